@@ -1,0 +1,84 @@
+# cellar — build, test, bench.  See README.md.
+#   make          build build/cellar
+#   make deps     install the Debian packages needed to build and test
+#   make test     deps + build + whole suite; last line: "N passed, N failed"
+#   make check    the suite again under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make bench    reference programs (CGAL, GEOS) and the comparison table
+#   make run      build and start the service (see README)
+
+BUILD   ?= build
+CC      ?= cc
+CXX     ?= g++
+OPT     ?= -O2
+SAN     ?=
+CFLAGS  += -std=c17 $(OPT) -g -Wall -Wextra -Werror -pthread -D_GNU_SOURCE $(SAN)
+CPPFLAGS += -I.
+LDLIBS  += -lm -pthread
+JANSSON_LIBS := -ljansson
+GEOS_LIBS    := -lgeos_c
+
+DEPS_BUILD := gcc make libc6-dev pkg-config libjansson-dev libgeos-dev
+DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
+
+CORE_SRC := $(wildcard core/*.c)
+API_SRC  := $(wildcard api/*.c)
+CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
+API_OBJ  := $(API_SRC:%.c=$(BUILD)/%.o)
+TEST_SRC := $(wildcard tests/test_*.c)
+TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/ref/geos_ref.o
+
+.PHONY: all deps test check bench run clean format tests
+all: $(BUILD)/cellar
+
+deps:
+	@scripts/deps.sh $(DEPS_BUILD)
+
+$(BUILD)/%.o: %.c $(wildcard core/*.h api/*.h tests/*.h)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/libcellar.a: $(CORE_OBJ) $(API_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(BUILD)/cellar: $(BUILD)/cli/cellar.o $(BUILD)/libcellar.a
+	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) $(LDLIBS)
+
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellar.a
+	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) $(GEOS_LIBS) $(LDLIBS)
+
+tests: $(BUILD)/cellar $(TEST_BIN)
+
+test: deps
+	@$(MAKE) --no-print-directory tests
+	@tests/run.sh $(BUILD)
+
+check: deps
+	@$(MAKE) --no-print-directory BUILD=build/san OPT=-O1 \
+	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" tests
+	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	    CELLAR_SANITIZED=1 tests/run.sh build/san
+
+bench: deps
+	@scripts/deps.sh $(DEPS_BENCH)
+	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement $(BUILD)/bench/geos_polygonize
+	@bench/run.sh $(BUILD)
+
+$(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -ljansson -lgmp -lmpfr
+
+$(BUILD)/bench/geos_polygonize: bench/geos_polygonize.c tests/ref/geos_ref.c tests/ref/geos_ref.h
+	@mkdir -p $(dir $@)
+	$(CC) -std=c17 -O2 -Wall -Wextra -Werror -I. -o $@ bench/geos_polygonize.c tests/ref/geos_ref.c -ljansson -lgeos_c -lm
+
+run: deps
+	@$(MAKE) --no-print-directory all
+	@scripts/run.sh $(BUILD)
+
+format:
+	clang-format -i $(CORE_SRC) $(API_SRC) core/*.h api/*.h cli/*.c tests/*.c tests/*.h
+
+clean:
+	rm -rf build

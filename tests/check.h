@@ -1,0 +1,43 @@
+/* check.h — the test framework: small C programs, one file per area (tests/test_*.c).
+ *
+ * A test is a function registered with TEST(name); CHECK(cond, fmt, ...) records a failure
+ * with file:function:line and a message, and lets the test go on; REQUIRE() also returns.
+ * main() comes from testlib.c: it runs every test (or those named on the command line) and
+ * prints one line per test ("ok NAME" / "FAIL NAME") and a last line "N passed, N failed"
+ * that tests/run.sh adds up.
+ */
+#ifndef CELLAR_CHECK_H
+#define CELLAR_CHECK_H
+
+#include <stdio.h>
+
+typedef void (*test_fn)(void);
+void test_register(const char *name, test_fn fn);
+void test_fail(const char *file, const char *func, int line, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+int test_failed_now(void); /* non-zero once the running test has a failure */
+
+#define TEST(name)                                                                                 \
+    static void name(void);                                                                        \
+    __attribute__((constructor)) static void name##_register(void) { test_register(#name, name); } \
+    static void name(void)
+
+#define CHECK(cond, ...)                                                                           \
+    do {                                                                                           \
+        if (!(cond)) test_fail(__FILE__, __func__, __LINE__, __VA_ARGS__);                         \
+    } while (0)
+
+#define REQUIRE(cond, ...)                                                                         \
+    do {                                                                                           \
+        if (!(cond)) {                                                                             \
+            test_fail(__FILE__, __func__, __LINE__, __VA_ARGS__);                                  \
+            return;                                                                                \
+        }                                                                                          \
+    } while (0)
+
+/* The directory of the shared data (../shared/data by default, CELLAR_DATA overrides). */
+const char *test_data_dir(void);
+/* Reads a whole file into a NUL-terminated buffer the caller frees; NULL on error. */
+char *test_read_file(const char *path, size_t *len);
+
+#endif

@@ -1,0 +1,33 @@
+#!/bin/sh
+# Runs every test program of a build directory and every shell test (tests/t_*.sh), adds up
+# their "N passed, N failed" lines and prints the total as the last line.
+# Usage: tests/run.sh BUILD_DIR
+set -u
+B=${1:-build}
+export CELLAR_BIN="$B/cellar" CELLAR_BUILD="$B"
+: "${CELLAR_DATA:=$(cd "$(dirname "$0")/../.." && pwd)/shared/data}"
+export CELLAR_DATA
+P=0; F=0
+log=$(mktemp)
+for t in "$B"/tests/test_* tests/t_*.sh; do
+    [ -x "$t" ] || continue
+    echo "== $t"
+    "$t" >"$log" 2>&1
+    rc=$?
+    cat "$log"
+    last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$log" | tail -n 1)
+    if [ -z "$last" ]; then
+        echo "FAIL $t: exited $rc without a summary line"
+        F=$((F + 1))
+        continue
+    fi
+    p=${last%% passed*}; f=${last#*, }; f=${f%% failed*}
+    P=$((P + p)); F=$((F + f))
+    if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
+        echo "FAIL $t: exited $rc"
+        F=$((F + 1))
+    fi
+done
+rm -f "$log"
+echo "$P passed, $F failed"
+[ "$F" -eq 0 ]

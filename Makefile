@@ -26,7 +26,7 @@ CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
 API_OBJ  := $(API_SRC:%.c=$(BUILD)/%.o)
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
-TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/ref/geos_ref.o
+TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/ref/geos_ref.o
 
 .PHONY: all deps test check bench run clean format tests
 all: $(BUILD)/cellar

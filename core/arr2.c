@@ -1,0 +1,1267 @@
+/* arr2.c — the planar arrangement of segments (DESIGN.md, "The 2D pipeline").
+ *
+ * Stages, each a function below, all on integer grid coordinates (core/num.h):
+ *   snap        map coordinates to the grid (step = precision), drop zero-length segments
+ *   buckets     box-kd-tree of the segments' boxes (core/box.h)
+ *   intersect   per bucket, in parallel: each pair tested once (in the bucket holding the
+ *               corner (max x0, max y0) of the two boxes), exact orientation tests; a proper
+ *               crossing is rounded to its pixel (a "hot pixel"); endpoints are hot too
+ *   split       snap rounding: per bucket, each hot pixel against each segment whose box holds
+ *               it (exact half-open pixel test); per segment, its hot pixels sorted along it
+ *               become its edges.  A segment is split at every hot pixel it passes through,
+ *               not only at its own crossings, so rounding never creates a crossing and no
+ *               vertex ever lies inside an edge.  Collinear overlaps come out as identical
+ *               edges, which the sort merges.
+ *   graph       edges sorted and made unique; vertices in lexicographic order
+ *   biconnected iterative Hopcroft–Tarjan; blocks of one edge (bridges, dangling trees)
+ *               removed unless keep_dangling, then vertices left without edges
+ *   faces       edges sorted around each vertex by exact angle; half-edge walks; positive
+ *               walks are bounded faces, the others the outer walks of components
+ *   holes       each component's outer walk is placed by a downward ray from its lowest
+ *               vertex: the first edge of another component below it tells the face that
+ *               contains it (a hole of that face) or the component it sits beside (same
+ *               face as that one).  Chains only go down, so they end.
+ *
+ * Memory: flat arrays and per-worker buffers; nothing is allocated per element.
+ * Thread use: par_for() in intersect and split; everything else on the calling thread.
+ */
+#include "core/arr2.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "core/box.h"
+#include "core/num.h"
+#include "core/par.h"
+#include "core/sort.h"
+
+#define MAXW      64           /* most workers */
+#define LEAF_MAX  24           /* bucket size aimed at */
+#define NONE      UINT32_MAX
+#define SEG_CHUNK 512          /* segments per work item in the split stage */
+
+typedef struct seg2 {
+    ipt a, b; /* a < b lexicographically */
+} seg2;
+
+typedef struct vbuf {
+    void *p;
+    size_t n, cap; /* in elements */
+} vbuf;
+
+typedef struct scratch {
+    i128 *key;
+    uint32_t *val;
+    size_t cap;
+} scratch;
+
+typedef struct ctx {
+    const arr2_opts *o;
+    int threads;
+    atomic_int fail;           /* set by workers: ARR_ENOMEM or ARR_ECANCELED */
+    /* snap */
+    double step;               /* grid step */
+    double origin_d[2];        /* grid index of the origin per axis, as a double */
+    int64_t origin[2];         /* same, when it fits in 2^52 (origin_int) */
+    int origin_int[2];
+    seg2 *seg;
+    size_t m;
+    int64_t *box;              /* 4 per segment */
+    box_tree tree;
+    /* intersect: per worker */
+    vbuf cross[MAXW];          /* ipt */
+    size_t pairs[MAXW];
+    /* hot pixels */
+    ipt *pix;
+    size_t npix;
+    uint32_t *pl_off, *pl_pix; /* pixels grouped by leaf */
+    vbuf inc[MAXW];            /* uint64: seg << 32 | pixel */
+    uint32_t *sp_off, *sp_pix; /* pixels grouped by segment */
+    vbuf edges[MAXW];          /* uint64: v0 << 32 | v1 */
+    scratch scr[MAXW];
+} ctx;
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
+{
+    if (err && errlen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+static int vbuf_reserve(vbuf *v, size_t need, size_t elem)
+{
+    if (need <= v->cap) return 0;
+    size_t nc = v->cap ? v->cap * 2 : 256;
+    while (nc < need) nc *= 2;
+    void *q = realloc(v->p, nc * elem);
+    if (!q) return -1;
+    v->p = q;
+    v->cap = nc;
+    return 0;
+}
+
+static int cancelled(const ctx *c) { return c->o->cancel && atomic_load(c->o->cancel); }
+
+static void progress(const ctx *c, const char *stage, double f)
+{
+    if (c->o->progress) c->o->progress(c->o->udata, stage, f);
+}
+
+/* ---- snap ------------------------------------------------------------------------------ */
+
+/* Grid coordinates are relative to an origin near the centre of the input's box, so they stay
+ * below 2^(ARR2_GRID_BITS-1) + 1 in magnitude.  When the origin's grid index is small enough,
+ * output coordinates are (origin + g) * step: a coordinate that was on the grid comes back
+ * exactly (0.3 with precision 0.01 gives 0.3, not 0.2999...). */
+static int64_t snap_coord(const ctx *c, int axis, double v)
+{
+    if (c->origin_int[axis]) return llround(v / c->step) - c->origin[axis];
+    return llround((v - c->origin_d[axis] * c->step) / c->step);
+}
+
+static double unsnap(const ctx *c, int axis, int64_t g)
+{
+    if (c->origin_int[axis]) return (double)(c->origin[axis] + g) * c->step;
+    return c->origin_d[axis] * c->step + (double)g * c->step;
+}
+
+static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *err, size_t el)
+{
+    double minx = INFINITY, miny = INFINITY, maxx = -INFINITY, maxy = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        for (int k = 0; k < 4; k++)
+            if (!isfinite(s[4 * i + k]))
+                return seterr(err, el, ARR_EINVAL, "lines[%zu][%d]: expected 2 finite numbers", i,
+                              k / 2);
+        for (int k = 0; k < 4; k += 2) {
+            double x = s[4 * i + k], y = s[4 * i + k + 1];
+            minx = x < minx ? x : minx;
+            maxx = x > maxx ? x : maxx;
+            miny = y < miny ? y : miny;
+            maxy = y > maxy ? y : maxy;
+        }
+    }
+    double w = n ? maxx - minx : 0, h = n ? maxy - miny : 0, ext = w > h ? w : h;
+    if (n && !isfinite(ext))
+        return seterr(err, el, ARR_ELIMIT, "lines: the coordinates span more than a double holds");
+    double p = c->o->precision;
+    if (p != 0 && !(isfinite(p) && p > 0))
+        return seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
+    if (p == 0) {
+        if (n == 0 || ext == 0) p = 1;
+        else {
+            int e;
+            frexp(ext, &e); /* ext <= 2^e */
+            p = ldexp(1.0, e - ARR2_GRID_BITS);
+        }
+    } else if (ext / p > ldexp(1.0, ARR2_GRID_BITS)) {
+        return seterr(err, el, ARR_ELIMIT,
+                      "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
+                      "grid steps across; use precision >= %g)",
+                      p, ext, ARR2_GRID_BITS, ext / ldexp(1.0, ARR2_GRID_BITS));
+    }
+    if (!isfinite(ext / p) || p < 1e-300)
+        return seterr(err, el, ARR_ELIMIT, "options.precision: %g is out of range", p);
+    c->step = p;
+    st->precision = p;
+    double centre[2] = {n ? minx / 2 + maxx / 2 : 0, n ? miny / 2 + maxy / 2 : 0};
+    for (int a = 0; a < 2; a++) {
+        c->origin_d[a] = nearbyint(centre[a] / p);
+        c->origin_int[a] = fabs(c->origin_d[a]) < 4503599627370496.0; /* 2^52 */
+        c->origin[a] = c->origin_int[a] ? (int64_t)c->origin_d[a] : 0;
+    }
+
+    c->seg = malloc((n ? n : 1) * sizeof *c->seg);
+    if (!c->seg) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        ipt a = {snap_coord(c, 0, s[4 * i]), snap_coord(c, 1, s[4 * i + 1])};
+        ipt b = {snap_coord(c, 0, s[4 * i + 2]), snap_coord(c, 1, s[4 * i + 3])};
+        int k = ipt_cmp(a, b);
+        if (k == 0) continue;
+        c->seg[m].a = k < 0 ? a : b;
+        c->seg[m].b = k < 0 ? b : a;
+        m++;
+    }
+    c->m = m;
+    st->zero_length = n - m;
+    return ARR_OK;
+}
+
+/* The bound every predicate relies on (core/num.h); the snap stage guarantees it, this
+ * checks it rather than assuming it. */
+static int check_range(const ctx *c, char *err, size_t el)
+{
+    const int64_t lim = (int64_t)1 << (ARR2_GRID_BITS + 1);
+    for (size_t i = 0; i < c->m; i++) {
+        const seg2 *s = &c->seg[i];
+        if (llabs(s->a.x) > lim || llabs(s->a.y) > lim || llabs(s->b.x) > lim ||
+            llabs(s->b.y) > lim)
+            return seterr(err, el, ARR_EINTERNAL,
+                          "internal: a snapped coordinate is out of range");
+    }
+    return ARR_OK;
+}
+
+/* ---- intersect ------------------------------------------------------------------------- */
+
+static void intersect_leaf(void *vc, size_t l, int w)
+{
+    ctx *c = vc;
+    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
+    if ((l & 63) == 0 && cancelled(c)) {
+        atomic_store(&c->fail, ARR_ECANCELED);
+        return;
+    }
+    const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
+    size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
+    const double *r = c->tree.region + 4 * l;
+    vbuf *out = &c->cross[w];
+    size_t pairs = 0;
+    for (size_t i = 0; i < k; i++) {
+        const int64_t *bi = c->box + 4 * (size_t)it[i];
+        const seg2 *si = &c->seg[it[i]];
+        for (size_t j = i + 1; j < k; j++) {
+            const int64_t *bj = c->box + 4 * (size_t)it[j];
+            if (bi[2] < bj[0] || bj[2] < bi[0] || bi[3] < bj[1] || bj[3] < bi[1]) continue;
+            double rx = (double)(bi[0] > bj[0] ? bi[0] : bj[0]);
+            double ry = (double)(bi[1] > bj[1] ? bi[1] : bj[1]);
+            if (!(rx > r[0] && rx <= r[2] && ry > r[1] && ry <= r[3])) continue;
+            pairs++;
+            const seg2 *sj = &c->seg[it[j]];
+            i128 o1 = orient2(si->a, si->b, sj->a), o2 = orient2(si->a, si->b, sj->b);
+            if (o1 == 0 || o2 == 0 || (o1 > 0) == (o2 > 0)) continue;
+            i128 o3 = orient2(sj->a, sj->b, si->a), o4 = orient2(sj->a, sj->b, si->b);
+            if (o3 == 0 || o4 == 0 || (o3 > 0) == (o4 > 0)) continue;
+            /* proper crossing: a + (b - a) * tn / den, rounded to its pixel */
+            int64_t dx = si->b.x - si->a.x, dy = si->b.y - si->a.y;
+            int64_t ex = sj->b.x - sj->a.x, ey = sj->b.y - sj->a.y;
+            i128 den = cross2(dx, dy, ex, ey);
+            i128 tn = cross2(sj->a.x - si->a.x, sj->a.y - si->a.y, ex, ey);
+            if (den < 0) {
+                den = -den;
+                tn = -tn;
+            }
+            ipt p = {si->a.x + rounddiv128((i128)dx * tn, den),
+                     si->a.y + rounddiv128((i128)dy * tn, den)};
+            if (vbuf_reserve(out, out->n + 1, sizeof(ipt))) {
+                atomic_store(&c->fail, ARR_ENOMEM);
+                return;
+            }
+            ((ipt *)out->p)[out->n++] = p;
+        }
+    }
+    c->pairs[w] += pairs;
+}
+
+/* ---- split (snap rounding) ----------------------------------------------------------------- */
+
+/* Does segment ab pass through the half-open pixel [p - 1/2, p + 1/2)^2?  The caller has
+ * checked that p lies in the segment's (integer) bounding box, which is exactly the condition
+ * for the segment's box to meet the pixel.  Works in doubled coordinates, where endpoints are
+ * even and pixel sides odd, so an endpoint never lies on a pixel side and a segment can only
+ * graze a pixel at a corner. */
+static int seg_hits_pixel(ipt a, ipt b, ipt p)
+{
+    if ((a.x == p.x && a.y == p.y) || (b.x == p.x && b.y == p.y)) return 1;
+    ipt A = {2 * a.x, 2 * a.y}, B = {2 * b.x, 2 * b.y};
+    ipt cr[4] = {{2 * p.x - 1, 2 * p.y - 1},
+                 {2 * p.x + 1, 2 * p.y - 1},
+                 {2 * p.x + 1, 2 * p.y + 1},
+                 {2 * p.x - 1, 2 * p.y + 1}};
+    int pos = 0, neg = 0, zero = -1;
+    for (int k = 0; k < 4; k++) {
+        int s = sign128(orient2(A, B, cr[k]));
+        pos += s > 0;
+        neg += s < 0;
+        if (s == 0) zero = k;
+    }
+    if (pos && neg) return 1;   /* the segment crosses the open pixel */
+    if (zero < 0) return 0;     /* the line misses the pixel */
+    /* the line only touches corner `zero`: inside the half-open pixel only if it is the
+     * lower-left corner and lies on the segment (not just on its line) */
+    ipt q = cr[zero];
+    int64_t x0 = A.x < B.x ? A.x : B.x, x1 = A.x < B.x ? B.x : A.x;
+    int64_t y0 = A.y < B.y ? A.y : B.y, y1 = A.y < B.y ? B.y : A.y;
+    return zero == 0 && q.x >= x0 && q.x <= x1 && q.y >= y0 && q.y <= y1;
+}
+
+static void hotpixel_leaf(void *vc, size_t l, int w)
+{
+    ctx *c = vc;
+    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
+    if ((l & 63) == 0 && cancelled(c)) {
+        atomic_store(&c->fail, ARR_ECANCELED);
+        return;
+    }
+    const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
+    size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
+    vbuf *out = &c->inc[w];
+    for (uint32_t q = c->pl_off[l]; q < c->pl_off[l + 1]; q++) {
+        uint32_t pid = c->pl_pix[q];
+        ipt p = c->pix[pid];
+        for (size_t i = 0; i < k; i++) {
+            const int64_t *b = c->box + 4 * (size_t)it[i];
+            if (p.x < b[0] || p.x > b[2] || p.y < b[1] || p.y > b[3]) continue;
+            const seg2 *s = &c->seg[it[i]];
+            if (!seg_hits_pixel(s->a, s->b, p)) continue;
+            if (vbuf_reserve(out, out->n + 1, sizeof(uint64_t))) {
+                atomic_store(&c->fail, ARR_ENOMEM);
+                return;
+            }
+            ((uint64_t *)out->p)[out->n++] = (uint64_t)it[i] << 32 | pid;
+        }
+    }
+}
+
+/* Sorts key[0..n) ascending, carrying val; keys are distinct. */
+static void sort_keyed(i128 *key, uint32_t *val, size_t n)
+{
+    while (n > 16) {
+        i128 pv = key[n / 2];
+        size_t i = 0, j = n - 1;
+        for (;;) {
+            while (key[i] < pv) i++;
+            while (key[j] > pv) j--;
+            if (i >= j) break;
+            i128 tk = key[i];
+            key[i] = key[j];
+            key[j] = tk;
+            uint32_t tv = val[i];
+            val[i] = val[j];
+            val[j] = tv;
+            i++;
+            j--;
+        }
+        /* recurse on the smaller side, loop on the larger */
+        size_t left = j + 1;
+        if (left < n - left) {
+            sort_keyed(key, val, left);
+            key += left;
+            val += left;
+            n -= left;
+        } else {
+            sort_keyed(key + left, val + left, n - left);
+            n = left;
+        }
+    }
+    for (size_t i = 1; i < n; i++) {
+        i128 k = key[i];
+        uint32_t v = val[i];
+        size_t j = i;
+        while (j > 0 && key[j - 1] > k) {
+            key[j] = key[j - 1];
+            val[j] = val[j - 1];
+            j--;
+        }
+        key[j] = k;
+        val[j] = v;
+    }
+}
+
+static void split_segments(void *vc, size_t chunk, int w)
+{
+    ctx *c = vc;
+    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
+    if (cancelled(c)) {
+        atomic_store(&c->fail, ARR_ECANCELED);
+        return;
+    }
+    size_t s0 = chunk * SEG_CHUNK, s1 = s0 + SEG_CHUNK < c->m ? s0 + SEG_CHUNK : c->m;
+    scratch *sc = &c->scr[w];
+    vbuf *out = &c->edges[w];
+    for (size_t s = s0; s < s1; s++) {
+        size_t k = c->sp_off[s + 1] - c->sp_off[s];
+        if (k > sc->cap) {
+            size_t nc = k * 2;
+            i128 *nk = realloc(sc->key, nc * sizeof *nk);
+            if (nk) sc->key = nk;
+            uint32_t *nv = realloc(sc->val, nc * sizeof *nv);
+            if (nv) sc->val = nv;
+            if (!nk || !nv) {
+                atomic_store(&c->fail, ARR_ENOMEM);
+                return;
+            }
+            sc->cap = nc;
+        }
+        const seg2 *sg = &c->seg[s];
+        int64_t dx = sg->b.x - sg->a.x, dy = sg->b.y - sg->a.y;
+        for (size_t i = 0; i < k; i++) {
+            uint32_t pid = c->sp_pix[c->sp_off[s] + i];
+            ipt p = c->pix[pid];
+            sc->key[i] = (i128)(p.x - sg->a.x) * dx + (i128)(p.y - sg->a.y) * dy;
+            sc->val[i] = pid;
+        }
+        sort_keyed(sc->key, sc->val, k);
+        if (vbuf_reserve(out, out->n + k, sizeof(uint64_t))) {
+            atomic_store(&c->fail, ARR_ENOMEM);
+            return;
+        }
+        uint64_t *e = out->p;
+        for (size_t i = 0; i + 1 < k; i++) {
+            uint32_t u = sc->val[i], v = sc->val[i + 1];
+            e[out->n++] = u < v ? (uint64_t)u << 32 | v : (uint64_t)v << 32 | u;
+        }
+    }
+}
+
+/* Concatenates the per-worker buffers of elem-sized items into one malloc'd array. */
+static void *gather(vbuf *v, int nw, size_t elem, size_t *n)
+{
+    size_t t = 0;
+    for (int w = 0; w < nw; w++) t += v[w].n;
+    char *out = malloc((t ? t : 1) * elem);
+    if (!out) return NULL;
+    size_t o = 0;
+    for (int w = 0; w < nw; w++) {
+        if (v[w].n) memcpy(out + o * elem, v[w].p, v[w].n * elem);
+        o += v[w].n;
+        free(v[w].p);
+        v[w] = (vbuf){0};
+    }
+    *n = t;
+    return out;
+}
+
+/* Groups items by a key in [0, nkeys): off gets nkeys+1 offsets, out the values, stably. */
+static int group_by(const uint64_t *kv, size_t n, size_t nkeys, uint32_t **off, uint32_t **out)
+{
+    uint32_t *o = calloc(nkeys + 1, sizeof *o);
+    uint32_t *v = malloc((n ? n : 1) * sizeof *v);
+    if (!o || !v) {
+        free(o);
+        free(v);
+        return -1;
+    }
+    for (size_t i = 0; i < n; i++) o[(kv[i] >> 32) + 1]++;
+    for (size_t k = 0; k < nkeys; k++) o[k + 1] += o[k];
+    for (size_t i = 0; i < n; i++) v[o[kv[i] >> 32]++] = (uint32_t)kv[i];
+    for (size_t k = nkeys; k > 0; k--) o[k] = o[k - 1];
+    o[0] = 0;
+    *off = o;
+    *out = v;
+    return 0;
+}
+
+typedef struct locate_job {
+    ctx *c;
+    uint64_t *kv; /* leaf << 32 | pixel */
+} locate_job;
+
+static void locate_chunk(void *vj, size_t chunk, int w)
+{
+    (void)w;
+    locate_job *j = vj;
+    size_t p0 = chunk * 4096, p1 = p0 + 4096 < j->c->npix ? p0 + 4096 : j->c->npix;
+    for (size_t p = p0; p < p1; p++) {
+        uint32_t l = box_tree_locate(&j->c->tree, (double)j->c->pix[p].x, (double)j->c->pix[p].y);
+        j->kv[p] = (uint64_t)l << 32 | p;
+    }
+}
+
+/* From the snapped segments to a sorted, duplicate-free edge list over the hot pixels. */
+static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_out, char *err,
+                       size_t el)
+{
+    int rc = ARR_ENOMEM;
+    uint64_t *kv = NULL, *inc = NULL, *ev = NULL;
+    size_t ncross = 0, ninc = 0, nev = 0;
+    double t0 = now_ms();
+
+    /* buckets */
+    c->box = malloc((c->m ? c->m : 1) * 4 * sizeof *c->box);
+    if (!c->box) goto fail;
+    for (size_t i = 0; i < c->m; i++) {
+        const seg2 *s = &c->seg[i];
+        int64_t *b = c->box + 4 * i;
+        b[0] = s->a.x; /* a < b lexicographically */
+        b[2] = s->b.x;
+        b[1] = s->a.y < s->b.y ? s->a.y : s->b.y;
+        b[3] = s->a.y < s->b.y ? s->b.y : s->a.y;
+    }
+    if (box_tree_build(&c->tree, c->box, c->m, LEAF_MAX)) goto fail;
+    st->buckets = c->tree.nleaves;
+    double t1 = now_ms();
+    st->ms_buckets = t1 - t0;
+    progress(c, "buckets", 1);
+
+    /* intersect */
+    par_for(c->threads, c->tree.nleaves, intersect_leaf, c);
+    if ((rc = atomic_load(&c->fail))) goto fail;
+    rc = ARR_ENOMEM;
+    for (int w = 0; w < c->threads; w++) st->pairs_tested += c->pairs[w];
+    ipt *cr = gather(c->cross, c->threads, sizeof(ipt), &ncross);
+    if (!cr) goto fail;
+    st->intersections = ncross;
+    c->pix = realloc(cr, (ncross + 2 * c->m + 1) * sizeof *c->pix);
+    if (!c->pix) {
+        free(cr);
+        goto fail;
+    }
+    size_t np = ncross;
+    for (size_t i = 0; i < c->m; i++) {
+        c->pix[np++] = c->seg[i].a;
+        c->pix[np++] = c->seg[i].b;
+    }
+    if (sort_ipt(c->pix, np)) goto fail;
+    size_t u = 0;
+    for (size_t i = 0; i < np; i++)
+        if (u == 0 || ipt_cmp(c->pix[u - 1], c->pix[i]) != 0) c->pix[u++] = c->pix[i];
+    c->npix = u;
+    st->hot_pixels = u;
+    if (u >= NONE) {
+        rc = seterr(err, el, ARR_ELIMIT, "lines: more than 2^32 vertices");
+        goto fail;
+    }
+    double t2 = now_ms();
+    st->ms_intersect = t2 - t1;
+    progress(c, "intersect", 1);
+
+    /* hot pixels into their buckets, then each bucket's pixels against its segments */
+    kv = malloc((c->npix ? c->npix : 1) * sizeof *kv);
+    if (!kv) goto fail;
+    locate_job lj = {c, kv};
+    par_for(c->threads, (c->npix + 4095) / 4096, locate_chunk, &lj);
+    if (group_by(kv, c->npix, c->tree.nleaves, &c->pl_off, &c->pl_pix)) goto fail;
+    free(kv);
+    kv = NULL;
+    par_for(c->threads, c->tree.nleaves, hotpixel_leaf, c);
+    if ((rc = atomic_load(&c->fail))) goto fail;
+    rc = ARR_ENOMEM;
+    inc = gather(c->inc, c->threads, sizeof(uint64_t), &ninc);
+    if (!inc) goto fail;
+    if (group_by(inc, ninc, c->m, &c->sp_off, &c->sp_pix)) goto fail;
+    free(inc);
+    inc = NULL;
+    par_for(c->threads, (c->m + SEG_CHUNK - 1) / SEG_CHUNK, split_segments, c);
+    if ((rc = atomic_load(&c->fail))) goto fail;
+    rc = ARR_ENOMEM;
+    ev = gather(c->edges, c->threads, sizeof(uint64_t), &nev);
+    if (!ev) goto fail;
+    if (sort_u64(ev, nev)) goto fail;
+    size_t k = 0;
+    for (size_t i = 0; i < nev; i++)
+        if (k == 0 || ev[k - 1] != ev[i]) ev[k++] = ev[i];
+    *edges_out = ev;
+    *ne_out = k;
+    st->ms_split = now_ms() - t2;
+    progress(c, "split", 1);
+    return ARR_OK;
+fail:
+    free(kv);
+    free(inc);
+    free(ev);
+    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    return rc;
+}
+
+/* ---- graph, blocks ------------------------------------------------------------------------ */
+
+typedef struct graph {
+    size_t nv, ne;
+    ipt *P;            /* nv */
+    uint32_t *EV;      /* 2*ne */
+    uint32_t *off;     /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
+    uint32_t *out;     /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
+} graph;
+
+static inline uint32_t he_tail(const graph *g, uint32_t h) { return g->EV[h]; }
+static inline uint32_t he_head(const graph *g, uint32_t h) { return g->EV[h ^ 1]; }
+
+static void graph_free(graph *g)
+{
+    free(g->P);
+    free(g->EV);
+    free(g->off);
+    free(g->out);
+    memset(g, 0, sizeof *g);
+}
+
+/* Builds the outgoing half-edge lists (unsorted). */
+static int graph_adjacency(graph *g)
+{
+    free(g->off);
+    free(g->out);
+    g->off = calloc(g->nv + 1, sizeof *g->off);
+    g->out = malloc((2 * g->ne + 1) * sizeof *g->out);
+    if (!g->off || !g->out) return -1;
+    for (size_t h = 0; h < 2 * g->ne; h++) g->off[g->EV[h] + 1]++;
+    for (size_t v = 0; v < g->nv; v++) g->off[v + 1] += g->off[v];
+    for (size_t h = 0; h < 2 * g->ne; h++) g->out[g->off[g->EV[h]]++] = (uint32_t)h;
+    for (size_t v = g->nv; v > 0; v--) g->off[v] = g->off[v - 1];
+    g->off[0] = 0;
+    return 0;
+}
+
+/* Iterative biconnected components (Hopcroft–Tarjan).  block[e] gets the block of edge e;
+ * returns the number of blocks, or -1 when out of memory.  bsize[b] = edges in block b. */
+static long biconnected(const graph *g, uint32_t *block, uint32_t **bsize_out)
+{
+    typedef struct frame {
+        uint32_t v, pe, it;
+    } frame;
+    uint32_t *disc = calloc(g->nv + 1, sizeof *disc), *low = malloc((g->nv + 1) * sizeof *low);
+    frame *st = malloc((g->nv + 1) * sizeof *st);
+    uint32_t *es = malloc((g->ne + 1) * sizeof *es);
+    uint32_t *bsize = NULL;
+    size_t bcap = 0;
+    long nb = 0;
+    uint32_t time = 0;
+    if (!disc || !low || !st || !es) goto fail;
+    for (size_t r = 0; r < g->nv; r++) {
+        if (disc[r]) continue;
+        size_t sp = 0, ep = 0;
+        disc[r] = low[r] = ++time;
+        st[sp++] = (frame){(uint32_t)r, NONE, g->off[r]};
+        while (sp) {
+            frame *f = &st[sp - 1];
+            if (f->it < g->off[f->v + 1]) {
+                uint32_t h = g->out[f->it++], e = h >> 1, w = he_head(g, h);
+                if (e == f->pe) continue;
+                if (!disc[w]) {
+                    es[ep++] = e;
+                    disc[w] = low[w] = ++time;
+                    st[sp++] = (frame){w, e, g->off[w]};
+                } else if (disc[w] < disc[f->v]) {
+                    es[ep++] = e;
+                    if (disc[w] < low[f->v]) low[f->v] = disc[w];
+                }
+                continue;
+            }
+            frame done = *f;
+            sp--;
+            if (!sp) break;
+            uint32_t u = st[sp - 1].v;
+            if (low[done.v] < low[u]) low[u] = low[done.v];
+            if (low[done.v] >= disc[u]) {
+                if ((size_t)nb >= bcap) {
+                    size_t nc = bcap ? 2 * bcap : 64;
+                    uint32_t *q = realloc(bsize, nc * sizeof *q);
+                    if (!q) goto fail;
+                    bsize = q;
+                    bcap = nc;
+                }
+                uint32_t cnt = 0, e;
+                do {
+                    e = es[--ep];
+                    block[e] = (uint32_t)nb;
+                    cnt++;
+                } while (e != done.pe);
+                bsize[nb++] = cnt;
+            }
+        }
+    }
+    free(disc);
+    free(low);
+    free(st);
+    free(es);
+    *bsize_out = bsize;
+    return nb;
+fail:
+    free(disc);
+    free(low);
+    free(st);
+    free(es);
+    free(bsize);
+    return -1;
+}
+
+/* Removes the edges with drop[e] set and the vertices left without edges; keeps the order
+ * of what remains (so EV stays sorted and V lexicographic). */
+static int graph_prune(graph *g, const uint8_t *drop)
+{
+    uint32_t *vmap = malloc((g->nv + 1) * sizeof *vmap);
+    if (!vmap) return -1;
+    for (size_t v = 0; v < g->nv; v++) vmap[v] = NONE;
+    size_t ne = 0;
+    for (size_t e = 0; e < g->ne; e++) {
+        if (drop[e]) continue;
+        vmap[g->EV[2 * e]] = vmap[g->EV[2 * e + 1]] = 0;
+        g->EV[2 * ne] = g->EV[2 * e];
+        g->EV[2 * ne + 1] = g->EV[2 * e + 1];
+        ne++;
+    }
+    size_t nv = 0;
+    for (size_t v = 0; v < g->nv; v++)
+        if (vmap[v] != NONE) {
+            g->P[nv] = g->P[v];
+            vmap[v] = (uint32_t)nv++;
+        }
+    for (size_t i = 0; i < 2 * ne; i++) g->EV[i] = vmap[g->EV[i]];
+    g->nv = nv;
+    g->ne = ne;
+    free(vmap);
+    return graph_adjacency(g);
+}
+
+/* ---- faces and holes ------------------------------------------------------------------------ */
+
+static inline void he_dir(const graph *g, uint32_t h, int64_t *dx, int64_t *dy)
+{
+    ipt a = g->P[he_tail(g, h)], b = g->P[he_head(g, h)];
+    *dx = b.x - a.x;
+    *dy = b.y - a.y;
+}
+
+/* Sorts each vertex's outgoing half-edges counter-clockwise; pos[h] = index of h in its list.
+ * Returns -1 if two edges leave a vertex in the same direction (cannot happen after snap
+ * rounding; checked rather than assumed). */
+static int sort_around_vertices(const graph *g, uint32_t *pos)
+{
+    for (size_t v = 0; v < g->nv; v++) {
+        uint32_t *o = g->out + g->off[v];
+        size_t d = g->off[v + 1] - g->off[v];
+        for (size_t i = 1; i < d; i++) {
+            uint32_t h = o[i];
+            int64_t hx, hy;
+            he_dir(g, h, &hx, &hy);
+            size_t j = i;
+            while (j > 0) {
+                int64_t px, py;
+                he_dir(g, o[j - 1], &px, &py);
+                int k = dir_cmp(px, py, hx, hy);
+                if (k == 0) return -1;
+                if (k < 0) break;
+                o[j] = o[j - 1];
+                j--;
+            }
+            o[j] = h;
+        }
+        for (size_t i = 0; i < d; i++) pos[o[i]] = (uint32_t)i;
+    }
+    return 0;
+}
+
+static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
+{
+    uint32_t v = he_head(g, h), t = h ^ 1;
+    uint32_t d = g->off[v + 1] - g->off[v], i = pos[t];
+    return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
+}
+
+static uint32_t uf_find(uint32_t *par, uint32_t x)
+{
+    while (par[x] != x) {
+        par[x] = par[par[x]];
+        x = par[x];
+    }
+    return x;
+}
+
+typedef struct walks {
+    size_t ncyc;
+    uint32_t *cyc_of;   /* 2*ne: cycle of each half-edge */
+    uint32_t *hoff;     /* ncyc+1 */
+    uint32_t *hes;      /* half-edges of each cycle in walk order */
+    i128 *area2;        /* twice the signed area of each cycle */
+} walks;
+
+static void walks_free(walks *w)
+{
+    free(w->cyc_of);
+    free(w->hoff);
+    free(w->hes);
+    free(w->area2);
+    memset(w, 0, sizeof *w);
+}
+
+static int walk_faces(const graph *g, const uint32_t *pos, walks *w)
+{
+    size_t nh = 2 * g->ne, cap = 64;
+    w->cyc_of = malloc((nh + 1) * sizeof *w->cyc_of);
+    w->hes = malloc((nh + 1) * sizeof *w->hes);
+    w->hoff = malloc(cap * sizeof *w->hoff);
+    w->area2 = malloc(cap * sizeof *w->area2);
+    if (!w->cyc_of || !w->hes || !w->hoff || !w->area2) return ARR_ENOMEM;
+    for (size_t h = 0; h < nh; h++) w->cyc_of[h] = NONE;
+    size_t k = 0;
+    w->hoff[0] = 0;
+    for (size_t h0 = 0; h0 < nh; h0++) {
+        if (w->cyc_of[h0] != NONE) continue;
+        if (w->ncyc + 2 > cap) {
+            cap *= 2;
+            uint32_t *a = realloc(w->hoff, cap * sizeof *a);
+            if (a) w->hoff = a;
+            i128 *b = realloc(w->area2, cap * sizeof *b);
+            if (b) w->area2 = b;
+            if (!a || !b) return ARR_ENOMEM;
+        }
+        uint32_t c = (uint32_t)w->ncyc++, h = (uint32_t)h0;
+        i128 a2 = 0;
+        do {
+            if (w->cyc_of[h] != NONE || k >= nh) return ARR_EINTERNAL;
+            w->cyc_of[h] = c;
+            w->hes[k++] = h;
+            ipt p = g->P[he_tail(g, h)], q = g->P[he_head(g, h)];
+            a2 += cross2(p.x, p.y, q.x, q.y);
+            h = he_next(g, pos, h);
+        } while (h != h0);
+        w->hoff[c + 1] = (uint32_t)k;
+        w->area2[c] = a2;
+    }
+    return ARR_OK;
+}
+
+/* Highest point strictly below p where edge e meets the vertical line through p, as the
+ * fraction num/den (den > 0); *at gets the vertex hit, or NONE for an edge interior.
+ * Returns 0 when e does not meet the line below p. */
+static int hit_below(const graph *g, uint32_t e, ipt p, i128 *num, i128 *den, uint32_t *at)
+{
+    uint32_t u = g->EV[2 * e], v = g->EV[2 * e + 1]; /* P[u] < P[v] lexicographically */
+    ipt a = g->P[u], b = g->P[v];
+    if (p.x < a.x || p.x > b.x) return 0;
+    if (a.x == b.x) { /* vertical, on the line: its top is hit */
+        if (b.y >= p.y) return 0;
+        *num = b.y;
+        *den = 1;
+        *at = v;
+        return 1;
+    }
+    i128 d = b.x - a.x;
+    i128 n = (i128)a.y * d + (i128)(b.y - a.y) * (p.x - a.x);
+    if (n >= (i128)p.y * d) return 0;
+    *num = n;
+    *den = d;
+    *at = p.x == a.x ? u : (p.x == b.x ? v : NONE);
+    return 1;
+}
+
+/* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
+ * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
+static int place_components(const graph *g, const uint32_t *pos, const walks *w,
+                            const uint32_t *comp, size_t ncomp, const uint32_t *comp_outer,
+                            uint32_t *face_of)
+{
+    int rc = ARR_ENOMEM;
+    uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
+    uint32_t *found = malloc(ncomp * sizeof *found);
+    uint32_t *soff = NULL, *sedge = NULL;
+    if (!low || !par || !found) goto out;
+    for (size_t k = 0; k < ncomp; k++) {
+        low[k] = NONE;
+        par[k] = (uint32_t)k;
+        found[k] = NONE;
+    }
+    int64_t minx = INT64_MAX, maxx = INT64_MIN;
+    for (size_t v = 0; v < g->nv; v++) {
+        uint32_t k = comp[v];
+        ipt p = g->P[v];
+        if (low[k] == NONE || p.y < g->P[low[k]].y) low[k] = (uint32_t)v;
+        minx = p.x < minx ? p.x : minx;
+        maxx = p.x > maxx ? p.x : maxx;
+    }
+    /* vertical slabs of edges: each edge listed in every slab its x-range meets */
+    size_t ns = 1;
+    while (ns * ns < g->ne) ns *= 2;
+    uint64_t width, total;
+    for (;;) {
+        width = (uint64_t)(maxx - minx) / ns + 1;
+        total = 0;
+        for (size_t e = 0; e < g->ne; e++)
+            total += (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width -
+                     (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width + 1;
+        if (total <= 8 * (uint64_t)g->ne + ns || ns == 1) break;
+        ns /= 2;
+    }
+    soff = calloc(ns + 2, sizeof *soff);
+    sedge = malloc((total + 1) * sizeof *sedge);
+    if (!soff || !sedge) goto out;
+    for (size_t e = 0; e < g->ne; e++) {
+        uint64_t s0 = (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width;
+        uint64_t s1 = (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width;
+        for (uint64_t s = s0; s <= s1; s++) soff[s + 1]++;
+    }
+    for (size_t s = 0; s < ns + 1; s++) soff[s + 1] += soff[s];
+    for (size_t e = 0; e < g->ne; e++) {
+        uint64_t s0 = (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width;
+        uint64_t s1 = (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width;
+        for (uint64_t s = s0; s <= s1; s++) sedge[soff[s]++] = (uint32_t)e;
+    }
+    for (size_t s = ns + 1; s > 0; s--) soff[s] = soff[s - 1];
+    soff[0] = 0;
+
+    for (size_t k = 0; k < ncomp; k++) {
+        ipt p = g->P[low[k]];
+        uint64_t s = (uint64_t)(p.x - minx) / width;
+        i128 bn = 0, bd = 0;
+        uint32_t be = NONE, bat = NONE;
+        for (uint32_t i = soff[s]; i < soff[s + 1]; i++) {
+            uint32_t e = sedge[i], at;
+            if (comp[g->EV[2 * e]] == k) continue;
+            i128 n, d;
+            if (!hit_below(g, e, p, &n, &d, &at)) continue;
+            if (be == NONE || n * bd > bn * d) {
+                bn = n;
+                bd = d;
+                be = e;
+                bat = at;
+            }
+        }
+        if (be == NONE) continue; /* nothing below: in the unbounded face */
+        uint32_t h;
+        if (bat != NONE) { /* a vertex: the wedge there that holds the upward direction */
+            const uint32_t *o = g->out + g->off[bat];
+            size_t d = g->off[bat + 1] - g->off[bat], j = d - 1;
+            for (size_t i = 0; i < d; i++) {
+                int64_t dx, dy;
+                he_dir(g, o[i], &dx, &dy);
+                if (dir_cmp(dx, dy, 0, 1) < 0) j = i;
+            }
+            h = o[j];
+        } else {
+            h = 2 * be; /* leaves the left end: the face above is on its left */
+        }
+        uint32_t cyc = w->cyc_of[h];
+        if (w->area2[cyc] > 0) found[k] = cyc;
+        else par[uf_find(par, (uint32_t)k)] = uf_find(par, comp[he_tail(g, h)]);
+    }
+    for (size_t k = 0; k < ncomp; k++) {
+        if (found[k] == NONE) continue;
+        uint32_t r = uf_find(par, (uint32_t)k);
+        if (found[r] != NONE && found[r] != found[k] && r != k) {
+            rc = ARR_EINTERNAL;
+            goto out;
+        }
+        if (r != k) found[r] = found[k];
+    }
+    for (size_t k = 0; k < ncomp; k++) face_of[comp_outer[k]] = found[uf_find(par, (uint32_t)k)];
+    rc = ARR_OK;
+out:
+    free(low);
+    free(par);
+    free(found);
+    free(soff);
+    free(sedge);
+    (void)pos;
+    return rc;
+}
+
+/* ---- the whole pipeline ----------------------------------------------------------------- */
+
+static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
+{
+    arr2_stats *st = &out->stats;
+    int rc = ARR_ENOMEM;
+    uint32_t *block = NULL, *bsize = NULL, *pos = NULL, *comp = NULL, *stack = NULL;
+    uint32_t *comp_outer = NULL, *face_of = NULL, *face_idx = NULL;
+    uint8_t *drop = NULL;
+    walks w = {0};
+    double t0 = now_ms();
+
+    /* blocks */
+    if (graph_adjacency(g)) goto fail;
+    block = malloc((g->ne + 1) * sizeof *block);
+    if (!block) goto fail;
+    long nb = biconnected(g, block, &bsize);
+    if (nb < 0) goto fail;
+    size_t blocks = 0;
+    drop = calloc(g->ne + 1, 1);
+    if (!drop) goto fail;
+    for (size_t e = 0; e < g->ne; e++) drop[e] = bsize[block[e]] == 1 && !c->o->keep_dangling;
+    for (long b = 0; b < nb; b++) blocks += bsize[b] > 1 || c->o->keep_dangling;
+    for (size_t e = 0; e < g->ne; e++) st->dangling_removed += drop[e];
+    st->blocks = blocks;
+    if (st->dangling_removed && graph_prune(g, drop)) goto fail;
+    double t1 = now_ms();
+    st->ms_biconnected = t1 - t0;
+    progress(c, "biconnected", 1);
+    if (cancelled(c)) {
+        rc = ARR_ECANCELED;
+        goto fail;
+    }
+
+    /* faces */
+    pos = malloc((2 * g->ne + 1) * sizeof *pos);
+    if (!pos) goto fail;
+    if (sort_around_vertices(g, pos)) {
+        rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
+        goto fail;
+    }
+    if ((rc = walk_faces(g, pos, &w))) goto fail;
+    rc = ARR_ENOMEM;
+    /* connected components */
+    comp = malloc((g->nv + 1) * sizeof *comp);
+    stack = malloc((g->nv + 1) * sizeof *stack);
+    if (!comp || !stack) goto fail;
+    for (size_t v = 0; v < g->nv; v++) comp[v] = NONE;
+    size_t ncomp = 0;
+    for (size_t r = 0; r < g->nv; r++) {
+        if (comp[r] != NONE) continue;
+        size_t sp = 0;
+        comp[r] = (uint32_t)ncomp;
+        stack[sp++] = (uint32_t)r;
+        while (sp) {
+            uint32_t v = stack[--sp];
+            for (uint32_t i = g->off[v]; i < g->off[v + 1]; i++) {
+                uint32_t u = he_head(g, g->out[i]);
+                if (comp[u] == NONE) {
+                    comp[u] = (uint32_t)ncomp;
+                    stack[sp++] = u;
+                }
+            }
+        }
+        ncomp++;
+    }
+    comp_outer = malloc((ncomp + 1) * sizeof *comp_outer);
+    face_of = malloc((w.ncyc + 1) * sizeof *face_of);
+    face_idx = malloc((w.ncyc + 1) * sizeof *face_idx);
+    if (!comp_outer || !face_of || !face_idx) goto fail;
+    for (size_t k = 0; k < ncomp; k++) comp_outer[k] = NONE;
+    size_t nf = 0, nouter = 0;
+    for (size_t cy = 0; cy < w.ncyc; cy++) {
+        face_of[cy] = NONE;
+        face_idx[cy] = NONE;
+        if (w.area2[cy] > 0) {
+            face_idx[cy] = (uint32_t)nf++;
+            face_of[cy] = (uint32_t)cy;
+            continue;
+        }
+        uint32_t k = comp[he_tail(g, w.hes[w.hoff[cy]])];
+        if (comp_outer[k] != NONE) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: a component with two outer walks");
+            goto fail;
+        }
+        comp_outer[k] = (uint32_t)cy;
+        nouter++;
+    }
+    if (nouter != ncomp || (long long)g->nv - (long long)g->ne + (long long)w.ncyc !=
+                               2 * (long long)ncomp) {
+        rc = seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
+        goto fail;
+    }
+    double t2 = now_ms();
+    st->ms_faces = t2 - t1;
+    progress(c, "faces", 1);
+
+    /* holes */
+    if (ncomp > 1) {
+        rc = place_components(g, pos, &w, comp, ncomp, comp_outer, face_of);
+        if (rc) {
+            if (rc == ARR_EINTERNAL) seterr(err, el, rc, "internal: inconsistent hole placement");
+            goto fail;
+        }
+        rc = ARR_ENOMEM;
+    }
+    st->ms_holes = now_ms() - t2;
+
+    /* output */
+    out->nv = g->nv;
+    out->ne = g->ne;
+    out->nf = nf;
+    out->ncyc = w.ncyc;
+    out->V = malloc((2 * g->nv + 1) * sizeof *out->V);
+    out->EV = malloc((2 * g->ne + 1) * sizeof *out->EV);
+    out->face_cycle = malloc((nf + 1) * sizeof *out->face_cycle);
+    out->hole_off = calloc(nf + 2, sizeof *out->hole_off);
+    out->hole_cyc = malloc((ncomp + 1) * sizeof *out->hole_cyc);
+    out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+    out->fe = malloc((2 * g->ne + 1) * sizeof *out->fe);
+    out->cyc_off = malloc((w.ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = malloc((2 * g->ne + 1) * sizeof *out->cyc);
+    out->ext_cyc = malloc((ncomp + 1) * sizeof *out->ext_cyc);
+    if (!out->V || !out->EV || !out->face_cycle || !out->hole_off || !out->hole_cyc ||
+        !out->fe_off || !out->fe || !out->cyc_off || !out->cyc || !out->ext_cyc)
+        goto fail;
+    for (size_t v = 0; v < g->nv; v++) {
+        out->V[2 * v] = unsnap(c, 0, g->P[v].x);
+        out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
+    }
+    memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
+    for (size_t cy = 0; cy <= w.ncyc; cy++) out->cyc_off[cy] = w.hoff[cy];
+    for (size_t i = 0; i < 2 * g->ne; i++) out->cyc[i] = he_tail(g, w.hes[i]);
+    /* holes: count per face, then fill in cycle order */
+    for (size_t cy = 0; cy < w.ncyc; cy++)
+        if (face_idx[cy] == NONE && face_of[cy] != NONE) out->hole_off[face_idx[face_of[cy]] + 1]++;
+    for (size_t f = 0; f < nf; f++) out->hole_off[f + 1] += out->hole_off[f];
+    out->next = 0;
+    for (size_t cy = 0; cy < w.ncyc; cy++) {
+        if (face_idx[cy] != NONE) {
+            out->face_cycle[face_idx[cy]] = (uint32_t)cy;
+        } else if (face_of[cy] == NONE) {
+            out->ext_cyc[out->next++] = (uint32_t)cy;
+        } else {
+            uint32_t f = face_idx[face_of[cy]];
+            out->hole_cyc[out->hole_off[f]++] = (uint32_t)cy;
+        }
+    }
+    for (size_t f = nf; f > 0; f--) out->hole_off[f] = out->hole_off[f - 1];
+    out->hole_off[0] = 0;
+    /* FE: signed edges of the outer cycle, then of the holes; an edge with this face on
+     * both sides (a dangling edge kept on request) cancels */
+    size_t k = 0;
+    for (size_t f = 0; f < nf; f++) {
+        out->fe_off[f] = (uint32_t)k;
+        uint32_t fc = out->face_cycle[f], nh = out->hole_off[f + 1] - out->hole_off[f];
+        for (uint32_t j = 0; j <= nh; j++) {
+            uint32_t cy = j == 0 ? fc : out->hole_cyc[out->hole_off[f] + j - 1];
+            for (uint32_t i = w.hoff[cy]; i < w.hoff[cy + 1]; i++) {
+                uint32_t h = w.hes[i], other = face_of[w.cyc_of[h ^ 1]];
+                if (other == fc) continue;
+                int32_t e = (int32_t)(h >> 1) + 1;
+                out->fe[k++] = (h & 1) ? -e : e;
+            }
+        }
+    }
+    out->fe_off[nf] = (uint32_t)k;
+    st->nv = g->nv;
+    st->ne = g->ne;
+    st->nf = nf;
+    st->components = ncomp;
+    rc = ARR_OK;
+fail:
+    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    free(block);
+    free(bsize);
+    free(drop);
+    free(pos);
+    free(comp);
+    free(stack);
+    free(comp_outer);
+    free(face_of);
+    free(face_idx);
+    walks_free(&w);
+    return rc;
+}
+
+/* Frees the intermediate buffers and leaves them NULL, so it can run twice. */
+static void ctx_free(ctx *c)
+{
+    free(c->seg);
+    free(c->box);
+    box_tree_free(&c->tree);
+    free(c->pix);
+    free(c->pl_off);
+    free(c->pl_pix);
+    free(c->sp_off);
+    free(c->sp_pix);
+    c->seg = NULL;
+    c->pix = NULL;
+    c->box = NULL;
+    c->pl_off = c->pl_pix = c->sp_off = c->sp_pix = NULL;
+    for (int w = 0; w < MAXW; w++) {
+        free(c->cross[w].p);
+        free(c->inc[w].p);
+        free(c->edges[w].p);
+        free(c->scr[w].key);
+        free(c->scr[w].val);
+        c->cross[w] = c->inc[w] = c->edges[w] = (vbuf){0};
+        c->scr[w] = (scratch){0};
+    }
+}
+
+int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, char *err,
+               size_t errlen)
+{
+    static const arr2_opts defaults = {0};
+    ctx *c = calloc(1, sizeof *c);
+    graph g = {0};
+    uint64_t *ev = NULL;
+    size_t nev = 0;
+    int rc;
+    double t0 = now_ms();
+
+    memset(out, 0, sizeof *out);
+    if (err && errlen) err[0] = 0;
+    if (!c) return seterr(err, errlen, ARR_ENOMEM, "out of memory");
+    c->o = opts ? opts : &defaults;
+    c->threads = c->o->threads > 0 ? c->o->threads : par_ncpu();
+    if (c->threads > MAXW) c->threads = MAXW;
+    atomic_init(&c->fail, 0);
+    out->stats.input_segments = n;
+    if (n > ARR2_MAX_SEGMENTS) {
+        rc = seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u", n,
+                    ARR2_MAX_SEGMENTS);
+        goto fail;
+    }
+    if ((rc = stage_snap(c, seg, n, &out->stats, err, errlen))) goto fail;
+    if ((rc = check_range(c, err, errlen))) goto fail;
+    out->stats.ms_snap = now_ms() - t0;
+    progress(c, "snap", 1);
+    if ((rc = stage_split(c, &out->stats, &ev, &nev, err, errlen))) goto fail;
+    if (cancelled(c)) {
+        rc = ARR_ECANCELED;
+        goto fail;
+    }
+
+    /* graph: the hot pixels as vertices, the unique edges; unused pixels cannot occur
+     * (each is an endpoint or a crossing, so on a segment) */
+    double tg = now_ms();
+    g.nv = c->npix;
+    g.ne = nev;
+    g.P = c->pix;
+    c->pix = NULL;
+    g.EV = malloc((2 * nev + 1) * sizeof *g.EV);
+    if (!g.EV) {
+        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        goto fail;
+    }
+    for (size_t e = 0; e < nev; e++) {
+        g.EV[2 * e] = (uint32_t)(ev[e] >> 32);
+        g.EV[2 * e + 1] = (uint32_t)ev[e];
+    }
+    free(ev);
+    ev = NULL;
+    ctx_free(c); /* the big intermediate buffers are done with */
+    out->stats.ms_graph = now_ms() - tg;
+    if ((rc = build_complex(c, &g, out, err, errlen))) goto fail;
+    out->stats.ms_total = now_ms() - t0;
+    graph_free(&g);
+    free(c);
+    return ARR_OK;
+fail:
+    {
+        arr2_stats keep = out->stats;
+        lar2_free(out);
+        out->stats = keep;
+    }
+    if (rc == ARR_ECANCELED) seterr(err, errlen, rc, "cancelled");
+    free(ev);
+    graph_free(&g);
+    ctx_free(c);
+    free(c);
+    return rc;
+}
+
+void lar2_free(lar2 *c)
+{
+    free(c->V);
+    free(c->EV);
+    free(c->face_cycle);
+    free(c->hole_off);
+    free(c->hole_cyc);
+    free(c->fe_off);
+    free(c->fe);
+    free(c->cyc_off);
+    free(c->cyc);
+    free(c->ext_cyc);
+    memset(c, 0, sizeof *c);
+}
+
+double lar2_cycle_area(const lar2 *c, uint32_t cy)
+{
+    double a = 0;
+    uint32_t b = c->cyc_off[cy], e = c->cyc_off[cy + 1];
+    if (e - b < 3) return 0;
+    double x0 = c->V[2 * c->cyc[b]], y0 = c->V[2 * c->cyc[b] + 1];
+    for (uint32_t i = b + 1; i + 1 < e; i++) {
+        double x1 = c->V[2 * c->cyc[i]] - x0, y1 = c->V[2 * c->cyc[i] + 1] - y0;
+        double x2 = c->V[2 * c->cyc[i + 1]] - x0, y2 = c->V[2 * c->cyc[i + 1] + 1] - y0;
+        a += x1 * y2 - x2 * y1;
+    }
+    return a / 2;
+}

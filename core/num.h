@@ -1,0 +1,62 @@
+/* num.h — exact integer geometry on the snapping grid.
+ *
+ * Grid coordinates are int64 with |x|, |y| <= 2^39 (arr2 keeps them below 2^38 + 1), so
+ * differences fit in 40 bits and every product below fits in a signed 128-bit integer:
+ * orient2 is exact (|result| < 2^82), and so are the intersection numerators (< 2^122).
+ * There is no epsilon here: the only tolerance of the 2D pipeline is the grid step itself.
+ */
+#ifndef CELLAR_NUM_H
+#define CELLAR_NUM_H
+
+#include <stdint.h>
+
+typedef __int128 i128;
+
+typedef struct ipt {
+    int64_t x, y;
+} ipt;
+
+/* Twice the signed area of triangle abc: > 0 when a, b, c turn counter-clockwise. */
+static inline i128 orient2(ipt a, ipt b, ipt c)
+{
+    return (i128)(b.x - a.x) * (c.y - a.y) - (i128)(b.y - a.y) * (c.x - a.x);
+}
+
+static inline int sign128(i128 v) { return (v > 0) - (v < 0); }
+
+static inline i128 cross2(int64_t ax, int64_t ay, int64_t bx, int64_t by)
+{
+    return (i128)ax * by - (i128)ay * bx;
+}
+
+/* floor(n / d) for d > 0 */
+static inline i128 floordiv128(i128 n, i128 d)
+{
+    i128 q = n / d;
+    if ((n % d != 0) && (n < 0)) q--;
+    return q;
+}
+
+/* n / d rounded to the nearest integer, halves rounded up (floor(n/d + 1/2)); d > 0.
+ * This is the pixel convention: the pixel of grid point X is [X - 1/2, X + 1/2). */
+static inline int64_t rounddiv128(i128 n, i128 d) { return (int64_t)floordiv128(2 * n + d, 2 * d); }
+
+/* Lexicographic order of grid points (x, then y). */
+static inline int ipt_cmp(ipt a, ipt b)
+{
+    if (a.x != b.x) return a.x < b.x ? -1 : 1;
+    if (a.y != b.y) return a.y < b.y ? -1 : 1;
+    return 0;
+}
+
+/* Angular order of direction vectors counter-clockwise from the +x axis, exact.
+ * Returns < 0 when a comes first, 0 when a and b point the same way. */
+static inline int dir_cmp(int64_t ax, int64_t ay, int64_t bx, int64_t by)
+{
+    int ha = ay < 0 || (ay == 0 && ax < 0);
+    int hb = by < 0 || (by == 0 && bx < 0);
+    if (ha != hb) return ha - hb;
+    return -sign128(cross2(ax, ay, bx, by));
+}
+
+#endif

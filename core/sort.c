@@ -1,0 +1,91 @@
+/* sort.c — see sort.h.  11-bit digits: 6 passes for a 64-bit key at most. */
+#include "core/sort.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define RBITS 11
+#define RSIZE (1u << RBITS)
+
+/* One stable counting pass of elements of size `size` whose key is key(elem); returns 1 when
+ * it moved the data to dst, 0 when every key had the same digit (nothing to do). */
+#define RADIX_PASS(T, KEY)                                                                         \
+    static int pass_##T(const T *src, T *dst, size_t n, unsigned shift, size_t *cnt)               \
+    {                                                                                              \
+        memset(cnt, 0, RSIZE * sizeof *cnt);                                                       \
+        for (size_t i = 0; i < n; i++) cnt[(KEY(src[i]) >> shift) & (RSIZE - 1)]++;                \
+        for (size_t d = 0; d < RSIZE; d++)                                                         \
+            if (cnt[d] == n) return 0;                                                             \
+        size_t s = 0;                                                                              \
+        for (size_t d = 0; d < RSIZE; d++) {                                                       \
+            size_t c = cnt[d];                                                                     \
+            cnt[d] = s;                                                                            \
+            s += c;                                                                                \
+        }                                                                                          \
+        for (size_t i = 0; i < n; i++) dst[cnt[(KEY(src[i]) >> shift) & (RSIZE - 1)]++] = src[i];  \
+        return 1;                                                                                  \
+    }
+
+#define KEY_U64(e) (e)
+RADIX_PASS(uint64_t, KEY_U64)
+#define KEY_IPT_X(e) ((uint64_t)(e).x ^ (UINT64_C(1) << 63))
+#define KEY_IPT_Y(e) ((uint64_t)(e).y ^ (UINT64_C(1) << 63))
+typedef ipt ipt_x;
+typedef ipt ipt_y;
+RADIX_PASS(ipt_x, KEY_IPT_X)
+RADIX_PASS(ipt_y, KEY_IPT_Y)
+
+int sort_u64(uint64_t *a, size_t n)
+{
+    if (n < 2) return 0;
+    uint64_t *tmp = malloc(n * sizeof *tmp);
+    size_t *cnt = malloc(RSIZE * sizeof *cnt);
+    if (!tmp || !cnt) {
+        free(tmp);
+        free(cnt);
+        return -1;
+    }
+    uint64_t *src = a, *dst = tmp;
+    for (unsigned sh = 0; sh < 64; sh += RBITS) {
+        if (pass_uint64_t(src, dst, n, sh, cnt)) {
+            uint64_t *t = src;
+            src = dst;
+            dst = t;
+        }
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
+    free(tmp);
+    free(cnt);
+    return 0;
+}
+
+int sort_ipt(ipt *a, size_t n)
+{
+    if (n < 2) return 0;
+    ipt *tmp = malloc(n * sizeof *tmp);
+    size_t *cnt = malloc(RSIZE * sizeof *cnt);
+    if (!tmp || !cnt) {
+        free(tmp);
+        free(cnt);
+        return -1;
+    }
+    ipt *src = a, *dst = tmp;
+    for (unsigned sh = 0; sh < 64; sh += RBITS) {
+        if (pass_ipt_y(src, dst, n, sh, cnt)) {
+            ipt *t = src;
+            src = dst;
+            dst = t;
+        }
+    }
+    for (unsigned sh = 0; sh < 64; sh += RBITS) {
+        if (pass_ipt_x(src, dst, n, sh, cnt)) {
+            ipt *t = src;
+            src = dst;
+            dst = t;
+        }
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
+    free(tmp);
+    free(cnt);
+    return 0;
+}

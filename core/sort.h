@@ -1,0 +1,17 @@
+/* sort.h — LSD radix sorts for the big arrays of the pipeline (keys, grid points).
+ * Each allocates its own scratch buffer and returns 0, or -1 when out of memory (the array
+ * is then left unsorted but intact).  Passes whose digit is the same for every key are
+ * skipped, so keys that use few bits cost few passes. */
+#ifndef CELLAR_SORT_H
+#define CELLAR_SORT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/num.h"
+
+int sort_u64(uint64_t *a, size_t n);
+/* Lexicographic (x, then y); coordinates must satisfy |c| < 2^62. */
+int sort_ipt(ipt *a, size_t n);
+
+#endif

@@ -1,0 +1,184 @@
+/* lar_check.c — see lar_check.h. */
+#include "tests/lar_check.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int bad(char *msg, size_t len, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, len, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+/* Edge index of {u, v} by binary search in the sorted EV, or -1. */
+static long find_edge(const lar2 *c, uint32_t u, uint32_t v)
+{
+    uint32_t a = u < v ? u : v, b = u < v ? v : u;
+    size_t lo = 0, hi = c->ne;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
+        if (x < a || (x == a && y < b)) lo = mid + 1;
+        else hi = mid;
+    }
+    if (lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b) return (long)lo;
+    return -1;
+}
+
+double lar_face_area(const lar2 *c, size_t f)
+{
+    double a = lar2_cycle_area(c, c->face_cycle[f]);
+    for (uint32_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++)
+        a += lar2_cycle_area(c, c->hole_cyc[h]);
+    return a;
+}
+
+static uint32_t uf(uint32_t *p, uint32_t x)
+{
+    while (p[x] != x) x = p[x] = p[p[x]];
+    return x;
+}
+
+int lar_check(const lar2 *c, char *msg, size_t len)
+{
+    int rc = -1;
+    int *use = calloc(2 * c->ne + 1, sizeof *use);
+    int *net = calloc(c->ne + 1, sizeof *net);
+    long *vsum = calloc(c->nv + 1, sizeof *vsum);
+    uint32_t *par = malloc((c->nv + 1) * sizeof *par);
+    if (!use || !net || !vsum || !par) {
+        bad(msg, len, "out of memory");
+        goto out;
+    }
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t a = c->EV[2 * e], b = c->EV[2 * e + 1];
+        if (a >= b || b >= c->nv) {
+            bad(msg, len, "EV[%zu] = [%u, %u] not v0 < v1 < nv", e, a, b);
+            goto out;
+        }
+        if (e && (c->EV[2 * e - 2] > a || (c->EV[2 * e - 2] == a && c->EV[2 * e - 1] >= b))) {
+            bad(msg, len, "EV not sorted and unique at %zu", e);
+            goto out;
+        }
+    }
+    /* every cycle a closed walk; every directed edge used once */
+    for (size_t cy = 0; cy < c->ncyc; cy++) {
+        uint32_t s = c->cyc_off[cy], t = c->cyc_off[cy + 1];
+        if (t - s < 2) {
+            bad(msg, len, "cycle %zu has %u vertices", cy, t - s);
+            goto out;
+        }
+        for (uint32_t i = s; i < t; i++) {
+            uint32_t u = c->cyc[i], v = c->cyc[i + 1 < t ? i + 1 : s];
+            long e = find_edge(c, u, v);
+            if (e < 0) {
+                bad(msg, len, "cycle %zu steps %u -> %u along no edge", cy, u, v);
+                goto out;
+            }
+            use[2 * e + (u > v)]++;
+        }
+    }
+    for (size_t h = 0; h < 2 * c->ne; h++)
+        if (use[h] != 1) {
+            bad(msg, len, "edge %zu walked %d times in direction %zu", h / 2, use[h], h % 2);
+            goto out;
+        }
+    /* FE = net signed edges of the face's cycles; d1 d2 = 0 */
+    for (size_t f = 0; f < c->nf; f++) {
+        memset(net, 0, c->ne * sizeof *net);
+        for (uint32_t j = 0; j <= c->hole_off[f + 1] - c->hole_off[f]; j++) {
+            uint32_t cy = j == 0 ? c->face_cycle[f] : c->hole_cyc[c->hole_off[f] + j - 1];
+            uint32_t s = c->cyc_off[cy], t = c->cyc_off[cy + 1];
+            for (uint32_t i = s; i < t; i++) {
+                uint32_t u = c->cyc[i], v = c->cyc[i + 1 < t ? i + 1 : s];
+                net[find_edge(c, u, v)] += u < v ? 1 : -1;
+            }
+        }
+        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
+            int32_t s = c->fe[i];
+            long e = labs((long)s) - 1;
+            if (e < 0 || (size_t)e >= c->ne) {
+                bad(msg, len, "FE[%zu] has edge %ld out of range", f, e);
+                goto out;
+            }
+            net[e] -= s > 0 ? 1 : -1;
+            vsum[c->EV[2 * e]] -= s > 0 ? 1 : -1;
+            vsum[c->EV[2 * e + 1]] += s > 0 ? 1 : -1;
+        }
+        for (size_t e = 0; e < c->ne; e++)
+            if (net[e]) {
+                bad(msg, len, "FE row %zu disagrees with its cycles at edge %zu", f, e);
+                goto out;
+            }
+        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
+            long e = labs((long)c->fe[i]) - 1;
+            if (vsum[c->EV[2 * e]] || vsum[c->EV[2 * e + 1]]) {
+                bad(msg, len, "d1 d2 != 0 in column %zu", f);
+                goto out;
+            }
+        }
+    }
+    /* orientation and areas */
+    /* a flat walk (a tree kept with keep_dangling) has area 0 exactly on the grid, and
+     * about scale^2 * 1e-16 per vertex in doubles: anything below flat is treated as 0 */
+    double fsum = 0, esum = 0, scale = 0;
+    for (size_t v = 0; v < 2 * c->nv; v++) scale = fmax(scale, fabs(c->V[v]));
+    double flat = 1e-13 * scale * scale * (double)(c->ne + 1);
+    for (size_t f = 0; f < c->nf; f++) {
+        if (!(lar2_cycle_area(c, c->face_cycle[f]) > 0)) {
+            bad(msg, len, "face %zu outer cycle not counter-clockwise", f);
+            goto out;
+        }
+        for (uint32_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++)
+            if (lar2_cycle_area(c, c->hole_cyc[h]) > flat) {
+                bad(msg, len, "face %zu has a counter-clockwise hole", f);
+                goto out;
+            }
+        fsum += lar_face_area(c, f);
+    }
+    for (size_t x = 0; x < c->next; x++) {
+        double a = lar2_cycle_area(c, c->ext_cyc[x]);
+        if (a > flat) {
+            bad(msg, len, "exterior cycle %zu counter-clockwise (area %g)", x, a);
+            goto out;
+        }
+        esum -= a;
+    }
+    if (fabs(fsum - esum) > 1e-9 * fmax(esum, 1e-300) + 1e-12 * scale * scale) {
+        bad(msg, len, "face areas add up to %.17g, exterior encloses %.17g", fsum, esum);
+        goto out;
+    }
+    /* Euler: V - E + F = components */
+    for (size_t v = 0; v < c->nv; v++) par[v] = (uint32_t)v;
+    size_t comps = c->nv;
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t a = uf(par, c->EV[2 * e]), b = uf(par, c->EV[2 * e + 1]);
+        if (a != b) {
+            par[a] = b;
+            comps--;
+        }
+    }
+    if ((long)c->nv - (long)c->ne + (long)c->nf != (long)comps) {
+        bad(msg, len, "V - E + F = %ld, components = %zu", (long)c->nv - (long)c->ne + (long)c->nf,
+            comps);
+        goto out;
+    }
+    if (c->stats.components != comps) {
+        bad(msg, len, "stats.components = %zu, found %zu", c->stats.components, comps);
+        goto out;
+    }
+    rc = 0;
+out:
+    free(use);
+    free(net);
+    free(vsum);
+    free(par);
+    return rc;
+}

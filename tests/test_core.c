@@ -1,0 +1,471 @@
+/* test_core.c — unit tests of the 2D arrangement core (core/arr2.h): the seeds' examples,
+ * counts known in closed form, holes, degenerate and hostile input, determinism.  Every
+ * result also goes through lar_check() (tests/lar_check.h). */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/arr2.h"
+#include "core/num.h"
+#include "tests/check.h"
+#include "tests/lar_check.h"
+
+/* Runs the arrangement and the invariant checks; returns ARR_* */
+static int run(const double *s, size_t n, const arr2_opts *o, lar2 *out)
+{
+    char err[256], msg[256];
+    int rc = arr2_build(s, n, o, out, err, sizeof err);
+    if (rc == ARR_OK && lar_check(out, msg, sizeof msg))
+        test_fail(__FILE__, "run", __LINE__, "invariant: %s", msg);
+    return rc;
+}
+
+static size_t total_holes(const lar2 *c) { return c->hole_off[c->nf]; }
+
+static double sum_face_areas(const lar2 *c)
+{
+    double a = 0;
+    for (size_t f = 0; f < c->nf; f++) a += lar_face_area(c, f);
+    return a;
+}
+
+/* x0, y0 .. squares of side `side`, each as 4 segments */
+static size_t add_square(double *s, size_t n, double x, double y, double side)
+{
+    double q[4][4] = {{x, y, x + side, y},
+                      {x + side, y, x + side, y + side},
+                      {x + side, y + side, x, y + side},
+                      {x, y + side, x, y}};
+    memcpy(s + 4 * n, q, sizeof q);
+    return n + 4;
+}
+
+static const double ORTHO[8][4] = {{0, 0, 6, 0}, {0, 4, 10, 4}, {0, 0, 0, 4},  {3, 0, 3, 4},
+                                   {6, 0, 6, 8}, {3, 2, 6, 2},  {10, 0, 10, 8}, {0, 8, 10, 8}};
+
+TEST(orthogonal_example_seeds)
+{
+    lar2 c;
+    arr2_opts o = {.keep_dangling = 1};
+    REQUIRE(run(&ORTHO[0][0], 8, &o, &c) == ARR_OK, "keep_dangling run failed");
+    CHECK(c.nv == 13 && c.ne == 16, "before pruning: %zu V %zu E, want 13, 16", c.nv, c.ne);
+    CHECK(c.nf == 4, "faces %zu, want 4", c.nf);
+    CHECK(c.stats.intersections == 1, "proper crossings %zu, want 1", c.stats.intersections);
+    lar2_free(&c);
+    REQUIRE(run(&ORTHO[0][0], 8, NULL, &c) == ARR_OK, "default run failed");
+    CHECK(c.nv == 11 && c.ne == 14 && c.nf == 4, "%zu V %zu E %zu F, want 11 14 4", c.nv, c.ne,
+          c.nf);
+    CHECK(c.stats.blocks == 2, "blocks %zu, want 2", c.stats.blocks);
+    CHECK(c.stats.dangling_removed == 2, "removed %zu, want 2", c.stats.dangling_removed);
+    /* faces: 3x4 on the left, 3x2 twice (split by (3,2)-(6,2)), 4x4 upper right */
+    double want[4] = {6, 6, 12, 16}, got[4];
+    for (size_t f = 0; f < 4 && f < c.nf; f++) got[f] = lar_face_area(&c, f);
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++)
+            if (got[j] < got[i]) {
+                double t = got[i];
+                got[i] = got[j];
+                got[j] = t;
+            }
+    for (int i = 0; i < 4; i++) CHECK(fabs(got[i] - want[i]) < 1e-9, "area %g want %g", got[i], want[i]);
+    lar2_free(&c);
+}
+
+static size_t grid_segments(double *s, int k, double x0, double y0, double step)
+{
+    size_t n = 0;
+    for (int i = 0; i < k; i++) {
+        double a[4] = {x0, y0 + i * step, x0 + (k - 1) * step, y0 + i * step};
+        double b[4] = {x0 + i * step, y0, x0 + i * step, y0 + (k - 1) * step};
+        memcpy(s + 4 * n++, a, sizeof a);
+        memcpy(s + 4 * n++, b, sizeof b);
+    }
+    return n;
+}
+
+TEST(grid_closed_form)
+{
+    int ks[] = {2, 3, 4, 10, 50};
+    for (size_t t = 0; t < sizeof ks / sizeof *ks; t++) {
+        int k = ks[t];
+        double *s = malloc(2 * (size_t)k * 4 * sizeof *s);
+        size_t n = grid_segments(s, k, 0, 0, 1);
+        lar2 c;
+        REQUIRE(run(s, n, NULL, &c) == ARR_OK, "grid %d failed", k);
+        size_t f = (size_t)(k - 1) * (size_t)(k - 1);
+        CHECK(c.nf == f, "grid %d: %zu faces, want %zu", k, c.nf, f);
+        CHECK(c.nv == (size_t)k * k, "grid %d: %zu V", k, c.nv);
+        CHECK(c.ne == 2 * (size_t)k * (k - 1), "grid %d: %zu E", k, c.ne);
+        for (size_t i = 0; i < c.nf; i++)
+            CHECK(fabs(lar_face_area(&c, i) - 1) < 1e-12, "grid %d face %zu area %g", k, i,
+                  lar_face_area(&c, i));
+        lar2_free(&c);
+        free(s);
+    }
+}
+
+TEST(grid_4x4_chaincomplex_oracle)
+{
+    /* LinearAlgebraicRepresentation.jl "chaincomplex 2D": 16 V, 24 unit edges, 9 faces,
+     * copFE with 36 non-zeros; here given as 24 unit segments */
+    double s[24 * 4];
+    size_t n = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 3; j++) {
+            double a[4] = {j, i, j + 1, i}, b[4] = {i, j, i, j + 1};
+            memcpy(s + 4 * n++, a, sizeof a);
+            memcpy(s + 4 * n++, b, sizeof b);
+        }
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 16 && c.ne == 24 && c.nf == 9, "%zu %zu %zu", c.nv, c.ne, c.nf);
+    CHECK(c.fe_off[c.nf] == 36, "FE non-zeros %u, want 36", c.fe_off[c.nf]);
+    lar2_free(&c);
+}
+
+TEST(refactoring_jl_oracles)
+{
+    /* test/refactoring.jl: square plus a diagonal to (2,1) that cuts the right side at (1,.5):
+     * fragmentlines gives 6 V, 7 E; the arrangement 5 V, 6 E, 2 faces */
+    double s[5][4] = {{0, 0, 1, 0}, {1, 0, 1, 1}, {1, 1, 0, 1}, {0, 1, 0, 0}, {0, 0, 2, 1}};
+    lar2 c;
+    arr2_opts keep = {.keep_dangling = 1};
+    REQUIRE(run(&s[0][0], 5, &keep, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 6 && c.ne == 7, "fragments: %zu V %zu E, want 6, 7", c.nv, c.ne);
+    lar2_free(&c);
+    REQUIRE(run(&s[0][0], 5, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 5 && c.ne == 6 && c.nf == 2, "%zu V %zu E %zu F, want 5 6 2", c.nv, c.ne, c.nf);
+    lar2_free(&c);
+    /* refactor_planar_arrangement.jl: a collinear overlap and a crossing: 7 V, 8 E */
+    double t[5][4] = {{0, 1, 4, 1}, {1, 1, 3, 1}, {2, 2, 2, 0}, {1, 1, 2, 2}, {3, 1, 2, 0}};
+    REQUIRE(run(&t[0][0], 5, &keep, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 7 && c.ne == 8 && c.nf == 2, "%zu V %zu E %zu F, want 7 8 2", c.nv, c.ne, c.nf);
+    lar2_free(&c);
+    REQUIRE(run(&t[0][0], 5, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 5 && c.ne == 6 && c.nf == 2 && c.stats.blocks == 2, "%zu V %zu E %zu F %zu B",
+          c.nv, c.ne, c.nf, c.stats.blocks);
+    lar2_free(&c);
+    /* intersection([[0,0],[1,2]],[[2,0],[0,3]]) = (0.857142857142857, 0.571428571428571):
+     * the parameters on the two segments, 6/7 and 4/7, so the point is (6/7, 12/7) */
+    double x[2][4] = {{0, 0, 1, 2}, {2, 0, 0, 3}};
+    REQUIRE(run(&x[0][0], 2, &keep, &c) == ARR_OK, "failed");
+    int found = 0;
+    for (size_t v = 0; v < c.nv; v++)
+        found |= fabs(c.V[2 * v] - 6.0 / 7) < 1e-10 && fabs(c.V[2 * v + 1] - 12.0 / 7) < 1e-10;
+    CHECK(c.nv == 5 && found, "crossing point not found (%zu V)", c.nv);
+    lar2_free(&c);
+}
+
+TEST(concentric_squares_are_holes)
+{
+    double s[4 * 4 * 4];
+    size_t n = 0;
+    for (int i = 0; i < 4; i++) n = add_square(s, n, i, i, 8 - 2 * i);
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 4 && c.stats.components == 4, "%zu faces %zu comps", c.nf, c.stats.components);
+    CHECK(total_holes(&c) == 3 && c.next == 1, "%zu holes, %zu exterior", total_holes(&c), c.next);
+    /* rings of area 64-36, 36-16, 16-4, and the core 4 */
+    double want[] = {28, 20, 12, 4};
+    for (size_t f = 0; f < c.nf; f++) {
+        double a = lar_face_area(&c, f);
+        int ok = 0;
+        for (int i = 0; i < 4; i++) ok |= fabs(a - want[i]) < 1e-9;
+        CHECK(ok, "face %zu area %g", f, a);
+    }
+    lar2_free(&c);
+}
+
+TEST(disjoint_and_nested_components)
+{
+    double s[16 * 4];
+    size_t n = 0;
+    n = add_square(s, n, 0, 0, 1);
+    n = add_square(s, n, 5, 0, 1);    /* beside */
+    n = add_square(s, n, 10, 0, 10);  /* a big one ... */
+    n = add_square(s, n, 12, 2, 2);   /* ... with one inside */
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 4, "faces %zu", c.nf);
+    CHECK(c.next == 3, "exterior cycles %zu, want 3", c.next);
+    CHECK(total_holes(&c) == 1, "holes %zu, want 1", total_holes(&c));
+    for (size_t f = 0; f < c.nf; f++)
+        if (c.hole_off[f + 1] > c.hole_off[f])
+            CHECK(fabs(lar_face_area(&c, f) - 96) < 1e-9, "holed face area %g",
+                  lar_face_area(&c, f));
+    CHECK(fabs(sum_face_areas(&c) - 102) < 1e-9, "total %g", sum_face_areas(&c));
+    lar2_free(&c);
+}
+
+TEST(hole_in_nonconvex_face_goes_to_the_right_face)
+{
+    /* a U-shaped face whose bounding box holds a square that lies in the notch, outside the
+     * U: the square must not become a hole of the U (the seeds' bbox rule gets this wrong) */
+    double u[8][4] = {{0, 0, 9, 0}, {9, 0, 9, 9}, {9, 9, 6, 9}, {6, 9, 6, 3},
+                      {6, 3, 3, 3}, {3, 3, 3, 9}, {3, 9, 0, 9}, {0, 9, 0, 0}};
+    double s[12 * 4];
+    memcpy(s, u, sizeof u);
+    size_t n = add_square(s, 8, 4, 5, 1);
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 2 && total_holes(&c) == 0 && c.next == 2, "%zu faces %zu holes %zu ext", c.nf,
+          total_holes(&c), c.next);
+    lar2_free(&c);
+    /* and in the U's arm it is a hole */
+    n = add_square(s, 8, 1, 5, 1);
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 2 && total_holes(&c) == 1 && c.next == 1, "%zu faces %zu holes %zu ext", c.nf,
+          total_holes(&c), c.next);
+    lar2_free(&c);
+}
+
+TEST(hole_below_a_vertex_and_stacked_islands)
+{
+    /* islands whose lowest vertex lies straight above a vertex or a vertical edge of
+     * another: the downward ray hits vertices, not only edge interiors */
+    double s[32 * 4];
+    size_t n = 0;
+    n = add_square(s, n, 0, 0, 20);
+    n = add_square(s, n, 5, 2, 4);   /* island A: lowest vertex (5,2) */
+    n = add_square(s, n, 5, 8, 2);   /* island B: straight above A's vertex (5,6) */
+    double d[4][4] = {{14, 2, 16, 4}, {16, 4, 14, 6}, {14, 6, 12, 4}, {12, 4, 14, 2}};
+    memcpy(s + 4 * n, d, sizeof d); /* a diamond; its bottom (14,2) above nothing */
+    n += 4;
+    n = add_square(s, n, 13, 9, 2); /* above the diamond's top vertex (14,6) */
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 5 && total_holes(&c) == 4 && c.next == 1, "%zu faces %zu holes %zu ext", c.nf,
+          total_holes(&c), c.next);
+    lar2_free(&c);
+}
+
+TEST(collinear_overlaps_merge)
+{
+    /* the same square drawn three times with overlapping pieces of each side */
+    double s[][4] = {{0, 0, 4, 0}, {1, 0, 3, 0}, {2, 0, 6, 0}, {6, 0, 6, 4}, {6, 2, 6, 4},
+                     {6, 4, 0, 4}, {0, 4, 0, 0}, {0, 1, 0, 3}, {0, 4, 0, 2}, {4, 0, 0, 0}};
+    lar2 c;
+    REQUIRE(run(&s[0][0], sizeof s / sizeof *s, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 1, "faces %zu", c.nf);
+    CHECK(fabs(lar_face_area(&c, 0) - 24) < 1e-12, "area %g", lar_face_area(&c, 0));
+    lar2_free(&c);
+}
+
+TEST(many_segments_through_one_point)
+{
+    /* n chords through the centre of a regular 2n-gon: 2n triangles */
+    enum { N = 64 };
+    double s[(N + 2 * N) * 4];
+    size_t n = 0;
+    for (int i = 0; i < N; i++) {
+        double a = M_PI * i / N;
+        double q[4] = {cos(a), sin(a), -cos(a), -sin(a)};
+        memcpy(s + 4 * n++, q, sizeof q);
+    }
+    for (int i = 0; i < 2 * N; i++) {
+        double a = M_PI * i / N, b = M_PI * (i + 1) / N;
+        double q[4] = {cos(a), sin(a), cos(b), sin(b)};
+        memcpy(s + 4 * n++, q, sizeof q);
+    }
+    lar2 c;
+    REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 2 * N, "faces %zu want %d", c.nf, 2 * N);
+    CHECK(c.nv == 2 * N + 1, "V %zu want %d", c.nv, 2 * N + 1);
+    double want = N * sin(M_PI / N); /* area of the 2N-gon */
+    CHECK(fabs(sum_face_areas(&c) - want) < 1e-9, "area %.15g want %.15g", sum_face_areas(&c),
+          want);
+    lar2_free(&c);
+}
+
+TEST(far_from_origin_same_complex)
+{
+    double base[8][4];
+    /* at 1e9 a double holds the input to about 1e-7: the area can only be that good */
+    double off[][2] = {{0, 0}, {1e6, 1e6}, {-3e7, 2e5}, {1e9, -1e9}};
+    size_t nv0 = 0, ne0 = 0, nf0 = 0;
+    for (size_t t = 0; t < sizeof off / sizeof *off; t++) {
+        for (int i = 0; i < 8; i++)
+            for (int k = 0; k < 4; k++) base[i][k] = ORTHO[i][k] * 0.37 + off[t][k % 2];
+        lar2 c;
+        REQUIRE(run(&base[0][0], 8, NULL, &c) == ARR_OK, "offset %zu failed", t);
+        if (t == 0) {
+            nv0 = c.nv;
+            ne0 = c.ne;
+            nf0 = c.nf;
+        }
+        CHECK(c.nv == nv0 && c.ne == ne0 && c.nf == nf0 && nf0 == 4, "offset %zu: %zu %zu %zu", t,
+              c.nv, c.ne, c.nf);
+        double a = sum_face_areas(&c), want = 40 * 0.37 * 0.37;
+        CHECK(fabs(a - want) < 1e-9 * want + 1e-13 * fabs(off[t][0]) * 40, "offset %zu: area %.12g want %.12g", t, a, want);
+        lar2_free(&c);
+    }
+}
+
+TEST(bad_and_degenerate_input)
+{
+    lar2 c;
+    char err[256];
+    double nanseg[2][4] = {{0, 0, 1, 1}, {0, NAN, 1, 0}};
+    CHECK(arr2_build(&nanseg[0][0], 2, NULL, &c, err, sizeof err) == ARR_EINVAL, "NaN accepted");
+    CHECK(strstr(err, "lines[1][0]") != NULL, "message '%s' does not name lines[1][0]", err);
+    double infseg[1][4] = {{0, 0, INFINITY, 1}};
+    CHECK(arr2_build(&infseg[0][0], 1, NULL, &c, err, sizeof err) == ARR_EINVAL, "inf accepted");
+    CHECK(strstr(err, "lines[0][1]") != NULL, "message '%s'", err);
+    /* empty, all degenerate, one segment: empty complexes */
+    CHECK(run(NULL, 0, NULL, &c) == ARR_OK && c.nv == 0 && c.nf == 0, "empty");
+    lar2_free(&c);
+    double deg[3][4] = {{1, 1, 1, 1}, {2, 2, 2, 2}, {1, 1, 1, 1}};
+    CHECK(run(&deg[0][0], 3, NULL, &c) == ARR_OK && c.nv == 0 && c.stats.zero_length == 3,
+          "degenerate: %zu V, %zu dropped", c.nv, c.stats.zero_length);
+    lar2_free(&c);
+    double one[1][4] = {{0, 0, 1, 1}};
+    CHECK(run(&one[0][0], 1, NULL, &c) == ARR_OK && c.nv == 0 && c.ne == 0, "one segment pruned");
+    lar2_free(&c);
+    arr2_opts keep = {.keep_dangling = 1};
+    CHECK(run(&one[0][0], 1, &keep, &c) == ARR_OK && c.nv == 2 && c.ne == 1 && c.nf == 0 &&
+              c.next == 1,
+          "one segment kept: %zu V %zu E %zu ext", c.nv, c.ne, c.next);
+    lar2_free(&c);
+    /* huge coordinates: fine as long as the span fits a double */
+    double huge[4][4] = {{-1e300, -1e300, 1e300, 1e300}, {-1e300, 1e300, 1e300, -1e300},
+                         {-1e300, -1e300, 1e300, -1e300}, {1e300, -1e300, 1e300, 1e300}};
+    CHECK(run(&huge[0][0], 4, NULL, &c) == ARR_OK && c.nf == 2, "huge: %zu faces", c.nf);
+    lar2_free(&c);
+    double span[1][4] = {{-1.7e308, 0, 1.7e308, 1}};
+    CHECK(arr2_build(&span[0][0], 1, NULL, &c, err, sizeof err) == ARR_ELIMIT, "span accepted");
+    /* a precision finer than the grid allows is refused with the bound in the message */
+    arr2_opts fine = {.precision = 1e-15};
+    CHECK(arr2_build(&ORTHO[0][0], 8, &fine, &c, err, sizeof err) == ARR_ELIMIT,
+          "precision too fine accepted");
+    CHECK(strstr(err, "precision") != NULL, "message '%s'", err);
+    arr2_opts negp = {.precision = -1};
+    CHECK(arr2_build(&ORTHO[0][0], 8, &negp, &c, err, sizeof err) == ARR_EINVAL, "negative");
+    CHECK(c.V == NULL && c.nv == 0, "failed build left data behind");
+}
+
+TEST(precision_merges_close_vertices)
+{
+    /* a square whose corners miss each other by 1e-4: open at a fine grid, closed at 1e-3 */
+    double s[4][4] = {{0, 0, 1, 0}, {1.0001, 0, 1, 1}, {1, 1.0001, 0, 1}, {0, 1, 0, 0.0001}};
+    lar2 c;
+    REQUIRE(run(&s[0][0], 4, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 0, "fine grid: %zu faces, want 0", c.nf);
+    lar2_free(&c);
+    arr2_opts o = {.precision = 1e-3};
+    REQUIRE(run(&s[0][0], 4, &o, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 1 && c.nv == 4, "coarse grid: %zu faces %zu V, want 1, 4", c.nf, c.nv);
+    CHECK(c.stats.precision == 1e-3, "precision %g", c.stats.precision);
+    lar2_free(&c);
+}
+
+TEST(snap_rounding_near_misses)
+{
+    /* many nearly concurrent lines at a coarse grid: rounding must not create crossings
+     * (lar_check verifies planarity through Euler and the walks) */
+    enum { N = 40 };
+    double s[N * 4];
+    for (int i = 0; i < N; i++) {
+        double a = 0.3 + i * 1e-3;
+        double q[4] = {-cos(a) + i * 1e-4, -sin(a), cos(a), sin(a) + i * 2e-4};
+        memcpy(s + 4 * i, q, sizeof q);
+    }
+    arr2_opts o = {.precision = 1e-3, .keep_dangling = 1};
+    lar2 c;
+    REQUIRE(run(s, N, &o, &c) == ARR_OK, "failed");
+    CHECK(c.nv > 0, "no vertices");
+    lar2_free(&c);
+}
+
+/* splitmix64: the tests' own reproducible random numbers */
+static uint64_t rnd_state;
+static double rnd(void)
+{
+    uint64_t z = (rnd_state += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    z ^= z >> 31;
+    return (double)(z >> 11) / 9007199254740992.0;
+}
+
+static double *random_lines(size_t n, double scaling, uint64_t seed)
+{
+    double *s = malloc(n * 4 * sizeof *s);
+    rnd_state = seed;
+    for (size_t i = 0; i < n; i++) {
+        double x1 = rnd(), y1 = rnd(), x2 = rnd(), y2 = rnd(), px = rnd(), py = rnd();
+        double cx = (x1 + x2) / 2, cy = (y1 + y2) / 2;
+        s[4 * i] = (x1 - cx) * scaling + px;
+        s[4 * i + 1] = (y1 - cy) * scaling + py;
+        s[4 * i + 2] = (x2 - cx) * scaling + px;
+        s[4 * i + 3] = (y2 - cy) * scaling + py;
+    }
+    return s;
+}
+
+TEST(random_invariants_and_thread_determinism)
+{
+    size_t sizes[] = {10, 200, 1000, 5000};
+    double scal[] = {0.8, 0.3, 0.2, 0.1};
+    for (size_t t = 0; t < 4; t++)
+        for (uint64_t seed = 1; seed <= 3; seed++) {
+            double *s = random_lines(sizes[t], scal[t], seed);
+            lar2 a, b, k;
+            arr2_opts o1 = {.threads = 1}, o2 = {.threads = 2}, ok = {.keep_dangling = 1};
+            REQUIRE(run(s, sizes[t], &o1, &a) == ARR_OK, "n=%zu seed=%d", sizes[t], (int)seed);
+            REQUIRE(run(s, sizes[t], &o2, &b) == ARR_OK, "n=%zu seed=%d", sizes[t], (int)seed);
+            REQUIRE(run(s, sizes[t], &ok, &k) == ARR_OK, "n=%zu seed=%d", sizes[t], (int)seed);
+            CHECK(a.nv == b.nv && a.ne == b.ne && a.nf == b.nf &&
+                      !memcmp(a.V, b.V, 2 * a.nv * sizeof *a.V) &&
+                      !memcmp(a.EV, b.EV, 2 * a.ne * sizeof *a.EV) &&
+                      !memcmp(a.cyc, b.cyc, a.cyc_off[a.ncyc] * sizeof *a.cyc),
+                  "1 and 2 threads differ at n=%zu seed=%d", sizes[t], (int)seed);
+            CHECK(k.nf == a.nf, "keep_dangling changes the faces: %zu vs %zu", k.nf, a.nf);
+            CHECK(fabs(sum_face_areas(&k) - sum_face_areas(&a)) <= 1e-9 * sum_face_areas(&a),
+                  "keep_dangling changes the area");
+            lar2_free(&a);
+            lar2_free(&b);
+            lar2_free(&k);
+            free(s);
+        }
+}
+
+static void count_progress(void *u, const char *stage, double f)
+{
+    (void)stage;
+    (void)f;
+    (*(int *)u)++;
+}
+
+TEST(cancel_and_progress)
+{
+    double *s = random_lines(2000, 0.2, 7);
+    atomic_int stop;
+    atomic_init(&stop, 1);
+    int calls = 0;
+    arr2_opts o = {.cancel = &stop};
+    lar2 c;
+    char err[128];
+    CHECK(arr2_build(s, 2000, &o, &c, err, sizeof err) == ARR_ECANCELED, "not cancelled");
+    CHECK(c.V == NULL, "cancelled build left data");
+    atomic_store(&stop, 0);
+    o.progress = count_progress;
+    o.udata = &calls;
+    CHECK(arr2_build(s, 2000, &o, &c, err, sizeof err) == ARR_OK, "failed: %s", err);
+    CHECK(calls >= 5, "progress called %d times", calls);
+    lar2_free(&c);
+    free(s);
+}
+
+TEST(exact_predicates)
+{
+    ipt a = {0, 0}, b = {(int64_t)1 << 38, 1}, c = {(int64_t)1 << 37, 0};
+    CHECK(orient2(a, b, c) < 0, "orient sign");
+    ipt d = {((int64_t)1 << 38) - 1, 1};
+    CHECK(orient2(a, b, d) == 1, "orient exact: %lld", (long long)orient2(a, b, d));
+    CHECK(rounddiv128(5, 2) == 3 && rounddiv128(-5, 2) == -2 && rounddiv128(-7, 2) == -3,
+          "rounding");
+    CHECK(dir_cmp(1, 0, 0, 1) < 0 && dir_cmp(0, -1, 1, 1) > 0 && dir_cmp(-1, 0, 0, -1) < 0 &&
+              dir_cmp(2, 2, 1, 1) == 0,
+          "angular order");
+}

@@ -44,6 +44,22 @@ static double split_threshold(const int64_t *box, const uint32_t *ids, size_t cn
     return s / (double)cnt;
 }
 
+/* The middle of the bucket's region clipped to its boxes' extent along axis: where the mean of
+ * the centres fails (long boxes all centred alike), this still halves the short ones. */
+static double split_middle(const int64_t *box, const uint32_t *ids, size_t cnt, int axis,
+                           double lo, double hi)
+{
+    double mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < cnt; i++) {
+        const int64_t *b = box + 4 * (size_t)ids[i];
+        mn = fmin(mn, (double)b[axis]);
+        mx = fmax(mx, (double)b[axis + 2]);
+    }
+    mn = fmax(mn, lo);
+    mx = fmin(mx, hi);
+    return floor(mn / 2 + mx / 2) + 0.5; /* between grid lines: no box edge lies on it */
+}
+
 static void split_count(const int64_t *box, const uint32_t *ids, size_t cnt, int axis, double t,
                         size_t *nb, size_t *na)
 {
@@ -82,14 +98,20 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
         size_t best = p.cnt;
         if (p.cnt > leaf_max && p.depth < BOX_MAX_DEPTH) {
             for (int a = 0; a < 2; a++) {
-                size_t nb, na;
-                double th = split_threshold(box, pool + p.off, p.cnt, a);
-                split_count(box, pool + p.off, p.cnt, a, th, &nb, &na);
-                size_t worst = nb > na ? nb : na;
-                if (worst < best && th > p.lo[a] && th < p.hi[a]) {
-                    best = worst;
-                    axis = a;
-                    thr = th;
+                double cand[2];
+                cand[0] = split_threshold(box, pool + p.off, p.cnt, a);
+                cand[1] = split_middle(box, pool + p.off, p.cnt, a, p.lo[a], p.hi[a]);
+                for (int k = 0; k < 2; k++) {
+                    size_t nb, na;
+                    double th = cand[k];
+                    if (!(th > p.lo[a] && th < p.hi[a])) continue;
+                    split_count(box, pool + p.off, p.cnt, a, th, &nb, &na);
+                    size_t worst = nb > na ? nb : na;
+                    if (worst < best) {
+                        best = worst;
+                        axis = a;
+                        thr = th;
+                    }
                 }
             }
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */

@@ -754,6 +754,14 @@ static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
     return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
 }
 
+/* The half-edge from u to v (they are adjacent); a scan of u's few edges. */
+static uint32_t find_half_edge(const graph *g, uint32_t u, uint32_t v)
+{
+    for (uint32_t i = g->off[u]; i < g->off[u + 1]; i++)
+        if (he_head(g, g->out[i]) == v) return g->out[i];
+    return NONE;
+}
+
 static uint32_t uf_find(uint32_t *par, uint32_t x)
 {
     while (par[x] != x) {
@@ -953,6 +961,143 @@ out:
 
 /* ---- the whole pipeline ----------------------------------------------------------------- */
 
+/* Splits a closed walk of vertices at its repeated vertices into simple cycles, in walk
+ * order; appends them to the cycle table (*k vertices, *np cycles so far) and their signs
+ * (1: counter-clockwise) to pos.  instack has nv entries, all NONE, and is left so. */
+static void split_walk(const graph *g, const uint32_t *walk, size_t len, uint32_t *stack,
+                       uint32_t *instack, uint32_t *cyc, uint32_t *off, uint8_t *pos, size_t *k,
+                       size_t *np)
+{
+    size_t sp = 0;
+    for (size_t i = 0; i <= len; i++) {
+        uint32_t v = i < len ? walk[i] : NONE;
+        size_t from;
+        if (i < len && instack[v] == NONE) {
+            instack[v] = (uint32_t)sp;
+            stack[sp++] = v;
+            continue;
+        }
+        from = i < len ? instack[v] : 0; /* a loop closes at v (or the walk ends) */
+        i128 a2 = 0;
+        for (size_t j = from; j < sp; j++) {
+            ipt p = g->P[stack[j]], q = g->P[stack[j + 1 < sp ? j + 1 : from]];
+            a2 += cross2(p.x, p.y, q.x, q.y);
+            cyc[(*k)++] = stack[j];
+            if (j > from || i == len) instack[stack[j]] = NONE;
+        }
+        pos[*np] = a2 > 0;
+        off[++*np] = (uint32_t)*k;
+        sp = from + (i < len);
+    }
+}
+
+/* Fills the lar2 from the graph and its walks.  Each walk is split at repeated vertices
+ * into simple cycles (unless keep_dangling, where walks along dangling edges are kept
+ * whole): a bounded face's walk gives one counter-clockwise cycle, its outer cycle, and
+ * clockwise cycles where something touches it from inside at a single vertex, which become
+ * holes (as GEOS and the OGC model have it: holes may touch the shell at a point). */
+static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint32_t *face_idx,
+                        const uint32_t *face_of, size_t nf, lar2 *out, char *err, size_t el)
+{
+    int rc = ARR_ENOMEM;
+    size_t nh = 2 * g->ne, np = 0, k = 0;
+    uint32_t *pwalk = malloc((nh + 1) * sizeof *pwalk);
+    uint8_t *ppos = malloc(nh + 1);
+    uint32_t *stack = malloc((nh + 1) * sizeof *stack), *instack = malloc((g->nv + 1) * 4);
+    uint32_t *walkv = malloc((nh + 1) * sizeof *walkv);
+    out->nv = g->nv;
+    out->ne = g->ne;
+    out->nf = nf;
+    out->V = malloc((2 * g->nv + 1) * sizeof *out->V);
+    out->EV = malloc((2 * g->ne + 1) * sizeof *out->EV);
+    out->face_cycle = malloc((nf + 1) * sizeof *out->face_cycle);
+    out->hole_off = calloc(nf + 2, sizeof *out->hole_off);
+    out->hole_cyc = malloc((nh + 1) * sizeof *out->hole_cyc);
+    out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+    out->fe = malloc((nh + 1) * sizeof *out->fe);
+    out->cyc_off = malloc((nh + 2) * sizeof *out->cyc_off);
+    out->cyc = malloc((nh + 1) * sizeof *out->cyc);
+    out->ext_cyc = malloc((nh + 1) * sizeof *out->ext_cyc);
+    if (!pwalk || !ppos || !stack || !instack || !walkv || !out->V || !out->EV ||
+        !out->face_cycle || !out->hole_off || !out->hole_cyc || !out->fe_off || !out->fe ||
+        !out->cyc_off || !out->cyc || !out->ext_cyc)
+        goto out;
+    for (size_t v = 0; v < g->nv; v++) {
+        out->V[2 * v] = unsnap(c, 0, g->P[v].x);
+        out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
+        instack[v] = NONE;
+    }
+    memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
+    out->cyc_off[0] = 0;
+    for (size_t cy = 0; cy < w->ncyc; cy++) {
+        size_t len = w->hoff[cy + 1] - w->hoff[cy], p0 = np;
+        for (size_t i = 0; i < len; i++) walkv[i] = he_tail(g, w->hes[w->hoff[cy] + i]);
+        if (c->o->keep_dangling) {
+            memcpy(out->cyc + k, walkv, len * sizeof *walkv);
+            k += len;
+            ppos[np] = w->area2[cy] > 0;
+            out->cyc_off[++np] = (uint32_t)k;
+        } else {
+            split_walk(g, walkv, len, stack, instack, out->cyc, out->cyc_off, ppos, &k, &np);
+        }
+        size_t npos = 0;
+        for (size_t p = p0; p < np; p++) {
+            pwalk[p] = (uint32_t)cy;
+            npos += ppos[p];
+        }
+        if (npos != (face_idx[cy] != NONE)) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: walk %zu splits into %zu outer cycles",
+                        cy, npos);
+            goto out;
+        }
+    }
+    out->ncyc = np;
+    /* holes: the clockwise pieces of each face's walk and every piece of the outer walks
+     * placed in it; counted per face, then filled in cycle order */
+    for (size_t p = 0; p < np; p++) {
+        uint32_t fw = face_of[pwalk[p]];
+        if (!ppos[p] && fw != NONE) out->hole_off[face_idx[fw] + 1]++;
+    }
+    for (size_t f = 0; f < nf; f++) out->hole_off[f + 1] += out->hole_off[f];
+    out->next = 0;
+    for (size_t p = 0; p < np; p++) {
+        uint32_t fw = face_of[pwalk[p]];
+        if (ppos[p]) out->face_cycle[face_idx[pwalk[p]]] = (uint32_t)p;
+        else if (fw == NONE) out->ext_cyc[out->next++] = (uint32_t)p;
+        else out->hole_cyc[out->hole_off[face_idx[fw]]++] = (uint32_t)p;
+    }
+    for (size_t f = nf; f > 0; f--) out->hole_off[f] = out->hole_off[f - 1];
+    out->hole_off[0] = 0;
+    /* FE: the signed edges of the face's cycles; an edge with this face on both sides (a
+     * dangling edge kept on request) cancels */
+    size_t fe = 0;
+    for (size_t f = 0; f < nf; f++) {
+        out->fe_off[f] = (uint32_t)fe;
+        uint32_t nhol = out->hole_off[f + 1] - out->hole_off[f];
+        uint32_t fw = pwalk[out->face_cycle[f]];
+        for (uint32_t j = 0; j <= nhol; j++) {
+            uint32_t p = j == 0 ? out->face_cycle[f] : out->hole_cyc[out->hole_off[f] + j - 1];
+            for (uint32_t i = out->cyc_off[p]; i < out->cyc_off[p + 1]; i++) {
+                uint32_t u = out->cyc[i];
+                uint32_t v = out->cyc[i + 1 < out->cyc_off[p + 1] ? i + 1 : out->cyc_off[p]];
+                uint32_t h = find_half_edge(g, u, v);
+                if (face_of[w->cyc_of[h ^ 1]] == fw) continue;
+                int32_t e = (int32_t)(h >> 1) + 1;
+                out->fe[fe++] = (h & 1) ? -e : e;
+            }
+        }
+    }
+    out->fe_off[nf] = (uint32_t)fe;
+    rc = ARR_OK;
+out:
+    free(pwalk);
+    free(ppos);
+    free(stack);
+    free(instack);
+    free(walkv);
+    return rc;
+}
+
 static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 {
     arr2_stats *st = &out->stats;
@@ -1060,64 +1205,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     st->ms_holes = now_ms() - t2;
 
     /* output */
-    out->nv = g->nv;
-    out->ne = g->ne;
-    out->nf = nf;
-    out->ncyc = w.ncyc;
-    out->V = malloc((2 * g->nv + 1) * sizeof *out->V);
-    out->EV = malloc((2 * g->ne + 1) * sizeof *out->EV);
-    out->face_cycle = malloc((nf + 1) * sizeof *out->face_cycle);
-    out->hole_off = calloc(nf + 2, sizeof *out->hole_off);
-    out->hole_cyc = malloc((ncomp + 1) * sizeof *out->hole_cyc);
-    out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
-    out->fe = malloc((2 * g->ne + 1) * sizeof *out->fe);
-    out->cyc_off = malloc((w.ncyc + 1) * sizeof *out->cyc_off);
-    out->cyc = malloc((2 * g->ne + 1) * sizeof *out->cyc);
-    out->ext_cyc = malloc((ncomp + 1) * sizeof *out->ext_cyc);
-    if (!out->V || !out->EV || !out->face_cycle || !out->hole_off || !out->hole_cyc ||
-        !out->fe_off || !out->fe || !out->cyc_off || !out->cyc || !out->ext_cyc)
-        goto fail;
-    for (size_t v = 0; v < g->nv; v++) {
-        out->V[2 * v] = unsnap(c, 0, g->P[v].x);
-        out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
-    }
-    memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
-    for (size_t cy = 0; cy <= w.ncyc; cy++) out->cyc_off[cy] = w.hoff[cy];
-    for (size_t i = 0; i < 2 * g->ne; i++) out->cyc[i] = he_tail(g, w.hes[i]);
-    /* holes: count per face, then fill in cycle order */
-    for (size_t cy = 0; cy < w.ncyc; cy++)
-        if (face_idx[cy] == NONE && face_of[cy] != NONE) out->hole_off[face_idx[face_of[cy]] + 1]++;
-    for (size_t f = 0; f < nf; f++) out->hole_off[f + 1] += out->hole_off[f];
-    out->next = 0;
-    for (size_t cy = 0; cy < w.ncyc; cy++) {
-        if (face_idx[cy] != NONE) {
-            out->face_cycle[face_idx[cy]] = (uint32_t)cy;
-        } else if (face_of[cy] == NONE) {
-            out->ext_cyc[out->next++] = (uint32_t)cy;
-        } else {
-            uint32_t f = face_idx[face_of[cy]];
-            out->hole_cyc[out->hole_off[f]++] = (uint32_t)cy;
-        }
-    }
-    for (size_t f = nf; f > 0; f--) out->hole_off[f] = out->hole_off[f - 1];
-    out->hole_off[0] = 0;
-    /* FE: signed edges of the outer cycle, then of the holes; an edge with this face on
-     * both sides (a dangling edge kept on request) cancels */
-    size_t k = 0;
-    for (size_t f = 0; f < nf; f++) {
-        out->fe_off[f] = (uint32_t)k;
-        uint32_t fc = out->face_cycle[f], nh = out->hole_off[f + 1] - out->hole_off[f];
-        for (uint32_t j = 0; j <= nh; j++) {
-            uint32_t cy = j == 0 ? fc : out->hole_cyc[out->hole_off[f] + j - 1];
-            for (uint32_t i = w.hoff[cy]; i < w.hoff[cy + 1]; i++) {
-                uint32_t h = w.hes[i], other = face_of[w.cyc_of[h ^ 1]];
-                if (other == fc) continue;
-                int32_t e = (int32_t)(h >> 1) + 1;
-                out->fe[k++] = (h & 1) ? -e : e;
-            }
-        }
-    }
-    out->fe_off[nf] = (uint32_t)k;
+    if ((rc = emit_complex(c, g, &w, face_idx, face_of, nf, out, err, el))) goto fail;
     st->nv = g->nv;
     st->ne = g->ne;
     st->nf = nf;

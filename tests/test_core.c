@@ -469,3 +469,22 @@ TEST(exact_predicates)
               dir_cmp(2, 2, 1, 1) == 0,
           "angular order");
 }
+
+TEST(touching_hole_is_a_simple_cycle)
+{
+    /* a triangle inside a square, touching it at the square's corner (0,0): the square's
+     * face gets the triangle as a hole touching its outer cycle at one point; every cycle
+     * is simple */
+    double s[7][4] = {{0, 0, 4, 0}, {4, 0, 4, 4}, {4, 4, 0, 4}, {0, 4, 0, 0},
+                      {0, 0, 2, 1}, {2, 1, 1, 2}, {1, 2, 0, 0}};
+    lar2 c;
+    REQUIRE(run(&s[0][0], 7, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nf == 2 && total_holes(&c) == 1 && c.next == 1, "%zu faces %zu holes %zu ext", c.nf,
+          total_holes(&c), c.next);
+    for (size_t cy = 0; cy < c.ncyc; cy++)
+        for (uint32_t i = c.cyc_off[cy]; i < c.cyc_off[cy + 1]; i++)
+            for (uint32_t j = i + 1; j < c.cyc_off[cy + 1]; j++)
+                CHECK(c.cyc[i] != c.cyc[j], "cycle %zu repeats vertex %u", cy, c.cyc[i]);
+    CHECK(fabs(sum_face_areas(&c) - 16) < 1e-12, "area %g", sum_face_areas(&c));
+    lar2_free(&c);
+}

@@ -147,7 +147,9 @@ for c in $CASES; do
     [ "$fail" -eq 0 ] || status=1
     row "$c" "$os" "$om" "$cs" "$cm" "$gs" "$gm" "$speed" \
         "${oV:-?}/${oE:-?}/${oF:-?}" "${cV:-?}/${cE:-?}/${cF:-?}" "${gF:-?}" "$agree"
-    inner="$inner$(printf '%-13s %14s %14s %14s' "$c" "${oms:--}" "${cms:--}" "${gms:--}")
+    inner="$inner$(awk -v c="$c" -v o="$oms" -v k="$cms" -v g="$gms" '
+        function f(x) { return x == "" ? "-" : sprintf("%.2f", x) }
+        BEGIN { printf "%-13s %14s %14s %14s", c, f(o), f(k), f(g) }')
 "
 done
 echo

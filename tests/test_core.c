@@ -488,3 +488,26 @@ TEST(touching_hole_is_a_simple_cycle)
     CHECK(fabs(sum_face_areas(&c) - 16) < 1e-12, "area %g", sum_face_areas(&c));
     lar2_free(&c);
 }
+
+TEST(coarse_grid_snap_rounding_stress)
+{
+    /* on a coarse grid most segments pass through other segments' hot pixels: snap rounding
+     * must still give a planar complex (lar_check: walks, Euler, areas) */
+    double precs[] = {1.0 / 64, 0.013, 0.05};
+    for (size_t t = 0; t < 3; t++)
+        for (uint64_t seed = 1; seed <= 4; seed++) {
+            double *s = random_lines(400, 0.3, seed * 31 + t);
+            lar2 c;
+            arr2_opts o = {.precision = precs[t], .keep_dangling = (int)(seed & 1)};
+            REQUIRE(run(s, 400, &o, &c) == ARR_OK, "precision %g seed %d", precs[t], (int)seed);
+            CHECK(c.nf > 0, "no faces");
+            for (size_t v = 0; v < c.nv; v++) {
+                double gx = c.V[2 * v] / precs[t], gy = c.V[2 * v + 1] / precs[t];
+                CHECK(fabs(gx - nearbyint(gx)) < 1e-6 && fabs(gy - nearbyint(gy)) < 1e-6,
+                      "vertex %zu (%g, %g) off the grid", v, c.V[2 * v], c.V[2 * v + 1]);
+                if (test_failed_now()) break;
+            }
+            lar2_free(&c);
+            free(s);
+        }
+}

@@ -1,0 +1,119 @@
+/* api_int.h — what the files of api/ share with one another; nothing outside api/ includes it.
+ *
+ * api_buf: the growing output buffer every result is streamed into.  A failed allocation makes
+ * the buffer sticky-failed: later appends do nothing, and the writer checks b->failed once at the
+ * end, so the serializers need no error path per number.
+ *
+ * api_kind: one entry of the table of request kinds (api/run.c).  Adding a kind ("svg",
+ * "solids") is one handler in its own file and one line in that table.
+ */
+#ifndef CELLAR_API_INT_H
+#define CELLAR_API_INT_H
+
+#include <jansson.h>
+#include <stdarg.h>
+#include <stdint.h>
+
+#include "api/api.h"
+#include "core/arr2.h"
+
+typedef struct api_buf {
+    char *p;    /* owned; NUL-terminated whenever len > 0 and !failed */
+    size_t len; /* bytes used */
+    size_t cap; /* bytes allocated */
+    int failed; /* an allocation failed: contents are incomplete */
+} api_buf;
+
+/* Makes room for n more bytes (and a NUL); returns where they go, or NULL once failed. */
+char *api_buf_reserve(api_buf *b, size_t n);
+void api_buf_put(api_buf *b, const char *s, size_t n);
+void api_buf_puts(api_buf *b, const char *s);
+void api_buf_u64(api_buf *b, uint64_t v);
+void api_buf_i64(api_buf *b, int64_t v);
+void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
+void api_buf_free(api_buf *b);
+
+/* api_format_double() by snprintf and strtod only: the reference its fast path is tested
+ * against. */
+size_t api_format_double_slow(double x, char *buf);
+
+static inline void api_buf_putc(api_buf *b, char c)
+{
+    if (b->len + 2 <= b->cap) {
+        b->p[b->len++] = c;
+        b->p[b->len] = 0;
+    } else {
+        api_buf_put(b, &c, 1);
+    }
+}
+
+/* Fills err (may be NULL) with status and a printf-style message, bytes outside printable ASCII
+ * replaced by '?' (messages quote user input and end up in JSON and on terminals); returns
+ * status. */
+int api_fail(api_error *err, int status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Maps an ARR_* code of the core and its message to an api status and *err. */
+int api_core_fail(api_error *err, int arr_code, const char *core_msg);
+
+/* One kind of request, in three steps so that the parsed JSON tree (jansson keeps a node per
+ * number: ten times the size of the body) is freed before the core runs:
+ *   parse       req (borrowed, its "kind" already matched) -> *parsed, the kind's own request
+ *               struct; validates every other key.  On failure *parsed is NULL.
+ *   parse_fast  optional: the raw body -> *parsed without a jansson tree, for the well-formed
+ *               requests that make up nearly all traffic.  It accepts only bodies that the
+ *               jansson path would accept with the same values, and leaves everything else
+ *               (malformed JSON, invalid values, other kinds, unusual spellings) to that path,
+ *               which writes the error messages: returns API_OK with *parsed set (done) or NULL
+ *               (fall back), or an error status with *err filled when the answer is certain
+ *               and the fallback would be costly (a request beyond the size limit).
+ *   run         runs *parsed (borrowed) with ro and appends the result JSON (no final "\n").
+ *   free        frees what parse or parse_fast made; safe on NULL. */
+typedef struct api_kind {
+    const char *name; /* the value of "kind" */
+    int (*parse)(const json_t *req, void **parsed, api_error *err);
+    int (*parse_fast)(const char *body, size_t len, void **parsed, api_error *err);
+    int (*run)(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
+    void (*free)(void *parsed);
+} api_kind;
+
+/* The "lines" kind (api/lines.c). */
+int api_lines_parse(const json_t *req, void **parsed, api_error *err);
+int api_lines_parse_fast(const char *body, size_t len, void **parsed, api_error *err);
+int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
+void api_lines_free(void *parsed);
+/* For tests: parses body as api_run_json() does (fast != 0) or through jansson only; *parsed is
+ * freed with the kind's free (api_lines_free for "lines"). */
+int api_parse_for_test(const char *body, size_t len, int fast, void **parsed, api_error *err);
+/* For tests: the segments of a parsed "lines" request (borrowed), 4 doubles each. */
+const double *api_lines_segments(const void *parsed, size_t *n);
+/* For tests: non-zero when two parsed "lines" requests are the same bit for bit. */
+int api_lines_same(const void *a, const void *b);
+
+/* The result fields a request may ask for (options.fields), as bits. */
+enum {
+    API_F_V = 1u << 0,
+    API_F_EV = 1u << 1,
+    API_F_FV = 1u << 2,
+    API_F_FE = 1u << 3,
+    API_F_HOLES = 1u << 4,
+    API_F_EXTERIOR = 1u << 5,
+    API_F_STATS = 1u << 6,
+    API_F_OPERATORS = 1u << 7,
+    API_F_DEFAULT = (1u << 7) - 1 /* all but operators */
+};
+#define API_NFIELDS 8
+extern const char *const api_field_names[API_NFIELDS]; /* "V", "EV", ... in bit order */
+
+/* How api_lar2_write() presents a 2-complex. */
+typedef struct api_lar2_fmt {
+    unsigned fields;   /* API_F_* bits */
+    int exterior_last; /* append the exterior cycles as the last rows of FV and FE */
+} api_lar2_fmt;
+
+/* Appends the LAR JSON object of c (borrowed) to b.  Returns API_OK, API_ENOMEM (b failed or a
+ * scratch allocation failed) or API_EINTERNAL (c breaks an invariant, e.g. an exterior cycle
+ * walks a pair of vertices that is not an edge). */
+int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error *err);
+
+#endif

@@ -1,0 +1,666 @@
+/* larjson.c — LAR JSON out: a 2-complex (core/arr2.h) streamed into a growing buffer.
+ *
+ *   {"dim":2,"V":[[x,y],...],"EV":[[v0,v1],...],"FV":[[v,...],...],"FE":[[±(e+1),...],...],
+ *    "holes":{"f":[[v,...],...]},"exterior":[[v,...],...],
+ *    "operators":{"d1":{"shape":[V,E],"indptr":[...],"indices":[...],"data":[...]},"d2":{...}},
+ *    "stats":{...}}
+ *
+ * Indices are 0-based.  Face f's FV row is its outer cycle, its FE row the core's signed edges
+ * (outer cycle, then holes).  With exterior_last the exterior cycles follow as extra rows of FV
+ * and FE (the seeds' convention); their FE rows are found by binary search in the sorted EV,
+ * + when the walk goes from EV's v0 to v1, and an edge walked both ways (a dangling edge kept
+ * with keep_dangling) cancels, as in the core's own FE rows.  The operators are compressed sparse
+ * ROW matrices, loadable by scipy.sparse.csr_matrix((data, indices, indptr), shape):
+ * d1 is V x E (column e: -1 at v0, +1 at v1), d2 is E x F with one column per FE row written
+ * (so exterior rows too with exterior_last), holding the FE signs; d1·d2 = 0.
+ *
+ * Why not a jansson tree: a result can hold tens of millions of numbers, and a json_t per number
+ * costs ten times the memory of the complex itself.  Numbers are formatted here directly, doubles
+ * as the shortest of %.15g/%.16g/%.17g that reads back equal, so clients get the exact doubles.
+ *
+ * Threads: reentrant, no globals.  Ownership: the complex is borrowed; the buffer is the
+ * caller's (api_buf_free() frees it).
+ */
+#include "api/api_int.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const api_field_names[API_NFIELDS] = {"V",     "EV",       "FV",    "FE",
+                                                  "holes", "exterior", "stats", "operators"};
+
+/* ---- the buffer ---------------------------------------------------------------------------- */
+
+char *api_buf_reserve(api_buf *b, size_t n)
+{
+    if (b->failed) return NULL;
+    if (n > SIZE_MAX / 2 - b->len) goto fail;
+    if (b->len + n + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        char *p;
+        while (cap < b->len + n + 1) cap *= 2;
+        p = realloc(b->p, cap);
+        if (!p) goto fail;
+        b->p = p;
+        b->cap = cap;
+    }
+    return b->p + b->len;
+fail:
+    b->failed = 1;
+    return NULL;
+}
+
+void api_buf_put(api_buf *b, const char *s, size_t n)
+{
+    char *p = api_buf_reserve(b, n);
+    if (!p) return;
+    memcpy(p, s, n);
+    b->len += n;
+    b->p[b->len] = 0;
+}
+
+void api_buf_puts(api_buf *b, const char *s)
+{
+    api_buf_put(b, s, strlen(s));
+}
+
+/* Writes v in decimal at p (room for 20 digits); returns the length. */
+static size_t fmt_u64(uint64_t v, char *p)
+{
+    char tmp[20];
+    size_t n = 0;
+    do {
+        tmp[n++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    for (size_t i = 0; i < n; i++) p[i] = tmp[n - 1 - i];
+    return n;
+}
+
+void api_buf_u64(api_buf *b, uint64_t v)
+{
+    char *p = api_buf_reserve(b, 20);
+    if (!p) return;
+    b->len += fmt_u64(v, p);
+    b->p[b->len] = 0;
+}
+
+void api_buf_i64(api_buf *b, int64_t v)
+{
+    char *p = api_buf_reserve(b, 21);
+    size_t n = 0;
+    if (!p) return;
+    if (v < 0) p[n++] = '-';
+    n += fmt_u64(v < 0 ? (uint64_t)0 - (uint64_t)v : (uint64_t)v, p + n);
+    b->len += n;
+    b->p[b->len] = 0;
+}
+
+/* Writes the decimal digits of v, exactly n of them (leading zeros if v is short). */
+static void put_digits(uint64_t v, char *p, int n)
+{
+    for (int i = n - 1; i >= 0; i--) {
+        p[i] = (char)('0' + v % 10);
+        v /= 10;
+    }
+}
+
+/* api_format_double() without snprintf/strtod, for 1e-6 <= |x| < 1e15 with a 53-bit mantissa
+ * that is not a power of two; returns 0 when x is outside that range.  Same output as the
+ * slow path (the tests compare them on millions of values), about ten times faster.
+ *
+ * With x = m 2^-s exactly, x 10^q = (m 10^q) / 2^s is an exact 128-bit division (m < 2^53,
+ * 10^q <= 10^22 < 2^74, s <= 72 in this range): its floor N and remainder r give the correctly
+ * rounded P-digit decimal D (half to even, as printf), and D 10^-q reads back as x iff it lies
+ * within half an ulp, 2^-s-1: |D - x 10^q| 2^s < 10^q / 2, or equal and m even. */
+static size_t format_double_fast(double x, char *buf)
+{
+    typedef unsigned __int128 u128;
+    static const uint64_t pow10[20] = {1ull,
+                                       10ull,
+                                       100ull,
+                                       1000ull,
+                                       10000ull,
+                                       100000ull,
+                                       1000000ull,
+                                       10000000ull,
+                                       100000000ull,
+                                       1000000000ull,
+                                       10000000000ull,
+                                       100000000000ull,
+                                       1000000000000ull,
+                                       10000000000000ull,
+                                       100000000000000ull,
+                                       1000000000000000ull,
+                                       10000000000000000ull,
+                                       100000000000000000ull,
+                                       1000000000000000000ull,
+                                       10000000000000000000ull};
+    double ax = fabs(x);
+    int bexp, e10, n = 0;
+    uint64_t bits, m;
+    unsigned s;
+    if (!(ax >= 1e-6 && ax < 1e15)) return 0;
+    memcpy(&bits, &ax, sizeof bits);
+    m = (bits & (((uint64_t)1 << 52) - 1)) | (uint64_t)1 << 52; /* ax = m 2^(bexp-52) */
+    bexp = (int)(bits >> 52) - 1023;
+    if (m == (uint64_t)1 << 52 || bexp >= 52) return 0;
+    s = (unsigned)(52 - bexp);
+    /* floor(log10(ax)) is floor(bexp log10(2)) or one more: corrected below. */
+    e10 = (int)floor(bexp * 0.30102999566398119521);
+    for (int prec = 15; prec <= 17; prec++) {
+        uint64_t lo = pow10[prec - 1], d;
+        int q, x10 = e10;
+        for (;;) {
+            q = prec - 1 - x10;
+            if (q < 0 || q > 22) return 0;
+            u128 p10 = q < 20 ? (u128)pow10[q] : (u128)pow10[19] * pow10[q - 19];
+            u128 num = (u128)m * p10;
+            u128 fl = num >> s, rem = num - (fl << s), half = (u128)1 << (s - 1);
+            if (fl < lo) { /* e10 was one too large */
+                x10--;
+                continue;
+            }
+            if (fl >= (u128)lo * 10) {
+                x10++;
+                continue;
+            }
+            d = (uint64_t)fl;
+            u128 dist = rem; /* |D - x 10^q| 2^s */
+            if (rem > half || (rem == half && (d & 1))) {
+                d++;
+                dist = ((u128)1 << s) - rem;
+            }
+            int ok = 2 * dist < p10 || (2 * dist == p10 && !(m & 1)); /* strtod: half to even */
+            if (d == lo * 10) { /* rounded up to the next power of ten */
+                d = lo;
+                x10++;
+            }
+            if (!ok && prec < 17) break;
+            /* Write D with exponent x10 as %.{prec}g does: trailing zeros dropped, exponential
+             * form when x10 < -4 or x10 >= prec. */
+            char dig[17];
+            int len = prec;
+            put_digits(d, dig, prec);
+            while (len > 1 && dig[len - 1] == '0') len--;
+            if (x < 0) buf[n++] = '-';
+            if (x10 < -4 || x10 >= prec) {
+                buf[n++] = dig[0];
+                if (len > 1) {
+                    buf[n++] = '.';
+                    memcpy(buf + n, dig + 1, (size_t)len - 1);
+                    n += len - 1;
+                }
+                int ae = x10 < 0 ? -x10 : x10;
+                buf[n++] = 'e';
+                buf[n++] = x10 < 0 ? '-' : '+';
+                if (ae >= 100) buf[n++] = (char)('0' + ae / 100);
+                buf[n++] = (char)('0' + ae / 10 % 10);
+                buf[n++] = (char)('0' + ae % 10);
+            } else if (x10 >= 0) {
+                for (int i = 0; i <= x10; i++) buf[n++] = i < len ? dig[i] : '0';
+                if (len > x10 + 1) {
+                    buf[n++] = '.';
+                    memcpy(buf + n, dig + x10 + 1, (size_t)(len - x10 - 1));
+                    n += len - x10 - 1;
+                }
+            } else {
+                buf[n++] = '0';
+                buf[n++] = '.';
+                for (int i = 0; i < -x10 - 1; i++) buf[n++] = '0';
+                memcpy(buf + n, dig, (size_t)len);
+                n += len;
+            }
+            buf[n] = 0;
+            return (size_t)n;
+        }
+        e10 = x10; /* the exponent found for this precision is right for the next one */
+    }
+    return 0;
+}
+
+size_t api_format_double(double x, char *buf)
+{
+    size_t n;
+    assert(isfinite(x));
+    /* Integers below 1e15 print the same under %.15g: skip snprintf and strtod for them (grids,
+     * counts, integer drawings). -0 prints as 0. */
+    if (fabs(x) < 1e15 && x == (double)(int64_t)x) {
+        int64_t i = (int64_t)x;
+        n = 0;
+        if (i < 0) buf[n++] = '-';
+        n += fmt_u64(i < 0 ? (uint64_t)0 - (uint64_t)i : (uint64_t)i, buf + n);
+        buf[n] = 0;
+        return n;
+    }
+    n = format_double_fast(x, buf);
+    if (n) return n;
+    return api_format_double_slow(x, buf);
+}
+
+size_t api_format_double_slow(double x, char *buf)
+{
+    for (int prec = 15;; prec++) {
+        int n = snprintf(buf, API_DOUBLE_MAX, "%.*g", prec, x);
+        assert(n > 0 && n < API_DOUBLE_MAX);
+        if (prec == 17 || strtod(buf, NULL) == x) return (size_t)n;
+    }
+}
+
+void api_buf_double(api_buf *b, double x)
+{
+    char *p = api_buf_reserve(b, API_DOUBLE_MAX);
+    if (!p) return;
+    b->len += api_format_double(x, p);
+}
+
+void api_buf_free(api_buf *b)
+{
+    free(b->p);
+    *b = (api_buf){0};
+}
+
+/* ---- rows of the complex ------------------------------------------------------------------- */
+
+/* The FV and FE rows written: the bounded faces, then (exterior_last) the exterior cycles. */
+typedef struct rows {
+    const lar2 *c;
+    size_t nrows; /* c->nf, plus c->next with exterior_last */
+    size_t *xoff; /* owned, next+1 or NULL: exterior FE row r is xfe[xoff[r]..xoff[r+1]) */
+    int32_t *xfe; /* owned */
+} rows;
+
+static size_t cycle_of(const lar2 *c, uint32_t cy, const uint32_t **v)
+{
+    *v = c->cyc + c->cyc_off[cy];
+    return c->cyc_off[cy + 1] - c->cyc_off[cy];
+}
+
+static size_t fv_row(const rows *r, size_t f, const uint32_t **v)
+{
+    const lar2 *c = r->c;
+    return cycle_of(c, f < c->nf ? c->face_cycle[f] : c->ext_cyc[f - c->nf], v);
+}
+
+static size_t fe_row(const rows *r, size_t f, const int32_t **e)
+{
+    const lar2 *c = r->c;
+    if (f < c->nf) {
+        *e = c->fe + c->fe_off[f];
+        return c->fe_off[f + 1] - c->fe_off[f];
+    }
+    f -= c->nf;
+    *e = r->xfe + r->xoff[f];
+    return r->xoff[f + 1] - r->xoff[f];
+}
+
+/* The index of edge {a, b} in the sorted EV, or -1. */
+static int64_t edge_find(const lar2 *c, uint32_t a, uint32_t b)
+{
+    uint32_t lo_v = a < b ? a : b, hi_v = a < b ? b : a;
+    size_t lo = 0, hi = c->ne;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        const uint32_t *e = c->EV + 2 * mid;
+        if (e[0] < lo_v || (e[0] == lo_v && e[1] < hi_v))
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo < c->ne && c->EV[2 * lo] == lo_v && c->EV[2 * lo + 1] == hi_v) return (int64_t)lo;
+    return -1;
+}
+
+static int cmp_i32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Computes the FE rows of the exterior cycles into r->xoff, r->xfe. */
+static int exterior_rows(rows *r, api_error *err)
+{
+    const lar2 *c = r->c;
+    size_t total = 0, maxlen = 0, w = 0;
+    int32_t *sorted = NULL;
+    int rc;
+    for (size_t x = 0; x < c->next; x++) {
+        const uint32_t *v;
+        size_t k = cycle_of(c, c->ext_cyc[x], &v);
+        total += k;
+        if (k > maxlen) maxlen = k;
+    }
+    r->xoff = malloc((c->next + 1) * sizeof *r->xoff);
+    r->xfe = malloc((total ? total : 1) * sizeof *r->xfe);
+    sorted = malloc((maxlen ? maxlen : 1) * sizeof *sorted);
+    if (!r->xoff || !r->xfe || !sorted) {
+        rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+        goto fail;
+    }
+    for (size_t x = 0; x < c->next; x++) {
+        const uint32_t *v;
+        size_t k = cycle_of(c, c->ext_cyc[x], &v);
+        r->xoff[x] = w;
+        for (size_t i = 0; i < k; i++) {
+            uint32_t a = v[i], b = v[(i + 1) % k];
+            int64_t e = edge_find(c, a, b);
+            if (e < 0) {
+                rc = api_fail(err, API_EINTERNAL,
+                              "internal error: exterior cycle %zu walks %u-%u, not an edge", x,
+                              (unsigned)a, (unsigned)b);
+                goto fail;
+            }
+            sorted[i] = a < b ? (int32_t)(e + 1) : -(int32_t)(e + 1);
+        }
+        memcpy(r->xfe + w, sorted, k * sizeof *sorted);
+        qsort(sorted, k, sizeof *sorted, cmp_i32);
+        for (size_t i = 0; i < k; i++) { /* keep the walk's order, drop edges walked both ways */
+            int32_t s = r->xfe[r->xoff[x] + i], neg = -s;
+            if (!bsearch(&neg, sorted, k, sizeof *sorted, cmp_i32)) r->xfe[w++] = s;
+        }
+    }
+    r->xoff[c->next] = w;
+    free(sorted);
+    return API_OK;
+fail:
+    free(sorted);
+    free(r->xoff);
+    free(r->xfe);
+    r->xoff = NULL;
+    r->xfe = NULL;
+    return rc;
+}
+
+/* Checks the indices the writer follows, so that a bug in the core is a 500, not a crash. */
+static int check_complex(const lar2 *c, api_error *err)
+{
+    const char *what = NULL;
+    if (c->nv && !c->V) what = "V";
+    for (size_t i = 0; !what && i < 2 * c->ne; i++)
+        if (c->EV[i] >= c->nv) what = "EV";
+    for (size_t i = 0; !what && i + 1 < c->ncyc + 1; i++)
+        if (c->cyc_off[i] > c->cyc_off[i + 1]) what = "cyc_off";
+    for (size_t i = 0; !what && c->ncyc && i < c->cyc_off[c->ncyc]; i++)
+        if (c->cyc[i] >= c->nv) what = "cyc";
+    for (size_t f = 0; !what && f < c->nf; f++) {
+        if (c->face_cycle[f] >= c->ncyc) what = "face_cycle";
+        if (c->hole_off[f] > c->hole_off[f + 1] || c->fe_off[f] > c->fe_off[f + 1])
+            what = "hole_off/fe_off";
+    }
+    for (size_t i = 0; !what && c->nf && i < c->hole_off[c->nf]; i++)
+        if (c->hole_cyc[i] >= c->ncyc) what = "hole_cyc";
+    for (size_t i = 0; !what && c->nf && i < c->fe_off[c->nf]; i++)
+        if (c->fe[i] == 0 || (size_t)llabs(c->fe[i]) > c->ne) what = "fe";
+    for (size_t i = 0; !what && i < c->next; i++)
+        if (c->ext_cyc[i] >= c->ncyc) what = "ext_cyc";
+    if (what)
+        return api_fail(err, API_EINTERNAL, "internal error: the complex's %s is invalid", what);
+    return API_OK;
+}
+
+/* ---- writers ------------------------------------------------------------------------------- */
+
+static void put_u32_list(api_buf *b, const uint32_t *a, size_t n)
+{
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_u64(b, a[i]);
+    }
+    api_buf_putc(b, ']');
+}
+
+static void put_key(api_buf *b, int *first, const char *key)
+{
+    if (!*first) api_buf_putc(b, ',');
+    *first = 0;
+    api_buf_putc(b, '"');
+    api_buf_puts(b, key);
+    api_buf_puts(b, "\":");
+}
+
+static void put_stats(api_buf *b, const arr2_stats *s)
+{
+    static const char *const names[] = {"input_segments",
+                                        "zero_length_dropped",
+                                        "intersections",
+                                        "hot_pixels",
+                                        "pairs_tested",
+                                        "buckets",
+                                        "dangling_removed",
+                                        "V",
+                                        "E",
+                                        "F",
+                                        "components",
+                                        "blocks"};
+    const size_t counts[] = {s->input_segments,
+                             s->zero_length,
+                             s->intersections,
+                             s->hot_pixels,
+                             s->pairs_tested,
+                             s->buckets,
+                             s->dangling_removed,
+                             s->nv,
+                             s->ne,
+                             s->nf,
+                             s->components,
+                             s->blocks};
+    static const char *const ms_names[] = {"snap",        "buckets", "intersect", "split", "graph",
+                                           "biconnected", "faces",   "holes",     "total"};
+    const double ms[] = {s->ms_snap,  s->ms_buckets, s->ms_intersect,
+                         s->ms_split, s->ms_graph,   s->ms_biconnected,
+                         s->ms_faces, s->ms_holes,   s->ms_total};
+    int first = 1;
+    api_buf_putc(b, '{');
+    for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++) {
+        put_key(b, &first, names[i]);
+        api_buf_u64(b, counts[i]);
+    }
+    put_key(b, &first, "precision");
+    api_buf_double(b, isfinite(s->precision) ? s->precision : 0);
+    put_key(b, &first, "ms");
+    first = 1;
+    api_buf_putc(b, '{');
+    for (size_t i = 0; i < sizeof ms / sizeof ms[0]; i++) {
+        put_key(b, &first, ms_names[i]);
+        api_buf_double(b, isfinite(ms[i]) ? ms[i] : 0);
+    }
+    api_buf_puts(b, "}}");
+}
+
+/* Writes {"shape":[nrows,ncols],"indptr":..,"indices":..,"data":..} of a CSR matrix. */
+static void put_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
+                    const uint32_t *indices, const int8_t *data)
+{
+    api_buf_puts(b, "{\"shape\":[");
+    api_buf_u64(b, nrows);
+    api_buf_putc(b, ',');
+    api_buf_u64(b, ncols);
+    api_buf_puts(b, "],\"indptr\":[");
+    for (size_t i = 0; i <= nrows; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_u64(b, indptr[i]);
+    }
+    api_buf_puts(b, "],\"indices\":");
+    put_u32_list(b, indices, indptr[nrows]);
+    api_buf_puts(b, ",\"data\":[");
+    for (size_t i = 0; i < indptr[nrows]; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_puts(b, data[i] > 0 ? "1" : "-1");
+    }
+    api_buf_puts(b, "]}");
+}
+
+/* Writes the operators d1 (V x E) and d2 (E x rows) as CSR. */
+static int put_operators(api_buf *b, const rows *r, api_error *err)
+{
+    const lar2 *c = r->c;
+    size_t nnz2 = 0, n = c->nv > c->ne ? c->nv : c->ne;
+    size_t *ptr = NULL, *fill = NULL;
+    uint32_t *idx = NULL;
+    int8_t *val = NULL;
+    int rc = API_OK;
+    for (size_t f = 0; f < r->nrows; f++) {
+        const int32_t *e;
+        nnz2 += fe_row(r, f, &e);
+    }
+    ptr = calloc(n + 1, sizeof *ptr);
+    fill = malloc((n + 1) * sizeof *fill);
+    idx = malloc((2 * c->ne > nnz2 ? 2 * c->ne : nnz2) * sizeof *idx + 1);
+    val = malloc((2 * c->ne > nnz2 ? 2 * c->ne : nnz2) * sizeof *val + 1);
+    if (!ptr || !fill || !idx || !val) {
+        rc = api_fail(err, API_ENOMEM, "out of memory while writing the operators");
+        goto out;
+    }
+    /* d1: row v holds edge e with -1 when v is EV's v0, +1 when it is v1; edges are visited in
+     * order, so every row's indices come out sorted. */
+    for (size_t e = 0; e < c->ne; e++) ptr[c->EV[2 * e] + 1]++, ptr[c->EV[2 * e + 1] + 1]++;
+    for (size_t v = 0; v < c->nv; v++) ptr[v + 1] += ptr[v];
+    memcpy(fill, ptr, (c->nv + 1) * sizeof *fill);
+    for (size_t e = 0; e < c->ne; e++) {
+        size_t k0 = fill[c->EV[2 * e]]++, k1 = fill[c->EV[2 * e + 1]]++;
+        idx[k0] = (uint32_t)e, val[k0] = -1;
+        idx[k1] = (uint32_t)e, val[k1] = 1;
+    }
+    api_buf_puts(b, "{\"d1\":");
+    put_csr(b, c->nv, c->ne, ptr, idx, val);
+    /* d2: row e holds the FE rows (faces) that contain ±(e+1), with that sign. */
+    memset(ptr, 0, (c->ne + 1) * sizeof *ptr);
+    for (size_t f = 0; f < r->nrows; f++) {
+        const int32_t *e;
+        size_t k = fe_row(r, f, &e);
+        for (size_t i = 0; i < k; i++) ptr[(size_t)llabs(e[i])]++;
+    }
+    for (size_t e = 0; e < c->ne; e++) ptr[e + 1] += ptr[e];
+    memcpy(fill, ptr, (c->ne + 1) * sizeof *fill);
+    for (size_t f = 0; f < r->nrows; f++) {
+        const int32_t *e;
+        size_t k = fe_row(r, f, &e);
+        for (size_t i = 0; i < k; i++) {
+            size_t at = fill[(size_t)llabs(e[i]) - 1]++;
+            idx[at] = (uint32_t)f;
+            val[at] = e[i] > 0 ? 1 : -1;
+        }
+    }
+    api_buf_puts(b, ",\"d2\":");
+    put_csr(b, c->ne, r->nrows, ptr, idx, val);
+    api_buf_putc(b, '}');
+out:
+    free(ptr);
+    free(fill);
+    free(idx);
+    free(val);
+    return rc;
+}
+
+int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
+{
+    rows r = {.c = c, .nrows = c->nf};
+    unsigned fl = fmt->fields;
+    int first = 0, rc;
+    rc = check_complex(c, err);
+    if (rc != API_OK) return rc;
+    if (fmt->exterior_last && (fl & (API_F_FV | API_F_FE | API_F_OPERATORS))) {
+        rc = exterior_rows(&r, err);
+        if (rc != API_OK) return rc;
+        r.nrows += c->next;
+    }
+    api_buf_puts(b, "{\"dim\":2");
+    if (fl & API_F_V) {
+        put_key(b, &first, "V");
+        api_buf_putc(b, '[');
+        for (size_t v = 0; v < c->nv; v++) {
+            api_buf_puts(b, v ? ",[" : "[");
+            api_buf_double(b, c->V[2 * v]);
+            api_buf_putc(b, ',');
+            api_buf_double(b, c->V[2 * v + 1]);
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F_EV) {
+        put_key(b, &first, "EV");
+        api_buf_putc(b, '[');
+        for (size_t e = 0; e < c->ne; e++) {
+            if (e) api_buf_putc(b, ',');
+            put_u32_list(b, c->EV + 2 * e, 2);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F_FV) {
+        put_key(b, &first, "FV");
+        api_buf_putc(b, '[');
+        for (size_t f = 0; f < r.nrows; f++) {
+            const uint32_t *v;
+            size_t k = fv_row(&r, f, &v);
+            if (f) api_buf_putc(b, ',');
+            put_u32_list(b, v, k);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F_FE) {
+        put_key(b, &first, "FE");
+        api_buf_putc(b, '[');
+        for (size_t f = 0; f < r.nrows; f++) {
+            const int32_t *e;
+            size_t k = fe_row(&r, f, &e);
+            api_buf_puts(b, f ? ",[" : "[");
+            for (size_t i = 0; i < k; i++) {
+                if (i) api_buf_putc(b, ',');
+                api_buf_i64(b, e[i]);
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F_HOLES) {
+        int hfirst = 1;
+        put_key(b, &first, "holes");
+        api_buf_putc(b, '{');
+        for (size_t f = 0; f < c->nf; f++) {
+            if (c->hole_off[f] == c->hole_off[f + 1]) continue;
+            if (!hfirst) api_buf_putc(b, ',');
+            hfirst = 0;
+            api_buf_putc(b, '"');
+            api_buf_u64(b, f);
+            api_buf_puts(b, "\":[");
+            for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
+                const uint32_t *v;
+                size_t k = cycle_of(c, c->hole_cyc[h], &v);
+                if (h > c->hole_off[f]) api_buf_putc(b, ',');
+                put_u32_list(b, v, k);
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, '}');
+    }
+    if (fl & API_F_EXTERIOR) {
+        put_key(b, &first, "exterior");
+        api_buf_putc(b, '[');
+        for (size_t x = 0; x < c->next; x++) {
+            const uint32_t *v;
+            size_t k = cycle_of(c, c->ext_cyc[x], &v);
+            if (x) api_buf_putc(b, ',');
+            put_u32_list(b, v, k);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F_OPERATORS) {
+        put_key(b, &first, "operators");
+        rc = put_operators(b, &r, err);
+        if (rc != API_OK) goto out;
+    }
+    if (fl & API_F_STATS) {
+        put_key(b, &first, "stats");
+        put_stats(b, &c->stats);
+    }
+    api_buf_putc(b, '}');
+    if (b->failed) rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+out:
+    free(r.xoff);
+    free(r.xfe);
+    return rc;
+}

@@ -1,0 +1,292 @@
+/* run.c — the entry points of api/: load the JSON, dispatch on "kind", map errors to statuses.
+ *
+ * The table of kinds below is the one place that knows which kinds exist.  A kind parses and
+ * validates its own keys and runs the core (api_int.h, api_kind); this file tries the kinds' fast
+ * parsers, else loads the body with jansson, frees the tree as soon as the kind has parsed it
+ * (before the core runs), and turns jansson's errors into error values:
+ *   - syntax errors, bad UTF-8 and nesting deeper than jansson's limit (2048 levels in 2.14:
+ *     "maximum parsing depth reached", an error value, not a recursion) are 400 with the
+ *     parser's line and column;
+ *   - a number out of range (1e400, an integer beyond 64 bits) or a duplicate key is valid JSON
+ *     grammar with an invalid value, so it is 422; jansson only tells the byte position, and
+ *     json_path_at() rescans the body up to there to name the JSON path of the offending value.
+ *
+ * Threads: reentrant, no globals (the tables are constant).
+ * Ownership: the body is borrowed; *out and *canon are malloc'd for the caller.
+ */
+#include "api/api_int.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const api_kind kinds[] = {
+    {"lines", api_lines_parse, api_lines_parse_fast, api_lines_run, api_lines_free},
+};
+#define NKINDS (sizeof kinds / sizeof kinds[0])
+
+size_t api_kind_count(void)
+{
+    return NKINDS;
+}
+
+const char *api_kind_name(size_t i)
+{
+    return i < NKINDS ? kinds[i].name : NULL;
+}
+
+int api_fail(api_error *err, int status, const char *fmt, ...)
+{
+    va_list ap;
+    if (!err) return status;
+    err->status = status;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    for (char *p = err->msg; *p; p++)
+        if ((unsigned char)*p < 0x20 || (unsigned char)*p > 0x7e) *p = '?';
+    return status;
+}
+
+int api_core_fail(api_error *err, int arr_code, const char *core_msg)
+{
+    const char *m = core_msg && *core_msg ? core_msg : NULL;
+    switch (arr_code) {
+    case ARR_EINVAL:
+        return api_fail(err, API_EINVALID, "%s", m ? m : "invalid input");
+    case ARR_ELIMIT:
+        return api_fail(err, API_EINVALID, "%s", m ? m : "input beyond a limit");
+    case ARR_ENOMEM:
+        return api_fail(err, API_ENOMEM, "out of memory%s%s", m ? ": " : "", m ? m : "");
+    case ARR_ECANCELED:
+        return api_fail(err, API_ECANCELED, "canceled");
+    default:
+        return api_fail(err, API_EINTERNAL, "internal error (core code %d)%s%s", arr_code,
+                        m ? ": " : "", m ? m : "");
+    }
+}
+
+/* One open container while rescanning a body. */
+typedef struct scan_frame {
+    char type;      /* '[' or '{' */
+    int expect_key; /* object: the next string is a key */
+    size_t index;   /* array: index of the current element */
+    size_t koff;    /* object: the current key's raw bytes body[koff .. koff+klen) */
+    size_t klen;
+} scan_frame;
+
+#define SCAN_MAX_DEPTH 4096 /* above jansson's 2048: a body it parsed that far fits */
+#define SCAN_KEY_MAX   64   /* longer keys are cut in messages */
+
+/* Writes into path[0..n) the JSON path ("lines[3][1][0]", "options", "" for the root) of the
+ * value (or object key) that contains byte stop-1 of body, by following the structure of
+ * body[0..stop).  The body is known to be well-formed up to there: jansson read it. */
+static void json_path_at(const char *body, size_t len, size_t stop, char *path, size_t n)
+{
+    scan_frame *st = NULL;
+    size_t depth = 0, i = 0, w = 0;
+    path[0] = 0;
+    if (stop > len) stop = len;
+    if (stop > 0) stop--; /* jansson's position is just past the offending token */
+    st = malloc(SCAN_MAX_DEPTH * sizeof *st);
+    if (!st) return;
+    while (i < stop) {
+        char ch = body[i];
+        scan_frame *top = depth ? &st[depth - 1] : NULL;
+        if (ch == '"') {
+            size_t j = i + 1;
+            while (j < len && body[j] != '"') j += body[j] == '\\' ? 2 : 1;
+            if (j >= stop) break; /* the offending token is this string (a duplicate key) */
+            if (top && top->type == '{' && top->expect_key) {
+                top->koff = i + 1;
+                top->klen = j - i - 1;
+            }
+            i = j + 1;
+            continue;
+        }
+        if (ch == '[' || ch == '{') {
+            if (depth == SCAN_MAX_DEPTH) goto out;
+            st[depth++] = (scan_frame){.type = ch, .expect_key = ch == '{'};
+        } else if ((ch == ']' || ch == '}') && depth) {
+            depth--;
+        } else if (ch == ',' && top) {
+            if (top->type == '[')
+                top->index++;
+            else
+                top->expect_key = 1;
+        } else if (ch == ':' && top) {
+            top->expect_key = 0;
+        }
+        i++;
+    }
+    for (size_t d = 0; d < depth && w + 1 < n; d++) {
+        const scan_frame *f = &st[d];
+        int k;
+        if (f->type == '[') {
+            k = snprintf(path + w, n - w, "[%zu]", f->index);
+        } else {
+            if (f->expect_key) break; /* inside a key: the path ends at its object */
+            k = snprintf(path + w, n - w, "%s%.*s", w ? "." : "",
+                         (int)(f->klen < SCAN_KEY_MAX ? f->klen : SCAN_KEY_MAX), body + f->koff);
+        }
+        if (k < 0 || (size_t)k >= n - w) break;
+        w += (size_t)k;
+    }
+out:
+    free(st);
+}
+
+/* Loads body as JSON; on failure fills *err and returns NULL. */
+static json_t *load(const char *body, size_t len, api_error *err)
+{
+    json_error_t je;
+    json_t *root;
+    size_t i = 0;
+    while (i < len && (body[i] == ' ' || body[i] == '\t' || body[i] == '\n' || body[i] == '\r'))
+        i++;
+    if (i == len) {
+        api_fail(err, API_EJSON, "malformed JSON: empty body");
+        return NULL;
+    }
+    root = json_loadb(body, len, JSON_DECODE_ANY | JSON_REJECT_DUPLICATES, &je);
+    if (root) return root;
+    switch (json_error_code(&je)) {
+    case json_error_out_of_memory:
+        api_fail(err, API_ENOMEM, "out of memory while parsing the request");
+        break;
+    case json_error_numeric_overflow:
+    case json_error_duplicate_key: {
+        char path[256];
+        json_path_at(body, len, je.position > 0 ? (size_t)je.position : 0, path, sizeof path);
+        api_fail(err, API_EINVALID, "%s: %s (line %d, column %d)", *path ? path : "request",
+                 je.text, je.line, je.column);
+        break;
+    }
+    default:
+        api_fail(err, API_EJSON, "malformed JSON at line %d, column %d: %s", je.line, je.column,
+                 je.text);
+        break;
+    }
+    return NULL;
+}
+
+/* Finds the handler of root's "kind". */
+static const api_kind *kind_of(const json_t *root, api_error *err)
+{
+    const json_t *k;
+    char expected[128];
+    size_t w = 0;
+    if (!json_is_object(root)) {
+        api_fail(err, API_EINVALID, "request: expected an object {\"kind\": ...}");
+        return NULL;
+    }
+    k = json_object_get(root, "kind");
+    if (json_is_string(k))
+        for (size_t i = 0; i < NKINDS; i++)
+            if (strcmp(json_string_value(k), kinds[i].name) == 0) return &kinds[i];
+    for (size_t i = 0; i < NKINDS && w < sizeof expected; i++) {
+        const char *sep = i == 0 ? "" : i + 1 == NKINDS ? " or " : ", ";
+        int n = snprintf(expected + w, sizeof expected - w, "%s\"%s\"", sep, kinds[i].name);
+        if (n < 0) break;
+        w += (size_t)n;
+    }
+    if (!k)
+        api_fail(err, API_EINVALID, "kind: required, expected %s", expected);
+    else
+        api_fail(err, API_EINVALID, "kind: expected %s", expected);
+    return NULL;
+}
+
+/* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free). */
+static int parse(const char *body, size_t len, int fast, const api_kind **kind, void **parsed,
+                 api_error *err)
+{
+    json_t *root;
+    int rc;
+    *kind = NULL;
+    *parsed = NULL;
+    for (size_t i = 0; fast && i < NKINDS; i++) {
+        if (!kinds[i].parse_fast) continue;
+        rc = kinds[i].parse_fast(body, len, parsed, err);
+        if (rc != API_OK) return rc;
+        if (*parsed) {
+            *kind = &kinds[i];
+            return API_OK;
+        }
+    }
+    root = load(body, len, err);
+    if (!root) return err ? err->status : API_EJSON;
+    *kind = kind_of(root, err);
+    rc = *kind ? (*kind)->parse(root, parsed, err) : API_EINVALID;
+    json_decref(root);
+    return rc;
+}
+
+int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,
+                    size_t *outlen, api_error *err)
+{
+    api_run_opts dflt = {0};
+    api_buf b = {0};
+    const api_kind *kind = NULL;
+    void *req = NULL;
+    int rc;
+    *out = NULL;
+    *outlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    if (!ro) ro = &dflt;
+    rc = parse(body, len, 1, &kind, &req, err);
+    if (rc != API_OK) goto fail;
+    rc = kind->run(req, ro, &b, err);
+    if (rc != API_OK) goto fail;
+    kind->free(req);
+    req = NULL;
+    api_buf_putc(&b, '\n');
+    if (b.failed) {
+        rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+        goto fail;
+    }
+    *out = b.p;
+    *outlen = b.len;
+    return API_OK;
+fail:
+    if (kind) kind->free(req);
+    api_buf_free(&b);
+    return rc;
+}
+
+int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,
+                 api_error *err)
+{
+    api_run_opts ro = {.threads = threads};
+    return api_run_json_ex(body, len, &ro, out, outlen, err);
+}
+
+int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err)
+{
+    const api_kind *kind = NULL;
+    void *req = NULL;
+    json_t *root = NULL;
+    int rc;
+    if (canon) *canon = NULL;
+    if (canonlen) *canonlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    rc = parse(body, len, 1, &kind, &req, err);
+    if (kind) kind->free(req);
+    if (rc != API_OK || !canon) return rc;
+    /* valid: the canonical form comes from the tree */
+    root = json_loadb(body, len, JSON_DECODE_ANY, NULL);
+    *canon =
+        root ? json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS | JSON_REAL_PRECISION(17)) : NULL;
+    json_decref(root);
+    if (!*canon)
+        return api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");
+    if (canonlen) *canonlen = strlen(*canon);
+    return API_OK;
+}
+
+/* For tests: parses body with the jansson path only (fast = 0) or as api_run_json() does. */
+int api_parse_for_test(const char *body, size_t len, int fast, void **parsed, api_error *err)
+{
+    const api_kind *kind;
+    return parse(body, len, fast, &kind, parsed, err);
+}

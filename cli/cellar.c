@@ -1,0 +1,443 @@
+/* cellar.c — the command-line tool: runs requests offline and generates test inputs.
+ *
+ *   cellar run REQUEST.json|-        the result JSON the service returns for the request, same
+ *                                    bytes (api_run_json()), on stdout
+ *   cellar gen lines N SCALING SEED  N random segments, as the seeds' randomLines(N, scaling)
+ *   cellar gen grid K                K horizontal and K vertical segments: (K-1)^2 faces
+ *
+ * Exit status: 0 success, 1 the request failed (message "cellar: <where>: <what>" on stderr) or
+ * an I/O error, 2 a usage error.  Options (anywhere on the line): --threads N, --options JSON
+ * (gen: the request's "options"), --help, --version.
+ *
+ * The random generator is our own (xoshiro256** seeded by splitmix64) and the arithmetic is
+ * written one operation per statement (no contraction into fused multiply-adds), so that a seed
+ * gives the same bytes on every machine and compiler.  Unlike the seeds, points are not rounded
+ * to PRECISION decimal digits (vcode): that would put many endpoints on a coarse common grid,
+ * a different (and easier) input; snapping is the request's "precision" option instead.
+ *
+ * Ownership: everything is freed before exit; the API's output buffer is the caller's to free.
+ */
+#include "api/api.h"
+#include "core/arr2.h"
+
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define EXIT_USAGE 2
+
+static const char usage_text[] =
+    "usage: cellar [--threads N] COMMAND ...\n"
+    "\n"
+    "  cellar run REQUEST.json         run a request (\"-\": standard input) and print the\n"
+    "                                  result JSON, exactly as the service returns it\n"
+    "  cellar gen lines N SCALING SEED [--options JSON]\n"
+    "                                  print a request of N random segments: two random points\n"
+    "                                  of the unit square scaled by SCALING about their midpoint\n"
+    "                                  and moved to a random point, then everything translated\n"
+    "                                  to x, y >= 0 (the seeds' randomLines); the same SEED\n"
+    "                                  gives the same bytes everywhere\n"
+    "  cellar gen grid K [--options JSON]\n"
+    "                                  print a request of K horizontal and K vertical segments\n"
+    "                                  (0,i)-(K-1,i), (i,0)-(i,K-1): (K-1)^2 faces\n"
+    "\n"
+    "options:\n"
+    "  --threads N       worker threads of the core (default 0: one per CPU)\n"
+    "  --options JSON    gen: a JSON object used as the request's \"options\", e.g.\n"
+    "                    '{\"precision\":1e-6,\"fields\":[\"V\",\"EV\",\"stats\"]}'\n"
+    "  --help            this text\n"
+    "  --version         the version\n"
+    "\n"
+    "exit status: 0 success, 1 invalid request or I/O error, 2 usage error\n";
+
+static int usage_error(const char *fmt, const char *arg) __attribute__((format(printf, 1, 0)));
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "cellar: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n(cellar --help for usage)\n");
+    return EXIT_USAGE;
+}
+
+/* ---- random numbers: splitmix64 to seed xoshiro256** ---------------------------------------- */
+
+typedef struct rng {
+    uint64_t s[4];
+} rng;
+
+static uint64_t splitmix64(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+static void rng_seed(rng *r, uint64_t seed)
+{
+    for (int i = 0; i < 4; i++) r->s[i] = splitmix64(&seed);
+}
+
+static uint64_t rotl(uint64_t x, int k)
+{
+    return (x << k) | (x >> (64 - k));
+}
+
+static uint64_t rng_next(rng *r)
+{
+    uint64_t *s = r->s;
+    uint64_t result = rotl(s[1] * 5, 7) * 9, t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = rotl(s[3], 45);
+    return result;
+}
+
+/* A uniform double in [0, 1): 53 random bits. */
+static double rng_unit(rng *r)
+{
+    return (double)(rng_next(r) >> 11) * 0x1.0p-53;
+}
+
+/* One segment of randomLines: redge(scaling) without the seeds' rounding to PRECISION digits. */
+static void random_segment(rng *r, double scaling, double s[4])
+{
+    double v1x = rng_unit(r), v1y = rng_unit(r);
+    double v2x = rng_unit(r), v2y = rng_unit(r);
+    double px = rng_unit(r), py = rng_unit(r);
+    double cx = (v1x + v2x) / 2, cy = (v1y + v2y) / 2;
+    const double v[4] = {v1x - cx, v1y - cy, v2x - cx, v2y - cy};
+    for (int i = 0; i < 4; i++) {
+        double d = v[i] * scaling; /* rounded here: an assignment is never fused with the + */
+        s[i] = d + (i % 2 ? py : px);
+    }
+}
+
+/* ---- output -------------------------------------------------------------------------------- */
+
+static void put_double(FILE *f, double x)
+{
+    char buf[API_DOUBLE_MAX];
+    fwrite(buf, 1, api_format_double(x, buf), f);
+}
+
+static void put_segment(FILE *f, size_t i, double x1, double y1, double x2, double y2)
+{
+    fputs(i ? ",[[" : "[[", f);
+    put_double(f, x1);
+    fputc(',', f);
+    put_double(f, y1);
+    fputs("],[", f);
+    put_double(f, x2);
+    fputc(',', f);
+    put_double(f, y2);
+    fputs("]]", f);
+}
+
+/* Writes v compactly to f, numbers in the format of our results (jansson's own dump prints 0.1
+ * as 0.10000000000000001).  Depth is bounded by jansson's parser. */
+static void put_json(FILE *f, const json_t *v)
+{
+    const char *key;
+    json_t *x;
+    size_t i;
+    char *s;
+    switch (json_typeof(v)) {
+    case JSON_OBJECT:
+        fputc('{', f);
+        i = 0;
+        json_object_foreach((json_t *)v, key, x)
+        {
+            json_t *k = json_string(key);
+            if (i++) fputc(',', f);
+            put_json(f, k);
+            fputc(':', f);
+            put_json(f, x);
+            json_decref(k);
+        }
+        fputc('}', f);
+        break;
+    case JSON_ARRAY:
+        fputc('[', f);
+        json_array_foreach(v, i, x)
+        {
+            if (i) fputc(',', f);
+            put_json(f, x);
+        }
+        fputc(']', f);
+        break;
+    case JSON_INTEGER:
+        fprintf(f, "%" JSON_INTEGER_FORMAT, json_integer_value(v));
+        break;
+    case JSON_REAL:
+        put_double(f, json_real_value(v));
+        break;
+    default: /* strings and literals: jansson escapes them */
+        s = json_dumps(v, JSON_ENCODE_ANY | JSON_COMPACT);
+        if (s) fputs(s, f);
+        free(s);
+        break;
+    }
+}
+
+static int finish_output(const json_t *options)
+{
+    fputc(']', stdout);
+    if (options) {
+        fputs(",\"options\":", stdout);
+        put_json(stdout, options);
+    }
+    fputs("}\n", stdout);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
+/* ---- arguments ----------------------------------------------------------------------------- */
+
+/* Parses a decimal unsigned integer (the whole string); returns 0 on success. */
+static int parse_u64(const char *s, uint64_t *out)
+{
+    char *end;
+    unsigned long long v;
+    if (!*s || *s == '-' || *s == '+' || *s == ' ') return -1;
+    errno = 0;
+    v = strtoull(s, &end, 10);
+    if (errno || *end) return -1;
+    *out = v;
+    return 0;
+}
+
+/* Parses the --options text: a JSON object that is valid as a "lines" request's options.
+ * Returns it (caller json_decref()s) or NULL after printing why. */
+static json_t *options_parse(const char *text)
+{
+    json_error_t je;
+    json_t *o = json_loads(text, JSON_REJECT_DUPLICATES, &je), *req = NULL;
+    char *body = NULL;
+    api_error err;
+    if (!o || !json_is_object(o)) {
+        if (o)
+            fprintf(stderr, "cellar: --options: expected a JSON object\n");
+        else
+            fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column,
+                    je.text);
+        goto fail;
+    }
+    req = json_pack("{s:s, s:[], s:O}", "kind", "lines", "lines", "options", o);
+    body = req ? json_dumps(req, JSON_COMPACT) : NULL;
+    if (!body) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto fail;
+    }
+    if (api_check_json(body, strlen(body), NULL, NULL, &err) != API_OK) {
+        fprintf(stderr, "cellar: --options: %s\n", err.msg);
+        goto fail;
+    }
+    free(body);
+    json_decref(req);
+    return o;
+fail:
+    free(body);
+    json_decref(req);
+    json_decref(o);
+    return NULL;
+}
+
+static int gen_lines(char **pos, int npos, const char *options_text)
+{
+    uint64_t n, seed;
+    double scaling, s[4], xmin = INFINITY, ymin = INFINITY;
+    char *end;
+    json_t *options = NULL;
+    rng r;
+    int rc;
+    if (npos != 5) return usage_error("%s", "gen lines takes N SCALING SEED");
+    if (parse_u64(pos[2], &n) || n > ARR2_MAX_SEGMENTS)
+        return usage_error("gen lines: N must be an integer in 0..20000000, not \"%s\"", pos[2]);
+    errno = 0;
+    scaling = strtod(pos[3], &end);
+    if (errno || *end || end == pos[3] || !isfinite(scaling) || scaling < 0)
+        return usage_error("gen lines: SCALING must be a finite number >= 0, not \"%s\"", pos[3]);
+    if (parse_u64(pos[4], &seed))
+        return usage_error("gen lines: SEED must be an integer in 0..2^64-1, not \"%s\"", pos[4]);
+    if (options_text && !(options = options_parse(options_text))) return EXIT_USAGE;
+    /* Two passes over the same stream: the minimum first, then the translated segments, so the
+     * generator needs no memory whatever N is. */
+    rng_seed(&r, seed);
+    for (uint64_t i = 0; i < n; i++) {
+        random_segment(&r, scaling, s);
+        xmin = fmin(xmin, fmin(s[0], s[2]));
+        ymin = fmin(ymin, fmin(s[1], s[3]));
+    }
+    rng_seed(&r, seed);
+    fputs("{\"kind\":\"lines\",\"lines\":[", stdout);
+    for (uint64_t i = 0; i < n; i++) {
+        random_segment(&r, scaling, s);
+        put_segment(stdout, i, s[0] - xmin, s[1] - ymin, s[2] - xmin, s[3] - ymin);
+    }
+    rc = finish_output(options);
+    json_decref(options);
+    return rc;
+}
+
+static int gen_grid(char **pos, int npos, const char *options_text)
+{
+    uint64_t k;
+    json_t *options = NULL;
+    size_t at = 0;
+    int rc;
+    if (npos != 3) return usage_error("%s", "gen grid takes K");
+    if (parse_u64(pos[2], &k) || k > ARR2_MAX_SEGMENTS / 2)
+        return usage_error("gen grid: K must be an integer in 0..10000000, not \"%s\"", pos[2]);
+    if (options_text && !(options = options_parse(options_text))) return EXIT_USAGE;
+    fputs("{\"kind\":\"lines\",\"lines\":[", stdout);
+    for (uint64_t i = 0; i < k; i++)
+        put_segment(stdout, at++, 0, (double)i, (double)(k - 1), (double)i);
+    for (uint64_t i = 0; i < k; i++)
+        put_segment(stdout, at++, (double)i, 0, (double)i, (double)(k - 1));
+    rc = finish_output(options);
+    json_decref(options);
+    return rc;
+}
+
+/* Reads a whole file ("-": stdin) into a malloc'd buffer; NULL after printing why. */
+static char *read_all(const char *path, size_t *len)
+{
+    FILE *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "rb");
+    char *buf = NULL, *p;
+    size_t cap = 0, n = 0;
+    if (!f) {
+        fprintf(stderr, "cellar: %s: %s\n", path, strerror(errno));
+        return NULL;
+    }
+    for (;;) {
+        if (n == cap) {
+            cap = cap ? 2 * cap : 1 << 16;
+            p = realloc(buf, cap);
+            if (!p) {
+                fprintf(stderr, "cellar: %s: out of memory\n", path);
+                goto fail;
+            }
+            buf = p;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0) break;
+    }
+    if (ferror(f)) {
+        fprintf(stderr, "cellar: %s: %s\n", path, strerror(errno));
+        goto fail;
+    }
+    if (f != stdin) fclose(f);
+    *len = n;
+    return buf;
+fail:
+    if (f != stdin) fclose(f);
+    free(buf);
+    return NULL;
+}
+
+static int run(char **pos, int npos, int threads)
+{
+    size_t len, outlen;
+    char *body, *out;
+    api_error err;
+    int rc;
+    if (npos != 2) return usage_error("%s", "run takes one REQUEST.json (or - for stdin)");
+    body = read_all(pos[1], &len);
+    if (!body) return 1;
+    rc = api_run_json(body, len, threads, &out, &outlen, &err);
+    free(body);
+    if (rc != API_OK) {
+        fprintf(stderr, "cellar: %s\n", err.msg);
+        return 1;
+    }
+    fwrite(out, 1, outlen, stdout);
+    free(out);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    static char outbuf[1 << 16];
+    char **pos = calloc((size_t)argc + 1, sizeof *pos);
+    const char *options_text = NULL;
+    int npos = 0, threads = 0, rc;
+    if (!pos) return 1;
+    setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *val = NULL;
+        if (strncmp(a, "--", 2) != 0 && strcmp(a, "-h") != 0) {
+            pos[npos++] = argv[i];
+            continue;
+        }
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            fputs(usage_text, stdout);
+            rc = 0;
+            goto out;
+        }
+        if (strcmp(a, "--version") == 0) {
+            printf("cellar %s (jansson %s)\n", API_VERSION, JANSSON_VERSION);
+            rc = 0;
+            goto out;
+        }
+        if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
+            if (i + 1 == argc) {
+                rc = usage_error("%s needs a value", a);
+                goto out;
+            }
+            val = argv[++i];
+        } else if (strncmp(a, "--threads=", 10) == 0 || strncmp(a, "--options=", 10) == 0) {
+            val = a + 10;
+        } else {
+            rc = usage_error("unknown option %s", a);
+            goto out;
+        }
+        if (strncmp(a, "--threads", 9) == 0) {
+            uint64_t t;
+            if (parse_u64(val, &t) || t > 4096) {
+                rc = usage_error("--threads: expected an integer in 0..4096, not \"%s\"", val);
+                goto out;
+            }
+            threads = (int)t;
+        } else {
+            options_text = val;
+        }
+    }
+    if (npos == 0) {
+        rc = usage_error("%s", "no command (run, gen)");
+    } else if (strcmp(pos[0], "run") == 0) {
+        rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
+                          : run(pos, npos, threads);
+    } else if (strcmp(pos[0], "gen") == 0) {
+        if (npos < 2)
+            rc = usage_error("%s", "gen needs lines or grid");
+        else if (strcmp(pos[1], "lines") == 0)
+            rc = gen_lines(pos, npos, options_text);
+        else if (strcmp(pos[1], "grid") == 0)
+            rc = gen_grid(pos, npos, options_text);
+        else
+            rc = usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
+    } else {
+        rc = usage_error("unknown command \"%s\" (run, gen)", pos[0]);
+    }
+out:
+    free(pos);
+    if (fflush(stdout) != 0) rc = rc ? rc : 1;
+    return rc;
+}

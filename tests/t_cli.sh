@@ -1,0 +1,122 @@
+#!/bin/sh
+# t_cli.sh — black-box tests of the command-line tool: exit statuses, stdin, gen, --help.
+# Usage: CELLAR_BIN=build/cellar tests/t_cli.sh   (tests/run.sh sets CELLAR_BIN)
+# Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
+set -u
+BIN=${CELLAR_BIN:-build/cellar}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT INT TERM
+P=0
+F=0
+
+pass() { P=$((P + 1)); echo "ok $1"; }
+fail() { F=$((F + 1)); echo "FAIL $1"; }
+# check NAME COND...: runs the condition (a command), records the result
+check() {
+    name=$1
+    shift
+    if "$@"; then pass "$name"; else fail "$name"; fi
+}
+# status WANT CMD...: runs CMD with stdout to $T/out, stderr to $T/err; true if it exits WANT
+status() {
+    want=$1
+    shift
+    "$@" >"$T/out" 2>"$T/err"
+    got=$?
+    [ "$got" -eq "$want" ] || { echo "  exit $got, want $want: $*"; head -c 300 "$T/err"; return 1; }
+}
+# a number from the "stats" object of a result file: stat FILE KEY
+stat() { sed -n "s/.*\"stats\":{.*\"$2\":\([0-9][0-9]*\)[,}].*/\1/p" "$1"; }
+has() { grep -q -- "$2" "$1"; }
+lines_of() { wc -l <"$1" | tr -d ' '; }
+
+if [ ! -x "$BIN" ]; then
+    echo "FAIL $BIN is not built"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+
+SQUARE='[[[0,0],[1,0]],[[1,0],[1,1]],[[1,1],[0,1]],[[0,1],[0,0]]]'
+printf '{"kind":"lines","lines":%s,"options":{"fields":["V","EV","FV","FE","holes","exterior"]}}\n' \
+    "$SQUARE" >"$T/square.json"
+
+# --help, --version, usage errors
+check "--help exits 0 with usage on stdout" status 0 "$BIN" --help
+check "--help text names run and gen" sh -c "grep -q 'usage: cellar' '$T/out' && grep -q 'gen lines N SCALING SEED' '$T/out'"
+check "--help after a command still helps" status 0 "$BIN" run --help
+check "--version exits 0" status 0 "$BIN" --version
+check "--version prints the version" grep -q '^cellar [0-9]' "$T/out"
+check "no command exits 2" status 2 "$BIN"
+check "usage error explained on stderr" grep -q '^cellar: no command' "$T/err"
+check "unknown command exits 2" status 2 "$BIN" frobnicate
+check "unknown option exits 2" status 2 "$BIN" --frob run "$T/square.json"
+check "run without a file exits 2" status 2 "$BIN" run
+check "run with two files exits 2" status 2 "$BIN" run "$T/square.json" "$T/square.json"
+check "--threads without a value exits 2" status 2 "$BIN" run "$T/square.json" --threads
+check "--threads not a number exits 2" status 2 "$BIN" --threads many run "$T/square.json"
+check "--options with run exits 2" status 2 "$BIN" run "$T/square.json" --options '{}'
+
+# run: success, stdin, failures
+check "run FILE exits 0" status 0 "$BIN" run "$T/square.json"
+cp "$T/out" "$T/square.out"
+check "run prints one line" test "$(lines_of "$T/square.out")" = 1
+check "run prints the complex" grep -q '^{"dim":2,"V":\[\[0,0\],\[0,1\],\[1,0\],\[1,1\]\],"EV":\[\[0,1\],\[0,2\],\[1,3\],\[2,3\]\],"FV":\[\[' "$T/square.out"
+check "run prints nothing on stderr" test ! -s "$T/err"
+check "run - reads stdin" status 0 sh -c "'$BIN' run - <'$T/square.json'"
+check "stdin and file give the same bytes" cmp -s "$T/out" "$T/square.out"
+check "--threads before and after the command agree" sh -c \
+    "'$BIN' --threads 1 run '$T/square.json' >'$T/a' && '$BIN' run '$T/square.json' --threads=3 >'$T/b' && cmp -s '$T/a' '$T/b'"
+printf '{"kind":"lines","lines":[[[0,0],[1,0]],[[0,0],[1,2,3]]]}' >"$T/bad.json"
+check "invalid request exits 1" status 1 "$BIN" run "$T/bad.json"
+check "invalid request names the JSON path" grep -q '^cellar: lines\[1\]\[1\]: expected 2 finite numbers$' "$T/err"
+check "invalid request prints nothing on stdout" test ! -s "$T/out"
+check "malformed JSON on stdin exits 1" status 1 sh -c "printf '{\"kind\":' | '$BIN' run -"
+check "malformed JSON message has line and column" grep -q 'malformed JSON at line 1, column' "$T/err"
+check "empty stdin exits 1" status 1 sh -c "'$BIN' run - </dev/null"
+check "unknown option in the request exits 1" status 1 sh -c \
+    "echo '{\"kind\":\"lines\",\"lines\":[],\"options\":{\"colour\":1}}' | '$BIN' run -"
+check "unknown option is named" grep -q '^cellar: options.colour: unknown option' "$T/err"
+check "missing file exits 1" status 1 "$BIN" run "$T/no-such-file.json"
+
+# gen lines
+check "gen lines exits 0" status 0 "$BIN" gen lines 200 0.3 7
+cp "$T/out" "$T/g7a"
+"$BIN" gen lines 200 0.3 7 >"$T/g7b"
+"$BIN" gen lines 200 0.3 8 >"$T/g8"
+check "gen: same seed, same bytes" cmp -s "$T/g7a" "$T/g7b"
+check "gen: other seed, other bytes" sh -c "! cmp -s '$T/g7a' '$T/g8'"
+check "gen: one line" test "$(lines_of "$T/g7a")" = 1
+check "gen: 200 segments" test "$(grep -o '\[\[' "$T/g7a" | wc -l | tr -d ' ')" = 200
+check "gen: no negative coordinate" sh -c "! grep -q '[[,]-' '$T/g7a'"
+check "gen: translated to x = 0 and y = 0" sh -c "grep -q '\[0,' '$T/g7a' && grep -q ',0\]' '$T/g7a'"
+# the generator is ours and portable: these bytes are the same on every machine
+check "gen: known bytes for seed 42" test "$("$BIN" gen lines 3 0.3 42)" = \
+    '{"kind":"lines","lines":[[[0.29909645858954803,0.437203664596629],[0.4779505905800252,0.6009174729954447]],[[0.07285510944602591,0.07999774025207201],[0.08548985038438017,0]],[[0.02696230578508607,0.517257852451174],[0,0.6841645313429738]]]}'
+check "gen lines | run exits 0" status 0 sh -c "'$BIN' run '$T/g7a'"
+check "run counts the 200 input segments" test "$(stat "$T/out" input_segments)" = 200
+check "gen lines 0 is an empty request" test "$("$BIN" gen lines 0 0.3 1)" = '{"kind":"lines","lines":[]}'
+check "gen lines with bad N exits 2" status 2 "$BIN" gen lines ten 0.3 1
+check "gen lines with negative scaling exits 2" status 2 "$BIN" gen lines 10 -0.3 1
+check "gen lines with a missing seed exits 2" status 2 "$BIN" gen lines 10 0.3
+check "gen with an unknown generator exits 2" status 2 "$BIN" gen circles 3
+
+# gen grid
+check "gen grid 4 exits 0" status 0 "$BIN" gen grid 4
+cp "$T/out" "$T/grid4"
+check "gen grid 4 has 8 segments" test "$(grep -o '\[\[' "$T/grid4" | wc -l | tr -d ' ')" = 8
+check "gen grid 4 starts with (0,0)-(3,0)" grep -q '^{"kind":"lines","lines":\[\[\[0,0\],\[3,0\]\],\[\[0,1\],\[3,1\]\]' "$T/grid4"
+check "gen grid 4 | run - exits 0" status 0 sh -c "'$BIN' gen grid 4 | '$BIN' run -"
+check "gen grid 4 gives 9 faces" test "$(stat "$T/out" F)" = 9
+check "gen grid 4 gives 16 vertices, 24 edges" test "$(stat "$T/out" V),$(stat "$T/out" E)" = "16,24"
+check "gen grid 4: 9 rows in FE" test "$(sed 's/.*"FE":\[\(.*\)\],"holes".*/\1/' "$T/out" | grep -o '\[' | wc -l | tr -d ' ')" = 9
+check "gen --options becomes the request's options" status 0 "$BIN" gen grid 3 --options '{"fields":["stats"], "precision": 0.1}'
+check "gen --options is kept compact and exact" grep -q '"options":{"fields":\["stats"\],"precision":0.1}}$' "$T/out"
+check "gen --options request runs" status 0 sh -c "'$BIN' gen grid 3 --options '{\"fields\":[\"stats\"]}' | '$BIN' run -"
+check "fields subset gives only stats" sh -c "grep -q '^{\"dim\":2,\"stats\":{' '$T/out' && ! grep -q '\"FV\"' '$T/out'"
+check "gen grid 3 gives 4 faces" test "$(stat "$T/out" F)" = 4
+check "gen --options rejects an unknown option (exit 2)" status 2 "$BIN" gen grid 3 --options '{"bogus":true}'
+check "gen --options error names the option" grep -q 'options.bogus: unknown option' "$T/err"
+check "gen --options rejects a non-object (exit 2)" status 2 "$BIN" gen grid 3 --options '[1]'
+
+echo "$P passed, $F failed"
+[ "$F" -eq 0 ]

@@ -1,0 +1,915 @@
+/* test_api.c — the JSON layer: every error path with its status and JSON path, results parsed
+ * back with jansson and checked against hand-computed complexes, the CSR operators (d1·d2 = 0
+ * from the CSR arrays alone), exterior_last, field subsets, and the double formatter's fast path
+ * against snprintf/strtod. */
+#include "api/api.h"
+#include "api/api_int.h"
+#include "tests/check.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SQUARE           "[[[0,0],[1,0]],[[1,0],[1,1]],[[1,1],[0,1]],[[0,1],[0,0]]]"
+#define SQUARE_REQ(opts) "{\"kind\":\"lines\",\"lines\":" SQUARE ",\"options\":" opts "}"
+
+/* Runs body; on success returns the parsed result (caller decrefs), else NULL with a failure. */
+static json_t *run_ok_(const char *body, int threads, const char *func, int line)
+{
+    char *out = NULL;
+    size_t outlen = 0;
+    api_error err;
+    json_error_t je;
+    json_t *r;
+    int rc = api_run_json(body, strlen(body), threads, &out, &outlen, &err);
+    if (rc != API_OK) {
+        test_fail(__FILE__, func, line, "api_run_json: %d %s", rc, err.msg);
+        return NULL;
+    }
+    if (!out || outlen != strlen(out) || outlen < 2 || out[outlen - 1] != '\n' ||
+        memchr(out, '\n', outlen - 1)) {
+        test_fail(__FILE__, func, line, "result is not one line ending with a newline");
+        free(out);
+        return NULL;
+    }
+    r = json_loadb(out, outlen, 0, &je);
+    if (!json_is_object(r)) test_fail(__FILE__, func, line, "result is not JSON: %s", je.text);
+    free(out);
+    return r;
+}
+#define run_ok(body) run_ok_(body, 1, __func__, __LINE__)
+
+/* json integer at a[i] (or a[i][j] with j >= 0), -999999 when absent */
+static long long iat(const json_t *a, size_t i, long j)
+{
+    const json_t *v = json_array_get(a, i);
+    if (j >= 0) v = json_array_get(v, (size_t)j);
+    return json_is_integer(v) ? (long long)json_integer_value(v) : -999999;
+}
+
+/* ---- error paths ------------------------------------------------------------------------- */
+
+typedef struct err_case {
+    const char *body;
+    int status;
+    const char *prefix; /* the message starts with this */
+} err_case;
+
+static const err_case err_cases[] = {
+    {"", 400, "malformed JSON: empty body"},
+    {"  \n\t", 400, "malformed JSON: empty body"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0]]", 400, "malformed JSON at line 1, column 38"},
+    {"{\"kind\":\"lines\",\n\"lines\":[[[0,0],[1,0]]]", 400, "malformed JSON at line 2, column"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[NaN,0]]]}", 400, "malformed JSON at line 1"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[Infinity,0]]]}", 400, "malformed JSON at line 1"},
+    {"{\"kind\":\"lines\",\"lines\":[] } x", 400, "malformed JSON at line 1"},
+    {"{\"kind\":\"l\xff\"}", 400, "malformed JSON"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1e400,0]]]}", 422, "lines[0][1][0]: "},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0]],[[0,0],[1,-1e400]]]}", 422, "lines[1][1][1]: "},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,123456789012345678901234]]]}", 422,
+     "lines[0][1][1]: "},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":1e999}}", 422,
+     "options.precision: "},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"operators\":true,\"operators\":false}}", 422,
+     "options: duplicate object key"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0,3]]]}", 422,
+     "lines[0][1]: expected 2 finite numbers"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0]],[[0,0],[1]]]}", 422,
+     "lines[1][1]: expected 2 finite numbers"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],5]]}", 422, "lines[0][1]: expected 2 finite numbers"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0]]]}", 422, "lines[0]: expected 2 points"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1],[2,2]]]}", 422, "lines[0]: expected 2 points"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]],7]}", 422, "lines[1]: expected 2 points"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[\"1\",0]]]}", 422,
+     "lines[0][1][0]: expected a finite number"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,null],[1,0]]]}", 422,
+     "lines[0][0][1]: expected a finite number"},
+    {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,true]]]}", 422,
+     "lines[0][1][1]: expected a finite number"},
+    {"{\"kind\":\"lines\",\"lines\":{}}", 422, "lines: expected an array of segments"},
+    {"{\"kind\":\"lines\",\"lines\":\"0 0 1 1\"}", 422, "lines: expected an array of segments"},
+    {"{\"kind\":\"lines\"}", 422, "lines: required"},
+    {"{\"lines\":[]}", 422, "kind: required, expected \"lines\""},
+    {"{\"kind\":\"svg\",\"lines\":[]}", 422, "kind: expected \"lines\""},
+    {"{\"kind\":5,\"lines\":[]}", 422, "kind: expected \"lines\""},
+    {"[1,2]", 422, "request: expected an object"},
+    {"\"lines\"", 422, "request: expected an object"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"extra\":1}", 422, "extra: unknown key"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"foo\":1}}", 422,
+     "options.foo: unknown option"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":[]}", 422, "options: expected an object"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":null}", 422, "options: expected an object"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":0}}", 422,
+     "options.precision: expected a number > 0"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":-0.5}}", 422,
+     "options.precision: expected a number > 0"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":\"1e-3\"}}", 422,
+     "options.precision: expected a number > 0"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"keep_dangling\":1}}", 422,
+     "options.keep_dangling: expected true or false"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"exterior_last\":\"yes\"}}", 422,
+     "options.exterior_last: expected true or false"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"operators\":null}}", 422,
+     "options.operators: expected true or false"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"V\",\"X\"]}}", 422,
+     "options.fields[1]: expected one of \"V\""},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"V\",3]}}", 422,
+     "options.fields[1]: expected one of"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":\"V\"}}", 422,
+     "options.fields: expected an array"},
+};
+
+TEST(parse_errors_have_status_and_path)
+{
+    for (size_t i = 0; i < sizeof err_cases / sizeof err_cases[0]; i++) {
+        const err_case *c = &err_cases[i];
+        char *out = (char *)1, *canon = (char *)1;
+        size_t outlen = 7;
+        api_error err = {0};
+        int rc = api_run_json(c->body, strlen(c->body), 1, &out, &outlen, &err);
+        CHECK(rc == c->status && err.status == c->status, "case %zu %s: status %d, want %d (%s)", i,
+              c->body, rc, c->status, err.msg);
+        CHECK(strncmp(err.msg, c->prefix, strlen(c->prefix)) == 0,
+              "case %zu %s: message \"%s\", want prefix \"%s\"", i, c->body, err.msg, c->prefix);
+        CHECK(out == NULL && outlen == 0, "case %zu: output not cleared on failure", i);
+        /* validation alone gives the same answer */
+        memset(&err, 0, sizeof err);
+        rc = api_check_json(c->body, strlen(c->body), &canon, NULL, &err);
+        CHECK(rc == c->status && strncmp(err.msg, c->prefix, strlen(c->prefix)) == 0,
+              "case %zu: api_check_json gives %d \"%s\"", i, rc, err.msg);
+        CHECK(canon == NULL, "case %zu: canon not cleared", i);
+        for (const char *p = err.msg; *p; p++)
+            CHECK(*p >= 0x20 && *p < 0x7f, "case %zu: unprintable byte in message", i);
+    }
+}
+
+/* Nesting far beyond jansson's limit (2048 in 2.14) is an error value, not a stack overflow. */
+TEST(deep_nesting_is_an_error)
+{
+    size_t depth = 100000, n = 2 * depth + 64;
+    char *body = malloc(n), *out = NULL;
+    size_t outlen, len;
+    api_error err;
+    int rc;
+    REQUIRE(body, "malloc");
+    /* bare arrays */
+    memset(body, '[', depth);
+    memset(body + depth, ']', depth);
+    rc = api_run_json(body, 2 * depth, 1, &out, &outlen, &err);
+    CHECK(rc == 400 && strstr(err.msg, "maximum parsing depth"), "bare: %d %s", rc, err.msg);
+    /* inside the lines of a real request, unterminated */
+    len = (size_t)snprintf(body, n, "{\"kind\":\"lines\",\"lines\":");
+    memset(body + len, '[', depth);
+    len += depth;
+    rc = api_run_json(body, len, 1, &out, &outlen, &err);
+    CHECK(rc == 400 && strstr(err.msg, "maximum parsing depth") &&
+              strstr(err.msg, "line 1, column"),
+          "in lines: %d %s", rc, err.msg);
+    /* nested objects */
+    len = 0;
+    for (size_t i = 0; i < 10000; i++) memcpy(body + len, "{\"a\":", 5), len += 5;
+    rc = api_check_json(body, len, NULL, NULL, &err);
+    CHECK(rc == 400 && strstr(err.msg, "maximum parsing depth"), "objects: %d %s", rc, err.msg);
+    CHECK(out == NULL, "output set on failure");
+    free(body);
+}
+
+/* The path named for an out-of-range number deep in a nested, multi-line body. */
+TEST(overflow_path_in_nested_body)
+{
+    const char *body = "{\"kind\": \"lines\",\n \"lines\": [[[0, 0], [1, 1]],\n"
+                       "  [[2, 2], [3, 3]], [[4, 4], [5, \"]\"]], [[6, 6], [7, 1e400]]]}";
+    api_error err;
+    int rc = api_check_json(body, strlen(body), NULL, NULL, &err);
+    CHECK(rc == 422 && strncmp(err.msg, "lines[3][1][1]: ", 16) == 0 && strstr(err.msg, "line 3"),
+          "%d %s", rc, err.msg);
+    body = "{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"V\"],\"na\\\"me\":-1e400}}";
+    rc = api_check_json(body, strlen(body), NULL, NULL, &err);
+    CHECK(rc == 422 && strncmp(err.msg, "options.na\\\"me: ", 16) == 0, "%d %s", rc, err.msg);
+}
+
+TEST(core_errors_map_to_statuses)
+{
+    api_error err;
+    CHECK(api_core_fail(&err, ARR_EINVAL, "bad") == 422 && err.status == 422 &&
+              strcmp(err.msg, "bad") == 0,
+          "EINVAL: %d %s", err.status, err.msg);
+    CHECK(api_core_fail(&err, ARR_ELIMIT, "too wide") == 422 && strcmp(err.msg, "too wide") == 0,
+          "ELIMIT: %s", err.msg);
+    CHECK(api_core_fail(&err, ARR_ENOMEM, "") == 503 && strcmp(err.msg, "out of memory") == 0,
+          "ENOMEM: %s", err.msg);
+    CHECK(api_core_fail(&err, ARR_ECANCELED, NULL) == API_ECANCELED, "ECANCELED");
+    CHECK(api_core_fail(&err, ARR_EINTERNAL, "x") == 500 && strstr(err.msg, "internal error"),
+          "EINTERNAL: %s", err.msg);
+    CHECK(api_core_fail(&err, 77, "x") == 500, "unknown code");
+    /* a real limit of the core: extent / precision beyond 2^ARR2_GRID_BITS */
+    const char *body = "{\"kind\":\"lines\",\"lines\":[[[0,0],[1000,1000]]],"
+                       "\"options\":{\"precision\":1e-12}}";
+    char *out = NULL;
+    size_t outlen;
+    int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
+    CHECK(rc == 422 && out == NULL && *err.msg, "precision too fine: %d %s", rc, err.msg);
+}
+
+TEST(cancel_before_start)
+{
+    atomic_int cancel = 1;
+    api_run_opts ro = {.threads = 2, .cancel = &cancel};
+    char body[1 << 16], *out = NULL;
+    size_t len = 0, outlen;
+    api_error err;
+    int rc;
+    len += (size_t)snprintf(body + len, sizeof body - len, "{\"kind\":\"lines\",\"lines\":[");
+    for (int i = 0; i < 200; i++)
+        len += (size_t)snprintf(body + len, sizeof body - len,
+                                "%s[[0,%d],[199,%d]],[[%d,0],[%d,199]]", i ? "," : "", i, i, i, i);
+    len += (size_t)snprintf(body + len, sizeof body - len, "]}");
+    rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    CHECK(rc == API_ECANCELED && err.status == API_ECANCELED && out == NULL, "%d %s", rc, err.msg);
+    cancel = 0;
+    rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    CHECK(rc == API_OK && out && strstr(out, "\"F\":39601,"), "uncanceled: %d %s", rc, err.msg);
+    free(out);
+}
+
+/* ---- results ----------------------------------------------------------------------------- */
+
+/* Signed area of the cycle of vertex ids cyc (a JSON array) over V. */
+static double cycle_area(const json_t *V, const json_t *cyc)
+{
+    double a = 0;
+    size_t k = json_array_size(cyc);
+    for (size_t i = 0; i < k; i++) {
+        const json_t *p = json_array_get(V, (size_t)iat(cyc, i, -1));
+        const json_t *q = json_array_get(V, (size_t)iat(cyc, (i + 1) % k, -1));
+        a += json_number_value(json_array_get(p, 0)) * json_number_value(json_array_get(q, 1)) -
+             json_number_value(json_array_get(q, 0)) * json_number_value(json_array_get(p, 1));
+    }
+    return a / 2;
+}
+
+/* Checks that the signed edges fe (JSON array) are exactly the walk of the cycle cyc over EV:
+ * ±(e+1) with e = {a,b}, + when a < b (EV rows are [v0 < v1]). */
+static int fe_matches_walk(const json_t *EV, const json_t *cyc, const json_t *fe)
+{
+    size_t k = json_array_size(cyc);
+    if (json_array_size(fe) != k) return 0;
+    for (size_t i = 0; i < k; i++) {
+        long long a = iat(cyc, i, -1), b = iat(cyc, (i + 1) % k, -1), want = 0;
+        for (size_t e = 0; e < json_array_size(EV); e++)
+            if ((iat(EV, e, 0) == a && iat(EV, e, 1) == b) ||
+                (iat(EV, e, 0) == b && iat(EV, e, 1) == a))
+                want = a < b ? (long long)e + 1 : -(long long)e - 1;
+        int found = 0;
+        for (size_t j = 0; j < k; j++) found |= iat(fe, j, -1) == want;
+        if (!want || !found) return 0;
+    }
+    return 1;
+}
+
+typedef struct csr {
+    long long rows, cols;
+    size_t nnz;
+    long long *indptr, *indices, *data;
+} csr;
+
+/* Reads {"shape","indptr","indices","data"} checking the CSR structure; 0 on success. */
+static int csr_read(const json_t *m, csr *c, char *why, size_t n)
+{
+    const json_t *shape = json_object_get(m, "shape"), *ip = json_object_get(m, "indptr"),
+                 *ix = json_object_get(m, "indices"), *d = json_object_get(m, "data");
+    memset(c, 0, sizeof *c);
+    if (json_object_size(m) != 4 || json_array_size(shape) != 2 || !json_is_array(ip) ||
+        !json_is_array(ix) || !json_is_array(d))
+        return snprintf(why, n, "not a CSR object"), -1;
+    c->rows = iat(shape, 0, -1), c->cols = iat(shape, 1, -1);
+    c->nnz = json_array_size(ix);
+    if ((long long)json_array_size(ip) != c->rows + 1 || json_array_size(d) != c->nnz)
+        return snprintf(why, n, "bad lengths"), -1;
+    c->indptr = calloc((size_t)c->rows + 1, sizeof *c->indptr);
+    c->indices = calloc(c->nnz + 1, sizeof *c->indices);
+    c->data = calloc(c->nnz + 1, sizeof *c->data);
+    for (long long r = 0; r <= c->rows; r++) c->indptr[r] = iat(ip, (size_t)r, -1);
+    for (size_t k = 0; k < c->nnz; k++) {
+        c->indices[k] = iat(ix, k, -1);
+        c->data[k] = iat(d, k, -1);
+        if (c->indices[k] < 0 || c->indices[k] >= c->cols || (c->data[k] != 1 && c->data[k] != -1))
+            return snprintf(why, n, "entry %zu out of range", k), -1;
+    }
+    if (c->indptr[0] != 0 || c->indptr[c->rows] != (long long)c->nnz)
+        return snprintf(why, n, "indptr ends"), -1;
+    for (long long r = 0; r < c->rows; r++) {
+        if (c->indptr[r] > c->indptr[r + 1]) return snprintf(why, n, "indptr decreases"), -1;
+        for (long long k = c->indptr[r] + 1; k < c->indptr[r + 1]; k++)
+            if (c->indices[k - 1] >= c->indices[k])
+                return snprintf(why, n, "row %lld indices unsorted", r), -1;
+    }
+    return 0;
+}
+
+static void csr_free(csr *c)
+{
+    free(c->indptr);
+    free(c->indices);
+    free(c->data);
+}
+
+/* Entry (r, col) of a CSR matrix. */
+static long long csr_at(const csr *c, long long r, long long col)
+{
+    for (long long k = c->indptr[r]; k < c->indptr[r + 1]; k++)
+        if (c->indices[k] == col) return c->data[k];
+    return 0;
+}
+
+/* Checks d1 against EV, d2 against FE, and d1·d2 = 0, from the CSR arrays alone. */
+static void check_operators(const json_t *r, const char *what)
+{
+    const json_t *ops = json_object_get(r, "operators"), *EV = json_object_get(r, "EV"),
+                 *FE = json_object_get(r, "FE"), *V = json_object_get(r, "V");
+    csr d1, d2;
+    char why[128];
+    long long nv = (long long)json_array_size(V), ne = (long long)json_array_size(EV),
+              nf = (long long)json_array_size(FE);
+    if (!json_is_object(ops)) {
+        test_fail(__FILE__, __func__, __LINE__, "%s: no operators", what);
+        return;
+    }
+    if (csr_read(json_object_get(ops, "d1"), &d1, why, sizeof why) != 0 ||
+        csr_read(json_object_get(ops, "d2"), &d2, why, sizeof why) != 0) {
+        test_fail(__FILE__, __func__, __LINE__, "%s: %s", what, why);
+        goto out;
+    }
+    CHECK(d1.rows == nv && d1.cols == ne && d2.rows == ne && d2.cols == nf,
+          "%s: shapes %lldx%lld %lldx%lld for V=%lld E=%lld F=%lld", what, d1.rows, d1.cols,
+          d2.rows, d2.cols, nv, ne, nf);
+    if (test_failed_now()) goto out;
+    CHECK(d1.nnz == 2 * (size_t)ne, "%s: d1 has %zu entries", what, d1.nnz);
+    for (long long e = 0; e < ne; e++) {
+        long long v0 = iat(EV, (size_t)e, 0), v1 = iat(EV, (size_t)e, 1);
+        CHECK(csr_at(&d1, v0, e) == -1 && csr_at(&d1, v1, e) == 1, "%s: d1 column %lld", what, e);
+    }
+    size_t fe_total = 0;
+    for (long long f = 0; f < nf; f++) {
+        const json_t *row = json_array_get(FE, (size_t)f);
+        fe_total += json_array_size(row);
+        for (size_t k = 0; k < json_array_size(row); k++) {
+            long long s = iat(row, k, -1), e = llabs(s) - 1;
+            CHECK(csr_at(&d2, e, f) == (s > 0 ? 1 : -1), "%s: d2[%lld][%lld]", what, e, f);
+        }
+    }
+    CHECK(d2.nnz == fe_total, "%s: d2 has %zu entries, FE %zu", what, d2.nnz, fe_total);
+    /* (d1·d2)[v][f] = sum over e of d1[v][e] d2[e][f], from the rows of d1 and of d2 */
+    long long *acc = calloc((size_t)nf + 1, sizeof *acc);
+    for (long long v = 0; acc && v < nv; v++) {
+        memset(acc, 0, ((size_t)nf + 1) * sizeof *acc);
+        for (long long k = d1.indptr[v]; k < d1.indptr[v + 1]; k++) {
+            long long e = d1.indices[k];
+            for (long long j = d2.indptr[e]; j < d2.indptr[e + 1]; j++)
+                acc[d2.indices[j]] += d1.data[k] * d2.data[j];
+        }
+        for (long long f = 0; f < nf; f++)
+            CHECK(acc[f] == 0, "%s: (d1 d2)[%lld][%lld] = %lld", what, v, f, acc[f]);
+    }
+    free(acc);
+out:
+    csr_free(&d1);
+    csr_free(&d2);
+}
+
+static const char *const keys_all[] = {"dim", "V", "EV", "FV", "FE", "holes", "exterior", "stats"};
+
+TEST(unit_square_round_trip)
+{
+    json_t *r = run_ok(SQUARE_REQ("{}"));
+    REQUIRE(r, "no result");
+    const json_t *V = json_object_get(r, "V"), *EV = json_object_get(r, "EV"),
+                 *FV = json_object_get(r, "FV"), *FE = json_object_get(r, "FE"),
+                 *ext = json_object_get(r, "exterior"), *st = json_object_get(r, "stats");
+    CHECK(json_object_size(r) == 8, "%zu keys", json_object_size(r));
+    for (size_t i = 0; i < 8; i++) CHECK(json_object_get(r, keys_all[i]), "no %s", keys_all[i]);
+    CHECK(json_is_integer(json_object_get(r, "dim")) &&
+              json_integer_value(json_object_get(r, "dim")) == 2,
+          "dim");
+    /* V sorted by x then y */
+    static const double wantV[4][2] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+    REQUIRE(json_array_size(V) == 4, "%zu vertices", json_array_size(V));
+    for (size_t v = 0; v < 4; v++)
+        for (size_t k = 0; k < 2; k++)
+            CHECK(json_number_value(json_array_get(json_array_get(V, v), k)) == wantV[v][k],
+                  "V[%zu][%zu]", v, k);
+    static const long long wantEV[4][2] = {{0, 1}, {0, 2}, {1, 3}, {2, 3}};
+    REQUIRE(json_array_size(EV) == 4, "%zu edges", json_array_size(EV));
+    for (size_t e = 0; e < 4; e++)
+        CHECK(iat(EV, e, 0) == wantEV[e][0] && iat(EV, e, 1) == wantEV[e][1], "EV[%zu]", e);
+    /* one face: a counter-clockwise rotation of 0 -> 2 -> 3 -> 1 */
+    REQUIRE(json_array_size(FV) == 1 && json_array_size(FE) == 1, "%zu faces", json_array_size(FV));
+    const json_t *f0 = json_array_get(FV, 0);
+    static const long long ccw[4] = {0, 2, 3, 1};
+    size_t start = 0;
+    while (start < 4 && ccw[start] != iat(f0, 0, -1)) start++;
+    REQUIRE(json_array_size(f0) == 4 && start < 4, "FV[0] has %zu vertices", json_array_size(f0));
+    for (size_t i = 0; i < 4; i++)
+        CHECK(iat(f0, i, -1) == ccw[(start + i) % 4], "FV[0][%zu] = %lld", i, iat(f0, i, -1));
+    CHECK(cycle_area(V, f0) == 1, "face area %g", cycle_area(V, f0));
+    /* FE: walking 0->2 is +(1+1), 2->3 +(3+1), 3->1 -(2+1), 1->0 -(0+1) */
+    const json_t *fe0 = json_array_get(FE, 0);
+    CHECK(fe_matches_walk(EV, f0, fe0), "FE[0] does not match the walk of FV[0]");
+    long long sum = 0, prod = 1;
+    for (size_t i = 0; i < json_array_size(fe0); i++)
+        sum += iat(fe0, i, -1), prod *= iat(fe0, i, -1);
+    CHECK(sum == 2 + 4 - 3 - 1 && prod == 2 * 4 * 3 * 1, "FE[0] sum %lld prod %lld", sum, prod);
+    /* exterior: the same square, clockwise; no holes */
+    REQUIRE(json_array_size(ext) == 1, "%zu exterior cycles", json_array_size(ext));
+    CHECK(cycle_area(V, json_array_get(ext, 0)) == -1, "exterior area");
+    CHECK(json_is_object(json_object_get(r, "holes")) &&
+              json_object_size(json_object_get(r, "holes")) == 0,
+          "holes");
+    /* stats */
+    static const char *const ones[] = {"F", "components", "blocks"};
+    for (size_t i = 0; i < 3; i++)
+        CHECK(json_integer_value(json_object_get(st, ones[i])) == 1, "stats.%s", ones[i]);
+    CHECK(json_integer_value(json_object_get(st, "V")) == 4 &&
+              json_integer_value(json_object_get(st, "E")) == 4 &&
+              json_integer_value(json_object_get(st, "input_segments")) == 4 &&
+              json_integer_value(json_object_get(st, "zero_length_dropped")) == 0 &&
+              json_number_value(json_object_get(st, "precision")) > 0,
+          "stats counts");
+    const json_t *ms = json_object_get(st, "ms");
+    CHECK(json_object_size(st) == 14 && json_object_size(ms) == 9 &&
+              json_is_number(json_object_get(ms, "total")),
+          "stats keys %zu ms keys %zu", json_object_size(st), json_object_size(ms));
+    json_decref(r);
+}
+
+TEST(operators_csr)
+{
+    json_t *r = run_ok(SQUARE_REQ("{\"operators\":true}"));
+    REQUIRE(r, "no result");
+    CHECK(json_object_size(r) == 9, "%zu keys", json_object_size(r));
+    check_operators(r, "square");
+    /* exact arrays for the square: d1 rows are vertices */
+    json_t *d1 = json_object_get(json_object_get(r, "operators"), "d1");
+    char *s = json_dumps(json_object_get(d1, "indptr"), JSON_COMPACT);
+    CHECK(s && strcmp(s, "[0,2,4,6,8]") == 0, "d1.indptr %s", s);
+    free(s);
+    s = json_dumps(json_object_get(d1, "data"), JSON_COMPACT);
+    CHECK(s && strcmp(s, "[-1,-1,1,-1,1,-1,1,1]") == 0, "d1.data %s", s);
+    free(s);
+    json_decref(r);
+
+    /* a grid with a hole-free interior and a square with a hole */
+    r = run_ok("{\"kind\":\"lines\",\"lines\":[[[0,0],[3,0]],[[0,1],[3,1]],[[0,2],[3,2]],"
+               "[[0,3],[3,3]],[[0,0],[0,3]],[[1,0],[1,3]],[[2,0],[2,3]],[[3,0],[3,3]]],"
+               "\"options\":{\"operators\":true}}");
+    REQUIRE(r, "no grid result");
+    CHECK(json_array_size(json_object_get(r, "FE")) == 9, "grid faces");
+    check_operators(r, "grid");
+    json_decref(r);
+}
+
+TEST(exterior_last_appends_exterior_rows)
+{
+    json_t *plain = run_ok(SQUARE_REQ("{}"));
+    json_t *r = run_ok(SQUARE_REQ("{\"exterior_last\":true,\"operators\":true}"));
+    REQUIRE(r && plain, "no result");
+    const json_t *V = json_object_get(r, "V"), *EV = json_object_get(r, "EV"),
+                 *FV = json_object_get(r, "FV"), *FE = json_object_get(r, "FE"),
+                 *ext = json_object_get(r, "exterior");
+    REQUIRE(json_array_size(FV) == 2 && json_array_size(FE) == 2, "rows: FV %zu FE %zu",
+            json_array_size(FV), json_array_size(FE));
+    CHECK(json_equal(json_array_get(FV, 0), json_array_get(json_object_get(plain, "FV"), 0)) &&
+              json_equal(json_array_get(FE, 0), json_array_get(json_object_get(plain, "FE"), 0)),
+          "first rows changed");
+    CHECK(json_equal(json_array_get(FV, 1), json_array_get(ext, 0)), "FV's last row");
+    CHECK(cycle_area(V, json_array_get(FV, 1)) == -1, "exterior row not clockwise");
+    CHECK(fe_matches_walk(EV, json_array_get(FV, 1), json_array_get(FE, 1)),
+          "exterior FE row does not match its walk");
+    /* each edge once with each sign over the two rows */
+    for (long long e = 1; e <= 4; e++) {
+        int plus = 0, minus = 0;
+        for (size_t f = 0; f < 2; f++)
+            for (size_t k = 0; k < json_array_size(json_array_get(FE, f)); k++) {
+                long long s = iat(json_array_get(FE, f), k, -1);
+                plus += s == e, minus += s == -e;
+            }
+        CHECK(plus == 1 && minus == 1, "edge %lld: %d +, %d -", e, plus, minus);
+    }
+    check_operators(r, "exterior_last");
+    json_decref(r);
+    json_decref(plain);
+
+    /* a dangling edge kept with keep_dangling is walked both ways by the exterior: it cancels */
+    r = run_ok("{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0]],[[1,0],[1,1]],[[1,1],[0,1]],"
+               "[[0,1],[0,0]],[[1,1],[2,2]]],\"options\":{\"keep_dangling\":true,"
+               "\"exterior_last\":true,\"operators\":true}}");
+    REQUIRE(r, "no dangling result");
+    FE = json_object_get(r, "FE");
+    CHECK(json_array_size(json_object_get(r, "EV")) == 5 && json_array_size(FE) == 2,
+          "dangling: E %zu rows %zu", json_array_size(json_object_get(r, "EV")),
+          json_array_size(FE));
+    CHECK(json_array_size(json_array_get(FE, 1)) == 4, "exterior FE row has %zu edges",
+          json_array_size(json_array_get(FE, 1)));
+    check_operators(r, "dangling");
+    json_decref(r);
+}
+
+TEST(holes_keyed_by_face)
+{
+    json_t *r = run_ok("{\"kind\":\"lines\",\"lines\":[[[0,0],[10,0]],[[10,0],[10,10]],"
+                       "[[10,10],[0,10]],[[0,10],[0,0]],[[3,3],[7,3]],[[7,3],[7,7]],[[7,7],"
+                       "[3,7]],[[3,7],[3,3]]],\"options\":{\"operators\":true}}");
+    REQUIRE(r, "no result");
+    const json_t *V = json_object_get(r, "V"), *FV = json_object_get(r, "FV"),
+                 *holes = json_object_get(r, "holes");
+    REQUIRE(json_array_size(FV) == 2, "%zu faces", json_array_size(FV));
+    size_t outer = cycle_area(V, json_array_get(FV, 0)) == 100 ? 0 : 1;
+    char key[8];
+    snprintf(key, sizeof key, "%zu", outer);
+    CHECK(cycle_area(V, json_array_get(FV, outer)) == 100 &&
+              cycle_area(V, json_array_get(FV, 1 - outer)) == 16,
+          "face areas");
+    REQUIRE(json_object_size(holes) == 1 && json_object_get(holes, key), "holes keyed %s", key);
+    const json_t *h = json_object_get(holes, key);
+    CHECK(json_array_size(h) == 1 && cycle_area(V, json_array_get(h, 0)) == -16,
+          "hole cycle clockwise of area 16");
+    CHECK(json_array_size(json_array_get(json_object_get(r, "FE"), outer)) == 8,
+          "FE of the face with a hole has outer and hole edges");
+    CHECK(json_array_size(json_object_get(r, "exterior")) == 1, "one exterior cycle");
+    check_operators(r, "hole");
+    json_decref(r);
+}
+
+TEST(fields_subset)
+{
+    static const struct {
+        const char *opts;
+        const char *keys[4];
+    } cases[] = {
+        {"{\"fields\":[\"V\",\"stats\"]}", {"dim", "V", "stats"}},
+        {"{\"fields\":[]}", {"dim"}},
+        {"{\"fields\":[\"operators\"]}", {"dim", "operators"}},
+        {"{\"fields\":[\"FE\"],\"operators\":true}", {"dim", "FE", "operators"}},
+        {"{\"fields\":[\"holes\",\"exterior\",\"holes\"]}", {"dim", "holes", "exterior"}},
+        {"{\"fields\":[\"EV\",\"FV\"],\"exterior_last\":true}", {"dim", "EV", "FV"}},
+    };
+    char body[512];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        size_t n = 0;
+        snprintf(body, sizeof body, "{\"kind\":\"lines\",\"lines\":" SQUARE ",\"options\":%s}",
+                 cases[i].opts);
+        json_t *r = run_ok(body);
+        if (!r) continue;
+        while (n < 4 && cases[i].keys[n]) {
+            CHECK(json_object_get(r, cases[i].keys[n]), "%s: no %s", cases[i].opts,
+                  cases[i].keys[n]);
+            n++;
+        }
+        CHECK(json_object_size(r) == n, "%s: %zu keys, want %zu", cases[i].opts,
+              json_object_size(r), n);
+        json_decref(r);
+    }
+    /* exterior_last without FE still adds the exterior row to FV */
+    json_t *r = run_ok(SQUARE_REQ("{\"fields\":[\"FV\"],\"exterior_last\":true}"));
+    CHECK(r && json_array_size(json_object_get(r, "FV")) == 2, "FV rows with exterior_last");
+    json_decref(r);
+}
+
+TEST(empty_and_degenerate_inputs)
+{
+    json_t *r = run_ok("{\"kind\":\"lines\",\"lines\":[],\"options\":{\"operators\":true}}");
+    REQUIRE(r, "empty request failed");
+    static const char *const empty_arrays[] = {"V", "EV", "FV", "FE", "exterior"};
+    for (size_t i = 0; i < 5; i++)
+        CHECK(json_is_array(json_object_get(r, empty_arrays[i])) &&
+                  json_array_size(json_object_get(r, empty_arrays[i])) == 0,
+              "%s not empty", empty_arrays[i]);
+    CHECK(json_integer_value(json_object_get(json_object_get(r, "stats"), "F")) == 0, "F");
+    const json_t *d1 = json_object_get(json_object_get(r, "operators"), "d1");
+    char *s = json_dumps(d1, JSON_COMPACT | JSON_SORT_KEYS);
+    CHECK(s && strcmp(s, "{\"data\":[],\"indices\":[],\"indptr\":[0],\"shape\":[0,0]}") == 0,
+          "empty d1 %s", s);
+    free(s);
+    json_decref(r);
+    /* only zero-length segments, integers and reals mixed */
+    r = run_ok("{\"kind\":\"lines\",\"lines\":[[[1,1],[1.0,1]],[[2.5,-3],[2.5,-3e0]]]}");
+    REQUIRE(r, "degenerate request failed");
+    const json_t *st = json_object_get(r, "stats");
+    CHECK(json_integer_value(json_object_get(st, "input_segments")) == 2 &&
+              json_integer_value(json_object_get(st, "zero_length_dropped")) == 2 &&
+              json_array_size(json_object_get(r, "EV")) == 0,
+          "zero-length segments");
+    json_decref(r);
+}
+
+/* Threads change timings only: the complex is the same bytes. */
+TEST(threads_give_identical_results)
+{
+    char *body = malloc(1 << 20), *a = NULL, *b = NULL;
+    size_t len = 0, alen, blen;
+    api_error err;
+    uint64_t x = 12345;
+    REQUIRE(body, "malloc");
+    len += (size_t)snprintf(body, 1 << 20,
+                            "{\"kind\":\"lines\",\"options\":{\"fields\":"
+                            "[\"V\",\"EV\",\"FV\",\"FE\",\"holes\",\"exterior\","
+                            "\"operators\"]},\"lines\":[");
+    for (int i = 0; i < 400; i++) {
+        double c[4];
+        for (int k = 0; k < 4; k++) {
+            x = x * 6364136223846793005u + 1442695040888963407u;
+            c[k] = (double)(x >> 11) * 0x1.0p-53;
+        }
+        len += (size_t)snprintf(body + len, (1 << 20) - len, "%s[[%.17g,%.17g],[%.17g,%.17g]]",
+                                i ? "," : "", c[0], c[1], c[0] + (c[2] - .5) / 3,
+                                c[1] + (c[3] - .5) / 3);
+    }
+    len += (size_t)snprintf(body + len, (1 << 20) - len, "]}");
+    int ra = api_run_json(body, len, 1, &a, &alen, &err);
+    int rb = api_run_json(body, len, 4, &b, &blen, &err);
+    CHECK(ra == API_OK && rb == API_OK, "%d %d %s", ra, rb, err.msg);
+    CHECK(a && b && alen == blen && memcmp(a, b, alen) == 0, "1 and 4 threads differ");
+    if (a) {
+        json_t *r = json_loadb(a, alen, 0, NULL);
+        CHECK(r && json_array_size(json_object_get(r, "FV")) > 10, "too few faces");
+        if (r) check_operators(r, "random");
+        json_decref(r);
+    }
+    free(a);
+    free(b);
+    free(body);
+}
+
+TEST(check_json_canonical)
+{
+    const char *body = "{ \"options\": {\"keep_dangling\": true, \"fields\": [\"V\"]},\n"
+                       "  \"lines\": [[[0, 0.5], [1, 2]]], \"kind\": \"lines\" }";
+    char *canon = NULL;
+    size_t n = 0;
+    api_error err;
+    int rc = api_check_json(body, strlen(body), &canon, &n, &err);
+    CHECK(rc == API_OK && canon &&
+              strcmp(canon, "{\"kind\":\"lines\",\"lines\":[[[0,0.5],[1,2]]],\"options\":"
+                            "{\"fields\":[\"V\"],\"keep_dangling\":true}}") == 0 &&
+              n == strlen(canon),
+          "%d %s", rc, canon ? canon : err.msg);
+    free(canon);
+    CHECK(api_kind_count() == 1 && strcmp(api_kind_name(0), "lines") == 0 &&
+              api_kind_name(1) == NULL,
+          "kinds");
+}
+
+/* ---- numbers ----------------------------------------------------------------------------- */
+
+TEST(double_format_known_values)
+{
+    static const struct {
+        double x;
+        const char *s;
+    } cases[] = {
+        {0, "0"},
+        {-0.0, "0"},
+        {1, "1"},
+        {-42, "-42"},
+        {0.1, "0.1"},
+        {0.3, "0.3"},
+        {1.0 / 3, "0.3333333333333333"},
+        {2.0 / 3, "0.6666666666666666"},
+        {0.1 + 0.2, "0.30000000000000004"},
+        {1e-7, "1e-07"},
+        {1.5e-5, "1.5e-05"},
+        {123456789012345.5, "123456789012345.5"},
+        {999999999999999.9, "999999999999999.9"},
+        {1e15, "1e+15"},
+        {1e300, "1e+300"},
+        {5e-324, "4.94065645841247e-324"},
+        {0x1p-20, "9.5367431640625e-07"},
+        {0.5, "0.5"},
+        {-1.25, "-1.25"},
+        {1.7976931348623157e308, "1.7976931348623157e+308"},
+    };
+    char buf[API_DOUBLE_MAX];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        size_t n = api_format_double(cases[i].x, buf);
+        CHECK(n == strlen(buf) && strcmp(buf, cases[i].s) == 0, "%.17g: \"%s\", want \"%s\"",
+              cases[i].x, buf, cases[i].s);
+        CHECK(strtod(buf, NULL) == cases[i].x, "%s does not read back", buf);
+    }
+}
+
+/* The fast path against snprintf/strtod on random bit patterns, random reals at every scale,
+ * grid points (as the core produces) and short decimals. */
+TEST(double_format_fast_equals_slow)
+{
+    uint64_t st = 0x9e3779b97f4a7c15u;
+    char a[API_DOUBLE_MAX], b[API_DOUBLE_MAX];
+    long bad = 0, n = 0;
+    for (long i = 0; i < 400000; i++) {
+        double x;
+        uint64_t r;
+        st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+        r = st;
+        st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+        switch (i % 4) {
+        case 0:
+            memcpy(&x, &r, sizeof x);
+            if (!isfinite(x)) continue;
+            break;
+        case 1:
+            x = ldexp((double)(r >> 11), -53) * pow(10, (int)(st % 26) - 9);
+            break;
+        case 2:
+            x = ldexp((double)(r % ((uint64_t)1 << 38)), -(int)(st % 60));
+            break;
+        default:
+            x = (double)(r % 100000000) / pow(10, (int)(st % 14));
+            break;
+        }
+        if (st & 1024) x = -x;
+        if (x == 0) continue;
+        n++;
+        api_format_double(x, a);
+        api_format_double_slow(x, b);
+        if (strcmp(a, b) != 0 && bad++ < 10) CHECK(0, "%.17g: fast %s, slow %s", x, a, b);
+    }
+    CHECK(bad == 0 && n > 390000, "%ld of %ld differ", bad, n);
+}
+
+/* ---- the fast parser agrees with jansson ------------------------------------------------- */
+
+/* Parses body both ways; returns 1 when the fast parser took it, 0 when it left it to jansson,
+ * and fails the test when it took it with a different result or jansson rejects it. */
+static int fast_agrees_(const char *body, size_t len, const char *func, int line)
+{
+    void *fast = NULL, *ref = NULL;
+    api_error e1, e2;
+    char *exact = malloc(len ? len : 1); /* no NUL after it: the sanitizers see any overread */
+    if (!exact) return 0;
+    memcpy(exact, body, len);
+    int rc1 = api_lines_parse_fast(exact, len, &fast, &e1);
+    int rc2 = api_parse_for_test(exact, len, 0, &ref, &e2);
+    free(exact);
+    int took = rc1 == API_OK && fast != NULL;
+    if (rc1 != API_OK && rc1 != rc2)
+        test_fail(__FILE__, func, line, "fast %d \"%s\", jansson %d \"%s\": %.80s", rc1, e1.msg,
+                  rc2, e2.msg, body);
+    if (took && (rc2 != API_OK || !api_lines_same(fast, ref)))
+        test_fail(__FILE__, func, line, "fast path took a body jansson %s: %.200s",
+                  rc2 == API_OK ? "reads differently" : "rejects", body);
+    api_lines_free(fast);
+    api_lines_free(ref);
+    return took;
+}
+#define fast_agrees(body) fast_agrees_(body, strlen(body), __func__, __LINE__)
+
+TEST(fast_parser_takes_usual_bodies)
+{
+    static const char *const usual[] = {
+        "{\"kind\":\"lines\",\"lines\":[]}",
+        " \n{ \"lines\" : [ [ [ 0 , 0 ] , [ 1 , 1 ] ] ] ,\r\n\t\"kind\" : \"lines\" } \n",
+        "{\"kind\":\"lines\",\"lines\":[[[-0,0],[1e-400,-0.0]],[[1.5E+3,2e-3],[-12.25,7]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0.29909645858954803,0.437203664596629],"
+        "[0.4779505905800252,1e22]],[[123456789012345678,-123456789012345678],"
+        "[9007199254740993,0.1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1e23,1.7976931348623157e308],[4.9e-324,2."
+        "2250738585072014e-308]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0.1,0.2],[0.30000000000000004,3.0000000000000004]]],"
+        "\"options\":{\"precision\":0.001,\"fields\":[\"V\",\"FE\"],\"operators\":true,"
+        "\"exterior_last\":false,\"keep_dangling\":true}}",
+        "{\"options\":{},\"kind\":\"lines\",\"lines\":[[[1,2],[3,4]]]}",
+        "{\"kind\":\"lines\",\"options\": {\"fields\": [\"V\", \"stats\"]} "
+        ",\"lines\":[[[1,2],[3,4]]]}",
+    };
+    for (size_t i = 0; i < sizeof usual / sizeof usual[0]; i++)
+        CHECK(fast_agrees(usual[i]), "fast parser left body %zu to jansson", i);
+    /* values jansson reads its own way or rejects: left to it, or identical */
+    static const char *const odd[] = {
+        "{\"kind\":\"lines\",\"lines\":[[[12345678901234567890,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1e400,0],[1,1]]]}",
+        "{\"kind\":\"lin\\u0065s\",\"lines\":[]}",
+        "{\"k\\u0069nd\":\"lines\",\"lines\":[]}",
+        "{\"kind\":\"lines\",\"lines\":[],\"kind\":\"lines\"}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":1,\"precision\":2}}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":{\"precision\":-1}}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":null}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"V\"]]}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":\"{}\"}",
+        "{\"kind\":\"lines\",\"lines\":[[[01,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1.,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[.5,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[+1,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0x10,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1e,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1,0],[1,1]],]}",
+        "{\"kind\":\"lines\",\"lines\":[[[1,0],[1,1]]]} {",
+        "{\"kind\":\"lines\",\"lines\":[[[1,0],[1,1]]]",
+        "\xef\xbb\xbf{\"kind\":\"lines\",\"lines\":[]}",
+        "{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"V\\u0000\"]}}",
+    };
+    for (size_t i = 0; i < sizeof odd / sizeof odd[0]; i++)
+        CHECK(!fast_agrees(odd[i]), "fast parser took odd body %zu: %s", i, odd[i]);
+}
+
+/* Random mutations of valid bodies: whenever the fast parser takes one, jansson must accept it
+ * with the same segments and options. */
+TEST(fast_parser_mutations_agree)
+{
+    static const char *const seeds[] = {
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,0]],[[1,0.5],[-1.25e-3,1]],[[2E2,3],[4,-5]]],"
+        "\"options\":{\"precision\":0.125,\"fields\":[\"V\",\"EV\"],\"keep_dangling\":true}}",
+        "{ \"lines\": [ [ [ 0.29909645858954803, 0.437203664596629 ], [ 12, 1e-5 ] ] ],"
+        " \"kind\": \"lines\" }",
+    };
+    static const char alphabet[] = "[]{},:\"-+.eE0123456789 \n\\xa";
+    uint64_t st = 0x2545f4914f6cdd1du;
+    char buf[512];
+    long taken = 0, total = 0;
+    for (int round = 0; round < 30000; round++) {
+        const char *seed = seeds[round % 2];
+        size_t len = strlen(seed);
+        memcpy(buf, seed, len + 1);
+        int nmut = 1 + round % 3;
+        for (int m = 0; m < nmut; m++) {
+            st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+            size_t at = (size_t)(st >> 8) % (len + 1);
+            char ch = alphabet[(st >> 40) % (sizeof alphabet - 1)];
+            switch (st % 3) {
+            case 0: /* delete */
+                if (at < len) memmove(buf + at, buf + at + 1, len - at), len--;
+                break;
+            case 1: /* insert */
+                if (len + 2 < sizeof buf)
+                    memmove(buf + at + 1, buf + at, len - at + 1), buf[at] = ch, len++;
+                break;
+            default: /* replace */
+                if (at < len) buf[at] = ch;
+                break;
+            }
+        }
+        taken += fast_agrees_(buf, len, __func__, __LINE__);
+        total++;
+        if (test_failed_now()) break;
+    }
+    /* a fair share of mutants are still valid (a digit changed, a space added) */
+    CHECK(taken > total / 20, "fast parser took only %ld of %ld mutants", taken, total);
+}
+
+/* The run output is the same whichever parser read the request. */
+TEST(fast_and_jansson_paths_give_the_same_result)
+{
+    const char *fast =
+        SQUARE_REQ("{\"operators\":true,\"fields\":[\"V\",\"EV\",\"FE\",\"operators\"]}");
+    /* an escaped key forces the jansson path */
+    const char *slow = "{\"kind\":\"lines\",\"lines\":" SQUARE ",\"opt\\u0069ons\":{\"operators\":"
+                       "true,\"fields\":[\"V\",\"EV\",\"FE\",\"operators\"]}}";
+    char *a = NULL, *b = NULL;
+    size_t alen, blen;
+    api_error err;
+    void *p = NULL;
+    CHECK(api_lines_parse_fast(slow, strlen(slow), &p, &err) == API_OK && p == NULL,
+          "the escaped key went through the fast path");
+    int ra = api_run_json(fast, strlen(fast), 1, &a, &alen, &err);
+    int rb = api_run_json(slow, strlen(slow), 1, &b, &blen, &err);
+    CHECK(ra == API_OK && rb == API_OK && alen == blen && memcmp(a, b, alen) == 0,
+          "%d %d: results differ", ra, rb);
+    free(a);
+    free(b);
+}
+
+/* Numbers in every spelling convert to the same doubles as jansson's. */
+TEST(fast_parser_numbers_match_jansson)
+{
+    static const char *const fmts[] = {"%.17g", "%.15g", "%.3g", "%.1e",
+                                       "%.20e", "%.6f",  "%.0f", "%.25f"};
+    size_t cap = 1 << 21, len = 0;
+    char *body = malloc(cap);
+    uint64_t st = 0x853c49e6748fea9bu;
+    REQUIRE(body, "malloc");
+    len += (size_t)snprintf(body, cap, "{\"kind\":\"lines\",\"lines\":[");
+    for (int i = 0; i < 5000; i++) {
+        len += (size_t)snprintf(body + len, cap - len, "%s[", i ? "," : "");
+        for (int k = 0; k < 4; k++) {
+            double x;
+            st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+            x = ldexp((double)(st >> 11), -53) * pow(10, (int)(st % 40) - 20);
+            if (st & 64) x = -x;
+            if (k % 2 == 0) len += (size_t)snprintf(body + len, cap - len, "%s[", k ? "," : "");
+            if (st % 7 == 0)
+                len += (size_t)snprintf(body + len, cap - len, "%lld",
+                                        (long long)(st >> 20) * ((st & 128) ? -1 : 1));
+            else if ((st >> 3) % 8 == 6 &&
+                     fabs(x) >= 1e17) /* an integer token too big for jansson */
+                len += (size_t)snprintf(body + len, cap - len, "%.17g", x);
+            else
+                len += (size_t)snprintf(body + len, cap - len, fmts[(st >> 3) % 8], x);
+            len += (size_t)snprintf(body + len, cap - len, "%s", k % 2 ? "]" : ",");
+        }
+        len += (size_t)snprintf(body + len, cap - len, "]");
+    }
+    len += (size_t)snprintf(body + len, cap - len, "]}");
+    REQUIRE(len < cap - 1, "body too long");
+    CHECK(fast_agrees_(body, len, __func__, __LINE__), "fast parser left the body to jansson");
+    free(body);
+}

@@ -33,10 +33,6 @@ void api_buf_i64(api_buf *b, int64_t v);
 void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
 void api_buf_free(api_buf *b);
 
-/* api_format_double() by snprintf and strtod only: the reference its fast path is tested
- * against. */
-size_t api_format_double_slow(double x, char *buf);
-
 static inline void api_buf_putc(api_buf *b, char c)
 {
     if (b->len + 2 <= b->cap) {
@@ -60,35 +56,19 @@ int api_core_fail(api_error *err, int arr_code, const char *core_msg);
  * number: ten times the size of the body) is freed before the core runs:
  *   parse       req (borrowed, its "kind" already matched) -> *parsed, the kind's own request
  *               struct; validates every other key.  On failure *parsed is NULL.
- *   parse_fast  optional: the raw body -> *parsed without a jansson tree, for the well-formed
- *               requests that make up nearly all traffic.  It accepts only bodies that the
- *               jansson path would accept with the same values, and leaves everything else
- *               (malformed JSON, invalid values, other kinds, unusual spellings) to that path,
- *               which writes the error messages: returns API_OK with *parsed set (done) or NULL
- *               (fall back), or an error status with *err filled when the answer is certain
- *               and the fallback would be costly (a request beyond the size limit).
  *   run         runs *parsed (borrowed) with ro and appends the result JSON (no final "\n").
- *   free        frees what parse or parse_fast made; safe on NULL. */
+ *   free        frees what parse made; safe on NULL. */
 typedef struct api_kind {
     const char *name; /* the value of "kind" */
     int (*parse)(const json_t *req, void **parsed, api_error *err);
-    int (*parse_fast)(const char *body, size_t len, void **parsed, api_error *err);
     int (*run)(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
     void (*free)(void *parsed);
 } api_kind;
 
 /* The "lines" kind (api/lines.c). */
 int api_lines_parse(const json_t *req, void **parsed, api_error *err);
-int api_lines_parse_fast(const char *body, size_t len, void **parsed, api_error *err);
 int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_lines_free(void *parsed);
-/* For tests: parses body as api_run_json() does (fast != 0) or through jansson only; *parsed is
- * freed with the kind's free (api_lines_free for "lines"). */
-int api_parse_for_test(const char *body, size_t len, int fast, void **parsed, api_error *err);
-/* For tests: the segments of a parsed "lines" request (borrowed), 4 doubles each. */
-const double *api_lines_segments(const void *parsed, size_t *n);
-/* For tests: non-zero when two parsed "lines" requests are the same bit for bit. */
-int api_lines_same(const void *a, const void *b);
 
 /* The result fields a request may ask for (options.fields), as bits. */
 enum {

@@ -99,129 +99,6 @@ void api_buf_i64(api_buf *b, int64_t v)
     b->p[b->len] = 0;
 }
 
-/* Writes the decimal digits of v, exactly n of them (leading zeros if v is short). */
-static void put_digits(uint64_t v, char *p, int n)
-{
-    for (int i = n - 1; i >= 0; i--) {
-        p[i] = (char)('0' + v % 10);
-        v /= 10;
-    }
-}
-
-/* api_format_double() without snprintf/strtod, for 1e-6 <= |x| < 1e15 with a 53-bit mantissa
- * that is not a power of two; returns 0 when x is outside that range.  Same output as the
- * slow path (the tests compare them on millions of values), about ten times faster.
- *
- * With x = m 2^-s exactly, x 10^q = (m 10^q) / 2^s is an exact 128-bit division (m < 2^53,
- * 10^q <= 10^22 < 2^74, s <= 72 in this range): its floor N and remainder r give the correctly
- * rounded P-digit decimal D (half to even, as printf), and D 10^-q reads back as x iff it lies
- * within half an ulp, 2^-s-1: |D - x 10^q| 2^s < 10^q / 2, or equal and m even. */
-static size_t format_double_fast(double x, char *buf)
-{
-    typedef unsigned __int128 u128;
-    static const uint64_t pow10[20] = {1ull,
-                                       10ull,
-                                       100ull,
-                                       1000ull,
-                                       10000ull,
-                                       100000ull,
-                                       1000000ull,
-                                       10000000ull,
-                                       100000000ull,
-                                       1000000000ull,
-                                       10000000000ull,
-                                       100000000000ull,
-                                       1000000000000ull,
-                                       10000000000000ull,
-                                       100000000000000ull,
-                                       1000000000000000ull,
-                                       10000000000000000ull,
-                                       100000000000000000ull,
-                                       1000000000000000000ull,
-                                       10000000000000000000ull};
-    double ax = fabs(x);
-    int bexp, e10, n = 0;
-    uint64_t bits, m;
-    unsigned s;
-    if (!(ax >= 1e-6 && ax < 1e15)) return 0;
-    memcpy(&bits, &ax, sizeof bits);
-    m = (bits & (((uint64_t)1 << 52) - 1)) | (uint64_t)1 << 52; /* ax = m 2^(bexp-52) */
-    bexp = (int)(bits >> 52) - 1023;
-    if (m == (uint64_t)1 << 52 || bexp >= 52) return 0;
-    s = (unsigned)(52 - bexp);
-    /* floor(log10(ax)) is floor(bexp log10(2)) or one more: corrected below. */
-    e10 = (int)floor(bexp * 0.30102999566398119521);
-    for (int prec = 15; prec <= 17; prec++) {
-        uint64_t lo = pow10[prec - 1], d;
-        int q, x10 = e10;
-        for (;;) {
-            q = prec - 1 - x10;
-            if (q < 0 || q > 22) return 0;
-            u128 p10 = q < 20 ? (u128)pow10[q] : (u128)pow10[19] * pow10[q - 19];
-            u128 num = (u128)m * p10;
-            u128 fl = num >> s, rem = num - (fl << s), half = (u128)1 << (s - 1);
-            if (fl < lo) { /* e10 was one too large */
-                x10--;
-                continue;
-            }
-            if (fl >= (u128)lo * 10) {
-                x10++;
-                continue;
-            }
-            d = (uint64_t)fl;
-            u128 dist = rem; /* |D - x 10^q| 2^s */
-            if (rem > half || (rem == half && (d & 1))) {
-                d++;
-                dist = ((u128)1 << s) - rem;
-            }
-            int ok = 2 * dist < p10 || (2 * dist == p10 && !(m & 1)); /* strtod: half to even */
-            if (d == lo * 10) { /* rounded up to the next power of ten */
-                d = lo;
-                x10++;
-            }
-            if (!ok && prec < 17) break;
-            /* Write D with exponent x10 as %.{prec}g does: trailing zeros dropped, exponential
-             * form when x10 < -4 or x10 >= prec. */
-            char dig[17];
-            int len = prec;
-            put_digits(d, dig, prec);
-            while (len > 1 && dig[len - 1] == '0') len--;
-            if (x < 0) buf[n++] = '-';
-            if (x10 < -4 || x10 >= prec) {
-                buf[n++] = dig[0];
-                if (len > 1) {
-                    buf[n++] = '.';
-                    memcpy(buf + n, dig + 1, (size_t)len - 1);
-                    n += len - 1;
-                }
-                int ae = x10 < 0 ? -x10 : x10;
-                buf[n++] = 'e';
-                buf[n++] = x10 < 0 ? '-' : '+';
-                if (ae >= 100) buf[n++] = (char)('0' + ae / 100);
-                buf[n++] = (char)('0' + ae / 10 % 10);
-                buf[n++] = (char)('0' + ae % 10);
-            } else if (x10 >= 0) {
-                for (int i = 0; i <= x10; i++) buf[n++] = i < len ? dig[i] : '0';
-                if (len > x10 + 1) {
-                    buf[n++] = '.';
-                    memcpy(buf + n, dig + x10 + 1, (size_t)(len - x10 - 1));
-                    n += len - x10 - 1;
-                }
-            } else {
-                buf[n++] = '0';
-                buf[n++] = '.';
-                for (int i = 0; i < -x10 - 1; i++) buf[n++] = '0';
-                memcpy(buf + n, dig, (size_t)len);
-                n += len;
-            }
-            buf[n] = 0;
-            return (size_t)n;
-        }
-        e10 = x10; /* the exponent found for this precision is right for the next one */
-    }
-    return 0;
-}
-
 size_t api_format_double(double x, char *buf)
 {
     size_t n;
@@ -236,13 +113,7 @@ size_t api_format_double(double x, char *buf)
         buf[n] = 0;
         return n;
     }
-    n = format_double_fast(x, buf);
-    if (n) return n;
-    return api_format_double_slow(x, buf);
-}
-
-size_t api_format_double_slow(double x, char *buf)
-{
+    /* the shortest of %.15g, %.16g, %.17g that reads back as x */
     for (int prec = 15;; prec++) {
         int n = snprintf(buf, API_DOUBLE_MAX, "%.*g", prec, x);
         assert(n > 0 && n < API_DOUBLE_MAX);

@@ -1,8 +1,8 @@
 /* run.c — the entry points of api/: load the JSON, dispatch on "kind", map errors to statuses.
  *
  * The table of kinds below is the one place that knows which kinds exist.  A kind parses and
- * validates its own keys and runs the core (api_int.h, api_kind); this file tries the kinds' fast
- * parsers, else loads the body with jansson, frees the tree as soon as the kind has parsed it
+ * validates its own keys and runs the core (api_int.h, api_kind); this file loads the body with
+ * jansson, frees the tree as soon as the kind has parsed it
  * (before the core runs), and turns jansson's errors into error values:
  *   - syntax errors, bad UTF-8 and nesting deeper than jansson's limit (2048 levels in 2.14:
  *     "maximum parsing depth reached", an error value, not a recursion) are 400 with the
@@ -21,7 +21,7 @@
 #include <string.h>
 
 static const api_kind kinds[] = {
-    {"lines", api_lines_parse, api_lines_parse_fast, api_lines_run, api_lines_free},
+    {"lines", api_lines_parse, api_lines_run, api_lines_free},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 
@@ -198,22 +198,13 @@ static const api_kind *kind_of(const json_t *root, api_error *err)
 }
 
 /* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free). */
-static int parse(const char *body, size_t len, int fast, const api_kind **kind, void **parsed,
+static int parse(const char *body, size_t len, const api_kind **kind, void **parsed,
                  api_error *err)
 {
     json_t *root;
     int rc;
     *kind = NULL;
     *parsed = NULL;
-    for (size_t i = 0; fast && i < NKINDS; i++) {
-        if (!kinds[i].parse_fast) continue;
-        rc = kinds[i].parse_fast(body, len, parsed, err);
-        if (rc != API_OK) return rc;
-        if (*parsed) {
-            *kind = &kinds[i];
-            return API_OK;
-        }
-    }
     root = load(body, len, err);
     if (!root) return err ? err->status : API_EJSON;
     *kind = kind_of(root, err);
@@ -234,7 +225,7 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     *outlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (!ro) ro = &dflt;
-    rc = parse(body, len, 1, &kind, &req, err);
+    rc = parse(body, len, &kind, &req, err);
     if (rc != API_OK) goto fail;
     rc = kind->run(req, ro, &b, err);
     if (rc != API_OK) goto fail;
@@ -270,7 +261,7 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
     if (canon) *canon = NULL;
     if (canonlen) *canonlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
-    rc = parse(body, len, 1, &kind, &req, err);
+    rc = parse(body, len, &kind, &req, err);
     if (kind) kind->free(req);
     if (rc != API_OK || !canon) return rc;
     /* valid: the canonical form comes from the tree */
@@ -284,9 +275,3 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
     return API_OK;
 }
 
-/* For tests: parses body with the jansson path only (fast = 0) or as api_run_json() does. */
-int api_parse_for_test(const char *body, size_t len, int fast, void **parsed, api_error *err)
-{
-    const api_kind *kind;
-    return parse(body, len, fast, &kind, parsed, err);
-}

@@ -198,8 +198,7 @@ static const api_kind *kind_of(const json_t *root, api_error *err)
 }
 
 /* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free). */
-static int parse(const char *body, size_t len, const api_kind **kind, void **parsed,
-                 api_error *err)
+static int parse(const char *body, size_t len, const api_kind **kind, void **parsed, api_error *err)
 {
     json_t *root;
     int rc;
@@ -274,4 +273,3 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
     if (canonlen) *canonlen = strlen(*canon);
     return API_OK;
 }
-

@@ -39,10 +39,10 @@
 #include "core/par.h"
 #include "core/sort.h"
 
-#define MAXW      64           /* most workers */
-#define LEAF_MAX  24           /* bucket size aimed at */
+#define MAXW      64 /* most workers */
+#define LEAF_MAX  24 /* bucket size aimed at */
 #define NONE      UINT32_MAX
-#define SEG_CHUNK 512          /* segments per work item in the split stage */
+#define SEG_CHUNK 512 /* segments per work item in the split stage */
 
 typedef struct seg2 {
     ipt a, b; /* a < b lexicographically */
@@ -62,18 +62,18 @@ typedef struct scratch {
 typedef struct ctx {
     const arr2_opts *o;
     int threads;
-    atomic_int fail;           /* set by workers: ARR_ENOMEM or ARR_ECANCELED */
+    atomic_int fail; /* set by workers: ARR_ENOMEM or ARR_ECANCELED */
     /* snap */
-    double step;               /* grid step */
-    double origin_d[2];        /* grid index of the origin per axis, as a double */
-    int64_t origin[2];         /* same, when it fits in 2^52 (origin_int) */
+    double step;        /* grid step */
+    double origin_d[2]; /* grid index of the origin per axis, as a double */
+    int64_t origin[2];  /* same, when it fits in 2^52 (origin_int) */
     int origin_int[2];
     seg2 *seg;
     size_t m;
-    int64_t *box;              /* 4 per segment */
+    int64_t *box; /* 4 per segment */
     box_tree tree;
     /* intersect: per worker */
-    vbuf cross[MAXW];          /* ipt */
+    vbuf cross[MAXW]; /* ipt */
     size_t pairs[MAXW];
     /* hot pixels */
     ipt *pix;
@@ -115,7 +115,10 @@ static int vbuf_reserve(vbuf *v, size_t need, size_t elem)
     return 0;
 }
 
-static int cancelled(const ctx *c) { return c->o->cancel && atomic_load(c->o->cancel); }
+static int cancelled(const ctx *c)
+{
+    return c->o->cancel && atomic_load(c->o->cancel);
+}
 
 static void progress(const ctx *c, const char *stage, double f)
 {
@@ -163,7 +166,8 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     if (p != 0 && !(isfinite(p) && p > 0))
         return seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
     if (p == 0) {
-        if (n == 0 || ext == 0) p = 1;
+        if (n == 0 || ext == 0)
+            p = 1;
         else {
             int e;
             frexp(ext, &e); /* ext <= 2^e */
@@ -212,8 +216,7 @@ static int check_range(const ctx *c, char *err, size_t el)
         const seg2 *s = &c->seg[i];
         if (llabs(s->a.x) > lim || llabs(s->a.y) > lim || llabs(s->b.x) > lim ||
             llabs(s->b.y) > lim)
-            return seterr(err, el, ARR_EINTERNAL,
-                          "internal: a snapped coordinate is out of range");
+            return seterr(err, el, ARR_EINTERNAL, "internal: a snapped coordinate is out of range");
     }
     return ARR_OK;
 }
@@ -286,8 +289,8 @@ static int seg_hits_pixel(ipt a, ipt b, ipt p)
     int64_t dx = b.x - a.x, dy = b.y - a.y, L = llabs(dx) + llabs(dy);
     i128 o2 = 2 * orient2(a, b, p);
     if (o2 < 0) o2 = -o2;
-    if (o2 < L) return 1;   /* the segment crosses the open pixel (p is in its box) */
-    if (o2 > L) return 0;   /* the line misses the pixel */
+    if (o2 < L) return 1; /* the segment crosses the open pixel (p is in its box) */
+    if (o2 > L) return 0; /* the line misses the pixel */
     /* the line only touches one corner: inside the half-open pixel only if it is the
      * lower-left one and lies on the segment (not just on its line) */
     int64_t O2 = 2 * (int64_t)orient2(a, b, p);
@@ -571,14 +574,20 @@ fail:
 
 typedef struct graph {
     size_t nv, ne;
-    ipt *P;            /* nv */
-    uint32_t *EV;      /* 2*ne */
-    uint32_t *off;     /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
-    uint32_t *out;     /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
+    ipt *P;        /* nv */
+    uint32_t *EV;  /* 2*ne */
+    uint32_t *off; /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
+    uint32_t *out; /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
 } graph;
 
-static inline uint32_t he_tail(const graph *g, uint32_t h) { return g->EV[h]; }
-static inline uint32_t he_head(const graph *g, uint32_t h) { return g->EV[h ^ 1]; }
+static inline uint32_t he_tail(const graph *g, uint32_t h)
+{
+    return g->EV[h];
+}
+static inline uint32_t he_head(const graph *g, uint32_t h)
+{
+    return g->EV[h ^ 1];
+}
 
 static void graph_free(graph *g)
 {
@@ -770,10 +779,10 @@ static uint32_t uf_find(uint32_t *par, uint32_t x)
 
 typedef struct walks {
     size_t ncyc;
-    uint32_t *cyc_of;   /* 2*ne: cycle of each half-edge */
-    uint32_t *hoff;     /* ncyc+1 */
-    uint32_t *hes;      /* half-edges of each cycle in walk order */
-    i128 *area2;        /* twice the signed area of each cycle */
+    uint32_t *cyc_of; /* 2*ne: cycle of each half-edge */
+    uint32_t *hoff;   /* ncyc+1 */
+    uint32_t *hes;    /* half-edges of each cycle in walk order */
+    i128 *area2;      /* twice the signed area of each cycle */
 } walks;
 
 static void walks_free(walks *w)
@@ -932,8 +941,10 @@ static int place_components(const graph *g, const uint32_t *pos, const walks *w,
             h = 2 * be; /* leaves the left end: the face above is on its left */
         }
         uint32_t cyc = w->cyc_of[h];
-        if (w->area2[cyc] > 0) found[k] = cyc;
-        else par[uf_find(par, (uint32_t)k)] = uf_find(par, comp[he_tail(g, h)]);
+        if (w->area2[cyc] > 0)
+            found[k] = cyc;
+        else
+            par[uf_find(par, (uint32_t)k)] = uf_find(par, comp[he_tail(g, h)]);
     }
     for (size_t k = 0; k < ncomp; k++) {
         if (found[k] == NONE) continue;
@@ -1059,9 +1070,12 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     out->next = 0;
     for (size_t p = 0; p < np; p++) {
         uint32_t fw = face_of[pwalk[p]];
-        if (ppos[p]) out->face_cycle[face_idx[pwalk[p]]] = (uint32_t)p;
-        else if (fw == NONE) out->ext_cyc[out->next++] = (uint32_t)p;
-        else out->hole_cyc[out->hole_off[face_idx[fw]]++] = (uint32_t)p;
+        if (ppos[p])
+            out->face_cycle[face_idx[pwalk[p]]] = (uint32_t)p;
+        else if (fw == NONE)
+            out->ext_cyc[out->next++] = (uint32_t)p;
+        else
+            out->hole_cyc[out->hole_off[face_idx[fw]]++] = (uint32_t)p;
     }
     for (size_t f = nf; f > 0; f--) out->hole_off[f] = out->hole_off[f - 1];
     out->hole_off[0] = 0;
@@ -1181,8 +1195,8 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         comp_outer[k] = (uint32_t)cy;
         nouter++;
     }
-    if (nouter != ncomp || (long long)g->nv - (long long)g->ne + (long long)w.ncyc !=
-                               2 * (long long)ncomp) {
+    if (nouter != ncomp ||
+        (long long)g->nv - (long long)g->ne + (long long)w.ncyc != 2 * (long long)ncomp) {
         rc = seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
         goto fail;
     }
@@ -1308,12 +1322,11 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     graph_free(&g);
     free(c);
     return ARR_OK;
-fail:
-    {
-        arr2_stats keep = out->stats;
-        lar2_free(out);
-        out->stats = keep;
-    }
+fail : {
+    arr2_stats keep = out->stats;
+    lar2_free(out);
+    out->stats = keep;
+}
     if (rc == ARR_ECANCELED) seterr(err, errlen, rc, "cancelled");
     free(ev);
     graph_free(&g);

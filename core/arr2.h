@@ -19,39 +19,39 @@
 
 enum {
     ARR_OK = 0,
-    ARR_EINVAL = 1,   /* bad input: non-finite number, bad option */
-    ARR_ELIMIT = 2,   /* input beyond a documented limit (size, precision vs extent) */
-    ARR_ENOMEM = 3,   /* out of memory */
+    ARR_EINVAL = 1,    /* bad input: non-finite number, bad option */
+    ARR_ELIMIT = 2,    /* input beyond a documented limit (size, precision vs extent) */
+    ARR_ENOMEM = 3,    /* out of memory */
     ARR_ECANCELED = 4, /* *opts->cancel became non-zero */
-    ARR_EINTERNAL = 5 /* an invariant of ours failed: a bug, reported rather than crashing */
+    ARR_EINTERNAL = 5  /* an invariant of ours failed: a bug, reported rather than crashing */
 };
 
 /* Limits, documented in README.md. */
-#define ARR2_MAX_SEGMENTS  20000000u   /* input segments */
-#define ARR2_GRID_BITS     38          /* extent / precision must be <= 2^ARR2_GRID_BITS */
+#define ARR2_MAX_SEGMENTS 20000000u /* input segments */
+#define ARR2_GRID_BITS    38        /* extent / precision must be <= 2^ARR2_GRID_BITS */
 
 typedef struct arr2_opts {
-    double precision;           /* grid step in input units; 0: default, the power of two
-                                   closest above extent * 2^-ARR2_GRID_BITS */
-    int keep_dangling;          /* keep bridges and dangling trees (and their vertices) */
-    int threads;                /* worker threads; <= 0: number of online CPUs */
-    const atomic_int *cancel;   /* borrowed, may be NULL: non-zero asks to stop */
+    double precision;         /* grid step in input units; 0: default, the power of two
+                                 closest above extent * 2^-ARR2_GRID_BITS */
+    int keep_dangling;        /* keep bridges and dangling trees (and their vertices) */
+    int threads;              /* worker threads; <= 0: number of online CPUs */
+    const atomic_int *cancel; /* borrowed, may be NULL: non-zero asks to stop */
     void (*progress)(void *udata, const char *stage, double fraction); /* may be NULL */
-    void *udata;                /* passed to progress */
+    void *udata;                                                       /* passed to progress */
 } arr2_opts;
 
 typedef struct arr2_stats {
-    size_t input_segments;      /* segments given */
-    size_t zero_length;         /* dropped: zero length after snapping */
-    size_t intersections;       /* proper crossings found between pairs of segments */
-    size_t hot_pixels;          /* distinct snapped points (endpoints and crossings) */
-    size_t pairs_tested;        /* candidate pairs given to the exact test */
-    size_t buckets;             /* leaves of the box-kd-tree */
-    size_t dangling_removed;    /* edges removed as bridges or dangling trees */
-    size_t nv, ne, nf;          /* result counts (nf: bounded faces) */
-    size_t components;          /* connected components of the result */
-    size_t blocks;              /* biconnected components of the result */
-    double precision;           /* grid step used */
+    size_t input_segments;   /* segments given */
+    size_t zero_length;      /* dropped: zero length after snapping */
+    size_t intersections;    /* proper crossings found between pairs of segments */
+    size_t hot_pixels;       /* distinct snapped points (endpoints and crossings) */
+    size_t pairs_tested;     /* candidate pairs given to the exact test */
+    size_t buckets;          /* leaves of the box-kd-tree */
+    size_t dangling_removed; /* edges removed as bridges or dangling trees */
+    size_t nv, ne, nf;       /* result counts (nf: bounded faces) */
+    size_t components;       /* connected components of the result */
+    size_t blocks;           /* biconnected components of the result */
+    double precision;        /* grid step used */
     double ms_snap, ms_buckets, ms_intersect, ms_split, ms_graph, ms_biconnected, ms_faces,
         ms_holes, ms_total;
 } arr2_stats;
@@ -61,21 +61,21 @@ typedef struct arr2_stats {
  * through a cut vertex). */
 typedef struct lar2 {
     size_t nv;
-    double *V;                  /* 2*nv: x, y; sorted by x then y */
+    double *V; /* 2*nv: x, y; sorted by x then y */
     size_t ne;
-    uint32_t *EV;               /* 2*ne: v0 < v1; sorted */
-    size_t nf;                  /* bounded faces */
-    uint32_t *face_cycle;       /* nf: the face's outer cycle (counter-clockwise) */
-    uint32_t *hole_off;         /* nf+1: holes of face f are hole_cyc[hole_off[f]..hole_off[f+1]) */
-    uint32_t *hole_cyc;         /* cycle ids of holes (clockwise) */
-    uint32_t *fe_off;           /* nf+1 */
-    int32_t *fe;                /* signed edges ±(e+1) of each face, outer cycle then holes;
-                                   an edge walked both ways (dangling) cancels and is left out */
+    uint32_t *EV;         /* 2*ne: v0 < v1; sorted */
+    size_t nf;            /* bounded faces */
+    uint32_t *face_cycle; /* nf: the face's outer cycle (counter-clockwise) */
+    uint32_t *hole_off;   /* nf+1: holes of face f are hole_cyc[hole_off[f]..hole_off[f+1]) */
+    uint32_t *hole_cyc;   /* cycle ids of holes (clockwise) */
+    uint32_t *fe_off;     /* nf+1 */
+    int32_t *fe;          /* signed edges ±(e+1) of each face, outer cycle then holes;
+                             an edge walked both ways (dangling) cancels and is left out */
     size_t ncyc;
-    uint32_t *cyc_off;          /* ncyc+1 */
-    uint32_t *cyc;              /* vertex ids */
+    uint32_t *cyc_off; /* ncyc+1 */
+    uint32_t *cyc;     /* vertex ids */
     size_t next;
-    uint32_t *ext_cyc;          /* cycles bounding the unbounded face (clockwise) */
+    uint32_t *ext_cyc; /* cycles bounding the unbounded face (clockwise) */
     arr2_stats stats;
 } lar2;
 

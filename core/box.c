@@ -9,9 +9,9 @@
 #define BOX_MAX_DEPTH 60
 
 typedef struct pending {
-    int32_t node;      /* index of the node to fill, or -1 for the root */
-    int32_t side;      /* which child slot of node */
-    size_t off, cnt;   /* the bucket: pool[off .. off+cnt) */
+    int32_t node;    /* index of the node to fill, or -1 for the root */
+    int32_t side;    /* which child slot of node */
+    size_t off, cnt; /* the bucket: pool[off .. off+cnt) */
     double lo[2], hi[2];
     int depth;
 } pending;
@@ -46,8 +46,8 @@ static double split_threshold(const int64_t *box, const uint32_t *ids, size_t cn
 
 /* The middle of the bucket's region clipped to its boxes' extent along axis: where the mean of
  * the centres fails (long boxes all centred alike), this still halves the short ones. */
-static double split_middle(const int64_t *box, const uint32_t *ids, size_t cnt, int axis,
-                           double lo, double hi)
+static double split_middle(const int64_t *box, const uint32_t *ids, size_t cnt, int axis, double lo,
+                           double hi)
 {
     double mn = INFINITY, mx = -INFINITY;
     for (size_t i = 0; i < cnt; i++) {
@@ -89,8 +89,8 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
     for (size_t i = 0; i < n; i++) pool[i] = (uint32_t)i;
     pool_n = n;
     if (grow((void **)&stack, &scap, 1, sizeof *stack)) goto fail;
-    stack[sn++] = (pending){.node = -1, .off = 0, .cnt = n, .lo = {-INFINITY, -INFINITY},
-                            .hi = {INFINITY, INFINITY}};
+    stack[sn++] = (pending){
+        .node = -1, .off = 0, .cnt = n, .lo = {-INFINITY, -INFINITY}, .hi = {INFINITY, INFINITY}};
     while (sn) {
         pending p = stack[--sn];
         int axis = -1;
@@ -123,8 +123,10 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
             memcpy(leaves[ln].hi, p.hi, sizeof p.hi);
             int32_t ref = ~(int32_t)ln;
             ln++;
-            if (p.node >= 0) nodes[p.node].child[p.side] = ref;
-            else if (grow((void **)&nodes, &ncap, 1, sizeof *nodes)) goto fail;
+            if (p.node >= 0)
+                nodes[p.node].child[p.side] = ref;
+            else if (grow((void **)&nodes, &ncap, 1, sizeof *nodes))
+                goto fail;
             else { /* the root is a leaf: a one-node tree whose both sides are that leaf */
                 nodes[0] = (box_node){.t = INFINITY, .axis = 0, .child = {ref, ref}};
                 nn = 1;

@@ -22,9 +22,9 @@
 #include <stdint.h>
 
 typedef struct box_node {
-    double t;          /* threshold */
-    int32_t axis;      /* 0: x, 1: y */
-    int32_t child[2];  /* below, above; >= 0 node index, < 0 leaf ~index */
+    double t;         /* threshold */
+    int32_t axis;     /* 0: x, 1: y */
+    int32_t child[2]; /* below, above; >= 0 node index, < 0 leaf ~index */
 } box_node;
 
 typedef struct box_tree {
@@ -33,7 +33,7 @@ typedef struct box_tree {
     uint32_t *items;    /* box indices, ascending within a leaf */
     double *region;     /* 4 per leaf: xlo, ylo, xhi, yhi of (lo, hi] */
     size_t nnodes;
-    box_node *nodes;    /* nodes[0] is the root when nnodes > 0 */
+    box_node *nodes; /* nodes[0] is the root when nnodes > 0 */
 } box_tree;
 
 /* Builds the tree of n boxes (box[4i..4i+3] = x0, y0, x1, y1, borrowed) with buckets of about

@@ -22,7 +22,10 @@ static inline i128 orient2(ipt a, ipt b, ipt c)
     return (i128)(b.x - a.x) * (c.y - a.y) - (i128)(b.y - a.y) * (c.x - a.x);
 }
 
-static inline int sign128(i128 v) { return (v > 0) - (v < 0); }
+static inline int sign128(i128 v)
+{
+    return (v > 0) - (v < 0);
+}
 
 static inline i128 cross2(int64_t ax, int64_t ay, int64_t bx, int64_t by)
 {
@@ -39,7 +42,10 @@ static inline i128 floordiv128(i128 n, i128 d)
 
 /* n / d rounded to the nearest integer, halves rounded up (floor(n/d + 1/2)); d > 0.
  * This is the pixel convention: the pixel of grid point X is [X - 1/2, X + 1/2). */
-static inline int64_t rounddiv128(i128 n, i128 d) { return (int64_t)floordiv128(2 * n + d, 2 * d); }
+static inline int64_t rounddiv128(i128 n, i128 d)
+{
+    return (int64_t)floordiv128(2 * n + d, 2 * d);
+}
 
 /* Lexicographic order of grid points (x, then y). */
 static inline int ipt_cmp(ipt a, ipt b)

@@ -19,7 +19,10 @@ int test_failed_now(void); /* non-zero once the running test has a failure */
 
 #define TEST(name)                                                                                 \
     static void name(void);                                                                        \
-    __attribute__((constructor)) static void name##_register(void) { test_register(#name, name); } \
+    __attribute__((constructor)) static void name##_register(void)                                 \
+    {                                                                                              \
+        test_register(#name, name);                                                                \
+    }                                                                                              \
     static void name(void)
 
 #define CHECK(cond, ...)                                                                           \

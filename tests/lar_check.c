@@ -25,8 +25,10 @@ static long find_edge(const lar2 *c, uint32_t u, uint32_t v)
     while (lo < hi) {
         size_t mid = (lo + hi) / 2;
         uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
-        if (x < a || (x == a && y < b)) lo = mid + 1;
-        else hi = mid;
+        if (x < a || (x == a && y < b))
+            lo = mid + 1;
+        else
+            hi = mid;
     }
     if (lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b) return (long)lo;
     return -1;

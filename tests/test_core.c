@@ -21,7 +21,10 @@ static int run(const double *s, size_t n, const arr2_opts *o, lar2 *out)
     return rc;
 }
 
-static size_t total_holes(const lar2 *c) { return c->hole_off[c->nf]; }
+static size_t total_holes(const lar2 *c)
+{
+    return c->hole_off[c->nf];
+}
 
 static double sum_face_areas(const lar2 *c)
 {
@@ -41,7 +44,7 @@ static size_t add_square(double *s, size_t n, double x, double y, double side)
     return n + 4;
 }
 
-static const double ORTHO[8][4] = {{0, 0, 6, 0}, {0, 4, 10, 4}, {0, 0, 0, 4},  {3, 0, 3, 4},
+static const double ORTHO[8][4] = {{0, 0, 6, 0}, {0, 4, 10, 4}, {0, 0, 0, 4},   {3, 0, 3, 4},
                                    {6, 0, 6, 8}, {3, 2, 6, 2},  {10, 0, 10, 8}, {0, 8, 10, 8}};
 
 TEST(orthogonal_example_seeds)
@@ -68,7 +71,8 @@ TEST(orthogonal_example_seeds)
                 got[i] = got[j];
                 got[j] = t;
             }
-    for (int i = 0; i < 4; i++) CHECK(fabs(got[i] - want[i]) < 1e-9, "area %g want %g", got[i], want[i]);
+    for (int i = 0; i < 4; i++)
+        CHECK(fabs(got[i] - want[i]) < 1e-9, "area %g want %g", got[i], want[i]);
     lar2_free(&c);
 }
 
@@ -182,9 +186,9 @@ TEST(disjoint_and_nested_components)
     double s[16 * 4];
     size_t n = 0;
     n = add_square(s, n, 0, 0, 1);
-    n = add_square(s, n, 5, 0, 1);    /* beside */
-    n = add_square(s, n, 10, 0, 10);  /* a big one ... */
-    n = add_square(s, n, 12, 2, 2);   /* ... with one inside */
+    n = add_square(s, n, 5, 0, 1);   /* beside */
+    n = add_square(s, n, 10, 0, 10); /* a big one ... */
+    n = add_square(s, n, 12, 2, 2);  /* ... with one inside */
     lar2 c;
     REQUIRE(run(s, n, NULL, &c) == ARR_OK, "failed");
     CHECK(c.nf == 4, "faces %zu", c.nf);
@@ -227,8 +231,8 @@ TEST(hole_below_a_vertex_and_stacked_islands)
     double s[32 * 4];
     size_t n = 0;
     n = add_square(s, n, 0, 0, 20);
-    n = add_square(s, n, 5, 2, 4);   /* island A: lowest vertex (5,2) */
-    n = add_square(s, n, 5, 8, 2);   /* island B: straight above A's vertex (5,6) */
+    n = add_square(s, n, 5, 2, 4); /* island A: lowest vertex (5,2) */
+    n = add_square(s, n, 5, 8, 2); /* island B: straight above A's vertex (5,6) */
     double d[4][4] = {{14, 2, 16, 4}, {16, 4, 14, 6}, {14, 6, 12, 4}, {12, 4, 14, 2}};
     memcpy(s + 4 * n, d, sizeof d); /* a diamond; its bottom (14,2) above nothing */
     n += 4;
@@ -297,7 +301,8 @@ TEST(far_from_origin_same_complex)
         CHECK(c.nv == nv0 && c.ne == ne0 && c.nf == nf0 && nf0 == 4, "offset %zu: %zu %zu %zu", t,
               c.nv, c.ne, c.nf);
         double a = sum_face_areas(&c), want = 40 * 0.37 * 0.37;
-        CHECK(fabs(a - want) < 1e-9 * want + 1e-13 * fabs(off[t][0]) * 40, "offset %zu: area %.12g want %.12g", t, a, want);
+        CHECK(fabs(a - want) < 1e-9 * want + 1e-13 * fabs(off[t][0]) * 40,
+              "offset %zu: area %.12g want %.12g", t, a, want);
         lar2_free(&c);
     }
 }
@@ -328,8 +333,10 @@ TEST(bad_and_degenerate_input)
           "one segment kept: %zu V %zu E %zu ext", c.nv, c.ne, c.next);
     lar2_free(&c);
     /* huge coordinates: fine as long as the span fits a double */
-    double huge[4][4] = {{-1e300, -1e300, 1e300, 1e300}, {-1e300, 1e300, 1e300, -1e300},
-                         {-1e300, -1e300, 1e300, -1e300}, {1e300, -1e300, 1e300, 1e300}};
+    double huge[4][4] = {{-1e300, -1e300, 1e300, 1e300},
+                         {-1e300, 1e300, 1e300, -1e300},
+                         {-1e300, -1e300, 1e300, -1e300},
+                         {1e300, -1e300, 1e300, 1e300}};
     CHECK(run(&huge[0][0], 4, NULL, &c) == ARR_OK && c.nf == 2, "huge: %zu faces", c.nf);
     lar2_free(&c);
     double span[1][4] = {{-1.7e308, 0, 1.7e308, 1}};

@@ -48,8 +48,8 @@ static void compare(const char *what, const double *s, size_t n, double extent)
     REQUIRE(geos_ref_faces(s, n, &ga, &gf, &gh, &gv, &ge) == 0, "%s: GEOS failed", what);
     CHECK(c.nf == gf, "%s: %zu faces, GEOS %zu", what, c.nf, gf);
     CHECK(c.hole_off[c.nf] == gh, "%s: %u holes, GEOS %zu", what, c.hole_off[c.nf], gh);
-    CHECK(k.nv == gv && k.ne == ge, "%s: keep_dangling %zu V %zu E, GEOS noding %zu V %zu E",
-          what, k.nv, k.ne, gv, ge);
+    CHECK(k.nv == gv && k.ne == ge, "%s: keep_dangling %zu V %zu E, GEOS noding %zu V %zu E", what,
+          k.nv, k.ne, gv, ge);
     if (c.nf == gf) {
         double *a = malloc((c.nf + 1) * sizeof *a);
         for (size_t f = 0; f < c.nf; f++) a[f] = lar_face_area(&c, f);
@@ -61,8 +61,8 @@ static void compare(const char *what, const double *s, size_t n, double extent)
             if (d > 1e-9 * fabs(ga[f]) + tol_abs) bad++;
             if (d / fmax(fabs(ga[f]), 1e-300) > worst) worst = d / fmax(fabs(ga[f]), 1e-300);
         }
-        CHECK(bad == 0, "%s: %zu of %zu sorted areas differ from GEOS (worst relative %g)",
-              what, bad, c.nf, worst);
+        CHECK(bad == 0, "%s: %zu of %zu sorted areas differ from GEOS (worst relative %g)", what,
+              bad, c.nf, worst);
         free(a);
     }
     free(ga);

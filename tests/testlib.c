@@ -35,7 +35,10 @@ void test_fail(const char *file, const char *func, int line, const char *fmt, ..
     fputc('\n', stdout);
 }
 
-int test_failed_now(void) { return cur_failures != 0; }
+int test_failed_now(void)
+{
+    return cur_failures != 0;
+}
 
 const char *test_data_dir(void)
 {

@@ -223,14 +223,21 @@ static int check_range(const ctx *c, char *err, size_t el)
 
 /* ---- intersect ------------------------------------------------------------------------- */
 
+/* For workers: non-zero when the job failed or was cancelled (polled every 64 items). */
+static int worker_stop(ctx *c, size_t item)
+{
+    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return 1;
+    if ((item & 63) == 0 && cancelled(c)) {
+        atomic_store(&c->fail, ARR_ECANCELED);
+        return 1;
+    }
+    return 0;
+}
+
 static void intersect_leaf(void *vc, size_t l, int w)
 {
     ctx *c = vc;
-    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
-    if ((l & 63) == 0 && cancelled(c)) {
-        atomic_store(&c->fail, ARR_ECANCELED);
-        return;
-    }
+    if (worker_stop(c, l)) return;
     const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
     size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
     const double *r = c->tree.region + 4 * l;
@@ -304,11 +311,7 @@ static int seg_hits_pixel(ipt a, ipt b, ipt p)
 static void hotpixel_leaf(void *vc, size_t l, int w)
 {
     ctx *c = vc;
-    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
-    if ((l & 63) == 0 && cancelled(c)) {
-        atomic_store(&c->fail, ARR_ECANCELED);
-        return;
-    }
+    if (worker_stop(c, l)) return;
     const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
     size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
     vbuf *out = &c->inc[w];
@@ -377,11 +380,7 @@ static void sort_keyed(i128 *key, uint32_t *val, size_t n)
 static void split_segments(void *vc, size_t chunk, int w)
 {
     ctx *c = vc;
-    if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return;
-    if (cancelled(c)) {
-        atomic_store(&c->fail, ARR_ECANCELED);
-        return;
-    }
+    if (worker_stop(c, 0)) return; /* chunks are big: poll on every one */
     size_t s0 = chunk * SEG_CHUNK, s1 = s0 + SEG_CHUNK < c->m ? s0 + SEG_CHUNK : c->m;
     scratch *sc = &c->scr[w];
     vbuf *out = &c->edges[w];

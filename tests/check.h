@@ -9,6 +9,7 @@
 #ifndef CELLAR_CHECK_H
 #define CELLAR_CHECK_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 typedef void (*test_fn)(void);
@@ -42,5 +43,11 @@ int test_failed_now(void); /* non-zero once the running test has a failure */
 const char *test_data_dir(void);
 /* Reads a whole file into a NUL-terminated buffer the caller frees; NULL on error. */
 char *test_read_file(const char *path, size_t *len);
+
+/* The tests' reproducible random numbers (splitmix64), in [0, 1). */
+double test_rnd(uint64_t *state);
+/* n random segments made like the seeds' randomLines(n, scaling), without the final shift:
+ * malloc'd, 4 doubles each, the caller frees. */
+double *test_random_lines(size_t n, double scaling, uint64_t seed);
 
 #endif

@@ -384,30 +384,9 @@ TEST(snap_rounding_near_misses)
     lar2_free(&c);
 }
 
-/* splitmix64: the tests' own reproducible random numbers */
-static uint64_t rnd_state;
-static double rnd(void)
-{
-    uint64_t z = (rnd_state += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    z ^= z >> 31;
-    return (double)(z >> 11) / 9007199254740992.0;
-}
-
 static double *random_lines(size_t n, double scaling, uint64_t seed)
 {
-    double *s = malloc(n * 4 * sizeof *s);
-    rnd_state = seed;
-    for (size_t i = 0; i < n; i++) {
-        double x1 = rnd(), y1 = rnd(), x2 = rnd(), y2 = rnd(), px = rnd(), py = rnd();
-        double cx = (x1 + x2) / 2, cy = (y1 + y2) / 2;
-        s[4 * i] = (x1 - cx) * scaling + px;
-        s[4 * i + 1] = (y1 - cy) * scaling + py;
-        s[4 * i + 2] = (x2 - cx) * scaling + px;
-        s[4 * i + 3] = (y2 - cy) * scaling + py;
-    }
-    return s;
+    return test_random_lines(n, scaling, seed);
 }
 
 TEST(random_invariants_and_thread_determinism)

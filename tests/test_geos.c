@@ -16,16 +16,6 @@
 #include "tests/lar_check.h"
 #include "tests/ref/geos_ref.h"
 
-static uint64_t rnd_state;
-static double rnd(void)
-{
-    uint64_t z = (rnd_state += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    z ^= z >> 31;
-    return (double)(z >> 11) / 9007199254740992.0;
-}
-
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -77,16 +67,7 @@ TEST(geos_random_lines)
     for (size_t t = 0; t < sizeof sizes / sizeof *sizes; t++)
         for (uint64_t seed = 1; seed <= 3; seed++) {
             size_t n = sizes[t];
-            double *s = malloc(n * 4 * sizeof *s);
-            rnd_state = seed * 7919 + t;
-            for (size_t i = 0; i < n; i++) {
-                double x1 = rnd(), y1 = rnd(), x2 = rnd(), y2 = rnd(), px = rnd(), py = rnd();
-                double cx = (x1 + x2) / 2, cy = (y1 + y2) / 2;
-                s[4 * i] = (x1 - cx) * scal[t] + px;
-                s[4 * i + 1] = (y1 - cy) * scal[t] + py;
-                s[4 * i + 2] = (x2 - cx) * scal[t] + px;
-                s[4 * i + 3] = (y2 - cy) * scal[t] + py;
-            }
+            double *s = test_random_lines(n, scal[t], seed * 7919 + t);
             char what[64];
             snprintf(what, sizeof what, "random %zu/%.2f seed %d", n, scal[t], (int)seed);
             compare(what, s, n, 1 + scal[t]);
@@ -100,10 +81,11 @@ TEST(geos_random_rectangles_with_holes)
     for (uint64_t seed = 1; seed <= 4; seed++) {
         size_t nr = 150, n = 0;
         double *s = malloc(nr * 4 * 4 * sizeof *s);
-        rnd_state = seed;
+        uint64_t st = seed;
         for (size_t r = 0; r < nr; r++) {
-            double cx = rnd() * 10, cy = rnd() * 10, w = rnd() * (r % 5 ? 0.6 : 4);
-            double h = rnd() * (r % 5 ? 0.6 : 4), a = seed % 2 ? rnd() * 3.14159 : 0;
+            double cx = test_rnd(&st) * 10, cy = test_rnd(&st) * 10;
+            double w = test_rnd(&st) * (r % 5 ? 0.6 : 4), h = test_rnd(&st) * (r % 5 ? 0.6 : 4);
+            double a = seed % 2 ? test_rnd(&st) * 3.14159 : 0;
             double ca = cos(a), sa = sin(a), px[4], py[4];
             double dx[4] = {-w, w, w, -w}, dy[4] = {-h, -h, h, h};
             for (int i = 0; i < 4; i++) {

@@ -67,6 +67,31 @@ out:
     return buf;
 }
 
+double test_rnd(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    z ^= z >> 31;
+    return (double)(z >> 11) / 9007199254740992.0;
+}
+
+double *test_random_lines(size_t n, double scaling, uint64_t seed)
+{
+    double *s = malloc((n ? n : 1) * 4 * sizeof *s);
+    if (!s) return NULL;
+    for (size_t i = 0; i < n; i++) {
+        double x1 = test_rnd(&seed), y1 = test_rnd(&seed), x2 = test_rnd(&seed);
+        double y2 = test_rnd(&seed), px = test_rnd(&seed), py = test_rnd(&seed);
+        double cx = (x1 + x2) / 2, cy = (y1 + y2) / 2;
+        s[4 * i] = (x1 - cx) * scaling + px;
+        s[4 * i + 1] = (y1 - cy) * scaling + py;
+        s[4 * i + 2] = (x2 - cx) * scaling + px;
+        s[4 * i + 3] = (y2 - cy) * scaling + py;
+    }
+    return s;
+}
+
 int main(int argc, char **argv)
 {
     int passed = 0, failed = 0;

@@ -143,6 +143,57 @@ static double unsnap(const ctx *c, int axis, int64_t g)
     return c->origin_d[axis] * c->step + (double)g * c->step;
 }
 
+/* Interleaves the low 16 bits of x and y (a Morton code). */
+static uint32_t morton16(uint32_t x, uint32_t y)
+{
+    uint64_t v = x | (uint64_t)y << 32;
+    v = (v | v << 8) & 0x00ff00ff00ff00ffull;
+    v = (v | v << 4) & 0x0f0f0f0f0f0f0f0full;
+    v = (v | v << 2) & 0x3333333333333333ull;
+    v = (v | v << 1) & 0x5555555555555555ull;
+    return (uint32_t)(v | v >> 31);
+}
+
+/* Puts the segments in Morton order of their midpoints, so that a bucket's segments sit close
+ * together in memory (every later stage walks the buckets).  The order of segments changes
+ * nothing else: results are sorted by geometry. */
+static int spatial_order(ctx *c)
+{
+    if (c->m < 2) return 0;
+    uint64_t *key = malloc(c->m * sizeof *key);
+    seg2 *tmp = malloc(c->m * sizeof *tmp);
+    if (!key || !tmp) {
+        free(key);
+        free(tmp);
+        return -1;
+    }
+    int64_t lo[2] = {INT64_MAX, INT64_MAX}, hi[2] = {INT64_MIN, INT64_MIN};
+    for (size_t i = 0; i < c->m; i++) {
+        int64_t mx = (c->seg[i].a.x + c->seg[i].b.x) / 2, my = (c->seg[i].a.y + c->seg[i].b.y) / 2;
+        lo[0] = mx < lo[0] ? mx : lo[0];
+        hi[0] = mx > hi[0] ? mx : hi[0];
+        lo[1] = my < lo[1] ? my : lo[1];
+        hi[1] = my > hi[1] ? my : hi[1];
+    }
+    int sh = 0;
+    while (((hi[0] - lo[0]) >> sh) > 65535 || ((hi[1] - lo[1]) >> sh) > 65535) sh++;
+    for (size_t i = 0; i < c->m; i++) {
+        int64_t mx = (c->seg[i].a.x + c->seg[i].b.x) / 2, my = (c->seg[i].a.y + c->seg[i].b.y) / 2;
+        uint32_t code = morton16((uint32_t)((mx - lo[0]) >> sh), (uint32_t)((my - lo[1]) >> sh));
+        key[i] = (uint64_t)code << 32 | i;
+    }
+    if (sort_u64(key, c->m)) {
+        free(key);
+        free(tmp);
+        return -1;
+    }
+    for (size_t i = 0; i < c->m; i++) tmp[i] = c->seg[(uint32_t)key[i]];
+    free(c->seg);
+    c->seg = tmp;
+    free(key);
+    return 0;
+}
+
 static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *err, size_t el)
 {
     double minx = INFINITY, miny = INFINITY, maxx = -INFINITY, maxy = -INFINITY;
@@ -204,7 +255,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
     c->m = m;
     st->zero_length = n - m;
-    return ARR_OK;
+    return spatial_order(c) ? seterr(err, el, ARR_ENOMEM, "out of memory") : ARR_OK;
 }
 
 /* The bound every predicate relies on (core/num.h); the snap stage guarantees it, this

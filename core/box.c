@@ -34,43 +34,43 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
     return 0;
 }
 
-static double split_threshold(const int64_t *box, const uint32_t *ids, size_t cnt, int axis)
+/* The candidate thresholds of a bucket, for both axes: the mean of the box centres (the
+ * seeds' rule) and the middle of the region clipped to the boxes' extent, which still halves
+ * the short boxes where the mean fails (long boxes all centred alike).  One pass. */
+static void split_candidates(const int64_t *box, const uint32_t *ids, size_t cnt,
+                             const double lo[2], const double hi[2], double cand[4])
 {
-    double s = 0;
+    double sum[2] = {0, 0};
+    int64_t mn[2] = {INT64_MAX, INT64_MAX}, mx[2] = {INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < cnt; i++) {
         const int64_t *b = box + 4 * (size_t)ids[i];
-        s += ((double)b[axis] + (double)b[axis + 2]) * 0.5;
+        for (int a = 0; a < 2; a++) {
+            sum[a] += (double)b[a] + (double)b[a + 2];
+            mn[a] = b[a] < mn[a] ? b[a] : mn[a];
+            mx[a] = b[a + 2] > mx[a] ? b[a + 2] : mx[a];
+        }
     }
-    return s / (double)cnt;
+    for (int a = 0; a < 2; a++) {
+        double l = (double)mn[a] > lo[a] ? (double)mn[a] : lo[a];
+        double h = (double)mx[a] < hi[a] ? (double)mx[a] : hi[a];
+        cand[2 * a] = sum[a] / (2.0 * (double)cnt);
+        cand[2 * a + 1] = floor(l / 2 + h / 2) + 0.5; /* between grid lines */
+    }
 }
 
-/* The middle of the bucket's region clipped to its boxes' extent along axis: where the mean of
- * the centres fails (long boxes all centred alike), this still halves the short ones. */
-static double split_middle(const int64_t *box, const uint32_t *ids, size_t cnt, int axis, double lo,
-                           double hi)
+/* Sizes of both sides for the four candidates (two per axis).  One pass. */
+static void split_counts(const int64_t *box, const uint32_t *ids, size_t cnt, const double cand[4],
+                         size_t nb[4], size_t na[4])
 {
-    double mn = INFINITY, mx = -INFINITY;
+    for (int k = 0; k < 4; k++) nb[k] = na[k] = 0;
     for (size_t i = 0; i < cnt; i++) {
         const int64_t *b = box + 4 * (size_t)ids[i];
-        mn = fmin(mn, (double)b[axis]);
-        mx = fmax(mx, (double)b[axis + 2]);
+        for (int k = 0; k < 4; k++) {
+            int a = k / 2;
+            nb[k] += (double)b[a] <= cand[k];
+            na[k] += (double)b[a + 2] > cand[k];
+        }
     }
-    mn = fmax(mn, lo);
-    mx = fmin(mx, hi);
-    return floor(mn / 2 + mx / 2) + 0.5; /* between grid lines: no box edge lies on it */
-}
-
-static void split_count(const int64_t *box, const uint32_t *ids, size_t cnt, int axis, double t,
-                        size_t *nb, size_t *na)
-{
-    size_t b = 0, a = 0;
-    for (size_t i = 0; i < cnt; i++) {
-        const int64_t *bx = box + 4 * (size_t)ids[i];
-        b += (double)bx[axis] <= t;
-        a += (double)bx[axis + 2] > t;
-    }
-    *nb = b;
-    *na = a;
 }
 
 int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
@@ -97,21 +97,17 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
         double thr = 0;
         size_t best = p.cnt;
         if (p.cnt > leaf_max && p.depth < BOX_MAX_DEPTH) {
-            for (int a = 0; a < 2; a++) {
-                double cand[2];
-                cand[0] = split_threshold(box, pool + p.off, p.cnt, a);
-                cand[1] = split_middle(box, pool + p.off, p.cnt, a, p.lo[a], p.hi[a]);
-                for (int k = 0; k < 2; k++) {
-                    size_t nb, na;
-                    double th = cand[k];
-                    if (!(th > p.lo[a] && th < p.hi[a])) continue;
-                    split_count(box, pool + p.off, p.cnt, a, th, &nb, &na);
-                    size_t worst = nb > na ? nb : na;
-                    if (worst < best) {
-                        best = worst;
-                        axis = a;
-                        thr = th;
-                    }
+            double cand[4];
+            size_t nb[4], na[4];
+            split_candidates(box, pool + p.off, p.cnt, p.lo, p.hi, cand);
+            split_counts(box, pool + p.off, p.cnt, cand, nb, na);
+            for (int k = 0; k < 4; k++) {
+                int a = k / 2;
+                size_t worst = nb[k] > na[k] ? nb[k] : na[k];
+                if (worst < best && cand[k] > p.lo[a] && cand[k] < p.hi[a]) {
+                    best = worst;
+                    axis = a;
+                    thr = cand[k];
                 }
             }
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */

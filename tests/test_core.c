@@ -497,3 +497,40 @@ TEST(coarse_grid_snap_rounding_stress)
             free(s);
         }
 }
+
+TEST(planar_arrangement_jl_oracles)
+{
+    /* test/planar_arrangement.jl intersect_edges: V = (2,2),(4,2),(3,3.5),(1,3),(5,3),(1,2),
+     * (5,2); edges (1,2),(2,3),(1,3),(4,5),(6,7).  Edge 5 overlaps edge 1 (the points (2,2)
+     * at 1/4 and (4,2) at 3/4 of it), edge 4 misses edge 1, edges 1 and 2 meet at (4,2). */
+    double s[5][4] = {{2, 2, 4, 2}, {4, 2, 3, 3.5}, {2, 2, 3, 3.5}, {1, 3, 5, 3}, {1, 2, 5, 2}};
+    lar2 c;
+    arr2_opts keep = {.keep_dangling = 1};
+    REQUIRE(run(&s[0][0], 5, &keep, &c) == ARR_OK, "failed");
+    /* vertices: the 7 given plus where (1,3)-(5,3) crosses the triangle's two slanted sides */
+    CHECK(c.nv == 9, "V %zu, want 9", c.nv);
+    /* edges: (1,2)-(2,2)-(4,2)-(5,2) 3, the slanted sides 2 pieces each, (1,3)-(5,3) 3 */
+    CHECK(c.ne == 10, "E %zu, want 10", c.ne);
+    CHECK(c.nf == 2, "F %zu, want 2 (the triangle cut in two)", c.nf);
+    CHECK(fabs(sum_face_areas(&c) - 1.5) < 8 * c.stats.precision, "area %.17g, want 1.5",
+          sum_face_areas(&c));
+    lar2_free(&c);
+    /* merge_vertices!: 16 points within 1e-12 of the unit square's corners, 16 edges ->
+     * 4 vertices, 4 edges */
+    double q[16][4];
+    double cx[4] = {0, 1, 1, 0}, cy[4] = {0, 0, 1, 1};
+    for (int i = 0; i < 16; i++) {
+        int a = i % 4, b = (i + 1) % 4;
+        double e1 = ((i * 7) % 5 - 2) * 0.5e-12, e2 = ((i * 3) % 5 - 2) * 0.5e-12;
+        double r[4] = {cx[a] + e1, cy[a] - e2, cx[b] - e2, cy[b] + e1};
+        memcpy(q[i], r, sizeof r);
+    }
+    REQUIRE(run(&q[0][0], 16, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 4 && c.ne == 4 && c.nf == 1, "%zu V %zu E %zu F, want 4 4 1", c.nv, c.ne, c.nf);
+    lar2_free(&c);
+    /* a 3-edge star: no biconnected component, nothing left */
+    double star[3][4] = {{0, 0, 1, 0}, {0, 0, 0, 1}, {0, 0, -1, -1}};
+    REQUIRE(run(&star[0][0], 3, NULL, &c) == ARR_OK, "failed");
+    CHECK(c.nv == 0 && c.ne == 0 && c.stats.blocks == 0, "%zu V %zu E", c.nv, c.ne);
+    lar2_free(&c);
+}

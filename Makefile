@@ -16,25 +16,30 @@ CPPFLAGS += -I.
 LDLIBS  += -lm -pthread
 JANSSON_LIBS := -ljansson
 GEOS_LIBS    := -lgeos_c
+SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lcrypto
+TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
-DEPS_BUILD := gcc make libc6-dev pkg-config libjansson-dev libgeos-dev
+DEPS_BUILD := gcc make libc6-dev pkg-config libjansson-dev libgeos-dev libmicrohttpd-dev \
+              libsqlite3-dev libssl-dev libcurl4-openssl-dev python3 python3-jsonschema
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)
 API_SRC  := $(wildcard api/*.c)
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
 API_OBJ  := $(API_SRC:%.c=$(BUILD)/%.o)
+SERVER_SRC := $(filter-out server/main.c,$(wildcard server/*.c))
+SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o) $(BUILD)/gen/openapi.o
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/ref/geos_ref.o
 
-.PHONY: all deps test check bench run clean format tests
-all: $(BUILD)/cellar
+.PHONY: all deps test check bench run clean format format-check tests
+all: $(BUILD)/cellar $(BUILD)/cellard
 
 deps:
 	@scripts/deps.sh $(DEPS_BUILD)
 
-$(BUILD)/%.o: %.c $(wildcard core/*.h api/*.h tests/*.h)
+$(BUILD)/%.o: %.c $(wildcard core/*.h api/*.h server/*.h tests/*.h)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
@@ -45,10 +50,24 @@ $(BUILD)/libcellar.a: $(CORE_OBJ) $(API_OBJ)
 $(BUILD)/cellar: $(BUILD)/cli/cellar.o $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) $(LDLIBS)
 
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellar.a
-	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) $(GEOS_LIBS) $(LDLIBS)
+$(BUILD)/gen/openapi.c: schemas/openapi.json scripts/embed.sh
+	@mkdir -p $(dir $@)
+	scripts/embed.sh cellar_openapi schemas/openapi.json > $@
 
-tests: $(BUILD)/cellar $(TEST_BIN)
+$(BUILD)/gen/openapi.o: $(BUILD)/gen/openapi.c
+	$(CC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/libcellard.a: $(SERVER_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(BUILD)/cellard: $(BUILD)/server/main.o $(BUILD)/libcellard.a $(BUILD)/libcellar.a
+	$(CC) $(CFLAGS) -o $@ $^ $(SERVER_LIBS) $(JANSSON_LIBS) $(LDLIBS)
+
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellard.a $(BUILD)/libcellar.a
+	$(CC) $(CFLAGS) -o $@ $^ $(TEST_LIBS) $(LDLIBS)
+
+tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN)
 
 test: deps
 	@$(MAKE) --no-print-directory tests
@@ -78,7 +97,10 @@ run: deps
 	@scripts/run.sh $(BUILD)
 
 format:
-	clang-format -i $(CORE_SRC) $(API_SRC) core/*.h api/*.h cli/*.c tests/*.c tests/*.h
+	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch]
+
+format-check:
+	clang-format --dry-run -Werror core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch]
 
 clean:
 	rm -rf build

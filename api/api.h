@@ -64,6 +64,11 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
  * may be NULL).  On failure *canon is NULL. */
 int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err);
 
+/* The same, and *kind_name (may be NULL) gets the request's kind ("lines", ...), a static
+ * string, or NULL on failure. */
+int api_check_request(const char *body, size_t len, char **canon, size_t *canonlen,
+                      const char **kind_name, api_error *err);
+
 /* Writes the shortest of %.15g, %.16g, %.17g that reads back as x (x finite) into buf, which
  * must hold API_DOUBLE_MAX bytes; returns the length.  The format of every number we print. */
 #define API_DOUBLE_MAX 32

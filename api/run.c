@@ -251,7 +251,8 @@ int api_run_json(const char *body, size_t len, int threads, char **out, size_t *
     return api_run_json_ex(body, len, &ro, out, outlen, err);
 }
 
-int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err)
+int api_check_request(const char *body, size_t len, char **canon, size_t *canonlen,
+                      const char **kind_name, api_error *err)
 {
     const api_kind *kind = NULL;
     void *req = NULL;
@@ -260,8 +261,10 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
     if (canon) *canon = NULL;
     if (canonlen) *canonlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
+    if (kind_name) *kind_name = NULL;
     rc = parse(body, len, &kind, &req, err);
     if (kind) kind->free(req);
+    if (rc == API_OK && kind_name) *kind_name = kind->name;
     if (rc != API_OK || !canon) return rc;
     /* valid: the canonical form comes from the tree */
     root = json_loadb(body, len, JSON_DECODE_ANY, NULL);
@@ -272,4 +275,9 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
         return api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");
     if (canonlen) *canonlen = strlen(*canon);
     return API_OK;
+}
+
+int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err)
+{
+    return api_check_request(body, len, canon, canonlen, NULL, err);
 }

@@ -1,0 +1,164 @@
+/* config.c — see config.h.  Every value is checked; nothing is silently clamped. */
+#include "server/config.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "server/log.h"
+
+const char config_usage[] =
+    "usage: cellard [options]\n"
+    "  --listen HOST:PORT    CELLAR_LISTEN        default 127.0.0.1:8080 (PORT 0: any free)\n"
+    "  --db PATH             CELLAR_DB            default ./cellar.db\n"
+    "  --workers N           CELLAR_WORKERS       jobs run at once (default: CPUs)\n"
+    "  --job-threads N       CELLAR_JOB_THREADS   core threads per job (default: CPUs)\n"
+    "  --queue N             CELLAR_QUEUE         waiting jobs at most (default 64)\n"
+    "  --max-body BYTES      CELLAR_MAX_BODY      request body limit (default 67108864)\n"
+    "  --max-wait SECONDS    CELLAR_MAX_WAIT      longest Prefer: wait (default 55)\n"
+    "  --cache-bytes BYTES   CELLAR_CACHE_BYTES   result cache budget, 0 = none (default 1 GiB)\n"
+    "  --drain-timeout SECS  CELLAR_DRAIN_TIMEOUT SIGTERM waits this long for running jobs\n"
+    "  --log-level LEVEL     CELLAR_LOG_LEVEL     debug, info, warn, error (default info)\n"
+    "  --help\n";
+
+static int bad(char *err, size_t errlen, const char *what, const char *v)
+{
+    snprintf(err, errlen, "%s: invalid value \"%s\"", what, v);
+    return -1;
+}
+
+static int parse_u64(const char *v, uint64_t lo, uint64_t hi, uint64_t *out)
+{
+    char *end;
+    errno = 0;
+    if (!*v || *v == '-') return -1;
+    unsigned long long x = strtoull(v, &end, 10);
+    if (errno || *end || x < lo || x > hi) return -1;
+    *out = x;
+    return 0;
+}
+
+static int parse_secs(const char *v, double lo, double hi, double *out)
+{
+    char *end;
+    errno = 0;
+    double x = strtod(v, &end);
+    if (errno || end == v || *end || !(x >= lo && x <= hi)) return -1;
+    *out = x;
+    return 0;
+}
+
+static int set(config *c, const char *name, const char *v, char *err, size_t errlen)
+{
+    uint64_t u;
+    if (!strcmp(name, "listen")) {
+        const char *colon = strrchr(v, ':');
+        if (!colon || colon == v || (size_t)(colon - v) >= sizeof c->host ||
+            parse_u64(colon + 1, 0, 65535, &u))
+            return bad(err, errlen, "--listen (HOST:PORT)", v);
+        memcpy(c->host, v, (size_t)(colon - v));
+        c->host[colon - v] = 0;
+        if (c->host[0] == '[' && c->host[strlen(c->host) - 1] == ']') { /* [::1] */
+            memmove(c->host, c->host + 1, strlen(c->host));
+            c->host[strlen(c->host) - 1] = 0;
+        }
+        c->port = (unsigned)u;
+    } else if (!strcmp(name, "db")) {
+        if (!*v || strlen(v) >= sizeof c->db) return bad(err, errlen, "--db", v);
+        strcpy(c->db, v);
+    } else if (!strcmp(name, "workers")) {
+        if (parse_u64(v, 1, 256, &u)) return bad(err, errlen, "--workers (1..256)", v);
+        c->workers = (int)u;
+    } else if (!strcmp(name, "job-threads")) {
+        if (parse_u64(v, 1, 64, &u)) return bad(err, errlen, "--job-threads (1..64)", v);
+        c->job_threads = (int)u;
+    } else if (!strcmp(name, "queue")) {
+        if (parse_u64(v, 1, 1000000, &u)) return bad(err, errlen, "--queue (1..1000000)", v);
+        c->queue = (size_t)u;
+    } else if (!strcmp(name, "max-body")) {
+        if (parse_u64(v, 1024, (uint64_t)1 << 32, &u))
+            return bad(err, errlen, "--max-body (1024..4294967296)", v);
+        c->max_body = u;
+    } else if (!strcmp(name, "max-wait")) {
+        if (parse_secs(v, 0, 3600, &c->max_wait))
+            return bad(err, errlen, "--max-wait (0..3600)", v);
+    } else if (!strcmp(name, "cache-bytes")) {
+        if (parse_u64(v, 0, UINT64_MAX, &u)) return bad(err, errlen, "--cache-bytes", v);
+        c->cache_bytes = u;
+    } else if (!strcmp(name, "drain-timeout")) {
+        if (parse_secs(v, 0, 86400, &c->drain_timeout))
+            return bad(err, errlen, "--drain-timeout (0..86400)", v);
+    } else if (!strcmp(name, "log-level")) {
+        if ((c->log_level = log_level_parse(v)) < 0)
+            return bad(err, errlen, "--log-level (debug, info, warn, error)", v);
+    } else {
+        snprintf(err, errlen, "unknown option --%s (cellard --help)", name);
+        return -1;
+    }
+    return 0;
+}
+
+static const char *names[] = {"listen",   "db",       "workers",     "job-threads",   "queue",
+                              "max-body", "max-wait", "cache-bytes", "drain-timeout", "log-level"};
+
+int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
+{
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    if (ncpu < 1) ncpu = 1;
+    if (ncpu > 64) ncpu = 64;
+    memset(c, 0, sizeof *c);
+    strcpy(c->host, "127.0.0.1");
+    c->port = 8080;
+    strcpy(c->db, "./cellar.db");
+    c->workers = (int)ncpu;
+    c->job_threads = (int)ncpu;
+    c->queue = 64;
+    c->max_body = 64u << 20;
+    c->max_wait = 55;
+    c->cache_bytes = 1u << 30;
+    c->drain_timeout = 30;
+    c->log_level = LOG_INFO;
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
+        char var[64] = "CELLAR_";
+        size_t k = 7;
+        for (const char *p = names[i]; *p && k < sizeof var - 1; p++)
+            var[k++] = *p == '-' ? '_' : (char)(*p - 'a' + 'A');
+        var[k] = 0;
+        const char *v = getenv(var);
+        if (v && *v && set(c, names[i], v, err, errlen)) {
+            char tmp[300];
+            snprintf(tmp, sizeof tmp, "%s (from %s)", err, var);
+            snprintf(err, errlen, "%s", tmp);
+            return -1;
+        }
+    }
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            fputs(config_usage, stdout);
+            return 1;
+        }
+        if (strncmp(a, "--", 2) != 0) {
+            snprintf(err, errlen, "unexpected argument \"%s\" (cellard --help)", a);
+            return -1;
+        }
+        const char *eq = strchr(a, '=');
+        char name[64];
+        const char *v;
+        if (eq) {
+            snprintf(name, sizeof name, "%.*s", (int)(eq - a - 2), a + 2);
+            v = eq + 1;
+        } else {
+            snprintf(name, sizeof name, "%s", a + 2);
+            if (i + 1 >= argc) {
+                snprintf(err, errlen, "--%s needs a value", name);
+                return -1;
+            }
+            v = argv[++i];
+        }
+        if (set(c, name, v, err, errlen)) return -1;
+    }
+    return 0;
+}

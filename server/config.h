@@ -1,0 +1,41 @@
+/* config.h — the daemon's settings: defaults, then CELLAR_* environment variables, then
+ * command-line flags (each flag overrides its variable).
+ *
+ *   flag            variable            default         meaning
+ *   --listen        CELLAR_LISTEN       127.0.0.1:8080  HOST:PORT to listen on (PORT 0: any)
+ *   --db            CELLAR_DB           ./cellar.db     the SQLite file (jobs and results)
+ *   --workers       CELLAR_WORKERS      CPUs            jobs run at once
+ *   --job-threads   CELLAR_JOB_THREADS  CPUs            core threads of one job
+ *   --queue         CELLAR_QUEUE        64              jobs waiting at most (then 503)
+ *   --max-body      CELLAR_MAX_BODY     67108864        request body bytes at most (then 413)
+ *   --max-wait      CELLAR_MAX_WAIT     55              seconds a Prefer: wait may hold
+ *   --cache-bytes   CELLAR_CACHE_BYTES  1073741824      result cache budget (0: unlimited)
+ *   --drain-timeout CELLAR_DRAIN_TIMEOUT 30             seconds SIGTERM waits for running jobs
+ *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
+ */
+#ifndef CELLAR_CONFIG_H
+#define CELLAR_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct config {
+    char host[256];
+    unsigned port;
+    char db[4096];
+    int workers, job_threads;
+    size_t queue;
+    uint64_t max_body;
+    double max_wait;
+    uint64_t cache_bytes;
+    double drain_timeout;
+    int log_level;
+} config;
+
+/* Fills *c from the environment and argv.  Returns 0; 1 after printing help (exit 0); -1 with
+ * a message in err for a bad value or an unknown flag (exit 2). */
+int config_load(config *c, int argc, char **argv, char *err, size_t errlen);
+
+extern const char config_usage[];
+
+#endif

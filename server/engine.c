@@ -1,0 +1,611 @@
+/* engine.c — see engine.h.
+ *
+ * One mutex (lock) guards the live list, the queue, every job's state/progress/refs and the
+ * waiter list; the condition `work` wakes workers, `idle` wakes a drain waiting for running jobs
+ * to end, `tick` wakes the timer thread.  Store I/O and the geometry run outside the lock.
+ *
+ * A job's references: one for the live list (dropped when it ends), one per holder
+ * (submit/find callers, the worker running it).  It is freed when the count reaches 0.
+ */
+#include "server/engine.h"
+
+#include <openssl/evp.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <time.h>
+
+#include "api/api.h"
+#include "server/log.h"
+
+typedef struct waiter {
+    job *j;
+    double deadline;
+    void (*wake)(void *);
+    void *ctx;
+    struct waiter *next;
+} waiter;
+
+struct job {
+    char id[33], hash[65], kind[16];
+    job_state state; /* lock */
+    double created, started, finished;
+    char *request; /* canonical request; immutable */
+    size_t request_len;
+    atomic_int cancel; /* read by the core */
+    char stage[32];    /* lock */
+    double fraction;   /* lock */
+    int error_status;  /* set once by the worker, under lock */
+    char *error;
+    char *result; /* DONE: the result JSON; immutable once set */
+    size_t result_len;
+    int refs; /* lock */
+    int live; /* lock: in e->live */
+    job *next_live, *next_queue;
+};
+
+struct engine {
+    engine_cfg cfg;
+    pthread_mutex_t lock;
+    pthread_cond_t work, idle, tick;
+    job *live;          /* queued and running jobs */
+    job *qhead, *qtail; /* FIFO of queued jobs */
+    size_t nqueued, nrunning;
+    waiter *waiters;
+    int draining, stopping;
+    pthread_t *threads; /* workers */
+    int nthreads;
+    pthread_t timer;
+    int timer_started;
+};
+
+double engine_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec / 1e9;
+}
+
+void engine_hash(const char *canon, size_t len, char *out)
+{
+    unsigned char md[32];
+    unsigned int mdlen = 0;
+    EVP_MD_CTX *ctx = EVP_MD_CTX_new();
+    int ok = ctx && EVP_DigestInit_ex(ctx, EVP_sha256(), NULL) &&
+             EVP_DigestUpdate(ctx, canon, len) && EVP_DigestUpdate(ctx, "\n", 1) &&
+             EVP_DigestUpdate(ctx, CELLAR_ALGO_VERSION, strlen(CELLAR_ALGO_VERSION)) &&
+             EVP_DigestFinal_ex(ctx, md, &mdlen);
+    EVP_MD_CTX_free(ctx);
+    if (!ok || mdlen != 32) memset(md, 0, sizeof md); /* cannot happen with OpenSSL's sha256 */
+    for (int i = 0; i < 32; i++) snprintf(out + 2 * i, 3, "%02x", md[i]);
+}
+
+static int new_id(char *out)
+{
+    unsigned char r[16];
+    if (getrandom(r, sizeof r, 0) != (ssize_t)sizeof r) return -1;
+    for (int i = 0; i < 16; i++) snprintf(out + 2 * i, 3, "%02x", r[i]);
+    return 0;
+}
+
+static void job_free(job *j)
+{
+    free(j->request);
+    free(j->error);
+    free(j->result);
+    free(j);
+}
+
+/* lock held */
+static void unref_locked(job *j)
+{
+    if (--j->refs == 0) job_free(j);
+}
+
+void engine_release(engine *e, job *j)
+{
+    if (!j) return;
+    pthread_mutex_lock(&e->lock);
+    unref_locked(j);
+    pthread_mutex_unlock(&e->lock);
+}
+
+/* lock held: takes j off the live list.  The list's reference is the caller's to drop, and
+ * every caller holds another one, so j stays valid (refs-- rather than a free). */
+static void unlive_locked(engine *e, job *j)
+{
+    for (job **p = &e->live; *p; p = &(*p)->next_live)
+        if (*p == j) {
+            *p = j->next_live;
+            j->live = 0;
+            return;
+        }
+}
+
+/* lock held: moves every waiter of j (or every waiter, when j is NULL; or those past `now`
+ * when j is NULL and now > 0) to the returned list, to be woken outside the lock */
+static waiter *take_waiters_locked(engine *e, const job *j, double now)
+{
+    waiter *out = NULL;
+    for (waiter **p = &e->waiters; *p;) {
+        waiter *w = *p;
+        int take = j ? w->j == j : (now <= 0 || w->deadline <= now);
+        if (take) {
+            *p = w->next;
+            w->next = out;
+            out = w;
+        } else {
+            p = &w->next;
+        }
+    }
+    return out;
+}
+
+static void wake_all(waiter *w)
+{
+    while (w) {
+        waiter *n = w->next;
+        w->wake(w->ctx);
+        free(w);
+        w = n;
+    }
+}
+
+typedef struct progress_ctx {
+    engine *e;
+    job *j;
+} progress_ctx;
+
+static void progress_cb(void *udata, const char *stage, double fraction)
+{
+    progress_ctx *p = udata; /* a few calls per job: the engine lock is fine */
+    pthread_mutex_lock(&p->e->lock);
+    snprintf(p->j->stage, sizeof p->j->stage, "%s", stage);
+    p->j->fraction = fraction;
+    pthread_mutex_unlock(&p->e->lock);
+}
+
+/* Runs one job on this worker thread; returns with the job ended and off the live list. */
+static void run_job(engine *e, job *j)
+{
+    char err[256] = "";
+    api_error ae = {0};
+    char *out = NULL;
+    size_t outlen = 0;
+    double t0 = engine_now();
+    store *st = e->cfg.st;
+
+    if (st->ops->job_set_state(st, j->id, JOB_RUNNING, j->started, 0, NULL, err, sizeof err))
+        log_kv(LOG_WARN, "store: job_set_state failed", "job", j->id, "error", err, NULL);
+    progress_ctx pc = {e, j};
+    api_run_opts ro = {
+        .threads = e->cfg.job_threads, .cancel = &j->cancel, .progress = progress_cb, .udata = &pc};
+    int rc = api_run_json_ex(j->request, j->request_len, &ro, &out, &outlen, &ae);
+    double t1 = engine_now();
+    job_state final = rc == API_OK ? JOB_DONE : rc == API_ECANCELED ? JOB_CANCELED : JOB_FAILED;
+    if (rc == API_OK && st->ops->result_put(st, j->hash, out, outlen, err, sizeof err)) {
+        log_kv(LOG_ERROR, "store: result_put failed", "job", j->id, "error", err, NULL);
+        final = JOB_FAILED;
+        rc = 503;
+        snprintf(ae.msg, sizeof ae.msg, "the result could not be stored: %s", err);
+    }
+    pthread_mutex_lock(&e->lock);
+    int canceled_meanwhile = j->state == JOB_CANCELED;
+    pthread_mutex_unlock(&e->lock);
+    if (!canceled_meanwhile &&
+        st->ops->job_set_state(st, j->id, final, t1, final == JOB_FAILED ? rc : 0,
+                               final == JOB_FAILED ? ae.msg : NULL, err, sizeof err))
+        log_kv(LOG_ERROR, "store: job_set_state failed", "job", j->id, "error", err, NULL);
+
+    pthread_mutex_lock(&e->lock);
+    if (!canceled_meanwhile) {
+        j->state = final;
+        j->finished = t1;
+        if (final == JOB_FAILED) {
+            j->error_status = rc;
+            j->error = strdup(ae.msg);
+        }
+    }
+    if (final == JOB_DONE) {
+        j->result = out;
+        j->result_len = outlen;
+        out = NULL;
+    }
+    e->nrunning--;
+    unlive_locked(e, j);
+    j->refs--; /* the list's; the worker still holds its own */
+    waiter *w = take_waiters_locked(e, j, 0);
+    pthread_cond_broadcast(&e->idle);
+    pthread_mutex_unlock(&e->lock);
+    wake_all(w);
+    free(out);
+    char ms[32];
+    metrics_job_end(e->cfg.m, job_state_name(canceled_meanwhile ? JOB_CANCELED : final), t1 - t0);
+    log_kv(LOG_INFO, "job ended", "job", j->id, "kind", j->kind, "state",
+           job_state_name(canceled_meanwhile ? JOB_CANCELED : final), "ms",
+           log_num(ms, (t1 - t0) * 1e3), NULL);
+}
+
+static void *worker_main(void *arg)
+{
+    engine *e = arg;
+    for (;;) {
+        pthread_mutex_lock(&e->lock);
+        while (!e->stopping && !e->draining && !e->qhead) pthread_cond_wait(&e->work, &e->lock);
+        if (e->stopping || e->draining) {
+            pthread_mutex_unlock(&e->lock);
+            return NULL;
+        }
+        job *j = e->qhead;
+        e->qhead = j->next_queue;
+        if (!e->qhead) e->qtail = NULL;
+        e->nqueued--;
+        e->nrunning++;
+        j->state = JOB_RUNNING;
+        j->started = engine_now();
+        j->refs++; /* the worker's */
+        pthread_mutex_unlock(&e->lock);
+        run_job(e, j);
+        engine_release(e, j);
+    }
+}
+
+static void *timer_main(void *arg)
+{
+    engine *e = arg;
+    double next_prune = engine_now() + 60;
+    pthread_mutex_lock(&e->lock);
+    while (!e->stopping) {
+        double now = engine_now(), soonest = now + 1;
+        for (waiter *w = e->waiters; w; w = w->next)
+            if (w->deadline < soonest) soonest = w->deadline;
+        if (soonest > now) {
+            struct timespec ts = {.tv_sec = (time_t)soonest,
+                                  .tv_nsec = (long)((soonest - (double)(time_t)soonest) * 1e9)};
+            pthread_cond_timedwait(&e->tick, &e->lock, &ts);
+            continue;
+        }
+        waiter *w = take_waiters_locked(e, NULL, now);
+        pthread_mutex_unlock(&e->lock);
+        wake_all(w);
+        if (now > next_prune) { /* finished jobs are kept a week */
+            size_t n = 0;
+            char err[256];
+            if (e->cfg.st->ops->jobs_prune(e->cfg.st, now - 7 * 86400, &n, err, sizeof err))
+                log_kv(LOG_WARN, "store: jobs_prune failed", "error", err, NULL);
+            next_prune = now + 3600;
+        }
+        pthread_mutex_lock(&e->lock);
+    }
+    pthread_mutex_unlock(&e->lock);
+    return NULL;
+}
+
+static job *job_new(const char *id, const char *hash, const char *kind, const char *req, size_t len)
+{
+    job *j = calloc(1, sizeof *j);
+    if (!j) return NULL;
+    j->request = malloc(len + 1);
+    if (!j->request) {
+        free(j);
+        return NULL;
+    }
+    memcpy(j->request, req, len);
+    j->request[len] = 0;
+    j->request_len = len;
+    snprintf(j->id, sizeof j->id, "%s", id);
+    snprintf(j->hash, sizeof j->hash, "%s", hash);
+    snprintf(j->kind, sizeof j->kind, "%s", kind);
+    snprintf(j->stage, sizeof j->stage, "queued");
+    atomic_init(&j->cancel, 0);
+    return j;
+}
+
+/* lock held */
+static void enqueue_locked(engine *e, job *j)
+{
+    j->next_queue = NULL;
+    if (e->qtail)
+        e->qtail->next_queue = j;
+    else
+        e->qhead = j;
+    e->qtail = j;
+    pthread_cond_signal(&e->work);
+}
+
+static int recover_one(void *ctx, store_job *sj)
+{
+    engine *e = ctx;
+    char err[256];
+    job *j = job_new(sj->id, sj->hash, sj->kind, sj->request, sj->request_len);
+    if (!j) return 1;
+    j->created = sj->created;
+    j->state = JOB_QUEUED;
+    j->refs = 1;
+    j->live = 1;
+    if (sj->state == JOB_RUNNING &&
+        e->cfg.st->ops->job_set_state(e->cfg.st, sj->id, JOB_QUEUED, 0, 0, NULL, err, sizeof err))
+        log_kv(LOG_WARN, "store: requeue failed", "job", sj->id, "error", err, NULL);
+    pthread_mutex_lock(&e->lock);
+    j->next_live = e->live;
+    e->live = j;
+    e->nqueued++;
+    enqueue_locked(e, j);
+    pthread_mutex_unlock(&e->lock);
+    log_kv(LOG_INFO, "job resumed", "job", j->id, "kind", j->kind, NULL);
+    return 0;
+}
+
+engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
+{
+    engine *e = calloc(1, sizeof *e);
+    if (!e) {
+        snprintf(err, errlen, "out of memory");
+        return NULL;
+    }
+    e->cfg = *cfg;
+    pthread_mutex_init(&e->lock, NULL);
+    pthread_cond_init(&e->work, NULL);
+    pthread_cond_init(&e->idle, NULL);
+    pthread_cond_init(&e->tick, NULL);
+    if (cfg->st->ops->jobs_unfinished(cfg->st, recover_one, e, err, errlen)) goto fail;
+    e->threads = calloc((size_t)cfg->workers, sizeof *e->threads);
+    if (!e->threads) {
+        snprintf(err, errlen, "out of memory");
+        goto fail;
+    }
+    for (int i = 0; i < cfg->workers; i++) {
+        if (pthread_create(&e->threads[i], NULL, worker_main, e) != 0) {
+            snprintf(err, errlen, "cannot start worker threads");
+            goto fail;
+        }
+        e->nthreads++;
+    }
+    if (pthread_create(&e->timer, NULL, timer_main, e) != 0) {
+        snprintf(err, errlen, "cannot start the timer thread");
+        goto fail;
+    }
+    e->timer_started = 1;
+    return e;
+fail:
+    engine_drain(e, 0);
+    engine_stop(e);
+    return NULL;
+}
+
+int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
+                  job **out, int *coalesced, char *err, size_t errlen)
+{
+    char id[33];
+    *out = NULL;
+    *coalesced = 0;
+    pthread_mutex_lock(&e->lock);
+    if (e->draining) {
+        pthread_mutex_unlock(&e->lock);
+        return ENG_DRAINING;
+    }
+    for (job *j = e->live; j; j = j->next_live)
+        if ((j->state == JOB_QUEUED || j->state == JOB_RUNNING) && strcmp(j->hash, hash) == 0) {
+            j->refs++;
+            pthread_mutex_unlock(&e->lock);
+            *out = j;
+            *coalesced = 1;
+            metrics_coalesced(e->cfg.m);
+            return ENG_OK;
+        }
+    if (e->nqueued >= e->cfg.queue_max) {
+        pthread_mutex_unlock(&e->lock);
+        return ENG_FULL;
+    }
+    job *j = NULL;
+    if (new_id(id) == 0) j = job_new(id, hash, kind, canon, len);
+    if (!j) {
+        pthread_mutex_unlock(&e->lock);
+        snprintf(err, errlen, "out of memory");
+        return ENG_ERR;
+    }
+    j->created = engine_now();
+    j->state = JOB_QUEUED;
+    j->refs = 2; /* the live list's and the caller's */
+    j->live = 1;
+    j->next_live = e->live;
+    e->live = j;
+    e->nqueued++; /* counted now so that the queue limit holds while the store writes */
+    pthread_mutex_unlock(&e->lock);
+
+    store_job sj = {
+        .state = JOB_QUEUED, .created = j->created, .request = j->request, .request_len = len};
+    memcpy(sj.id, j->id, sizeof sj.id);
+    memcpy(sj.hash, j->hash, sizeof sj.hash);
+    memcpy(sj.kind, j->kind, sizeof sj.kind);
+    int rc = e->cfg.st->ops->job_insert(e->cfg.st, &sj, err, errlen);
+    pthread_mutex_lock(&e->lock);
+    if (rc) {
+        /* an identical request may have joined it meanwhile: fail it for them too */
+        e->nqueued--;
+        unlive_locked(e, j);
+        j->state = JOB_FAILED;
+        j->finished = engine_now();
+        j->error_status = 503;
+        j->error = strdup(err);
+        waiter *w = take_waiters_locked(e, j, 0);
+        j->refs -= 2; /* the list's and ours */
+        int dead = j->refs == 0;
+        pthread_mutex_unlock(&e->lock);
+        wake_all(w);
+        if (dead) job_free(j);
+        return ENG_ERR;
+    }
+    enqueue_locked(e, j);
+    pthread_mutex_unlock(&e->lock);
+    metrics_job_accepted(e->cfg.m);
+    *out = j;
+    return ENG_OK;
+}
+
+job *engine_find(engine *e, const char *id)
+{
+    pthread_mutex_lock(&e->lock);
+    job *j = e->live;
+    while (j && strcmp(j->id, id) != 0) j = j->next_live;
+    if (j) j->refs++;
+    pthread_mutex_unlock(&e->lock);
+    return j;
+}
+
+static void info_locked(const job *j, job_info *out)
+{
+    memset(out, 0, sizeof *out);
+    memcpy(out->id, j->id, sizeof out->id);
+    memcpy(out->hash, j->hash, sizeof out->hash);
+    memcpy(out->kind, j->kind, sizeof out->kind);
+    out->state = j->state;
+    out->created = j->created;
+    out->started = j->started;
+    out->finished = j->finished;
+    snprintf(out->stage, sizeof out->stage, "%s",
+             j->state == JOB_QUEUED    ? "queued"
+             : j->state == JOB_RUNNING ? j->stage
+                                       : "done");
+    out->fraction = j->state == JOB_DONE ? 1 : j->state == JOB_RUNNING ? j->fraction : 0;
+    out->error_status = j->error_status;
+    if (j->error) snprintf(out->error, sizeof out->error, "%s", j->error);
+}
+
+void engine_info(engine *e, job *j, job_info *out)
+{
+    pthread_mutex_lock(&e->lock);
+    info_locked(j, out);
+    pthread_mutex_unlock(&e->lock);
+}
+
+const char *engine_result(engine *e, job *j, size_t *len)
+{
+    pthread_mutex_lock(&e->lock);
+    const char *r = j->state == JOB_DONE ? j->result : NULL;
+    if (r) *len = j->result_len;
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}
+
+int engine_cancel(engine *e, const char *id, job_info *out)
+{
+    char err[256];
+    job *j = engine_find(e, id);
+    if (!j) return 1;
+    pthread_mutex_lock(&e->lock);
+    if (j->state != JOB_QUEUED && j->state != JOB_RUNNING) {
+        info_locked(j, out);
+        unref_locked(j);
+        pthread_mutex_unlock(&e->lock);
+        return 2;
+    }
+    double now = engine_now();
+    int was_queued = j->state == JOB_QUEUED;
+    if (was_queued) { /* off the queue and the live list */
+        for (job **p = &e->qhead; *p; p = &(*p)->next_queue)
+            if (*p == j) {
+                *p = j->next_queue;
+                break;
+            }
+        e->qtail = NULL;
+        for (job *q = e->qhead; q; q = q->next_queue) e->qtail = q;
+        e->nqueued--;
+        unlive_locked(e, j);
+        j->refs--; /* the list's; engine_find's is still held */
+    } else {
+        atomic_store(&j->cancel, 1); /* the worker takes it off the live list */
+    }
+    j->state = JOB_CANCELED;
+    j->finished = now;
+    waiter *w = take_waiters_locked(e, j, 0);
+    info_locked(j, out);
+    pthread_mutex_unlock(&e->lock);
+    wake_all(w);
+    if (e->cfg.st->ops->job_set_state(e->cfg.st, id, JOB_CANCELED, now, 0, NULL, err, sizeof err))
+        log_kv(LOG_ERROR, "store: cancel failed", "job", id, "error", err, NULL);
+    if (was_queued) metrics_job_end(e->cfg.m, "canceled", 0); /* else the worker counts it */
+    engine_release(e, j);
+    return ENG_OK;
+}
+
+int engine_wait(engine *e, job *j, double deadline, void (*wake)(void *), void *ctx)
+{
+    waiter *w = malloc(sizeof *w);
+    pthread_mutex_lock(&e->lock);
+    if (j->state != JOB_QUEUED && j->state != JOB_RUNNING) {
+        pthread_mutex_unlock(&e->lock);
+        free(w);
+        return 1;
+    }
+    if (!w) { /* no memory for a waiter: answer at once, as if the deadline had passed */
+        pthread_mutex_unlock(&e->lock);
+        wake(ctx);
+        return 0;
+    }
+    *w = (waiter){.j = j, .deadline = deadline, .wake = wake, .ctx = ctx, .next = e->waiters};
+    e->waiters = w;
+    pthread_cond_signal(&e->tick);
+    pthread_mutex_unlock(&e->lock);
+    return 0;
+}
+
+void engine_drain(engine *e, double timeout)
+{
+    pthread_mutex_lock(&e->lock);
+    e->draining = 1;
+    pthread_cond_broadcast(&e->work);
+    double until = engine_now() + timeout;
+    while (e->nrunning > 0 && engine_now() < until) {
+        struct timespec ts = {.tv_sec = (time_t)until,
+                              .tv_nsec = (long)((until - (double)(time_t)until) * 1e9)};
+        pthread_cond_timedwait(&e->idle, &e->lock, &ts);
+    }
+    if (e->nrunning > 0)
+        log_kv(LOG_WARN, "drain timeout: jobs still running are resumed at the next start", NULL);
+    waiter *w = take_waiters_locked(e, NULL, 0);
+    pthread_mutex_unlock(&e->lock);
+    wake_all(w);
+}
+
+void engine_stop(engine *e)
+{
+    pthread_mutex_lock(&e->lock);
+    int busy = e->nrunning > 0;
+    e->stopping = 1;
+    pthread_cond_broadcast(&e->work);
+    pthread_cond_broadcast(&e->tick);
+    pthread_mutex_unlock(&e->lock);
+    if (e->timer_started) pthread_join(e->timer, NULL);
+    if (busy) {
+        /* a worker is still inside a job after the drain timeout: it must not touch a freed
+         * engine; the process is about to exit, so the engine is left allocated */
+        for (int i = 0; i < e->nthreads; i++) pthread_detach(e->threads[i]);
+        return;
+    }
+    for (int i = 0; i < e->nthreads; i++) pthread_join(e->threads[i], NULL);
+    free(e->threads);
+    while (e->live) { /* queued jobs: they stay queued in the store */
+        job *j = e->live;
+        e->live = j->next_live;
+        unref_locked(j);
+    }
+    pthread_mutex_destroy(&e->lock);
+    pthread_cond_destroy(&e->work);
+    pthread_cond_destroy(&e->idle);
+    pthread_cond_destroy(&e->tick);
+    free(e);
+}
+
+void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *queue_max, int *draining)
+{
+    pthread_mutex_lock(&e->lock);
+    *queued = e->nqueued;
+    *running = e->nrunning;
+    *queue_max = e->cfg.queue_max;
+    *draining = e->draining;
+    pthread_mutex_unlock(&e->lock);
+}

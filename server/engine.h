@@ -1,0 +1,90 @@
+/* engine.h — the job engine: a bounded queue, a pool of worker threads that run jobs through
+ * api/ (the geometry never runs on an HTTP thread), identical requests coalesced, waiters that
+ * are woken when a job ends or their deadline passes, and recovery of unfinished jobs from the
+ * store at start.
+ *
+ * Jobs are "live" (in memory) while queued or running, and a little after, while someone holds
+ * a reference; the store has every job.  A job is written to the store before it is queued, so
+ * an accepted job is never lost: after a crash, engine_start() queues again every job the store
+ * has as queued or running.
+ *
+ * Threads: every function is thread-safe.  engine_wait's wake callback runs on a worker or the
+ * timer thread, never under the engine's lock, exactly once per registered wait.
+ */
+#ifndef CELLAR_ENGINE_H
+#define CELLAR_ENGINE_H
+
+#include <stddef.h>
+
+#include "server/metrics.h"
+#include "server/store.h"
+
+/* Part of every request hash: bump it when an algorithm's output changes, so that an upgrade
+ * never serves a stale complex from the cache. */
+#define CELLAR_ALGO_VERSION "cellar-algo-1"
+
+typedef struct engine engine;
+typedef struct job job;
+
+typedef struct engine_cfg {
+    store *st;       /* borrowed; outlives the engine */
+    metrics *m;      /* borrowed */
+    int workers;     /* worker threads */
+    int job_threads; /* core threads per job */
+    size_t queue_max;
+} engine_cfg;
+
+enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_ERR = -1 };
+
+/* A snapshot of a job, for responses. */
+typedef struct job_info {
+    char id[33], hash[65], kind[16];
+    job_state state;
+    double created, started, finished;
+    char stage[32];
+    double fraction;
+    int error_status;
+    char error[300];
+} job_info;
+
+/* SHA-256 of canon + "\n" + CELLAR_ALGO_VERSION as 64 lowercase hex digits (out: 65 bytes). */
+void engine_hash(const char *canon, size_t len, char *out);
+
+/* Starts the threads and queues the store's unfinished jobs.  NULL with err on failure. */
+engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen);
+
+/* Accepts a request (canon: its canonical JSON, borrowed; kind: its kind; hash: engine_hash of
+ * canon).  ENG_OK: *out is a referenced job (new, or an identical one in flight: *coalesced
+ * = 1); ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err). */
+int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
+                  job **out, int *coalesced, char *err, size_t errlen);
+
+/* The live job with this id, referenced, or NULL (then look in the store). */
+job *engine_find(engine *e, const char *id);
+/* Drops a reference taken by engine_submit or engine_find. */
+void engine_release(engine *e, job *j);
+void engine_info(engine *e, job *j, job_info *out);
+/* The result of a job that ended DONE (borrowed while the reference is held), else NULL. */
+const char *engine_result(engine *e, job *j, size_t *len);
+
+/* Cancels a live queued or running job: ENG_OK with *out its new state (canceled), 1 when the
+ * job is not live (look in the store), 2 when it has already ended. */
+int engine_cancel(engine *e, const char *id, job_info *out);
+
+/* Calls wake(ctx) once, when j ends or at `deadline` (Unix seconds), whichever is first.
+ * Returns 0 when registered, 1 when j has already ended (wake is then not called). */
+int engine_wait(engine *e, job *j, double deadline, void (*wake)(void *), void *ctx);
+
+/* Stops taking and starting jobs, waits up to timeout seconds for the running ones (those
+ * still running then stay "running" in the store and are resumed by the next start), and
+ * wakes every waiter.  Queued jobs stay queued in the store. */
+void engine_drain(engine *e, double timeout);
+/* Joins the threads and frees the engine (after engine_drain). */
+void engine_stop(engine *e);
+
+void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *queue_max, int *draining);
+
+/* Unix time now, in seconds. */
+double engine_now(void);
+
+#endif

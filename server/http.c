@@ -1,0 +1,723 @@
+/* http.c — see http.h.
+ *
+ * Every connection gets a `conn` (MHD's con_cls) on the first call of the access handler; the
+ * body arrives in later calls (kept up to max_body, the rest discarded and answered 413); the
+ * last call (no upload data) answers.  A POST that asks to wait suspends its connection, and the
+ * engine's wake callback resumes it; MHD then calls the handler once more and the job's state
+ * decides the answer.  The request-completed callback logs the request, counts it in the
+ * metrics and frees the conn.
+ *
+ * Exactly one response per request: every path of handle() ends in respond() (which queues
+ * it) or in a suspension whose resumption ends in respond().
+ */
+#include "server/http.h"
+
+#include <arpa/inet.h>
+#include <ctype.h>
+#include <jansson.h>
+#include <microhttpd.h>
+#include <netdb.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <time.h>
+
+#include "api/api.h"
+#include "server/log.h"
+
+extern const unsigned char cellar_openapi[];
+extern const size_t cellar_openapi_len;
+
+struct http_server {
+    const config *cfg;
+    engine *e;
+    store *st;
+    metrics *m;
+    struct MHD_Daemon *d;
+    atomic_int draining;
+};
+
+typedef struct conn {
+    http_server *h;
+    struct MHD_Connection *mc;
+    metrics_route route;
+    char method[8];
+    char path[160]; /* for the log */
+    char id[65];    /* the job id or hash in the path */
+    double t0;
+    char *body;
+    size_t len, cap;
+    int too_large; /* the body passed max_body: the rest is discarded, then 413 */
+    job *j;        /* the job a POST waits on (referenced) */
+    int waiting;   /* suspended, waiting for j */
+    double wait_applied;
+    unsigned status; /* the status sent, for the log */
+    char job_id[33]; /* for the log */
+} conn;
+
+static const char *status_title(unsigned s)
+{
+    switch (s) {
+    case 400:
+        return "Bad Request";
+    case 404:
+        return "Not Found";
+    case 405:
+        return "Method Not Allowed";
+    case 409:
+        return "Conflict";
+    case 413:
+        return "Content Too Large";
+    case 415:
+        return "Unsupported Media Type";
+    case 422:
+        return "Unprocessable Content";
+    case 500:
+        return "Internal Server Error";
+    case 503:
+        return "Service Unavailable";
+    default:
+        return "Error";
+    }
+}
+
+/* ---- responses ------------------------------------------------------------------------ */
+
+typedef struct hdr {
+    const char *name, *value;
+} hdr;
+
+/* Queues the response: body is malloc'd and taken (or, with `persistent`, static). */
+static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char *body, size_t len,
+                               int persistent, const hdr *hs, size_t nh)
+{
+    struct MHD_Response *r = MHD_create_response_from_buffer(
+        len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
+    if (!r) {
+        if (!persistent) free(body);
+        return MHD_NO;
+    }
+    if (ctype) MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
+    for (size_t i = 0; i < nh; i++)
+        if (hs[i].name && hs[i].value) MHD_add_response_header(r, hs[i].name, hs[i].value);
+    c->status = status;
+    enum MHD_Result ok = MHD_queue_response(c->mc, status, r);
+    MHD_destroy_response(r);
+    return ok;
+}
+
+static enum MHD_Result respond_json(conn *c, unsigned status, json_t *o, const hdr *hs, size_t nh)
+{
+    char *s = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
+    json_decref(o);
+    if (!s) return MHD_NO;
+    size_t n = strlen(s);
+    char *b = realloc(s, n + 2);
+    if (!b) {
+        free(s);
+        return MHD_NO;
+    }
+    b[n] = '\n';
+    b[n + 1] = 0;
+    return respond(c, status, "application/json", b, n + 1, 0, hs, nh);
+}
+
+/* The JSON path at the start of an error message ("lines[3][1]: ..."), or "" */
+static void message_path(const char *msg, char *path, size_t n)
+{
+    const char *p = msg;
+    path[0] = 0;
+    if (!isalpha((unsigned char)*p) && *p != '_') return;
+    while (*p && (isalnum((unsigned char)*p) || strchr("_.[]", *p))) p++;
+    if (p[0] != ':' || p[1] != ' ' || (size_t)(p - msg) >= n) return;
+    memcpy(path, msg, (size_t)(p - msg));
+    path[p - msg] = 0;
+}
+
+static json_t *problem_json(unsigned status, const char *detail, const char *instance)
+{
+    char path[200];
+    json_t *o = json_object();
+    if (!o) return NULL;
+    json_object_set_new(o, "type", json_string("about:blank"));
+    json_object_set_new(o, "title", json_string(status_title(status)));
+    json_object_set_new(o, "status", json_integer(status));
+    json_t *d = json_string(detail);
+    json_object_set_new(o, "detail", d ? d : json_string("(message not UTF-8)"));
+    json_t *in = json_string(instance);
+    if (in) json_object_set_new(o, "instance", in);
+    message_path(detail, path, sizeof path);
+    if (path[0]) json_object_set_new(o, "path", json_string(path));
+    return o;
+}
+
+static enum MHD_Result problem(conn *c, unsigned status, const char *detail, const char *retry,
+                               const char *allow)
+{
+    json_t *o = problem_json(status, detail, c->path);
+    char *s = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
+    json_decref(o);
+    if (!s) return MHD_NO;
+    hdr hs[] = {{MHD_HTTP_HEADER_RETRY_AFTER, retry}, {MHD_HTTP_HEADER_ALLOW, allow}};
+    return respond(c, status, "application/problem+json", s, strlen(s), 0, hs, 2);
+}
+
+static void iso_time(double t, char *out, size_t n)
+{
+    time_t s = (time_t)t;
+    struct tm tm;
+    gmtime_r(&s, &tm);
+    size_t k = strftime(out, n, "%Y-%m-%dT%H:%M:%S", &tm);
+    snprintf(out + k, n - k, ".%03dZ", (int)((t - (double)s) * 1000));
+}
+
+static json_t *time_or_null(double t)
+{
+    char b[40];
+    if (t <= 0) return json_null();
+    iso_time(t, b, sizeof b);
+    return json_string(b);
+}
+
+static json_t *job_json(const job_info *ji)
+{
+    char url[100];
+    json_t *o = json_object();
+    if (!o) return NULL;
+    json_object_set_new(o, "id", json_string(ji->id));
+    json_object_set_new(o, "kind", json_string(ji->kind));
+    json_object_set_new(o, "state", json_string(job_state_name(ji->state)));
+    json_object_set_new(o, "hash", json_string(ji->hash));
+    json_object_set_new(o, "created", time_or_null(ji->created));
+    json_object_set_new(o, "started", time_or_null(ji->started));
+    json_object_set_new(o, "finished", time_or_null(ji->finished));
+    json_t *p = json_object();
+    json_object_set_new(p, "stage", json_string(ji->stage));
+    json_object_set_new(p, "fraction", json_real(ji->fraction));
+    json_object_set_new(o, "progress", p);
+    if (ji->state == JOB_FAILED) {
+        snprintf(url, sizeof url, "/v1/jobs/%s", ji->id);
+        json_object_set_new(o, "error", problem_json((unsigned)ji->error_status, ji->error, url));
+    }
+    if (ji->state == JOB_DONE) {
+        snprintf(url, sizeof url, "/v1/results/%s", ji->hash);
+        json_object_set_new(o, "result", json_string(url));
+    }
+    return o;
+}
+
+static void info_from_store(const store_job *sj, job_info *ji)
+{
+    memset(ji, 0, sizeof *ji);
+    memcpy(ji->id, sj->id, sizeof ji->id);
+    memcpy(ji->hash, sj->hash, sizeof ji->hash);
+    memcpy(ji->kind, sj->kind, sizeof ji->kind);
+    ji->state = sj->state;
+    ji->created = sj->created;
+    ji->started = sj->started;
+    ji->finished = sj->finished;
+    snprintf(ji->stage, sizeof ji->stage, "%s",
+             sj->state == JOB_QUEUED    ? "queued"
+             : sj->state == JOB_RUNNING ? "running"
+                                        : "done");
+    ji->fraction = sj->state == JOB_DONE ? 1 : 0;
+    ji->error_status = sj->error_status;
+    if (sj->error) snprintf(ji->error, sizeof ji->error, "%s", sj->error);
+}
+
+/* A result body (taken) with its cache headers. */
+static enum MHD_Result respond_result(conn *c, const char *hash, char *body, size_t len,
+                                      const char *job_id, const char *cache)
+{
+    char etag[70], loc[100], applied[40];
+    snprintf(etag, sizeof etag, "\"%s\"", hash);
+    snprintf(loc, sizeof loc, "/v1/results/%s", hash);
+    snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
+    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
+                {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
+                {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
+                {"X-Cellar-Job", job_id},
+                {"X-Cellar-Cache", cache},
+                {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
+    return respond(c, 200, "application/json", body, len, 0, hs, sizeof hs / sizeof *hs);
+}
+
+static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
+{
+    char loc[100], applied[40];
+    snprintf(loc, sizeof loc, "/v1/jobs/%s", ji->id);
+    snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
+    hdr hs[] = {{MHD_HTTP_HEADER_LOCATION, loc},
+                {MHD_HTTP_HEADER_RETRY_AFTER, "1"},
+                {"X-Cellar-Job", ji->id},
+                {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
+    return respond_json(c, 202, job_json(ji), hs, sizeof hs / sizeof *hs);
+}
+
+/* The answer to a POST once its job is known (and any wait is over). */
+static enum MHD_Result answer_job(conn *c, job *j)
+{
+    job_info ji;
+    engine_info(c->h->e, j, &ji);
+    snprintf(c->job_id, sizeof c->job_id, "%s", ji.id);
+    if (ji.state == JOB_DONE) {
+        size_t n;
+        const char *r = engine_result(c->h->e, j, &n);
+        char *b = r ? malloc(n + 1) : NULL;
+        if (!b) return problem(c, 503, "out of memory", "5", NULL);
+        memcpy(b, r, n + 1);
+        return respond_result(c, ji.hash, b, n, ji.id, "miss");
+    }
+    if (ji.state == JOB_FAILED) return problem(c, (unsigned)ji.error_status, ji.error, NULL, NULL);
+    if (ji.state == JOB_CANCELED) return problem(c, 409, "the job was canceled", NULL, NULL);
+    return respond_accepted(c, &ji);
+}
+
+/* ---- routes ------------------------------------------------------------------------------ */
+
+static int is_hex(const char *s, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isdigit((unsigned char)s[i]) && !(s[i] >= 'a' && s[i] <= 'f')) return 0;
+    return s[n] == 0 || s[n] == '/';
+}
+
+/* The route of a path, with the id or hash it names copied into id. */
+static metrics_route classify(const char *url, char *id)
+{
+    id[0] = 0;
+    if (!strcmp(url, "/")) return ROUTE_INDEX;
+    if (!strcmp(url, "/healthz")) return ROUTE_HEALTHZ;
+    if (!strcmp(url, "/readyz")) return ROUTE_READYZ;
+    if (!strcmp(url, "/metrics")) return ROUTE_METRICS;
+    if (!strcmp(url, "/openapi.json")) return ROUTE_OPENAPI;
+    if (!strcmp(url, "/v1/jobs")) return ROUTE_JOBS;
+    if (!strncmp(url, "/v1/jobs/", 9) && strlen(url) >= 41 && is_hex(url + 9, 32)) {
+        memcpy(id, url + 9, 32);
+        id[32] = 0;
+        if (url[41] == 0) return ROUTE_JOB;
+        if (!strcmp(url + 41, "/result")) return ROUTE_JOB_RESULT;
+        return ROUTE_OTHER;
+    }
+    if (!strncmp(url, "/v1/results/", 12) && strlen(url) == 76 && is_hex(url + 12, 64)) {
+        memcpy(id, url + 12, 65);
+        return ROUTE_RESULT;
+    }
+    return ROUTE_OTHER;
+}
+
+static const char index_html[] =
+    "<!doctype html><html lang=en><meta charset=utf-8><title>cellar</title>\n"
+    "<style>body{font:15px system-ui;margin:2em;max-width:60em}textarea{width:100%;height:12em;"
+    "font:13px monospace}pre{background:#f4f4f4;padding:1em;overflow:auto;max-height:30em}"
+    "</style>\n<h1>cellar</h1><p>Post line segments; get the cell complex (LAR). API: "
+    "<a href=/openapi.json>/openapi.json</a>, <a href=/metrics>/metrics</a>.</p>\n"
+    "<textarea id=req>{\"kind\":\"lines\",\"lines\":[[[0,0],[6,0]],[[0,4],[10,4]],[[0,0],[0,4]"
+    "],[[3,0],[3,4]],[[6,0],[6,8]],[[3,2],[6,2]],[[10,0],[10,8]],[[0,8],[10,8]]]}</textarea>\n"
+    "<p><button id=go>Compute</button> <span id=st></span></p><pre id=out></pre>\n<script>\n"
+    "document.getElementById('go').onclick=async()=>{const st=document.getElementById('st'),"
+    "out=document.getElementById('out');st.textContent='working…';try{const r=await fetch("
+    "'/v1/jobs',{method:'POST',headers:{'Content-Type':'application/json','Prefer':'wait=30'},"
+    "body:document.getElementById('req').value});const t=await r.text();st.textContent=r.status"
+    "+' '+r.statusText;try{const j=JSON.parse(t);if(j.stats)st.textContent+=' — '+j.stats.V+' "
+    "vertices, '+j.stats.E+' edges, '+j.stats.F+' faces';out.textContent=JSON.stringify(j,null,1)"
+    "}catch(e){out.textContent=t}}catch(e){st.textContent=String(e)}};\n</script>\n";
+
+static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id)
+{
+    char err[256];
+    char *body = NULL;
+    size_t len = 0;
+    store *st = c->h->st;
+    int rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
+    if (rc == STORE_NOTFOUND)
+        return problem(c, 404,
+                       job_id ? "the result was evicted from the cache: post the request again"
+                              : "no result with this hash",
+                       NULL, NULL);
+    if (rc) return problem(c, 503, err, "5", NULL);
+    return respond_result(c, hash, body, len, job_id, "hit");
+}
+
+static enum MHD_Result route_result(conn *c)
+{
+    char etag[70];
+    const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
+    snprintf(etag, sizeof etag, "\"%s\"", c->id);
+    if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
+        char err[256];
+        int rc = c->h->st->ops->result_exists(c->h->st, c->id, err, sizeof err);
+        if (rc == STORE_OK) {
+            hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
+                        {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"}};
+            return respond(c, 304, NULL, NULL, 0, 1, hs, 2);
+        }
+    }
+    return get_result(c, c->id, NULL);
+}
+
+static enum MHD_Result route_job(conn *c, int want_result)
+{
+    char err[256];
+    job_info ji;
+    job *j = engine_find(c->h->e, c->id);
+    snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
+    if (j) {
+        engine_info(c->h->e, j, &ji);
+        if (want_result && ji.state == JOB_DONE) {
+            enum MHD_Result r = answer_job(c, j);
+            engine_release(c->h->e, j);
+            return r;
+        }
+        engine_release(c->h->e, j);
+    } else {
+        store_job sj = {0};
+        int rc = c->h->st->ops->job_get(c->h->st, c->id, &sj, err, sizeof err);
+        if (rc == STORE_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
+        if (rc) return problem(c, 503, err, "5", NULL);
+        info_from_store(&sj, &ji);
+        store_job_clear(&sj);
+    }
+    if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);
+    switch (ji.state) {
+    case JOB_DONE:
+        return get_result(c, ji.hash, ji.id);
+    case JOB_FAILED:
+        return problem(c, (unsigned)ji.error_status, ji.error, NULL, NULL);
+    case JOB_CANCELED:
+        return problem(c, 409, "the job was canceled", NULL, NULL);
+    default:
+        return problem(c, 409, "the job has not finished yet", "1", NULL);
+    }
+}
+
+static enum MHD_Result route_cancel(conn *c)
+{
+    char err[256];
+    job_info ji;
+    snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
+    int rc = engine_cancel(c->h->e, c->id, &ji);
+    if (rc == ENG_OK) return respond_json(c, 200, job_json(&ji), NULL, 0);
+    if (rc == 2) return problem(c, 409, "the job has already ended", NULL, NULL);
+    store_job sj = {0};
+    rc = c->h->st->ops->job_get(c->h->st, c->id, &sj, err, sizeof err);
+    if (rc == STORE_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
+    if (rc) return problem(c, 503, err, "5", NULL);
+    store_job_clear(&sj);
+    return problem(c, 409, "the job has already ended", NULL, NULL);
+}
+
+/* Prefer: wait=N (RFC 7240): the seconds asked for, or -1. */
+static double prefer_wait(struct MHD_Connection *mc)
+{
+    const char *p = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_PREFER);
+    while (p && *p) {
+        while (*p == ' ' || *p == ',' || *p == '\t') p++;
+        if (!strncasecmp(p, "wait", 4)) {
+            const char *q = p + 4;
+            while (*q == ' ') q++;
+            if (*q == '=') {
+                q++;
+                while (*q == ' ') q++;
+                if (*q == '"') q++;
+                char *end;
+                double w = strtod(q, &end);
+                if (end != q && w >= 0 && w < 1e9) return w;
+            }
+        }
+        p = strchr(p, ',');
+    }
+    return -1;
+}
+
+static void wake_conn(void *ctx)
+{
+    conn *c = ctx;
+    MHD_resume_connection(c->mc);
+}
+
+static int json_content_type(struct MHD_Connection *mc)
+{
+    const char *t = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (!t) return 0;
+    while (*t == ' ') t++;
+    if (strncasecmp(t, "application/json", 16) != 0) return 0;
+    return t[16] == 0 || t[16] == ';' || t[16] == ' ';
+}
+
+static enum MHD_Result route_submit(conn *c)
+{
+    char err[256], hash[65];
+    api_error ae = {0};
+    char *canon = NULL;
+    size_t clen = 0;
+    const char *kind = NULL;
+    http_server *h = c->h;
+
+    if (c->too_large) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
+                 (unsigned long long)h->cfg->max_body);
+        return problem(c, 413, msg, NULL, NULL);
+    }
+    int rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
+    free(c->body);
+    c->body = NULL;
+    if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL, NULL);
+    engine_hash(canon, clen, hash);
+
+    /* a cached result costs one lookup */
+    char *body = NULL;
+    size_t len = 0;
+    int hit = h->st->ops->result_get(h->st, hash, &body, &len, err, sizeof err);
+    metrics_cache(h->m, hit == STORE_OK);
+    if (hit == STORE_OK) {
+        free(canon);
+        return respond_result(c, hash, body, len, NULL, "hit");
+    }
+    job *j = NULL;
+    int coalesced = 0;
+    rc = engine_submit(h->e, canon, clen, kind, hash, &j, &coalesced, err, sizeof err);
+    free(canon);
+    if (rc == ENG_FULL) return problem(c, 503, "the job queue is full: try again later", "5", NULL);
+    if (rc == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
+    if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
+
+    double wait = prefer_wait(c->mc);
+    if (wait > h->cfg->max_wait) wait = h->cfg->max_wait;
+    if (wait <= 0) {
+        enum MHD_Result r = answer_job(c, j);
+        engine_release(h->e, j);
+        return r;
+    }
+    c->wait_applied = wait;
+    c->j = j;
+    c->waiting = 1;
+    MHD_suspend_connection(c->mc);
+    if (engine_wait(h->e, j, engine_now() + wait, wake_conn, c) == 1)
+        MHD_resume_connection(c->mc); /* ended meanwhile: answer at once */
+    return MHD_YES;
+}
+
+static enum MHD_Result route_metrics(conn *c)
+{
+    metrics_gauges g = {0};
+    char err[256];
+    engine_gauges(c->h->e, &g.queued, &g.running, &g.queue_capacity, &g.draining);
+    if (c->h->st->ops->result_stats(c->h->st, &g.cache_results, &g.cache_bytes, err, sizeof err))
+        log_kv(LOG_WARN, "store: result_stats failed", "error", err, NULL);
+    g.cache_budget = c->h->cfg->cache_bytes;
+    size_t len;
+    char *s = metrics_render(c->h->m, &g, &len);
+    if (!s) return MHD_NO;
+    return respond(c, 200, "text/plain; version=0.0.4; charset=utf-8", s, len, 0, NULL, 0);
+}
+
+static enum MHD_Result status_json(conn *c, unsigned status, const char *value)
+{
+    json_t *o = json_object();
+    json_object_set_new(o, "status", json_string(value));
+    return respond_json(c, status, o, NULL, 0);
+}
+
+static enum MHD_Result dispatch(conn *c)
+{
+    const char *m = c->method;
+    int get = !strcmp(m, "GET") || !strcmp(m, "HEAD");
+    switch (c->route) {
+    case ROUTE_INDEX:
+        if (!get) break;
+        return respond(c, 200, "text/html; charset=utf-8", (char *)index_html,
+                       sizeof index_html - 1, 1, NULL, 0);
+    case ROUTE_HEALTHZ:
+        if (!get) break;
+        return status_json(c, 200, "ok");
+    case ROUTE_READYZ:
+        if (!get) break;
+        return atomic_load(&c->h->draining) ? status_json(c, 503, "draining")
+                                            : status_json(c, 200, "ready");
+    case ROUTE_METRICS:
+        if (!get) break;
+        return route_metrics(c);
+    case ROUTE_OPENAPI:
+        if (!get) break;
+        return respond(c, 200, "application/json", (char *)cellar_openapi, cellar_openapi_len, 1,
+                       NULL, 0);
+    case ROUTE_JOBS:
+        if (strcmp(m, "POST")) return problem(c, 405, "use POST", NULL, "POST");
+        return route_submit(c);
+    case ROUTE_JOB:
+        if (get) return route_job(c, 0);
+        if (!strcmp(m, "DELETE")) return route_cancel(c);
+        return problem(c, 405, "use GET or DELETE", NULL, "GET, HEAD, DELETE");
+    case ROUTE_JOB_RESULT:
+        if (get) return route_job(c, 1);
+        return problem(c, 405, "use GET", NULL, "GET, HEAD");
+    case ROUTE_RESULT:
+        if (get) return route_result(c);
+        return problem(c, 405, "use GET", NULL, "GET, HEAD");
+    default:
+        return problem(c, 404, "no such resource", NULL, NULL);
+    }
+    return problem(c, 405, "use GET", NULL, "GET, HEAD");
+}
+
+static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *url,
+                              const char *method, const char *version, const char *upload,
+                              size_t *upload_size, void **con_cls)
+{
+    (void)version;
+    http_server *h = cls;
+    conn *c = *con_cls;
+    if (!c) { /* headers are in: early answers before any body is read */
+        c = calloc(1, sizeof *c);
+        if (!c) return MHD_NO;
+        *con_cls = c;
+        c->h = h;
+        c->mc = mc;
+        c->t0 = engine_now();
+        snprintf(c->method, sizeof c->method, "%s", method);
+        snprintf(c->path, sizeof c->path, "%s", url);
+        c->route = classify(url, c->id);
+        if (c->route == ROUTE_JOBS && !strcmp(method, "POST")) {
+            if (atomic_load(&h->draining))
+                return problem(c, 503, "the service is shutting down", "5", NULL);
+            const char *cl =
+                MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+            if (cl && strtoull(cl, NULL, 10) > h->cfg->max_body) {
+                char msg[128];
+                snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
+                         (unsigned long long)h->cfg->max_body);
+                return problem(c, 413, msg, NULL, NULL);
+            }
+            if (!json_content_type(mc))
+                return problem(c, 415, "the body must be application/json", NULL, NULL);
+        }
+        return MHD_YES;
+    }
+    if (*upload_size) { /* a piece of the body */
+        size_t n = *upload_size;
+        *upload_size = 0;
+        if (c->status || c->too_large) return MHD_YES; /* answered already, or discarding */
+        if (c->route != ROUTE_JOBS) return MHD_YES;    /* bodies of other routes are ignored */
+        if (c->len + n > h->cfg->max_body) {
+            c->too_large = 1;
+            free(c->body);
+            c->body = NULL;
+            c->len = c->cap = 0;
+            return MHD_YES;
+        }
+        if (c->len + n + 1 > c->cap) {
+            size_t cap = c->cap ? c->cap : 4096;
+            while (cap < c->len + n + 1) cap *= 2;
+            char *b = realloc(c->body, cap);
+            if (!b) return MHD_NO;
+            c->body = b;
+            c->cap = cap;
+        }
+        memcpy(c->body + c->len, upload, n);
+        c->len += n;
+        return MHD_YES;
+    }
+    if (c->status) return MHD_YES; /* answered before the body (413, 415, 503) */
+    if (c->waiting) {              /* resumed: the job ended or the wait is over */
+        c->waiting = 0;
+        enum MHD_Result r = answer_job(c, c->j);
+        engine_release(h->e, c->j);
+        c->j = NULL;
+        return r;
+    }
+    return dispatch(c);
+}
+
+static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
+                      enum MHD_RequestTerminationCode toe)
+{
+    (void)mc;
+    http_server *h = cls;
+    conn *c = *con_cls;
+    if (!c) return;
+    char ms[32], st[32];
+    metrics_request(h->m, c->route, c->status);
+    log_kv(c->status >= 500 ? LOG_WARN : LOG_INFO, "request", "method", c->method, "path", c->path,
+           "status", log_num(st, c->status), "ms", log_num(ms, (engine_now() - c->t0) * 1e3), "job",
+           c->job_id[0] ? c->job_id : NULL, "closed",
+           toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
+    if (c->j) engine_release(h->e, c->j);
+    free(c->body);
+    free(c);
+    *con_cls = NULL;
+}
+
+static void mhd_log(void *cls, const char *fmt, va_list ap)
+{
+    (void)cls;
+    char msg[512];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    size_t n = strlen(msg);
+    while (n && (msg[n - 1] == '\n' || msg[n - 1] == '\r')) msg[--n] = 0;
+    log_kv(LOG_DEBUG, "libmicrohttpd", "detail", msg, NULL);
+}
+
+http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, char *err,
+                        size_t errlen)
+{
+    struct addrinfo hints = {.ai_family = AF_UNSPEC,
+                             .ai_socktype = SOCK_STREAM,
+                             .ai_flags = AI_NUMERICSERV | AI_PASSIVE};
+    struct addrinfo *ai = NULL;
+    char port[8];
+    snprintf(port, sizeof port, "%u", cfg->port);
+    int gai = getaddrinfo(cfg->host[0] ? cfg->host : NULL, port, &hints, &ai);
+    if (gai) {
+        snprintf(err, errlen, "cannot resolve %s: %s", cfg->host, gai_strerror(gai));
+        return NULL;
+    }
+    http_server *h = calloc(1, sizeof *h);
+    if (!h) {
+        freeaddrinfo(ai);
+        snprintf(err, errlen, "out of memory");
+        return NULL;
+    }
+    h->cfg = cfg;
+    h->e = e;
+    h->st = st;
+    h->m = m;
+    atomic_init(&h->draining, 0);
+    unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
+                     MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
+    h->d = MHD_start_daemon(
+        flags, (uint16_t)cfg->port, NULL, NULL, handle, h, MHD_OPTION_SOCK_ADDR, ai->ai_addr,
+        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)2, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
+        MHD_OPTION_CONNECTION_LIMIT, (unsigned)1000, MHD_OPTION_NOTIFY_COMPLETED, completed, h,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, MHD_OPTION_END);
+    freeaddrinfo(ai);
+    if (!h->d) {
+        snprintf(err, errlen, "cannot listen on %s:%u (in use, or not an address of this host)",
+                 cfg->host, cfg->port);
+        free(h);
+        return NULL;
+    }
+    return h;
+}
+
+unsigned http_port(http_server *h)
+{
+    const union MHD_DaemonInfo *i = MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_BIND_PORT);
+    return i ? i->port : 0;
+}
+
+void http_set_draining(http_server *h)
+{
+    atomic_store(&h->draining, 1);
+}
+
+void http_stop(http_server *h)
+{
+    if (!h) return;
+    MHD_stop_daemon(h->d);
+    free(h);
+}

@@ -1,0 +1,88 @@
+/* main.c — cellard: the daemon.  Loads the configuration, opens the store, starts the engine
+ * (which resumes the jobs a previous run left queued or running) and the HTTP server, then
+ * waits for SIGTERM or SIGINT and drains: /readyz answers 503 and new jobs are refused, the
+ * running jobs finish (up to --drain-timeout), waiting clients get their answer, and the
+ * process exits 0.  Queued jobs stay in the store for the next start.
+ *
+ * Signals are blocked in every thread (the mask is set before any thread starts) and taken
+ * here with sigwait(), so no handler runs inside the daemon's threads.
+ */
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "api/api.h"
+#include "server/config.h"
+#include "server/engine.h"
+#include "server/http.h"
+#include "server/log.h"
+#include "server/metrics.h"
+#include "server/store.h"
+
+int main(int argc, char **argv)
+{
+    config cfg;
+    char err[512];
+    int rc = config_load(&cfg, argc, argv, err, sizeof err);
+    if (rc == 1) return 0;
+    if (rc < 0) {
+        fprintf(stderr, "cellard: %s\n", err);
+        return 2;
+    }
+    log_set_level(cfg.log_level);
+
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &set, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    metrics *m = metrics_new();
+    store *st = m ? store_sqlite_open(cfg.db, cfg.cache_bytes, err, sizeof err) : NULL;
+    if (!st) {
+        log_kv(LOG_ERROR, "cannot open the store", "db", cfg.db, "error", m ? err : "no memory",
+               NULL);
+        metrics_free(m);
+        return 1;
+    }
+    engine_cfg ec = {.st = st,
+                     .m = m,
+                     .workers = cfg.workers,
+                     .job_threads = cfg.job_threads,
+                     .queue_max = cfg.queue};
+    engine *e = engine_start(&ec, err, sizeof err);
+    if (!e) {
+        log_kv(LOG_ERROR, "cannot start the engine", "error", err, NULL);
+        st->ops->close(st);
+        metrics_free(m);
+        return 1;
+    }
+    http_server *h = http_start(&cfg, e, st, m, err, sizeof err);
+    if (!h) {
+        log_kv(LOG_ERROR, "cannot start the HTTP server", "error", err, NULL);
+        engine_drain(e, 0);
+        engine_stop(e);
+        st->ops->close(st);
+        metrics_free(m);
+        return 1;
+    }
+    char port[32], workers[32];
+    snprintf(port, sizeof port, "%u", http_port(h));
+    snprintf(workers, sizeof workers, "%d", cfg.workers);
+    log_kv(LOG_INFO, "listening", "host", cfg.host, "port", port, "db", cfg.db, "workers", workers,
+           "version", API_VERSION, "algorithm", CELLAR_ALGO_VERSION, NULL);
+
+    int sig = 0;
+    sigwait(&set, &sig);
+    log_kv(LOG_INFO, "draining", "signal", sig == SIGTERM ? "SIGTERM" : "SIGINT", NULL);
+    http_set_draining(h);
+    engine_drain(e, cfg.drain_timeout);
+    http_stop(h);
+    engine_stop(e);
+    st->ops->close(st);
+    metrics_free(m);
+    log_kv(LOG_INFO, "stopped", NULL);
+    return 0;
+}

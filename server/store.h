@@ -1,0 +1,92 @@
+/* store.h — where jobs and results live: one small interface of function pointers, so the
+ * backend can change (SQLite today, in server/store_sqlite.c; PostgreSQL for scale-out later)
+ * without the rest of the daemon knowing.
+ *
+ * Jobs: one row per accepted job, written when it is accepted, updated when it starts and
+ * when it ends, so that a restart can resume every job that was queued or running.
+ * Results: content-addressed by the request hash (64 hex digits of SHA-256), the result JSON
+ * as bytes, with a total size budget enforced by least-recently-used eviction.
+ *
+ * Threads: every function may be called from any thread at any time; the backend takes care
+ * of its own connections and locks (SQLite: one connection per thread).
+ * Errors: 0 on success, STORE_NOTFOUND when the row is absent, STORE_ERR on failure with a
+ * message in err (errlen bytes).  Strings passed in are borrowed; strings and buffers
+ * returned are malloc'd and the caller frees them (store_job_clear for a store_job).
+ */
+#ifndef CELLAR_STORE_H
+#define CELLAR_STORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+enum { STORE_OK = 0, STORE_NOTFOUND = 1, STORE_ERR = -1 };
+
+typedef enum job_state {
+    JOB_QUEUED = 0,
+    JOB_RUNNING = 1,
+    JOB_DONE = 2,
+    JOB_FAILED = 3,
+    JOB_CANCELED = 4
+} job_state;
+
+/* "queued", "running", "done", "failed", "canceled" */
+const char *job_state_name(job_state s);
+
+typedef struct store_job {
+    char id[33];   /* 32 hex digits */
+    char hash[65]; /* request hash, 64 hex digits */
+    char kind[16]; /* "lines", "svg", "solids", ... */
+    job_state state;
+    double created, started, finished; /* Unix seconds; 0 when not yet */
+    int error_status;                  /* HTTP status of a failed job (422, 500, ...), else 0 */
+    char *error;                       /* message of a failed job, or NULL */
+    char *request; /* the canonical request JSON (needed to resume after a restart) */
+    size_t request_len;
+} store_job;
+
+void store_job_clear(store_job *j); /* frees error and request, zeroes the struct */
+
+typedef struct store store;
+
+typedef struct store_ops {
+    /* Inserts a new job (state, times and request as given). */
+    int (*job_insert)(store *s, const store_job *j, char *err, size_t errlen);
+    /* Sets state and the matching time (started for RUNNING, finished for the end states);
+     * error_status/error only for JOB_FAILED (error may be NULL otherwise). */
+    int (*job_set_state)(store *s, const char *id, job_state st, double when, int error_status,
+                         const char *error, char *err, size_t errlen);
+    /* Reads one job (request included). */
+    int (*job_get)(store *s, const char *id, store_job *out, char *err, size_t errlen);
+    /* Calls fn for every job in state QUEUED or RUNNING, oldest first (request included;
+     * the job is cleared after fn returns).  fn returns non-zero to stop early. */
+    int (*jobs_unfinished)(store *s, int (*fn)(void *ctx, store_job *j), void *ctx, char *err,
+                           size_t errlen);
+    /* Deletes finished jobs (DONE, FAILED, CANCELED) that ended before `before`; returns
+     * how many in *n. */
+    int (*jobs_prune)(store *s, double before, size_t *n, char *err, size_t errlen);
+    /* Stores a result (replacing one with the same hash), then evicts least recently used
+     * results until the total is within the budget (the new one is never evicted). */
+    int (*result_put)(store *s, const char *hash, const char *body, size_t len, char *err,
+                      size_t errlen);
+    /* Reads a result and marks it used now. */
+    int (*result_get)(store *s, const char *hash, char **body, size_t *len, char *err,
+                      size_t errlen);
+    /* Whether a result exists, without reading it or marking it. */
+    int (*result_exists)(store *s, const char *hash, char *err, size_t errlen);
+    /* Number of results and their total bytes. */
+    int (*result_stats)(store *s, size_t *count, uint64_t *bytes, char *err, size_t errlen);
+    /* A consistency check of the backend (SQLite: PRAGMA integrity_check). */
+    int (*check)(store *s, char *err, size_t errlen);
+    /* Closes every connection and frees s. */
+    void (*close)(store *s);
+} store_ops;
+
+struct store {
+    const store_ops *ops;
+};
+
+/* Opens (creating or migrating) the SQLite store at path with a result budget in bytes
+ * (0: unlimited).  Returns NULL with a message in err on failure. */
+store *store_sqlite_open(const char *path, uint64_t budget_bytes, char *err, size_t errlen);
+
+#endif

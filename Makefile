@@ -94,7 +94,7 @@ $(BUILD)/bench/geos_polygonize: bench/geos_polygonize.c tests/ref/geos_ref.c tes
 
 run: deps
 	@$(MAKE) --no-print-directory all
-	@scripts/run.sh $(BUILD)
+	@scripts/run.sh $(BUILD) $(ARGS)
 
 format:
 	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch]

@@ -1,10 +1,8 @@
 #!/bin/sh
-# `make run`: starts the service when it is built (build/cellard, the daemon issue);
-# until then, runs the command-line tool on the seeds' orthogonal example and prints its faces.
+# `make run`: starts the daemon in the foreground with the embedded SQLite default
+# (./cellar.db) on 127.0.0.1:8080; CELLAR_* variables and extra arguments (make run
+# ARGS="--listen 0.0.0.0:8080") override.  Ctrl-C (SIGINT) or SIGTERM drains and stops it.
 set -eu
 B=${1:-build}
-if [ -x "$B/cellard" ]; then
-    exec "$B/cellard" "$@"
-fi
-echo "cellard (the HTTP daemon) is not built yet; running the CLI on tests/cases/orthogonal:" >&2
-"$B/cellar" run tests/cases/orthogonal/request.json
+shift || true
+exec "$B/cellard" "$@"

@@ -1,0 +1,255 @@
+#!/bin/sh
+# t_schemas.sh — the JSON Schemas of schemas/ and the OpenAPI document against real documents:
+# the schemas are valid; every case request and its `cellar run` result validate, and so do
+# random requests with and without options; hand-made documents of every schema that must be
+# accepted are, and hand-made INVALID documents are rejected at the expected JSON path (so the
+# schemas can fail); the invalid requests are refused by `cellar run` too, so the request schema
+# and the C validator agree.
+# Usage: CELLAR_BIN=build/cellar tests/t_schemas.sh   (tests/run.sh sets CELLAR_BIN)
+# Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
+set -u
+BIN=${CELLAR_BIN:-build/cellar}
+case $BIN in /*) ;; *) [ -e "$BIN" ] && BIN="$(pwd)/$BIN" ;; esac # before the cd below
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-python3}
+V="$PY tests/validate.py"
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT INT TERM
+P=0
+F=0
+
+pass() { P=$((P + 1)); echo "ok $1"; }
+fail() { F=$((F + 1)); echo "FAIL $1"; }
+check() {
+    name=$1
+    shift
+    if "$@"; then pass "$name"; else fail "$name"; fi
+}
+# tally WHAT: counts the "ok"/"FAIL" lines of validate.py's output in $T/out as checks
+tally() {
+    n=0
+    while IFS= read -r line; do
+        case $line in
+        "ok "*) pass "$1: ${line#ok }"; n=$((n + 1)) ;;
+        "FAIL "*) fail "$1: ${line#FAIL }"; n=$((n + 1)) ;;
+        esac
+    done <"$T/out"
+    [ "$n" -gt 0 ] || fail "$1: validate.py printed no result ($(head -c 300 "$T/out"))"
+}
+
+if ! $PY -c 'import jsonschema; jsonschema.Draft202012Validator' 2>/dev/null; then
+    echo "FAIL python3 with jsonschema (Draft202012Validator) is needed: apt-get install python3-jsonschema"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+if [ ! -x "$BIN" ]; then
+    echo "FAIL $BIN is not built"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+
+# --- the schemas themselves and the OpenAPI document
+$V --check-all >"$T/out" 2>&1
+rc=$?
+tally "check-all"
+check "check-all exits 0" test "$rc" -eq 0
+
+# --- the case folders: requests and their results
+mkdir "$T/cases"
+for d in tests/cases/*/; do
+    [ -f "$d/request.json" ] || continue
+    name=$(basename "$d")
+    "$BIN" run "$d/request.json" >"$T/cases/$name.result.json" 2>"$T/err" ||
+        fail "cellar run tests/cases/$name: $(head -c 200 "$T/err")"
+done
+$V request tests/cases/*/request.json >"$T/out" 2>&1
+tally "case request"
+$V result "$T"/cases/*.result.json >"$T/out" 2>&1
+tally "case result"
+$V openapi:Result "$T"/cases/*.result.json >"$T/out" 2>&1
+tally "case result (openapi.json)"
+
+# --- random requests, with and without options
+mkdir "$T/gen"
+i=0
+for seed in 1 2 3 4; do
+    for opt in '' '{"operators":true,"keep_dangling":true}' \
+        '{"operators":true,"keep_dangling":true,"exterior_last":true,"precision":0.02}' \
+        '{"fields":["stats","holes"]}' '{"fields":[]}'; do
+        i=$((i + 1))
+        if [ -n "$opt" ]; then
+            "$BIN" gen lines $((40 * seed)) 0.3 "$seed" --options "$opt" >"$T/gen/g$i.request.json"
+        else
+            "$BIN" gen lines $((40 * seed)) 0.3 "$seed" >"$T/gen/g$i.request.json"
+        fi
+        "$BIN" run "$T/gen/g$i.request.json" >"$T/gen/g$i.result.json" 2>"$T/err" ||
+            fail "cellar run gen lines $((40 * seed)) 0.3 $seed $opt: $(head -c 200 "$T/err")"
+        echo "seed $seed ${opt:-no options}" >"$T/gen/g$i.what"
+    done
+done
+$V request "$T"/gen/*.request.json >"$T/out" 2>&1
+tally "gen request"
+$V result "$T"/gen/*.result.json >"$T/out" 2>&1
+tally "gen result"
+check "operators present with options.operators" grep -q '"operators":{"d1":{"shape":\[' "$T/gen/g2.result.json"
+check "fields [] gives {\"dim\":2}" test "$(cat "$T/gen/g5.result.json")" = '{"dim":2}'
+
+# --- hand-made documents that must be accepted
+H=0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef
+J=0f1e2d3c4b5a69788796a5b4c3d2e1f0
+T0='"2025-11-22T06:30:00.123Z"'
+T1='"2025-11-22T06:30:01+01:00"'
+PROB='{"type":"about:blank","title":"Unprocessable Content","status":422,"detail":"lines[17][1]: expected 2 finite numbers","instance":"/v1/jobs","path":"lines[17][1]"}'
+JOB="\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0"
+SQUARE='"V":[[0,0],[0,1],[1,0],[1,1]],"EV":[[0,1],[0,2],[1,3],[2,3]],"FV":[[1,0,2,3]],"FE":[[-1,2,4,-3]],"holes":{},"exterior":[[0,1,3,2]]'
+CSR1='{"shape":[2,1],"indptr":[0,1,2],"indices":[0,0],"data":[-1,1]}'
+CSR0='{"shape":[1,0],"indptr":[0,0],"indices":[],"data":[]}'
+STATS=$(sed -n 's/.*"stats":\({.*}\)}$/\1/p' "$T/cases/orthogonal.result.json")
+check "a stats object to build documents from" test -n "$STATS"
+
+mkdir "$T/good" "$T/bad"
+good() { printf '%s\n' "$3" >"$T/good/$1.$2.json"; }
+good job queued "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+good job running "{$JOB,\"state\":\"running\",\"started\":$T0,\"finished\":null,\"progress\":{\"stage\":\"intersect\",\"fraction\":0.5}}"
+good job done "{$JOB,\"state\":\"done\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"done\",\"fraction\":1},\"result\":\"/v1/results/$H\"}"
+good job done_from_cache "{$JOB,\"state\":\"done\",\"started\":null,\"finished\":$T0,\"progress\":{\"stage\":\"done\",\"fraction\":1},\"result\":\"/v1/results/$H\"}"
+good job failed "{$JOB,\"state\":\"failed\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"snap\",\"fraction\":0},\"error\":$PROB}"
+good job canceled_queued "{$JOB,\"state\":\"canceled\",\"started\":null,\"finished\":$T1,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+good job canceled_running "{$JOB,\"state\":\"canceled\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"faces\",\"fraction\":0.9}}"
+good problem with_path "$PROB"
+good problem without_path '{"type":"about:blank","title":"Service Unavailable","status":503,"detail":"the queue is full","instance":"/v1/jobs"}'
+good problem typed '{"type":"https://cellar.invalid/problems/limit","title":"Beyond a limit","status":422,"detail":"at most 20000000 segments","instance":"/v1/jobs","path":"lines"}'
+good result dim_only '{"dim":2}'
+good result square "{\"dim\":2,$SQUARE}"
+good result stats_only "{\"dim\":2,\"stats\":$STATS}"
+good result operators "{\"dim\":2,\"operators\":{\"d1\":$CSR1,\"d2\":$CSR0}}"
+good result lone_edge '{"dim":2,"V":[[0,0],[1,0]],"EV":[[0,1]],"FV":[[0,1]],"FE":[[]],"holes":{"0":[[0,1]]},"exterior":[[0,1]]}'
+good request minimal '{"kind":"lines","lines":[]}'
+good request all_options '{"kind":"lines","lines":[[[0,0],[1,1]],[[0,1],[1,0]]],"options":{"precision":0.5,"keep_dangling":true,"exterior_last":true,"operators":true,"fields":["V","EV","FV","FE","holes","exterior","stats","operators"]}}'
+good request empty_options '{"kind":"lines","lines":[[[0,0],[1,1]]],"options":{}}'
+good request repeated_fields '{"kind":"lines","lines":[[[-1e9,2.5e-3],[1E3,7]]],"options":{"fields":["V","V"]}}'
+for s in job problem result request; do
+    $V "$s" "$T"/good/$s.*.json >"$T/out" 2>&1
+    tally "accepted"
+done
+for f in "$T"/good/request.*.json; do
+    check "cellar run accepts $(basename "$f")" sh -c "'$BIN' run '$f' >/dev/null 2>&1"
+done
+
+# --- hand-made INVALID documents: each must be rejected at its JSON path
+# bad SCHEMA NAME PATH JSON: PATH is where validate.py must report it ("(document)" for the
+# root, "not JSON" for strict-JSON refusals)
+bad() {
+    printf '%s\n' "$4" >"$T/bad/$1.$2.json"
+    printf '%s\n' "$3" >"$T/bad/$1.$2.want"
+}
+bad result string_in_V 'V[2][1]' "{\"dim\":2,\"V\":[[0,0],[0,1],[1,\"0\"],[1,1]]}"
+bad result negative_edge_index 'EV[1][0]' '{"dim":2,"EV":[[0,1],[-1,2]]}'
+bad result extra_key '(document)' "{\"dim\":2,$SQUARE,\"colour\":\"red\"}"
+bad result no_dim '(document)' "{$SQUARE}"
+bad result dim_3 'dim' '{"dim":3}'
+bad result vertex_3_coords 'V[0]' '{"dim":2,"V":[[0,0,0]]}'
+bad result edge_3_vertices 'EV[0]' '{"dim":2,"EV":[[0,1,2]]}'
+bad result fractional_index 'FV[0][1]' '{"dim":2,"FV":[[0,1.5,2]]}'
+bad result zero_in_FE 'FE[0][2]' '{"dim":2,"FE":[[1,-2,0]]}'
+bad result FE_not_integer 'FE[0][0]' '{"dim":2,"FE":[["1"]]}'
+bad result one_vertex_cycle 'exterior[0]' '{"dim":2,"exterior":[[3]]}'
+bad result holes_key_not_index 'holes' '{"dim":2,"holes":{"face1":[[0,1,2]]}}'
+bad result holes_key_leading_zero 'holes' '{"dim":2,"holes":{"01":[[0,1,2]]}}'
+bad result holes_not_object 'holes' '{"dim":2,"holes":[[[0,1,2]]]}'
+bad result holes_empty_list 'holes.0' '{"dim":2,"holes":{"0":[]}}'
+bad result stats_missing_key 'stats' "{\"dim\":2,\"stats\":$(printf '%s' "$STATS" | sed 's/"blocks":[0-9]*,//')}"
+bad result stats_extra_key 'stats' "{\"dim\":2,\"stats\":$(printf '%s' "$STATS" | sed 's/^{/{"faces":1,/')}"
+bad result stats_negative_count 'stats.V' "{\"dim\":2,\"stats\":$(printf '%s' "$STATS" | sed 's/"V":[0-9]*/"V":-1/')}"
+bad result stats_ms_missing 'stats.ms' "{\"dim\":2,\"stats\":$(printf '%s' "$STATS" | sed 's/"total":[0-9.e-]*//; s/,}/}/')}"
+bad result stats_zero_precision 'stats.precision' "{\"dim\":2,\"stats\":$(printf '%s' "$STATS" | sed 's/"precision":[0-9.e-]*/"precision":0/')}"
+bad result operators_data_2 'operators.d1.data[1]' "{\"dim\":2,\"operators\":{\"d1\":{\"shape\":[2,1],\"indptr\":[0,1,2],\"indices\":[0,0],\"data\":[-1,2]},\"d2\":$CSR0}}"
+bad result operators_no_d2 'operators' "{\"dim\":2,\"operators\":{\"d1\":$CSR1}}"
+bad result operators_shape_1 'operators.d2.shape' "{\"dim\":2,\"operators\":{\"d1\":$CSR1,\"d2\":{\"shape\":[1],\"indptr\":[0],\"indices\":[],\"data\":[]}}}"
+bad result NaN_coordinate 'not JSON' '{"dim":2,"V":[[0,NaN]]}'
+bad job unknown_state 'state' "{$JOB,\"state\":\"paused\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job id_uppercase 'id' "{\"id\":\"0F1E2D3C4B5A69788796A5B4C3D2E1F0\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job hash_short 'hash' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"0123abc\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job created_not_rfc3339 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":\"22/11/2025 06:30\",\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job created_unix_seconds 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":1763793000,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job no_progress '(document)' "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null}"
+bad job fraction_above_1 'progress.fraction' "{$JOB,\"state\":\"running\",\"started\":$T0,\"finished\":null,\"progress\":{\"stage\":\"faces\",\"fraction\":1.5}}"
+bad job failed_without_error '(document)' "{$JOB,\"state\":\"failed\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"snap\",\"fraction\":0}}"
+bad job done_without_result '(document)' "{$JOB,\"state\":\"done\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"done\",\"fraction\":1}}"
+bad job queued_with_result '(document)' "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"result\":\"/v1/results/$H\"}"
+bad job result_wrong_path 'result' "{$JOB,\"state\":\"done\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"done\",\"fraction\":1},\"result\":\"/results/$H\"}"
+bad job running_finished 'finished' "{$JOB,\"state\":\"running\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"faces\",\"fraction\":0.5}}"
+bad job queued_started 'started' "{$JOB,\"state\":\"queued\",\"started\":$T0,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job error_without_status 'error' "{$JOB,\"state\":\"failed\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"snap\",\"fraction\":0},\"error\":{\"type\":\"about:blank\",\"title\":\"x\",\"detail\":\"x\",\"instance\":\"/v1/jobs\"}}"
+bad job extra_key '(document)' "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"priority\":1}"
+bad problem no_status '(document)' '{"type":"about:blank","title":"Not Found","detail":"no such job","instance":"/v1/jobs/x"}'
+bad problem status_200 'status' '{"type":"about:blank","title":"OK","status":200,"detail":"fine","instance":"/v1/jobs"}'
+bad problem status_string 'status' '{"type":"about:blank","title":"Not Found","status":"404","detail":"no such job","instance":"/v1/jobs/x"}'
+bad problem extra_key '(document)' '{"type":"about:blank","title":"Not Found","status":404,"detail":"no such job","instance":"/v1/jobs/x","message":"no such job"}'
+bad problem path_not_string 'path' '{"type":"about:blank","title":"Unprocessable Content","status":422,"detail":"x","instance":"/v1/jobs","path":["lines",17]}'
+bad request unknown_option 'options' '{"kind":"lines","lines":[],"options":{"colour":1}}'
+bad request unknown_key '(document)' '{"kind":"lines","lines":[],"name":"plan"}'
+bad request unknown_kind 'kind' '{"kind":"svg","lines":[]}'
+bad request no_kind '(document)' '{"lines":[[[0,0],[1,1]]]}'
+bad request no_lines '(document)' '{"kind":"lines"}'
+bad request lines_not_array 'lines' '{"kind":"lines","lines":{"0":[[0,0],[1,1]]}}'
+bad request point_3_numbers 'lines[1][1]' '{"kind":"lines","lines":[[[0,0],[1,0]],[[0,0],[1,2,3]]]}'
+bad request point_1_number 'lines[0][0]' '{"kind":"lines","lines":[[[0],[1,0]]]}'
+bad request segment_3_points 'lines[0]' '{"kind":"lines","lines":[[[0,0],[1,0],[2,0]]]}'
+bad request coordinate_string 'lines[0][1][0]' '{"kind":"lines","lines":[[[0,0],["1",0]]]}'
+bad request coordinate_null 'lines[0][1][1]' '{"kind":"lines","lines":[[[0,0],[1,null]]]}'
+bad request coordinate_NaN 'not JSON' '{"kind":"lines","lines":[[[0,0],[1,NaN]]]}'
+bad request precision_0 'options.precision' '{"kind":"lines","lines":[],"options":{"precision":0}}'
+bad request precision_negative 'options.precision' '{"kind":"lines","lines":[],"options":{"precision":-0.001}}'
+bad request precision_string 'options.precision' '{"kind":"lines","lines":[],"options":{"precision":"0.001"}}'
+bad request keep_dangling_string 'options.keep_dangling' '{"kind":"lines","lines":[],"options":{"keep_dangling":"yes"}}'
+bad request operators_number 'options.operators' '{"kind":"lines","lines":[],"options":{"operators":1}}'
+bad request exterior_last_null 'options.exterior_last' '{"kind":"lines","lines":[],"options":{"exterior_last":null}}'
+bad request fields_unknown_name 'options.fields[1]' '{"kind":"lines","lines":[],"options":{"fields":["V","faces"]}}'
+bad request fields_string 'options.fields' '{"kind":"lines","lines":[],"options":{"fields":"V"}}'
+bad request options_array 'options' '{"kind":"lines","lines":[],"options":[]}'
+bad request duplicate_key 'not JSON' '{"kind":"lines","lines":[],"lines":[[[0,0],[1,1]]]}'
+for s in result job problem request; do
+    $V "$s" "$T"/bad/$s.*.json >"$T/out" 2>&1
+    for f in "$T"/bad/$s.*.json; do
+        name=$(basename "$f" .json)
+        want=$(cat "$T/bad/$name.want")
+        line=$(grep -F " $f: " "$T/out" | head -n 1)
+        if grep -q -F -x "ok $s $f" "$T/out"; then
+            fail "rejects $name: it was accepted"
+        elif [ -z "$line" ]; then
+            fail "rejects $name: no verdict ($(head -c 200 "$T/out"))"
+        else
+            got=${line#FAIL "$s" "$f": }
+            got=${got%%: *}
+            if [ "$got" = "$want" ]; then pass "rejects $name at $want"; else fail "rejects $name at $want: $line"; fi
+        fi
+    done
+done
+for f in "$T"/bad/request.*.json; do
+    check "cellar run refuses $(basename "$f" .json) too" sh -c "'$BIN' run '$f' >/dev/null 2>&1; test \$? -eq 1"
+done
+
+# --- validate.py itself
+"$BIN" run tests/cases/orthogonal/request.json | $V result - >"$T/out" 2>&1
+check "validate.py - reads stdin" grep -q -x 'ok result -' "$T/out"
+printf '{"dim":2,"V":[[0,"a"]]}' | $V result - >"$T/out" 2>&1
+check "validate.py - on an invalid document exits 1" test $? -eq 1
+$V result "$T/cases/orthogonal.result.json" "$T/bad/result.string_in_V.json" "$T/cases/empty.result.json" >"$T/out" 2>&1
+rc=$?
+check "validate.py: one invalid file of three exits 1" test "$rc" -eq 1
+check "validate.py: one line per file" test "$(wc -l <"$T/out" | tr -d ' ')" = 3
+check "validate.py: the valid files still pass" test "$(grep -c '^ok result ' "$T/out")" = 2
+printf '{"dim":' >"$T/truncated.json"
+$V result "$T/truncated.json" >"$T/out" 2>&1
+check "validate.py: malformed JSON exits 1" test $? -eq 1
+check "validate.py: malformed JSON says so" grep -q "^FAIL result $T/truncated.json: not JSON" "$T/out"
+$V result "$T/no-such-file.json" >"$T/out" 2>&1
+check "validate.py: a missing file exits 1" test $? -eq 1
+$V nosuchschema "$T/truncated.json" >"$T/out" 2>&1
+check "validate.py: an unknown schema exits 2" test $? -eq 2
+$V >"$T/out" 2>&1
+check "validate.py without arguments exits 2" test $? -eq 2
+
+echo "$P passed, $F failed"
+[ "$F" -eq 0 ]

@@ -147,8 +147,8 @@ static json_t *problem_json(unsigned status, const char *detail, const char *ins
     json_object_set_new(o, "status", json_integer(status));
     json_t *d = json_string(detail);
     json_object_set_new(o, "detail", d ? d : json_string("(message not UTF-8)"));
-    json_t *in = json_string(instance);
-    if (in) json_object_set_new(o, "instance", in);
+    json_t *in = json_string(instance); /* a client's path: may not be UTF-8 */
+    json_object_set_new(o, "instance", in ? in : json_string("(path not UTF-8)"));
     message_path(detail, path, sizeof path);
     if (path[0]) json_object_set_new(o, "path", json_string(path));
     return o;

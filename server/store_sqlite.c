@@ -1,0 +1,1028 @@
+/* store_sqlite.c — the SQLite backend of the store (server/store.h): one database file in WAL
+ * mode holding the jobs and the result cache.
+ *
+ * Schema (PRAGMA user_version is the number of migrations applied; sq_migrations below):
+ *   jobs(id TEXT PRIMARY KEY, hash, kind, state, created, started, finished, error_status,
+ *        error, request BLOB)                                   index jobs_state(state)
+ *   results(hash TEXT PRIMARY KEY, bytes, created, last_used)   index results_last_used
+ *   result_bodies(hash TEXT PRIMARY KEY, body BLOB)             one per results row
+ *   result_totals(id = 0, count, bytes)                         one row
+ * Times are Unix seconds as REAL, NULL for "not yet" (0 in a store_job); error_status and
+ * error are NULL unless the job failed.
+ *
+ * Why the bodies have a table of their own: SQLite rewrites a whole record on any UPDATE, so
+ * with the body in the results row every result_get rewrote the body to move last_used (a
+ * 1 MiB result: 6.2 ms a get, against 0.4 ms to read it; 64 KiB: 226 us against 22 us), and
+ * held the write lock meanwhile.  Apart, the mark is a ~20 us update of a small row, and the
+ * body is read outside any write transaction.  A put costs one more upsert (1 KiB results:
+ * ~110 us a put with its eviction, against ~70 us in one table).
+ *
+ * Invariants:
+ *   - result_totals equals COUNT(*), SUM(bytes) of results at every commit: three triggers
+ *     (after insert, after delete, after update of bytes) keep it, in the same transaction as
+ *     the change, whoever makes it.  result_put thus reads the total in ~2 us where SUM(bytes)
+ *     costs ~400 us over 5000 results (and grows with them; with the bodies inline it walked
+ *     their overflow pages: 2-37 ms).  Rows are written with upserts, never INSERT OR REPLACE,
+ *     whose implicit delete fires no trigger.
+ *   - A result_bodies row exists for every results row and no other (a trigger deletes the
+ *     body with its row; result_put writes both in one transaction).  check() verifies this
+ *     and the totals.
+ *   - After a committed result_put with a budget, SUM(bytes) <= budget, or the new result is
+ *     the only one left (a result larger than the budget is still stored, alone).
+ *   - last_used stamps handed out by one store strictly increase (sq_stamp: the clock, or a
+ *     microsecond past the last stamp when the clock has not moved or went back), so "least
+ *     recently used" is a total order even within one clock tick.
+ *   - Every write is one BEGIN IMMEDIATE ... COMMIT, rolled back on any error: a writer takes
+ *     the write lock up front and waits for it under the busy timeout, instead of failing to
+ *     upgrade a read lock half-way (SQLITE_BUSY_SNAPSHOT).  Readers never block in WAL mode.
+ *
+ * Threads: any thread may call any op.  Each thread gets its own connection (opened on its
+ * first call, SQLITE_OPEN_NOMUTEX, with its own cache of prepared statements), found through a
+ * pthread key whose destructor closes it when the thread exits.  The store keeps the list of
+ * all its connections under mu, so that close() can finalize and close every one of them;
+ * close() must therefore not run while another thread still uses the store or is exiting
+ * after having used it (the daemon closes the store after joining its workers and stopping
+ * the HTTP server).  The ops never hold mu while talking to SQLite.  A callback of
+ * jobs_unfinished() runs with no statement active, so it may call any op of the same store.
+ *
+ * Ownership: strings passed in are borrowed; error, request and body handed out are malloc'd
+ * copies, NUL-terminated one byte past their length, which the caller frees.
+ */
+#include "server/store.h"
+
+#include <pthread.h>
+#include <sqlite3.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define SQ_BUSY_MS 5000 /* how long a connection waits for a lock before SQLITE_BUSY */
+
+/* The schema, one script per version: sq_migrations[v] takes a database from version v to
+ * v + 1.  Append, never edit: a database in the field has run the scripts it has run. */
+static const char *const sq_migrations[] = {
+    /* 0 -> 1 */
+    "CREATE TABLE jobs(id TEXT PRIMARY KEY, hash TEXT NOT NULL, kind TEXT NOT NULL,"
+    " state INTEGER NOT NULL, created REAL, started REAL, finished REAL,"
+    " error_status INTEGER, error TEXT, request BLOB NOT NULL);"
+    "CREATE INDEX jobs_state ON jobs(state);"
+    "CREATE TABLE results(hash TEXT PRIMARY KEY, bytes INTEGER NOT NULL, created REAL,"
+    " last_used REAL);"
+    "CREATE INDEX results_last_used ON results(last_used);"
+    "CREATE TABLE result_bodies(hash TEXT PRIMARY KEY, body BLOB NOT NULL);"
+    "CREATE TRIGGER results_body_delete AFTER DELETE ON results BEGIN"
+    " DELETE FROM result_bodies WHERE hash = OLD.hash; END;"
+    "CREATE TABLE result_totals(id INTEGER PRIMARY KEY CHECK (id = 0),"
+    " count INTEGER NOT NULL, bytes INTEGER NOT NULL);"
+    "INSERT INTO result_totals VALUES(0, 0, 0);"
+    "CREATE TRIGGER results_total_insert AFTER INSERT ON results BEGIN"
+    " UPDATE result_totals SET count = count + 1, bytes = bytes + NEW.bytes; END;"
+    "CREATE TRIGGER results_total_delete AFTER DELETE ON results BEGIN"
+    " UPDATE result_totals SET count = count - 1, bytes = bytes - OLD.bytes; END;"
+    "CREATE TRIGGER results_total_update AFTER UPDATE OF bytes ON results BEGIN"
+    " UPDATE result_totals SET bytes = bytes - OLD.bytes + NEW.bytes; END;",
+};
+#define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
+
+/* The statements every connection prepares once (on first use) and keeps. */
+enum sq_sql {
+    SQ_BEGIN,
+    SQ_COMMIT,
+    SQ_ROLLBACK,
+    SQ_JOB_INSERT,
+    SQ_JOB_SET_STATE,
+    SQ_JOB_GET,
+    SQ_JOBS_UNFINISHED,
+    SQ_JOBS_PRUNE,
+    SQ_RESULT_UPSERT,
+    SQ_BODY_UPSERT,
+    SQ_RESULT_TOTALS,
+    SQ_RESULT_EVICT_ONE,
+    SQ_BODY_GET,
+    SQ_RESULT_TOUCH,
+    SQ_RESULT_EXISTS,
+    SQ_INTEGRITY,
+    SQ_TOTALS_RECOUNT,
+    SQ_NSQL
+};
+
+static const char *const sq_sql_text[SQ_NSQL] = {
+    [SQ_BEGIN] = "BEGIN IMMEDIATE",
+    [SQ_COMMIT] = "COMMIT",
+    [SQ_ROLLBACK] = "ROLLBACK",
+    [SQ_JOB_INSERT] =
+        "INSERT INTO jobs(id, hash, kind, state, created, started, finished,"
+        " error_status, error, request) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
+    /* ?3 started, ?4 finished: NULL keeps the old value */
+    [SQ_JOB_SET_STATE] = "UPDATE jobs SET state = ?2, started = coalesce(?3, started),"
+                         " finished = coalesce(?4, finished), error_status = ?5, error = ?6"
+                         " WHERE id = ?1",
+    [SQ_JOB_GET] = "SELECT id, hash, kind, state, created, started, finished, error_status, error,"
+                   " request FROM jobs WHERE id = ?1",
+    [SQ_JOBS_UNFINISHED] = "SELECT id FROM jobs WHERE state IN (?1, ?2) ORDER BY created, rowid",
+    [SQ_JOBS_PRUNE] = "DELETE FROM jobs WHERE state IN (?1, ?2, ?3) AND finished < ?4",
+    [SQ_RESULT_UPSERT] = "INSERT INTO results(hash, bytes, created, last_used)"
+                         " VALUES(?1, ?2, ?3, ?3) ON CONFLICT(hash) DO UPDATE SET"
+                         " bytes = excluded.bytes, created = excluded.created,"
+                         " last_used = excluded.last_used",
+    [SQ_BODY_UPSERT] = "INSERT INTO result_bodies(hash, body) VALUES(?1, ?2)"
+                       " ON CONFLICT(hash) DO UPDATE SET body = excluded.body",
+    [SQ_RESULT_TOTALS] = "SELECT count, bytes FROM result_totals WHERE id = 0",
+    /* the least recently used result but ?1 (the one just stored), through the index */
+    [SQ_RESULT_EVICT_ONE] = "DELETE FROM results WHERE rowid = (SELECT rowid FROM results"
+                            " WHERE hash <> ?1 ORDER BY last_used LIMIT 1)",
+    [SQ_BODY_GET] = "SELECT body FROM result_bodies WHERE hash = ?1",
+    [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
+    [SQ_RESULT_EXISTS] = "SELECT 1 FROM results WHERE hash = ?1",
+    [SQ_INTEGRITY] = "PRAGMA integrity_check",
+    /* the totals row, the table's count and sum, the bodies, the bodies of the right size */
+    [SQ_TOTALS_RECOUNT] = "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
+                          " (SELECT coalesce(sum(bytes), 0) FROM results),"
+                          " (SELECT count(*) FROM result_bodies),"
+                          " (SELECT count(*) FROM results r JOIN result_bodies b"
+                          "  ON b.hash = r.hash AND length(b.body) = r.bytes)"
+                          " FROM result_totals t WHERE t.id = 0",
+};
+
+typedef struct sq_store sq_store;
+
+typedef struct sq_conn {
+    sqlite3 *db;                 /* used by one thread only (or by close) */
+    sqlite3_stmt *stmt[SQ_NSQL]; /* prepared on first use, finalized when the conn closes */
+    sq_store *owner;             /* the store whose list holds this conn */
+    struct sq_conn *prev, *next; /* in owner->conns; guarded by owner->mu */
+} sq_conn;
+
+struct sq_store {
+    store base;         /* first member: a store * of this backend is a sq_store * */
+    char *path;         /* the database file */
+    uint64_t budget;    /* result bytes allowed; 0: unlimited */
+    pthread_key_t key;  /* the calling thread's sq_conn */
+    pthread_mutex_t mu; /* guards conns and last_stamp */
+    sq_conn *conns;     /* every open connection of this store */
+    double last_stamp;  /* the latest last_used handed out (or found at open) */
+    int key_made;       /* key is valid (for the cleanup path of open) */
+};
+
+static void sq_errf(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void sq_errf(char *err, size_t errlen, const char *fmt, ...)
+{
+    va_list ap;
+    if (!err || !errlen) return;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+/* "sqlite WHERE: SQLite's message of the connection's last error" */
+static void sq_dberr(char *err, size_t errlen, const char *where, sqlite3 *db)
+{
+    sq_errf(err, errlen, "sqlite %s: %s", where, db ? sqlite3_errmsg(db) : "out of memory");
+}
+
+/* An error while opening path; the first read of a file that is no database says so. */
+static void sq_open_err(char *err, size_t errlen, const char *path, sqlite3 *db, int rc)
+{
+    if ((rc & 0xff) == SQLITE_NOTADB)
+        sq_errf(err, errlen, "sqlite open %s: not a SQLite database (%s)", path,
+                sqlite3_errmsg(db));
+    else
+        sq_errf(err, errlen, "sqlite open %s: %s", path, sqlite3_errmsg(db));
+}
+
+/* Resets a statement after use and drops its bindings (borrowed buffers bound SQLITE_STATIC
+ * must not outlive the call that bound them). */
+static void sq_done(sqlite3_stmt *st)
+{
+    if (!st) return;
+    sqlite3_reset(st);
+    sqlite3_clear_bindings(st);
+}
+
+static sqlite3_stmt *sq_stmt(sq_conn *c, enum sq_sql id, const char *where, char *err,
+                             size_t errlen)
+{
+    if (!c->stmt[id] && sqlite3_prepare_v3(c->db, sq_sql_text[id], -1, SQLITE_PREPARE_PERSISTENT,
+                                           &c->stmt[id], NULL) != SQLITE_OK) {
+        sq_dberr(err, errlen, where, c->db);
+        c->stmt[id] = NULL;
+        return NULL;
+    }
+    return c->stmt[id];
+}
+
+/* Runs a statement that returns no row (BEGIN, COMMIT, ...). */
+static int sq_run(sq_conn *c, enum sq_sql id, const char *where, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE && rc != SQLITE_ROW) sq_dberr(err, errlen, where, c->db);
+    sq_done(st);
+    return rc == SQLITE_DONE || rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+}
+
+/* Rolls back the open transaction, if any (SQLite ends some on its own, e.g. on SQLITE_FULL). */
+static void sq_rollback(sq_conn *c)
+{
+    if (!sqlite3_get_autocommit(c->db)) sq_run(c, SQ_ROLLBACK, "rollback", NULL, 0);
+}
+
+static void sq_conn_close(sq_conn *c)
+{
+    if (!c) return;
+    for (int i = 0; i < SQ_NSQL; i++) sqlite3_finalize(c->stmt[i]);
+    sqlite3_close_v2(c->db);
+    free(c);
+}
+
+/* The pthread key's destructor: a thread that used the store is exiting. */
+static void sq_conn_release(void *p)
+{
+    sq_conn *c = p;
+    sq_store *s = c->owner;
+    pthread_mutex_lock(&s->mu);
+    if (c->prev)
+        c->prev->next = c->next;
+    else
+        s->conns = c->next;
+    if (c->next) c->next->prev = c->prev;
+    pthread_mutex_unlock(&s->mu);
+    sq_conn_close(c);
+}
+
+/* Opens a connection to s->path (creating the file if create), with this backend's per-connection
+ * settings; not yet registered anywhere.  *out is the conn, or NULL on failure. */
+static int sq_conn_open(sq_store *s, int create, sq_conn **out, char *err, size_t errlen)
+{
+    int rc, flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX | (create ? SQLITE_OPEN_CREATE : 0);
+    sq_conn *c = calloc(1, sizeof *c);
+    *out = NULL;
+    if (!c) {
+        sq_errf(err, errlen, "sqlite open: out of memory");
+        return STORE_ERR;
+    }
+    c->owner = s;
+    if (sqlite3_open_v2(s->path, &c->db, flags, NULL) != SQLITE_OK) {
+        sq_errf(err, errlen, "sqlite open %s: %s", s->path,
+                c->db ? sqlite3_errmsg(c->db) : "out of memory");
+        goto fail;
+    }
+    sqlite3_extended_result_codes(c->db, 1);
+    sqlite3_busy_timeout(c->db, SQ_BUSY_MS);
+    /* synchronous=NORMAL: in WAL mode a commit survives a crash of the process, and the last
+     * ones may be lost only with the machine (fsync at checkpoints, not at every commit). */
+    rc = sqlite3_exec(c->db, "PRAGMA synchronous=NORMAL", NULL, NULL, NULL);
+    if (rc != SQLITE_OK) {
+        sq_open_err(err, errlen, s->path, c->db, rc);
+        goto fail;
+    }
+    *out = c;
+    return STORE_OK;
+fail:
+    sq_conn_close(c);
+    return STORE_ERR;
+}
+
+/* The calling thread's connection, opened and registered on its first call. */
+static sq_conn *sq_conn_get(sq_store *s, char *err, size_t errlen)
+{
+    sq_conn *c = pthread_getspecific(s->key);
+    if (c) return c;
+    if (sq_conn_open(s, 0, &c, err, errlen)) return NULL;
+    if (pthread_setspecific(s->key, c) != 0) {
+        sq_errf(err, errlen, "sqlite open: pthread_setspecific failed");
+        sq_conn_close(c);
+        return NULL;
+    }
+    pthread_mutex_lock(&s->mu);
+    c->next = s->conns;
+    if (s->conns) s->conns->prev = c;
+    s->conns = c;
+    pthread_mutex_unlock(&s->mu);
+    return c;
+}
+
+/* A last_used stamp: now, but strictly after every stamp this store handed out before. */
+static double sq_stamp(sq_store *s)
+{
+    struct timespec ts;
+    double t;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    t = (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+    pthread_mutex_lock(&s->mu);
+    if (t <= s->last_stamp) t = s->last_stamp + 1e-6; /* > 4 ulps at today's Unix times */
+    s->last_stamp = t;
+    pthread_mutex_unlock(&s->mu);
+    return t;
+}
+
+static void sq_bind_time(sqlite3_stmt *st, int i, double t)
+{
+    if (t != 0)
+        sqlite3_bind_double(st, i, t);
+    else
+        sqlite3_bind_null(st, i);
+}
+
+static double sq_column_time(sqlite3_stmt *st, int col)
+{
+    return sqlite3_column_type(st, col) == SQLITE_NULL ? 0 : sqlite3_column_double(st, col);
+}
+
+/* Copies a text column into dst[cap]; -1 when it does not fit (NULL reads as ""). */
+static int sq_column_fixed(sqlite3_stmt *st, int col, char *dst, size_t cap)
+{
+    const unsigned char *t = sqlite3_column_text(st, col);
+    size_t n = (size_t)sqlite3_column_bytes(st, col);
+    if (!t) n = 0;
+    if (n >= cap) return -1;
+    if (n) memcpy(dst, t, n);
+    dst[n] = 0;
+    return 0;
+}
+
+/* A malloc'd copy of a blob or text column, NUL-terminated past its length; NULL in *out for
+ * an SQL NULL when null_ok.  -1 on out of memory. */
+static int sq_column_dup(sqlite3_stmt *st, int col, int null_ok, char **out, size_t *len)
+{
+    const void *p;
+    size_t n;
+    *out = NULL;
+    if (len) *len = 0;
+    if (null_ok && sqlite3_column_type(st, col) == SQLITE_NULL) return 0;
+    p = sqlite3_column_blob(st, col);
+    n = (size_t)sqlite3_column_bytes(st, col);
+    if (!p && n) return -1;
+    *out = malloc(n + 1);
+    if (!*out) return -1;
+    if (n) memcpy(*out, p, n);
+    (*out)[n] = 0;
+    if (len) *len = n;
+    return 0;
+}
+
+/* Binds a NUL-terminated string that must fit a store_job field of cap bytes. */
+static int sq_bind_field(sqlite3_stmt *st, int i, const char *v, size_t cap, const char *what,
+                         char *err, size_t errlen)
+{
+    size_t n = strnlen(v, cap);
+    if (n == cap) {
+        sq_errf(err, errlen, "sqlite job_insert: %s is not a string of at most %zu bytes", what,
+                cap - 1);
+        return STORE_ERR;
+    }
+    sqlite3_bind_text(st, i, v, (int)n, SQLITE_STATIC);
+    return STORE_OK;
+}
+
+static int sq_state_valid(int st)
+{
+    return st >= JOB_QUEUED && st <= JOB_CANCELED;
+}
+
+/* ---- jobs ---- */
+
+static int sq_job_insert(store *base, const store_job *j, char *err, size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = NULL;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (!c) return STORE_ERR;
+    if (!sq_state_valid((int)j->state)) {
+        sq_errf(err, errlen, "sqlite job_insert: unknown state %d", (int)j->state);
+        return STORE_ERR;
+    }
+    if (!j->request && j->request_len) {
+        sq_errf(err, errlen, "sqlite job_insert: request_len %zu with no request", j->request_len);
+        return STORE_ERR;
+    }
+    if (sq_run(c, SQ_BEGIN, "job_insert: begin", err, errlen)) return STORE_ERR;
+    st = sq_stmt(c, SQ_JOB_INSERT, "job_insert", err, errlen);
+    if (!st) goto fail;
+    if (sq_bind_field(st, 1, j->id, sizeof j->id, "id", err, errlen) ||
+        sq_bind_field(st, 2, j->hash, sizeof j->hash, "hash", err, errlen) ||
+        sq_bind_field(st, 3, j->kind, sizeof j->kind, "kind", err, errlen))
+        goto fail;
+    sqlite3_bind_int(st, 4, (int)j->state);
+    sq_bind_time(st, 5, j->created);
+    sq_bind_time(st, 6, j->started);
+    sq_bind_time(st, 7, j->finished);
+    if (j->error_status) sqlite3_bind_int(st, 8, j->error_status);
+    if (j->error) sqlite3_bind_text(st, 9, j->error, -1, SQLITE_STATIC);
+    /* a non-NULL pointer even for 0 bytes: a NULL one would bind SQL NULL */
+    sqlite3_bind_blob64(st, 10, j->request ? j->request : "", j->request_len, SQLITE_STATIC);
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "job_insert", c->db);
+        goto fail;
+    }
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_COMMIT, "job_insert: commit", err, errlen)) goto fail;
+    return STORE_OK;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+static int sq_job_set_state(store *base, const char *id, job_state state, double when,
+                            int error_status, const char *error, char *err, size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = NULL;
+    int rc = STORE_ERR;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (!c) return STORE_ERR;
+    if (!sq_state_valid((int)state)) {
+        sq_errf(err, errlen, "sqlite job_set_state: unknown state %d", (int)state);
+        return STORE_ERR;
+    }
+    if (sq_run(c, SQ_BEGIN, "job_set_state: begin", err, errlen)) return STORE_ERR;
+    st = sq_stmt(c, SQ_JOB_SET_STATE, "job_set_state", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_int(st, 2, (int)state);
+    if (state == JOB_RUNNING)
+        sq_bind_time(st, 3, when);
+    else if (state != JOB_QUEUED)
+        sq_bind_time(st, 4, when);
+    if (state == JOB_FAILED) {
+        if (error_status) sqlite3_bind_int(st, 5, error_status);
+        if (error) sqlite3_bind_text(st, 6, error, -1, SQLITE_STATIC);
+    }
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "job_set_state", c->db);
+        goto fail;
+    }
+    rc = sqlite3_changes(c->db) ? STORE_OK : STORE_NOTFOUND;
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_COMMIT, "job_set_state: commit", err, errlen)) goto fail;
+    return rc;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* Reads job id into *out on connection c (no transaction: one statement is one snapshot). */
+static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, size_t errlen)
+{
+    sqlite3_stmt *st;
+    int rc;
+    memset(out, 0, sizeof *out);
+    st = sq_stmt(c, SQ_JOB_GET, "job_get", err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_DONE) {
+        sq_done(st);
+        return STORE_NOTFOUND;
+    }
+    if (rc != SQLITE_ROW) {
+        sq_dberr(err, errlen, "job_get", c->db);
+        goto fail;
+    }
+    if (sq_column_fixed(st, 0, out->id, sizeof out->id) ||
+        sq_column_fixed(st, 1, out->hash, sizeof out->hash) ||
+        sq_column_fixed(st, 2, out->kind, sizeof out->kind)) {
+        sq_errf(err, errlen, "sqlite job_get %s: id, hash or kind too long in the database", id);
+        goto fail;
+    }
+    out->state = (job_state)sqlite3_column_int(st, 3);
+    if (!sq_state_valid((int)out->state)) {
+        sq_errf(err, errlen, "sqlite job_get %s: unknown state %d in the database", id,
+                (int)out->state);
+        goto fail;
+    }
+    out->created = sq_column_time(st, 4);
+    out->started = sq_column_time(st, 5);
+    out->finished = sq_column_time(st, 6);
+    out->error_status = sqlite3_column_int(st, 7);
+    if (sq_column_dup(st, 8, 1, &out->error, NULL) ||
+        sq_column_dup(st, 9, 0, &out->request, &out->request_len)) {
+        sq_errf(err, errlen, "sqlite job_get %s: out of memory", id);
+        goto fail;
+    }
+    sq_done(st);
+    return STORE_OK;
+fail:
+    sq_done(st);
+    store_job_clear(out);
+    return STORE_ERR;
+}
+
+static int sq_job_get(store *base, const char *id, store_job *out, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) {
+        memset(out, 0, sizeof *out);
+        return STORE_ERR;
+    }
+    return sq_job_read(c, id, out, err, errlen);
+}
+
+/* Two passes: the ids in order first, then one job_get per id, so that no statement is active
+ * while fn runs (fn may call the store) and a job that ended or went away in between is
+ * skipped.  The ids of a restart's backlog are small: 33 bytes a job. */
+static int sq_jobs_unfinished(store *base, int (*fn)(void *ctx, store_job *j), void *ctx, char *err,
+                              size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = NULL;
+    char(*ids)[33] = NULL;
+    size_t n = 0, cap = 0;
+    store_job j = {0};
+    int rc;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (!c) return STORE_ERR;
+    st = sq_stmt(c, SQ_JOBS_UNFINISHED, "jobs_unfinished", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_int(st, 1, JOB_QUEUED);
+    sqlite3_bind_int(st, 2, JOB_RUNNING);
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        if (n == cap) {
+            size_t ncap = cap ? 2 * cap : 64;
+            void *p = realloc(ids, ncap * sizeof *ids);
+            if (!p) {
+                sq_errf(err, errlen, "sqlite jobs_unfinished: out of memory");
+                goto fail;
+            }
+            ids = p;
+            cap = ncap;
+        }
+        if (sq_column_fixed(st, 0, ids[n], sizeof ids[n])) {
+            sq_errf(err, errlen, "sqlite jobs_unfinished: an id too long in the database");
+            goto fail;
+        }
+        n++;
+    }
+    if (rc != SQLITE_DONE) {
+        sq_dberr(err, errlen, "jobs_unfinished", c->db);
+        goto fail;
+    }
+    sq_done(st);
+    st = NULL;
+    for (size_t i = 0; i < n; i++) {
+        int stop;
+        rc = sq_job_read(c, ids[i], &j, err, errlen);
+        if (rc == STORE_NOTFOUND) continue;
+        if (rc != STORE_OK) goto fail;
+        if (j.state != JOB_QUEUED && j.state != JOB_RUNNING) {
+            store_job_clear(&j);
+            continue;
+        }
+        stop = fn(ctx, &j);
+        store_job_clear(&j);
+        if (stop) break;
+    }
+    free(ids);
+    return STORE_OK;
+fail:
+    sq_done(st);
+    free(ids);
+    return STORE_ERR;
+}
+
+static int sq_jobs_prune(store *base, double before, size_t *n, char *err, size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = NULL;
+    sqlite3_int64 changed;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (n) *n = 0;
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, "jobs_prune: begin", err, errlen)) return STORE_ERR;
+    st = sq_stmt(c, SQ_JOBS_PRUNE, "jobs_prune", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_int(st, 1, JOB_DONE);
+    sqlite3_bind_int(st, 2, JOB_FAILED);
+    sqlite3_bind_int(st, 3, JOB_CANCELED);
+    sqlite3_bind_double(st, 4, before);
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "jobs_prune", c->db);
+        goto fail;
+    }
+    changed = sqlite3_changes64(c->db);
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_COMMIT, "jobs_prune: commit", err, errlen)) goto fail;
+    if (n) *n = (size_t)changed;
+    return STORE_OK;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* ---- results ---- */
+
+/* Reads result_totals (inside the caller's transaction, or as one snapshot). */
+static int sq_totals(sq_conn *c, const char *where, size_t *count, uint64_t *bytes, char *err,
+                     size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOTALS, where, err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        if (count) *count = (size_t)sqlite3_column_int64(st, 0);
+        if (bytes) *bytes = (uint64_t)sqlite3_column_int64(st, 1);
+    } else if (rc == SQLITE_DONE) {
+        sq_errf(err, errlen, "sqlite %s: the result_totals row is missing", where);
+    } else {
+        sq_dberr(err, errlen, where, c->db);
+    }
+    sq_done(st);
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+}
+
+/* Deletes the least recently used results but `keep` until the total is within budget or
+ * `keep` is alone; inside the caller's transaction.  Each round is an O(1) read of the total
+ * and one indexed delete. */
+static int sq_evict(sq_conn *c, uint64_t budget, const char *keep, char *err, size_t errlen)
+{
+    for (;;) {
+        uint64_t total;
+        sqlite3_stmt *st;
+        int rc;
+        if (sq_totals(c, "result_put: total", NULL, &total, err, errlen)) return STORE_ERR;
+        if (total <= budget) return STORE_OK;
+        st = sq_stmt(c, SQ_RESULT_EVICT_ONE, "result_put: evict", err, errlen);
+        if (!st) return STORE_ERR;
+        sqlite3_bind_text(st, 1, keep, -1, SQLITE_STATIC);
+        rc = sqlite3_step(st);
+        if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put: evict", c->db);
+        sq_done(st);
+        if (rc != SQLITE_DONE) return STORE_ERR;
+        if (sqlite3_changes(c->db) == 0) return STORE_OK; /* keep alone exceeds the budget */
+    }
+}
+
+/* Runs one of the two upserts of result_put, its hash in ?1. */
+static int sq_upsert(sq_conn *c, enum sq_sql id, const char *hash, const char *body, size_t len,
+                     double stamp, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, id, "result_put", err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    if (id == SQ_BODY_UPSERT) {
+        sqlite3_bind_blob64(st, 2, body ? body : "", len, SQLITE_STATIC);
+    } else {
+        sqlite3_bind_int64(st, 2, (sqlite3_int64)len);
+        sqlite3_bind_double(st, 3, stamp);
+    }
+    rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put", c->db);
+    sq_done(st);
+    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
+}
+
+static int sq_result_put(store *base, const char *hash, const char *body, size_t len, char *err,
+                         size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (!c) return STORE_ERR;
+    if (!body && len) {
+        sq_errf(err, errlen, "sqlite result_put: %zu bytes with no body", len);
+        return STORE_ERR;
+    }
+    if (sq_run(c, SQ_BEGIN, "result_put: begin", err, errlen)) return STORE_ERR;
+    /* the stamp is taken under the write lock: stamps of puts follow the commit order */
+    if (sq_upsert(c, SQ_RESULT_UPSERT, hash, NULL, len, sq_stamp(s), err, errlen) ||
+        sq_upsert(c, SQ_BODY_UPSERT, hash, body, len, 0, err, errlen))
+        goto fail;
+    if (s->budget && sq_evict(c, s->budget, hash, err, errlen)) goto fail;
+    if (sq_run(c, SQ_COMMIT, "result_put: commit", err, errlen)) goto fail;
+    return STORE_OK;
+fail:
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* The body is read outside any transaction (readers run in parallel under WAL), then the
+ * small results row is marked in a write transaction of its own.  A result evicted in between
+ * is still returned: it was there when read, and its content is fixed by its hash. */
+static int sq_result_get(store *base, const char *hash, char **body, size_t *len, char *err,
+                         size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = NULL;
+    char *copy = NULL;
+    size_t n = 0;
+    int rc;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    *body = NULL;
+    if (len) *len = 0;
+    if (!c) return STORE_ERR;
+    st = sq_stmt(c, SQ_BODY_GET, "result_get", err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_DONE) {
+        sq_done(st);
+        return STORE_NOTFOUND;
+    }
+    if (rc != SQLITE_ROW) {
+        sq_dberr(err, errlen, "result_get", c->db);
+        goto fail;
+    }
+    if (sq_column_dup(st, 0, 0, &copy, &n)) {
+        sq_errf(err, errlen, "sqlite result_get: out of memory");
+        goto fail;
+    }
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_BEGIN, "result_get: begin", err, errlen)) goto fail;
+    st = sq_stmt(c, SQ_RESULT_TOUCH, "result_get: mark used", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 2, sq_stamp(s));
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "result_get: mark used", c->db);
+        goto fail;
+    }
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_COMMIT, "result_get: commit", err, errlen)) goto fail;
+    *body = copy;
+    if (len) *len = n;
+    return STORE_OK;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    free(copy);
+    return STORE_ERR;
+}
+
+static int sq_result_exists(store *base, const char *hash, char *err, size_t errlen)
+{
+    sqlite3_stmt *st;
+    int rc;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    st = sq_stmt(c, SQ_RESULT_EXISTS, "result_exists", err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) sq_dberr(err, errlen, "result_exists", c->db);
+    sq_done(st);
+    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
+}
+
+static int sq_result_stats(store *base, size_t *count, uint64_t *bytes, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (count) *count = 0;
+    if (bytes) *bytes = 0;
+    if (!c) return STORE_ERR;
+    return sq_totals(c, "result_stats", count, bytes, err, errlen);
+}
+
+/* PRAGMA integrity_check (every line it reports but "ok", joined with "; "), then the
+ * result_totals row against a recount of the table, in one snapshot. */
+static int sq_check(store *base, char *err, size_t errlen)
+{
+    sqlite3_stmt *st;
+    int rc, bad = 0;
+    size_t used = 0;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    st = sq_stmt(c, SQ_INTEGRITY, "check", err, errlen);
+    if (!st) return STORE_ERR;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        const char *line = (const char *)sqlite3_column_text(st, 0);
+        if (line && strcmp(line, "ok") == 0) continue;
+        if (err && errlen && used + 1 < errlen) {
+            int k = snprintf(err + used, errlen - used, "%s%s",
+                             bad ? "; " : "sqlite check: ", line ? line : "(null)");
+            used += k > 0 ? (size_t)k : 0;
+            if (used >= errlen) used = errlen - 1;
+        }
+        bad = 1;
+    }
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "check", c->db);
+    sq_done(st);
+    if (rc != SQLITE_DONE || bad) return STORE_ERR;
+    st = sq_stmt(c, SQ_TOTALS_RECOUNT, "check: totals", err, errlen);
+    if (!st) return STORE_ERR;
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        sqlite3_int64 n0 = sqlite3_column_int64(st, 0), b0 = sqlite3_column_int64(st, 1);
+        sqlite3_int64 n1 = sqlite3_column_int64(st, 2), b1 = sqlite3_column_int64(st, 3);
+        sqlite3_int64 nb = sqlite3_column_int64(st, 4), nok = sqlite3_column_int64(st, 5);
+        if (n0 != n1 || b0 != b1) {
+            sq_errf(err, errlen,
+                    "sqlite check: result_totals says %lld results of %lld bytes, the table "
+                    "holds %lld of %lld",
+                    (long long)n0, (long long)b0, (long long)n1, (long long)b1);
+            bad = 1;
+        } else if (nb != n1 || nok != n1) {
+            sq_errf(err, errlen,
+                    "sqlite check: %lld results, %lld bodies, %lld of them of the recorded size",
+                    (long long)n1, (long long)nb, (long long)nok);
+            bad = 1;
+        }
+    } else if (rc == SQLITE_DONE) {
+        sq_errf(err, errlen, "sqlite check: the result_totals row is missing");
+        bad = 1;
+    } else {
+        sq_dberr(err, errlen, "check: totals", c->db);
+    }
+    sq_done(st);
+    return rc != SQLITE_ROW || bad ? STORE_ERR : STORE_OK;
+}
+
+/* Finalizes and closes every connection of the store, on whichever thread opened it (see the
+ * file comment: no other thread may be using the store). */
+static void sq_close(store *base)
+{
+    sq_store *s = (sq_store *)base;
+    sq_conn *c;
+    if (!s) return;
+    /* first, so that no thread exiting from now on runs the destructor on a conn freed here */
+    if (s->key_made) pthread_key_delete(s->key);
+    pthread_mutex_lock(&s->mu);
+    c = s->conns;
+    s->conns = NULL;
+    pthread_mutex_unlock(&s->mu);
+    while (c) {
+        sq_conn *next = c->next;
+        sq_conn_close(c);
+        c = next;
+    }
+    pthread_mutex_destroy(&s->mu);
+    free(s->path);
+    free(s);
+}
+
+static const store_ops sq_ops = {
+    .job_insert = sq_job_insert,
+    .job_set_state = sq_job_set_state,
+    .job_get = sq_job_get,
+    .jobs_unfinished = sq_jobs_unfinished,
+    .jobs_prune = sq_jobs_prune,
+    .result_put = sq_result_put,
+    .result_get = sq_result_get,
+    .result_exists = sq_result_exists,
+    .result_stats = sq_result_stats,
+    .check = sq_check,
+    .close = sq_close,
+};
+
+/* ---- opening ---- */
+
+/* PRAGMA user_version into *v (the first read of the file: a file that is no database fails
+ * here); a version this cellard does not know is an error too. */
+static int sq_user_version(sq_conn *c, const char *path, int *v, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(c->db, "PRAGMA user_version", -1, &st, NULL);
+    if (rc == SQLITE_OK) rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW)
+        *v = sqlite3_column_int(st, 0);
+    else
+        sq_open_err(err, errlen, path, c->db, rc);
+    sqlite3_finalize(st);
+    if (rc != SQLITE_ROW) return STORE_ERR;
+    if (*v > SQ_VERSION) {
+        sq_errf(err, errlen,
+                "sqlite open %s: database schema version %d is newer than this cellard "
+                "(which knows versions up to %d)",
+                path, *v, SQ_VERSION);
+        return STORE_ERR;
+    }
+    if (*v < 0) {
+        sq_errf(err, errlen, "sqlite open %s: database schema version %d is not ours", path, *v);
+        return STORE_ERR;
+    }
+    return STORE_OK;
+}
+
+static int sq_exec(sq_conn *c, const char *sql, const char *where, char *err, size_t errlen)
+{
+    char *msg = NULL;
+    if (sqlite3_exec(c->db, sql, NULL, NULL, &msg) == SQLITE_OK) return STORE_OK;
+    sq_errf(err, errlen, "sqlite %s: %s", where, msg ? msg : sqlite3_errmsg(c->db));
+    sqlite3_free(msg);
+    return STORE_ERR;
+}
+
+/* Brings the schema to SQ_VERSION, all migrations in one transaction.  The version is read
+ * again under the write lock: another process may have migrated in between. */
+static int sq_migrate(sq_conn *c, const char *path, char *err, size_t errlen)
+{
+    char sql[64], where[64];
+    int v;
+    if (sq_user_version(c, path, &v, err, errlen)) return STORE_ERR;
+    if (v == SQ_VERSION) return STORE_OK;
+    if (sq_exec(c, "BEGIN IMMEDIATE", "open: begin", err, errlen)) return STORE_ERR;
+    if (sq_user_version(c, path, &v, err, errlen)) goto fail;
+    for (; v < SQ_VERSION; v++) {
+        snprintf(where, sizeof where, "open: migration to schema version %d", v + 1);
+        if (sq_exec(c, sq_migrations[v], where, err, errlen)) goto fail;
+    }
+    snprintf(sql, sizeof sql, "PRAGMA user_version = %d", SQ_VERSION);
+    if (sq_exec(c, sql, "open: user_version", err, errlen) ||
+        sq_exec(c, "COMMIT", "open: commit", err, errlen))
+        goto fail;
+    return STORE_OK;
+fail:
+    if (!sqlite3_get_autocommit(c->db)) sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL);
+    return STORE_ERR;
+}
+
+/* Switches the file to WAL (a property of the file, kept across opens). */
+static int sq_wal(sq_conn *c, const char *path, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    int ok = 0, rc = sqlite3_prepare_v2(c->db, "PRAGMA journal_mode=WAL", -1, &st, NULL);
+    if (rc == SQLITE_OK) rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        const char *mode = (const char *)sqlite3_column_text(st, 0);
+        ok = mode && strcmp(mode, "wal") == 0;
+        if (!ok)
+            sq_errf(err, errlen, "sqlite open %s: journal_mode=WAL refused (mode is %s)", path,
+                    mode ? mode : "unknown");
+    } else {
+        sq_errf(err, errlen, "sqlite open %s: journal_mode=WAL: %s", path, sqlite3_errmsg(c->db));
+    }
+    sqlite3_finalize(st);
+    return ok ? STORE_OK : STORE_ERR;
+}
+
+/* The largest last_used in the file, so stamps keep increasing across a restart even if the
+ * clock went back. */
+static int sq_load_stamp(sq_conn *c, sq_store *s, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(c->db, "SELECT max(last_used) FROM results", -1, &st, NULL);
+    if (rc == SQLITE_OK) rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW)
+        s->last_stamp = sq_column_time(st, 0);
+    else
+        sq_errf(err, errlen, "sqlite open %s: %s", s->path, sqlite3_errmsg(c->db));
+    sqlite3_finalize(st);
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+}
+
+store *store_sqlite_open(const char *path, uint64_t budget_bytes, char *err, size_t errlen)
+{
+    sq_store *s = NULL;
+    sq_conn *c = NULL;
+    int mu_made = 0, v;
+    if (!path || !*path) {
+        sq_errf(err, errlen, "sqlite open: no path");
+        return NULL;
+    }
+    if (!sqlite3_threadsafe()) {
+        sq_errf(err, errlen, "sqlite open: this libsqlite3 was built without thread support");
+        return NULL;
+    }
+    s = calloc(1, sizeof *s);
+    if (!s || !(s->path = strdup(path))) {
+        sq_errf(err, errlen, "sqlite open %s: out of memory", path);
+        goto fail;
+    }
+    s->base.ops = &sq_ops;
+    s->budget = budget_bytes;
+    if (pthread_mutex_init(&s->mu, NULL) != 0) {
+        sq_errf(err, errlen, "sqlite open %s: pthread_mutex_init failed", path);
+        goto fail;
+    }
+    mu_made = 1;
+    if (pthread_key_create(&s->key, sq_conn_release) != 0) {
+        sq_errf(err, errlen, "sqlite open %s: pthread_key_create failed", path);
+        goto fail;
+    }
+    s->key_made = 1;
+    if (sq_conn_open(s, 1, &c, err, errlen)) goto fail;
+    /* the version first: refuse a newer database (or a file that is no database) before
+     * changing anything in it */
+    if (sq_user_version(c, path, &v, err, errlen) || sq_wal(c, path, err, errlen) ||
+        sq_migrate(c, path, err, errlen) || sq_load_stamp(c, s, err, errlen))
+        goto fail;
+    if (pthread_setspecific(s->key, c) != 0) {
+        sq_errf(err, errlen, "sqlite open %s: pthread_setspecific failed", path);
+        goto fail;
+    }
+    s->conns = c; /* this thread's connection from now on */
+    return &s->base;
+fail:
+    sq_conn_close(c);
+    if (s) {
+        if (s->key_made) pthread_key_delete(s->key);
+        if (mu_made) pthread_mutex_destroy(&s->mu);
+        free(s->path);
+        free(s);
+    }
+    return NULL;
+}

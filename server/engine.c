@@ -190,7 +190,7 @@ static void run_job(engine *e, job *j)
         log_kv(LOG_ERROR, "store: result_put failed", "job", j->id, "error", err, NULL);
         final = JOB_FAILED;
         rc = 503;
-        snprintf(ae.msg, sizeof ae.msg, "the result could not be stored: %s", err);
+        snprintf(ae.msg, sizeof ae.msg, "the result could not be stored: %.200s", err);
     }
     pthread_mutex_lock(&e->lock);
     int canceled_meanwhile = j->state == JOB_CANCELED;

@@ -86,7 +86,10 @@ struct store {
 };
 
 /* Opens (creating or migrating) the SQLite store at path with a result budget in bytes
- * (0: unlimited).  Returns NULL with a message in err on failure. */
-store *store_sqlite_open(const char *path, uint64_t budget_bytes, char *err, size_t errlen);
+ * (0: unlimited).  touch_seconds: result_get marks a result used only when its mark is older
+ * than this (0: on every read; the daemon uses 10, so a hot result does not take the write
+ * lock on every read).  Returns NULL with a message in err on failure. */
+store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, char *err,
+                         size_t errlen);
 
 #endif

@@ -40,7 +40,7 @@ static int fx_init(fx *f)
 static int fx_open(fx *f, uint64_t budget)
 {
     f->err[0] = 0;
-    f->s = store_sqlite_open(f->path, budget, f->err, sizeof f->err);
+    f->s = store_sqlite_open(f->path, budget, 0, f->err, sizeof f->err);
     return f->s ? 0 : -1;
 }
 
@@ -778,11 +778,11 @@ TEST(store_open_refuses_garbage)
     /* a file in a directory that does not exist */
     snprintf(dirpath, sizeof dirpath, "%s/no/such/dir/store.db", f.dir);
     f.err[0] = 0;
-    store *s = store_sqlite_open(dirpath, 0, f.err, sizeof f.err);
+    store *s = store_sqlite_open(dirpath, 0, 0, f.err, sizeof f.err);
     CHECK(!s && strstr(f.err, "unable to open") && strstr(f.err, dirpath), "message: %s", f.err);
     if (s) s->ops->close(s);
     f.err[0] = 0;
-    CHECK(!store_sqlite_open("", 0, f.err, sizeof f.err) && f.err[0], "empty path");
+    CHECK(!store_sqlite_open("", 0, 0, f.err, sizeof f.err) && f.err[0], "empty path");
     fx_done(&f);
 }
 
@@ -972,4 +972,41 @@ TEST(store_close_with_live_threads)
     REQUIRE(fx_open(&f, 0) == 0, "reopen: %s", f.err);
     CHECK(get_is(f.s, 42, 10) == 1, "the thread's result is not in the file");
     fx_done(&f);
+}
+
+/* With a touch interval, reading a result whose mark is fresh does not move it (no write):
+ * eviction then takes the result put first even though it was read last.  With 0 the read
+ * moves it, and the other one goes. */
+TEST(store_touch_interval)
+{
+    double intervals[2] = {3600, 0};
+    const char *evicted[2] = {"a", "b"};
+    char body[100];
+    memset(body, 'x', sizeof body);
+    for (int t = 0; t < 2; t++) {
+        fx f;
+        REQUIRE(fx_init(&f) == 0, "mkdtemp");
+        f.s = store_sqlite_open(f.path, 250, intervals[t], f.err, sizeof f.err);
+        REQUIRE(f.s, "open: %s", f.err);
+        char ha[65], hb[65], hc[65];
+        memset(ha, 'a', 64);
+        memset(hb, 'b', 64);
+        memset(hc, 'c', 64);
+        ha[64] = hb[64] = hc[64] = 0;
+        CHECK(f.s->ops->result_put(f.s, ha, body, sizeof body, f.err, sizeof f.err) == 0, "put a");
+        CHECK(f.s->ops->result_put(f.s, hb, body, sizeof body, f.err, sizeof f.err) == 0, "put b");
+        char *got = NULL;
+        size_t n = 0;
+        CHECK(f.s->ops->result_get(f.s, ha, &got, &n, f.err, sizeof f.err) == 0 && n == 100,
+              "get a");
+        free(got);
+        CHECK(f.s->ops->result_put(f.s, hc, body, sizeof body, f.err, sizeof f.err) == 0, "put c");
+        const char *gone =
+            f.s->ops->result_exists(f.s, ha, f.err, sizeof f.err) == STORE_NOTFOUND   ? "a"
+            : f.s->ops->result_exists(f.s, hb, f.err, sizeof f.err) == STORE_NOTFOUND ? "b"
+                                                                                      : "none";
+        CHECK(!strcmp(gone, evicted[t]), "interval %g: %s evicted, want %s", intervals[t], gone,
+              evicted[t]);
+        fx_done(&f);
+    }
 }

@@ -19,8 +19,8 @@ GEOS_LIBS    := -lgeos_c
 SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lcrypto
 TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
-DEPS_BUILD := gcc make libc6-dev pkg-config libjansson-dev libgeos-dev libmicrohttpd-dev \
-              libsqlite3-dev libssl-dev libcurl4-openssl-dev python3 python3-jsonschema
+DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev
+DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev python3 python3-jsonschema sqlite3
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)
@@ -92,7 +92,8 @@ $(BUILD)/bench/geos_polygonize: bench/geos_polygonize.c tests/ref/geos_ref.c tes
 	@mkdir -p $(dir $@)
 	$(CC) -std=c17 -O2 -Wall -Wextra -Werror -I. -o $@ bench/geos_polygonize.c tests/ref/geos_ref.c -ljansson -lgeos_c -lm
 
-run: deps
+run:
+	@scripts/deps.sh $(DEPS_RUN)
 	@$(MAKE) --no-print-directory all
 	@scripts/run.sh $(BUILD) $(ARGS)
 

@@ -12,14 +12,15 @@ CXX     ?= g++
 OPT     ?= -O2
 SAN     ?=
 CFLAGS  += -std=c17 $(OPT) -g -Wall -Wextra -Werror -pthread -D_GNU_SOURCE $(SAN)
-CPPFLAGS += -I.
+CPPFLAGS += -I. -I/usr/include/libxml2
 LDLIBS  += -lm -pthread
-JANSSON_LIBS := -ljansson
+JANSSON_LIBS := -ljansson -lxml2
 GEOS_LIBS    := -lgeos_c
 SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lcrypto
 TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
-DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev
+DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
+              libxml2-dev
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev python3 python3-jsonschema sqlite3
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 

@@ -69,8 +69,8 @@ int main(int argc, char **argv)
         return 1;
     }
     char port[32], workers[32];
-    snprintf(port, sizeof port, "%u", http_port(h));
-    snprintf(workers, sizeof workers, "%d", cfg.workers);
+    log_num(port, http_port(h));
+    log_num(workers, cfg.workers);
     log_kv(LOG_INFO, "listening", "host", cfg.host, "port", port, "db", cfg.db, "workers", workers,
            "version", API_VERSION, "algorithm", CELLAR_ALGO_VERSION, NULL);
 

@@ -38,6 +38,7 @@ struct http_server {
     metrics *m;
     struct MHD_Daemon *d;
     atomic_int draining;
+    atomic_int parked; /* connections suspended for a wait and not yet answered */
 };
 
 typedef struct conn {
@@ -53,6 +54,7 @@ typedef struct conn {
     int too_large; /* the body passed max_body: the rest is discarded, then 413 */
     job *j;        /* the job a POST waits on (referenced) */
     int waiting;   /* suspended, waiting for j */
+    int parked;    /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
     char job_id[33]; /* for the log */
@@ -496,6 +498,8 @@ static enum MHD_Result route_submit(conn *c)
     c->wait_applied = wait;
     c->j = j;
     c->waiting = 1;
+    c->parked = 1;
+    atomic_fetch_add(&h->parked, 1);
     MHD_suspend_connection(c->mc);
     if (engine_wait(h->e, j, engine_now() + wait, wake_conn, c) == 1)
         MHD_resume_connection(c->mc); /* ended meanwhile: answer at once */
@@ -647,6 +651,7 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            c->job_id[0] ? c->job_id : NULL, "closed",
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
     if (c->j) engine_release(h->e, c->j);
+    if (c->parked) atomic_fetch_sub(&h->parked, 1);
     free(c->body);
     free(c);
     *con_cls = NULL;
@@ -687,6 +692,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     h->st = st;
     h->m = m;
     atomic_init(&h->draining, 0);
+    atomic_init(&h->parked, 0);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
     h->d = MHD_start_daemon(
@@ -718,6 +724,10 @@ void http_set_draining(http_server *h)
 void http_stop(http_server *h)
 {
     if (!h) return;
+    /* the waits that the drain woke are answered before every connection is closed (for 5 s
+     * at most: a client that does not read its answer cannot hold the exit) */
+    for (int i = 0; i < 500 && atomic_load(&h->parked) > 0; i++)
+        nanosleep(&(struct timespec){0, 10000000}, NULL);
     MHD_stop_daemon(h->d);
     free(h);
 }

@@ -70,6 +70,11 @@ int api_lines_parse(const json_t *req, void **parsed, api_error *err);
 int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_lines_free(void *parsed);
 
+/* The "svg" kind (api/svg.c). */
+int api_svg_parse(const json_t *req, void **parsed, api_error *err);
+int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
+void api_svg_free(void *parsed);
+
 /* The result fields a request may ask for (options.fields), as bits. */
 enum {
     API_F_V = 1u << 0,
@@ -85,10 +90,29 @@ enum {
 #define API_NFIELDS 8
 extern const char *const api_field_names[API_NFIELDS]; /* "V", "EV", ... in bit order */
 
+/* The options of every kind that returns a 2-complex ("lines", "svg"): api/lines.c reads them. */
+typedef struct api_lar2_opts {
+    double precision; /* 0: the core's default */
+    int keep_dangling;
+    int exterior_last;
+    int operators;
+    unsigned fields; /* API_F_*; API_F_DEFAULT unless given */
+} api_lar2_opts;
+
+#define API_NOT_MINE (-1) /* api_lar2_option(): the key is not one of these options */
+
+/* Reads options.key = v into *o when key is precision, keep_dangling, exterior_last, operators or
+ * fields.  Returns API_OK, an error status (message in *err) or API_NOT_MINE.  Start from
+ * {.fields = API_F_DEFAULT}; after the last key, operators adds API_F_OPERATORS to fields. */
+int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_error *err);
+
 /* How api_lar2_write() presents a 2-complex. */
 typedef struct api_lar2_fmt {
     unsigned fields;   /* API_F_* bits */
     int exterior_last; /* append the exterior cycles as the last rows of FV and FE */
+    /* may be NULL: appends more members to the "stats" object, each as ,"key":value */
+    void (*stats_more)(api_buf *b, const void *udata);
+    const void *stats_udata; /* passed to stats_more */
 } api_lar2_fmt;
 
 /* Appends the LAR JSON object of c (borrowed) to b.  Returns API_OK, API_ENOMEM (b failed or a

@@ -293,7 +293,7 @@ static void put_key(api_buf *b, int *first, const char *key)
     api_buf_puts(b, "\":");
 }
 
-static void put_stats(api_buf *b, const arr2_stats *s)
+static void put_stats(api_buf *b, const arr2_stats *s, const api_lar2_fmt *fmt)
 {
     static const char *const names[] = {"input_segments",
                                         "zero_length_dropped",
@@ -339,7 +339,9 @@ static void put_stats(api_buf *b, const arr2_stats *s)
         put_key(b, &first, ms_names[i]);
         api_buf_double(b, isfinite(ms[i]) ? ms[i] : 0);
     }
-    api_buf_puts(b, "}}");
+    api_buf_putc(b, '}');
+    if (fmt->stats_more) fmt->stats_more(b, fmt->stats_udata);
+    api_buf_putc(b, '}');
 }
 
 /* Writes {"shape":[nrows,ncols],"indptr":..,"indices":..,"data":..} of a CSR matrix. */
@@ -526,7 +528,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
     }
     if (fl & API_F_STATS) {
         put_key(b, &first, "stats");
-        put_stats(b, &c->stats);
+        put_stats(b, &c->stats, fmt);
     }
     api_buf_putc(b, '}');
     if (b->failed) rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");

@@ -15,6 +15,7 @@
  *   operators      bool: add the boundary operators d1, d2 as CSR
  *   fields         array of names among "V","EV","FV","FE","holes","exterior","stats",
  *                  "operators" (default: all but operators)
+ * api_lar2_option() reads them, for "svg" (api/svg.c) too.
  *
  * Threads: reentrant, no globals.  Ownership: the body and req are borrowed; a parsed request
  * (*parsed) belongs to the caller, who frees it with api_lines_free().
@@ -27,18 +28,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct lines_opts {
-    double precision; /* 0: the core's default */
-    int keep_dangling;
-    int exterior_last;
-    int operators;
-    unsigned fields; /* API_F_* */
-} lines_opts;
-
 typedef struct lines_req {
     double *seg; /* owned: 4n doubles x1, y1, x2, y2 */
     size_t n;    /* segments */
-    lines_opts opt;
+    api_lar2_opts opt;
 } lines_req;
 
 static int parse_bool(const json_t *v, const char *name, int *out, api_error *err)
@@ -73,35 +66,36 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
     return API_OK;
 }
 
-static int parse_options(const json_t *o, lines_opts *opt, api_error *err)
+int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_error *err)
+{
+    if (strcmp(key, "precision") == 0) {
+        if (!json_is_number(v) || !(json_number_value(v) > 0) || !isfinite(json_number_value(v)))
+            return api_fail(err, API_EINVALID, "options.precision: expected a number > 0");
+        o->precision = json_number_value(v);
+        return API_OK;
+    }
+    if (strcmp(key, "keep_dangling") == 0) return parse_bool(v, key, &o->keep_dangling, err);
+    if (strcmp(key, "exterior_last") == 0) return parse_bool(v, key, &o->exterior_last, err);
+    if (strcmp(key, "operators") == 0) return parse_bool(v, key, &o->operators, err);
+    if (strcmp(key, "fields") == 0) return parse_fields(v, &o->fields, err);
+    return API_NOT_MINE;
+}
+
+static int parse_options(const json_t *o, api_lar2_opts *opt, api_error *err)
 {
     const char *key;
     json_t *v;
-    int rc = API_OK;
-    *opt = (lines_opts){.fields = API_F_DEFAULT};
+    *opt = (api_lar2_opts){.fields = API_F_DEFAULT};
     if (!o) return API_OK;
     if (!json_is_object(o)) return api_fail(err, API_EINVALID, "options: expected an object");
     json_object_foreach((json_t *)o, key, v)
     {
-        if (strcmp(key, "precision") == 0) {
-            if (!json_is_number(v) || !(json_number_value(v) > 0) ||
-                !isfinite(json_number_value(v)))
-                return api_fail(err, API_EINVALID, "options.precision: expected a number > 0");
-            opt->precision = json_number_value(v);
-        } else if (strcmp(key, "keep_dangling") == 0) {
-            rc = parse_bool(v, key, &opt->keep_dangling, err);
-        } else if (strcmp(key, "exterior_last") == 0) {
-            rc = parse_bool(v, key, &opt->exterior_last, err);
-        } else if (strcmp(key, "operators") == 0) {
-            rc = parse_bool(v, key, &opt->operators, err);
-        } else if (strcmp(key, "fields") == 0) {
-            rc = parse_fields(v, &opt->fields, err);
-        } else {
+        int rc = api_lar2_option(key, v, opt, err);
+        if (rc == API_NOT_MINE)
             return api_fail(err, API_EINVALID,
                             "options.%.64s: unknown option (expected precision, keep_dangling, "
                             "exterior_last, operators or fields)",
                             key);
-        }
         if (rc != API_OK) return rc;
     }
     if (opt->operators) opt->fields |= API_F_OPERATORS;

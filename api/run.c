@@ -22,6 +22,7 @@
 
 static const api_kind kinds[] = {
     {"lines", api_lines_parse, api_lines_run, api_lines_free},
+    {"svg", api_svg_parse, api_svg_run, api_svg_free},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 

@@ -2,12 +2,18 @@
  *
  *   cellar run REQUEST.json|-        the result JSON the service returns for the request, same
  *                                    bytes (api_run_json()), on stdout
+ *   cellar svg DRAWING.svg|- [--normalize] [--y-up] [--rect-diagonal] [--precision X]
+ *              [--keep-dangling] [--flatten-tolerance X] [--options JSON]
+ *                                    the same for the request {"kind":"svg","svg":<the file>,
+ *                                    "options":{...}} (the flags set options; --options gives
+ *                                    the others)
  *   cellar gen lines N SCALING SEED  N random segments, as the seeds' randomLines(N, scaling)
  *   cellar gen grid K                K horizontal and K vertical segments: (K-1)^2 faces
  *
- * Exit status: 0 success, 1 the request failed (message "cellar: <where>: <what>" on stderr) or
- * an I/O error, 2 a usage error.  Options (anywhere on the line): --threads N, --options JSON
- * (gen: the request's "options"), --help, --version.
+ * Exit status: 0 success, 1 the request failed (message "cellar: <where>: <what>" on stderr:
+ * malformed or hostile SVG is "cellar: svg: line L, column C: ...") or an I/O error, 2 a usage
+ * error.  Options (anywhere on the line): --threads N, --options JSON (gen, svg: the request's
+ * "options"), the svg flags, --help, --version.
  *
  * The random generator is our own (xoshiro256** seeded by splitmix64) and the arithmetic is
  * written one operation per statement (no contraction into fused multiply-adds), so that a seed
@@ -44,11 +50,18 @@ static const char usage_text[] =
     "  cellar gen grid K [--options JSON]\n"
     "                                  print a request of K horizontal and K vertical segments\n"
     "                                  (0,i)-(K-1,i), (i,0)-(i,K-1): (K-1)^2 faces\n"
+    "  cellar svg DRAWING.svg [--normalize] [--y-up] [--rect-diagonal] [--precision X]\n"
+    "             [--keep-dangling] [--flatten-tolerance X] [--options JSON]\n"
+    "                                  the complex of an SVG drawing (\"-\": standard input):\n"
+    "                                  runs {\"kind\":\"svg\",\"svg\":...,\"options\":...}\n"
     "\n"
     "options:\n"
     "  --threads N       worker threads of the core (default 0: one per CPU)\n"
-    "  --options JSON    gen: a JSON object used as the request's \"options\", e.g.\n"
+    "  --options JSON    gen, svg: a JSON object used as the request's \"options\", e.g.\n"
     "                    '{\"precision\":1e-6,\"fields\":[\"V\",\"EV\",\"stats\"]}'\n"
+    "  svg: --normalize (into the unit square, y up), --y-up (y' = -y), --rect-diagonal\n"
+    "       (a rect is its diagonal), --precision X (grid step), --keep-dangling,\n"
+    "       --flatten-tolerance X (curves, in drawing units): the options of the same names\n"
     "  --help            this text\n"
     "  --version         the version\n"
     "\n"
@@ -372,11 +385,101 @@ static int run(char **pos, int npos, int threads)
     return 0;
 }
 
+/* The svg command's flags: each sets the request option of the same name. */
+typedef struct svg_flags {
+    int normalize, y_up, rect_diagonal, keep_dangling;
+    double precision, tolerance; /* 0: not given */
+    const char *first;           /* the first flag given (for "is for svg" errors), or NULL */
+} svg_flags;
+
+/* Parses a number > 0 for flag; returns 0 on success. */
+static int parse_positive(const char *flag, const char *val, double *out)
+{
+    char *end;
+    errno = 0;
+    *out = strtod(val, &end);
+    if (errno || *end || end == val || !isfinite(*out) || !(*out > 0)) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "%s: expected a number > 0, not \"%.64s\"", flag, val);
+        usage_error("%s", msg);
+        return -1;
+    }
+    return 0;
+}
+
+static int svg_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
+                       int threads)
+{
+    size_t len, outlen;
+    char *text = NULL, *body = NULL, *out = NULL;
+    json_t *opts = NULL, *req = NULL, *str = NULL;
+    json_error_t je;
+    api_error err;
+    int rc = 1;
+    if (npos != 2) return usage_error("%s", "svg takes one DRAWING.svg (or - for stdin)");
+    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
+    if (!opts || !json_is_object(opts)) {
+        if (opts || !options_text)
+            fprintf(stderr, "cellar: --options: expected a JSON object\n");
+        else
+            fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column,
+                    je.text);
+        json_decref(opts);
+        return EXIT_USAGE;
+    }
+    if ((fl->normalize && json_object_set_new(opts, "normalize", json_true())) ||
+        (fl->y_up && json_object_set_new(opts, "y_up", json_true())) ||
+        (fl->rect_diagonal && json_object_set_new(opts, "rect2lines", json_string("diagonal"))) ||
+        (fl->keep_dangling && json_object_set_new(opts, "keep_dangling", json_true())) ||
+        (fl->precision > 0 && json_object_set_new(opts, "precision", json_real(fl->precision))) ||
+        (fl->tolerance > 0 &&
+         json_object_set_new(opts, "flatten_tolerance", json_real(fl->tolerance)))) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    text = read_all(pos[1], &len);
+    if (!text) goto out;
+    str = json_stringn(text, len);
+    if (!str) {
+        fprintf(stderr,
+                "cellar: %s: not UTF-8 text (the request carries the drawing as a JSON "
+                "string)\n",
+                pos[1]);
+        goto out;
+    }
+    req = json_pack("{s:s, s:o, s:O}", "kind", "svg", "svg", str, "options", opts);
+    str = NULL; /* the "o" format took it, also on failure */
+    body = req ? json_dumps(req, JSON_COMPACT) : NULL;
+    if (!body) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    if (api_run_json(body, strlen(body), threads, &out, &outlen, &err) != API_OK) {
+        fprintf(stderr, "cellar: %s\n", err.msg);
+        goto out;
+    }
+    fwrite(out, 1, outlen, stdout);
+    rc = 0;
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        rc = 1;
+    }
+out:
+    free(out);
+    free(body);
+    free(text);
+    json_decref(str);
+    json_decref(req);
+    json_decref(opts);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     static char outbuf[1 << 16];
     char **pos = calloc((size_t)argc + 1, sizeof *pos);
     const char *options_text = NULL;
+    svg_flags fl = {0};
     int npos = 0, threads = 0, rc;
     if (!pos) return 1;
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
@@ -395,6 +498,33 @@ int main(int argc, char **argv)
             printf("cellar %s (jansson %s)\n", API_VERSION, JANSSON_VERSION);
             rc = 0;
             goto out;
+        }
+        if (strcmp(a, "--normalize") == 0 || strcmp(a, "--y-up") == 0 ||
+            strcmp(a, "--rect-diagonal") == 0 || strcmp(a, "--keep-dangling") == 0) {
+            *(a[2] == 'n'   ? &fl.normalize
+              : a[2] == 'y' ? &fl.y_up
+              : a[2] == 'r' ? &fl.rect_diagonal
+                            : &fl.keep_dangling) = 1;
+            if (!fl.first) fl.first = a;
+            continue;
+        }
+        if (strcmp(a, "--precision") == 0 || strcmp(a, "--flatten-tolerance") == 0 ||
+            strncmp(a, "--precision=", 12) == 0 || strncmp(a, "--flatten-tolerance=", 20) == 0) {
+            int tol = a[2] == 'f';
+            const char *eq = strchr(a, '=');
+            char flag[24];
+            snprintf(flag, sizeof flag, "%.*s", eq ? (int)(eq - a) : (int)strlen(a), a);
+            if (!eq && i + 1 == argc) {
+                rc = usage_error("%s needs a value", a);
+                goto out;
+            }
+            if (parse_positive(flag, eq ? eq + 1 : argv[++i],
+                               tol ? &fl.tolerance : &fl.precision)) {
+                rc = EXIT_USAGE;
+                goto out;
+            }
+            if (!fl.first) fl.first = tol ? "--flatten-tolerance" : "--precision";
+            continue;
         }
         if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
             if (i + 1 == argc) {
@@ -419,8 +549,12 @@ int main(int argc, char **argv)
             options_text = val;
         }
     }
-    if (npos == 0) {
-        rc = usage_error("%s", "no command (run, gen)");
+    if (fl.first && (npos == 0 || strcmp(pos[0], "svg") != 0)) {
+        rc = usage_error("%s is for the svg command", fl.first);
+    } else if (npos == 0) {
+        rc = usage_error("%s", "no command (run, gen, svg)");
+    } else if (strcmp(pos[0], "svg") == 0) {
+        rc = svg_command(pos, npos, options_text, &fl, threads);
     } else if (strcmp(pos[0], "run") == 0) {
         rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
                           : run(pos, npos, threads);
@@ -434,7 +568,7 @@ int main(int argc, char **argv)
         else
             rc = usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
     } else {
-        rc = usage_error("unknown command \"%s\" (run, gen)", pos[0]);
+        rc = usage_error("unknown command \"%s\" (run, gen, svg)", pos[0]);
     }
 out:
     free(pos);

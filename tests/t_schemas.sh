@@ -189,7 +189,7 @@ bad problem extra_key '(document)' '{"type":"about:blank","title":"Not Found","s
 bad problem path_not_string 'path' '{"type":"about:blank","title":"Unprocessable Content","status":422,"detail":"x","instance":"/v1/jobs","path":["lines",17]}'
 bad request unknown_option 'options' '{"kind":"lines","lines":[],"options":{"colour":1}}'
 bad request unknown_key '(document)' '{"kind":"lines","lines":[],"name":"plan"}'
-bad request unknown_kind 'kind' '{"kind":"svg","lines":[]}'
+bad request unknown_kind 'kind' '{"kind":"mesh","lines":[]}'
 bad request no_kind '(document)' '{"lines":[[[0,0],[1,1]]]}'
 bad request no_lines '(document)' '{"kind":"lines"}'
 bad request lines_not_array 'lines' '{"kind":"lines","lines":{"0":[[0,0],[1,1]]}}'

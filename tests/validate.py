@@ -37,7 +37,7 @@ import warnings
 
 import jsonschema
 from jsonschema import Draft202012Validator
-from jsonschema.exceptions import best_match
+from jsonschema.exceptions import relevance
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCHEMA_DIR = os.path.join(ROOT, "schemas")
@@ -134,13 +134,21 @@ def json_path(parts):
 
 def first_error(validator, doc):
     """None, or "PATH: MESSAGE" of the most relevant error."""
-    err = best_match(validator.iter_errors(doc))
-    if err is None:
+    errors = list(validator.iter_errors(doc))
+    if not errors:
         return None
-    # best_match stops at a oneOf whose branch failed in several places at once (a stats object
-    # missing two keys); the deepest of its leaves names the offending input best
+    # the top error as best_match chooses it; below a oneOf (whose branch may have failed in
+    # several places at once: a stats object missing two keys) the deepest leaf names the
+    # offending input best
+    err = max(errors, key=relevance)
     while err.context:
-        err = max(err.context, key=lambda e: len(e.absolute_path))
+        ctx = err.context
+        # a oneOf over request kinds: leave out the branches of the other kinds (those whose
+        # "kind" const fails), unless no branch is left (an unknown kind)
+        wrong = {e.relative_schema_path[0] for e in ctx
+                 if e.validator == "const" and list(e.relative_path) == ["kind"] and e.relative_schema_path}
+        rest = [e for e in ctx if not e.relative_schema_path or e.relative_schema_path[0] not in wrong]
+        err = max(rest or ctx, key=lambda e: len(e.absolute_path))
     msg = " ".join(err.message.split())
     if len(msg) > MSG_MAX:
         msg = msg[: MSG_MAX - 3] + "..."

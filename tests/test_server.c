@@ -1,0 +1,2278 @@
+/* test_server.c — black-box tests of a live cellard: each test starts the daemon built in
+ * $CELLAR_BUILD (default build/) as a child process on a free port of 127.0.0.1 with a fresh
+ * SQLite file in a temporary directory, talks to it through libcurl (and raw sockets for the
+ * garbage), and stops it with SIGTERM, expecting exit status 0 (or SIGKILL where the test says
+ * so).  Expected results come from the command-line tool ($CELLAR_BIN, default
+ * build/cellar), which prints exactly what the service returns; response documents are checked
+ * against schemas/ with tests/validate.py ($PYTHON, default python3).
+ *
+ * Results that include "stats" carry the stages' milliseconds, which differ from run to run:
+ * the byte-for-byte comparisons use requests whose "fields" leave stats out, and results with
+ * stats are compared as JSON with stats.ms removed.
+ *
+ * Slow jobs are random lines (`cellar gen lines N 0.4 SEED`, returning only "stats") sized
+ * once per process so that one takes about 1-3 s with one core thread (the "huge" blocker is
+ * 2N lines, 4-6 times that); every wait is a bounded poll, and the bounds grow 3x
+ * under the sanitizers (CELLAR_SANITIZED).  On a failure the daemon's log tail is printed and
+ * its directory is kept. */
+#include "tests/check.h"
+
+#include <arpa/inet.h>
+#include <curl/curl.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <jansson.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+/* ---- small utilities --------------------------------------------------------------------- */
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec / 1e9;
+}
+
+static void sleep_s(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
+    }
+}
+
+/* Bounds grow under the sanitizers, which make everything about 3x slower. */
+static double slowdown(void)
+{
+    const char *s = getenv("CELLAR_SANITIZED");
+    return s && *s && strcmp(s, "0") ? 3.0 : 1.0;
+}
+
+static const char *build_dir(void)
+{
+    const char *b = getenv("CELLAR_BUILD");
+    return b && *b ? b : "build";
+}
+
+static const char *cli_bin(void)
+{
+    static char path[512];
+    const char *b = getenv("CELLAR_BIN");
+    if (b && *b) return b;
+    snprintf(path, sizeof path, "%s/cellar", build_dir());
+    return path;
+}
+
+typedef struct buf {
+    char *p;
+    size_t n, cap;
+} buf;
+
+static int buf_add(buf *b, const void *data, size_t n)
+{
+    if (b->n + n + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        while (cap < b->n + n + 1) cap *= 2;
+        char *p = realloc(b->p, cap);
+        if (!p) return -1;
+        b->p = p;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, data, n);
+    b->n += n;
+    b->p[b->n] = 0;
+    return 0;
+}
+
+static void buf_printf(buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void buf_printf(buf *b, const char *fmt, ...)
+{
+    char tmp[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n > 0) buf_add(b, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
+}
+
+static int write_file(const char *path, const char *data, size_t len)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f) return -1;
+    size_t w = fwrite(data, 1, len, f);
+    return fclose(f) == 0 && w == len ? 0 : -1;
+}
+
+static int rm_one(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st;
+    (void)flag;
+    (void)ftw;
+    remove(path);
+    return 0;
+}
+
+static void rm_rf(const char *dir)
+{
+    if (dir[0]) nftw(dir, rm_one, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+/* The process's scratch directory (request files for the CLI), removed at exit. */
+static char scratch[256];
+static void scratch_cleanup(void);
+
+static const char *scratch_dir(void)
+{
+    if (!scratch[0]) {
+        snprintf(scratch, sizeof scratch, "/tmp/cellar-test-server-XXXXXX");
+        if (!mkdtemp(scratch)) {
+            scratch[0] = 0;
+            return "/tmp";
+        }
+        atexit(scratch_cleanup);
+    }
+    return scratch;
+}
+
+/* Runs a shell command and returns its standard output (malloc'd, NUL-terminated), or NULL
+ * when it cannot start or exits non-zero. */
+static char *run_capture(const char *cmd, size_t *len)
+{
+    FILE *p = popen(cmd, "r");
+    if (!p) return NULL;
+    buf b = {0};
+    char tmp[65536];
+    size_t n;
+    while ((n = fread(tmp, 1, sizeof tmp, p)) > 0)
+        if (buf_add(&b, tmp, n)) break;
+    int st = pclose(p);
+    if (st != 0 || !b.p) {
+        free(b.p);
+        return NULL;
+    }
+    if (len) *len = b.n;
+    return b.p;
+}
+
+/* ---- expected results from the CLI -------------------------------------------------------- */
+
+static uint64_t fnv(const char *s, size_t n)
+{
+    uint64_t h = 1469598103934665603u;
+    for (size_t i = 0; i < n; i++) h = (h ^ (unsigned char)s[i]) * 1099511628211u;
+    return h;
+}
+
+#define MAX_MEMO 64
+static struct memo {
+    uint64_t key;
+    size_t body_len;
+    char *out;
+    size_t len;
+} memo[MAX_MEMO];
+static int nmemo;
+static int memo_seq;
+
+static void memo_put(const char *body, size_t blen, char *out, size_t len)
+{
+    if (nmemo == MAX_MEMO) {
+        free(out);
+        return;
+    }
+    memo[nmemo++] = (struct memo){fnv(body, blen), blen, out, len};
+}
+
+/* What `cellar run` prints for body (borrowed, kept for the process), or NULL (then a failure
+ * is recorded).  threads: the CLI's --threads (0: default). */
+static const char *expect_threads(const char *body, size_t blen, size_t *len, int threads,
+                                  double *secs)
+{
+    uint64_t k = fnv(body, blen);
+    for (int i = 0; i < nmemo; i++)
+        if (memo[i].key == k && memo[i].body_len == blen) {
+            *len = memo[i].len;
+            return memo[i].out;
+        }
+    char path[320], cmd[1024];
+    snprintf(path, sizeof path, "%s/req%d.json", scratch_dir(), memo_seq++);
+    if (write_file(path, body, blen)) {
+        test_fail(__FILE__, __func__, __LINE__, "cannot write %s", path);
+        return NULL;
+    }
+    snprintf(cmd, sizeof cmd, "'%s' --threads %d run '%s'", cli_bin(), threads, path);
+    double t0 = now_s();
+    char *out = run_capture(cmd, len);
+    if (secs) *secs = now_s() - t0;
+    remove(path);
+    if (!out) {
+        test_fail(__FILE__, __func__, __LINE__, "`%s` failed", cmd);
+        return NULL;
+    }
+    memo_put(body, blen, out, *len);
+    return out;
+}
+
+static const char *expect(const char *body, size_t blen, size_t *len)
+{
+    return expect_threads(body, blen, len, 0, NULL);
+}
+
+/* ---- request bodies ---------------------------------------------------------------------- */
+
+#define NO_STATS "{\"fields\":[\"V\",\"EV\",\"FV\",\"FE\",\"holes\",\"exterior\"]}"
+
+/* A small hand-made request: a square of side k+1 with a diagonal and a crossing segment;
+ * stats: the default fields (with the non-deterministic stats), else NO_STATS. */
+static char *small_body(int k, int stats, size_t *len)
+{
+    buf b = {0};
+    int s = k + 1;
+    buf_printf(&b,
+               "{\"kind\":\"lines\",\"lines\":[[[0,0],[%d,0]],[[%d,0],[%d,%d]],[[%d,%d],[0,%d]],"
+               "[[0,%d],[0,0]],[[0,0],[%d,%d]],[[0,%d],[%d,0]]]",
+               s, s, s, s, s, s, s, s, s, s, s, s);
+    buf_printf(&b, "%s}", stats ? "" : ",\"options\":" NO_STATS);
+    *len = b.n;
+    return b.p;
+}
+
+/* Medium requests (gen lines, 300..3900 segments, k = 20: 8000; no stats): cached for the
+ * process. */
+#define MAX_MEDIUM 24
+static struct {
+    char *p;
+    size_t n;
+} medium_cache[MAX_MEDIUM];
+
+static const char *medium(int k, size_t *len)
+{
+    if (k < 0 || k >= MAX_MEDIUM) return NULL;
+    if (!medium_cache[k].p) {
+        char cmd[512];
+        int n = k == 20 ? 8000 : 300 + 400 * (k % 10);
+        snprintf(cmd, sizeof cmd, "'%s' gen lines %d 0.1 %d --options '%s'", cli_bin(), n, 100 + k,
+                 NO_STATS);
+        medium_cache[k].p = run_capture(cmd, &medium_cache[k].n);
+        if (!medium_cache[k].p) {
+            test_fail(__FILE__, __func__, __LINE__, "`%s` failed", cmd);
+            return NULL;
+        }
+    }
+    *len = medium_cache[k].n;
+    return medium_cache[k].p;
+}
+
+/* Slow requests: the lines of `gen lines N 0.4 1`, with options {"fields":["stats"]} and
+ * (variant k > 0) "precision": k e-9 so that every variant is a distinct job of the same cost.
+ * N is sized on the first call so that variant 0 takes 1-3 s in `cellar --threads 1 run`
+ * (about 6000).  Long segments (0.4 rather than 0.02) give the same crossings with a body 20
+ * times smaller: the daemon parses a body on its HTTP thread at about 5 MB/s (15 under the
+ * sanitizers), which would dominate with 8 MB bodies.  The "huge" job is 2N lines of seed 2:
+ * four times the crossings, 4-6 times as long. */
+static struct {
+    int ready, failed;
+    size_t n;
+    double secs; /* variant 0 with one core thread */
+    char *base;  /* gen output without the final "}" and newline */
+    size_t base_len;
+    char *huge;
+    size_t huge_len;
+    char *variant[16];
+    size_t variant_len[16];
+} slow;
+
+static void slow_cleanup(void)
+{
+    free(slow.base);
+    free(slow.huge);
+    for (int i = 0; i < 16; i++) free(slow.variant[i]);
+    for (int i = 0; i < MAX_MEDIUM; i++) free(medium_cache[i].p);
+    for (int i = 0; i < nmemo; i++) free(memo[i].out);
+    memset(&slow, 0, sizeof slow);
+    nmemo = 0;
+}
+
+static void scratch_cleanup(void)
+{
+    rm_rf(scratch);
+}
+
+static char *slow_make(int k, size_t *len)
+{
+    buf b = {0};
+    buf_add(&b, slow.base, slow.base_len);
+    if (k == 0)
+        buf_printf(&b, ",\"options\":{\"fields\":[\"stats\"]}}");
+    else
+        buf_printf(&b, ",\"options\":{\"fields\":[\"stats\"],\"precision\":%de-9}}", k);
+    *len = b.n;
+    return b.p;
+}
+
+static int slow_init(void)
+{
+    if (slow.ready) return 0;
+    if (slow.failed) return -1;
+    slow.failed = 1;
+    atexit(slow_cleanup);
+    size_t n = 6000;
+    for (int attempt = 0; attempt < 4; attempt++) {
+        char cmd[512];
+        snprintf(cmd, sizeof cmd, "'%s' gen lines %zu 0.4 1", cli_bin(), n);
+        free(slow.base);
+        slow.base = run_capture(cmd, &slow.base_len);
+        if (!slow.base) {
+            test_fail(__FILE__, __func__, __LINE__, "`%s` failed", cmd);
+            return -1;
+        }
+        while (slow.base_len &&
+               (slow.base[slow.base_len - 1] == '\n' || slow.base[slow.base_len - 1] == '}'))
+            if (slow.base[--slow.base_len] == '}') break;
+        slow.base[slow.base_len] = 0;
+        free(slow.variant[0]);
+        slow.variant[0] = slow_make(0, &slow.variant_len[0]);
+        size_t len;
+        double secs = 0;
+        if (!expect_threads(slow.variant[0], slow.variant_len[0], &len, 1, &secs)) return -1;
+        slow.n = n;
+        slow.secs = secs;
+        if (secs < 1.0 && n < 20000)
+            n = n * 6 / 5;
+        else if (secs > 6.0 && n > 2000)
+            n = n * 4 / 5;
+        else
+            break;
+    }
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "'%s' gen lines %zu 0.4 2 --options '{\"fields\":[\"stats\"]}'",
+             cli_bin(), slow.n * 2);
+    slow.huge = run_capture(cmd, &slow.huge_len);
+    if (!slow.huge) {
+        test_fail(__FILE__, __func__, __LINE__, "`%s` failed", cmd);
+        return -1;
+    }
+    printf("  (slow jobs: %zu segments, %.2f s with one thread; huge: %zu segments)\n", slow.n,
+           slow.secs, slow.n * 2);
+    fflush(stdout);
+    slow.ready = 1;
+    slow.failed = 0;
+    return 0;
+}
+
+static const char *slow_body(int k, size_t *len)
+{
+    *len = 0;
+    if (slow_init() || k < 0 || k >= 16) return NULL;
+    if (!slow.variant[k]) slow.variant[k] = slow_make(k, &slow.variant_len[k]);
+    *len = slow.variant_len[k];
+    return slow.variant[k];
+}
+
+static const char *huge_body(size_t *len)
+{
+    *len = 0;
+    if (slow_init()) return NULL;
+    *len = slow.huge_len;
+    return slow.huge;
+}
+
+/* 1: identical bytes; 2: equal as JSON once stats.ms is removed from both; 0: different. */
+static int same_result(const char *a, size_t alen, const char *b, size_t blen)
+{
+    if (a && b && alen == blen && memcmp(a, b, alen) == 0) return 1;
+    if (!a || !b) return 0;
+    json_t *x = json_loadb(a, alen, 0, NULL), *y = json_loadb(b, blen, 0, NULL);
+    int eq = 0;
+    if (x && y) {
+        json_object_del(json_object_get(x, "stats"), "ms");
+        json_object_del(json_object_get(y, "stats"), "ms");
+        eq = json_equal(x, y) ? 2 : 0;
+    }
+    json_decref(x);
+    json_decref(y);
+    return eq;
+}
+
+/* ---- the daemon -------------------------------------------------------------------------- */
+
+#define MAXV 128
+typedef struct srv {
+    char dir[256], db[300], log[300], base[64];
+    char flags[256];
+    int port;
+    pid_t pid; /* 0: not running */
+    int nv;    /* documents to validate: schema name and file */
+    const char *vschema[MAXV];
+    char vfile[MAXV][320];
+} srv;
+
+static int curl_ready;
+
+static void global_init(void)
+{
+    if (curl_ready) return;
+    signal(SIGPIPE, SIG_IGN);
+    curl_global_init(CURL_GLOBAL_ALL);
+    atexit(curl_global_cleanup);
+    curl_ready = 1;
+}
+
+static int free_port(void)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return -1;
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = 0};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t al = sizeof a;
+    int port = -1;
+    if (bind(fd, (struct sockaddr *)&a, sizeof a) == 0 &&
+        getsockname(fd, (struct sockaddr *)&a, &al) == 0)
+        port = ntohs(a.sin_port);
+    close(fd);
+    return port;
+}
+
+static void log_tail(const srv *d, int lines)
+{
+    size_t n = 0;
+    char *s = test_read_file(d->log, &n);
+    if (!s) {
+        printf("  (no daemon log at %s)\n", d->log);
+        return;
+    }
+    size_t i = n;
+    int seen = 0;
+    while (i > 0) {
+        if (s[i - 1] == '\n' && i != n && ++seen >= lines) break;
+        i--;
+    }
+    printf("  --- tail of %s:\n", d->log);
+    for (char *p = s + i; *p;) {
+        char *e = strchr(p, '\n');
+        size_t k = e ? (size_t)(e - p) : strlen(p);
+        printf("  | %.*s\n", (int)(k > 400 ? 400 : k), p);
+        p += k + (e ? 1 : 0);
+    }
+    fflush(stdout);
+    free(s);
+}
+
+static int log_contains(const srv *d, const char *what)
+{
+    char *s = test_read_file(d->log, NULL);
+    int r = s && strstr(s, what);
+    free(s);
+    return r;
+}
+
+/* ---- HTTP through libcurl ---------------------------------------------------------------- */
+
+typedef struct hreq {
+    const char *method; /* default: GET, or POST with a body */
+    const char *path;
+    const char *body;
+    size_t len;
+    int has_body;
+    int chunked;       /* send the body with Transfer-Encoding: chunked */
+    const char *h[8];  /* extra header lines */
+    double timeout;    /* seconds; default 60 (x3 under the sanitizers) */
+    int no_expect_off; /* leave libcurl's Expect: 100-continue alone */
+} hreq;
+
+typedef struct hresp {
+    long status;
+    CURLcode cc;
+    char err[CURL_ERROR_SIZE];
+    buf body, hdr;
+    double secs;
+} hresp;
+
+static void hresp_free(hresp *r)
+{
+    free(r->body.p);
+    free(r->hdr.p);
+    memset(r, 0, sizeof *r);
+}
+
+static size_t on_body(char *p, size_t size, size_t n, void *ud)
+{
+    return buf_add(ud, p, size * n) ? 0 : size * n;
+}
+
+static size_t on_header(char *p, size_t size, size_t n, void *ud)
+{
+    hresp *r = ud;
+    if (size * n >= 5 && !strncmp(p, "HTTP/", 5)) r->hdr.n = 0; /* after a 100 Continue */
+    return buf_add(&r->hdr, p, size * n) ? 0 : size * n;
+}
+
+typedef struct reader {
+    const char *p;
+    size_t n, off;
+} reader;
+
+static size_t on_read(char *dst, size_t size, size_t n, void *ud)
+{
+    reader *r = ud;
+    size_t k = size * n, left = r->n - r->off;
+    if (k > left) k = left;
+    if (k > 1000) k = 1000; /* several chunks */
+    memcpy(dst, r->p + r->off, k);
+    r->off += k;
+    return k;
+}
+
+static void http_do(const srv *d, const hreq *q, hresp *r)
+{
+    char url[512];
+    memset(r, 0, sizeof *r);
+    snprintf(url, sizeof url, "%s%s", d->base, q->path);
+    CURL *c = curl_easy_init();
+    if (!c) {
+        r->cc = CURLE_FAILED_INIT;
+        return;
+    }
+    struct curl_slist *hl = NULL;
+    reader rd = {q->body, q->len, 0};
+    long tmo = (long)((q->timeout > 0 ? q->timeout : 60 * slowdown()) * 1000);
+    curl_easy_setopt(c, CURLOPT_URL, url);
+    curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
+    curl_easy_setopt(c, CURLOPT_NOPROXY, "*");
+    curl_easy_setopt(c, CURLOPT_CONNECTTIMEOUT_MS, 5000L);
+    curl_easy_setopt(c, CURLOPT_TIMEOUT_MS, tmo);
+    curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_body);
+    curl_easy_setopt(c, CURLOPT_WRITEDATA, &r->body);
+    curl_easy_setopt(c, CURLOPT_HEADERFUNCTION, on_header);
+    curl_easy_setopt(c, CURLOPT_HEADERDATA, r);
+    curl_easy_setopt(c, CURLOPT_ERRORBUFFER, r->err);
+    const char *m = q->method ? q->method : q->has_body ? "POST" : "GET";
+    if (q->has_body) {
+        curl_easy_setopt(c, CURLOPT_POST, 1L);
+        if (q->chunked) {
+            curl_easy_setopt(c, CURLOPT_READFUNCTION, on_read);
+            curl_easy_setopt(c, CURLOPT_READDATA, &rd);
+            hl = curl_slist_append(hl, "Transfer-Encoding: chunked");
+        } else {
+            curl_easy_setopt(c, CURLOPT_POSTFIELDSIZE_LARGE, (curl_off_t)q->len);
+            curl_easy_setopt(c, CURLOPT_POSTFIELDS, q->body ? q->body : "");
+        }
+        if (strcmp(m, "POST")) curl_easy_setopt(c, CURLOPT_CUSTOMREQUEST, m);
+    } else if (!strcmp(m, "HEAD")) {
+        curl_easy_setopt(c, CURLOPT_NOBODY, 1L);
+    } else if (strcmp(m, "GET")) {
+        curl_easy_setopt(c, CURLOPT_CUSTOMREQUEST, m);
+    }
+    for (int i = 0; i < 8 && q->h[i]; i++) hl = curl_slist_append(hl, q->h[i]);
+    if (!q->no_expect_off) hl = curl_slist_append(hl, "Expect:");
+    curl_easy_setopt(c, CURLOPT_HTTPHEADER, hl);
+    double t0 = now_s();
+    r->cc = curl_easy_perform(c);
+    r->secs = now_s() - t0;
+    curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &r->status);
+    curl_slist_free_all(hl);
+    curl_easy_cleanup(c);
+    if (!r->body.p) buf_add(&r->body, "", 0);
+    if (!r->hdr.p) buf_add(&r->hdr, "", 0);
+}
+
+static void http_get(const srv *d, const char *path, hresp *r)
+{
+    hreq q = {.path = path};
+    http_do(d, &q, r);
+}
+
+static void http_method(const srv *d, const char *method, const char *path, hresp *r)
+{
+    hreq q = {.method = method, .path = path};
+    http_do(d, &q, r);
+}
+
+/* POST /v1/jobs with Content-Type: application/json and, when prefer is set, Prefer. */
+static void http_post(const srv *d, const char *body, size_t len, const char *prefer, hresp *r)
+{
+    char pf[128];
+    hreq q = {.path = "/v1/jobs", .body = body, .len = len, .has_body = 1};
+    q.h[0] = "Content-Type: application/json";
+    if (prefer) {
+        snprintf(pf, sizeof pf, "Prefer: %s", prefer);
+        q.h[1] = pf;
+    }
+    http_do(d, &q, r);
+}
+
+/* The value of a response header (case-insensitive name) into out; 0 when absent. */
+static int hget(const hresp *r, const char *name, char *out, size_t n)
+{
+    size_t nl = strlen(name);
+    const char *p = r->hdr.p;
+    out[0] = 0;
+    while (p && *p) {
+        const char *e = strchr(p, '\n');
+        size_t k = e ? (size_t)(e - p) : strlen(p);
+        if (k > nl && !strncasecmp(p, name, nl) && p[nl] == ':') {
+            const char *v = p + nl + 1;
+            while (*v == ' ' || *v == '\t') v++;
+            size_t vl = k - (size_t)(v - p);
+            while (vl && (v[vl - 1] == '\r' || v[vl - 1] == ' ')) vl--;
+            if (vl >= n) vl = n - 1;
+            memcpy(out, v, vl);
+            out[vl] = 0;
+            return 1;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    return 0;
+}
+
+static int has_header(const hresp *r, const char *name, const char *value)
+{
+    char v[512];
+    return hget(r, name, v, sizeof v) && !strcmp(v, value);
+}
+
+static json_t *jbody(const hresp *r)
+{
+    return json_loadb(r->body.p ? r->body.p : "", r->body.n, 0, NULL);
+}
+
+static const char *jstr(const json_t *o, const char *key)
+{
+    const char *s = json_string_value(json_object_get(o, key));
+    return s ? s : "";
+}
+
+static int is_hex(const char *s, size_t n)
+{
+    if (strlen(s) != n) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!((s[i] >= '0' && s[i] <= '9') || (s[i] >= 'a' && s[i] <= 'f'))) return 0;
+    return 1;
+}
+
+/* ---- starting and stopping the daemon ---------------------------------------------------- */
+
+static int srv_start(srv *d)
+{
+    char cellard[512], listen[64];
+    snprintf(cellard, sizeof cellard, "%s/cellard", build_dir());
+    if (access(cellard, X_OK) != 0) {
+        test_fail(__FILE__, __func__, __LINE__, "%s is not built", cellard);
+        return -1;
+    }
+    for (int attempt = 0; attempt < 3; attempt++) {
+        d->port = free_port();
+        if (d->port <= 0) continue;
+        snprintf(listen, sizeof listen, "127.0.0.1:%d", d->port);
+        snprintf(d->base, sizeof d->base, "http://127.0.0.1:%d", d->port);
+        char flags[256], *argv[40], *save = NULL;
+        int argc = 0;
+        snprintf(flags, sizeof flags, "%s", d->flags);
+        argv[argc++] = cellard;
+        argv[argc++] = "--listen";
+        argv[argc++] = listen;
+        argv[argc++] = "--db";
+        argv[argc++] = d->db;
+        for (char *t = strtok_r(flags, " ", &save); t && argc < 38; t = strtok_r(NULL, " ", &save))
+            argv[argc++] = t;
+        argv[argc] = NULL;
+        fflush(stdout);
+        pid_t pid = fork();
+        if (pid < 0) {
+            test_fail(__FILE__, __func__, __LINE__, "fork: %s", strerror(errno));
+            return -1;
+        }
+        if (pid == 0) {
+            int fd = open(d->log, O_WRONLY | O_CREAT | O_APPEND, 0644);
+            int nul = open("/dev/null", O_RDONLY);
+            if (fd >= 0) {
+                dup2(fd, 1);
+                dup2(fd, 2);
+            }
+            if (nul >= 0) dup2(nul, 0);
+            execv(cellard, argv);
+            _exit(127);
+        }
+        d->pid = pid;
+        double deadline = now_s() + 10 * slowdown();
+        int exited = 0, st = 0;
+        while (now_s() < deadline) {
+            if (waitpid(pid, &st, WNOHANG) == pid) {
+                exited = 1;
+                d->pid = 0;
+                break;
+            }
+            hresp r;
+            hreq q = {.path = "/healthz", .timeout = 1};
+            http_do(d, &q, &r);
+            long s = r.status;
+            hresp_free(&r);
+            if (s == 200) return 0;
+            sleep_s(0.02);
+        }
+        if (exited && log_contains(d, "cannot listen")) continue; /* the port was taken */
+        if (!exited) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &st, 0);
+            d->pid = 0;
+            test_fail(__FILE__, __func__, __LINE__, "cellard did not answer /healthz in %.0f s",
+                      10 * slowdown());
+        } else {
+            test_fail(__FILE__, __func__, __LINE__, "cellard exited at start (status 0x%x)", st);
+        }
+        log_tail(d, 20);
+        return -1;
+    }
+    test_fail(__FILE__, __func__, __LINE__, "no free port for cellard");
+    return -1;
+}
+
+static int srv_open(srv *d, const char *flags)
+{
+    global_init();
+    memset(d, 0, sizeof *d);
+    snprintf(d->dir, sizeof d->dir, "/tmp/cellar-test-server-d-XXXXXX");
+    if (!mkdtemp(d->dir)) {
+        test_fail(__FILE__, __func__, __LINE__, "mkdtemp: %s", strerror(errno));
+        d->dir[0] = 0;
+        return -1;
+    }
+    snprintf(d->db, sizeof d->db, "%s/cellar.db", d->dir);
+    snprintf(d->log, sizeof d->log, "%s/cellard.log", d->dir);
+    snprintf(d->flags, sizeof d->flags, "%s", flags);
+    return srv_start(d);
+}
+
+static int srv_alive(srv *d)
+{
+    int st;
+    if (!d->pid) return 0;
+    if (waitpid(d->pid, &st, WNOHANG) == d->pid) {
+        d->pid = 0;
+        test_fail(__FILE__, __func__, __LINE__, "cellard died (status 0x%x)", st);
+        return 0;
+    }
+    return 1;
+}
+
+/* Waits up to timeout seconds for the daemon to exit: 1 with *status, or 0. */
+static int srv_wait_exit(srv *d, double timeout, int *status)
+{
+    double deadline = now_s() + timeout;
+    while (d->pid) {
+        if (waitpid(d->pid, status, WNOHANG) == d->pid) {
+            d->pid = 0;
+            return 1;
+        }
+        if (now_s() > deadline) return 0;
+        sleep_s(0.01);
+    }
+    return 0;
+}
+
+/* SIGTERM and expect exit status 0 within the drain time. */
+static int srv_term_(srv *d, const char *func, int line)
+{
+    int st = 0;
+    if (!d->pid) {
+        test_fail(__FILE__, func, line, "cellard is not running");
+        return -1;
+    }
+    kill(d->pid, SIGTERM);
+    if (!srv_wait_exit(d, 60 * slowdown(), &st)) {
+        test_fail(__FILE__, func, line, "cellard did not exit within %.0f s of SIGTERM",
+                  60 * slowdown());
+        kill(d->pid, SIGKILL);
+        waitpid(d->pid, &st, 0);
+        d->pid = 0;
+        return -1;
+    }
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) {
+        if (WIFSIGNALED(st))
+            test_fail(__FILE__, func, line, "cellard was killed by signal %d", WTERMSIG(st));
+        else
+            test_fail(__FILE__, func, line, "cellard exited with status %d", WEXITSTATUS(st));
+        return -1;
+    }
+    return 0;
+}
+#define srv_term(d) srv_term_(d, __func__, __LINE__)
+
+static void srv_kill(srv *d)
+{
+    int st;
+    if (!d->pid) return;
+    kill(d->pid, SIGKILL);
+    waitpid(d->pid, &st, 0);
+    d->pid = 0;
+}
+
+/* Queues a document for validation against schemas/NAME.schema.json (checked at the end).
+ * Documents over 512 KB are skipped: the Python validator takes about 5 s per MB. */
+static void vq_add(srv *d, const char *schema, const hresp *r)
+{
+    char f[sizeof d->vfile[0]];
+    if (d->nv >= MAXV || !d->dir[0] || r->body.n > (512u << 10)) return;
+    snprintf(f, sizeof f, "%s/doc%03d-%s.json", d->dir, d->nv, schema);
+    if (write_file(f, r->body.p ? r->body.p : "", r->body.n)) return;
+    memcpy(d->vfile[d->nv], f, sizeof f);
+    d->vschema[d->nv++] = schema;
+}
+
+static const char *validator(void)
+{
+    static char path[512];
+    const char *src = getenv("CELLAR_SRC");
+    snprintf(path, sizeof path, "%s/tests/validate.py", src && *src ? src : ".");
+    return path;
+}
+
+static void vq_check(srv *d)
+{
+    static const char *schemas[] = {"job", "result", "problem", "request"};
+    if (!d->nv) return;
+    if (access(validator(), R_OK) != 0) {
+        test_fail(__FILE__, __func__, __LINE__, "%s is missing", validator());
+        return;
+    }
+    const char *py = getenv("PYTHON");
+    for (size_t s = 0; s < sizeof schemas / sizeof *schemas; s++) {
+        buf cmd = {0};
+        int n = 0;
+        buf_printf(&cmd, "'%s' '%s' %s", py && *py ? py : "python3", validator(), schemas[s]);
+        for (int i = 0; i < d->nv; i++)
+            if (!strcmp(d->vschema[i], schemas[s])) {
+                buf_printf(&cmd, " '%s'", d->vfile[i]);
+                n++;
+            }
+        buf_printf(&cmd, " 2>&1");
+        if (n) {
+            FILE *p = popen(cmd.p, "r");
+            buf out = {0};
+            char tmp[4096];
+            size_t k;
+            while (p && (k = fread(tmp, 1, sizeof tmp, p)) > 0) buf_add(&out, tmp, k);
+            int st = p ? pclose(p) : -1;
+            int oks = 0;
+            for (const char *q = out.p; q && (q = strstr(q, "ok ")); q += 3)
+                if (q == out.p || q[-1] == '\n') oks++;
+            CHECK(st == 0 && oks == n, "%d %s documents against the schema: %s", n, schemas[s],
+                  out.p ? out.p : "(no output)");
+            free(out.p);
+        }
+        free(cmd.p);
+    }
+    d->nv = 0;
+}
+
+static void srv_finish(srv *d)
+{
+    if (!d->dir[0]) return;
+    vq_check(d);
+    if (d->pid) srv_kill(d);
+    const char *keep = getenv("CELLAR_TEST_KEEP");
+    if (test_failed_now() || (keep && *keep)) {
+        log_tail(d, 40);
+        printf("  (daemon directory kept: %s)\n", d->dir);
+    } else {
+        rm_rf(d->dir);
+    }
+    d->dir[0] = 0;
+}
+
+/* A test with a daemon started with flags, available as `d` in the body; the daemon is killed
+ * (if the body did not stop it) and its directory removed afterwards. */
+#define SERVER_TEST(name, flags)                                                                   \
+    static void name##_run(srv *d);                                                                \
+    TEST(name)                                                                                     \
+    {                                                                                              \
+        srv d_;                                                                                    \
+        if (srv_open(&d_, flags) == 0) name##_run(&d_);                                            \
+        srv_finish(&d_);                                                                           \
+    }                                                                                              \
+    static void name##_run(srv *d)
+
+/* ---- API helpers ------------------------------------------------------------------------- */
+
+typedef struct jobv {
+    char id[40], state[16], hash[72], result[128];
+} jobv;
+
+static int job_parse(const hresp *r, jobv *j)
+{
+    memset(j, 0, sizeof *j);
+    json_t *o = jbody(r);
+    if (!json_is_object(o)) {
+        json_decref(o);
+        return -1;
+    }
+    snprintf(j->id, sizeof j->id, "%s", jstr(o, "id"));
+    snprintf(j->state, sizeof j->state, "%s", jstr(o, "state"));
+    snprintf(j->hash, sizeof j->hash, "%s", jstr(o, "hash"));
+    snprintf(j->result, sizeof j->result, "%s", jstr(o, "result"));
+    json_decref(o);
+    return is_hex(j->id, 32) && is_hex(j->hash, 64) ? 0 : -1;
+}
+
+/* POSTs body without Prefer and expects 202 with a job: fills j; 0 on success. */
+static int submit_(srv *d, const char *body, size_t len, jobv *j, const char *func, int line)
+{
+    hresp r;
+    char loc[256], want[128];
+    http_post(d, body, len, NULL, &r);
+    int ok = r.status == 202 && job_parse(&r, j) == 0;
+    if (ok) {
+        snprintf(want, sizeof want, "/v1/jobs/%.32s", j->id);
+        ok = hget(&r, "Location", loc, sizeof loc) && !strcmp(loc, want);
+    }
+    if (!ok)
+        test_fail(__FILE__, func, line, "POST: want 202 with a job and its Location, got %ld %s %s",
+                  r.status, r.err, r.body.p ? r.body.p : "");
+    hresp_free(&r);
+    return ok ? 0 : -1;
+}
+#define submit(d, body, len, j) submit_(d, body, len, j, __func__, __LINE__)
+
+/* Polls GET /v1/jobs/{id} until its state is `want` (1), or it ends otherwise or timeout
+ * seconds pass (0); the last job seen is in *j (when not NULL). */
+static int wait_state(srv *d, const char *id, const char *want, double timeout, jobv *j)
+{
+    char path[128];
+    jobv tmp;
+    if (!j) j = &tmp;
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", id);
+    double deadline = now_s() + timeout, pause = 0.01;
+    for (int i = 0; i < 100000; i++) {
+        hresp r;
+        http_get(d, path, &r);
+        int parsed = r.status == 200 && job_parse(&r, j) == 0;
+        hresp_free(&r);
+        if (parsed && !strcmp(j->state, want)) return 1;
+        if (parsed && strcmp(want, "running") &&
+            (!strcmp(j->state, "done") || !strcmp(j->state, "failed") ||
+             !strcmp(j->state, "canceled")))
+            return 0; /* ended otherwise */
+        if (parsed && !strcmp(want, "running") && strcmp(j->state, "queued")) return 0;
+        if (now_s() > deadline || (d->pid && !srv_alive(d))) return 0;
+        sleep_s(pause);
+        if (pause < 0.05) pause *= 1.5;
+    }
+    return 0;
+}
+
+static char *metrics_text(srv *d)
+{
+    hresp r;
+    http_get(d, "/metrics", &r);
+    char *s = NULL;
+    if (r.status == 200) {
+        s = r.body.p;
+        r.body.p = NULL;
+    } else {
+        test_fail(__FILE__, __func__, __LINE__, "GET /metrics: %ld %s", r.status, r.err);
+    }
+    hresp_free(&r);
+    return s;
+}
+
+/* The value of a series (name with its labels exactly as exposed), or -1 when absent. */
+static double mval(const char *text, const char *series)
+{
+    size_t n = strlen(series);
+    for (const char *p = text; p && *p;) {
+        if (!strncmp(p, series, n) && p[n] == ' ') return strtod(p + n + 1, NULL);
+        p = strchr(p, '\n');
+        if (p) p++;
+    }
+    return -1;
+}
+
+static double metric(srv *d, const char *series)
+{
+    char *t = metrics_text(d);
+    double v = t ? mval(t, series) : -1;
+    free(t);
+    return v;
+}
+
+#define ACCEPTED "cellar_jobs_total{state=\"accepted\"}"
+#define DONE     "cellar_jobs_total{state=\"done\"}"
+#define CANCELED "cellar_jobs_total{state=\"canceled\"}"
+#define HITS     "cellar_cache_hits_total"
+#define COALESCE "cellar_jobs_coalesced_total"
+
+/* Every 5xx counted in /metrics other than 503 (none expected). */
+static void check_no_500(srv *d)
+{
+    char *t = metrics_text(d);
+    for (const char *p = t; p && (p = strstr(p, "status=\"5")); p++)
+        CHECK(!strncmp(p, "status=\"503\"", 12), "a 5xx other than 503 was answered: %.60s", p);
+    free(t);
+}
+
+/* The problem document checks shared by every error response. */
+static void check_problem_(srv *d, const hresp *r, long status, const char *path, const char *what,
+                           const char *func, int line)
+{
+    char ct[128];
+    if (r->status != status) {
+        test_fail(__FILE__, func, line, "%s: want %ld, got %ld (%s) %s", what, status, r->status,
+                  r->err, r->body.p ? r->body.p : "");
+        return;
+    }
+    if (!hget(r, "Content-Type", ct, sizeof ct) || strcmp(ct, "application/problem+json"))
+        test_fail(__FILE__, func, line, "%s: Content-Type %s", what, ct);
+    json_t *o = jbody(r);
+    if (!json_is_object(o) || json_integer_value(json_object_get(o, "status")) != status ||
+        !*jstr(o, "title") || !*jstr(o, "detail") || (path && strcmp(jstr(o, "instance"), path)))
+        test_fail(__FILE__, func, line, "%s: not the problem expected: %s", what, r->body.p);
+    json_decref(o);
+    vq_add(d, "problem", r);
+}
+#define check_problem(d, r, status, path, what)                                                    \
+    check_problem_(d, r, status, path, what, __func__, __LINE__)
+
+/* /healthz answers and a small request still works (after some abuse). */
+static void check_sane_(srv *d, const char *after, int k, const char *func, int line)
+{
+    hresp r;
+    size_t len, elen;
+    if (!srv_alive(d)) {
+        test_fail(__FILE__, func, line, "after %s: cellard is gone", after);
+        return;
+    }
+    http_get(d, "/healthz", &r);
+    if (r.status != 200)
+        test_fail(__FILE__, func, line, "after %s: /healthz %ld %s", after, r.status, r.err);
+    hresp_free(&r);
+    char *body = small_body(k, 0, &len);
+    const char *exp = expect(body, len, &elen);
+    http_post(d, body, len, "wait=20", &r);
+    if (r.status != 200 || same_result(r.body.p, r.body.n, exp, elen) != 1)
+        test_fail(__FILE__, func, line, "after %s: a small request: %ld %s", after, r.status,
+                  r.err);
+    hresp_free(&r);
+    free(body);
+}
+#define check_sane(d, after, k) check_sane_(d, after, k, __func__, __LINE__)
+
+/* ---- 1. post, poll, fetch ---------------------------------------------------------------- */
+
+SERVER_TEST(post_poll_fetch, "--workers 2 --job-threads 1")
+{
+    size_t len, elen;
+    const char *body = medium(20, &len); /* 8000 segments: tens of ms, so never done at once */
+    REQUIRE(body, "no request");
+    const char *exp = expect(body, len, &elen);
+    REQUIRE(exp, "no expected result");
+
+    hresp r;
+    char v[256], want[256];
+    jobv j;
+    http_post(d, body, len, NULL, &r);
+    REQUIRE(r.status == 202, "POST without Prefer: %ld %s %.300s", r.status, r.err, r.body.p);
+    REQUIRE(job_parse(&r, &j) == 0, "202 body is not a job: %s", r.body.p);
+    vq_add(d, "job", &r);
+    snprintf(want, sizeof want, "/v1/jobs/%.32s", j.id);
+    CHECK(hget(&r, "Location", v, sizeof v) && !strcmp(v, want), "Location %s, want %s", v, want);
+    CHECK(hget(&r, "Retry-After", v, sizeof v) && atoi(v) >= 1, "Retry-After %s", v);
+    CHECK(has_header(&r, "X-Cellar-Job", j.id), "X-Cellar-Job");
+    CHECK(has_header(&r, "Content-Type", "application/json"), "Content-Type");
+    CHECK(!hget(&r, "Preference-Applied", v, sizeof v), "Preference-Applied without Prefer");
+    CHECK(!strcmp(j.state, "queued") || !strcmp(j.state, "running"), "state %s", j.state);
+    CHECK(!j.result[0], "a result link before the job ended");
+    hresp_free(&r);
+
+    jobv done;
+    REQUIRE(wait_state(d, j.id, "done", 60 * slowdown(), &done), "job %s: last state %s", j.id,
+            done.state);
+    CHECK(!strcmp(done.hash, j.hash) && !strcmp(done.id, j.id), "the job changed its id or hash");
+    snprintf(want, sizeof want, "/v1/results/%.64s", j.hash);
+    CHECK(!strcmp(done.result, want), "result link %s, want %s", done.result, want);
+    snprintf(v, sizeof v, "/v1/jobs/%.32s", j.id);
+    http_get(d, v, &r);
+    vq_add(d, "job", &r);
+    json_t *o = jbody(&r);
+    json_t *pr = json_object_get(o, "progress");
+    CHECK(json_is_string(json_object_get(o, "finished")) &&
+              json_is_string(json_object_get(o, "started")) &&
+              json_real_value(json_object_get(pr, "fraction")) == 1.0,
+          "a done job has started, finished and fraction 1: %s", r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+
+    /* the job's result: the CLI's bytes */
+    snprintf(v, sizeof v, "/v1/jobs/%.32s/result", j.id);
+    http_get(d, v, &r);
+    CHECK(r.status == 200, "GET %s: %ld", v, r.status);
+    CHECK(same_result(r.body.p, r.body.n, exp, elen) == 1,
+          "job result differs from `cellar run` (%zu vs %zu bytes)", r.body.n, elen);
+    snprintf(want, sizeof want, "\"%s\"", j.hash);
+    CHECK(has_header(&r, "ETag", want), "job result ETag");
+    CHECK(has_header(&r, "Content-Type", "application/json"), "job result Content-Type");
+    hresp_free(&r);
+
+    /* a smaller job's result against the result schema (the big one is slow to validate) */
+    size_t slen, selen;
+    const char *small = medium(1, &slen), *sexp = small ? expect(small, slen, &selen) : NULL;
+    REQUIRE(sexp, "no expected result");
+    jobv j2, d2;
+    REQUIRE(submit(d, small, slen, &j2) == 0, "second job");
+    CHECK(wait_state(d, j2.id, "done", 30 * slowdown(), &d2), "second job: %s", d2.state);
+    snprintf(v, sizeof v, "/v1/jobs/%.32s/result", j2.id);
+    http_get(d, v, &r);
+    CHECK(r.status == 200 && same_result(r.body.p, r.body.n, sexp, selen) == 1,
+          "second job's result: %ld", r.status);
+    vq_add(d, "result", &r);
+    hresp_free(&r);
+
+    /* the same bytes by hash, with the ETag */
+    char rpath[128];
+    snprintf(rpath, sizeof rpath, "/v1/results/%.64s", j.hash);
+    http_get(d, rpath, &r);
+    CHECK(r.status == 200, "GET %s: %ld", rpath, r.status);
+    CHECK(same_result(r.body.p, r.body.n, exp, elen) == 1, "result by hash differs");
+    CHECK(has_header(&r, "ETag", want), "ETag, want %s", want);
+    CHECK(hget(&r, "Cache-Control", v, sizeof v) && strstr(v, "immutable"), "Cache-Control %s", v);
+    hresp_free(&r);
+
+    /* If-None-Match: 304 with no body; another tag: the full result */
+    char inm[128];
+    snprintf(inm, sizeof inm, "If-None-Match: \"%s\"", j.hash);
+    hreq q = {.path = rpath, .h = {inm}};
+    http_do(d, &q, &r);
+    CHECK(r.status == 304 && r.body.n == 0, "If-None-Match: %ld with %zu bytes", r.status,
+          r.body.n);
+    CHECK(has_header(&r, "ETag", want), "304 without the ETag");
+    hresp_free(&r);
+    hreq q2 = {.path = rpath, .h = {"If-None-Match: \"0000\""}};
+    http_do(d, &q2, &r);
+    CHECK(r.status == 200 && r.body.n == elen, "If-None-Match with another tag: %ld", r.status);
+    hresp_free(&r);
+
+    /* HEAD: the headers alone, Content-Length of the full result */
+    http_method(d, "HEAD", rpath, &r);
+    snprintf(want, sizeof want, "%zu", elen);
+    CHECK(r.status == 200 && r.body.n == 0 && has_header(&r, "Content-Length", want),
+          "HEAD %s: %ld, %zu bytes", rpath, r.status, r.body.n);
+    hresp_free(&r);
+
+    srv_term(d);
+}
+
+/* ---- 2. a cache hit runs no job ---------------------------------------------------------- */
+
+SERVER_TEST(cache_hit_runs_no_job, "--workers 2 --job-threads 1")
+{
+    size_t len, elen;
+    const char *body = medium(3, &len);
+    REQUIRE(body, "no request");
+    const char *exp = expect(body, len, &elen);
+    REQUIRE(exp, "no expected result");
+    hresp r1, r2;
+    char v[256], etag[128], loc[128];
+
+    http_post(d, body, len, "wait=30", &r1);
+    REQUIRE(r1.status == 200, "first POST: %ld %s", r1.status, r1.err);
+    CHECK(has_header(&r1, "X-Cellar-Cache", "miss"), "first POST is not a miss");
+    CHECK(same_result(r1.body.p, r1.body.n, exp, elen) == 1, "first result differs from the CLI");
+    CHECK(hget(&r1, "ETag", etag, sizeof etag) && strlen(etag) == 66, "ETag %s", etag);
+    CHECK(hget(&r1, "X-Cellar-Job", v, sizeof v) && is_hex(v, 32), "X-Cellar-Job %s", v);
+    snprintf(loc, sizeof loc, "/v1/results/%.64s", etag + 1);
+    CHECK(has_header(&r1, "Content-Location", loc), "Content-Location, want %s", loc);
+    CHECK(has_header(&r1, "Preference-Applied", "wait=30"), "Preference-Applied");
+
+    char *m = metrics_text(d);
+    REQUIRE(m, "no metrics");
+    double acc = mval(m, ACCEPTED), hits = mval(m, HITS);
+    free(m);
+    CHECK(acc == 1 && hits == 0, "after one job: accepted %g hits %g", acc, hits);
+
+    http_post(d, body, len, NULL, &r2);
+    CHECK(r2.status == 200, "repeat: %ld, want 200 at once", r2.status);
+    CHECK(has_header(&r2, "X-Cellar-Cache", "hit"), "repeat is not a hit");
+    CHECK(r2.body.n == r1.body.n && !memcmp(r2.body.p, r1.body.p, r1.body.n), "hit bytes differ");
+    CHECK(has_header(&r2, "ETag", etag), "hit ETag differs");
+    CHECK(r2.secs < 2 * slowdown(), "a hit took %.2f s", r2.secs);
+    hresp_free(&r2);
+
+    /* the same request written differently (key order, spaces): the same canonical request */
+    json_t *o = json_loadb(body, len, 0, NULL);
+    char *alt = o ? json_dumps(o, JSON_SORT_KEYS | JSON_INDENT(2)) : NULL;
+    json_decref(o);
+    REQUIRE(alt, "cannot re-serialize the request");
+    http_post(d, alt, strlen(alt), "wait=30", &r2);
+    CHECK(r2.status == 200 && has_header(&r2, "X-Cellar-Cache", "hit"),
+          "the same request re-formatted: %ld, not a hit", r2.status);
+    CHECK(r2.body.n == r1.body.n && !memcmp(r2.body.p, r1.body.p, r1.body.n), "hit bytes differ");
+    hresp_free(&r2);
+    free(alt);
+
+    m = metrics_text(d);
+    REQUIRE(m, "no metrics");
+    CHECK(mval(m, ACCEPTED) == acc, "a hit ran a job: accepted %g -> %g", acc, mval(m, ACCEPTED));
+    CHECK(mval(m, HITS) == hits + 2, "cache hits %g -> %g, want +2", hits, mval(m, HITS));
+    CHECK(mval(m, DONE) == 1, "done %g", mval(m, DONE));
+    free(m);
+
+    /* the cache outlives the process */
+    if (srv_term(d) == 0 && srv_start(d) == 0) {
+        http_post(d, body, len, NULL, &r2);
+        CHECK(r2.status == 200 && has_header(&r2, "X-Cellar-Cache", "hit"),
+              "after a restart: %ld, not a hit", r2.status);
+        CHECK(r2.body.n == r1.body.n && !memcmp(r2.body.p, r1.body.p, r1.body.n),
+              "hit bytes differ after a restart");
+        hresp_free(&r2);
+        CHECK(metric(d, ACCEPTED) == 0, "after a restart a hit ran a job");
+        srv_term(d);
+    }
+    hresp_free(&r1);
+}
+
+/* ---- 3. Prefer: wait --------------------------------------------------------------------- */
+
+typedef struct poster {
+    srv *d;
+    const char *body;
+    size_t len;
+    const char *prefer;
+    pthread_barrier_t *bar;
+    hresp r;
+} poster;
+
+static void *post_thread(void *arg)
+{
+    poster *p = arg;
+    if (p->bar) pthread_barrier_wait(p->bar);
+    http_post(p->d, p->body, p->len, p->prefer, &p->r);
+    return NULL;
+}
+
+SERVER_TEST(prefer_wait, "--workers 1 --job-threads 1 --max-wait 2")
+{
+    size_t len, elen, hlen;
+    hresp r;
+    char v[256];
+    const char *huge = huge_body(&hlen);
+    REQUIRE(huge, "no slow request");
+
+    /* a fast job within the wait: 200 with the result and Preference-Applied */
+    char *f1 = small_body(1, 1, &len);
+    const char *exp = expect(f1, len, &elen);
+    http_post(d, f1, len, "wait=1.5", &r);
+    CHECK(r.status == 200, "fast job with wait=1.5: %ld", r.status);
+    CHECK(has_header(&r, "Preference-Applied", "wait=1.5"), "Preference-Applied: %s",
+          hget(&r, "Preference-Applied", v, sizeof v) ? v : "(none)");
+    CHECK(has_header(&r, "X-Cellar-Cache", "miss"), "not a miss");
+    CHECK(exp && same_result(r.body.p, r.body.n, exp, elen) == 2,
+          "result differs from the CLI (stats.ms aside)");
+    vq_add(d, "result", &r);
+    hresp_free(&r);
+    free(f1);
+
+    /* wait above --max-wait: capped, and the cap is what Preference-Applied says */
+    char *f2 = small_body(2, 1, &len);
+    http_post(d, f2, len, "wait=10", &r);
+    CHECK(r.status == 200, "fast job with wait=10: %ld", r.status);
+    CHECK(has_header(&r, "Preference-Applied", "wait=2"), "capped Preference-Applied: %s",
+          hget(&r, "Preference-Applied", v, sizeof v) ? v : "(none)");
+    hresp_free(&r);
+    free(f2);
+
+    /* a slow job holds the only worker; jobs behind it cannot finish within their wait */
+    jobv h;
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "huge job");
+    CHECK(wait_state(d, h.id, "running", 30 * slowdown(), NULL), "the huge job never ran");
+
+    pthread_t t[2];
+    size_t l3, l4;
+    char *f3 = small_body(3, 0, &l3), *f4 = small_body(4, 0, &l4);
+    poster p[2] = {{.d = d, .body = f3, .len = l3, .prefer = "respond-async, wait=1"},
+                   {.d = d, .body = f4, .len = l4, .prefer = "wait=60"}};
+    int started[2];
+    for (int i = 0; i < 2; i++) started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+    for (int i = 0; i < 2; i++)
+        if (started[i]) pthread_join(t[i], NULL);
+    CHECK(p[0].r.status == 202, "wait=1 behind a slow job: %ld %s", p[0].r.status, p[0].r.err);
+    CHECK(p[0].r.secs >= 0.8 && p[0].r.secs <= 3.0, "wait=1 answered after %.2f s", p[0].r.secs);
+    CHECK(has_header(&p[0].r, "Preference-Applied", "wait=1"), "wait=1: Preference-Applied %s",
+          hget(&p[0].r, "Preference-Applied", v, sizeof v) ? v : "(none)");
+    CHECK(hget(&p[0].r, "Location", v, sizeof v) && !strncmp(v, "/v1/jobs/", 9),
+          "202 without Location");
+    vq_add(d, "job", &p[0].r);
+    CHECK(p[1].r.status == 202, "wait=60 (capped at 2) behind a slow job: %ld %s", p[1].r.status,
+          p[1].r.err);
+    CHECK(p[1].r.secs >= 1.8 && p[1].r.secs <= 4.5, "wait=60 capped at 2 answered after %.2f s",
+          p[1].r.secs);
+    CHECK(has_header(&p[1].r, "Preference-Applied", "wait=2"), "capped: Preference-Applied %s",
+          hget(&p[1].r, "Preference-Applied", v, sizeof v) ? v : "(none)");
+    jobv j3 = {0}, j4 = {0};
+    job_parse(&p[0].r, &j3);
+    job_parse(&p[1].r, &j4);
+    hresp_free(&p[0].r);
+    hresp_free(&p[1].r);
+    free(f3);
+    free(f4);
+
+    /* the slow job is still running (else the timings above prove nothing), 2 s in: past its
+     * first stages, and its progress never goes back */
+    char path[128], stage[64] = "";
+    double f[2] = {-1, -1};
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    for (int i = 0; i < 2; i++) {
+        if (i) sleep_s(0.2);
+        http_get(d, path, &r);
+        json_t *o = jbody(&r), *pr = json_object_get(o, "progress");
+        CHECK(r.status == 200 && !strcmp(jstr(o, "state"), "running"),
+              "the huge job is no longer running: %s", r.body.p);
+        f[i] = json_number_value(json_object_get(pr, "fraction"));
+        snprintf(stage, sizeof stage, "%s", jstr(pr, "stage"));
+        vq_add(d, "job", &r);
+        json_decref(o);
+        hresp_free(&r);
+    }
+    CHECK(f[0] > 0 && f[0] < 1 && f[1] >= f[0] && f[1] < 1,
+          "progress of a job running for 2 s: %g then %g", f[0], f[1]);
+    CHECK(strcmp(stage, "queued") && strcmp(stage, "done"), "stage of a running job: %s", stage);
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE the huge job: %ld", r.status);
+    hresp_free(&r);
+    /* the jobs whose wait ran out go on and finish */
+    CHECK(j3.id[0] && wait_state(d, j3.id, "done", 30 * slowdown(), NULL), "job 3 not done");
+    CHECK(j4.id[0] && wait_state(d, j4.id, "done", 30 * slowdown(), NULL), "job 4 not done");
+    srv_term(d);
+}
+
+/* ---- 4. cancel --------------------------------------------------------------------------- */
+
+SERVER_TEST(cancel, "--workers 1 --job-threads 1")
+{
+    size_t hlen, slen, len;
+    const char *huge = huge_body(&hlen), *slow1 = slow_body(1, &slen);
+    REQUIRE(huge && slow1, "no slow requests");
+    hresp r;
+    char path[160], v[128];
+    jobv h, s, j;
+
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "running job");
+    REQUIRE(wait_state(d, h.id, "running", 30 * slowdown(), &j), "huge job not running: %s",
+            j.state);
+    REQUIRE(submit(d, slow1, slen, &s) == 0, "queued job");
+    CHECK(wait_state(d, s.id, "queued", 1, &j), "second job: %s, want queued", j.state);
+
+    /* the result of an unfinished job: 409 with Retry-After */
+    snprintf(path, sizeof path, "/v1/jobs/%.32s/result", s.id);
+    http_get(d, path, &r);
+    check_problem(d, &r, 409, path, "result of a queued job");
+    CHECK(hget(&r, "Retry-After", v, sizeof v), "409 for an unfinished job without Retry-After");
+    hresp_free(&r);
+
+    /* a client waiting on the queued job (an identical request joins it) */
+    poster w = {.d = d, .body = slow1, .len = slen, .prefer = "wait=30"};
+    pthread_t wt;
+    int wstarted = pthread_create(&wt, NULL, post_thread, &w) == 0;
+    double coal = 0, deadline = now_s() + 10 * slowdown();
+    while (wstarted && now_s() < deadline && (coal = metric(d, COALESCE)) < 1) sleep_s(0.01);
+    CHECK(coal == 1, "the waiting client did not join the queued job: coalesced %g", coal);
+
+    /* cancel the queued job: the waiting client hears it at once */
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+    double tc = now_s();
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200 && job_parse(&r, &j) == 0 && !strcmp(j.state, "canceled"),
+          "DELETE queued: %ld %s", r.status, r.body.p);
+    vq_add(d, "job", &r);
+    hresp_free(&r);
+    if (wstarted) pthread_join(wt, NULL);
+    check_problem(d, &w.r, 409, "/v1/jobs", "a client waiting on a canceled job");
+    CHECK(now_s() - tc < 2 * slowdown(), "the waiting client heard of the cancel after %.2f s",
+          now_s() - tc);
+    hresp_free(&w.r);
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && job_parse(&r, &j) == 0 && !strcmp(j.state, "canceled"),
+          "GET canceled job: %ld %s", r.status, r.body.p);
+    vq_add(d, "job", &r);
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/jobs/%.32s/result", s.id);
+    http_get(d, path, &r);
+    check_problem(d, &r, 409, path, "result of a canceled job");
+    hresp_free(&r);
+
+    /* cancel the running job: it stops early and frees the worker */
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    double t0 = now_s();
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200 && job_parse(&r, &j) == 0 && !strcmp(j.state, "canceled"),
+          "DELETE running: %ld %s", r.status, r.body.p);
+    vq_add(d, "job", &r);
+    hresp_free(&r);
+    char *small = small_body(5, 0, &len);
+    http_post(d, small, len, "wait=30", &r);
+    double freed = now_s() - t0, bound = 1.0 + slow.secs;
+    CHECK(r.status == 200, "a small job after the cancel: %ld", r.status);
+    CHECK(freed < bound, "the worker was busy %.2f s after the cancel (bound %.2f s)", freed,
+          bound);
+    hresp_free(&r);
+    free(small);
+
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && job_parse(&r, &j) == 0 && !strcmp(j.state, "canceled"),
+          "canceled running job later: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    snprintf(v, sizeof v, "/v1/results/%.64s", h.hash);
+    http_get(d, v, &r);
+    CHECK(r.status == 404, "the canceled job left a result: %ld", r.status);
+    hresp_free(&r);
+
+    /* cancel again: 409; an unknown job: 404 */
+    http_method(d, "DELETE", path, &r);
+    check_problem(d, &r, 409, path, "DELETE a canceled (running) job");
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+    http_method(d, "DELETE", path, &r);
+    check_problem(d, &r, 409, path, "DELETE a canceled (queued) job");
+    hresp_free(&r);
+    const char *unknown = "/v1/jobs/0123456789abcdef0123456789abcdef";
+    http_method(d, "DELETE", unknown, &r);
+    check_problem(d, &r, 404, unknown, "DELETE an unknown job");
+    hresp_free(&r);
+
+    char *m = metrics_text(d);
+    CHECK(m && mval(m, CANCELED) == 2 && mval(m, DONE) == 1, "canceled %g done %g, want 2 and 1",
+          m ? mval(m, CANCELED) : -1, m ? mval(m, DONE) : -1);
+    free(m);
+    srv_term(d);
+}
+
+/* ---- 5. concurrent clients --------------------------------------------------------------- */
+
+#define NCLIENTS  50
+#define NDISTINCT 10
+
+SERVER_TEST(concurrent_clients, "--workers 1 --job-threads 1")
+{
+    const char *bodies[NDISTINCT], *exp[NDISTINCT];
+    size_t lens[NDISTINCT], elens[NDISTINCT], hlen;
+    for (int k = 0; k < NDISTINCT; k++) {
+        bodies[k] = medium(k, &lens[k]);
+        REQUIRE(bodies[k], "no request %d", k);
+        exp[k] = expect(bodies[k], lens[k], &elens[k]);
+        REQUIRE(exp[k], "no expected result %d", k);
+    }
+    const char *huge = huge_body(&hlen);
+    REQUIRE(huge, "no slow request");
+
+    /* round 1: the worker is held by a slow job while 50 clients post 10 distinct requests */
+    jobv h;
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "blocking job");
+    static poster p[NCLIENTS];
+    pthread_t t[NCLIENTS];
+    int started[NCLIENTS];
+    pthread_barrier_t bar;
+    pthread_barrier_init(&bar, NULL, NCLIENTS);
+    for (int i = 0; i < NCLIENTS; i++) {
+        p[i] = (poster){.d = d,
+                        .body = bodies[i % NDISTINCT],
+                        .len = lens[i % NDISTINCT],
+                        .prefer = "wait=30",
+                        .bar = &bar};
+        started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        if (!started[i]) { /* let the barrier open anyway */
+            p[i].bar = NULL;
+            started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        }
+    }
+    /* every client has joined a job (or made one) before the slow job is canceled */
+    double acc = 0, coal = 0, deadline = now_s() + 20 * slowdown();
+    while (now_s() < deadline) {
+        char *m = metrics_text(d);
+        acc = m ? mval(m, ACCEPTED) : -1;
+        coal = m ? mval(m, COALESCE) : -1;
+        free(m);
+        if (acc + coal >= 1 + NCLIENTS) break;
+        sleep_s(0.02);
+    }
+    CHECK(acc == 1 + NDISTINCT && coal == NCLIENTS - NDISTINCT,
+          "while the worker was busy: accepted %g (want %d), coalesced %g (want %d)", acc,
+          1 + NDISTINCT, coal, NCLIENTS - NDISTINCT);
+    jobv hs;
+    CHECK(wait_state(d, h.id, "running", 1, &hs), "the blocking job ended early: %s", hs.state);
+    char path[128];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    hresp r;
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE the blocking job: %ld", r.status);
+    hresp_free(&r);
+    int bad = 0;
+    for (int i = 0; i < NCLIENTS; i++) {
+        if (started[i]) pthread_join(t[i], NULL);
+        int k = i % NDISTINCT;
+        if (p[i].r.status != 200 ||
+            same_result(p[i].r.body.p, p[i].r.body.n, exp[k], elens[k]) != 1)
+            if (bad++ < 5)
+                CHECK(0, "client %d: %ld (%s), %zu bytes, want 200 with %zu", i, p[i].r.status,
+                      p[i].r.err, p[i].r.body.n, elens[k]);
+        hresp_free(&p[i].r);
+    }
+    pthread_barrier_destroy(&bar);
+    CHECK(bad == 0, "%d of %d clients got a wrong answer", bad, NCLIENTS);
+
+    /* round 2: the same 50 again, every one a cache hit */
+    pthread_barrier_init(&bar, NULL, NCLIENTS);
+    for (int i = 0; i < NCLIENTS; i++) {
+        started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        if (!started[i]) {
+            p[i].bar = NULL;
+            started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        }
+    }
+    bad = 0;
+    for (int i = 0; i < NCLIENTS; i++) {
+        if (started[i]) pthread_join(t[i], NULL);
+        int k = i % NDISTINCT;
+        if (p[i].r.status != 200 || !has_header(&p[i].r, "X-Cellar-Cache", "hit") ||
+            same_result(p[i].r.body.p, p[i].r.body.n, exp[k], elens[k]) != 1)
+            if (bad++ < 5)
+                CHECK(0, "round 2 client %d: %ld (%s), %zu bytes", i, p[i].r.status, p[i].r.err,
+                      p[i].r.body.n);
+        hresp_free(&p[i].r);
+    }
+    pthread_barrier_destroy(&bar);
+    CHECK(bad == 0, "round 2: %d of %d clients got a wrong answer", bad, NCLIENTS);
+
+    char *m = metrics_text(d);
+    REQUIRE(m, "no metrics");
+    CHECK(mval(m, ACCEPTED) - 1 == NDISTINCT, "accepted %g, want %d distinct (+1 blocker)",
+          mval(m, ACCEPTED), NDISTINCT);
+    CHECK(mval(m, DONE) == NDISTINCT, "done %g, want %d", mval(m, DONE), NDISTINCT);
+    CHECK(mval(m, HITS) == NCLIENTS, "hits %g, want %d", mval(m, HITS), NCLIENTS);
+    CHECK(mval(m, "cellar_http_requests_total{route=\"jobs\",status=\"200\"}") == 2 * NCLIENTS,
+          "jobs 200 counted %g, want %d",
+          mval(m, "cellar_http_requests_total{route=\"jobs\",status=\"200\"}"), 2 * NCLIENTS);
+    free(m);
+    srv_term(d);
+}
+
+/* ---- 6. error statuses ------------------------------------------------------------------- */
+
+static void post_ct(srv *d, const char *ctype, const char *body, size_t len, hresp *r)
+{
+    char h[128];
+    snprintf(h, sizeof h, "Content-Type:%s%s", ctype ? " " : "", ctype ? ctype : "");
+    hreq q = {.path = "/v1/jobs", .body = body, .len = len, .has_body = 1, .h = {h}};
+    http_do(d, &q, r);
+}
+
+static void queue_full(void)
+{
+    srv d_, *d = &d_;
+    size_t slen, len;
+    hresp r;
+    char v[64];
+    jobv s, q1, j;
+    if (srv_open(d, "--workers 1 --queue 1 --job-threads 1") != 0) goto out;
+    const char *slow1 = slow_body(1, &slen);
+    if (!slow1 || submit(d, slow1, slen, &s)) goto out;
+    if (!wait_state(d, s.id, "running", 30 * slowdown(), &j)) {
+        CHECK(0, "slow job not running: %s", j.state);
+        goto out;
+    }
+    char *b1 = small_body(6, 0, &len);
+    if (submit(d, b1, len, &q1) == 0) {
+        char *b2 = small_body(7, 0, &len);
+        http_post(d, b2, len, NULL, &r);
+        check_problem(d, &r, 503, "/v1/jobs", "a job with the queue full");
+        CHECK(hget(&r, "Retry-After", v, sizeof v) && atoi(v) >= 1, "503 Retry-After: %s", v);
+        hresp_free(&r);
+        free(b2);
+        /* a request identical to the queued job joins it, even with the queue full */
+        http_post(d, b1, strlen(b1), NULL, &r);
+        CHECK(r.status == 202 && job_parse(&r, &j) == 0 && !strcmp(j.id, q1.id),
+              "identical to the queued job: %ld %s", r.status, r.body.p);
+        hresp_free(&r);
+        char *m = metrics_text(d);
+        CHECK(m && mval(m, "cellar_queue_depth") == 1 &&
+                  mval(m, "cellar_jobs{state=\"running\"}") == 1 &&
+                  mval(m, "cellar_queue_capacity") == 1,
+              "queue gauges: depth %g running %g", m ? mval(m, "cellar_queue_depth") : -1,
+              m ? mval(m, "cellar_jobs{state=\"running\"}") : -1);
+        free(m);
+        char path[128];
+        snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+        http_method(d, "DELETE", path, &r);
+        CHECK(r.status == 200, "DELETE: %ld", r.status);
+        hresp_free(&r);
+        CHECK(wait_state(d, q1.id, "done", 30 * slowdown(), &j), "queued job: %s", j.state);
+    }
+    free(b1);
+    check_no_500(d);
+    srv_term(d);
+out:
+    srv_finish(d);
+}
+
+SERVER_TEST(error_statuses, "--workers 2 --job-threads 1 --max-body 4096")
+{
+    hresp r;
+    char v[256];
+    size_t len;
+
+    /* 400: malformed JSON, with line and column */
+    const char *bad[] = {"{\"kind\":\"lines\",\"lines\":[[1",
+                         "{\n  \"kind\": \"lines\",\n  \"lines\": [}\n",
+                         "",
+                         "{\"kind\":\"lines\",\"lines\":[[[0,0],[NaN,1]]]}",
+                         "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]]} trailing",
+                         "{\"kind\":\"l\xff\xfe\",\"lines\":[]}"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        post_ct(d, "application/json", bad[i], strlen(bad[i]), &r);
+        check_problem(d, &r, 400, "/v1/jobs", bad[i]);
+        hresp_free(&r);
+    }
+    /* a duplicate key: refused, as malformed (400) or as the wrong shape (422) */
+    const char *dup = "{\"kind\":\"lines\",\"kind\":\"lines\",\"lines\":[]}";
+    post_ct(d, "application/json", dup, strlen(dup), &r);
+    check_problem(d, &r, r.status == 422 ? 422 : 400, "/v1/jobs", dup);
+    hresp_free(&r);
+    post_ct(d, "application/json", bad[1], strlen(bad[1]), &r);
+    json_t *o = jbody(&r);
+    CHECK(strstr(jstr(o, "detail"), "line 3, column"), "400 detail without line 3: %s",
+          jstr(o, "detail"));
+    json_decref(o);
+    hresp_free(&r);
+    post_ct(d, "application/json", bad[0], strlen(bad[0]), &r);
+    o = jbody(&r);
+    CHECK(strstr(jstr(o, "detail"), "line 1, column"), "400 detail without line/column: %s",
+          jstr(o, "detail"));
+    json_decref(o);
+    hresp_free(&r);
+
+    /* 413: by Content-Length (with and without Expect: 100-continue), chunked, and the edge */
+    char *big = malloc(10001);
+    REQUIRE(big, "no memory");
+    memset(big, ' ', 10000);
+    big[10000] = 0;
+    post_ct(d, "application/json", big, 10000, &r);
+    check_problem(d, &r, 413, "/v1/jobs", "10000 bytes with Content-Length");
+    hresp_free(&r);
+    hreq q = {.path = "/v1/jobs",
+              .body = big,
+              .len = 10000,
+              .has_body = 1,
+              .no_expect_off = 1,
+              .h = {"Content-Type: application/json", "Expect: 100-continue"}};
+    http_do(d, &q, &r);
+    check_problem(d, &r, 413, "/v1/jobs", "10000 bytes with Expect: 100-continue");
+    hresp_free(&r);
+    hreq qc = {.path = "/v1/jobs",
+               .body = big,
+               .len = 10000,
+               .has_body = 1,
+               .chunked = 1,
+               .h = {"Content-Type: application/json"}};
+    http_do(d, &qc, &r);
+    check_problem(d, &r, 413, "/v1/jobs", "10000 bytes chunked");
+    hresp_free(&r);
+    /* a valid request padded with spaces to exactly 4096 bytes passes, 4097 does not */
+    char *sb = small_body(8, 0, &len);
+    REQUIRE(len < 4000, "small body too big");
+    memcpy(big, sb, len);
+    memset(big + len, ' ', 4097 - len);
+    post_ct(d, "application/json", big, 4096, &r);
+    CHECK(r.status == 202 || r.status == 200, "4096 bytes (the limit): %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    post_ct(d, "application/json", big, 4097, &r);
+    check_problem(d, &r, 413, "/v1/jobs", "4097 bytes");
+    hresp_free(&r);
+    qc.body = sb;
+    qc.len = len;
+    http_do(d, &qc, &r); /* a small chunked body is fine */
+    CHECK(r.status == 202 || r.status == 200, "small chunked body: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    free(big);
+
+    /* 415: not JSON */
+    post_ct(d, "text/plain", sb, len, &r);
+    check_problem(d, &r, 415, "/v1/jobs", "text/plain");
+    hresp_free(&r);
+    post_ct(d, NULL, sb, len, &r); /* no Content-Type at all */
+    check_problem(d, &r, 415, "/v1/jobs", "no Content-Type");
+    hresp_free(&r);
+    post_ct(d, "application/json; charset=utf-8", sb, len, &r);
+    CHECK(r.status == 200 || r.status == 202, "application/json; charset=utf-8: %ld", r.status);
+    hresp_free(&r);
+    free(sb);
+
+    /* 422: valid JSON of the wrong shape, with the JSON path */
+    static const struct {
+        const char *body, *path;
+    } shape[] = {{"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,\"a\"]]]}", "lines[0][1][1]"},
+                 {"{\"kind\":\"lines\"}", "lines"},
+                 {"{\"kind\":\"bogus\",\"lines\":[]}", "kind"},
+                 {"{\"kind\":\"lines\",\"lines\":[],\"extra\":1}", "extra"},
+                 {"{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]],\"options\":{\"precision\":-1}}",
+                  "options.precision"},
+                 {"[1,2]", NULL}};
+    for (size_t i = 0; i < sizeof shape / sizeof *shape; i++) {
+        post_ct(d, "application/json", shape[i].body, strlen(shape[i].body), &r);
+        check_problem(d, &r, 422, "/v1/jobs", shape[i].body);
+        o = jbody(&r);
+        if (shape[i].path)
+            CHECK(!strcmp(jstr(o, "path"), shape[i].path), "%s: path \"%s\", want \"%s\"",
+                  shape[i].body, jstr(o, "path"), shape[i].path);
+        json_decref(o);
+        hresp_free(&r);
+    }
+
+    /* 404 */
+    const char *missing[] = {
+        "/nope",
+        "/v1/jobs/0123456789abcdef0123456789abcdef",
+        "/v1/jobs/0123456789abcdef0123456789abcdef/result",
+        "/v1/results/0000000000000000000000000000000000000000000000000000000000000000",
+        "/v1/jobs/xyz",
+        "/v1/jobs/0123456789abcdef0123456789abcdef/nope",
+        "/v1/results/short",
+        "/v1"};
+    for (size_t i = 0; i < sizeof missing / sizeof *missing; i++) {
+        http_get(d, missing[i], &r);
+        check_problem(d, &r, 404, missing[i], missing[i]);
+        hresp_free(&r);
+    }
+
+    /* 405 with Allow */
+    static const struct {
+        const char *method, *path, *allow;
+    } na[] = {{"GET", "/v1/jobs", "POST"},
+              {"DELETE", "/v1/jobs", "POST"},
+              {"PUT", "/v1/jobs/0123456789abcdef0123456789abcdef", "DELETE"},
+              {"POST", "/v1/jobs/0123456789abcdef0123456789abcdef/result", "GET"},
+              {"DELETE",
+               "/v1/results/0000000000000000000000000000000000000000000000000000000000000000",
+               "GET"},
+              {"DELETE", "/healthz", "GET"},
+              {"POST", "/metrics", "GET"}};
+    for (size_t i = 0; i < sizeof na / sizeof *na; i++) {
+        hreq qm = {.method = na[i].method, .path = na[i].path};
+        http_do(d, &qm, &r);
+        check_problem(d, &r, 405, na[i].path, na[i].path);
+        CHECK(hget(&r, "Allow", v, sizeof v) && strstr(v, na[i].allow), "%s %s: Allow %s",
+              na[i].method, na[i].path, v);
+        hresp_free(&r);
+    }
+
+    check_no_500(d);
+    CHECK(srv_alive(d), "cellard died");
+    srv_term(d);
+    queue_full();
+}
+
+/* ---- 7. restart resumes jobs ------------------------------------------------------------- */
+
+static int db_integrity(const char *path, char *out, size_t n)
+{
+    sqlite3 *db = NULL;
+    sqlite3_stmt *st = NULL;
+    snprintf(out, n, "(no answer)");
+    int ok = sqlite3_open_v2(path, &db, SQLITE_OPEN_READWRITE, NULL) == SQLITE_OK &&
+             sqlite3_prepare_v2(db, "PRAGMA integrity_check", -1, &st, NULL) == SQLITE_OK &&
+             sqlite3_step(st) == SQLITE_ROW;
+    if (ok)
+        snprintf(out, n, "%s", (const char *)sqlite3_column_text(st, 0));
+    else if (db)
+        snprintf(out, n, "%s", sqlite3_errmsg(db));
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+    return ok && !strcmp(out, "ok");
+}
+
+SERVER_TEST(restart_resumes_jobs, "--workers 1 --job-threads 1")
+{
+    enum { N = 5 };
+    const char *body[N];
+    size_t len[N];
+    body[0] = slow_body(2, &len[0]);
+    body[1] = medium(1, &len[1]);
+    body[2] = slow_body(3, &len[2]);
+    body[3] = medium(2, &len[3]);
+    body[4] = small_body(9, 0, &len[4]);
+    for (int i = 0; i < N; i++) REQUIRE(body[i], "no request %d", i);
+    jobv j[N], t;
+    REQUIRE(submit(d, body[0], len[0], &j[0]) == 0, "slow job");
+    REQUIRE(wait_state(d, j[0].id, "running", 30 * slowdown(), &t), "not running: %s", t.state);
+    int ok = 1;
+    for (int i = 1; i < N && ok; i++) ok = submit(d, body[i], len[i], &j[i]) == 0;
+    char *m = metrics_text(d);
+    CHECK(m && mval(m, "cellar_queue_depth") == N - 1, "queue depth %g",
+          m ? mval(m, "cellar_queue_depth") : -1);
+    free(m);
+    CHECK(wait_state(d, j[0].id, "running", 1, &t), "the slow job ended before the kill: %s",
+          t.state);
+    srv_kill(d);
+    if (!ok) {
+        free((char *)body[4]);
+        REQUIRE(0, "submits failed");
+    }
+
+    REQUIRE(srv_start(d) == 0, "restart");
+    for (int i = 0; i < N; i++) {
+        jobv done;
+        CHECK(wait_state(d, j[i].id, "done", (4 * slow.secs + 30) * slowdown(), &done),
+              "job %d (%s) after the restart: %s", i, j[i].id, done.state);
+        char path[128];
+        size_t elen;
+        const char *exp = expect(body[i], len[i], &elen);
+        snprintf(path, sizeof path, "/v1/jobs/%.32s/result", j[i].id);
+        hresp r;
+        http_get(d, path, &r);
+        int same = exp ? same_result(r.body.p, r.body.n, exp, elen) : 0;
+        CHECK(r.status == 200 && (i == 0 || i == 2 ? same > 0 : same == 1),
+              "job %d result: %ld, %zu bytes, differs from the CLI", i, r.status, r.body.n);
+        hresp_free(&r);
+    }
+    for (int i = 0; i < N; i++) {
+        char resumed[128];
+        snprintf(resumed, sizeof resumed, "\"msg\":\"job resumed\",\"job\":\"%.32s\"", j[i].id);
+        CHECK(log_contains(d, resumed), "job %d was not resumed", i);
+    }
+    m = metrics_text(d);
+    CHECK(m && mval(m, ACCEPTED) == 0 && mval(m, DONE) == N,
+          "after the restart: accepted %g (want 0: resumed, not new), done %g (want %d)",
+          m ? mval(m, ACCEPTED) : -1, m ? mval(m, DONE) : -1, N);
+    free(m);
+    /* a request of a resumed job is now a cache hit */
+    hresp r;
+    http_post(d, body[2], len[2], NULL, &r);
+    CHECK(r.status == 200 && has_header(&r, "X-Cellar-Cache", "hit"), "resumed result: %ld",
+          r.status);
+    hresp_free(&r);
+    free((char *)body[4]);
+    if (srv_term(d) == 0) {
+        char res[256];
+        CHECK(db_integrity(d->db, res, sizeof res), "PRAGMA integrity_check: %s", res);
+    }
+}
+
+/* ---- 8. SIGTERM drains ------------------------------------------------------------------- */
+
+SERVER_TEST(sigterm_drains, "--workers 1 --job-threads 1")
+{
+    size_t slen, qlen, wlen, nlen;
+    const char *slow4 = slow_body(4, &slen), *qb = medium(4, &qlen), *wb = medium(5, &wlen),
+               *nb = medium(6, &nlen);
+    REQUIRE(slow4 && qb && wb && nb, "no requests");
+    jobv s, q, t;
+    hresp r;
+    char v[64];
+
+    REQUIRE(submit(d, slow4, slen, &s) == 0, "slow job");
+    REQUIRE(wait_state(d, s.id, "running", 30 * slowdown(), &t), "not running: %s", t.state);
+    REQUIRE(submit(d, qb, qlen, &q) == 0, "queued job");
+    /* a client waiting on a queued job: answered (202) when the drain ends */
+    poster w = {.d = d, .body = wb, .len = wlen, .prefer = "wait=30"};
+    pthread_t wt;
+    int wstarted = pthread_create(&wt, NULL, post_thread, &w) == 0;
+    double acc = 0, deadline = now_s() + 10 * slowdown();
+    while (now_s() < deadline && (acc = metric(d, ACCEPTED)) < 3) sleep_s(0.01);
+    CHECK(acc == 3, "the waiting client's job was not accepted: %g", acc);
+    CHECK(wait_state(d, s.id, "running", 1, &t), "the slow job ended before SIGTERM: %s", t.state);
+
+    double t0 = now_s();
+    kill(d->pid, SIGTERM);
+    int saw503 = 0;
+    for (int i = 0; i < 1000 && now_s() < t0 + 5 * slowdown(); i++) {
+        http_get(d, "/readyz", &r);
+        long st = r.status;
+        json_t *o = jbody(&r);
+        if (st == 503) CHECK(!strcmp(jstr(o, "status"), "draining"), "readyz body %s", r.body.p);
+        json_decref(o);
+        hresp_free(&r);
+        if (st == 503) {
+            saw503 = 1;
+            break;
+        }
+        CHECK(st == 200, "/readyz while draining: %ld", st);
+        if (st != 200) break;
+        sleep_s(0.005);
+    }
+    CHECK(saw503, "/readyz never answered 503 while the slow job ran");
+    if (saw503) {
+        http_post(d, nb, nlen, NULL, &r);
+        check_problem(d, &r, 503, "/v1/jobs", "POST while draining");
+        CHECK(hget(&r, "Retry-After", v, sizeof v), "503 while draining without Retry-After");
+        hresp_free(&r);
+        char path[128];
+        snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+        http_get(d, path, &r);
+        CHECK(r.status == 200 && job_parse(&r, &t) == 0 && !strcmp(t.state, "running"),
+              "GET the running job while draining: %ld %s", r.status, r.body.p);
+        hresp_free(&r);
+    }
+    int st = 0;
+    int exited = srv_wait_exit(d, 60 * slowdown(), &st);
+    double drained = now_s() - t0;
+    CHECK(exited && WIFEXITED(st) && WEXITSTATUS(st) == 0, "after SIGTERM: exited %d, status 0x%x",
+          exited, st);
+    if (!exited) srv_kill(d);
+    if (wstarted) pthread_join(wt, NULL);
+    CHECK(w.r.status == 202, "the waiting client at the drain: %ld (%s) %s", w.r.status, w.r.err,
+          w.r.body.p ? w.r.body.p : "");
+    jobv wj = {0};
+    job_parse(&w.r, &wj);
+    CHECK(!strcmp(wj.state, "queued"), "the waiting client's job: %s", wj.state);
+    hresp_free(&w.r);
+    CHECK(log_contains(d, "\"state\":\"done\""), "the running job did not finish in the drain");
+    (void)drained;
+
+    /* restart: the drained job is done and cached, the queued ones resume */
+    REQUIRE(srv_start(d) == 0, "restart");
+    char path[128], resumed[128];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && job_parse(&r, &t) == 0 && !strcmp(t.state, "done"),
+          "the drained job at once after the restart: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    snprintf(resumed, sizeof resumed, "\"msg\":\"job resumed\",\"job\":\"%.32s\"", s.id);
+    CHECK(!log_contains(d, resumed), "the drained job was resumed: it did not finish in the drain");
+    snprintf(resumed, sizeof resumed, "\"msg\":\"job resumed\",\"job\":\"%.32s\"", q.id);
+    CHECK(log_contains(d, resumed), "the queued job was not resumed");
+    snprintf(path, sizeof path, "/v1/results/%.64s", s.hash);
+    http_get(d, path, &r);
+    size_t elen;
+    const char *exp = expect(slow4, slen, &elen);
+    CHECK(r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) == 2,
+          "the drained job's result: %ld", r.status);
+    hresp_free(&r);
+    const char *ids[2] = {q.id, wj.id};
+    const char *bodies[2] = {qb, wb};
+    size_t lens[2] = {qlen, wlen};
+    for (int i = 0; i < 2; i++) {
+        if (!ids[i][0]) continue; /* the waiting client got no job (a failure above) */
+        CHECK(wait_state(d, ids[i], "done", 30 * slowdown(), &t),
+              "queued job %d after the restart: %s", i, t.state);
+        snprintf(path, sizeof path, "/v1/jobs/%.32s/result", ids[i]);
+        http_get(d, path, &r);
+        exp = expect(bodies[i], lens[i], &elen);
+        CHECK(r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) == 1,
+              "queued job %d result: %ld", i, r.status);
+        hresp_free(&r);
+    }
+    srv_term(d);
+}
+
+/* ---- 9. garbage on the socket ------------------------------------------------------------ */
+
+static int raw_connect(const srv *d)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return -1;
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)d->port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    struct timeval tv = {5, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+    if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+/* Sends everything it can (the server may close first); returns the bytes sent. */
+static size_t raw_send(int fd, const void *data, size_t len)
+{
+    size_t off = 0;
+    while (off < len) {
+        ssize_t k = send(fd, (const char *)data + off, len - off, MSG_NOSIGNAL);
+        if (k <= 0) break;
+        off += (size_t)k;
+    }
+    return off;
+}
+
+/* Reads until the server closes, the timeout passes or max bytes; NUL-terminated. */
+static size_t raw_read(int fd, char *out, size_t max, double timeout)
+{
+    size_t n = 0;
+    double deadline = now_s() + timeout;
+    while (n + 1 < max && now_s() < deadline) {
+        ssize_t k = recv(fd, out + n, max - 1 - n, 0);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    out[n] = 0;
+    return n;
+}
+
+/* One raw exchange: the status of the answer (0: none). */
+static int raw_exchange(const srv *d, const void *data, size_t len, char *out, size_t max)
+{
+    int fd = raw_connect(d);
+    if (fd < 0) return -1;
+    raw_send(fd, data, len);
+    shutdown(fd, SHUT_WR);
+    size_t n = raw_read(fd, out, max, 10 * slowdown());
+    close(fd);
+    int status = 0;
+    if (n > 12 && !strncmp(out, "HTTP/1.", 7)) status = atoi(out + 9);
+    return status;
+}
+
+typedef struct slowclient {
+    const srv *d;
+    int status;
+    double secs;
+} slowclient;
+
+static void *slow_client(void *arg)
+{
+    slowclient *c = arg;
+    const char req[] = "GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
+    char out[2048];
+    double t0 = now_s();
+    int fd = raw_connect(c->d);
+    if (fd < 0) return NULL;
+    size_t i = 0;
+    for (; i < 40 && now_s() < t0 + 2.5; i++) { /* 40 bytes over 2 s */
+        raw_send(fd, req + i, 1);
+        sleep_s(0.05);
+    }
+    raw_send(fd, req + i, sizeof req - 1 - i);
+    raw_read(fd, out, sizeof out, 10);
+    close(fd);
+    if (!strncmp(out, "HTTP/1.", 7)) c->status = atoi(out + 9);
+    c->secs = now_s() - t0;
+    return NULL;
+}
+
+SERVER_TEST(garbage_on_the_socket, "--workers 2 --job-threads 1")
+{
+    char out[8192];
+    int st;
+
+    /* a truncated body: Content-Length 1000, 10 bytes, close */
+    int fd = raw_connect(d);
+    REQUIRE(fd >= 0, "connect");
+    const char trunc[] = "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: "
+                         "application/json\r\nContent-Length: 1000\r\n\r\n{\"kind\":\"l";
+    raw_send(fd, trunc, sizeof trunc - 1);
+    close(fd);
+    check_sane(d, "a truncated body", 0);
+
+    /* a method nobody knows */
+    const char brew[] = "BREW /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
+    st = raw_exchange(d, brew, sizeof brew - 1, out, sizeof out);
+    CHECK(st >= 400 && st < 500, "BREW: status %d: %.200s", st, out);
+    const char nohost[] = "GET /healthz HTTP/1.1\r\nConnection: close\r\n\r\n";
+    st = raw_exchange(d, nohost, sizeof nohost - 1, out, sizeof out);
+    CHECK(st == 200 || st == 400, "HTTP/1.1 without Host: status %d", st);
+    check_sane(d, "BREW", 1);
+
+    /* 10 MB of random bytes */
+    size_t n = 10u << 20;
+    unsigned char *junk = malloc(n);
+    REQUIRE(junk, "no memory");
+    uint64_t seed = 42;
+    for (size_t i = 0; i < n; i += 8) {
+        uint64_t x = (uint64_t)(test_rnd(&seed) * 18446744073709551615.0);
+        memcpy(junk + i, &x, 8);
+    }
+    st = raw_exchange(d, junk, n, out, sizeof out);
+    CHECK(st == 0 || (st >= 400 && st < 500), "random bytes: status %d", st);
+    check_sane(d, "10 MB of random bytes", 2);
+    /* the same as the body of a valid request */
+    char pre[256];
+    int pl = snprintf(pre, sizeof pre,
+                      "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: "
+                      "application/json\r\nConnection: close\r\nContent-Length: %zu\r\n\r\n",
+                      n);
+    unsigned char *req = malloc((size_t)pl + n);
+    if (!req) free(junk);
+    REQUIRE(req, "no memory");
+    memcpy(req, pre, (size_t)pl);
+    memcpy(req + pl, junk, n);
+    st = raw_exchange(d, req, (size_t)pl + n, out, sizeof out);
+    free(req);
+    CHECK(st == 400, "10 MB of random JSON: status %d: %.200s", st, out);
+    check_sane(d, "a random 10 MB body", 3);
+    free(junk);
+
+    /* deeply nested JSON: at the top and inside "lines" */
+    size_t depth = 100000;
+    buf b = {0};
+    for (int v = 0; v < 2; v++) {
+        buf body = {0};
+        if (v) buf_printf(&body, "{\"kind\":\"lines\",\"lines\":");
+        for (size_t i = 0; i < depth; i++) buf_add(&body, "[", 1);
+        b.n = 0;
+        buf_printf(&b,
+                   "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                   "Connection: close\r\nContent-Length: %zu\r\n\r\n",
+                   body.n);
+        buf_add(&b, body.p, body.n);
+        st = raw_exchange(d, b.p, b.n, out, sizeof out);
+        CHECK(st == 400, "nested JSON (%d): status %d: %.200s", v, st, out);
+        free(body.p);
+        check_sane(d, "deeply nested JSON", 4 + v);
+    }
+
+    /* a bad chunked encoding, and a header far too long */
+    const char badchunk[] = "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: "
+                            "application/json\r\nTransfer-Encoding: chunked\r\nConnection: "
+                            "close\r\n\r\nzz\r\n{}\r\n0\r\n\r\n";
+    st = raw_exchange(d, badchunk, sizeof badchunk - 1, out, sizeof out);
+    CHECK(st == 0 || (st >= 400 && st < 500), "bad chunked encoding: status %d", st);
+    b.n = 0;
+    buf_printf(&b, "GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Long: ");
+    for (int i = 0; i < 200000; i++) buf_add(&b, "a", 1);
+    buf_printf(&b, "\r\nConnection: close\r\n\r\n");
+    st = raw_exchange(d, b.p, b.n, out, sizeof out);
+    CHECK(st == 0 || (st >= 400 && st < 500), "a 200 KB header: status %d", st);
+    free(b.p);
+    check_sane(d, "bad chunks and a long header", 6);
+
+    /* a slow client (a byte every 50 ms for 2 s) and 100 idle connections while others are
+     * served normally */
+    int idle[100], nidle = 0;
+    for (int i = 0; i < 100; i++)
+        if ((idle[nidle] = raw_connect(d)) >= 0) {
+            if (i % 2) raw_send(idle[nidle], "GET /heal", 9);
+            nidle++;
+        }
+    slowclient sc = {.d = d};
+    pthread_t t;
+    int started = pthread_create(&t, NULL, slow_client, &sc) == 0;
+    double t0 = now_s(), worst = 0;
+    int served = 0;
+    for (int i = 0; i < 200 && now_s() < t0 + 2; i++) {
+        hresp r;
+        http_get(d, "/healthz", &r);
+        if (r.status == 200) served++;
+        if (r.secs > worst) worst = r.secs;
+        hresp_free(&r);
+        sleep_s(0.05);
+    }
+    check_sane(d, "a slow client", 7);
+    if (started) pthread_join(t, NULL);
+    for (int i = 0; i < nidle; i++) close(idle[i]);
+    CHECK(served >= 10, "only %d requests served beside a slow client", served);
+    CHECK(worst < 1.0 * slowdown(), "a request took %.2f s beside a slow client", worst);
+    CHECK(sc.status == 200, "the slow client: %d after %.2f s", sc.status, sc.secs);
+    check_sane(d, "closing idle connections", 8);
+
+    check_no_500(d);
+    srv_term(d);
+}
+
+/* ---- 10. health and docs ----------------------------------------------------------------- */
+
+SERVER_TEST(health_and_docs, "--workers 1 --job-threads 1")
+{
+    hresp r;
+    json_t *o;
+    char ct[128];
+
+    http_get(d, "/healthz", &r);
+    o = jbody(&r);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "status"), "ok"), "/healthz: %ld %s", r.status,
+          r.body.p);
+    CHECK(has_header(&r, "Content-Type", "application/json"), "/healthz Content-Type");
+    json_decref(o);
+    hresp_free(&r);
+    http_method(d, "HEAD", "/healthz", &r);
+    CHECK(r.status == 200 && r.body.n == 0, "HEAD /healthz: %ld", r.status);
+    hresp_free(&r);
+
+    http_get(d, "/readyz", &r);
+    o = jbody(&r);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "status"), "ready"), "/readyz: %ld %s", r.status,
+          r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+
+    http_get(d, "/openapi.json", &r);
+    json_error_t je;
+    o = json_loadb(r.body.p, r.body.n, 0, &je);
+    CHECK(r.status == 200 && json_is_object(o), "/openapi.json: %ld, not JSON: %s", r.status,
+          je.text);
+    CHECK(!strcmp(jstr(o, "openapi"), "3.1.0"), "openapi: \"%s\"", jstr(o, "openapi"));
+    json_t *paths = json_object_get(o, "paths");
+    CHECK(json_object_get(paths, "/v1/jobs") && json_object_get(paths, "/v1/jobs/{id}"),
+          "/openapi.json lacks the job paths");
+    CHECK(hget(&r, "Content-Type", ct, sizeof ct) && !strncmp(ct, "application/json", 16),
+          "/openapi.json Content-Type %s", ct);
+    json_decref(o);
+    hresp_free(&r);
+
+    http_get(d, "/", &r);
+    CHECK(r.status == 200 && strstr(r.body.p, "<html") && hget(&r, "Content-Type", ct, sizeof ct) &&
+              !strncmp(ct, "text/html", 9),
+          "/: %ld", r.status);
+    hresp_free(&r);
+
+    /* one job, so that every family has samples */
+    size_t len;
+    char *b = small_body(0, 0, &len);
+    http_post(d, b, len, "wait=20", &r);
+    CHECK(r.status == 200, "a small job: %ld", r.status);
+    hresp_free(&r);
+    free(b);
+
+    http_get(d, "/metrics", &r);
+    CHECK(r.status == 200 && hget(&r, "Content-Type", ct, sizeof ct) &&
+              !strncmp(ct, "text/plain", 10),
+          "/metrics: %ld %s", r.status, ct);
+    const char *fam[][2] = {{"cellar_http_requests_total", "counter"},
+                            {"cellar_job_duration_seconds", "histogram"},
+                            {"cellar_queue_depth", "gauge"},
+                            {"cellar_cache_hits_total", "counter"},
+                            {"cellar_jobs", "gauge"},
+                            {"cellar_jobs_total", "counter"}};
+    for (size_t i = 0; i < sizeof fam / sizeof *fam; i++) {
+        char want[128];
+        snprintf(want, sizeof want, "# TYPE %s %s\n", fam[i][0], fam[i][1]);
+        CHECK(r.body.p && strstr(r.body.p, want), "/metrics lacks \"%.*s\"", (int)strlen(want) - 1,
+              want);
+    }
+    /* every sample: cellar_NAME{labels} NUMBER */
+    int samples = 0;
+    for (char *p = r.body.p; p && *p;) {
+        char *e = strchr(p, '\n');
+        size_t k = e ? (size_t)(e - p) : strlen(p);
+        if (k && *p != '#') {
+            char line[512], *sp, *end;
+            snprintf(line, sizeof line, "%.*s", (int)k, p);
+            sp = strrchr(line, ' ');
+            int ok = !strncmp(line, "cellar_", 7) && sp;
+            if (ok) {
+                strtod(sp + 1, &end);
+                ok = end != sp + 1 && *end == 0;
+            }
+            CHECK(ok, "bad metrics line: %s", line);
+            samples++;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    CHECK(samples >= 20, "only %d samples", samples);
+    CHECK(mval(r.body.p, "cellar_http_requests_total{route=\"healthz\",status=\"200\"}") >= 1,
+          "healthz requests not counted");
+    CHECK(mval(r.body.p, "cellar_job_duration_seconds_count") == 1, "job duration count %g",
+          mval(r.body.p, "cellar_job_duration_seconds_count"));
+    CHECK(mval(r.body.p, "cellar_job_duration_seconds_bucket{le=\"+Inf\"}") == 1, "+Inf bucket");
+    CHECK(mval(r.body.p, "cellar_queue_depth") == 0, "queue depth");
+    hresp_free(&r);
+    srv_term(d);
+}

@@ -284,13 +284,23 @@ static int push_curve(reader *r, const curve *c, int npts)
     return ARR_OK;
 }
 
+/* Whether the control points x[0..2n) lie exactly on the segment from the first to the last:
+ * then the curve's image is that segment (a smooth command after a line, a degenerate curve). */
+static int bezier_is_straight(const double *x, int n)
+{
+    double dx = x[2 * n - 2] - x[0], dy = x[2 * n - 1] - x[1], l2 = dx * dx + dy * dy;
+    for (int i = 1; i < n - 1; i++) {
+        double px = x[2 * i] - x[0], py = x[2 * i + 1] - x[1], t = px * dx + py * dy;
+        if (px * dy - py * dx != 0 || t < 0 || t > l2) return 0;
+    }
+    return 1;
+}
+
 /* Quadratic (n = 3) or cubic (n = 4) Bézier with local control points x[0..2n). */
 static int bezier_local(reader *r, const mat *m, const double *x, int n)
 {
     curve c = {.kind = n == 3 ? CURVE_QUAD : CURVE_CUBIC};
-    int same = 1;
-    for (int i = 1; i < n; i++) same &= x[2 * i] == x[0] && x[2 * i + 1] == x[1];
-    if (same) return ARR_OK;
+    if (bezier_is_straight(x, n)) return line_local(r, m, x[0], x[1], x[2 * n - 2], x[2 * n - 1]);
     for (int i = 0; i < n; i++) mat_apply(m, x[2 * i], x[2 * i + 1], &c.p[2 * i], &c.p[2 * i + 1]);
     return push_curve(r, &c, 2 * n);
 }
@@ -1147,8 +1157,9 @@ static int parse_par(const char *s, int *ax, int *ay, int *slice)
     return *s ? -1 : 0;
 }
 
-/* A viewport length attribute (x, y, width, height) of n, or of over when it has it (a <use>
- * sizing a symbol or svg); % of the parent viewport's size `of`.  1 read, 0 bad (warned). */
+/* A viewport length attribute (x, y, width, height) of n, or of `over` when it has it (a <use>
+ * sizing a symbol or svg); dflt_pct % when absent; % of the parent viewport's size `of`, which
+ * may be unknown (NaN): then *v is NaN.  Returns 1 read, 0 bad (warned) or *fatal set. */
 static int vp_length(reader *r, const xmlNode *n, const xmlNode *over, const char *name,
                      double dflt_pct, double of, double *v, int *fatal)
 {
@@ -1165,29 +1176,26 @@ static int vp_length(reader *r, const xmlNode *n, const xmlNode *over, const cha
     if (!a.s) *fatal = attr_get(r, n, name, &a);
     if (*fatal) return 0;
     if (!a.s) {
-        *v = dflt_pct * of / 100;
-        k = isfinite(*v) ? LEN_OK : LEN_PERCENT;
-        if (k == LEN_OK) return 1;
-        SKIP(r, src, "%s: the default %g%% of a viewport of unknown size; skipped", name, dflt_pct);
-        return 0;
+        *v = dflt_pct == 0 ? 0 : dflt_pct * of / 100;
+        return 1;
     }
     k = parse_length(r, a.s, v);
-    if (k == LEN_PERCENT && isfinite(of)) {
+    if (k == LEN_PERCENT) {
         *v = *v * of / 100;
         k = LEN_OK;
     }
     if (k != LEN_OK)
         SKIP(r, src, "%s=\"%s\": %s; skipped", name, snippet(a.s, b),
-             k == LEN_BAD       ? "not a finite number or length"
-             : k == LEN_PERCENT ? "a percentage of a viewport of unknown size"
-                                : "lengths in em/ex are not supported");
+             k == LEN_BAD ? "not a finite number or length" : "lengths in em/ex are not supported");
     aval_free(&a);
     return k == LEN_OK;
 }
 
 /* The map of a viewport-establishing element n (nested <svg>, or <svg>/<symbol> through the
- * <use> `over`, whose width and height win) into its parent, and its inner viewport.  Returns 1
- * drawn, 0 not (zero size, or an error: warned), or a fatal code in *fatal. */
+ * <use> `over`, whose width and height win) into its parent, and its inner viewport.  Width and
+ * height default to 100% of the parent's; they matter only with a viewBox (no clipping), so an
+ * unknown parent size is an error only then.  Returns 1 drawn, 0 not (zero size, or an error:
+ * warned), or sets *fatal. */
 static int viewport_map(reader *r, const xmlNode *n, const xmlNode *over, vpt parent, mat *m,
                         vpt *inner, int *fatal)
 {
@@ -1199,6 +1207,10 @@ static int viewport_map(reader *r, const xmlNode *n, const xmlNode *over, vpt pa
     if (!is_symbol) {
         if (!vp_length(r, n, NULL, "x", 0, parent.w, &x, fatal)) return 0;
         if (!vp_length(r, n, NULL, "y", 0, parent.h, &y, fatal)) return 0;
+        if (isnan(x) || isnan(y)) {
+            SKIP(r, n, "x, y: a percentage of a viewport of unknown size; skipped");
+            return 0;
+        }
     }
     if (!vp_length(r, n, over, "width", 100, parent.w, &w, fatal)) return 0;
     if (!vp_length(r, n, over, "height", 100, parent.h, &h, fatal)) return 0;
@@ -1206,7 +1218,7 @@ static int viewport_map(reader *r, const xmlNode *n, const xmlNode *over, vpt pa
         SKIP(r, n, "negative width or height; skipped");
         return 0;
     }
-    if (w == 0 || h == 0) return 0;
+    if (w == 0 || h == 0) return 0; /* not rendered */
     *fatal = attr_get(r, n, "viewBox", &a);
     if (*fatal) return 0;
     k = parse_viewbox(r, a.s, vb);
@@ -1223,6 +1235,12 @@ static int viewport_map(reader *r, const xmlNode *n, const xmlNode *over, vpt pa
         return 1;
     }
     if (vb[2] == 0 || vb[3] == 0) return 0;
+    if (isnan(w) || isnan(h)) {
+        SKIP(r, n,
+             "width, height: a percentage of a viewport of unknown size (the root has no "
+             "viewBox, width or height); skipped");
+        return 0;
+    }
     *fatal = attr_get(r, n, "preserveAspectRatio", &a);
     if (*fatal) return 0;
     if (parse_par(a.s, &ax, &ay, &slice) != 0) {
@@ -1692,15 +1710,19 @@ static void on_end(void *ctx, const xmlChar *localname, const xmlChar *prefix, c
     xmlSAX2EndElementNs(ctx, localname, prefix, URI);
 }
 
-/* libxml2's own limits (its messages say "too long", "Excessive depth", "Huge input"). */
-static int is_limit_message(const char *m)
+/* libxml2's own limits (without XML_PARSE_HUGE), from its messages: NULL when m is none. */
+static const char *libxml2_limit(const char *m)
 {
-    return strstr(m, "too long") || strstr(m, "Excessive depth") || strstr(m, "Huge input") ||
-           strstr(m, "too big") || strstr(m, "too large");
+    if (strstr(m, "Excessive depth")) return "libxml2's limit: 256 levels of elements";
+    if (strstr(m, "Huge input lookup"))
+        return "libxml2's limit: 10000000 bytes of lookahead, reached within very long lines";
+    if (strstr(m, "too long") || strstr(m, "too big") || strstr(m, "too large"))
+        return "libxml2's limit: 10000000 bytes per attribute value, text or name";
+    return NULL;
 }
 
 typedef struct entity_scan {
-    const char *nested; /* the first entity whose value refers to another, or NULL */
+    const char *nested; /* the entity (first by name) whose value refers to another, or NULL */
 } entity_scan;
 
 static void scan_entity(void *payload, void *data, const xmlChar *name)
@@ -1708,7 +1730,8 @@ static void scan_entity(void *payload, void *data, const xmlChar *name)
     xmlEntityPtr e = payload;
     entity_scan *es = data;
     (void)name;
-    if (es->nested || !e || e->etype != XML_INTERNAL_GENERAL_ENTITY || !e->content) return;
+    if (!e || e->etype != XML_INTERNAL_GENERAL_ENTITY || !e->content || !e->name) return;
+    if (es->nested && strcmp((const char *)e->name, es->nested) >= 0) return;
     for (const char *p = (const char *)e->content; (p = strchr(p, '&')); p++)
         if (p[1] != '#') {
             es->nested = (const char *)e->name;
@@ -1754,11 +1777,8 @@ static int parse(reader *r, const char *text, size_t len, xmlDocPtr *doc)
             rc = fail(r, ARR_EINVAL,
                       "line %d, column %d: %s (entity expansion refused: billion laughs guard)",
                       line, col, m);
-        else if (is_limit_message(m))
-            rc = fail(r, ARR_ELIMIT,
-                      "line %d, column %d: %s (a limit of libxml2: at most 10000000 bytes per "
-                      "attribute value or text, 256 levels of elements)",
-                      line, col, m);
+        else if (libxml2_limit(m))
+            rc = fail(r, ARR_ELIMIT, "line %d, column %d: %s (%s)", line, col, m, libxml2_limit(m));
         else
             rc = fail(r, ARR_EINVAL, "line %d, column %d: %s", line > 0 ? line : 1,
                       col > 0 ? col : 1, *m ? m : "malformed XML");

@@ -1,0 +1,1169 @@
+/* render.c — a 2D result (LAR JSON) drawn as SVG or written as GeoJSON (api/render.h).
+ *
+ * The result is read with jansson into a flat model: V as doubles, and for each bounded face
+ * its rings (the outer cycle, then its holes) as runs of vertex indices:
+ *
+ *     face_ring:  f -> [face_ring[f], face_ring[f+1])      rings of face f, outer first
+ *     ring_off:   r -> [ring_off[r], ring_off[r+1])        positions in idx
+ *     idx:        vertex indices, every one < nv (checked while reading)
+ *
+ * so the writers never look at JSON again and never index out of bounds.  The jansson tree
+ * costs about ten times the result's own size while it is read (api/larjson.c says why results
+ * are not written that way); it is freed before anything is drawn.  Output is streamed into
+ * api_bufs (api/api_int.h), numbers formatted by api_format_double.  The faces and the edges
+ * are written into buffers of their own, and the label points kept, before the SVG's header:
+ * the viewBox (and with it the stroke width and the font size in user units) must fit every
+ * coordinate drawn, exploded faces and labels included, which is known only at the end.
+ *
+ * Geometry here is for pictures, not for the complex: floating point, no exact predicates.
+ * The face label point is the one place that must be right: the midpoint of the widest
+ * horizontal chord through the face, taken at heights strictly between two consecutive distinct
+ * vertex heights of the face, so the line meets no vertex and the crossings' parity (decided by
+ * comparisons only, hence exact) says which chords are inside; holes and edges walked twice
+ * (kept dangling) fall out of the parity.  Faces with many distinct heights try 64 of them
+ * spread over the range plus the largest gap, so the cost stays linear in the face's size.
+ *
+ * Threads: reentrant, no globals.  Ownership: inputs are borrowed; the output buffer goes to the
+ * caller (free()).
+ */
+#include "api/render.h"
+
+#include "api/api_int.h"
+
+#include <ctype.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* ---- options ------------------------------------------------------------------------------- */
+
+void render_opts_init(render_opts *o)
+{
+    *o = (render_opts)RENDER_OPTS_INIT;
+}
+
+static int check_opts(const render_opts *o, api_error *err)
+{
+    if (!(o->explode >= 1 && o->explode <= RENDER_EXPLODE_MAX))
+        return api_fail(err, API_EINVALID, "explode: expected a number in [1, %g]",
+                        RENDER_EXPLODE_MAX);
+    if (o->width < RENDER_WIDTH_MIN || o->width > RENDER_WIDTH_MAX)
+        return api_fail(err, API_EINVALID, "width: expected an integer in [%d, %d]",
+                        RENDER_WIDTH_MIN, RENDER_WIDTH_MAX);
+    if (!(o->stroke >= 0 && o->stroke <= RENDER_STROKE_MAX))
+        return api_fail(err, API_EINVALID, "stroke: expected a number in [0, %g] (0: auto)",
+                        RENDER_STROKE_MAX);
+    return API_OK;
+}
+
+/* A decimal number, nothing else (no spaces, no hex, no inf or nan). */
+static int parse_number(const char *s, double *out)
+{
+    char *end;
+    if (!s || !*s) return 0;
+    for (const char *p = s; *p; p++)
+        if (!isdigit((unsigned char)*p) && !strchr("+-.eE", *p)) return 0;
+    *out = strtod(s, &end);
+    return *end == 0 && isfinite(*out);
+}
+
+/* 1 0 true false yes no on off (any case); no value at all is true ("?numbers"). */
+static int parse_bool(const char *s, int *out)
+{
+    static const char *const words[] = {"1", "true", "yes", "on", "0", "false", "no", "off"};
+    if (!s || !*s) {
+        *out = 1;
+        return 1;
+    }
+    for (size_t i = 0; i < sizeof words / sizeof *words; i++) {
+        if (!strcasecmp(s, words[i])) {
+            *out = i < 4;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int render_opts_is_query_key(const char *key)
+{
+    static const char *const keys[] = {"explode", "numbers", "edges", "width", "stroke"};
+    for (size_t i = 0; key && i < sizeof keys / sizeof *keys; i++)
+        if (!strcmp(key, keys[i])) return 1;
+    return 0;
+}
+
+int render_opts_parse_query(const char *query_key, const char *value, render_opts *o,
+                            api_error *err)
+{
+    const char *k = query_key ? query_key : "";
+    const char *v = value ? value : "";
+    double d;
+    int b;
+    if (!strcmp(k, "explode")) {
+        if (!parse_number(value, &d) || !(d >= 1 && d <= RENDER_EXPLODE_MAX))
+            return api_fail(err, API_EINVALID,
+                            "explode: expected a number in [1, %g], got \"%.40s\"",
+                            RENDER_EXPLODE_MAX, v);
+        o->explode = d;
+    } else if (!strcmp(k, "stroke")) {
+        if (!parse_number(value, &d) || !(d >= 0 && d <= RENDER_STROKE_MAX))
+            return api_fail(err, API_EINVALID,
+                            "stroke: expected a number in [0, %g] (0: auto), got \"%.40s\"",
+                            RENDER_STROKE_MAX, v);
+        o->stroke = d;
+    } else if (!strcmp(k, "width")) {
+        char *end;
+        long w = 0;
+        int digits = *v != 0;
+        for (const char *p = v; *p; p++) digits &= isdigit((unsigned char)*p) != 0;
+        if (digits && strlen(v) <= 6) w = strtol(v, &end, 10);
+        if (!digits || w < RENDER_WIDTH_MIN || w > RENDER_WIDTH_MAX)
+            return api_fail(err, API_EINVALID,
+                            "width: expected an integer in [%d, %d] (pixels), got \"%.40s\"",
+                            RENDER_WIDTH_MIN, RENDER_WIDTH_MAX, v);
+        o->width = (int)w;
+    } else if (!strcmp(k, "numbers") || !strcmp(k, "edges")) {
+        if (!parse_bool(value, &b))
+            return api_fail(err, API_EINVALID,
+                            "%s: expected 1, 0, true, false, yes, no, on or off, got \"%.40s\"", k,
+                            v);
+        if (k[0] == 'n')
+            o->numbers = b;
+        else
+            o->edges = b;
+    } else {
+        return api_fail(err, API_EINVALID,
+                        "%.40s: unknown parameter (expected explode, numbers, edges, width or "
+                        "stroke)",
+                        k);
+    }
+    return API_OK;
+}
+
+static int hexval(int c)
+{
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+}
+
+/* Decodes s[0..n) (%XX, '+') into out (room for n + 1); returns 0 on a bad or %00 escape. */
+static int url_decode(const char *s, size_t n, char *out)
+{
+    size_t w = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] == '+') {
+            out[w++] = ' ';
+        } else if (s[i] == '%') {
+            int hi, lo;
+            if (i + 2 >= n) return 0;
+            hi = hexval((unsigned char)s[i + 1]);
+            lo = hexval((unsigned char)s[i + 2]);
+            if (hi < 0 || lo < 0 || (hi == 0 && lo == 0)) return 0;
+            out[w++] = (char)(hi * 16 + lo);
+            i += 2;
+        } else {
+            out[w++] = s[i];
+        }
+    }
+    out[w] = 0;
+    return 1;
+}
+
+int render_opts_parse_query_string(const char *query, size_t len, render_opts *o, api_error *err)
+{
+    char *buf = NULL;
+    int rc = API_OK;
+    size_t i = 0;
+    if (!query) return API_OK;
+    buf = malloc(2 * len + 2);
+    if (!buf) return api_fail(err, API_ENOMEM, "out of memory reading the query");
+    while (i < len) {
+        size_t start = i, eq = SIZE_MAX;
+        char *key = buf, *value;
+        while (i < len && query[i] != '&' && query[i] != ';') {
+            if (query[i] == '=' && eq == SIZE_MAX) eq = i;
+            i++;
+        }
+        if (i > start) {
+            size_t kend = eq == SIZE_MAX ? i : eq;
+            value = buf + (kend - start) + 1;
+            if (!url_decode(query + start, kend - start, key) ||
+                (eq != SIZE_MAX && !url_decode(query + eq + 1, i - eq - 1, value))) {
+                rc = api_fail(err, API_EINVALID,
+                              "query: bad percent-escape in the parameter at byte %zu", start);
+                goto fail;
+            }
+            rc = render_opts_parse_query(key, eq == SIZE_MAX ? NULL : value, o, err);
+            if (rc != API_OK) goto fail;
+        }
+        i++; /* past the separator */
+    }
+fail:
+    free(buf);
+    return rc;
+}
+
+/* ---- the result, read ---------------------------------------------------------------------- */
+
+typedef struct rmodel {
+    size_t nv;
+    double *xy;        /* owned: x, y of each vertex */
+    size_t ne;         /* edges in ev (0 when the result has no EV) */
+    uint32_t *ev;      /* owned, may be NULL: 2 per edge */
+    size_t nf;         /* bounded faces */
+    size_t *face_ring; /* owned, nf + 1 */
+    size_t nrings;
+    size_t *ring_off; /* owned, nrings + 1 */
+    uint32_t *idx;    /* owned, ring_off[nrings] */
+    double cx, cy;    /* centre of the bounding box of V (0, 0 when V is empty) */
+} rmodel;
+
+static void rmodel_free(rmodel *m)
+{
+    free(m->xy);
+    free(m->ev);
+    free(m->face_ring);
+    free(m->ring_off);
+    free(m->idx);
+    *m = (rmodel){0};
+}
+
+static size_t ring_len(const rmodel *m, size_t r)
+{
+    return m->ring_off[r + 1] - m->ring_off[r];
+}
+
+static const uint32_t *ring_idx(const rmodel *m, size_t r)
+{
+    return m->idx + m->ring_off[r];
+}
+
+/* Reads a cycle (a JSON array of vertex indices) named path (printf'd with a, b) into out
+ * (may be NULL: check only).  */
+static int read_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
+                      const char *what, size_t a, size_t b)
+{
+    size_t n = json_array_size(row);
+    char path[96];
+    if (b == SIZE_MAX)
+        snprintf(path, sizeof path, what, a);
+    else
+        snprintf(path, sizeof path, what, a, b);
+    if (!json_is_array(row) || n < minlen)
+        return api_fail(err, API_EINVALID, "%s: expected an array of at least %zu vertex indices",
+                        path, minlen);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *v = json_array_get(row, i);
+        json_int_t k = json_is_integer(v) ? json_integer_value(v) : -1;
+        if (k < 0 || (uint64_t)k >= nv)
+            return api_fail(err, API_EINVALID, "%s[%zu]: expected a vertex index < %zu", path, i,
+                            nv);
+        if (out) out[i] = (uint32_t)k;
+    }
+    return API_OK;
+}
+
+/* Twice the signed area of the cycle row (JSON, checked) of the vertices xy. */
+static double json_cycle_area2(const json_t *row, const double *xy)
+{
+    size_t n = json_array_size(row);
+    double s = 0, ox, oy;
+    if (n < 3) return 0;
+    ox = xy[2 * json_integer_value(json_array_get(row, 0))];
+    oy = xy[2 * json_integer_value(json_array_get(row, 0)) + 1];
+    for (size_t i = 0; i < n; i++) {
+        size_t a = (size_t)json_integer_value(json_array_get(row, i));
+        size_t b = (size_t)json_integer_value(json_array_get(row, (i + 1) % n));
+        s += (xy[2 * a] - ox) * (xy[2 * b + 1] - oy) - (xy[2 * b] - ox) * (xy[2 * a + 1] - oy);
+    }
+    return s;
+}
+
+/* How many rows of FV are bounded faces (see render.h): the rest are exterior_last rows. */
+static size_t bounded_rows(const json_t *root, const json_t *FV, const double *xy)
+{
+    size_t rows = json_array_size(FV), k;
+    const json_t *F = json_object_get(json_object_get(root, "stats"), "F");
+    const json_t *ext = json_object_get(root, "exterior");
+    if (json_is_integer(F) && json_integer_value(F) >= 0 && (uint64_t)json_integer_value(F) <= rows)
+        return (size_t)json_integer_value(F);
+    k = json_array_size(ext);
+    if (json_is_array(ext) && k > 0 && k <= rows) {
+        size_t i = 0;
+        while (i < k && json_equal(json_array_get(ext, i), json_array_get(FV, rows - k + i))) i++;
+        if (i == k) return rows - k;
+        return rows;
+    }
+    while (rows > 0 && json_cycle_area2(json_array_get(FV, rows - 1), xy) <= 0) rows--;
+    return rows;
+}
+
+/* Parses a key of "holes": canonical decimal ("0", "17"; no sign, no leading zero). */
+static int parse_face_key(const char *key, size_t *out)
+{
+    size_t v = 0, n = strlen(key);
+    if (n == 0 || n > 19 || (n > 1 && key[0] == '0')) return 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!isdigit((unsigned char)key[i])) return 0;
+        v = v * 10 + (size_t)(key[i] - '0');
+    }
+    *out = v;
+    return 1;
+}
+
+static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
+{
+    json_t *root = NULL;
+    json_error_t je;
+    const json_t *dim, *V, *FV, *EV, *holes, *val;
+    const char *key;
+    size_t rows, nring, nidx, r, w;
+    int rc;
+    *m = (rmodel){0};
+    if (!text || len == 0) return api_fail(err, API_EINVALID, "result: empty");
+    root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
+    if (!root) {
+        if (json_error_code(&je) == json_error_out_of_memory)
+            return api_fail(err, API_ENOMEM, "out of memory reading the result");
+        return api_fail(err, API_EINVALID, "result: malformed JSON at line %d, column %d: %s",
+                        je.line, je.column, je.text);
+    }
+    if (!json_is_object(root)) {
+        rc = api_fail(err, API_EINVALID, "result: expected a JSON object (LAR JSON)");
+        goto fail;
+    }
+    dim = json_object_get(root, "dim");
+    if (!dim) {
+        rc = api_fail(err, API_EINVALID, "dim: required (not a LAR JSON result)");
+        goto fail;
+    }
+    if (!json_is_integer(dim) || json_integer_value(dim) != 2) {
+        if (json_is_integer(dim))
+            rc =
+                api_fail(err, API_EINVALID, "dim: expected 2 (only 2D results are drawn), got %lld",
+                         (long long)json_integer_value(dim));
+        else
+            rc = api_fail(err, API_EINVALID, "dim: expected 2 (only 2D results are drawn)");
+        goto fail;
+    }
+    V = json_object_get(root, "V");
+    FV = json_object_get(root, "FV");
+    EV = json_object_get(root, "EV");
+    holes = json_object_get(root, "holes");
+    if (!V || !FV) {
+        rc = api_fail(err, API_EINVALID,
+                      "%s: required (the result was made with \"fields\" leaving it out: ask for "
+                      "\"V\" and \"FV\")",
+                      V ? "FV" : "V");
+        goto fail;
+    }
+    if (!json_is_array(V)) {
+        rc = api_fail(err, API_EINVALID, "V: expected an array of [x, y]");
+        goto fail;
+    }
+    m->nv = json_array_size(V);
+    if (m->nv > UINT32_MAX) {
+        rc = api_fail(err, API_EINVALID, "V: more than 2^32 vertices");
+        goto fail;
+    }
+    m->xy = malloc(2 * m->nv * sizeof *m->xy + 1);
+    if (!m->xy) goto nomem;
+    for (size_t i = 0; i < m->nv; i++) {
+        const json_t *p = json_array_get(V, i);
+        const json_t *x = json_array_get(p, 0), *y = json_array_get(p, 1);
+        if (json_array_size(p) != 2 || !json_is_number(x) || !json_is_number(y) ||
+            !isfinite(json_number_value(x)) || !isfinite(json_number_value(y))) {
+            rc = api_fail(err, API_EINVALID, "V[%zu]: expected 2 finite numbers", i);
+            goto fail;
+        }
+        m->xy[2 * i] = json_number_value(x);
+        m->xy[2 * i + 1] = json_number_value(y);
+    }
+    if (m->nv > 0) {
+        double x0 = m->xy[0], x1 = m->xy[0], y0 = m->xy[1], y1 = m->xy[1];
+        for (size_t i = 1; i < m->nv; i++) {
+            x0 = fmin(x0, m->xy[2 * i]), x1 = fmax(x1, m->xy[2 * i]);
+            y0 = fmin(y0, m->xy[2 * i + 1]), y1 = fmax(y1, m->xy[2 * i + 1]);
+        }
+        m->cx = x0 / 2 + x1 / 2;
+        m->cy = y0 / 2 + y1 / 2;
+    }
+
+    if (EV && !json_is_null(EV)) {
+        if (!json_is_array(EV)) {
+            rc = api_fail(err, API_EINVALID, "EV: expected an array of [v0, v1]");
+            goto fail;
+        }
+        m->ne = json_array_size(EV);
+        m->ev = malloc(2 * m->ne * sizeof *m->ev + 1);
+        if (!m->ev) goto nomem;
+        for (size_t e = 0; e < m->ne; e++) {
+            const json_t *row = json_array_get(EV, e);
+            if (json_array_size(row) != 2) {
+                rc = api_fail(err, API_EINVALID, "EV[%zu]: expected 2 vertex indices", e);
+                goto fail;
+            }
+            rc = read_cycle(row, m->nv, 2, m->ev + 2 * e, err, "EV[%zu]", e, SIZE_MAX);
+            if (rc != API_OK) goto fail;
+        }
+    }
+
+    if (!json_is_array(FV)) {
+        rc = api_fail(err, API_EINVALID, "FV: expected an array of cycles");
+        goto fail;
+    }
+    rows = json_array_size(FV);
+    for (size_t f = 0; f < rows; f++) {
+        rc = read_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
+        if (rc != API_OK) goto fail;
+    }
+    m->nf = bounded_rows(root, FV, m->xy);
+    nring = m->nf;
+    nidx = 0;
+    for (size_t f = 0; f < m->nf; f++) {
+        const json_t *row = json_array_get(FV, f);
+        rc = read_cycle(row, m->nv, 3, NULL, err, "FV[%zu]", f, SIZE_MAX);
+        if (rc != API_OK) goto fail;
+        nidx += json_array_size(row);
+    }
+    if (holes && !json_is_null(holes)) {
+        if (!json_is_object(holes)) {
+            rc = api_fail(err, API_EINVALID, "holes: expected an object {\"f\": [[v, ...], ...]}");
+            goto fail;
+        }
+        json_object_foreach((json_t *)holes, key, val)
+        {
+            size_t f;
+            if (!parse_face_key(key, &f) || f >= m->nf) {
+                rc = api_fail(err, API_EINVALID, "holes.%.40s: not a bounded face (there are %zu)",
+                              key, m->nf);
+                goto fail;
+            }
+            if (!json_is_array(val)) {
+                rc = api_fail(err, API_EINVALID, "holes.%zu: expected an array of cycles", f);
+                goto fail;
+            }
+            for (size_t h = 0; h < json_array_size(val); h++) {
+                const json_t *row = json_array_get(val, h);
+                rc = read_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
+                if (rc != API_OK) goto fail;
+                nidx += json_array_size(row);
+                nring++;
+            }
+        }
+    }
+
+    m->nrings = nring;
+    m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
+    m->ring_off = malloc((nring + 1) * sizeof *m->ring_off);
+    m->idx = malloc(nidx * sizeof *m->idx + 1);
+    if (!m->face_ring || !m->ring_off || !m->idx) goto nomem;
+    r = 0;
+    w = 0;
+    for (size_t f = 0; f < m->nf; f++) {
+        const json_t *row = json_array_get(FV, f), *hs = NULL;
+        char k[24];
+        m->face_ring[f] = r;
+        m->ring_off[r++] = w;
+        read_cycle(row, m->nv, 3, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
+        w += json_array_size(row);
+        snprintf(k, sizeof k, "%zu", f);
+        if (json_is_object(holes)) hs = json_object_get(holes, k);
+        for (size_t h = 0; h < json_array_size(hs); h++) {
+            row = json_array_get(hs, h);
+            m->ring_off[r++] = w;
+            read_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
+            w += json_array_size(row);
+        }
+    }
+    m->face_ring[m->nf] = r;
+    m->ring_off[r] = w;
+    if (r != nring || w != nidx) { /* cannot happen: keys were checked canonical and < nf */
+        rc = api_fail(err, API_EINTERNAL, "render: holes counted twice differently");
+        goto fail;
+    }
+    json_decref(root);
+    return API_OK;
+nomem:
+    rc = api_fail(err, API_ENOMEM, "out of memory reading the result");
+fail:
+    json_decref(root);
+    rmodel_free(m);
+    return rc;
+}
+
+/* Every vertex's coordinates formatted once, "x<sep>y" (y negated for SVG): a vertex is written
+ * by each ring through it, and finding the shortest round-tripping form of a double is most of
+ * the time spent on a large result. */
+typedef struct vtext {
+    api_buf pool; /* the texts, back to back */
+    size_t *off;  /* owned, nv + 1: vertex v's text is pool.p[off[v] .. off[v+1]) */
+} vtext;
+
+static void vtext_free(vtext *t)
+{
+    api_buf_free(&t->pool);
+    free(t->off);
+    t->off = NULL;
+}
+
+static int vtext_make(const rmodel *m, int negate_y, char sep, vtext *t)
+{
+    t->pool = (api_buf){0};
+    t->off = malloc((m->nv + 1) * sizeof *t->off);
+    if (!t->off) return API_ENOMEM;
+    for (size_t v = 0; v < m->nv; v++) {
+        t->off[v] = t->pool.len;
+        api_buf_double(&t->pool, m->xy[2 * v]);
+        api_buf_putc(&t->pool, sep);
+        api_buf_double(&t->pool, negate_y ? -m->xy[2 * v + 1] : m->xy[2 * v + 1]);
+    }
+    t->off[m->nv] = t->pool.len;
+    if (!t->pool.failed) return API_OK;
+    vtext_free(t);
+    return API_ENOMEM;
+}
+
+static void vtext_put(api_buf *b, const vtext *t, uint32_t v)
+{
+    api_buf_put(b, t->pool.p + t->off[v], t->off[v + 1] - t->off[v]);
+}
+
+/* ---- geometry ------------------------------------------------------------------------------ */
+
+/* Twice the signed area of ring r, and (when cx is not NULL) the first moments about (ox, oy)
+ * times 6: the ring's share of the centroid sums. */
+static double ring_area2(const rmodel *m, size_t r, double ox, double oy, double *mx, double *my)
+{
+    const uint32_t *v = ring_idx(m, r);
+    size_t n = ring_len(m, r);
+    double s = 0, sx = 0, sy = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double *a = m->xy + 2 * (size_t)v[i], *b = m->xy + 2 * (size_t)v[(i + 1) % n];
+        double ax = a[0] - ox, ay = a[1] - oy, bx = b[0] - ox, by = b[1] - oy;
+        double c = ax * by - bx * ay;
+        s += c;
+        sx += (ax + bx) * c;
+        sy += (ay + by) * c;
+    }
+    if (mx) *mx = sx;
+    if (my) *my = sy;
+    return s;
+}
+
+/* The face's area with its holes subtracted (holes are clockwise: their signed areas are <= 0). */
+static double face_area(const rmodel *m, size_t f)
+{
+    const double *o = m->xy + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
+    double s = 0;
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
+        s += ring_area2(m, r, o[0], o[1], NULL, NULL);
+    return s / 2;
+}
+
+/* The face's area centroid (holes subtracted); its outer cycle's first vertex if the area is 0. */
+static void face_centroid(const rmodel *m, size_t f, double *x, double *y)
+{
+    const double *o = m->xy + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
+    double s = 0, sx = 0, sy = 0;
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
+        double mx, my;
+        s += ring_area2(m, r, o[0], o[1], &mx, &my);
+        sx += mx;
+        sy += my;
+    }
+    *x = o[0];
+    *y = o[1];
+    if (s > 0) {
+        *x += sx / (3 * s);
+        *y += sy / (3 * s);
+    }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+#define LABEL_HEIGHTS 64 /* heights tried for a face label when the face has more */
+
+/* Width of the widest inside chord of face f at height y (no vertex at y), its midpoint in *mid;
+ * xs has room for the face's vertex count. */
+static double widest_chord(const rmodel *m, size_t f, double y, double *xs, double *mid)
+{
+    size_t k = 0;
+    double best = -1;
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
+        const uint32_t *v = ring_idx(m, r);
+        size_t n = ring_len(m, r);
+        for (size_t i = 0; i < n; i++) {
+            const double *a = m->xy + 2 * (size_t)v[i], *b = m->xy + 2 * (size_t)v[(i + 1) % n];
+            if ((a[1] > y) != (b[1] > y))
+                xs[k++] = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+        }
+    }
+    qsort(xs, k, sizeof *xs, cmp_double);
+    for (size_t i = 0; i + 1 < k; i += 2) {
+        if (xs[i + 1] - xs[i] > best) {
+            best = xs[i + 1] - xs[i];
+            *mid = xs[i] / 2 + xs[i + 1] / 2;
+        }
+    }
+    return best;
+}
+
+/* A point strictly inside face f (holes excluded), for its number; ys and xs have room for the
+ * face's vertex count. */
+static void face_label_point(const rmodel *m, size_t f, double *ys, double *xs, double *px,
+                             double *py)
+{
+    size_t n = 0, u = 0, gaps, big = 0, tries;
+    double best = -1;
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
+        for (size_t i = 0; i < ring_len(m, r); i++)
+            ys[n++] = m->xy[2 * (size_t)ring_idx(m, r)[i] + 1];
+    qsort(ys, n, sizeof *ys, cmp_double);
+    for (size_t i = 0; i < n; i++)
+        if (u == 0 || ys[i] != ys[u - 1]) ys[u++] = ys[i];
+    face_centroid(m, f, px, py); /* the fallback: a face with no room between heights */
+    gaps = u > 0 ? u - 1 : 0;
+    for (size_t j = 1; j < gaps; j++)
+        if (ys[j + 1] - ys[j] > ys[big + 1] - ys[big]) big = j;
+    tries = gaps > LABEL_HEIGHTS ? LABEL_HEIGHTS + 1 : gaps;
+    for (size_t t = 0; t < tries; t++) {
+        size_t j = gaps <= LABEL_HEIGHTS ? t
+                   : t == LABEL_HEIGHTS  ? big
+                                         : t * (gaps - 1) / (LABEL_HEIGHTS - 1);
+        double y, x = 0, wid;
+        y = ys[j] / 2 + ys[j + 1] / 2;
+        if (!(y > ys[j] && y < ys[j + 1])) continue; /* adjacent doubles: no height between */
+        wid = widest_chord(m, f, y, xs, &x);
+        if (wid > best) {
+            best = wid;
+            *px = x;
+            *py = y;
+        }
+    }
+}
+
+/* ---- SVG ----------------------------------------------------------------------------------- */
+
+typedef struct svg_ctx {
+    double x0, y0, x1, y1; /* bounding box of the SVG coordinates written */
+    int any;               /* the box holds a point */
+    int overflow;          /* a coordinate was not finite (an explode too large for doubles) */
+} svg_ctx;
+
+/* Maps (x, y) to SVG coordinates (*sx, *sy) (y negated) and grows the box. */
+static void svg_track(svg_ctx *c, double x, double y, double *sx, double *sy)
+{
+    *sx = x;
+    *sy = -y;
+    if (!isfinite(*sx) || !isfinite(*sy)) {
+        c->overflow = 1;
+        *sx = *sy = 0;
+    }
+    if (!c->any) {
+        c->x0 = c->x1 = *sx;
+        c->y0 = c->y1 = *sy;
+        c->any = 1;
+    } else {
+        c->x0 = fmin(c->x0, *sx), c->x1 = fmax(c->x1, *sx);
+        c->y0 = fmin(c->y0, *sy), c->y1 = fmax(c->y1, *sy);
+    }
+}
+
+/* Writes "x y" of the point (x, y) for path data. */
+static void svg_point(svg_ctx *c, api_buf *b, double x, double y)
+{
+    double sx, sy;
+    svg_track(c, x, y, &sx, &sy);
+    api_buf_double(b, sx);
+    api_buf_putc(b, ' ');
+    api_buf_double(b, sy);
+}
+
+static void svg_number_attr(api_buf *b, const char *name, double x)
+{
+    api_buf_putc(b, ' ');
+    api_buf_puts(b, name);
+    api_buf_puts(b, "=\"");
+    api_buf_double(b, x);
+    api_buf_putc(b, '"');
+}
+
+/* x to 4 significant digits, for sizes (stroke, font) where exactness is noise. */
+static double round4(double x)
+{
+    char tmp[32];
+    snprintf(tmp, sizeof tmp, "%.4g", x);
+    return strtod(tmp, NULL);
+}
+
+/* Writes <text x=".." y="..">n</text> at the SVG point (sx, sy), in a group scaled by scale. */
+static void svg_label(api_buf *b, double sx, double sy, double scale, size_t n)
+{
+    api_buf_puts(b, "<text");
+    svg_number_attr(b, "x", sx / scale);
+    svg_number_attr(b, "y", sy / scale);
+    api_buf_putc(b, '>');
+    api_buf_u64(b, n);
+    api_buf_puts(b, "</text>\n");
+}
+
+/* Writes "x y" of vertex v translated by (dx, dy); in place, its text from vt. */
+static void svg_vertex(svg_ctx *c, api_buf *b, const rmodel *m, const vtext *vt, uint32_t v,
+                       double dx, double dy)
+{
+    const double *p = m->xy + 2 * (size_t)v;
+    double sx, sy;
+    if (dx == 0 && dy == 0) {
+        svg_track(c, p[0], p[1], &sx, &sy);
+        vtext_put(b, vt, v);
+    } else {
+        svg_point(c, b, p[0] + dx, p[1] + dy);
+    }
+}
+
+/* Writes ring r of the model as "M x y L x y ... Z", translated by (dx, dy). */
+static void svg_ring(svg_ctx *c, api_buf *b, const rmodel *m, const vtext *vt, size_t r, double dx,
+                     double dy)
+{
+    const uint32_t *v = ring_idx(m, r);
+    for (size_t i = 0; i < ring_len(m, r); i++) {
+        api_buf_puts(b, i == 0 ? (b->len && b->p[b->len - 1] != '"' ? " M" : "M") : " L");
+        svg_vertex(c, b, m, vt, v[i], dx, dy);
+    }
+    api_buf_puts(b, " Z");
+}
+
+/* The fill of face f: golden-ratio hue steps, lightness in a second low-discrepancy sequence, so
+ * neighbours by index differ and colours stay distinct for many faces. */
+static void face_colour(size_t f, char out[8])
+{
+    static const char hex[] = "0123456789abcdef";
+    double h = fmod((double)f * 0.6180339887498949, 1.0) * 6;
+    double l = 0.56 + 0.18 * fmod((double)f * 0.7548776662466927 + 0.5, 1.0), s = 0.65;
+    double ch = (1 - fabs(2 * l - 1)) * s, x = ch * (1 - fabs(fmod(h, 2) - 1)), lo = l - ch / 2;
+    double rgb[3];
+    int sector = (int)h;
+    switch (sector) {
+    case 0:
+        rgb[0] = ch, rgb[1] = x, rgb[2] = 0;
+        break;
+    case 1:
+        rgb[0] = x, rgb[1] = ch, rgb[2] = 0;
+        break;
+    case 2:
+        rgb[0] = 0, rgb[1] = ch, rgb[2] = x;
+        break;
+    case 3:
+        rgb[0] = 0, rgb[1] = x, rgb[2] = ch;
+        break;
+    case 4:
+        rgb[0] = x, rgb[1] = 0, rgb[2] = ch;
+        break;
+    default:
+        rgb[0] = ch, rgb[1] = 0, rgb[2] = x;
+        break;
+    }
+    out[0] = '#';
+    for (int i = 0; i < 3; i++) {
+        long v = lround((rgb[i] + lo) * 255);
+        v = v < 0 ? 0 : v > 255 ? 255 : v;
+        out[1 + 2 * i] = hex[v >> 4];
+        out[2 + 2 * i] = hex[v & 15];
+    }
+    out[7] = 0;
+}
+
+/* Length of the UTF-8 character at s[0..n) if it is one XML allows, else 0. */
+static size_t xml_char_len(const unsigned char *s, size_t n)
+{
+    uint32_t cp;
+    size_t len;
+    if (s[0] < 0x80) return s[0] >= 0x20 || s[0] == '\t' || s[0] == '\n' || s[0] == '\r';
+    if ((s[0] & 0xe0) == 0xc0)
+        len = 2, cp = s[0] & 0x1f;
+    else if ((s[0] & 0xf0) == 0xe0)
+        len = 3, cp = s[0] & 0x0f;
+    else if ((s[0] & 0xf8) == 0xf0)
+        len = 4, cp = s[0] & 0x07;
+    else
+        return 0;
+    if (len > n) return 0;
+    for (size_t i = 1; i < len; i++) {
+        if ((s[i] & 0xc0) != 0x80) return 0;
+        cp = cp << 6 | (s[i] & 0x3f);
+    }
+    if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) ||
+        cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff) || cp == 0xfffe || cp == 0xffff)
+        return 0;
+    return len;
+}
+
+/* Appends text escaped for XML character data and attribute values; what XML cannot hold
+ * (control characters, bytes that are not UTF-8) becomes '?'. */
+static void xml_escape(api_buf *b, const char *text)
+{
+    const unsigned char *s = (const unsigned char *)text;
+    size_t n = strlen(text);
+    for (size_t i = 0; i < n;) {
+        size_t k = xml_char_len(s + i, n - i);
+        if (k == 0) {
+            api_buf_putc(b, '?');
+            i++;
+            continue;
+        }
+        switch (s[i]) {
+        case '<':
+            api_buf_puts(b, "&lt;");
+            break;
+        case '>':
+            api_buf_puts(b, "&gt;");
+            break;
+        case '&':
+            api_buf_puts(b, "&amp;");
+            break;
+        case '"':
+            api_buf_puts(b, "&quot;");
+            break;
+        case '\'':
+            api_buf_puts(b, "&apos;");
+            break;
+        default:
+            api_buf_put(b, (const char *)s + i, k);
+        }
+        i += k;
+    }
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+/* The sorted keys of the edges walked by the faces' rings; NULL when out of memory. */
+static uint64_t *face_edge_keys(const rmodel *m, size_t *n)
+{
+    uint64_t *k = malloc(m->ring_off[m->nrings] * sizeof *k + 1);
+    size_t w = 0;
+    if (!k) return NULL;
+    for (size_t r = 0; r < m->nrings; r++) {
+        const uint32_t *v = ring_idx(m, r);
+        size_t len = ring_len(m, r);
+        for (size_t i = 0; i < len; i++) k[w++] = edge_key(v[i], v[(i + 1) % len]);
+    }
+    qsort(k, w, sizeof *k, cmp_u64);
+    *n = w;
+    return k;
+}
+
+static int has_key(const uint64_t *k, size_t n, uint64_t key)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (k[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && k[lo] == key;
+}
+
+/* The parts of a picture, each in its own buffer: the header, which needs the frame, is the
+ * last thing known. */
+typedef struct svg_parts {
+    api_buf faces;   /* the <path> elements of the faces */
+    api_buf edges;   /* the edges' path data */
+    double *label;   /* 2 per face: where its number goes, in SVG coordinates */
+    double *off;     /* 2 per face: its translation */
+    double *ys, *xs; /* scratch of the label points */
+    uint64_t *keys;  /* sorted edges of the faces' rings (exploded drawings with EV) */
+    vtext vt;        /* the vertices' SVG coordinates */
+} svg_parts;
+
+static void svg_parts_free(svg_parts *p)
+{
+    api_buf_free(&p->faces);
+    api_buf_free(&p->edges);
+    free(p->label);
+    free(p->off);
+    free(p->ys);
+    free(p->xs);
+    free(p->keys);
+    vtext_free(&p->vt);
+}
+
+/* The edges' path data: in place, EV (or, without EV, the faces' rings); exploded, each face's
+ * rings with the face and the edges on no face moved by their midpoints. */
+static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_parts *p)
+{
+    double k1 = o->explode - 1;
+    size_t nkeys = 0;
+    if (k1 > 0 || !m->ev)
+        for (size_t f = 0; f < m->nf; f++)
+            for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
+                svg_ring(c, &p->edges, m, &p->vt, r, p->off[2 * f], p->off[2 * f + 1]);
+    if (!m->ev) return API_OK;
+    if (k1 > 0) {
+        p->keys = face_edge_keys(m, &nkeys);
+        if (!p->keys) return API_ENOMEM;
+    }
+    for (size_t e = 0; e < m->ne; e++) {
+        double dx = 0, dy = 0;
+        if (k1 > 0) {
+            const double *a = m->xy + 2 * (size_t)m->ev[2 * e];
+            const double *b = m->xy + 2 * (size_t)m->ev[2 * e + 1];
+            if (has_key(p->keys, nkeys, edge_key(m->ev[2 * e], m->ev[2 * e + 1]))) continue;
+            dx = k1 * ((a[0] / 2 + b[0] / 2) - m->cx);
+            dy = k1 * ((a[1] / 2 + b[1] / 2) - m->cy);
+        }
+        api_buf_puts(&p->edges, p->edges.len ? " M" : "M");
+        svg_vertex(c, &p->edges, m, &p->vt, m->ev[2 * e], dx, dy);
+        api_buf_puts(&p->edges, " L");
+        svg_vertex(c, &p->edges, m, &p->vt, m->ev[2 * e + 1], dx, dy);
+    }
+    return API_OK;
+}
+
+static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_error *err)
+{
+    svg_parts p = {0};
+    svg_ctx c = {0};
+    double k1 = o->explode - 1;
+    size_t maxv = 0;
+    double vx, vy, vw, vh, s, margin, unit, stroke_px, font_px;
+    long height;
+    int rc = API_OK;
+
+    p.off = calloc(2 * m->nf + 1, sizeof *p.off);
+    if (!p.off || vtext_make(m, 1, ' ', &p.vt) != API_OK) goto nomem;
+    for (size_t f = 0; k1 > 0 && f < m->nf; f++) {
+        double x, y;
+        face_centroid(m, f, &x, &y);
+        p.off[2 * f] = k1 * (x - m->cx);
+        p.off[2 * f + 1] = k1 * (y - m->cy);
+    }
+
+    for (size_t f = 0; f < m->nf; f++) {
+        char fill[8];
+        face_colour(f, fill);
+        api_buf_puts(&p.faces, "<path id=\"face-");
+        api_buf_u64(&p.faces, f);
+        api_buf_puts(&p.faces, "\" fill=\"");
+        api_buf_puts(&p.faces, fill);
+        api_buf_puts(&p.faces, "\" fill-rule=\"evenodd\" d=\"");
+        for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
+            svg_ring(&c, &p.faces, m, &p.vt, r, p.off[2 * f], p.off[2 * f + 1]);
+        api_buf_puts(&p.faces, "\"/>\n");
+    }
+    if (o->edges && svg_edges(m, o, &c, &p) != API_OK) goto nomem;
+    if (o->numbers) {
+        double sx, sy;
+        for (size_t v = 0; v < m->nv; v++) svg_track(&c, m->xy[2 * v], m->xy[2 * v + 1], &sx, &sy);
+        for (size_t f = 0; f < m->nf; f++) {
+            size_t n = m->ring_off[m->face_ring[f + 1]] - m->ring_off[m->face_ring[f]];
+            if (n > maxv) maxv = n;
+        }
+        p.ys = malloc(maxv * sizeof *p.ys + 1);
+        p.xs = malloc(maxv * sizeof *p.xs + 1);
+        p.label = malloc(2 * m->nf * sizeof *p.label + 1);
+        if (!p.ys || !p.xs || !p.label) goto nomem;
+        for (size_t f = 0; f < m->nf; f++) {
+            double x, y;
+            face_label_point(m, f, p.ys, p.xs, &x, &y);
+            svg_track(&c, x + p.off[2 * f], y + p.off[2 * f + 1], p.label + 2 * f,
+                      p.label + 2 * f + 1);
+        }
+    }
+    if (p.faces.failed || p.edges.failed) goto nomem;
+    if (c.overflow) {
+        rc = api_fail(err, API_EINVALID,
+                      "explode: the exploded drawing does not fit in doubles (coordinates too "
+                      "large)");
+        goto fail;
+    }
+
+    /* the frame: every coordinate written, plus a margin of 5% of the larger side */
+    if (!c.any) {
+        c.x0 = c.x1 = m->cx;
+        c.y0 = c.y1 = -m->cy;
+    }
+    s = fmax(c.x1 - c.x0, c.y1 - c.y0);
+    margin = s > 0 ? 0.05 * s : fmax(1.0, 1e-3 * fmax(fabs(c.x0), fabs(c.y0)));
+    vx = c.x0 - margin;
+    vy = c.y0 - margin;
+    vw = (c.x1 - c.x0) + 2 * margin;
+    vh = (c.y1 - c.y0) + 2 * margin;
+    if (!isfinite(vx) || !isfinite(vy) || !isfinite(vw) || !isfinite(vh) || !(vw > 0) ||
+        !(vh > 0)) {
+        rc = api_fail(err, API_EINVALID, "V: the drawing's extent does not fit in doubles");
+        goto fail;
+    }
+    unit = vw / o->width; /* user units per pixel */
+    height = lround(o->width * (vh / vw));
+    if (height < 1) height = 1;
+    stroke_px = o->stroke > 0 ? o->stroke : fmin(4, fmax(0.5, o->width / 800.0));
+    font_px = fmin(24, fmax(6, 11 * o->width / 800.0));
+
+    api_buf_puts(out, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                      "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\"");
+    svg_number_attr(out, "width", o->width);
+    svg_number_attr(out, "height", (double)height);
+    api_buf_puts(out, " viewBox=\"");
+    api_buf_double(out, vx);
+    api_buf_putc(out, ' ');
+    api_buf_double(out, vy);
+    api_buf_putc(out, ' ');
+    api_buf_double(out, vw);
+    api_buf_putc(out, ' ');
+    api_buf_double(out, vh);
+    api_buf_puts(out, "\">\n<title>");
+    if (o->title) {
+        xml_escape(out, o->title);
+    } else {
+        api_buf_puts(out, "cellar: ");
+        api_buf_u64(out, m->nf);
+        api_buf_puts(out, m->nf == 1 ? " face, " : " faces, ");
+        api_buf_u64(out, m->ne);
+        api_buf_puts(out, m->ne == 1 ? " edge, " : " edges, ");
+        api_buf_u64(out, m->nv);
+        api_buf_puts(out, m->nv == 1 ? " vertex" : " vertices");
+    }
+    api_buf_puts(out, "</title>\n<g id=\"faces\" stroke=\"none\">\n");
+    api_buf_put(out, p.faces.p ? p.faces.p : "", p.faces.len);
+    api_buf_puts(out, "</g>\n");
+    if (p.edges.len > 0) {
+        api_buf_puts(out, "<path id=\"edges\" fill=\"none\" stroke=\"#1a1a1a\"");
+        svg_number_attr(out, "stroke-width", round4(stroke_px * unit));
+        api_buf_puts(out, " stroke-linecap=\"round\" stroke-linejoin=\"round\" d=\"");
+        api_buf_put(out, p.edges.p, p.edges.len);
+        api_buf_puts(out, "\"/>\n");
+    }
+    if (o->numbers) {
+        /* Text lives in a group scaled to about a pixel per unit (a power of two, so positions
+         * divide exactly): renderers that size glyphs in whole units, or apply a minimum font
+         * size, draw a font of 0.005 user units badly or not at all. */
+        double scale = ldexp(1.0, (int)lround(log2(unit)));
+        for (int i = 0; i < 2; i++) {
+            api_buf_puts(out, i == 0 ? "<g id=\"vertex-numbers\" fill=\"#8b0000\""
+                                     : "<g id=\"face-numbers\" fill=\"#000000\" "
+                                       "font-weight=\"bold\"");
+            api_buf_puts(out, " transform=\"scale(");
+            api_buf_double(out, scale);
+            api_buf_puts(out, ")\" font-family=\"sans-serif\"");
+            svg_number_attr(out, "font-size", round4(font_px * unit / scale));
+            api_buf_puts(out, " text-anchor=\"middle\" dominant-baseline=\"central\">\n");
+            if (i == 0)
+                for (size_t v = 0; v < m->nv; v++)
+                    svg_label(out, m->xy[2 * v], -m->xy[2 * v + 1], scale, v);
+            else
+                for (size_t f = 0; f < m->nf; f++)
+                    svg_label(out, p.label[2 * f], p.label[2 * f + 1], scale, f);
+            api_buf_puts(out, "</g>\n");
+        }
+    }
+    api_buf_puts(out, "</svg>\n");
+    if (out->failed) goto nomem;
+    goto fail; /* the common exit: rc is API_OK */
+nomem:
+    rc = api_fail(err, API_ENOMEM, "out of memory drawing the result");
+fail:
+    svg_parts_free(&p);
+    return rc;
+}
+
+static int finish(api_buf *b, int rc, char **out, size_t *outlen, api_error *err)
+{
+    if (rc == API_OK && b->failed) rc = api_fail(err, API_ENOMEM, "out of memory");
+    if (rc != API_OK) {
+        api_buf_free(b);
+        return rc;
+    }
+    *out = b->p;
+    *outlen = b->len;
+    if (err) *err = (api_error){0};
+    return API_OK;
+}
+
+int render_svg(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err)
+{
+    render_opts def = RENDER_OPTS_INIT;
+    rmodel m;
+    api_buf b = {0};
+    int rc;
+    *out = NULL;
+    *outlen = 0;
+    if (!o) o = &def;
+    rc = check_opts(o, err);
+    if (rc != API_OK) return rc;
+    rc = read_result(result_json, len, &m, err);
+    if (rc != API_OK) return rc;
+    rc = svg_write(&m, o, &b, err);
+    rmodel_free(&m);
+    return finish(&b, rc, out, outlen, err);
+}
+
+/* ---- GeoJSON ------------------------------------------------------------------------------- */
+
+int render_geojson(const char *result_json, size_t len, char **out, size_t *outlen, api_error *err)
+{
+    rmodel m;
+    api_buf b = {0};
+    vtext vt;
+    int rc;
+    *out = NULL;
+    *outlen = 0;
+    rc = read_result(result_json, len, &m, err);
+    if (rc != API_OK) return rc;
+    if (vtext_make(&m, 0, ',', &vt) != API_OK) {
+        rmodel_free(&m);
+        return api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+    }
+    api_buf_puts(&b, "{\"type\":\"FeatureCollection\",\"features\":[");
+    for (size_t f = 0; f < m.nf; f++) {
+        int first_ring = 1;
+        if (f) api_buf_putc(&b, ',');
+        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"Polygon\","
+                         "\"coordinates\":[");
+        for (size_t r = m.face_ring[f]; r < m.face_ring[f + 1]; r++) {
+            const uint32_t *v = ring_idx(&m, r);
+            size_t n = ring_len(&m, r);
+            if (n < 3) continue; /* a dangling edge kept inside: encloses nothing */
+            if (!first_ring) api_buf_putc(&b, ',');
+            first_ring = 0;
+            api_buf_putc(&b, '[');
+            for (size_t i = 0; i <= n; i++) {
+                api_buf_puts(&b, i ? ",[" : "[");
+                vtext_put(&b, &vt, v[i % n]);
+                api_buf_putc(&b, ']');
+            }
+            api_buf_putc(&b, ']');
+        }
+        api_buf_puts(&b, "]},\"properties\":{\"face\":");
+        api_buf_u64(&b, f);
+        api_buf_puts(&b, ",\"area\":");
+        api_buf_double(&b, face_area(&m, f));
+        api_buf_puts(&b, "}}");
+    }
+    api_buf_puts(&b, "]}\n");
+    vtext_free(&vt);
+    rmodel_free(&m);
+    return finish(&b, API_OK, out, outlen, err);
+}

@@ -1,0 +1,108 @@
+/* render.h — pictures and maps of a 2D result (issue "pictures out"): LAR JSON in, SVG or
+ * GeoJSON out.
+ *
+ * Both renderers read a result as api_run_json() writes it (DESIGN.md "LAR JSON"): "dim" must be
+ * 2; "V" and "FV" are required; "holes" and "EV" are optional.  The bounded faces are the rows of
+ * FV; with exterior_last the exterior cycles that follow them are recognised and left out (by
+ * "stats".F when present, else by the rows equal to those of "exterior", else as the trailing
+ * rows of area <= 0: a bounded face's outer cycle is counter-clockwise, so of area > 0).
+ * A bad result is a value, never a crash: status API_EINVALID (422) and a message that names the
+ * JSON path ("FV[3][2]: expected a vertex index < 11", "V: required ...", "dim: expected 2 ...",
+ * "result: malformed JSON at line 1, column 7: ...").  Out of memory is API_ENOMEM (503).
+ *
+ * SVG (render_svg): each bounded face is ONE <path> filled with fill-rule="evenodd" holding its
+ * outer cycle and its holes as subpaths ("M ... Z" each), inside <g id="faces">, coloured by a
+ * deterministic palette (golden-ratio hue steps by face index, lightness varied too).  Edges
+ * are one <path id="edges"> with fill="none" on top.  Coordinates are the result's with y
+ * negated (SVG's y points down; results are in math coordinates, y up), so the picture shows
+ * y up and text stays upright.  The viewBox fits every drawn coordinate plus a margin; width is
+ * the option, height follows the aspect ratio.  Vertex numbers go in <g id="vertex-numbers">,
+ * face numbers in <g id="face-numbers">, one <text> each.  A face's number sits at a point
+ * strictly inside the face, holes excluded (the midpoint of the widest horizontal chord at a
+ * height that passes through no vertex), not at the centroid, which may lie outside.
+ *
+ * Exploding (the seeds' EXPLODE figures): with explode = k > 1 every face is translated by
+ * (k - 1) * (c_f - C), c_f the face's area centroid (holes subtracted), C the centre of the
+ * bounding box of V, so each centroid's distance from C grows k times.  Edges then follow the
+ * faces: each face's cycles are drawn with it (an edge between two faces is drawn twice, once
+ * with each), and an edge on no bounded face (kept dangling, bridges outside) moves by
+ * (k - 1) * (its midpoint - C).  Vertex numbers stay at the vertices' own positions.
+ *
+ * GeoJSON (render_geojson, RFC 7946): a FeatureCollection of one Feature per bounded face, in face
+ * order, geometry a Polygon: the outer ring (counter-clockwise) then the holes (clockwise) as
+ * LAR gives them, each ring closed by repeating its first position; properties
+ * {"face": f, "area": a}, a the face's area with the holes subtracted.  A hole of fewer than
+ * 3 vertices (a dangling edge kept inside a face: it encloses nothing) is left out, since a ring
+ * needs 4 positions.  The coordinates are the result's own plane coordinates, not longitude and
+ * latitude: RFC 7946 allows that "by prior arrangement".  Numbers are printed with
+ * api_format_double (exact doubles).
+ *
+ * Threads: reentrant, no globals.  Ownership: the result text and the options (and o->title)
+ * are borrowed; *out is malloc'd and NUL-terminated, the caller frees it with free().  On
+ * failure *out = NULL, *outlen = 0 and *err (may be NULL) holds the status and message.
+ */
+#ifndef CELLAR_RENDER_H
+#define CELLAR_RENDER_H
+
+#include <stddef.h>
+
+#include "api/api.h"
+
+#define RENDER_EXPLODE_MAX 100.0 /* explode is in [1, RENDER_EXPLODE_MAX] */
+#define RENDER_WIDTH_MIN   16    /* width in pixels is in [RENDER_WIDTH_MIN, RENDER_WIDTH_MAX] */
+#define RENDER_WIDTH_MAX   16384
+#define RENDER_STROKE_MAX  100.0 /* stroke in pixels is 0 (auto) or in (0, RENDER_STROKE_MAX] */
+
+typedef struct render_opts {
+    double explode;    /* k >= 1: faces moved away from the centre (1, the default: in place) */
+    int numbers;       /* non-zero: vertex numbers and face numbers (default 0) */
+    int edges;         /* non-zero: draw the edges (default 1) */
+    int width;         /* of the picture in pixels (default 800); height from the aspect ratio */
+    double stroke;     /* edge width in pixels; 0 (the default): auto, width / 800 in [0.5, 4] */
+    const char *title; /* borrowed, may be NULL: the <title> text (escaped; bytes that are not
+                          UTF-8 become '?'); NULL: "cellar: F faces, E edges, V vertices" */
+} render_opts;
+
+/* The defaults above. */
+#define RENDER_OPTS_INIT                                                                           \
+    {                                                                                              \
+        1.0, 0, 1, 800, 0.0, NULL                                                                  \
+    }
+void render_opts_init(render_opts *o);
+
+/* Draws the 2D result result_json[0..len) (need not be NUL-terminated) as an SVG document
+ * (o may be NULL: the defaults).  Returns API_OK and sets *out (*outlen bytes, ending in "\n"),
+ * or API_EINVALID for a result it cannot draw or options out of range (the message names the
+ * key or option), API_ENOMEM. */
+int render_svg(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
+
+/* Writes the bounded faces of the 2D result result_json[0..len) as a GeoJSON FeatureCollection
+ * (one line, ending in "\n").  Returns API_OK, API_EINVALID or API_ENOMEM as render_svg(). */
+int render_geojson(const char *result_json, size_t len, char **out, size_t *outlen, api_error *err);
+
+/* Options from a URL's query, one parameter at a time (already percent-decoded, as
+ * libmicrohttpd's MHD_get_connection_values gives them):
+ *   explode=K   a number in [1, 100]
+ *   numbers=B   B one of 1 0 true false yes no on off, or no value at all ("?numbers"): true
+ *   edges=B
+ *   width=N     an integer in [16, 16384]
+ *   stroke=S    a number in [0, 100] (0: auto)
+ * value may be NULL (no "=").  Sets the field of *o and returns API_OK, or returns
+ * API_EINVALID with a message naming the parameter ("explode: expected a number in [1, 100],
+ * got \"x\"", "foo: unknown parameter ...") and leaves *o as it was.  The title is not a query
+ * parameter.  A caller that has query parameters of its own asks render_opts_is_query_key()
+ * first. */
+int render_opts_parse_query(const char *query_key, const char *value, render_opts *o,
+                            api_error *err);
+
+/* Non-zero when key is one of the parameters render_opts_parse_query() reads. */
+int render_opts_is_query_key(const char *key);
+
+/* The same for a whole raw query string query[0..len) ("explode=1.2&numbers=1&width=600",
+ * without the '?'): splits it at '&' (and ';'), decodes %XX and '+', and applies every
+ * parameter in order with render_opts_parse_query(); an unknown parameter or a bad %-escape is
+ * an error.  On failure *o may hold the parameters before the bad one. */
+int render_opts_parse_query_string(const char *query, size_t len, render_opts *o, api_error *err);
+
+#endif

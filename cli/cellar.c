@@ -24,6 +24,7 @@
  * Ownership: everything is freed before exit; the API's output buffer is the caller's to free.
  */
 #include "api/api.h"
+#include "api/render.h"
 #include "core/arr2.h"
 
 #include <errno.h>
@@ -361,7 +362,37 @@ fail:
     return NULL;
 }
 
-static int run(char **pos, int npos, int threads)
+/* What run and svg print: the result JSON, or a picture or map of it (api/render.h). */
+typedef struct out_format {
+    int kind; /* 0 json, 1 svg, 2 geojson */
+    render_opts ro;
+    const char *first; /* the first rendering flag given, for "needs --format svg" errors */
+} out_format;
+
+/* Writes the result (or its rendering) to stdout; returns the exit status. */
+static int write_result(const char *out, size_t outlen, const out_format *of)
+{
+    char *pic = NULL;
+    size_t piclen = 0;
+    api_error err;
+    if (of->kind == 1 && render_svg(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
+        fprintf(stderr, "cellar: --format svg: %s\n", err.msg);
+        return 1;
+    }
+    if (of->kind == 2 && render_geojson(out, outlen, &pic, &piclen, &err) != API_OK) {
+        fprintf(stderr, "cellar: --format geojson: %s\n", err.msg);
+        return 1;
+    }
+    fwrite(pic ? pic : out, 1, pic ? piclen : outlen, stdout);
+    free(pic);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
+static int run(char **pos, int npos, int threads, const out_format *of)
 {
     size_t len, outlen;
     char *body, *out;
@@ -376,13 +407,9 @@ static int run(char **pos, int npos, int threads)
         fprintf(stderr, "cellar: %s\n", err.msg);
         return 1;
     }
-    fwrite(out, 1, outlen, stdout);
+    rc = write_result(out, outlen, of);
     free(out);
-    if (fflush(stdout) != 0 || ferror(stdout)) {
-        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
-        return 1;
-    }
-    return 0;
+    return rc;
 }
 
 /* The svg command's flags: each sets the request option of the same name. */
@@ -408,7 +435,7 @@ static int parse_positive(const char *flag, const char *val, double *out)
 }
 
 static int svg_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
-                       int threads)
+                       int threads, const out_format *of)
 {
     size_t len, outlen;
     char *text = NULL, *body = NULL, *out = NULL;
@@ -458,12 +485,7 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
         fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
     }
-    fwrite(out, 1, outlen, stdout);
-    rc = 0;
-    if (fflush(stdout) != 0 || ferror(stdout)) {
-        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
-        rc = 1;
-    }
+    rc = write_result(out, outlen, of);
 out:
     free(out);
     free(body);
@@ -480,6 +502,7 @@ int main(int argc, char **argv)
     char **pos = calloc((size_t)argc + 1, sizeof *pos);
     const char *options_text = NULL;
     svg_flags fl = {0};
+    out_format of = {.kind = 0, .ro = RENDER_OPTS_INIT};
     int npos = 0, threads = 0, rc;
     if (!pos) return 1;
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
@@ -526,6 +549,37 @@ int main(int argc, char **argv)
             if (!fl.first) fl.first = tol ? "--flatten-tolerance" : "--precision";
             continue;
         }
+        if (strcmp(a, "--numbers") == 0) {
+            of.ro.numbers = 1;
+            if (!of.first) of.first = a;
+            continue;
+        }
+        if (strcmp(a, "--format") == 0 || strcmp(a, "--explode") == 0 ||
+            strcmp(a, "--width") == 0) {
+            if (i + 1 == argc) {
+                rc = usage_error("%s needs a value", a);
+                goto out;
+            }
+            val = argv[++i];
+            if (a[2] == 'f') {
+                of.kind = !strcmp(val, "json")      ? 0
+                          : !strcmp(val, "svg")     ? 1
+                          : !strcmp(val, "geojson") ? 2
+                                                    : -1;
+                if (of.kind < 0) {
+                    rc = usage_error("--format: expected json, svg or geojson, not \"%s\"", val);
+                    goto out;
+                }
+                continue;
+            }
+            api_error re;
+            if (render_opts_parse_query(a + 2, val, &of.ro, &re) != API_OK) {
+                rc = usage_error("--%s", re.msg);
+                goto out;
+            }
+            if (!of.first) of.first = a;
+            continue;
+        }
         if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
             if (i + 1 == argc) {
                 rc = usage_error("%s needs a value", a);
@@ -551,13 +605,15 @@ int main(int argc, char **argv)
     }
     if (fl.first && (npos == 0 || strcmp(pos[0], "svg") != 0)) {
         rc = usage_error("%s is for the svg command", fl.first);
+    } else if (of.first && of.kind != 1) {
+        rc = usage_error("%s is for --format svg", of.first);
     } else if (npos == 0) {
         rc = usage_error("%s", "no command (run, gen, svg)");
     } else if (strcmp(pos[0], "svg") == 0) {
-        rc = svg_command(pos, npos, options_text, &fl, threads);
+        rc = svg_command(pos, npos, options_text, &fl, threads, &of);
     } else if (strcmp(pos[0], "run") == 0) {
         rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
-                          : run(pos, npos, threads);
+                          : run(pos, npos, threads, &of);
     } else if (strcmp(pos[0], "gen") == 0) {
         if (npos < 2)
             rc = usage_error("%s", "gen needs lines or grid");

@@ -26,6 +26,7 @@
 #include <time.h>
 
 #include "api/api.h"
+#include "api/render.h"
 #include "server/log.h"
 
 extern const unsigned char cellar_openapi[];
@@ -57,6 +58,9 @@ typedef struct conn {
     int parked;    /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
+    int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON (from Accept) */
+    render_opts ro;  /* the picture's options (query parameters) */
+    char rep[48];    /* the ETag suffix of the representation: "" for JSON */
     char job_id[33]; /* for the log */
 } conn;
 
@@ -69,6 +73,8 @@ static const char *status_title(unsigned s)
         return "Not Found";
     case 405:
         return "Method Not Allowed";
+    case 406:
+        return "Not Acceptable";
     case 409:
         return "Conflict";
     case 413:
@@ -230,21 +236,130 @@ static void info_from_store(const store_job *sj, job_info *ji)
     if (sj->error) snprintf(ji->error, sizeof ji->error, "%s", sj->error);
 }
 
-/* A result body (taken) with its cache headers. */
+/* Results of more than this are not rendered on an HTTP thread (rendering costs about ten
+ * times the result's size in memory and ~0.2 s per MB). */
+#define RENDER_MAX_BYTES (16u << 20)
+
+/* A result body (taken) with its cache headers, as JSON or rendered (c->fmt). */
 static enum MHD_Result respond_result(conn *c, const char *hash, char *body, size_t len,
                                       const char *job_id, const char *cache)
 {
-    char etag[70], loc[100], applied[40];
-    snprintf(etag, sizeof etag, "\"%s\"", hash);
+    char etag[120], loc[100], applied[40];
+    const char *ctype = "application/json";
+    if (c->fmt) {
+        char *pic = NULL;
+        size_t piclen = 0;
+        api_error ae;
+        int rc = API_EINVALID;
+        if (len > RENDER_MAX_BYTES)
+            snprintf(ae.msg, sizeof ae.msg,
+                     "the result is %zu bytes: pictures and maps are made of results up to %u "
+                     "bytes; ask for application/json",
+                     len, RENDER_MAX_BYTES);
+        else if (c->fmt == 1)
+            rc = render_svg(body, len, &c->ro, &pic, &piclen, &ae);
+        else
+            rc = render_geojson(body, len, &pic, &piclen, &ae);
+        free(body);
+        if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, NULL, NULL);
+        body = pic;
+        len = piclen;
+        ctype = c->fmt == 1 ? "image/svg+xml" : "application/geo+json";
+    }
+    snprintf(etag, sizeof etag, "\"%s%s\"", hash, c->rep);
     snprintf(loc, sizeof loc, "/v1/results/%s", hash);
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
                 {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
+                {MHD_HTTP_HEADER_VARY, c->route == ROUTE_JOBS ? NULL : "Accept"},
                 {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
                 {"X-Cellar-Job", job_id},
                 {"X-Cellar-Cache", cache},
                 {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
-    return respond(c, 200, "application/json", body, len, 0, hs, sizeof hs / sizeof *hs);
+    return respond(c, 200, ctype, body, len, 0, hs, sizeof hs / sizeof *hs);
+}
+
+/* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, -1 none we have.
+ * The highest q wins; at equal q an exact type beats a wildcard, then JSON, SVG, GeoJSON. */
+static int accept_format(const char *accept)
+{
+    int best = -1, best_exact = 0;
+    double best_q = 0;
+    if (!accept || !*accept) return 0;
+    const char *p = accept;
+    while (*p) {
+        while (*p == ' ' || *p == ',' || *p == '\t') p++;
+        if (!*p) break;
+        const char *end = strchr(p, ',');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        size_t tl = strcspn(p, ";, \t");
+        if (tl > n) tl = n;
+        double q = 1;
+        const char *qp = memmem(p, n, ";q=", 3);
+        if (!qp) qp = memmem(p, n, "; q=", 4);
+        if (qp) q = strtod(strchr(qp, '=') + 1, NULL);
+        struct {
+            const char *type;
+            int fmt, exact;
+        } m[] = {{"application/json", 0, 1},     {"image/svg+xml", 1, 1},
+                 {"application/geo+json", 2, 1}, {"*/*", 0, 0},
+                 {"application/*", 0, 0},        {"image/*", 1, 0}};
+        for (size_t i = 0; i < sizeof m / sizeof *m; i++)
+            if (tl == strlen(m[i].type) && !strncasecmp(p, m[i].type, tl) && q > 0 &&
+                (q > best_q || (q == best_q && m[i].exact > best_exact) ||
+                 (q == best_q && m[i].exact == best_exact && m[i].fmt < best))) {
+                best = m[i].fmt;
+                best_q = q;
+                best_exact = m[i].exact;
+            }
+        p += n;
+    }
+    return best;
+}
+
+typedef struct query_ctx {
+    conn *c;
+    int failed;
+    api_error err;
+} query_ctx;
+
+static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char *key,
+                                 const char *value)
+{
+    (void)kind;
+    query_ctx *q = cls;
+    if (q->failed || !render_opts_is_query_key(key)) return MHD_YES;
+    if (render_opts_parse_query(key, value, &q->c->ro, &q->err) != API_OK) q->failed = 1;
+    return MHD_YES;
+}
+
+/* Decides the representation of a result route from Accept and the query; answers 406 or
+ * 422 itself (returning 1) when it cannot. */
+static int negotiate(conn *c, enum MHD_Result *r)
+{
+    const char *acc = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+    c->fmt = accept_format(acc);
+    if (c->fmt < 0) {
+        *r = problem(c, 406,
+                     "results are application/json, image/svg+xml (a picture) or "
+                     "application/geo+json (a map)",
+                     NULL, NULL);
+        return 1;
+    }
+    render_opts def = RENDER_OPTS_INIT;
+    c->ro = def;
+    query_ctx q = {.c = c};
+    MHD_get_connection_values(c->mc, MHD_GET_ARGUMENT_KIND, query_arg, &q);
+    if (q.failed) {
+        *r = problem(c, 422, q.err.msg, NULL, NULL);
+        return 1;
+    }
+    if (c->fmt == 1)
+        snprintf(c->rep, sizeof c->rep, ".svg;%g;%d;%d;%d;%g", c->ro.explode, c->ro.numbers,
+                 c->ro.edges, c->ro.width, c->ro.stroke);
+    else if (c->fmt == 2)
+        snprintf(c->rep, sizeof c->rep, ".geojson");
+    return 0;
 }
 
 static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
@@ -346,16 +461,17 @@ static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id)
 
 static enum MHD_Result route_result(conn *c)
 {
-    char etag[70];
+    char etag[120];
     const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
-    snprintf(etag, sizeof etag, "\"%s\"", c->id);
+    snprintf(etag, sizeof etag, "\"%s%s\"", c->id, c->rep);
     if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
         char err[256];
         int rc = c->h->st->ops->result_exists(c->h->st, c->id, err, sizeof err);
         if (rc == STORE_OK) {
             hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
-                        {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"}};
-            return respond(c, 304, NULL, NULL, 0, 1, hs, 2);
+                        {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
+                        {MHD_HTTP_HEADER_VARY, "Accept"}};
+            return respond(c, 304, NULL, NULL, 0, 1, hs, 3);
         }
     }
     return get_result(c, c->id, NULL);
@@ -557,12 +673,18 @@ static enum MHD_Result dispatch(conn *c)
         if (get) return route_job(c, 0);
         if (!strcmp(m, "DELETE")) return route_cancel(c);
         return problem(c, 405, "use GET or DELETE", NULL, "GET, HEAD, DELETE");
-    case ROUTE_JOB_RESULT:
+    case ROUTE_JOB_RESULT: {
+        enum MHD_Result r;
+        if (get && negotiate(c, &r)) return r;
         if (get) return route_job(c, 1);
         return problem(c, 405, "use GET", NULL, "GET, HEAD");
-    case ROUTE_RESULT:
+    }
+    case ROUTE_RESULT: {
+        enum MHD_Result r;
+        if (get && negotiate(c, &r)) return r;
         if (get) return route_result(c);
         return problem(c, 405, "use GET", NULL, "GET, HEAD");
+    }
     default:
         return problem(c, 404, "no such resource", NULL, NULL);
     }

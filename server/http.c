@@ -426,22 +426,35 @@ static metrics_route classify(const char *url, char *id)
     return ROUTE_OTHER;
 }
 
+/* The page at /: post line segments (JSON) or an SVG drawing, see the complex as a picture. */
 static const char index_html[] =
     "<!doctype html><html lang=en><meta charset=utf-8><title>cellar</title>\n"
-    "<style>body{font:15px system-ui;margin:2em;max-width:60em}textarea{width:100%;height:12em;"
-    "font:13px monospace}pre{background:#f4f4f4;padding:1em;overflow:auto;max-height:30em}"
-    "</style>\n<h1>cellar</h1><p>Post line segments; get the cell complex (LAR). API: "
-    "<a href=/openapi.json>/openapi.json</a>, <a href=/metrics>/metrics</a>.</p>\n"
-    "<textarea id=req>{\"kind\":\"lines\",\"lines\":[[[0,0],[6,0]],[[0,4],[10,4]],[[0,0],[0,4]"
-    "],[[3,0],[3,4]],[[6,0],[6,8]],[[3,2],[6,2]],[[10,0],[10,8]],[[0,8],[10,8]]]}</textarea>\n"
-    "<p><button id=go>Compute</button> <span id=st></span></p><pre id=out></pre>\n<script>\n"
-    "document.getElementById('go').onclick=async()=>{const st=document.getElementById('st'),"
-    "out=document.getElementById('out');st.textContent='working…';try{const r=await fetch("
-    "'/v1/jobs',{method:'POST',headers:{'Content-Type':'application/json','Prefer':'wait=30'},"
-    "body:document.getElementById('req').value});const t=await r.text();st.textContent=r.status"
-    "+' '+r.statusText;try{const j=JSON.parse(t);if(j.stats)st.textContent+=' — '+j.stats.V+' "
-    "vertices, '+j.stats.E+' edges, '+j.stats.F+' faces';out.textContent=JSON.stringify(j,null,1)"
-    "}catch(e){out.textContent=t}}catch(e){st.textContent=String(e)}};\n</script>\n";
+    "<style>body{font:15px system-ui;margin:2em;max-width:70em}textarea{width:100%;height:9em;"
+    "font:13px monospace}#pic svg{max-width:100%;height:auto;border:1px solid #ddd}"
+    "pre{background:#f4f4f4;padding:1em;overflow:auto;max-height:20em}</style>\n"
+    "<h1>cellar</h1><p>Post line segments or an SVG drawing; get its cell complex (LAR). "
+    "API: <a href=/openapi.json>/openapi.json</a> &middot; <a href=/metrics>/metrics</a></p>\n"
+    "<p><label>Request (JSON)<br><textarea id=req>{\"kind\":\"lines\",\"lines\":[[[0,0],[6,0]],"
+    "[[0,4],[10,4]],[[0,0],[0,4]],[[3,0],[3,4]],[[6,0],[6,8]],[[3,2],[6,2]],[[10,0],[10,8]],"
+    "[[0,8],[10,8]]]}</textarea></label></p>\n<p><label>or an SVG drawing: <input type=file "
+    "id=file accept=\".svg,image/svg+xml\"></label> <label>explode <input id=ex type=number "
+    "value=1.1 min=1 max=3 step=0.05 style=width:5em></label> <label><input type=checkbox "
+    "id=num> numbers</label></p>\n<p><button id=go>Compute</button> <span id=st></span></p>"
+    "<div id=pic></div><pre id=out></pre>\n<script>\n"
+    "const $=id=>document.getElementById(id);\n"
+    "$('file').onchange=async()=>{const f=$('file').files[0];if(f)$('req').value=JSON.stringify("
+    "{kind:'svg',svg:await f.text(),options:{y_up:true}})};\n"
+    "$('go').onclick=async()=>{$('st').textContent='working…';$('pic').innerHTML='';"
+    "$('out').textContent='';try{const r=await fetch('/v1/jobs',{method:'POST',headers:{"
+    "'Content-Type':'application/json','Prefer':'wait=50'},body:$('req').value});"
+    "const t=await r.text();$('st').textContent=r.status+' '+r.statusText;let j;try{j=JSON.parse(t)"
+    "}catch(e){$('out').textContent=t;return}if(r.status!=200){$('out').textContent="
+    "JSON.stringify(j,null,1);return}const s=j.stats||{};$('st').textContent+=' — '+s.V+"
+    "' vertices, '+s.E+' edges, '+s.F+' faces, '+(s.ms?s.ms.total.toFixed(1)+' ms':'');"
+    "$('out').textContent=t.length>20000?t.slice(0,20000)+'…':t;const h=(r.headers.get('ETag')||"
+    "'').replace(/\"/g,'');if(h){const p=await fetch('/v1/results/'+h+'?explode='+$('ex').value+"
+    "($('num').checked?'&numbers=1':''),{headers:{Accept:'image/svg+xml'}});if(p.ok)$('pic')"
+    ".innerHTML=await p.text()}}catch(e){$('st').textContent=String(e)}};\n</script>\n";
 
 static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id)
 {

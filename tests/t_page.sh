@@ -1,0 +1,37 @@
+#!/bin/sh
+# The web page at /, in a real browser: headless Chromium driven by playwright-core posts an
+# SVG drawing and must show its complex as a picture with one filled path per face (the count
+# the CLI gives for the same drawing).  Needs /usr/bin/chromium and node; playwright-core is
+# installed from npm into build/node_modules on first use.  Without them the test says so and
+# counts as skipped.
+set -u
+cd "$(dirname "$0")/.."
+B=${CELLAR_BUILD:-build}
+if [ ! -x /usr/bin/chromium ] || ! command -v node >/dev/null 2>&1; then
+    echo "skip page: no /usr/bin/chromium or node (apt-get install chromium nodejs)"
+    echo "0 passed, 0 failed, 1 skipped"
+    exit 0
+fi
+if [ ! -d build/node_modules/playwright-core ]; then
+    (cd build && npm install --no-audit --no-fund --silent playwright-core@1 >/dev/null 2>&1) || {
+        echo "skip page: npm install playwright-core failed"
+        echo "0 passed, 0 failed, 1 skipped"
+        exit 0
+    }
+fi
+tmp=$(mktemp -d)
+port=$(( 30000 + $$ % 20000 ))
+"$B/cellard" --listen 127.0.0.1:$port --db "$tmp/c.db" --log-level warn 2>"$tmp/log" &
+pid=$!
+trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null; rm -rf "$tmp"' EXIT
+for i in $(seq 50); do curl -fs "http://127.0.0.1:$port/healthz" >/dev/null 2>&1 && break; sleep 0.1; done
+P=0; F=0
+drawing=${CELLAR_DATA:-../shared/data}/svg/holes.svg
+want=$("$B/cellar" svg "$drawing" --y-up | sed -n 's/.*"F":\([0-9]*\).*/\1/p')
+out=$(NODE_PATH=build/node_modules timeout 90 node tests/page.js "http://127.0.0.1:$port/" "$drawing" "$tmp/page.png" 2>&1)
+echo "$out"
+got=$(printf '%s\n' "$out" | sed -n 's/^face paths: //p')
+if printf '%s\n' "$out" | grep -q "^status: 200 OK"; then echo "ok page: the drawing computes (200)"; P=$((P+1)); else echo "FAIL page: no 200 status line"; F=$((F+1)); fi
+if [ -n "$want" ] && [ "$got" = "$want" ]; then echo "ok page: $got face paths drawn, as the CLI's F"; P=$((P+1)); else echo "FAIL page: $got face paths drawn, the CLI says F=$want"; F=$((F+1)); fi
+echo "$P passed, $F failed"
+[ "$F" -eq 0 ]

@@ -1680,6 +1680,7 @@ static void on_start(void *ctx, const xmlChar *localname, const xmlChar *prefix,
     parse_state *st = ctxt->_private;
     xmlSAX2StartElementNs(ctx, localname, prefix, URI, nb_namespaces, namespaces, nb_attributes,
                           nb_defaulted, attributes);
+    if (!st) return; /* a context libxml2 made without our state: cannot happen in 2.9.14 */
     st->elements++;
     st->depth++;
     if (st->elements == 1) {
@@ -1706,7 +1707,7 @@ static void on_end(void *ctx, const xmlChar *localname, const xmlChar *prefix, c
 {
     xmlParserCtxtPtr ctxt = ctx;
     parse_state *st = ctxt->_private;
-    if (st->depth) st->depth--;
+    if (st && st->depth) st->depth--;
     xmlSAX2EndElementNs(ctx, localname, prefix, URI);
 }
 

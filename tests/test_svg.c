@@ -1079,6 +1079,14 @@ TEST(svg_hostile_entities_are_refused)
           NULL, &r);
     CHECK(r.n == 1 && has_seg(&r, 0, 0, 10, 1, 0), "flat entities: %zu", r.n);
     svg_result_free(&r);
+    /* elements inside an entity's text are not drawn (a warning says so) */
+    rd_ok("elements in an entity",
+          "<!DOCTYPE svg [<!ENTITY e \"<line x2='1'/><g><line x2='2'/></g>\">]>"
+          "<svg " NS ">&e;&e;<line x2='3'/></svg>",
+          NULL, &r);
+    CHECK(r.n == 1 && has_seg(&r, 0, 0, 3, 0, 0) && has_warning(&r, "&e; in element content"),
+          "entity in content: %zu", r.n);
+    svg_result_free(&r);
 }
 
 TEST(svg_hostile_sizes_are_refused_fast)

@@ -11,6 +11,7 @@
  * - malformed and hostile input: each a clear error, fast, no crash.
  */
 #include <dirent.h>
+#include <sys/resource.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdint.h>
@@ -1007,21 +1008,32 @@ TEST(svg_normalize_y_up_tolerance_and_limits)
 
 /* ---- malformed and hostile input ---------------------------------------------------------- */
 
-/* text must be refused with code and a message containing each of the needles. */
+/* The process's peak resident size so far, in MB. */
+static double peak_mb(void)
+{
+    struct rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return (double)u.ru_maxrss / 1024;
+}
+
+/* text must be refused with code and a message containing each of the needles; prints the time
+ * and how much the peak resident size grew (an upper bound of what the read used). */
 static void refused(const char *what, const char *text, size_t len, int code, const char *n1,
                     const char *n2)
 {
     svg_result r;
     char err[256] = "";
-    double t0 = now_ms();
+    double t0 = now_ms(), m0 = peak_mb();
     int rc = svg_read(text, len, NULL, &r, err, sizeof err);
-    double ms = now_ms() - t0;
+    double ms = now_ms() - t0, grew = peak_mb() - m0;
     CHECK(rc == code, "%s: code %d, want %d (%s)", what, rc, code, err);
     CHECK(strstr(err, n1) && (!n2 || strstr(err, n2)), "%s: message \"%s\" lacks \"%s\"/\"%s\"",
           what, err, n1, n2 ? n2 : "");
     CHECK(r.n == 0 && r.seg == NULL && r.nwarnings == 0, "%s: result not empty", what);
     for (const char *p = err; *p; p++) CHECK(*p >= 0x20 && *p < 0x7f, "%s: unprintable", what);
-    printf("  %s: %.1f ms: %s\n", what, ms, err);
+    /* bounded: libxml2's tree and our arrays, far below what the input could expand to */
+    CHECK(getenv("CELLAR_SANITIZED") || grew < 400, "%s: peak memory grew by %.0f MB", what, grew);
+    printf("  %s: %.1f ms, peak +%.0f MB: %s\n", what, ms, grew, err);
 }
 
 #define REFUSED(what, text, code, n1, n2) refused(what, text, strlen(text), code, n1, n2)

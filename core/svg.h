@@ -30,24 +30,24 @@
 #define SVG_MAX_WARNINGS      16          /* messages kept; the count goes on */
 
 typedef struct svg_opts {
-    int rect_diagonal;        /* the seeds' rect2lines: 0 a rect gives its 4 sides, 1 its diagonal */
-    int normalize;            /* map the drawing into the unit square, aspect kept, y up */
-    int y_up;                 /* without normalize: y' = -y (SVG's y points down) */
+    int rect_diagonal; /* the seeds' rect2lines: 0 a rect gives its 4 sides, 1 its diagonal */
+    int normalize;     /* map the drawing into the unit square, aspect kept, y up */
+    int y_up;          /* without normalize: y' = -y (SVG's y points down) */
     double flatten_tolerance; /* most distance of a curve from its chords, in root user units;
                                  0: 1e-3 of the drawing's size */
     size_t max_elements, max_path_commands, max_segments, max_depth; /* 0: defaults above */
 } svg_opts;
 
 typedef struct svg_result {
-    double *seg;              /* 4 per segment: x1, y1, x2, y2 (output coordinates) */
+    double *seg; /* 4 per segment: x1, y1, x2, y2 (output coordinates) */
     size_t n;
-    size_t elements;          /* geometric elements read */
-    size_t skipped;           /* elements skipped (unreadable, unsupported): see warnings */
-    size_t nwarnings;         /* messages in warning[] (at most SVG_MAX_WARNINGS) */
+    size_t elements;  /* geometric elements read */
+    size_t skipped;   /* elements skipped (unreadable, unsupported): see warnings */
+    size_t nwarnings; /* messages in warning[] (at most SVG_MAX_WARNINGS) */
     char warning[SVG_MAX_WARNINGS][160];
-    double transform[6];      /* output = (a c e; b d f) * root user coordinates: a,b,c,d,e,f
-                                 as in SVG's matrix(); the identity unless normalize/y_up */
-    double bbox[4];           /* of the segments in root user coordinates: x0, y0, x1, y1 */
+    double transform[6]; /* output = (a c e; b d f) * root user coordinates: a,b,c,d,e,f
+                            as in SVG's matrix(); the identity unless normalize/y_up */
+    double bbox[4];      /* of the segments in root user coordinates: x0, y0, x1, y1 */
 } svg_result;
 
 /* Reads the drawing text[0..len) (borrowed, need not be NUL-terminated).  Returns ARR_OK (0)

@@ -260,6 +260,7 @@ static void *worker_main(void *arg)
         e->nrunning++;
         j->state = JOB_RUNNING;
         j->started = engine_now();
+        snprintf(j->stage, sizeof j->stage, "started");
         j->refs++; /* the worker's */
         pthread_mutex_unlock(&e->lock);
         run_job(e, j);
@@ -390,6 +391,17 @@ fail:
     return NULL;
 }
 
+/* lock held: the queued or running job with this hash, referenced, or NULL */
+static job *join_locked(engine *e, const char *hash)
+{
+    for (job *j = e->live; j; j = j->next_live)
+        if ((j->state == JOB_QUEUED || j->state == JOB_RUNNING) && strcmp(j->hash, hash) == 0) {
+            j->refs++;
+            return j;
+        }
+    return NULL;
+}
+
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
                   job **out, int *coalesced, char *err, size_t errlen)
 {
@@ -401,15 +413,27 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
         pthread_mutex_unlock(&e->lock);
         return ENG_DRAINING;
     }
-    for (job *j = e->live; j; j = j->next_live)
-        if ((j->state == JOB_QUEUED || j->state == JOB_RUNNING) && strcmp(j->hash, hash) == 0) {
-            j->refs++;
-            pthread_mutex_unlock(&e->lock);
-            *out = j;
-            *coalesced = 1;
-            metrics_coalesced(e->cfg.m);
-            return ENG_OK;
-        }
+    if ((*out = join_locked(e, hash))) {
+        pthread_mutex_unlock(&e->lock);
+        *coalesced = 1;
+        metrics_coalesced(e->cfg.m);
+        return ENG_OK;
+    }
+    /* No identical job in flight.  One may have just ended: a worker stores its result before
+     * it leaves the live list, so the cache now has it (the caller looked before the scan). */
+    pthread_mutex_unlock(&e->lock);
+    int cached = e->cfg.st->ops->result_exists(e->cfg.st, hash, err, errlen) == STORE_OK;
+    pthread_mutex_lock(&e->lock);
+    if (cached) {
+        pthread_mutex_unlock(&e->lock);
+        return ENG_CACHED;
+    }
+    if ((*out = join_locked(e, hash))) { /* created by another request meanwhile */
+        pthread_mutex_unlock(&e->lock);
+        *coalesced = 1;
+        metrics_coalesced(e->cfg.m);
+        return ENG_OK;
+    }
     if (e->nqueued >= e->cfg.queue_max) {
         pthread_mutex_unlock(&e->lock);
         return ENG_FULL;
@@ -550,7 +574,8 @@ int engine_wait(engine *e, job *j, double deadline, void (*wake)(void *), void *
 {
     waiter *w = malloc(sizeof *w);
     pthread_mutex_lock(&e->lock);
-    if (j->state != JOB_QUEUED && j->state != JOB_RUNNING) {
+    if ((j->state != JOB_QUEUED && j->state != JOB_RUNNING) || e->draining) {
+        /* ended, or the drain has already woken every waiter: answer now */
         pthread_mutex_unlock(&e->lock);
         free(w);
         return 1;

@@ -34,7 +34,7 @@ typedef struct engine_cfg {
     size_t queue_max;
 } engine_cfg;
 
-enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_ERR = -1 };
+enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_CACHED = 3, ENG_ERR = -1 };
 
 /* A snapshot of a job, for responses. */
 typedef struct job_info {
@@ -55,7 +55,10 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen);
 
 /* Accepts a request (canon: its canonical JSON, borrowed; kind: its kind; hash: engine_hash of
  * canon).  ENG_OK: *out is a referenced job (new, or an identical one in flight: *coalesced
- * = 1); ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err). */
+ * = 1); ENG_CACHED: an identical job ended while we looked, its result is in the store;
+ * ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err).  Identical requests run
+ * once: the caller looks in the cache first, this looks for a job in flight, then in the
+ * cache again (a worker stores its result before its job leaves the live list). */
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
                   job **out, int *coalesced, char *err, size_t errlen);
 

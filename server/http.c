@@ -613,6 +613,11 @@ static enum MHD_Result route_submit(conn *c)
     int coalesced = 0;
     rc = engine_submit(h->e, canon, clen, kind, hash, &j, &coalesced, err, sizeof err);
     free(canon);
+    if (rc == ENG_CACHED) { /* an identical job ended between our two looks */
+        hit = h->st->ops->result_get(h->st, hash, &body, &len, err, sizeof err);
+        if (hit == STORE_OK) return respond_result(c, hash, body, len, NULL, "hit");
+        return problem(c, 503, "the result was evicted as it was made: try again", "1", NULL);
+    }
     if (rc == ENG_FULL) return problem(c, 503, "the job queue is full: try again later", "5", NULL);
     if (rc == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
@@ -832,7 +837,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
     h->d = MHD_start_daemon(
         flags, (uint16_t)cfg->port, NULL, NULL, handle, h, MHD_OPTION_SOCK_ADDR, ai->ai_addr,
-        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)2, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
+        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)4, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)1000, MHD_OPTION_NOTIFY_COMPLETED, completed, h,
         MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, MHD_OPTION_END);
     freeaddrinfo(ai);

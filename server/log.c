@@ -64,7 +64,7 @@ void log_kv(int level, const char *msg, ...)
         }
     }
     va_end(ap);
-    char *line = json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER);
+    char *line = json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(9));
     json_decref(o);
     if (!line) return;
     pthread_mutex_lock(&out_lock);

@@ -63,6 +63,9 @@ typedef struct api_kind {
     int (*parse)(const json_t *req, void **parsed, api_error *err);
     int (*run)(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
     void (*free)(void *parsed);
+    /* optional, run by api_check_request() only (the daemon's submit, before queueing): the
+     * checks that parse leaves to run but a client should hear about at once (svg: the XML) */
+    int (*check)(const void *parsed, api_error *err);
 } api_kind;
 
 /* The "lines" kind (api/lines.c). */
@@ -74,6 +77,7 @@ void api_lines_free(void *parsed);
 int api_svg_parse(const json_t *req, void **parsed, api_error *err);
 int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_svg_free(void *parsed);
+int api_svg_check(const void *parsed, api_error *err);
 
 /* The result fields a request may ask for (options.fields), as bits. */
 enum {

@@ -21,8 +21,8 @@
 #include <string.h>
 
 static const api_kind kinds[] = {
-    {"lines", api_lines_parse, api_lines_run, api_lines_free},
-    {"svg", api_svg_parse, api_svg_run, api_svg_free},
+    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL},
+    {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 
@@ -264,6 +264,7 @@ int api_check_request(const char *body, size_t len, char **canon, size_t *canonl
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (kind_name) *kind_name = NULL;
     rc = parse(body, len, &kind, &req, err);
+    if (rc == API_OK && kind->check) rc = kind->check(req, err);
     if (kind) kind->free(req);
     if (rc == API_OK && kind_name) *kind_name = kind->name;
     if (rc != API_OK || !canon) return rc;

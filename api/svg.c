@@ -4,9 +4,10 @@
  * JSON path, status 422), copies the drawing's text, reads it with svg_read() (core/svg.h),
  * runs the 2D core on the segments and writes the complex with api_lar2_write(), adding
  * stats.svg = {"elements", "skipped", "warnings": [...], "segments", "transform": [a..f]}.
- * The XML is parsed when the job runs, not when it is checked: malformed XML, a document that
- * is not SVG, or one beyond a limit of the reader is a 422 whose message starts "svg: " and
- * names line and column ("svg: line 3, column 7: ...").
+ * Malformed XML, a document that is not SVG, or one beyond a limit of the reader is a 422 whose
+ * message starts "svg: " and names line and column ("svg: line 3, column 7: ..."): at submit
+ * (api_svg_check, through api_check_request: the daemon refuses it before queueing) and again
+ * when the job runs.
  *
  * Options: those of "lines" (precision, keep_dangling, exterior_last, operators, fields; read by
  * api_lar2_option() in api/lines.c; precision is in output units, so after normalize a fraction
@@ -125,6 +126,27 @@ fail:
     return rc;
 }
 
+/* Reads the drawing, for its errors only (the segments are read again when the job runs:
+ * reading is a small part of a job, and a malformed drawing is then refused at once). */
+static int read_drawing(const svg_req *r, svg_result *sr, api_error *err)
+{
+    char msg[API_ERRMAX] = "";
+    int rc = svg_read(r->text, r->len, &r->so, sr, msg, sizeof msg);
+    if (rc == ARR_OK) return API_OK;
+    if (rc == ARR_ENOMEM)
+        return api_fail(err, API_ENOMEM, "out of memory while reading the drawing: %s", msg);
+    return api_fail(err, rc == ARR_EINVAL || rc == ARR_ELIMIT ? API_EINVALID : API_EINTERNAL,
+                    "svg: %s", *msg ? msg : "unreadable drawing");
+}
+
+int api_svg_check(const void *parsed, api_error *err)
+{
+    svg_result sr = {0};
+    int rc = read_drawing(parsed, &sr, err);
+    svg_result_free(&sr);
+    return rc;
+}
+
 /* Writes ,"svg":{...} into the stats object (api_lar2_fmt.stats_more). */
 static void put_svg_stats(api_buf *b, const void *udata)
 {
@@ -173,15 +195,8 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
     char msg[API_ERRMAX] = "";
     int rc;
     if (ro->progress) ro->progress(ro->udata, "svg", 0);
-    rc = svg_read(r->text, r->len, &r->so, &sr, msg, sizeof msg);
-    if (rc != ARR_OK) {
-        if (rc == ARR_ENOMEM)
-            rc = api_fail(err, API_ENOMEM, "out of memory while reading the drawing: %s", msg);
-        else
-            rc = api_fail(err, rc == ARR_EINVAL || rc == ARR_ELIMIT ? API_EINVALID : API_EINTERNAL,
-                          "svg: %s", *msg ? msg : "unreadable drawing");
-        goto out;
-    }
+    rc = read_drawing(r, &sr, err);
+    if (rc != API_OK) goto out;
     rc = arr2_build(sr.n ? sr.seg : no_segment, sr.n, &ao, &c, msg, sizeof msg);
     if (rc != ARR_OK) {
         rc = api_core_fail(err, rc, msg);

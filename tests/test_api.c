@@ -697,3 +697,24 @@ TEST(double_format_known_values)
         CHECK(strtod(buf, NULL) == cases[i].x, "%s does not read back", buf);
     }
 }
+
+/* The submit-time check (api_check_json, what the daemon runs before queueing) reads an SVG
+ * drawing, so a malformed one is refused at once with its line and column. */
+TEST(check_reads_svg_drawings)
+{
+    api_error err;
+    char *canon = NULL;
+    const char *bad = "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'>\\n"
+                      "<line x1='0' y1='0' x2='1' y2='1'>\\n</svg>\"}";
+    int rc = api_check_json(bad, strlen(bad), &canon, NULL, &err);
+    CHECK(rc == 422, "malformed drawing: status %d, want 422", rc);
+    CHECK(strstr(err.msg, "svg: line") != NULL, "message '%s' names no line", err.msg);
+    CHECK(canon == NULL, "canonical form given for a refused request");
+    const char *good = "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'>"
+                       "<rect x='0' y='0' width='2' height='1'/></svg>\"}";
+    rc = api_check_json(good, strlen(good), &canon, NULL, &err);
+    CHECK(rc == 0 && canon != NULL, "good drawing refused: %d %s", rc, err.msg);
+    free(canon);
+    const char *notsvg = "{\"kind\":\"svg\",\"svg\":\"<html></html>\"}";
+    CHECK(api_check_json(notsvg, strlen(notsvg), NULL, NULL, &err) == 422, "html accepted");
+}

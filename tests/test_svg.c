@@ -1249,11 +1249,16 @@ TEST(svg_kind_errors)
               cases[i].prefix);
         json_decref(o);
     }
-    /* the check step validates the request but leaves the XML to the run */
+    /* the check step (the daemon's submit) reads the drawing too: malformed XML is refused
+     * there, with line and column, and a good drawing passes with its kind */
     api_error err;
     const char *body = "{\"kind\":\"svg\",\"svg\":\"<svg>\",\"options\":{\"normalize\":true}}";
     const char *kind = NULL;
+    CHECK(api_check_request(body, strlen(body), NULL, NULL, &kind, &err) == API_EINVALID &&
+              !kind && strstr(err.msg, "svg: line 1, column") != NULL,
+          "check: %s", err.msg);
+    body = "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'/>\"}";
     CHECK(api_check_request(body, strlen(body), NULL, NULL, &kind, &err) == API_OK && kind &&
               strcmp(kind, "svg") == 0,
-          "check: %s", err.msg);
+          "check of a good drawing: %s", err.msg);
 }

@@ -23,6 +23,7 @@
 #include <fcntl.h>
 #include <ftw.h>
 #include <jansson.h>
+#include <libxml/parser.h>
 #include <netinet/in.h>
 #include <pthread.h>
 #include <signal.h>
@@ -2288,4 +2289,81 @@ SERVER_TEST(health_and_docs, "--workers 1 --job-threads 1")
     CHECK(mval(r.body.p, "cellar_queue_depth") == 0, "queue depth");
     hresp_free(&r);
     srv_term(d);
+}
+
+/* Results as pictures and maps: Accept image/svg+xml gives an SVG document (valid XML, one
+ * filled path per face), with query options and its own ETag (304 on it, Vary: Accept);
+ * application/geo+json a FeatureCollection of the faces; an Accept we cannot serve is 406 and
+ * a bad option 422; a browser's Accept gets JSON. */
+SERVER_TEST(results_as_pictures_and_maps, "--workers 1 --job-threads 1")
+{
+    size_t len;
+    char *body = small_body(3, 1, &len);
+    hresp r;
+    char etag[200], hash[80], path[200], acc[80], inm[240];
+    http_post(d, body, len, "wait=10", &r);
+    free(body);
+    REQUIRE(r.status == 200, "POST: %ld", r.status);
+    json_t *res = jbody(&r);
+    long nf = (long)json_integer_value(json_object_get(json_object_get(res, "stats"), "F"));
+    json_decref(res);
+    REQUIRE(nf > 0 && hget(&r, "ETag", etag, sizeof etag), "no faces or ETag");
+    snprintf(hash, sizeof hash, "%.64s", etag + 1);
+    hresp_free(&r);
+
+    snprintf(path, sizeof path, "/v1/results/%s?explode=1.25&numbers=1", hash);
+    hreq q = {.path = path};
+    q.h[0] = "Accept: image/svg+xml";
+    http_do(d, &q, &r);
+    REQUIRE(r.status == 200, "svg: %ld %s", r.status, r.body.p ? r.body.p : "");
+    CHECK(has_header(&r, "Content-Type", "image/svg+xml"), "svg Content-Type");
+    CHECK(has_header(&r, "Vary", "Accept"), "no Vary: Accept");
+    char setag[200];
+    CHECK(hget(&r, "ETag", setag, sizeof setag) && strcmp(setag, etag) != 0 &&
+              !strncmp(setag, etag, 65),
+          "svg ETag %s (JSON %s)", setag, etag);
+    xmlDocPtr doc = xmlReadMemory(r.body.p, (int)r.body.n, "r.svg", NULL, XML_PARSE_NONET);
+    CHECK(doc != NULL, "the picture is not XML");
+    if (doc) xmlFreeDoc(doc);
+    long paths = 0;
+    for (const char *p = r.body.p; p && (p = strstr(p, "<path id=\"face-")); p++) paths++;
+    CHECK(paths == nf, "%ld face paths, %ld faces", paths, nf);
+    hresp_free(&r);
+    snprintf(inm, sizeof inm, "If-None-Match: %s", setag);
+    q.h[1] = inm;
+    http_do(d, &q, &r);
+    CHECK(r.status == 304, "If-None-Match on the picture: %ld", r.status);
+    hresp_free(&r);
+
+    snprintf(path, sizeof path, "/v1/results/%s", hash);
+    hreq g = {.path = path};
+    g.h[0] = "Accept: application/geo+json";
+    http_do(d, &g, &r);
+    json_t *fc = jbody(&r);
+    CHECK(r.status == 200 && has_header(&r, "Content-Type", "application/geo+json") &&
+              !strcmp(jstr(fc, "type"), "FeatureCollection") &&
+              (long)json_array_size(json_object_get(fc, "features")) == nf,
+          "geojson: %ld", r.status);
+    json_decref(fc);
+    hresp_free(&r);
+
+    const char *accepts[] = {"text/html", "image/png;q=1, application/json;q=0",
+                             "text/html,application/xhtml+xml,application/xml;q=0.9,*/*;q=0.8"};
+    long want[] = {406, 406, 200};
+    for (int i = 0; i < 3; i++) {
+        snprintf(acc, sizeof acc, "Accept: %s", accepts[i]);
+        g.h[0] = acc;
+        http_do(d, &g, &r);
+        CHECK(r.status == want[i], "Accept %s: %ld, want %ld", accepts[i], r.status, want[i]);
+        if (want[i] == 200)
+            CHECK(has_header(&r, "Content-Type", "application/json"), "browser: not JSON");
+        hresp_free(&r);
+    }
+    snprintf(path, sizeof path, "/v1/results/%s?explode=0.5", hash);
+    hreq b = {.path = path};
+    b.h[0] = "Accept: image/svg+xml";
+    http_do(d, &b, &r);
+    CHECK(r.status == 422 && strstr(r.body.p ? r.body.p : "", "explode"), "explode=0.5: %ld",
+          r.status);
+    hresp_free(&r);
 }

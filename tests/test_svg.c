@@ -1254,8 +1254,8 @@ TEST(svg_kind_errors)
     api_error err;
     const char *body = "{\"kind\":\"svg\",\"svg\":\"<svg>\",\"options\":{\"normalize\":true}}";
     const char *kind = NULL;
-    CHECK(api_check_request(body, strlen(body), NULL, NULL, &kind, &err) == API_EINVALID &&
-              !kind && strstr(err.msg, "svg: line 1, column") != NULL,
+    CHECK(api_check_request(body, strlen(body), NULL, NULL, &kind, &err) == API_EINVALID && !kind &&
+              strstr(err.msg, "svg: line 1, column") != NULL,
           "check: %s", err.msg);
     body = "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'/>\"}";
     CHECK(api_check_request(body, strlen(body), NULL, NULL, &kind, &err) == API_OK && kind &&

@@ -1,0 +1,62 @@
+/* solid.h — solids given as face models (issue "3D: the arrangement of solids"): the input of
+ * the 3D pipeline, and its validation.
+ *
+ * A solid is a closed polyhedral surface: vertices V (x, y, z) and faces, each a planar polygon
+ * given as an outer cycle of vertex indices and zero or more hole cycles, outward oriented
+ * (counter-clockwise seen from outside, holes clockwise).  solid_check() validates one solid
+ * against a precision (the snapping grid step of the 3D pipeline) and reports every problem by
+ * solid and face:
+ *   - an index out of range, a face with fewer than 3 distinct vertices (after merging vertices
+ *     closer than the precision), a zero-area face;
+ *   - a non-planar face: a vertex farther than the precision from the face's Newell plane;
+ *   - an open surface (an edge used once), a non-manifold one (an edge used more than twice);
+ *   - inconsistent orientation (an edge walked twice in the same direction): reported; when the
+ *     faces can be made consistent by flipping some of them (the surface is orientable), they are
+ *     flipped in the fixed copy and a warning says so;
+ *   - an inward-oriented solid (negative signed volume): flipped in the fixed copy, warning.
+ * Errors make the solid unusable; warnings describe what the fixed copy changed.
+ *
+ * Threads: reentrant, no globals.  Ownership: inputs are borrowed; a solid made by the readers
+ * or by solid_check's fixed copy is freed with solid_free().
+ */
+#ifndef CELLAR_SOLID_H
+#define CELLAR_SOLID_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct solid {
+    size_t nv;
+    double *V; /* 3 * nv */
+    size_t nf;
+    uint32_t *face_off; /* nf + 1: face f owns cycles face_off[f] .. face_off[f+1] (first: outer) */
+    size_t ncyc;
+    uint32_t *cyc_off; /* ncyc + 1: cycle c is cyc[cyc_off[c] .. cyc_off[c+1]) */
+    uint32_t *cyc;     /* vertex indices */
+} solid;
+
+void solid_free(solid *s); /* frees the arrays, zeroes the struct; safe twice */
+
+#define SOLID_MAX_MESSAGES 32
+
+typedef struct solid_report {
+    size_t errors, warnings; /* counts (the messages kept are capped) */
+    size_t nmsg;
+    char msg[SOLID_MAX_MESSAGES][160]; /* "face 12: not planar (vertex 7 is 0.03 off)" */
+    double volume;                     /* signed volume of the (fixed) solid */
+    size_t flipped_faces;              /* faces the fixed copy reverses */
+} solid_report;
+
+/* Checks s (borrowed) at `precision` (> 0).  Returns 0 when it is usable (rep->errors == 0),
+ * with *fixed (may be NULL) set to a copy with consistent outward orientation; -1 when it is
+ * not (rep says why).  `label` prefixes the messages ("solids[2]"). */
+int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
+                solid *fixed);
+
+/* Readers, one solid per file: Wavefront OBJ (v and f lines; f with v, v/t, v//n, v/t/n and
+ * negative indices; other lines ignored) and OFF ("OFF" header, counts, comments).  Return 0,
+ * or -1 with "line N: ..." in err (out then empty). */
+int solid_read_obj(const char *text, size_t len, solid *out, char *err, size_t errlen);
+int solid_read_off(const char *text, size_t len, solid *out, char *err, size_t errlen);
+
+#endif

@@ -494,23 +494,39 @@ job *engine_find(engine *e, const char *id)
     return j;
 }
 
-static void info_locked(const job *j, job_info *out)
+/* Fills a job_info; `running_stage` is what a running job shows as its stage. */
+static void info_fill(job_info *out, const char *id, const char *hash, const char *kind,
+                      job_state st, double created, double started, double finished,
+                      const char *running_stage, double running_fraction, int error_status,
+                      const char *error)
 {
     memset(out, 0, sizeof *out);
-    memcpy(out->id, j->id, sizeof out->id);
-    memcpy(out->hash, j->hash, sizeof out->hash);
-    memcpy(out->kind, j->kind, sizeof out->kind);
-    out->state = j->state;
-    out->created = j->created;
-    out->started = j->started;
-    out->finished = j->finished;
+    snprintf(out->id, sizeof out->id, "%s", id);
+    snprintf(out->hash, sizeof out->hash, "%s", hash);
+    snprintf(out->kind, sizeof out->kind, "%s", kind);
+    out->state = st;
+    out->created = created;
+    out->started = started;
+    out->finished = finished;
     snprintf(out->stage, sizeof out->stage, "%s",
-             j->state == JOB_QUEUED    ? "queued"
-             : j->state == JOB_RUNNING ? j->stage
-                                       : "done");
-    out->fraction = j->state == JOB_DONE ? 1 : j->state == JOB_RUNNING ? j->fraction : 0;
-    out->error_status = j->error_status;
-    if (j->error) snprintf(out->error, sizeof out->error, "%s", j->error);
+             st == JOB_QUEUED    ? "queued"
+             : st == JOB_RUNNING ? running_stage
+                                 : "done");
+    out->fraction = st == JOB_DONE ? 1 : st == JOB_RUNNING ? running_fraction : 0;
+    out->error_status = error_status;
+    if (error) snprintf(out->error, sizeof out->error, "%s", error);
+}
+
+static void info_locked(const job *j, job_info *out)
+{
+    info_fill(out, j->id, j->hash, j->kind, j->state, j->created, j->started, j->finished, j->stage,
+              j->fraction, j->error_status, j->error);
+}
+
+void engine_info_from_store(const store_job *sj, job_info *out)
+{
+    info_fill(out, sj->id, sj->hash, sj->kind, sj->state, sj->created, sj->started, sj->finished,
+              "running", 0, sj->error_status, sj->error);
 }
 
 void engine_info(engine *e, job *j, job_info *out)

@@ -67,6 +67,8 @@ job *engine_find(engine *e, const char *id);
 /* Drops a reference taken by engine_submit or engine_find. */
 void engine_release(engine *e, job *j);
 void engine_info(engine *e, job *j, job_info *out);
+/* The same for a job read from the store (not live). */
+void engine_info_from_store(const store_job *sj, job_info *out);
 /* The result of a job that ended DONE (borrowed while the reference is held), else NULL. */
 const char *engine_result(engine *e, job *j, size_t *len);
 

@@ -217,25 +217,6 @@ static json_t *job_json(const job_info *ji)
     return o;
 }
 
-static void info_from_store(const store_job *sj, job_info *ji)
-{
-    memset(ji, 0, sizeof *ji);
-    memcpy(ji->id, sj->id, sizeof ji->id);
-    memcpy(ji->hash, sj->hash, sizeof ji->hash);
-    memcpy(ji->kind, sj->kind, sizeof ji->kind);
-    ji->state = sj->state;
-    ji->created = sj->created;
-    ji->started = sj->started;
-    ji->finished = sj->finished;
-    snprintf(ji->stage, sizeof ji->stage, "%s",
-             sj->state == JOB_QUEUED    ? "queued"
-             : sj->state == JOB_RUNNING ? "running"
-                                        : "done");
-    ji->fraction = sj->state == JOB_DONE ? 1 : 0;
-    ji->error_status = sj->error_status;
-    if (sj->error) snprintf(ji->error, sizeof ji->error, "%s", sj->error);
-}
-
 /* Results of more than this are not rendered on an HTTP thread (rendering costs about ten
  * times the result's size in memory and ~0.2 s per MB). */
 #define RENDER_MAX_BYTES (16u << 20)
@@ -509,7 +490,7 @@ static enum MHD_Result route_job(conn *c, int want_result)
         int rc = c->h->st->ops->job_get(c->h->st, c->id, &sj, err, sizeof err);
         if (rc == STORE_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
         if (rc) return problem(c, 503, err, "5", NULL);
-        info_from_store(&sj, &ji);
+        engine_info_from_store(&sj, &ji);
         store_job_clear(&sj);
     }
     if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);

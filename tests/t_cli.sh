@@ -3,28 +3,8 @@
 # Usage: CELLAR_BIN=build/cellar tests/t_cli.sh   (tests/run.sh sets CELLAR_BIN)
 # Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
 set -u
+. "$(dirname "$0")/lib.sh"
 BIN=${CELLAR_BIN:-build/cellar}
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT INT TERM
-P=0
-F=0
-
-pass() { P=$((P + 1)); echo "ok $1"; }
-fail() { F=$((F + 1)); echo "FAIL $1"; }
-# check NAME COND...: runs the condition (a command), records the result
-check() {
-    name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
-# status WANT CMD...: runs CMD with stdout to $T/out, stderr to $T/err; true if it exits WANT
-status() {
-    want=$1
-    shift
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    [ "$got" -eq "$want" ] || { echo "  exit $got, want $want: $*"; head -c 300 "$T/err"; return 1; }
-}
 # a number from the "stats" object of a result file: stat FILE KEY
 stat() { sed -n "s/.*\"stats\":{.*\"$2\":\([0-9][0-9]*\)[,}].*/\1/p" "$1"; }
 has() { grep -q -- "$2" "$1"; }

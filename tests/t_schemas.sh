@@ -8,23 +8,12 @@
 # Usage: CELLAR_BIN=build/cellar tests/t_schemas.sh   (tests/run.sh sets CELLAR_BIN)
 # Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
 set -u
+. "$(dirname "$0")/lib.sh"
 BIN=${CELLAR_BIN:-build/cellar}
 case $BIN in /*) ;; *) [ -e "$BIN" ] && BIN="$(pwd)/$BIN" ;; esac # before the cd below
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-python3}
 V="$PY tests/validate.py"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT INT TERM
-P=0
-F=0
-
-pass() { P=$((P + 1)); echo "ok $1"; }
-fail() { F=$((F + 1)); echo "FAIL $1"; }
-check() {
-    name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
 # tally WHAT: counts the "ok"/"FAIL" lines of validate.py's output in $T/out as checks
 tally() {
     n=0

@@ -4,31 +4,12 @@
 # Usage: CELLAR_BIN=build/cellar tests/t_svg.sh   (tests/run.sh sets CELLAR_BIN and CELLAR_DATA)
 # Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
 set -u
+. "$(dirname "$0")/lib.sh"
 BIN=${CELLAR_BIN:-build/cellar}
 case $BIN in /*) ;; *) [ -e "$BIN" ] && BIN="$(pwd)/$BIN" ;; esac # before the cd below
 cd "$(dirname "$0")/.."
 D=${CELLAR_DATA:-../shared/data}/svg
 PY=${PYTHON:-python3}
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT INT TERM
-P=0
-F=0
-
-pass() { P=$((P + 1)); echo "ok $1"; }
-fail() { F=$((F + 1)); echo "FAIL $1"; }
-check() {
-    name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
-# status WANT CMD...: runs CMD with stdout to $T/out, stderr to $T/err; true if it exits WANT
-status() {
-    want=$1
-    shift
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    [ "$got" -eq "$want" ] || { echo "  exit $got, want $want: $*"; head -c 300 "$T/err"; return 1; }
-}
 # a number of the result in $T/out: json EXPR (python, the result is r)
 json() { $PY -c "import json,sys; r=json.load(open('$T/out')); print($1)"; }
 errhas() { grep -q -- "$1" "$T/err"; }

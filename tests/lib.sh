@@ -1,0 +1,32 @@
+# lib.sh — what the shell tests (tests/t_*.sh) share; source it right after `set -u`:
+#   T         a temporary directory, removed at exit
+#   P, F      the counts of passed and failed checks
+#   pass NAME / fail NAME       record a check ("ok NAME" / "FAIL NAME")
+#   check NAME CMD...           runs CMD; passes when it succeeds
+#   status WANT CMD...          runs CMD (stdout to $T/out, stderr to $T/err); true when it
+#                               exits WANT, else prints what it got
+#   finish                      prints "N passed, N failed" and exits non-zero on a failure
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT INT TERM
+P=0
+F=0
+
+pass() { P=$((P + 1)); echo "ok $1"; }
+fail() { F=$((F + 1)); echo "FAIL $1"; }
+check() {
+    name=$1
+    shift
+    if "$@"; then pass "$name"; else fail "$name"; fi
+}
+status() {
+    want=$1
+    shift
+    "$@" >"$T/out" 2>"$T/err"
+    got=$?
+    [ "$got" -eq "$want" ] || { echo "  exit $got, want $want: $*"; head -c 300 "$T/err"; return 1; }
+}
+finish() {
+    echo "$P passed, $F failed"
+    [ "$F" -eq 0 ]
+    exit $?
+}

@@ -1,0 +1,1034 @@
+/* solid.c — solids given as face models (core/solid.h): checking them, and reading them from
+ * Wavefront OBJ and OFF text.
+ *
+ * solid_check runs in stages, each a function below:
+ *   shape     the offset arrays are well formed, every index is in range, every coordinate is
+ *             finite and small enough for the grid.  A failure here stops the check: nothing
+ *             after it could be trusted.
+ *   merge     every vertex is snapped to the grid of step `precision` (rounded to the nearest
+ *             grid point, the pixel convention of core/num.h), and vertices on the same grid
+ *             point are one: the merged vertex is the smallest input index among them.  We chose
+ *             the grid over a sorted sweep with a distance test because the grid is what the 3D
+ *             pipeline's unification does with the same solid, and because it never chains
+ *             merges (a, b, c each within the precision of the next, a far from c).  The price,
+ *             paid knowingly: two vertices closer than the precision on either side of a pixel
+ *             border stay two — exactly as they will in the pipeline.  Merging is for the
+ *             checks only: the fixed copy keeps the input's vertices and cycles.
+ *   faces     per cycle, the steps between consecutive merged vertices that differ (a step
+ *             between merged-equal vertices is no edge).  A cycle needs 3 distinct merged
+ *             vertices.  The Newell normal of the outer cycle gives the plane and the area;
+ *             a face is zero-area when its area is at most precision * (box diagonal) / 2 — a
+ *             triangle whose height is one grid step — and not planar when a vertex of any of
+ *             its cycles is farther than the precision from the plane through the mean of its
+ *             vertices.  These two are the only tolerances, and both are the precision.
+ *   edges     the half-edges, keyed by their undirected merged vertex pair, are sorted (qsort,
+ *             n log n): a key used once is an open edge, more than twice a non-manifold one.
+ *   orient    faces paired across each manifold edge must walk it in opposite directions.  A
+ *             breadth-first walk over that adjacency (a queue, no recursion) finds per
+ *             connected surface the flips that make it consistent, or proves none exists.
+ *             Each surface keeps the orientation most of its input faces have.
+ *             Orientation and volume are only looked at on a closed manifold surface: after
+ *             an open or non-manifold edge they would report noise.
+ *   volume    divergence theorem: per cycle, the fan about its first vertex, triple products
+ *             taken about the centre of the solid's box (exact for small dyadic coordinates:
+ *             the unit cube gives 1, not 0.9999...), holes included with their own direction.
+ *             A volume of at most precision * area / 2 (the solid is on average no thicker
+ *             than one grid step) is an error; a negative one flips every face.
+ * Messages name faces and vertices by their 0-based input indices, as the arrays hold them.
+ *
+ * Readers: one solid, each face one cycle (neither format has holes), 0-based indices.  OBJ:
+ * "v" takes 3 to 7 numbers (x y z, then w or a colour, ignored); an "f" index counts from 1,
+ * or back from the last vertex read when negative (no forward references); every other
+ * statement is skipped.  OFF: extra numbers after a vertex (colour, normal) and up to 4 after
+ * a face (its colour) are skipped; nothing but comments may follow the last face.
+ * Limits (a reader refuses more): SOLID_MAX_VERTICES vertices, SOLID_MAX_FACES faces,
+ * SOLID_MAX_FACE_LEN vertices in one face.  Arrays grow with the data actually read, never
+ * with a count the text announces: OFF's counts are believed only after checking that the
+ * bytes left could hold that many lines, so "OFF\n1000000 1000000 0" costs nothing.
+ * Numbers are decimal (digits, sign, point, exponent: no "nan", "inf" or hex) and finite,
+ * converted with strtod_l in a "C" locale of the reader's own, whatever the process locale.
+ *
+ * Threads: reentrant, no globals.  Ownership: inputs borrowed; outputs freed with solid_free().
+ * Bounds: O(n log n) time (sorts), O(n) memory in the total length of the cycles; no recursion.
+ */
+#include "core/solid.h"
+
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SOLID_MAX_VERTICES 10000000u /* a reader's limits, see above */
+#define SOLID_MAX_FACES    10000000u
+#define SOLID_MAX_FACE_LEN 1000000u
+#define GRID_LIMIT         4611686018427387904.0 /* 2^62: |coordinate / precision| below this */
+#define NUMBER_MAX         128                   /* longest number token a reader takes */
+#define NONE               UINT32_MAX
+
+void solid_free(solid *s)
+{
+    if (!s) return;
+    free(s->V);
+    free(s->face_off);
+    free(s->cyc_off);
+    free(s->cyc);
+    memset(s, 0, sizeof *s);
+}
+
+/* ---- check: messages ------------------------------------------------------------------ */
+
+typedef struct half {
+    uint64_t key;  /* min << 32 | max of the merged end vertices */
+    uint32_t face; /* the face walking it */
+    uint32_t a, b; /* input indices of its ends, in the face's direction */
+    uint32_t fwd;  /* 1 when the face walks it from the smaller merged vertex to the larger */
+} half;
+
+typedef struct ck {
+    const solid *s;
+    double p; /* precision */
+    solid_report *rep;
+    const char *label;
+    uint32_t *merged; /* nv: the merged vertex of each input vertex */
+    double *area;     /* nf: area of the outer cycle */
+    half *he;         /* half-edges, sorted by key */
+    size_t nhe;
+    uint32_t *pair; /* npair: index in he of the first of the two halves of a manifold edge */
+    size_t npair;
+    signed char *flip; /* nf: 1 when the fixed copy reverses the face */
+} ck;
+
+__attribute__((format(printf, 3, 4))) static void note(ck *c, int error, const char *fmt, ...)
+{
+    solid_report *r = c->rep;
+    if (error)
+        r->errors++;
+    else
+        r->warnings++;
+    if (r->nmsg >= SOLID_MAX_MESSAGES) return;
+    char *m = r->msg[r->nmsg++];
+    size_t cap = sizeof r->msg[0];
+    int k = snprintf(m, cap, "%s: ", c->label);
+    if (k < 0 || (size_t)k >= cap) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(m + k, cap - (size_t)k, fmt, ap);
+    va_end(ap);
+}
+
+static const double *vert(const ck *c, uint32_t v)
+{
+    return c->s->V + 3 * (size_t)v;
+}
+
+/* ---- check: shape --------------------------------------------------------------------- */
+
+/* The arrays must describe what solid.h says; -1 (with one error) when they do not. */
+static int check_shape(ck *c)
+{
+    const solid *s = c->s;
+    if (s->nf == 0) {
+        note(c, 1, "no faces");
+        return -1;
+    }
+    if (s->nv > NONE || s->ncyc >= NONE || s->nf > s->ncyc || !s->face_off || !s->cyc_off ||
+        (s->nv && !s->V)) {
+        note(c, 1, "malformed solid (counts %zu V, %zu faces, %zu cycles, or missing arrays)",
+             s->nv, s->nf, s->ncyc);
+        return -1;
+    }
+    if (s->face_off[0] != 0 || s->face_off[s->nf] != s->ncyc || s->cyc_off[0] != 0) {
+        note(c, 1, "malformed solid (face_off or cyc_off do not start at 0 and end at ncyc)");
+        return -1;
+    }
+    for (size_t f = 0; f < s->nf; f++)
+        if (s->face_off[f + 1] <= s->face_off[f]) {
+            note(c, 1, "face %zu: malformed (no outer cycle)", f);
+            return -1;
+        }
+    for (size_t k = 0; k < s->ncyc; k++)
+        if (s->cyc_off[k + 1] < s->cyc_off[k]) {
+            note(c, 1, "malformed solid (cyc_off decreases at cycle %zu)", k);
+            return -1;
+        }
+    if (s->cyc_off[s->ncyc] && !s->cyc) {
+        note(c, 1, "malformed solid (no cyc array)");
+        return -1;
+    }
+    int bad = 0;
+    for (size_t f = 0; f < s->nf; f++)
+        for (uint32_t i = s->cyc_off[s->face_off[f]]; i < s->cyc_off[s->face_off[f + 1]]; i++)
+            if (s->cyc[i] >= s->nv) {
+                note(c, 1, "face %zu: vertex index %u out of range (%zu vertices)", f, s->cyc[i],
+                     s->nv);
+                bad = 1;
+                break;
+            }
+    for (size_t v = 0; v < s->nv; v++) {
+        const double *x = vert(c, (uint32_t)v);
+        for (int a = 0; a < 3; a++)
+            if (!isfinite(x[a])) {
+                note(c, 1, "vertex %zu: coordinate %d is not finite", v, a);
+                bad = 1;
+                break;
+            } else if (!(fabs(x[a]) / c->p < GRID_LIMIT)) {
+                note(c, 1, "vertex %zu: coordinate %.17g is too large for precision %g", v, x[a],
+                     c->p);
+                bad = 1;
+                break;
+            }
+    }
+    return bad ? -1 : 0;
+}
+
+/* ---- check: merge --------------------------------------------------------------------- */
+
+typedef struct gpt {
+    int64_t g[3];
+    uint32_t v;
+} gpt;
+
+static int gpt_cmp(const void *pa, const void *pb)
+{
+    const gpt *a = pa, *b = pb;
+    for (int i = 0; i < 3; i++)
+        if (a->g[i] != b->g[i]) return a->g[i] < b->g[i] ? -1 : 1;
+    return (a->v > b->v) - (a->v < b->v);
+}
+
+static int merge_vertices(ck *c)
+{
+    size_t nv = c->s->nv;
+    gpt *g = malloc((nv ? nv : 1) * sizeof *g);
+    c->merged = malloc((nv ? nv : 1) * sizeof *c->merged);
+    if (!g || !c->merged) goto fail;
+    for (size_t v = 0; v < nv; v++) {
+        const double *x = vert(c, (uint32_t)v);
+        for (int a = 0; a < 3; a++) g[v].g[a] = (int64_t)floor(x[a] / c->p + 0.5);
+        g[v].v = (uint32_t)v;
+    }
+    qsort(g, nv, sizeof *g, gpt_cmp);
+    for (size_t i = 0, j; i < nv; i = j) {
+        for (j = i + 1; j < nv && !memcmp(g[j].g, g[i].g, sizeof g[i].g); j++) continue;
+        for (size_t k = i; k < j; k++) c->merged[g[k].v] = g[i].v;
+    }
+    free(g);
+    return 0;
+fail:
+    free(g);
+    return -1;
+}
+
+/* ---- check: faces --------------------------------------------------------------------- */
+
+static void sub3(const double *a, const double *b, double *d)
+{
+    d[0] = a[0] - b[0];
+    d[1] = a[1] - b[1];
+    d[2] = a[2] - b[2];
+}
+
+static void cross3(const double *a, const double *b, double *d)
+{
+    d[0] = a[1] * b[2] - a[2] * b[1];
+    d[1] = a[2] * b[0] - a[0] * b[2];
+    d[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Number of distinct merged vertices of cycle k, counted up to 3. */
+static int cycle_distinct(const ck *c, size_t k)
+{
+    const uint32_t *cy = c->s->cyc;
+    uint32_t lo = c->s->cyc_off[k], hi = c->s->cyc_off[k + 1];
+    if (lo == hi) return 0;
+    uint32_t u0 = c->merged[cy[lo]], u1 = NONE;
+    for (uint32_t i = lo + 1; i < hi; i++) {
+        uint32_t u = c->merged[cy[i]];
+        if (u == u0 || u == u1) continue;
+        if (u1 != NONE) return 3;
+        u1 = u;
+    }
+    return u1 == NONE ? 1 : 2;
+}
+
+/* Degenerate cycles, zero area, planarity; fills c->area.  Appends nothing to the topology:
+ * a bad face still has its edges, so what it does to its neighbours is reported too. */
+static int check_faces(ck *c)
+{
+    const solid *s = c->s;
+    const uint32_t *cy = s->cyc;
+    c->area = malloc(s->nf * sizeof *c->area);
+    if (!c->area) return -1;
+    for (size_t f = 0; f < s->nf; f++) {
+        size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
+        c->area[f] = 0;
+        int degenerate = 0;
+        for (size_t k = k0; k < k1; k++)
+            if (cycle_distinct(c, k) < 3) {
+                if (k == k0)
+                    note(c, 1, "face %zu: fewer than 3 distinct vertices (at precision %g)", f,
+                         c->p);
+                else
+                    note(c, 1, "face %zu: hole %zu has fewer than 3 distinct vertices", f, k - k0);
+                degenerate = 1;
+            }
+        if (degenerate) continue;
+        /* Newell normal of the outer cycle, about its first vertex */
+        uint32_t lo = s->cyc_off[k0], hi = s->cyc_off[k0 + 1];
+        const double *o = vert(c, cy[lo]);
+        double n[3] = {0, 0, 0}, bmin[3], bmax[3];
+        for (int a = 0; a < 3; a++) bmin[a] = bmax[a] = o[a];
+        for (uint32_t i = lo; i < hi; i++) {
+            const double *x = vert(c, cy[i]), *y = vert(c, cy[i + 1 < hi ? i + 1 : lo]);
+            double dx[3], dy[3], t[3];
+            sub3(x, o, dx);
+            sub3(y, o, dy);
+            cross3(dx, dy, t);
+            for (int a = 0; a < 3; a++) {
+                n[a] += t[a];
+                bmin[a] = x[a] < bmin[a] ? x[a] : bmin[a];
+                bmax[a] = x[a] > bmax[a] ? x[a] : bmax[a];
+            }
+        }
+        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        double diag = sqrt((bmax[0] - bmin[0]) * (bmax[0] - bmin[0]) +
+                           (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
+                           (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
+        c->area[f] = len / 2;
+        if (!(len / 2 > c->p * diag / 2)) {
+            note(c, 1, "face %zu: zero area (%.3g, no wider than the precision %g)", f, len / 2,
+                 c->p);
+            continue;
+        }
+        /* plane through the mean of all the face's vertices */
+        double m[3] = {0, 0, 0};
+        size_t cnt = s->cyc_off[k1] - s->cyc_off[k0];
+        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
+            double d[3];
+            sub3(vert(c, cy[i]), o, d);
+            for (int a = 0; a < 3; a++) m[a] += d[a];
+        }
+        for (int a = 0; a < 3; a++) m[a] = o[a] + m[a] / (double)cnt;
+        double worst = 0;
+        uint32_t wv = 0;
+        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
+            double d[3];
+            sub3(vert(c, cy[i]), m, d);
+            double dist = fabs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len;
+            if (dist > worst) worst = dist, wv = cy[i];
+        }
+        if (worst > c->p)
+            note(c, 1, "face %zu: not planar (vertex %u is %.3g from its plane, precision %g)", f,
+                 wv, worst, c->p);
+    }
+    return 0;
+}
+
+/* ---- check: edges --------------------------------------------------------------------- */
+
+static int half_cmp(const void *pa, const void *pb)
+{
+    const half *a = pa, *b = pb;
+    if (a->key != b->key) return a->key < b->key ? -1 : 1;
+    if (a->face != b->face) return a->face < b->face ? -1 : 1;
+    if (a->fwd != b->fwd) return a->fwd < b->fwd ? -1 : 1;
+    if (a->a != b->a) return a->a < b->a ? -1 : 1;
+    return (a->b > b->b) - (a->b < b->b);
+}
+
+/* Builds and sorts the half-edges, reports open and non-manifold edges, and lists the
+ * manifold ones in c->pair.  Returns -1 out of memory; *bad is set on any error reported. */
+static int check_edges(ck *c, int *bad)
+{
+    const solid *s = c->s;
+    const uint32_t *cy = s->cyc;
+    size_t total = s->cyc_off[s->ncyc];
+    c->he = malloc((total ? total : 1) * sizeof *c->he);
+    c->pair = malloc((total / 2 + 1) * sizeof *c->pair);
+    if (!c->he || !c->pair) return -1;
+    for (size_t f = 0; f < s->nf; f++)
+        for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
+            uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
+            for (uint32_t i = lo; i < hi; i++) {
+                uint32_t a = cy[i], b = cy[i + 1 < hi ? i + 1 : lo];
+                uint32_t u = c->merged[a], w = c->merged[b];
+                if (u == w) continue;
+                half *h = &c->he[c->nhe++];
+                h->key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u;
+                h->face = (uint32_t)f;
+                h->a = a;
+                h->b = b;
+                h->fwd = u < w;
+            }
+        }
+    qsort(c->he, c->nhe, sizeof *c->he, half_cmp);
+    for (size_t i = 0, j; i < c->nhe; i = j) {
+        for (j = i + 1; j < c->nhe && c->he[j].key == c->he[i].key; j++) continue;
+        const half *h = &c->he[i];
+        if (j - i == 2) {
+            c->pair[c->npair++] = (uint32_t)i;
+        } else if (j - i == 1) {
+            note(c, 1, "face %u: open surface (edge %u-%u has no other face)", h->face, h->a, h->b);
+            *bad = 1;
+        } else {
+            note(c, 1, "face %u: non-manifold edge %u-%u (used %zu times)", h->face, h->a, h->b,
+                 j - i);
+            *bad = 1;
+        }
+    }
+    return 0;
+}
+
+/* ---- check: orientation --------------------------------------------------------------- */
+
+/* Fills c->flip with the flips that make every manifold edge walked in opposite directions.
+ * Returns -1 out of memory; *bad set when no flips can do it (reported). */
+static int orient(ck *c, int *bad)
+{
+    size_t nf = c->s->nf, inconsistent = 0, flips = 0, first = SIZE_MAX;
+    size_t *adj_off = calloc(nf + 1, sizeof *adj_off);
+    uint32_t *adj = malloc((2 * c->npair + 1) * sizeof *adj);
+    uint32_t *queue = malloc(nf * sizeof *queue);
+    c->flip = malloc(nf);
+    if (!adj_off || !adj || !queue || !c->flip) goto fail;
+    for (size_t e = 0; e < c->npair; e++) {
+        const half *h = &c->he[c->pair[e]];
+        if (h[0].fwd != h[1].fwd) continue;
+        if (first == SIZE_MAX) first = e;
+        inconsistent++;
+        if (h[0].face == h[1].face) {
+            note(c, 1, "face %u: walks edge %u-%u twice in the same direction (no flip can fix it)",
+                 h->face, h->a, h->b);
+            *bad = 1;
+        }
+    }
+    for (size_t e = 0; e < c->npair; e++) {
+        const half *h = &c->he[c->pair[e]];
+        if (h[0].face == h[1].face) continue;
+        adj_off[h[0].face + 1]++;
+        adj_off[h[1].face + 1]++;
+    }
+    for (size_t f = 0; f < nf; f++) adj_off[f + 1] += adj_off[f];
+    for (size_t e = 0; e < c->npair; e++) {
+        const half *h = &c->he[c->pair[e]];
+        if (h[0].face == h[1].face) continue;
+        adj[adj_off[h[0].face]++] = (uint32_t)e;
+        adj[adj_off[h[1].face]++] = (uint32_t)e;
+    }
+    for (size_t f = nf; f > 0; f--) adj_off[f] = adj_off[f - 1];
+    adj_off[0] = 0;
+
+    memset(c->flip, -1, nf);
+    int conflict = 0;
+    for (size_t root = 0; root < nf; root++) {
+        if (c->flip[root] >= 0) continue;
+        size_t head = 0, tail = 0, comp_flips = 0;
+        c->flip[root] = 0;
+        queue[tail++] = (uint32_t)root;
+        while (head < tail) {
+            uint32_t f = queue[head++];
+            for (size_t i = adj_off[f]; i < adj_off[f + 1]; i++) {
+                const half *h = &c->he[c->pair[adj[i]]];
+                uint32_t g = h[0].face == f ? h[1].face : h[0].face;
+                signed char want = (signed char)(c->flip[f] ^ (h[0].fwd == h[1].fwd));
+                if (c->flip[g] < 0) {
+                    c->flip[g] = want;
+                    comp_flips += (size_t)want;
+                    queue[tail++] = g;
+                } else if (c->flip[g] != want && !conflict) {
+                    note(c, 1,
+                         "faces %u and %u: cannot be oriented consistently (edge %u-%u: "
+                         "non-orientable, or a hole walked the wrong way)",
+                         f, g, h->a, h->b);
+                    conflict = 1;
+                    *bad = 1;
+                }
+            }
+        }
+        /* the surface keeps the orientation of most of its input faces */
+        if (2 * comp_flips > tail) {
+            for (size_t i = 0; i < tail; i++) c->flip[queue[i]] ^= 1;
+            comp_flips = tail - comp_flips;
+        }
+        flips += comp_flips;
+    }
+    if (!*bad && flips) {
+        const half *h = &c->he[c->pair[first]];
+        note(c, 0,
+             "orientation inconsistent at %zu edges (first: %u-%u, faces %u and %u): flipped "
+             "%zu of %zu faces",
+             inconsistent, h[0].a, h[0].b, h[0].face, h[1].face, flips, nf);
+    }
+    free(adj_off);
+    free(adj);
+    free(queue);
+    return 0;
+fail:
+    free(adj_off);
+    free(adj);
+    free(queue);
+    return -1;
+}
+
+/* ---- check: volume -------------------------------------------------------------------- */
+
+static double face_volume6(const ck *c, size_t f, const double *ref)
+{
+    const solid *s = c->s;
+    double sum = 0;
+    for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
+        uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
+        double a[3], b[3], d[3], t[3];
+        if (hi - lo < 3) continue; /* reported as degenerate; no volume */
+        sub3(vert(c, s->cyc[lo]), ref, a);
+        for (uint32_t i = lo + 1; i + 1 < hi; i++) {
+            sub3(vert(c, s->cyc[i]), ref, b);
+            sub3(vert(c, s->cyc[i + 1]), ref, d);
+            cross3(b, d, t);
+            sum += a[0] * t[0] + a[1] * t[1] + a[2] * t[2];
+        }
+    }
+    return sum;
+}
+
+/* Signed volume under c->flip; flips everything when negative.  -1 when degenerate. */
+static int check_volume(ck *c)
+{
+    const solid *s = c->s;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < s->cyc_off[s->ncyc]; i++) {
+        const double *x = vert(c, s->cyc[i]);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = x[a] < lo[a] ? x[a] : lo[a];
+            hi[a] = x[a] > hi[a] ? x[a] : hi[a];
+        }
+    }
+    double ref[3] = {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
+    double vol6 = 0, area = 0;
+    for (size_t f = 0; f < s->nf; f++) {
+        double v = face_volume6(c, f, ref);
+        vol6 += c->flip[f] ? -v : v;
+        area += c->area[f];
+    }
+    double vol = vol6 / 6;
+    if (!(fabs(vol) > c->p * area / 2)) {
+        note(c, 1, "degenerate: volume %.3g for area %.3g (thinner than the precision %g)", vol,
+             area, c->p);
+        return -1;
+    }
+    if (vol < 0) {
+        note(c, 0, "inward oriented (volume %.6g): every face flipped", vol);
+        for (size_t f = 0; f < s->nf; f++) c->flip[f] ^= 1;
+        vol = -vol;
+    }
+    c->rep->volume = vol;
+    for (size_t f = 0; f < s->nf; f++) c->rep->flipped_faces += (size_t)c->flip[f];
+    return 0;
+}
+
+/* ---- check: the fixed copy ------------------------------------------------------------ */
+
+static int make_fixed(const ck *c, solid *out)
+{
+    const solid *s = c->s;
+    size_t total = s->cyc_off[s->ncyc];
+    out->V = malloc((s->nv ? 3 * s->nv : 1) * sizeof *out->V);
+    out->face_off = malloc((s->nf + 1) * sizeof *out->face_off);
+    out->cyc_off = malloc((s->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = malloc((total ? total : 1) * sizeof *out->cyc);
+    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) goto fail;
+    out->nv = s->nv;
+    out->nf = s->nf;
+    out->ncyc = s->ncyc;
+    if (s->nv) memcpy(out->V, s->V, 3 * s->nv * sizeof *out->V);
+    memcpy(out->face_off, s->face_off, (s->nf + 1) * sizeof *out->face_off);
+    memcpy(out->cyc_off, s->cyc_off, (s->ncyc + 1) * sizeof *out->cyc_off);
+    if (total) memcpy(out->cyc, s->cyc, total * sizeof *out->cyc);
+    /* a flipped face reverses every cycle, keeping each cycle's first vertex */
+    for (size_t f = 0; f < s->nf; f++) {
+        if (!c->flip[f]) continue;
+        for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++)
+            for (uint32_t i = s->cyc_off[k] + 1, j = s->cyc_off[k + 1]; j > 0 && i < j - 1;
+                 i++, j--) {
+                uint32_t t = out->cyc[i];
+                out->cyc[i] = out->cyc[j - 1];
+                out->cyc[j - 1] = t;
+            }
+    }
+    return 0;
+fail:
+    solid_free(out);
+    return -1;
+}
+
+int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
+                solid *fixed)
+{
+    solid_report local;
+    ck c = {.s = s, .p = precision, .rep = rep ? rep : &local, .label = label ? label : "solid"};
+    memset(c.rep, 0, sizeof *c.rep);
+    if (fixed) memset(fixed, 0, sizeof *fixed);
+    int bad = 0;
+    if (!(precision > 0) || !isfinite(precision)) {
+        note(&c, 1, "precision %g is not a positive number", precision);
+        goto done;
+    }
+    if (!s) {
+        note(&c, 1, "no solid");
+        goto done;
+    }
+    if (check_shape(&c)) goto done;
+    if (merge_vertices(&c) || check_faces(&c) || check_edges(&c, &bad)) goto oom;
+    if (bad) goto done;
+    if (orient(&c, &bad)) goto oom;
+    if (bad || check_volume(&c)) goto done;
+    if (c.rep->errors == 0 && fixed && make_fixed(&c, fixed)) goto oom;
+    goto done;
+oom:
+    note(&c, 1, "out of memory");
+done:
+    free(c.merged);
+    free(c.area);
+    free(c.he);
+    free(c.pair);
+    free(c.flip);
+    if (c.rep->errors && fixed) solid_free(fixed);
+    return c.rep->errors ? -1 : 0;
+}
+
+/* ---- readers: text ---------------------------------------------------------------------- */
+
+typedef struct text {
+    const char *p, *end; /* what is left */
+    size_t line;         /* of the line last taken */
+} text;
+
+typedef struct span {
+    const char *p, *end;
+} span;
+
+/* Takes the next line, without its comment and line end; 0 at the end of the text. */
+static int next_line(text *t, span *l)
+{
+    if (t->p >= t->end) return 0;
+    const char *nl = memchr(t->p, '\n', (size_t)(t->end - t->p));
+    const char *e = nl ? nl : t->end;
+    const char *hash = memchr(t->p, '#', (size_t)(e - t->p));
+    l->p = t->p;
+    l->end = hash ? hash : e;
+    t->p = nl ? nl + 1 : t->end;
+    t->line++;
+    return 1;
+}
+
+static int is_space(char ch)
+{
+    return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\f' || ch == '\v' || ch == '\0';
+}
+
+/* Takes the next whitespace-separated token of l; 0 when none is left. */
+static int next_token(span *l, span *tok)
+{
+    while (l->p < l->end && is_space(*l->p)) l->p++;
+    if (l->p >= l->end) return 0;
+    tok->p = l->p;
+    while (l->p < l->end && !is_space(*l->p)) l->p++;
+    tok->end = l->p;
+    return 1;
+}
+
+static int tok_is(span tok, const char *word)
+{
+    size_t n = strlen(word);
+    return (size_t)(tok.end - tok.p) == n && !memcmp(tok.p, word, n);
+}
+
+/* Prints a token for a message: at most 24 bytes, unprintable bytes as '?'. */
+static const char *tok_show(span tok, char *buf, size_t cap)
+{
+    size_t n = (size_t)(tok.end - tok.p), k = 0;
+    for (size_t i = 0; i < n && k + 4 < cap && i < 24; i++)
+        buf[k++] = tok.p[i] >= 0x20 && tok.p[i] < 0x7f ? tok.p[i] : '?';
+    if (n > 24 && k + 4 < cap) buf[k++] = '.', buf[k++] = '.', buf[k++] = '.';
+    buf[k] = 0;
+    return buf;
+}
+
+/* A finite decimal number, read in the "C" locale cl: 0, or -1 (malformed or not finite). */
+static int parse_number(span tok, locale_t cl, double *out)
+{
+    size_t n = (size_t)(tok.end - tok.p);
+    char buf[NUMBER_MAX + 1];
+    if (n == 0 || n > NUMBER_MAX) return -1;
+    for (size_t i = 0; i < n; i++)
+        if (!strchr("0123456789+-.eE", tok.p[i]) || tok.p[i] == 0) return -1;
+    memcpy(buf, tok.p, n);
+    buf[n] = 0;
+    char *end;
+    double v = strtod_l(buf, &end, cl);
+    if (end != buf + n || !isfinite(v)) return -1;
+    *out = v;
+    return 0;
+}
+
+/* An optionally signed integer with at most 18 digits: 0, or -1. */
+static int parse_int(const char *p, const char *end, int64_t *out)
+{
+    int neg = 0;
+    if (p < end && (*p == '-' || *p == '+')) neg = *p++ == '-';
+    if (p >= end || end - p > 18) return -1;
+    int64_t v = 0;
+    for (; p < end; p++) {
+        if (*p < '0' || *p > '9') return -1;
+        v = v * 10 + (*p - '0');
+    }
+    *out = neg ? -v : v;
+    return 0;
+}
+
+/* ---- readers: building the solid -------------------------------------------------------- */
+
+typedef struct build {
+    double *V;
+    size_t nv, capv; /* in vertices */
+    uint32_t *idx;
+    size_t ni, capi;
+    uint32_t *off; /* nf + 1 */
+    size_t nf, capf;
+} build;
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return 0;
+    size_t nc = *cap ? *cap : 64;
+    while (nc < need) nc *= 2;
+    if (nc > SIZE_MAX / elem) return -1;
+    void *q = realloc(*p, nc * elem);
+    if (!q) return -1;
+    *p = q;
+    *cap = nc;
+    return 0;
+}
+
+static int build_vertex(build *b, const double *x)
+{
+    if (grow((void **)&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
+    memcpy(b->V + 3 * b->nv++, x, 3 * sizeof *x);
+    return 0;
+}
+
+static int build_index(build *b, uint32_t v)
+{
+    if (grow((void **)&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
+    b->idx[b->ni++] = v;
+    return 0;
+}
+
+/* Closes the face whose indices were appended since the last one. */
+static int build_face(build *b)
+{
+    if (grow((void **)&b->off, &b->capf, b->nf + 2, sizeof *b->off)) return -1;
+    if (b->nf == 0) b->off[0] = 0;
+    b->off[++b->nf] = (uint32_t)b->ni;
+    return 0;
+}
+
+static void build_free(build *b)
+{
+    free(b->V);
+    free(b->idx);
+    free(b->off);
+    memset(b, 0, sizeof *b);
+}
+
+/* Moves b into out (each face one cycle); b is left empty. */
+static int build_finish(build *b, solid *out)
+{
+    uint32_t *fo = malloc((b->nf + 1) * sizeof *fo);
+    if (!fo) return -1;
+    for (size_t f = 0; f <= b->nf; f++) fo[f] = (uint32_t)f;
+    if (b->nf == 0) {
+        free(b->off);
+        b->off = calloc(1, sizeof *b->off);
+        if (!b->off) {
+            free(fo);
+            return -1;
+        }
+    }
+    out->nv = b->nv;
+    out->V = b->V;
+    out->nf = out->ncyc = b->nf;
+    out->face_off = fo;
+    out->cyc_off = b->off;
+    out->cyc = b->idx;
+    memset(b, 0, sizeof *b);
+    return 0;
+}
+
+__attribute__((format(printf, 4, 5))) static int read_error(char *err, size_t errlen, size_t line,
+                                                            const char *fmt, ...)
+{
+    if (err && errlen) {
+        int k = snprintf(err, errlen, "line %zu: ", line);
+        if (k >= 0 && (size_t)k < errlen) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(err + k, errlen - (size_t)k, fmt, ap);
+            va_end(ap);
+        }
+    }
+    return -1;
+}
+
+/* ---- readers: OBJ ----------------------------------------------------------------------- */
+
+/* One "a", "a/t", "a//n" or "a/t/n" of an f line: the vertex index a, as written. */
+static int obj_ref(span tok, int64_t *a)
+{
+    const char *s1 = memchr(tok.p, '/', (size_t)(tok.end - tok.p));
+    if (parse_int(tok.p, s1 ? s1 : tok.end, a)) return -1;
+    if (!s1) return 0;
+    const char *s2 = memchr(s1 + 1, '/', (size_t)(tok.end - s1 - 1));
+    int64_t ignored;
+    if (s2) { /* a/t/n or a//n: t may be empty, n may not */
+        if (s2 > s1 + 1 && parse_int(s1 + 1, s2, &ignored)) return -1;
+        return parse_int(s2 + 1, tok.end, &ignored);
+    }
+    return parse_int(s1 + 1, tok.end, &ignored);
+}
+
+int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t errlen)
+{
+    text t = {txt, txt + len, 0};
+    build b = {0};
+    span l, tok;
+    char show[32];
+    memset(out, 0, sizeof *out);
+    if (err && errlen) err[0] = 0;
+    if (!txt && len) return read_error(err, errlen, 0, "no text");
+    locale_t cl = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (!cl) return read_error(err, errlen, 0, "out of memory for a locale");
+    while (next_line(&t, &l)) {
+        if (!next_token(&l, &tok)) continue;
+        if (tok_is(tok, "v")) {
+            double x[3], w;
+            int n = 0;
+            for (; next_token(&l, &tok); n++) {
+                if (parse_number(tok, cl, n < 3 ? &x[n] : &w)) {
+                    read_error(err, errlen, t.line, "malformed number '%s'",
+                               tok_show(tok, show, sizeof show));
+                    goto fail;
+                }
+            }
+            /* x y z, with w, or the common x y z r g b [a] colour extension */
+            if (n < 3 || n > 7) {
+                read_error(err, errlen, t.line, "a vertex has 3 coordinates, this one %d", n);
+                goto fail;
+            }
+            if (b.nv >= SOLID_MAX_VERTICES) {
+                read_error(err, errlen, t.line, "more than %u vertices", SOLID_MAX_VERTICES);
+                goto fail;
+            }
+            if (build_vertex(&b, x)) goto oom;
+        } else if (tok_is(tok, "f")) {
+            size_t n = 0;
+            while (next_token(&l, &tok)) {
+                int64_t a;
+                if (obj_ref(tok, &a)) {
+                    read_error(err, errlen, t.line, "malformed vertex reference '%s'",
+                               tok_show(tok, show, sizeof show));
+                    goto fail;
+                }
+                int64_t v = a > 0 ? a - 1 : (int64_t)b.nv + a;
+                if (a == 0 || v < 0 || v >= (int64_t)b.nv) {
+                    read_error(err, errlen, t.line,
+                               "vertex index %lld out of range (%zu vertices so far; indices "
+                               "start at 1)",
+                               (long long)a, b.nv);
+                    goto fail;
+                }
+                if (++n > SOLID_MAX_FACE_LEN) {
+                    read_error(err, errlen, t.line, "a face of more than %u vertices",
+                               SOLID_MAX_FACE_LEN);
+                    goto fail;
+                }
+                if (b.ni >= UINT32_MAX - 1) {
+                    read_error(err, errlen, t.line, "too many face vertices in all");
+                    goto fail;
+                }
+                if (build_index(&b, (uint32_t)v)) goto oom;
+            }
+            if (n < 3) {
+                read_error(err, errlen, t.line, "a face needs 3 vertices, this one has %zu", n);
+                goto fail;
+            }
+            if (b.nf >= SOLID_MAX_FACES) {
+                read_error(err, errlen, t.line, "more than %u faces", SOLID_MAX_FACES);
+                goto fail;
+            }
+            if (build_face(&b)) goto oom;
+        }
+        /* anything else (vt, vn, vp, o, g, s, usemtl, mtllib, l, p, ...) is not geometry */
+    }
+    if (build_finish(&b, out)) goto oom;
+    freelocale(cl);
+    return 0;
+oom:
+    read_error(err, errlen, t.line, "out of memory");
+fail:
+    build_free(&b);
+    freelocale(cl);
+    return -1;
+}
+
+/* ---- readers: OFF ----------------------------------------------------------------------- */
+
+/* Takes the next line holding a token; 0 at the end of the text. */
+static int next_data_line(text *t, span *l)
+{
+    while (next_line(t, l)) {
+        span probe = *l, tok;
+        if (next_token(&probe, &tok)) return 1;
+    }
+    return 0;
+}
+
+/* "OFF" with the optional prefixes of Geomview's [ST][C][N][4][n]OFF that only add per-vertex
+ * values (texture, colour, normal): 1; "4OFF"/"nOFF" (other dimensions): 2; anything else 0. */
+static int off_header(span tok)
+{
+    size_t n = (size_t)(tok.end - tok.p);
+    if (n < 3 || memcmp(tok.end - 3, "OFF", 3)) return 0;
+    const char *p = tok.p, *e = tok.end - 3;
+    if (e - p >= 2 && p[0] == 'S' && p[1] == 'T') p += 2;
+    if (p < e && *p == 'C') p++;
+    if (p < e && *p == 'N') p++;
+    if (p < e && (*p == '4' || *p == 'n')) return 2;
+    return p == e ? 1 : 0;
+}
+
+int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t errlen)
+{
+    text t = {txt, txt + len, 0};
+    build b = {0};
+    span l, tok;
+    char show[32];
+    int64_t cnt[3] = {0, 0, 0};
+    int ncnt = 0;
+    memset(out, 0, sizeof *out);
+    if (err && errlen) err[0] = 0;
+    if (!txt && len) return read_error(err, errlen, 0, "no text");
+    if (!next_data_line(&t, &l)) return read_error(err, errlen, t.line, "empty: no OFF header");
+    span first = l;
+    next_token(&first, &tok);
+    int h = off_header(tok);
+    if (h == 2)
+        return read_error(err, errlen, t.line, "'%s': only 3D OFF is read",
+                          tok_show(tok, show, sizeof show));
+    if (h == 1) {
+        l = first; /* counts may follow on the header line */
+        span rest = l;
+        if (!next_token(&rest, &tok) && !next_data_line(&t, &l))
+            return read_error(err, errlen, t.line, "no counts after the OFF header");
+    } else if (parse_int(tok.p, tok.end, &cnt[0])) {
+        return read_error(err, errlen, t.line, "not an OFF file (it starts with '%s')",
+                          tok_show(tok, show, sizeof show));
+    }
+    while (next_token(&l, &tok)) {
+        if (ncnt == 3 || parse_int(tok.p, tok.end, &cnt[ncnt]) || cnt[ncnt] < 0)
+            return read_error(err, errlen, t.line,
+                              "counts are 'vertices faces edges', not '%s' at value %d",
+                              tok_show(tok, show, sizeof show), ncnt + 1);
+        ncnt++;
+    }
+    if (ncnt < 2) return read_error(err, errlen, t.line, "counts 'vertices faces edges' missing");
+    if (cnt[0] > SOLID_MAX_VERTICES || cnt[1] > SOLID_MAX_FACES)
+        return read_error(err, errlen, t.line, "%lld vertices and %lld faces: at most %u of each",
+                          (long long)cnt[0], (long long)cnt[1], SOLID_MAX_VERTICES);
+    size_t nv = (size_t)cnt[0], nf = (size_t)cnt[1];
+    /* a vertex line is at least "0 0 0\n", a face line "3 0 1 2\n": believe the counts only
+     * when what is left could hold them, so that no allocation follows a count alone */
+    size_t left = (size_t)(t.end - t.p);
+    if (nv * 6 + nf * 8 > left + 1)
+        return read_error(err, errlen, t.line,
+                          "%zu vertices and %zu faces announced, but only %zu bytes follow", nv, nf,
+                          left);
+    locale_t cl = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (!cl) return read_error(err, errlen, t.line, "out of memory for a locale");
+    while (b.nv < nv) {
+        if (!next_data_line(&t, &l)) {
+            read_error(err, errlen, t.line, "the file ends after %zu of %zu vertices", b.nv, nv);
+            goto fail;
+        }
+        double x[3], extra;
+        int n = 0;
+        for (; next_token(&l, &tok); n++)
+            if (parse_number(tok, cl, n < 3 ? &x[n] : &extra)) {
+                read_error(err, errlen, t.line, "malformed number '%s'",
+                           tok_show(tok, show, sizeof show));
+                goto fail;
+            }
+        if (n < 3) {
+            read_error(err, errlen, t.line, "a vertex has 3 coordinates, this one %d", n);
+            goto fail;
+        }
+        if (build_vertex(&b, x)) goto oom;
+    }
+    while (b.nf < nf) {
+        if (!next_data_line(&t, &l)) {
+            read_error(err, errlen, t.line, "the file ends after %zu of %zu faces", b.nf, nf);
+            goto fail;
+        }
+        int64_t k, v;
+        next_token(&l, &tok);
+        if (parse_int(tok.p, tok.end, &k) || k < 3 || k > SOLID_MAX_FACE_LEN) {
+            read_error(err, errlen, t.line,
+                       "a face starts with its vertex count (3 to %u), not '%s'",
+                       SOLID_MAX_FACE_LEN, tok_show(tok, show, sizeof show));
+            goto fail;
+        }
+        for (int64_t i = 0; i < k; i++) {
+            if (!next_token(&l, &tok)) {
+                read_error(err, errlen, t.line, "the face announces %lld vertices, %lld given",
+                           (long long)k, (long long)i);
+                goto fail;
+            }
+            if (parse_int(tok.p, tok.end, &v) || v < 0 || v >= (int64_t)nv) {
+                read_error(err, errlen, t.line, "vertex index '%s' out of range (%zu vertices)",
+                           tok_show(tok, show, sizeof show), nv);
+                goto fail;
+            }
+            if (b.ni >= UINT32_MAX - 1) {
+                read_error(err, errlen, t.line, "too many face vertices in all");
+                goto fail;
+            }
+            if (build_index(&b, (uint32_t)v)) goto oom;
+        }
+        /* a colour: an index into a colour map, or 3 or 4 components */
+        int extra = 0;
+        double c;
+        for (; next_token(&l, &tok); extra++)
+            if (parse_number(tok, cl, &c) || extra == 4) {
+                read_error(err, errlen, t.line,
+                           "after the %lld indices of a face only a colour may follow, not '%s'",
+                           (long long)k, tok_show(tok, show, sizeof show));
+                goto fail;
+            }
+        if (build_face(&b)) goto oom;
+    }
+    if (next_data_line(&t, &l)) {
+        read_error(err, errlen, t.line, "data after the last of the %zu faces", nf);
+        goto fail;
+    }
+    if (build_finish(&b, out)) goto oom;
+    freelocale(cl);
+    return 0;
+oom:
+    read_error(err, errlen, t.line, "out of memory");
+fail:
+    build_free(&b);
+    freelocale(cl);
+    return -1;
+}

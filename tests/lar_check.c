@@ -42,6 +42,31 @@ double lar_face_area(const lar2 *c, size_t f)
     return a;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+size_t lar_sorted_areas_differ(const lar2 *c, const double *ref, size_t nref, double tol_abs,
+                               double *worst)
+{
+    *worst = 0;
+    if (c->nf != nref) return nref + 1;
+    double *a = malloc((c->nf + 1) * sizeof *a);
+    if (!a) return nref + 1;
+    for (size_t f = 0; f < c->nf; f++) a[f] = lar_face_area(c, f);
+    qsort(a, c->nf, sizeof *a, cmp_double);
+    size_t bad = 0;
+    for (size_t f = 0; f < c->nf; f++) {
+        double d = fabs(a[f] - ref[f]);
+        if (d > 1e-9 * fabs(ref[f]) + tol_abs) bad++;
+        *worst = fmax(*worst, d / fmax(fabs(ref[f]), 1e-300));
+    }
+    free(a);
+    return bad;
+}
+
 static uint32_t uf(uint32_t *p, uint32_t x)
 {
     while (p[x] != x) x = p[x] = p[p[x]];

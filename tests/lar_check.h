@@ -18,4 +18,10 @@ int lar_check(const lar2 *c, char *msg, size_t len);
 /* Area of face f with its holes subtracted. */
 double lar_face_area(const lar2 *c, size_t f);
 
+/* Compares c's face areas, sorted ascending, with ref[0..nref) (sorted ascending, e.g. GEOS's
+ * polygon areas): returns how many differ by more than 1e-9 relative plus tol_abs (nref + 1
+ * when the counts differ); *worst gets the largest relative difference. */
+size_t lar_sorted_areas_differ(const lar2 *c, const double *ref, size_t nref, double tol_abs,
+                               double *worst);
+
 #endif

@@ -16,12 +16,6 @@
 #include "tests/lar_check.h"
 #include "tests/ref/geos_ref.h"
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* Compares arr2_build with GEOS on n segments; extent = the drawing's size. */
 static void compare(const char *what, const double *s, size_t n, double extent)
 {
@@ -41,19 +35,10 @@ static void compare(const char *what, const double *s, size_t n, double extent)
     CHECK(k.nv == gv && k.ne == ge, "%s: keep_dangling %zu V %zu E, GEOS noding %zu V %zu E", what,
           k.nv, k.ne, gv, ge);
     if (c.nf == gf) {
-        double *a = malloc((c.nf + 1) * sizeof *a);
-        for (size_t f = 0; f < c.nf; f++) a[f] = lar_face_area(&c, f);
-        qsort(a, c.nf, sizeof *a, cmp_double);
-        double tol_abs = 8 * extent * c.stats.precision, worst = 0;
-        size_t bad = 0;
-        for (size_t f = 0; f < c.nf; f++) {
-            double d = fabs(a[f] - ga[f]);
-            if (d > 1e-9 * fabs(ga[f]) + tol_abs) bad++;
-            if (d / fmax(fabs(ga[f]), 1e-300) > worst) worst = d / fmax(fabs(ga[f]), 1e-300);
-        }
+        double worst;
+        size_t bad = lar_sorted_areas_differ(&c, ga, gf, 8 * extent * c.stats.precision, &worst);
         CHECK(bad == 0, "%s: %zu of %zu sorted areas differ from GEOS (worst relative %g)", what,
               bad, c.nf, worst);
-        free(a);
     }
     free(ga);
     lar2_free(&c);

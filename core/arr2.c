@@ -907,9 +907,8 @@ static int hit_below(const graph *g, uint32_t e, ipt p, i128 *num, i128 *den, ui
 
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
  * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
-static int place_components(const graph *g, const uint32_t *pos, const walks *w,
-                            const uint32_t *comp, size_t ncomp, const uint32_t *comp_outer,
-                            uint32_t *face_of)
+static int place_components(const graph *g, const walks *w, const uint32_t *comp, size_t ncomp,
+                            const uint32_t *comp_outer, uint32_t *face_of)
 {
     int rc = ARR_ENOMEM;
     uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
@@ -1013,7 +1012,6 @@ out:
     free(found);
     free(soff);
     free(sedge);
-    (void)pos;
     return rc;
 }
 
@@ -1256,7 +1254,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 
     /* holes */
     if (ncomp > 1) {
-        rc = place_components(g, pos, &w, comp, ncomp, comp_outer, face_of);
+        rc = place_components(g, &w, comp, ncomp, comp_outer, face_of);
         if (rc) {
             if (rc == ARR_EINTERNAL) seterr(err, el, rc, "internal: inconsistent hole placement");
             goto fail;

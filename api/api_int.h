@@ -49,6 +49,10 @@ static inline void api_buf_putc(api_buf *b, char c)
 int api_fail(api_error *err, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
+/* A request of a kind holds the keys "kind", `own` (the kind's data: "lines", "svg", ...) and
+ * "options" only: API_OK, or API_EINVALID naming the first other key. */
+int api_only_keys(const json_t *req, const char *own, api_error *err);
+
 /* Maps an ARR_* code of the core and its message to an api status and *err. */
 int api_core_fail(api_error *err, int arr_code, const char *core_msg);
 

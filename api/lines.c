@@ -160,17 +160,10 @@ void api_lines_free(void *parsed)
 
 int api_lines_parse(const json_t *req, void **parsed, api_error *err)
 {
-    const char *key;
-    json_t *v;
     lines_req *r;
     int rc;
     *parsed = NULL;
-    json_object_foreach((json_t *)req, key, v)
-    {
-        if (strcmp(key, "kind") && strcmp(key, "lines") && strcmp(key, "options"))
-            return api_fail(err, API_EINVALID,
-                            "%.64s: unknown key (expected kind, lines or options)", key);
-    }
+    if ((rc = api_only_keys(req, "lines", err)) != API_OK) return rc;
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = parse_options(json_object_get(req, "options"), &r->opt, err);

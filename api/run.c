@@ -49,6 +49,19 @@ int api_fail(api_error *err, int status, const char *fmt, ...)
     return status;
 }
 
+int api_only_keys(const json_t *req, const char *own, api_error *err)
+{
+    const char *key;
+    json_t *v;
+    json_object_foreach((json_t *)req, key, v)
+    {
+        if (strcmp(key, "kind") && strcmp(key, own) && strcmp(key, "options"))
+            return api_fail(err, API_EINVALID, "%.64s: unknown key (expected kind, %s or options)",
+                            key, own);
+    }
+    return API_OK;
+}
+
 int api_core_fail(api_error *err, int arr_code, const char *core_msg)
 {
     const char *m = core_msg && *core_msg ? core_msg : NULL;
@@ -198,18 +211,24 @@ static const api_kind *kind_of(const json_t *root, api_error *err)
     return NULL;
 }
 
-/* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free). */
-static int parse(const char *body, size_t len, const api_kind **kind, void **parsed, api_error *err)
+/* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free); with
+ * tree, a valid request's JSON tree is handed over too (the caller decrefs it), else freed. */
+static int parse(const char *body, size_t len, const api_kind **kind, void **parsed, json_t **tree,
+                 api_error *err)
 {
     json_t *root;
     int rc;
     *kind = NULL;
     *parsed = NULL;
+    if (tree) *tree = NULL;
     root = load(body, len, err);
     if (!root) return err ? err->status : API_EJSON;
     *kind = kind_of(root, err);
     rc = *kind ? (*kind)->parse(root, parsed, err) : API_EINVALID;
-    json_decref(root);
+    if (tree && rc == API_OK)
+        *tree = root; /* the caller's now */
+    else
+        json_decref(root);
     return rc;
 }
 
@@ -225,7 +244,7 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     *outlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (!ro) ro = &dflt;
-    rc = parse(body, len, &kind, &req, err);
+    rc = parse(body, len, &kind, &req, NULL, err);
     if (rc != API_OK) goto fail;
     rc = kind->run(req, ro, &b, err);
     if (rc != API_OK) goto fail;
@@ -263,15 +282,16 @@ int api_check_request(const char *body, size_t len, char **canon, size_t *canonl
     if (canonlen) *canonlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (kind_name) *kind_name = NULL;
-    rc = parse(body, len, &kind, &req, err);
+    rc = parse(body, len, &kind, &req, canon ? &root : NULL, err);
     if (rc == API_OK && kind->check) rc = kind->check(req, err);
     if (kind) kind->free(req);
     if (rc == API_OK && kind_name) *kind_name = kind->name;
-    if (rc != API_OK || !canon) return rc;
-    /* valid: the canonical form comes from the tree */
-    root = json_loadb(body, len, JSON_DECODE_ANY, NULL);
-    *canon =
-        root ? json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS | JSON_REAL_PRECISION(17)) : NULL;
+    if (rc != API_OK || !canon) {
+        json_decref(root);
+        return rc;
+    }
+    /* valid: the canonical form comes from the tree parse kept */
+    *canon = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS | JSON_REAL_PRECISION(17));
     json_decref(root);
     if (!*canon)
         return api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");

@@ -88,18 +88,11 @@ void api_svg_free(void *parsed)
 
 int api_svg_parse(const json_t *req, void **parsed, api_error *err)
 {
-    const char *key;
-    json_t *v;
     const json_t *text;
     svg_req *r;
     int rc;
     *parsed = NULL;
-    json_object_foreach((json_t *)req, key, v)
-    {
-        if (strcmp(key, "kind") && strcmp(key, "svg") && strcmp(key, "options"))
-            return api_fail(err, API_EINVALID, "%.64s: unknown key (expected kind, svg or options)",
-                            key);
-    }
+    if ((rc = api_only_keys(req, "svg", err)) != API_OK) return rc;
     text = json_object_get(req, "svg");
     if (!text) return api_fail(err, API_EINVALID, "svg: required, the drawing as a string");
     if (!json_is_string(text))

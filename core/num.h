@@ -9,6 +9,7 @@
 #define CELLAR_NUM_H
 
 #include <stdint.h>
+#include <stdlib.h>
 
 typedef __int128 i128;
 
@@ -63,6 +64,33 @@ static inline int dir_cmp(int64_t ax, int64_t ay, int64_t bx, int64_t by)
     int hb = by < 0 || (by == 0 && bx < 0);
     if (ha != hb) return ha - hb;
     return -sign128(cross2(ax, ay, bx, by));
+}
+
+/* Does segment ab pass through the half-open pixel [p - 1/2, p + 1/2)^2?  The caller has
+ * checked that p lies in the segment's (integer) bounding box, which is exactly the condition
+ * for the segment's box to meet the pixel.  Works in doubled coordinates, where endpoints are
+ * even and pixel sides odd, so an endpoint never lies on a pixel side and a segment can only
+ * graze a pixel at a corner. */
+static inline int seg_hits_pixel(ipt a, ipt b, ipt p)
+{
+    if ((a.x == p.x && a.y == p.y) || (b.x == p.x && b.y == p.y)) return 1;
+    /* In doubled coordinates the corner 2p + (sx, sy) has orientation
+     * 4 O + 2 (dx sy - dy sx), O = orient(a, b, p): the four values spread by +-2(|dx|+|dy|)
+     * around 4 O.  So the line crosses the open pixel iff 2|O| < |dx| + |dy|, and touches
+     * only a corner iff 2|O| == |dx| + |dy|. */
+    int64_t dx = b.x - a.x, dy = b.y - a.y, L = llabs(dx) + llabs(dy);
+    i128 o2 = 2 * orient2(a, b, p);
+    if (o2 < 0) o2 = -o2;
+    if (o2 < L) return 1; /* the segment crosses the open pixel (p is in its box) */
+    if (o2 > L) return 0; /* the line misses the pixel */
+    /* the line only touches one corner: inside the half-open pixel only if it is the
+     * lower-left one and lies on the segment (not just on its line) */
+    int64_t O2 = 2 * (int64_t)orient2(a, b, p);
+    if (dx * -1 - dy * -1 != -O2) return 0;
+    int64_t qx = 2 * p.x - 1, qy = 2 * p.y - 1;
+    int64_t x0 = 2 * (a.x < b.x ? a.x : b.x), x1 = 2 * (a.x < b.x ? b.x : a.x);
+    int64_t y0 = 2 * (a.y < b.y ? a.y : b.y), y1 = 2 * (a.y < b.y ? b.y : a.y);
+    return qx >= x0 && qx <= x1 && qy >= y0 && qy <= y1;
 }
 
 #endif

@@ -209,3 +209,173 @@ out:
     free(par);
     return rc;
 }
+
+/* ------------------------------------------------------------------ 3D */
+
+static long find_edge3(const lar3 *c, uint32_t u, uint32_t v)
+{
+    uint32_t a = u < v ? u : v, b = u < v ? v : u;
+    size_t lo = 0, hi = c->ne;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
+        if (x < a || (x == a && y < b))
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b) return (long)lo;
+    return -1;
+}
+
+double lar3_cell_volume(const lar3 *c, size_t k)
+{
+    double v = 0;
+    for (uint32_t i = c->cf_off[k]; i < c->cf_off[k + 1]; i++) {
+        int32_t s = c->cf[i];
+        uint32_t f = (uint32_t)(s > 0 ? s : -s) - 1;
+        v += (s > 0 ? 1 : -1) * lar3_face_cone(c, f);
+    }
+    return v;
+}
+
+/* Adds sign * FE(f) into acc (per edge). */
+static void add_face(const lar3 *c, uint32_t f, int sign, long *acc)
+{
+    for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
+        int32_t s = c->fe[i];
+        acc[(s > 0 ? s : -s) - 1] += sign * (s > 0 ? 1 : -1);
+    }
+}
+
+int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
+{
+    int rc = -1;
+    long *acc = calloc(c->ne + 1, sizeof *acc);
+    long *vacc = calloc(c->nv + 1, sizeof *vacc);
+    int *seen = calloc(c->nf + 1, sizeof *seen);
+    if (!acc || !vacc || !seen) {
+        bad(msg, len, "out of memory");
+        goto done;
+    }
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t a = c->EV[2 * e], b = c->EV[2 * e + 1];
+        if (a >= b || b >= c->nv) {
+            bad(msg, len, "EV[%zu] = (%u, %u): not v0 < v1 < V", e, a, b);
+            goto done;
+        }
+        if (e && (c->EV[2 * e - 2] > a || (c->EV[2 * e - 2] == a && c->EV[2 * e - 1] >= b))) {
+            bad(msg, len, "EV[%zu]: not sorted or repeated", e);
+            goto done;
+        }
+    }
+    for (size_t f = 0; f < c->nf; f++) {
+        /* FE equals the signed sum of the cycles' edges */
+        memset(acc, 0, c->ne * sizeof *acc);
+        const double *n = c->FN + 3 * f;
+        double d = 0;
+        int first = 1;
+        for (uint32_t cy = c->fc_off[f]; cy < c->fc_off[f + 1]; cy++) {
+            uint32_t c0 = c->cyc_off[c->fc[cy]], c1 = c->cyc_off[c->fc[cy] + 1];
+            if (c1 - c0 < 3) {
+                bad(msg, len, "face %zu: a cycle of %u vertices", f, c1 - c0);
+                goto done;
+            }
+            for (uint32_t i = c0; i < c1; i++) {
+                uint32_t u = c->cyc[i], v = c->cyc[i + 1 < c1 ? i + 1 : c0];
+                long e = find_edge3(c, u, v);
+                if (e < 0) {
+                    bad(msg, len, "face %zu walks (%u, %u), not an edge", f, u, v);
+                    goto done;
+                }
+                acc[e] += u < v ? 1 : -1;
+                const double *p = c->V + 3 * (size_t)u;
+                double pd = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
+                if (first) d = pd, first = 0;
+                if (fabs(pd - d) > tol) {
+                    bad(msg, len, "face %zu: vertex %u is %g off its plane", f, u, fabs(pd - d));
+                    goto done;
+                }
+            }
+        }
+        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
+            int32_t s = c->fe[i];
+            long e = (s > 0 ? s : -s) - 1;
+            if (e >= (long)c->ne) {
+                bad(msg, len, "FE[%zu]: edge out of range", f);
+                goto done;
+            }
+            acc[e] -= s > 0 ? 1 : -1;
+        }
+        for (size_t e = 0; e < c->ne; e++)
+            if (acc[e]) {
+                bad(msg, len, "face %zu: FE is not the signed sum of its cycles (edge %zu)", f, e);
+                goto done;
+            }
+        /* d1 . d2 = 0 */
+        memset(vacc, 0, c->nv * sizeof *vacc);
+        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
+            int32_t s = c->fe[i];
+            uint32_t e = (uint32_t)(s > 0 ? s : -s) - 1;
+            vacc[c->EV[2 * e]] -= s > 0 ? 1 : -1;
+            vacc[c->EV[2 * e + 1]] += s > 0 ? 1 : -1;
+        }
+        for (size_t v = 0; v < c->nv; v++)
+            if (vacc[v]) {
+                bad(msg, len, "face %zu: d1.d2 != 0 at vertex %zu", f, v);
+                goto done;
+            }
+    }
+    /* cells: every face twice with opposite signs; d2 . d3 = 0 */
+    for (size_t k = 0; k <= c->nc; k++) {
+        const int32_t *row = k < c->nc ? c->cf + c->cf_off[k] : c->ext;
+        size_t nrow = k < c->nc ? c->cf_off[k + 1] - c->cf_off[k] : c->next;
+        memset(acc, 0, c->ne * sizeof *acc);
+        for (size_t i = 0; i < nrow; i++) {
+            int32_t s = row[i];
+            uint32_t f = (uint32_t)(s > 0 ? s : -s) - 1;
+            if (f >= c->nf) {
+                bad(msg, len, "cell %zu: face out of range", k);
+                goto done;
+            }
+            seen[f] += s > 0 ? 1 : 16;
+            add_face(c, f, s > 0 ? 1 : -1, acc);
+        }
+        for (size_t e = 0; e < c->ne; e++)
+            if (acc[e]) {
+                bad(msg, len, "%s %zu: d2.d3 != 0 at edge %zu", k < c->nc ? "cell" : "exterior",
+                    k, e);
+                goto done;
+            }
+    }
+    for (size_t f = 0; f < c->nf; f++)
+        if (seen[f] != 17) {
+            bad(msg, len, "face %zu is on %d + and %d - cell sides (want 1 and 1)", f, seen[f] % 16,
+                seen[f] / 16);
+            goto done;
+        }
+    double total = 0, ext = 0;
+    for (size_t k = 0; k < c->nc; k++) {
+        double v = lar3_cell_volume(c, k);
+        if (!(v > 0) || fabs(v - c->cvol[k]) > 1e-9 * (fabs(v) + 1)) {
+            bad(msg, len, "cell %zu: volume %.17g (cvol %.17g)", k, v, c->cvol[k]);
+            goto done;
+        }
+        total += v;
+    }
+    for (size_t i = 0; i < c->next; i++) {
+        int32_t s = c->ext[i];
+        ext += (s > 0 ? 1 : -1) * lar3_face_cone(c, (uint32_t)(s > 0 ? s : -s) - 1);
+    }
+    if (fabs(total + ext) > 1e-9 * (fabs(total) + 1)) {
+        bad(msg, len, "bounded volumes add up to %.17g, the exterior encloses %.17g", total, -ext);
+        goto done;
+    }
+    if (euler) *euler = (long)c->nv - (long)c->ne + (long)c->nf - (long)c->nc - 1;
+    rc = 0;
+done:
+    free(acc);
+    free(vacc);
+    free(seen);
+    return rc;
+}

@@ -1,0 +1,552 @@
+/* cgal_bool.cpp — the CGAL reference of the 3D pipeline: Boolean operations on closed solids.
+ *
+ * Usage: cgal_bool [--op union|intersection|difference|xor|none] [--fold tree|linear]
+ *                  [--groups] [--time] [--out RESULT.off] FILE...
+ *
+ * Each FILE (.off or .obj, by extension; with --groups each "g"/"o" group of an OBJ is a solid
+ * of its own, as in the LAR.jl arrangement outputs whose groups are 3-cells) is read as a polygon
+ * soup of doubles (the same doubles cellar reads: coordinates are parsed with strtod, never as
+ * exact decimals), turned into a CGAL::Surface_mesh with the Epeck kernel, its faces
+ * triangulated (a quad that is planar only up to rounding is split along one diagonal), and
+ * checked: closed, no self-intersection, bounding a volume (reoriented when inward).  Then the
+ * operation is folded over the inputs with the PMP corefinement functions:
+ *   union         A1 ∪ A2 ∪ ... ∪ An
+ *   intersection  A1 ∩ A2 ∩ ... ∩ An
+ *   difference    A1 − (A2 ∪ ... ∪ An)      (the first minus all the rest)
+ *   xor           A1 ⊕ A2 ⊕ ... ⊕ An: the points in an odd number of inputs.  (R ∪ A) − (R ∩ A)
+ *                 is not a 2-manifold as soon as two boundaries cross (for two overlapping cubes,
+ *                 A − B and B − A touch along edges), so the result is kept as a list of
+ *                 interior-disjoint pieces: R ⊕ A = {P − A : P in R} + {A − all P in R}
+ *   none          no Boolean operation: only the inputs are read, checked and measured
+ * --fold tree (default) combines the operands pairwise (a balanced tree: every operation is
+ * associative), --fold linear left to right, R = R op Ai (slower: R grows at every step).
+ * One JSON line is printed (also --op none, without the result's fields):
+ *   {"op": "union", "kernel": "epeck", "inputs": n, "input_volumes": [v1, ...], "fold": "tree",
+ *    "volume": V, "faces": F, "vertices": N, "components": K, "closed": true, "ms": T}
+ * volume: of the result (17 significant digits); faces, vertices, components: its triangles,
+ * vertices and connected components (xor: summed over its pieces, and "pieces": how many);
+ * closed: CGAL::is_closed of the result; ms: wall time of the Boolean part only (not reading,
+ * checking, triangulating or measuring).  --op none prints "volume_sum" (of the inputs) instead
+ * of the result's fields.  --out writes the result as OFF (17 digits); --time prints the time
+ * of every step on stderr.
+ *
+ * Volumes are the divergence-theorem sum over the triangles, evaluated in double (Neumaier
+ * summation, about the bounding box centre) on the vertices rounded to double: the result is
+ * exact (Epeck), only its measure is rounded, to about 1e-15 relative for these inputs.  (An
+ * exact rational sum is no option: the denominators of the constructed points make it explode.)
+ *
+ * Kernel: Epeck (exact constructions), the robust choice for chained corefinements.  Building
+ * with -DCGAL_BOOL_EPICK gives the same program on Epick (exact predicates, double
+ * constructions), for measurement only: every constructed point is rounded, so a chained result
+ * may self-intersect and the next corefinement may fail.
+ *
+ * Exit status: 0 on success; 1 on a usage error or an unreadable / invalid input (not closed,
+ * self-intersecting, not bounding a volume); 2 when CGAL fails (a corefinement that cannot
+ * produce a manifold result, or throws).  Messages on stderr.
+ */
+#ifdef CGAL_BOOL_EPICK
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+typedef CGAL::Exact_predicates_inexact_constructions_kernel Kernel;
+#define KERNEL_NAME "epick"
+#else
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+typedef CGAL::Exact_predicates_exact_constructions_kernel Kernel;
+#define KERNEL_NAME "epeck"
+#endif
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/OFF.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+typedef Kernel::Point_3 Point;
+typedef CGAL::Surface_mesh<Point> Mesh;
+typedef std::array<double, 3> P3;
+typedef CGAL::Epick::Point_3 Dpoint; /* a point of doubles, as read */
+typedef std::vector<std::size_t> Polygon;
+
+/* One solid as read: doubles and index polygons, and where it came from. */
+struct Soup {
+    std::string label; /* "file.obj" or "file.obj:g cell2" */
+    std::vector<Dpoint> points;
+    std::vector<Polygon> polygons;
+};
+
+static double now_ms()
+{
+    using namespace std::chrono;
+    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+static bool g_time = false; /* --time: a line on stderr per step */
+
+static void step(const char *what, double ms)
+{
+    if (g_time) std::fprintf(stderr, "cgal_bool: %-40s %10.2f ms\n", what, ms);
+}
+
+/* ---- reading ------------------------------------------------------------------------------ */
+
+static bool ends_with(const std::string &s, const char *suffix)
+{
+    size_t n = std::strlen(suffix);
+    if (s.size() < n) return false;
+    for (size_t i = 0; i < n; i++)
+        if (std::tolower((unsigned char)s[s.size() - n + i]) != suffix[i]) return false;
+    return true;
+}
+
+/* OFF through CGAL's reader, into Epick points: doubles, as cellar reads them (an Epeck point
+ * read from a stream would take "0.1" as the exact rational 1/10). */
+static bool read_off(const std::string &path, std::vector<Soup> &out, std::string &why)
+{
+    std::ifstream in(path);
+    if (!in) {
+        why = "cannot open";
+        return false;
+    }
+    Soup s;
+    s.label = path;
+    if (!CGAL::IO::read_OFF(in, s.points, s.polygons, CGAL::parameters::verbose(false))) {
+        why = "not a readable OFF file";
+        return false;
+    }
+    out.push_back(std::move(s));
+    return true;
+}
+
+/* OBJ: "v x y z", "f a b c ..." (a, a/t, a//n, a/t/n; negative = relative to the end), other
+ * statements ignored.  With groups, each "g"/"o" statement starts a new solid, sharing the
+ * file's vertex list (the soups are trimmed of unused points later). */
+static bool read_obj(const std::string &path, bool groups, std::vector<Soup> &out,
+                     std::string &why)
+{
+    std::ifstream in(path);
+    if (!in) {
+        why = "cannot open";
+        return false;
+    }
+    std::vector<Dpoint> pts;
+    std::vector<std::pair<std::string, std::vector<Polygon>>> parts(1);
+    parts[0].first = path;
+    std::string line;
+    for (size_t ln = 1; std::getline(in, line); ln++) {
+        const char *c = line.c_str();
+        while (*c == ' ' || *c == '\t') c++;
+        char *end;
+        if (c[0] == 'v' && (c[1] == ' ' || c[1] == '\t')) {
+            double p[3];
+            const char *q = c + 1;
+            for (int k = 0; k < 3; k++) {
+                p[k] = std::strtod(q, &end);
+                if (end == q || !std::isfinite(p[k])) {
+                    why = "line " + std::to_string(ln) + ": bad vertex";
+                    return false;
+                }
+                q = end;
+            }
+            pts.emplace_back(p[0], p[1], p[2]);
+        } else if (c[0] == 'f' && (c[1] == ' ' || c[1] == '\t')) {
+            Polygon poly;
+            const char *q = c + 1;
+            for (;;) {
+                while (*q == ' ' || *q == '\t' || *q == '\r') q++;
+                if (!*q) break;
+                long i = std::strtol(q, &end, 10);
+                if (end == q) {
+                    why = "line " + std::to_string(ln) + ": bad face";
+                    return false;
+                }
+                q = end;
+                while (*q && *q != ' ' && *q != '\t' && *q != '\r') q++; /* /t/n */
+                long idx = i > 0 ? i - 1 : (long)pts.size() + i;
+                if (i == 0 || idx < 0 || idx >= (long)pts.size()) {
+                    why = "line " + std::to_string(ln) + ": vertex index out of range";
+                    return false;
+                }
+                poly.push_back((size_t)idx);
+            }
+            if (poly.size() < 3) {
+                why = "line " + std::to_string(ln) + ": face with fewer than 3 vertices";
+                return false;
+            }
+            parts.back().second.push_back(std::move(poly));
+        } else if (groups && (c[0] == 'g' || c[0] == 'o') && (c[1] == ' ' || c[1] == '\t')) {
+            std::string name = c;
+            while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+            parts.emplace_back(path + ":" + name, std::vector<Polygon>());
+        }
+    }
+    for (auto &part : parts) {
+        if (part.second.empty()) continue; /* faces before the first group, empty groups */
+        Soup s;
+        s.label = part.first;
+        s.points = pts;
+        s.polygons = std::move(part.second);
+        out.push_back(std::move(s));
+    }
+    if (out.empty()) why = "no faces";
+    return !out.empty();
+}
+
+/* ---- meshes ------------------------------------------------------------------------------- */
+
+static double to_d(const Kernel::FT &x)
+{
+#ifdef CGAL_BOOL_EPICK
+    return x;
+#else
+    /* The lazy approximation is an interval; refine to the exact value when it is wide. */
+    std::pair<double, double> i = CGAL::to_interval(x);
+    if (i.first == i.second) return i.first;
+    if (i.second - i.first > 1e-15 * std::fabs(i.first)) CGAL::exact(x);
+    return CGAL::to_double(x);
+#endif
+}
+
+/* The volume of a closed, outward triangle mesh (see the file comment). */
+static double volume(const Mesh &m)
+{
+    if (m.number_of_faces() == 0) return 0;
+    std::vector<P3> p(m.number_of_vertices());
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (Mesh::Vertex_index v : m.vertices()) {
+        const Point &q = m.point(v);
+        P3 d = {to_d(q.x()), to_d(q.y()), to_d(q.z())};
+        for (int k = 0; k < 3; k++) {
+            lo[k] = std::min(lo[k], d[k]);
+            hi[k] = std::max(hi[k], d[k]);
+        }
+        p[v.idx()] = d;
+    }
+    double c[3];
+    for (int k = 0; k < 3; k++) c[k] = 0.5 * (lo[k] + hi[k]);
+    double sum = 0, comp = 0; /* Neumaier */
+    for (Mesh::Face_index f : m.faces()) {
+        P3 t[3];
+        int n = 0;
+        for (Mesh::Vertex_index v : CGAL::vertices_around_face(m.halfedge(f), m)) {
+            if (n == 3) break;
+            const P3 &q = p[v.idx()];
+            t[n++] = P3{q[0] - c[0], q[1] - c[1], q[2] - c[2]};
+        }
+        double x = t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1]) -
+                   t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0]) +
+                   t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0]);
+        double s = sum + x;
+        comp += std::fabs(sum) >= std::fabs(x) ? (sum - s) + x : (x - s) + sum;
+        sum = s;
+    }
+    return (sum + comp) / 6;
+}
+
+/* A soup into a checked, triangulated, outward mesh; false with why. */
+static bool make_mesh(Soup &s, Mesh &m, std::string &why)
+{
+    PMP::repair_polygon_soup(s.points, s.polygons); /* merges equal points, drops unused ones */
+    if (s.polygons.empty()) {
+        why = "no faces left after removing degenerate ones";
+        return false;
+    }
+    if (!PMP::orient_polygon_soup(s.points, s.polygons)) {
+        why = "not an orientable 2-manifold (an edge on more than two faces, or a pinched vertex)";
+        return false;
+    }
+    std::vector<Point> pts;
+    pts.reserve(s.points.size());
+    for (const Dpoint &p : s.points) pts.emplace_back(p.x(), p.y(), p.z());
+    if (!PMP::is_polygon_soup_a_polygon_mesh(s.polygons)) {
+        why = "the faces do not make a polygon mesh";
+        return false;
+    }
+    PMP::polygon_soup_to_polygon_mesh(pts, s.polygons, m);
+    if (!PMP::triangulate_faces(m)) {
+        why = "a face could not be triangulated";
+        return false;
+    }
+    if (!CGAL::is_closed(m)) {
+        why = "not closed";
+        return false;
+    }
+    if (PMP::does_self_intersect(m)) {
+        why = "self-intersecting";
+        return false;
+    }
+    if (!PMP::does_bound_a_volume(m)) {
+        PMP::orient_to_bound_a_volume(m);
+        if (!PMP::does_bound_a_volume(m)) {
+            why = "does not bound a volume";
+            return false;
+        }
+    }
+    return true;
+}
+
+/* ---- the Boolean fold ---------------------------------------------------------------------- */
+
+enum Op { OP_UNION, OP_INTERSECTION, OP_DIFFERENCE, OP_XOR, OP_NONE };
+static const char *const op_names[] = {"union", "intersection", "difference", "xor", "none"};
+
+struct Cgal_failure : std::exception {
+    std::string what_;
+    explicit Cgal_failure(std::string w) : what_(std::move(w)) {}
+    const char *what() const noexcept override { return what_.c_str(); }
+};
+
+/* A result: one mesh, or for xor a list of meshes with disjoint interiors (the points in an odd
+ * number of inputs make a non-manifold solid as soon as two boundaries cross: two overlapping
+ * cubes' A − B and B − A touch along edges; a Surface_mesh cannot hold that, a list can). */
+typedef std::vector<Mesh> Pieces;
+
+/* a op b into a fresh mesh (a and b are corefined in place: same solids, more triangles). */
+static Mesh combine(Op op, Mesh &a, Mesh &b)
+{
+    Mesh r;
+    bool ok = false;
+    auto np = CGAL::parameters::throw_on_self_intersection(true);
+    switch (op) {
+    case OP_UNION: ok = PMP::corefine_and_compute_union(a, b, r, np); break;
+    case OP_INTERSECTION: ok = PMP::corefine_and_compute_intersection(a, b, r, np); break;
+    case OP_DIFFERENCE: ok = PMP::corefine_and_compute_difference(a, b, r, np); break;
+    case OP_XOR:
+    case OP_NONE: break;
+    }
+    if (!ok)
+        throw Cgal_failure(std::string("corefine_and_compute_") + op_names[op] +
+                           " could not make a manifold result");
+    return r;
+}
+
+/* a op b; for xor: every piece of a minus all of b's, and every piece of b minus all of a's
+ * (the pieces of a result are interior-disjoint, so this is the symmetric difference). */
+static Pieces combine(Op op, Pieces &a, Pieces &b)
+{
+    if (op != OP_XOR) return Pieces{combine(op, a.at(0), b.at(0))};
+    Pieces out;
+    for (int side = 0; side < 2; side++) {
+        Pieces &from = side ? b : a, &minus = side ? a : b;
+        for (Mesh &p : from) {
+            Mesh r = p;
+            for (size_t i = 0; i < minus.size() && r.number_of_faces(); i++)
+                r = combine(OP_DIFFERENCE, r, minus[i]);
+            if (r.number_of_faces()) out.push_back(std::move(r));
+        }
+    }
+    return out;
+}
+
+static size_t faces(const Pieces &ps)
+{
+    size_t n = 0;
+    for (const Mesh &m : ps) n += m.number_of_faces();
+    return n;
+}
+
+/* Folds op over ms[lo, hi) (consumed): pairwise when tree, else left to right. */
+static Pieces fold(Op op, std::vector<Pieces> &ms, size_t lo, size_t hi, bool tree, size_t &steps)
+{
+    if (hi - lo == 1) return std::move(ms[lo]);
+    Pieces r;
+    if (!tree) {
+        r = std::move(ms[lo]);
+        for (size_t i = lo + 1; i < hi; i++) {
+            double t0 = now_ms();
+            r = combine(op, r, ms[i]);
+            ms[i].clear();
+            if (g_time) {
+                char what[64];
+                std::snprintf(what, sizeof what, "step %zu (%zu faces)", ++steps, faces(r));
+                step(what, now_ms() - t0);
+            }
+        }
+        return r;
+    }
+    size_t mid = lo + (hi - lo) / 2;
+    Pieces a = fold(op, ms, lo, mid, tree, steps);
+    Pieces b = fold(op, ms, mid, hi, tree, steps);
+    double t0 = now_ms();
+    r = combine(op, a, b);
+    if (g_time) {
+        char what[64];
+        std::snprintf(what, sizeof what, "step %zu (%zu faces)", ++steps, faces(r));
+        step(what, now_ms() - t0);
+    }
+    return r;
+}
+
+static std::string num(double x)
+{
+    char b[32];
+    if (!std::isfinite(x)) return "null";
+    std::snprintf(b, sizeof b, "%.17g", x);
+    return b;
+}
+
+static int usage()
+{
+    std::fprintf(stderr,
+                 "usage: cgal_bool [--op union|intersection|difference|xor|none] "
+                 "[--fold tree|linear] [--groups] [--time] [--out RESULT.off] FILE.off|FILE.obj...\n");
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    Op op = OP_UNION;
+    bool tree = true, groups = false;
+    const char *outpath = nullptr;
+    std::vector<std::string> files;
+    for (int i = 1; i < argc; i++) {
+        std::string a = argv[i];
+        if (a == "--op" && i + 1 < argc) {
+            std::string v = argv[++i];
+            int k = 0;
+            while (k < 5 && v != op_names[k]) k++;
+            if (k == 5) return usage();
+            op = (Op)k;
+        } else if (a == "--fold" && i + 1 < argc) {
+            std::string v = argv[++i];
+            if (v != "tree" && v != "linear") return usage();
+            tree = v == "tree";
+        } else if (a == "--out" && i + 1 < argc) {
+            outpath = argv[++i];
+        } else if (a == "--groups") {
+            groups = true;
+        } else if (a == "--time") {
+            g_time = true;
+        } else if (a == "--help" || a == "-h") {
+            usage();
+            return 0;
+        } else if (a.size() > 1 && a[0] == '-') {
+            return usage();
+        } else {
+            files.push_back(a);
+        }
+    }
+    if (files.empty()) return usage();
+
+    double t0 = now_ms();
+    std::vector<Soup> soups;
+    for (const std::string &f : files) {
+        std::string why;
+        bool ok;
+        if (ends_with(f, ".off"))
+            ok = read_off(f, soups, why);
+        else if (ends_with(f, ".obj"))
+            ok = read_obj(f, groups, soups, why);
+        else {
+            ok = false;
+            why = "expected a .off or .obj file";
+        }
+        if (!ok) {
+            std::fprintf(stderr, "cgal_bool: %s: %s\n", f.c_str(), why.c_str());
+            return 1;
+        }
+    }
+    step("read", now_ms() - t0);
+
+    t0 = now_ms();
+    std::vector<Pieces> meshes(soups.size(), Pieces(1));
+    std::vector<double> vols(soups.size());
+    try {
+        for (size_t i = 0; i < soups.size(); i++) {
+            std::string why;
+            if (!make_mesh(soups[i], meshes[i][0], why)) {
+                std::fprintf(stderr, "cgal_bool: %s: %s\n", soups[i].label.c_str(), why.c_str());
+                return 1;
+            }
+            vols[i] = volume(meshes[i][0]);
+        }
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "cgal_bool: checking the inputs: %s\n", e.what());
+        return 2;
+    }
+    soups.clear();
+    step("meshes, checks, input volumes", now_ms() - t0);
+
+    std::string js = "{\"op\": \"" + std::string(op_names[op]) + "\", \"kernel\": \"" KERNEL_NAME
+                     "\", \"inputs\": " + std::to_string(meshes.size()) + ", \"input_volumes\": [";
+    double vsum = 0;
+    for (size_t i = 0; i < vols.size(); i++) {
+        if (i) js += ", ";
+        js += num(vols[i]);
+        vsum += vols[i];
+    }
+    js += "]";
+    if (op == OP_NONE) {
+        std::printf("%s, \"volume_sum\": %s}\n", js.c_str(), num(vsum).c_str());
+        return 0;
+    }
+
+    Pieces r;
+    double ms;
+    try {
+        size_t steps = 0;
+        t0 = now_ms();
+        if (op == OP_DIFFERENCE && meshes.size() > 2) {
+            Pieces rest = fold(OP_UNION, meshes, 1, meshes.size(), tree, steps);
+            r = combine(OP_DIFFERENCE, meshes[0], rest);
+        } else {
+            r = fold(op, meshes, 0, meshes.size(), tree, steps);
+        }
+        ms = now_ms() - t0;
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "cgal_bool: %s failed: %s\n", op_names[op], e.what());
+        return 2;
+    }
+    step("boolean (total)", ms);
+
+    t0 = now_ms();
+    double v = 0;
+    size_t nf = 0, nv = 0, ncc = 0;
+    bool closed = true;
+    for (Mesh &m : r) {
+        v += volume(m);
+        auto fcc = m.add_property_map<Mesh::Face_index, std::size_t>("f:cc", 0).first;
+        ncc += m.number_of_faces() ? PMP::connected_components(m, fcc) : 0;
+        m.remove_property_map(fcc);
+        nf += m.number_of_faces();
+        nv += m.number_of_vertices();
+        closed = closed && CGAL::is_closed(m);
+    }
+    step("result volume, components", now_ms() - t0);
+    char tail[256];
+    std::snprintf(tail, sizeof tail,
+                  ", \"faces\": %zu, \"vertices\": %zu, \"components\": %zu, \"closed\": %s, "
+                  "\"ms\": %.3f",
+                  nf, nv, ncc, closed ? "true" : "false", ms);
+    std::printf("%s, \"fold\": \"%s\", \"volume\": %s%s", js.c_str(), tree ? "tree" : "linear",
+                num(v).c_str(), tail);
+    if (op == OP_XOR) std::printf(", \"pieces\": %zu", r.size());
+    std::printf("}\n");
+    if (outpath) {
+        Mesh all;
+        for (const Mesh &m : r) all += m;
+        std::ofstream out(outpath);
+        if (!out || !CGAL::IO::write_OFF(out, all, CGAL::parameters::stream_precision(17))) {
+            std::fprintf(stderr, "cgal_bool: cannot write %s\n", outpath);
+            return 1;
+        }
+    }
+    return 0;
+}

@@ -44,6 +44,7 @@
 #define PARALLEL_EPS  1e-12
 #define RAY_EPS       1e-6 /* grid units */
 #define RAY_TRIES     8
+#define FAR_PX        1024 /* grid units: a point of three planes farther is not used */
 
 /* ------------------------------------------------------------------ small tools */
 
@@ -951,7 +952,7 @@ static int three_planes(const ctx *c, uint32_t g0, uint32_t g1, uint32_t g2, dou
     double ca[3] = {e[1] * a[2] - e[2] * a[1], e[2] * a[0] - e[0] * a[2], e[0] * a[1] - e[1] * a[0]};
     double ab[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
     double det = a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2];
-    if (fabs(det) < 1e-9) return -1;
+    if (fabs(det) < 1e-6) return -1;
     for (int k = 0; k < 3; k++) x[k] = (da * bc[k] + db * ca[k] + de * ab[k]) / det;
     return 0;
 }
@@ -1117,11 +1118,14 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
         }
         double x[3];
         int ok = pl[1] != NONE && !three_planes(c, gi, pl[0], pl[1], x);
-        if (ok) { /* keep it near: the three planes may meet far away when nearly dependent */
+        if (ok) {
+            /* The point of the three planes is the same whichever group asks, so it is used
+             * however far (crossings of rounded cut segments at a shallow angle move along
+             * them), unless the planes are so near dependent that it lands far off. */
             ipt q = {llround(L->V[2 * j]), llround(L->V[2 * j + 1])};
             int64_t gx[3] = {llround(x[0]), llround(x[1]), llround(x[2])};
             ipt pq = proj(gx, g->k);
-            if (llabs(pq.x - q.x) > 2 || llabs(pq.y - q.y) > 2) ok = 0;
+            if (llabs(pq.x - q.x) > FAR_PX || llabs(pq.y - q.y) > FAR_PX) ok = 0;
         }
         if (!ok) { /* lift into the group's plane */
             int k = g->k, i1 = (k + 1) % 3, i2 = (k + 2) % 3;
@@ -1129,6 +1133,9 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
             x[i2] = L->V[2 * j + 1];
             x[k] = (g->d - g->nd[i1] * x[i1] - g->nd[i2] * x[i2]) / g->nd[k];
         }
+        if (getenv("ARR3_DEBUG"))
+            fprintf(stderr, "group %u new vertex %s planes %u %u at %.3f %.3f %.3f\n", gi,
+                    ok ? "3planes" : "lifted", pl[0], pl[1], x[0], x[1], x[2]);
         if (grow(&r->newp, &r->capnew, 3 * (r->nnew + 1), sizeof *r->newp)) return ARR_ENOMEM;
         for (int k = 0; k < 3; k++) r->newp[3 * r->nnew + k] = llround(x[k]);
         g->rgid[j] = 0x80000000u | (uint32_t)r->nnew; /* resolved after the round */

@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
 #include "core/arr3.h"
 #include "core/solid.h"
 #include "tests/check.h"
@@ -77,7 +79,7 @@ static int run3(solid *s, size_t n, int soup, double precision, lar3 *out, long 
         return -1;
     }
     char msg[256];
-    if (lar3_check(out, 1e-6, euler, msg, sizeof msg)) {
+    if (lar3_check(out, precision > 0 ? 3 * precision : 1e-6, euler, msg, sizeof msg)) {
         test_fail(__FILE__, __func__, __LINE__, "lar3_check: %s", msg);
         return -1;
     }
@@ -137,4 +139,217 @@ TEST(cube_and_rotated_cube)
     }
     lar3_free(&c);
     free_all(s, 2);
+}
+
+/* K x K x K unit cubes at (i, j, k) / 2: the union [0, (K+1)/2]^3 cut by every plane x, y,
+ * z = m / 2 into (K+1)^3 cells of volume 1/8. */
+TEST(grid_of_overlapping_cubes)
+{
+    for (int K = 1; K <= 5; K++) {
+        size_t n = (size_t)K * K * K;
+        solid *s = calloc(n, sizeof *s);
+        size_t m = 0;
+        for (int i = 0; i < K; i++)
+            for (int j = 0; j < K; j++)
+                for (int k = 0; k < K; k++)
+                    s[m++] = box(i / 2.0, j / 2.0, k / 2.0, i / 2.0 + 1, j / 2.0 + 1, k / 2.0 + 1);
+        lar3 c;
+        long eu;
+        if (!run3(s, n, 0, 0, &c, &eu)) {
+            size_t a = (size_t)K + 1, b = (size_t)K + 2;
+            if (K == 1) a = 1, b = 2; /* a single cube */
+            CHECK(c.nv == b * b * b && c.ne == 3 * a * b * b && c.nf == 3 * a * a * b &&
+                      c.nc == a * a * a,
+                  "K=%d: V %zu E %zu F %zu C %zu", K, c.nv, c.ne, c.nf, c.nc);
+            double bad = 0, want = K == 1 ? 1 : 0.125;
+            for (size_t q = 0; q < c.nc; q++)
+                if (fabs(c.cvol[q] - want) > bad) bad = fabs(c.cvol[q] - want);
+            CHECK(bad < 1e-12, "K=%d: a cell's volume is off by %g", K, bad);
+            CHECK(eu == 0, "K=%d: euler %ld", K, eu);
+        }
+        lar3_free(&c);
+        free_all(s, n);
+        free(s);
+    }
+}
+
+TEST(cubes_sharing_a_face)
+{
+    solid s[2] = {box(0, 0, 0, 1, 1, 1), box(1, 0, 0, 2, 1, 1)};
+    lar3 c;
+    long eu;
+    if (!run3(s, 2, 0, 0, &c, &eu)) {
+        CHECK(c.nv == 12 && c.ne == 20 && c.nf == 11 && c.nc == 2, "V %zu E %zu F %zu C %zu",
+              c.nv, c.ne, c.nf, c.nc);
+        double want[2] = {1, 1};
+        CHECK(volumes_are(&c, want, 2, 1e-12), "volumes");
+        CHECK(eu == 0, "euler %ld", eu);
+    }
+    lar3_free(&c);
+    free_all(s, 2);
+}
+
+/* A small box standing on a big one: the big box's top becomes a ring (a face with a hole)
+ * around the square they share. */
+TEST(cube_on_top_of_another)
+{
+    solid s[2] = {box(0, 0, 0, 2, 2, 1), box(.5, .5, 1, 1.5, 1.5, 2)};
+    lar3 c;
+    long eu;
+    if (!run3(s, 2, 0, 0, &c, &eu)) {
+        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu",
+              c.nv, c.ne, c.nf, c.nc);
+        size_t holes = 0;
+        for (size_t f = 0; f < c.nf; f++) holes += c.fc_off[f + 1] - c.fc_off[f] - 1;
+        CHECK(holes == 1, "%zu holes", holes);
+        double want[2] = {1, 4};
+        CHECK(volumes_are(&c, want, 2, 1e-12), "volumes");
+        CHECK(eu == 1, "euler %ld (one annular face)", eu);
+    }
+    lar3_free(&c);
+    free_all(s, 2);
+}
+
+TEST(identical_cubes)
+{
+    solid s[3] = {box(0, 0, 0, 1, 1, 1), box(0, 0, 0, 1, 1, 1), box(0, 0, 0, 1, 1, 1)};
+    lar3 c;
+    long eu;
+    if (!run3(s, 3, 0, 0, &c, &eu)) {
+        CHECK(c.nv == 8 && c.ne == 12 && c.nf == 6 && c.nc == 1, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
+        CHECK(c.nc == 1 && fabs(c.cvol[0] - 1) < 1e-12, "volume");
+    }
+    lar3_free(&c);
+    free_all(s, 3);
+}
+
+/* A cube floating inside another: the outer cell has a cavity (12 faces, volume 26). */
+TEST(cube_inside_cube_is_a_cavity)
+{
+    solid s[2] = {box(0, 0, 0, 3, 3, 3), box(1, 1, 1, 2, 2, 2)};
+    lar3 c;
+    long eu;
+    if (!run3(s, 2, 0, 0, &c, &eu)) {
+        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu",
+              c.nv, c.ne, c.nf, c.nc);
+        double want[2] = {1, 26};
+        CHECK(volumes_are(&c, want, 2, 1e-12), "volumes");
+        size_t big = c.cvol[0] > c.cvol[1] ? 0 : 1;
+        CHECK(c.cf_off[big + 1] - c.cf_off[big] == 12, "the outer cell has %u faces",
+              c.cf_off[big + 1] - c.cf_off[big]);
+        CHECK(c.next == 6, "exterior %zu faces", c.next);
+    }
+    lar3_free(&c);
+    /* nested twice, and a rotated cube inside: still cavities */
+    double ax[3] = {0.6, 0.8, 0}, t[3] = {4.2, 4.2, 4.2};
+    solid s2[3] = {box(0, 0, 0, 10, 10, 10), box(2, 2, 2, 8, 8, 8), cube_rt(1, ax, 0.7, t)};
+    if (!run3(s2, 3, 0, 0, &c, &eu)) {
+        double want[3] = {1, 216 - 1, 1000 - 216};
+        CHECK(volumes_are(&c, want, 3, 1e-6), "nested volumes (the rotated cube is snapped)");
+    }
+    lar3_free(&c);
+    free_all(s2, 3);
+    free_all(s, 2);
+}
+
+/* An L-shaped prism (non-convex top and bottom) crossing a box. */
+TEST(l_prism_crossing_a_box)
+{
+    static const double L[6][2] = {{0, 0}, {3, 0}, {3, 1}, {1, 1}, {1, 3}, {0, 3}};
+    solid p = {0};
+    p.nv = 12;
+    p.V = malloc(36 * sizeof *p.V);
+    for (int i = 0; i < 6; i++)
+        for (int z = 0; z < 2; z++) {
+            p.V[3 * (i + 6 * z)] = L[i][0];
+            p.V[3 * (i + 6 * z) + 1] = L[i][1];
+            p.V[3 * (i + 6 * z) + 2] = z;
+        }
+    p.nf = p.ncyc = 8;
+    p.face_off = malloc(9 * sizeof *p.face_off);
+    p.cyc_off = malloc(9 * sizeof *p.cyc_off);
+    p.cyc = malloc(36 * sizeof *p.cyc);
+    uint32_t n = 0;
+    p.cyc_off[0] = 0;
+    for (int i = 5; i >= 0; i--) p.cyc[n++] = (uint32_t)i; /* bottom, seen from below */
+    p.cyc_off[1] = n;
+    for (int i = 0; i < 6; i++) p.cyc[n++] = (uint32_t)(6 + i);
+    p.cyc_off[2] = n;
+    for (int i = 0; i < 6; i++) {
+        uint32_t a = (uint32_t)i, b = (uint32_t)((i + 1) % 6);
+        p.cyc[n++] = a, p.cyc[n++] = b, p.cyc[n++] = b + 6, p.cyc[n++] = a + 6;
+        p.cyc_off[3 + i] = n;
+    }
+    for (int f = 0; f <= 8; f++) p.face_off[f] = (uint32_t)f;
+    solid s[2] = {p, box(.5, .5, -1, 2.5, 2.5, .5)};
+    lar3 c;
+    long eu;
+    if (!run3(s, 2, 0, 0, &c, &eu)) {
+        double want[3] = {0.875, 4.125, 5.125};
+        CHECK(volumes_are(&c, want, 3, 1e-12), "volumes");
+        CHECK(eu == 0, "euler %ld", eu);
+    }
+    lar3_free(&c);
+    free_all(s, 2);
+}
+
+/* The seeds' five random cubes (shared/data/mesh/fivecubes-input.json; quads in LAR cuboid
+ * order a, b, d, c), oriented by solid_check. */
+static int load_fivecubes(solid *s)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/mesh/fivecubes-input.json", test_data_dir());
+    json_error_t je;
+    json_t *j = json_load_file(path, 0, &je);
+    if (!j) return -1;
+    json_t *V = json_object_get(j, "V"), *FV = json_object_get(j, "FV");
+    for (int k = 0; k < 5; k++) {
+        double c[8][3];
+        for (int i = 0; i < 8; i++)
+            for (int a = 0; a < 3; a++)
+                c[i][a] = json_number_value(json_array_get(json_array_get(V, 8 * k + i), a));
+        solid raw = hexa(c);
+        /* the file's own faces, in their order and orientation */
+        for (int f = 0; f < 6; f++) {
+            json_t *q = json_array_get(FV, 6 * k + f);
+            uint32_t a = (uint32_t)json_integer_value(json_array_get(q, 0)) - 1 - 8 * k;
+            uint32_t b = (uint32_t)json_integer_value(json_array_get(q, 1)) - 1 - 8 * k;
+            uint32_t cc = (uint32_t)json_integer_value(json_array_get(q, 2)) - 1 - 8 * k;
+            uint32_t d = (uint32_t)json_integer_value(json_array_get(q, 3)) - 1 - 8 * k;
+            raw.cyc[4 * f] = a, raw.cyc[4 * f + 1] = b, raw.cyc[4 * f + 2] = d;
+            raw.cyc[4 * f + 3] = cc;
+        }
+        solid_report rep;
+        /* the file's corners are planar to 2e-6 only (printed digits) */
+        int rc = solid_check(&raw, 1e-5, "fivecubes", &rep, &s[k]);
+        solid_free(&raw);
+        if (rc) {
+            json_decref(j);
+            return -1;
+        }
+    }
+    json_decref(j);
+    return 0;
+}
+
+TEST(five_cubes_of_the_seeds)
+{
+    solid s[5] = {0};
+    REQUIRE(!load_fivecubes(s), "cannot load fivecubes-input.json");
+    lar3 c;
+    long eu;
+    if (!run3(s, 5, 0, 1e-5, &c, &eu)) {
+        /* The reference (fivecubes-arrangement.json, Julia): 137 V, 268 E, 157 F, 27 cells with
+         * the exterior, 2 faces with a hole, 3 cells with a torus boundary. */
+        size_t holes = 0;
+        for (size_t f = 0; f < c.nf; f++) holes += c.fc_off[f + 1] - c.fc_off[f] - 1;
+        printf("# fivecubes: V %zu E %zu F %zu C %zu (+1), %zu faces with holes, euler %ld\n",
+               c.nv, c.ne, c.nf, c.nc, holes, eu);
+        CHECK(c.nv == 137 && c.ne == 268 && c.nf == 157 && c.nc == 26,
+              "V %zu E %zu F %zu C %zu", c.nv, c.ne, c.nf, c.nc);
+        CHECK(holes == 2, "%zu holes", holes);
+    }
+    lar3_free(&c);
+    free_all(s, 5);
 }

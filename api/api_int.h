@@ -16,6 +16,7 @@
 
 #include "api/api.h"
 #include "core/arr2.h"
+#include "core/arr3.h"
 
 typedef struct api_buf {
     char *p;    /* owned; NUL-terminated whenever len > 0 and !failed */
@@ -83,6 +84,12 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
 void api_svg_free(void *parsed);
 int api_svg_check(const void *parsed, api_error *err);
 
+/* The "solids" kind (api/solids.c). */
+int api_solids_parse(const json_t *req, void **parsed, api_error *err);
+int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
+void api_solids_free(void *parsed);
+int api_solids_check(const void *parsed, api_error *err);
+
 /* The result fields a request may ask for (options.fields), as bits. */
 enum {
     API_F_V = 1u << 0,
@@ -127,5 +134,34 @@ typedef struct api_lar2_fmt {
  * scratch allocation failed) or API_EINTERNAL (c breaks an invariant, e.g. an exterior cycle
  * walks a pair of vertices that is not an edge). */
 int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error *err);
+
+/* The fields of a 3-complex (options.fields of "solids"), as bits. */
+enum {
+    API_F3_V = 1u << 0,
+    API_F3_EV = 1u << 1,
+    API_F3_FV = 1u << 2,
+    API_F3_FE = 1u << 3,
+    API_F3_HOLES = 1u << 4,
+    API_F3_CF = 1u << 5,
+    API_F3_CV = 1u << 6,
+    API_F3_EXTERIOR = 1u << 7,
+    API_F3_STATS = 1u << 8,
+    API_F3_OPERATORS = 1u << 9,
+    API_F3_DEFAULT = (1u << 9) - 1 /* all but operators */
+};
+#define API_NFIELDS3 10
+extern const char *const api_field3_names[API_NFIELDS3]; /* "V", "EV", ... in bit order */
+
+/* How api_lar3_write() presents a 3-complex (api/larjson3.c). */
+typedef struct api_lar3_fmt {
+    unsigned fields;             /* API_F3_* bits */
+    const char *const *warnings; /* borrowed, nwarnings strings for stats.warnings (may be NULL) */
+    size_t nwarnings;
+} api_lar3_fmt;
+
+/* Appends the LAR JSON object of the 3-complex c (borrowed; core/arr3.h) to b.  Returns API_OK,
+ * API_ENOMEM (b failed or a scratch allocation failed) or API_EINTERNAL (c breaks an invariant
+ * the writer relies on: an index out of range, offsets that decrease). */
+int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err);
 
 #endif

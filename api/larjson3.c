@@ -1,0 +1,377 @@
+/* larjson3.c — LAR JSON out: a 3-complex (core/arr3.h) streamed into a growing buffer.
+ *
+ *   {"dim":3,"V":[[x,y,z],...],"EV":[[v0,v1],...],"FV":[[v,...],...],"FE":[[±(e+1),...],...],
+ *    "holes":{"f":[[v,...],...]},"CF":[[±(f+1),...],...],"CV":[[v,...],...],
+ *    "exterior":[±(f+1),...],
+ *    "operators":{"d1":{CSR V x E},"d2":{CSR E x F},"d3":{CSR F x C}},
+ *    "stats":{counts, "precision", "ms":{...}, "volumes":[...], "warnings":[...]}}
+ *
+ * Indices are 0-based, signed ones ±(i+1).  Face f's FV row is its outer cycle
+ * (counter-clockwise seen from the tip of its normal), its holes (clockwise) are holes."f", its FE
+ * row the core's signed edges (+ when the face walks the edge from EV's v0 to v1).  CF row c
+ * holds the faces of bounded cell c, +(f+1) when f's normal points out of the cell; CV row c
+ * its sorted vertices; "exterior" the faces of the unbounded cell with the same sign rule
+ * (so each face appears twice in CF and exterior together, once with each sign).
+ * stats.volumes[c] is the volume of cell c; stats.warnings what the validation of the input
+ * changed (flipped faces).  The operators are compressed sparse ROW matrices with one column
+ * per edge (d1: -1 at v0, +1 at v1), per FE row (d2) and per CF row (d3), so d1·d2 = 0 and
+ * d2·d3 = 0; scipy.sparse.csr_matrix((data, indices, indptr), shape) loads them.
+ *
+ * Why a stream and not a jansson tree, and the number format: see api/larjson.c.  The complex
+ * is checked first (every index the writer follows, every number it prints), so a bug in the
+ * core is a 500 with a message, never a crash.
+ *
+ * Threads: reentrant, no globals.  Ownership: the complex and the warnings are borrowed; the
+ * buffer is the caller's (api_buf_free() frees it).
+ */
+#include "api/api_int.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const api_field3_names[API_NFIELDS3] = {"V",  "EV", "FV",       "FE",    "holes",
+                                                    "CF", "CV", "exterior", "stats", "operators"};
+
+/* ---- checks ---------------------------------------------------------------------------------- */
+
+/* off[0..n] is a non-decreasing offset array (NULL allowed when n == 0); its end in *end. */
+static int offsets_ok(const uint32_t *off, size_t n, size_t *end)
+{
+    *end = 0;
+    if (n == 0) return 1; /* off is not read */
+    if (!off || off[0] != 0) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (off[i + 1] < off[i]) return 0;
+    *end = off[n];
+    return 1;
+}
+
+static int signed_ok(const int32_t *a, size_t n, size_t bound)
+{
+    if (n && !a) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (a[i] == 0 || (uint64_t)llabs((long long)a[i]) > bound) return 0;
+    return 1;
+}
+
+static int index_ok(const uint32_t *a, size_t n, size_t bound)
+{
+    if (n && !a) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (a[i] >= bound) return 0;
+    return 1;
+}
+
+/* Checks the indices the writer follows and the numbers it prints. */
+static int check_complex(const lar3 *c, api_error *err)
+{
+    const char *what = NULL;
+    size_t ncycv, nfc, nfe, ncf, ncv;
+    if (c->nv && !c->V) what = "V";
+    for (size_t i = 0; !what && i < 3 * c->nv; i++)
+        if (!isfinite(c->V[i])) what = "V (not finite)";
+    if (!what && !index_ok(c->EV, 2 * c->ne, c->nv)) what = "EV";
+    if (!what && (!offsets_ok(c->cyc_off, c->ncyc, &ncycv) || !index_ok(c->cyc, ncycv, c->nv)))
+        what = "cyc";
+    if (!what && (!offsets_ok(c->fc_off, c->nf, &nfc) || !index_ok(c->fc, nfc, c->ncyc)))
+        what = "fc";
+    for (size_t f = 0; !what && f < c->nf; f++)
+        if (c->fc_off[f + 1] == c->fc_off[f]) what = "fc_off (a face without a cycle)";
+    if (!what && (!offsets_ok(c->fe_off, c->nf, &nfe) || !signed_ok(c->fe, nfe, c->ne)))
+        what = "fe";
+    if (!what && (!offsets_ok(c->cf_off, c->nc, &ncf) || !signed_ok(c->cf, ncf, c->nf)))
+        what = "cf";
+    if (!what && (!offsets_ok(c->cv_off, c->nc, &ncv) || !index_ok(c->cv, ncv, c->nv))) what = "cv";
+    if (!what && !signed_ok(c->ext, c->next, c->nf)) what = "ext";
+    if (!what && c->nc && !c->cvol) what = "cvol";
+    for (size_t i = 0; !what && i < c->nc; i++)
+        if (!isfinite(c->cvol[i])) what = "cvol (not finite)";
+    if (what)
+        return api_fail(err, API_EINTERNAL, "internal error: the 3-complex's %s is invalid", what);
+    return API_OK;
+}
+
+/* ---- writers --------------------------------------------------------------------------------- */
+
+static void put_key(api_buf *b, const char *key)
+{
+    api_buf_puts(b, ",\"");
+    api_buf_puts(b, key);
+    api_buf_puts(b, "\":");
+}
+
+static void put_u32_list(api_buf *b, const uint32_t *a, size_t n)
+{
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_u64(b, a[i]);
+    }
+    api_buf_putc(b, ']');
+}
+
+static void put_i32_list(api_buf *b, const int32_t *a, size_t n)
+{
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_i64(b, a[i]);
+    }
+    api_buf_putc(b, ']');
+}
+
+static void put_cycle(api_buf *b, const lar3 *c, uint32_t cy)
+{
+    put_u32_list(b, c->cyc + c->cyc_off[cy], c->cyc_off[cy + 1] - c->cyc_off[cy]);
+}
+
+/* Rows of signed lists (FE, CF): row r is a[off[r] .. off[r+1]). */
+static void put_signed_rows(api_buf *b, const uint32_t *off, const int32_t *a, size_t n)
+{
+    api_buf_putc(b, '[');
+    for (size_t r = 0; r < n; r++) {
+        if (r) api_buf_putc(b, ',');
+        put_i32_list(b, a + off[r], off[r + 1] - off[r]);
+    }
+    api_buf_putc(b, ']');
+}
+
+/* A JSON string of printable ASCII: quotes and backslashes escaped, other bytes '?'. */
+static void put_string(api_buf *b, const char *s)
+{
+    api_buf_putc(b, '"');
+    for (const char *p = s; *p; p++) {
+        if (*p == '"' || *p == '\\') api_buf_putc(b, '\\');
+        api_buf_putc(b, (unsigned char)*p >= 0x20 && (unsigned char)*p < 0x7f ? *p : '?');
+    }
+    api_buf_putc(b, '"');
+}
+
+/* Writes {"shape":[nrows,ncols],"indptr":...,"indices":...,"data":...}: the matrix whose
+ * column j holds, for each entry s of ent[col_off[j] .. col_off[j+1]), sign(s) at row |s|-1.
+ * Columns are visited in order, so every row's indices come out sorted. */
+static int put_csr_from_columns(api_buf *b, size_t nrows, size_t ncols, const uint32_t *col_off,
+                                const int32_t *ent, api_error *err)
+{
+    size_t nnz = ncols ? col_off[ncols] : 0;
+    size_t *ptr = calloc(nrows + 2, sizeof *ptr), *fill = malloc((nrows + 1) * sizeof *fill);
+    uint32_t *idx = malloc((nnz ? nnz : 1) * sizeof *idx);
+    int8_t *val = malloc(nnz ? nnz : 1);
+    if (!ptr || !fill || !idx || !val) {
+        free(ptr), free(fill), free(idx), free(val);
+        return api_fail(err, API_ENOMEM, "out of memory while writing the operators");
+    }
+    for (size_t i = 0; i < nnz; i++) ptr[(size_t)llabs((long long)ent[i])]++;
+    for (size_t r = 0; r < nrows; r++) ptr[r + 1] += ptr[r];
+    memcpy(fill, ptr, (nrows + 1) * sizeof *fill);
+    for (size_t j = 0; j < ncols; j++)
+        for (size_t i = col_off[j]; i < col_off[j + 1]; i++) {
+            size_t at = fill[(size_t)llabs((long long)ent[i]) - 1]++;
+            idx[at] = (uint32_t)j;
+            val[at] = ent[i] > 0 ? 1 : -1;
+        }
+    api_buf_puts(b, "{\"shape\":[");
+    api_buf_u64(b, nrows);
+    api_buf_putc(b, ',');
+    api_buf_u64(b, ncols);
+    api_buf_puts(b, "],\"indptr\":[");
+    for (size_t r = 0; r <= nrows; r++) {
+        if (r) api_buf_putc(b, ',');
+        api_buf_u64(b, ptr[r]);
+    }
+    api_buf_puts(b, "],\"indices\":");
+    put_u32_list(b, idx, nnz);
+    api_buf_puts(b, ",\"data\":[");
+    for (size_t i = 0; i < nnz; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_puts(b, val[i] > 0 ? "1" : "-1");
+    }
+    api_buf_puts(b, "]}");
+    free(ptr), free(fill), free(idx), free(val);
+    return API_OK;
+}
+
+/* d1 (V x E), d2 (E x F), d3 (F x C). */
+static int put_operators(api_buf *b, const lar3 *c, api_error *err)
+{
+    static const uint32_t zero = 0;
+    uint32_t *off = NULL;
+    int32_t *ent = NULL;
+    int rc;
+    if (c->nv >= INT32_MAX || c->ne >= UINT32_MAX / 2)
+        return api_fail(err, API_EINVALID, "operators: the complex is too large to write them");
+    off = malloc((c->ne + 1) * sizeof *off);
+    ent = malloc((2 * c->ne + 1) * sizeof *ent);
+    if (!off || !ent) {
+        free(off), free(ent);
+        return api_fail(err, API_ENOMEM, "out of memory while writing the operators");
+    }
+    for (size_t e = 0; e <= c->ne; e++) off[e] = (uint32_t)(2 * e);
+    for (size_t e = 0; e < c->ne; e++) {
+        ent[2 * e] = -(int32_t)(c->EV[2 * e] + 1);
+        ent[2 * e + 1] = (int32_t)(c->EV[2 * e + 1] + 1);
+    }
+    api_buf_puts(b, "{\"d1\":");
+    rc = put_csr_from_columns(b, c->nv, c->ne, off, ent, err);
+    free(off), free(ent);
+    if (rc != API_OK) return rc;
+    api_buf_puts(b, ",\"d2\":");
+    rc = put_csr_from_columns(b, c->ne, c->nf, c->nf ? c->fe_off : &zero, c->fe, err);
+    if (rc != API_OK) return rc;
+    api_buf_puts(b, ",\"d3\":");
+    rc = put_csr_from_columns(b, c->nf, c->nc, c->nc ? c->cf_off : &zero, c->cf, err);
+    if (rc != API_OK) return rc;
+    api_buf_putc(b, '}');
+    return API_OK;
+}
+
+static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
+{
+    const arr3_stats *s = &c->stats;
+    static const char *const names[] = {"input_solids",
+                                        "input_faces",
+                                        "planes",
+                                        "coplanar_groups",
+                                        "pairs_tested",
+                                        "cuts",
+                                        "rounds",
+                                        "V",
+                                        "E",
+                                        "F",
+                                        "C",
+                                        "shells",
+                                        "components"};
+    const size_t counts[] = {s->input_solids, s->input_faces, s->planes, s->coplanar_groups,
+                             s->pairs_tested, s->cuts,        s->rounds, c->nv,
+                             c->ne,           c->nf,          c->nc,     s->shells,
+                             s->components};
+    static const char *const ms_names[] = {"snap", "pairs", "cuts", "faces", "cells", "total"};
+    const double ms[] = {s->ms_snap,  s->ms_pairs, s->ms_cuts,
+                         s->ms_faces, s->ms_cells, s->ms_total};
+    api_buf_putc(b, '{');
+    for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_putc(b, '"');
+        api_buf_puts(b, names[i]);
+        api_buf_puts(b, "\":");
+        api_buf_u64(b, counts[i]);
+    }
+    put_key(b, "precision");
+    api_buf_double(b, isfinite(s->precision) && s->precision > 0 ? s->precision : 0);
+    api_buf_puts(b, ",\"ms\":{");
+    for (size_t i = 0; i < sizeof ms / sizeof ms[0]; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_putc(b, '"');
+        api_buf_puts(b, ms_names[i]);
+        api_buf_puts(b, "\":");
+        api_buf_double(b, isfinite(ms[i]) && ms[i] > 0 ? ms[i] : 0);
+    }
+    api_buf_putc(b, '}');
+    put_key(b, "volumes");
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < c->nc; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_double(b, c->cvol[i]);
+    }
+    api_buf_putc(b, ']');
+    put_key(b, "warnings");
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < fmt->nwarnings; i++) {
+        if (i) api_buf_putc(b, ',');
+        put_string(b, fmt->warnings[i] ? fmt->warnings[i] : "");
+    }
+    api_buf_puts(b, "]}");
+}
+
+int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err)
+{
+    unsigned fl = fmt->fields;
+    int rc = check_complex(c, err);
+    if (rc != API_OK) return rc;
+    api_buf_puts(b, "{\"dim\":3");
+    if (fl & API_F3_V) {
+        put_key(b, "V");
+        api_buf_putc(b, '[');
+        for (size_t v = 0; v < c->nv; v++) {
+            api_buf_puts(b, v ? ",[" : "[");
+            api_buf_double(b, c->V[3 * v]);
+            api_buf_putc(b, ',');
+            api_buf_double(b, c->V[3 * v + 1]);
+            api_buf_putc(b, ',');
+            api_buf_double(b, c->V[3 * v + 2]);
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F3_EV) {
+        put_key(b, "EV");
+        api_buf_putc(b, '[');
+        for (size_t e = 0; e < c->ne; e++) {
+            if (e) api_buf_putc(b, ',');
+            put_u32_list(b, c->EV + 2 * e, 2);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F3_FV) {
+        put_key(b, "FV");
+        api_buf_putc(b, '[');
+        for (size_t f = 0; f < c->nf; f++) {
+            if (f) api_buf_putc(b, ',');
+            put_cycle(b, c, c->fc[c->fc_off[f]]);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F3_FE) {
+        put_key(b, "FE");
+        put_signed_rows(b, c->fe_off, c->fe, c->nf);
+    }
+    if (fl & API_F3_HOLES) {
+        int first = 1;
+        put_key(b, "holes");
+        api_buf_putc(b, '{');
+        for (size_t f = 0; f < c->nf; f++) {
+            if (c->fc_off[f + 1] - c->fc_off[f] < 2) continue;
+            if (!first) api_buf_putc(b, ',');
+            first = 0;
+            api_buf_putc(b, '"');
+            api_buf_u64(b, f);
+            api_buf_puts(b, "\":[");
+            for (size_t k = c->fc_off[f] + 1; k < c->fc_off[f + 1]; k++) {
+                if (k > c->fc_off[f] + 1) api_buf_putc(b, ',');
+                put_cycle(b, c, c->fc[k]);
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, '}');
+    }
+    if (fl & API_F3_CF) {
+        put_key(b, "CF");
+        put_signed_rows(b, c->cf_off, c->cf, c->nc);
+    }
+    if (fl & API_F3_CV) {
+        put_key(b, "CV");
+        api_buf_putc(b, '[');
+        for (size_t k = 0; k < c->nc; k++) {
+            if (k) api_buf_putc(b, ',');
+            put_u32_list(b, c->cv + c->cv_off[k], c->cv_off[k + 1] - c->cv_off[k]);
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fl & API_F3_EXTERIOR) {
+        put_key(b, "exterior");
+        put_i32_list(b, c->ext, c->next);
+    }
+    if (fl & API_F3_OPERATORS) {
+        put_key(b, "operators");
+        rc = put_operators(b, c, err);
+        if (rc != API_OK) return rc;
+    }
+    if (fl & API_F3_STATS) {
+        put_key(b, "stats");
+        put_stats(b, c, fmt);
+    }
+    api_buf_putc(b, '}');
+    if (b->failed) return api_fail(err, API_ENOMEM, "out of memory while writing the result");
+    return API_OK;
+}

@@ -1,0 +1,721 @@
+/* solids.c — the "solids" kind: the arrangement of 3D solids given as face models.
+ *
+ *   {"kind":"solids","solids":[{"V":[[x,y,z],...],"FV":[[v,...],...],"holes":{"f":[[v,...]]}},
+ *                              ...],"options":{...}}
+ *   {"kind":"solids","faces":{"V":...,"FV":...,"holes":...},"options":{...}}
+ *
+ * Exactly one of "solids" (closed surfaces, outward oriented: each face's outer cycle
+ * counter-clockwise seen from outside, its hole cycles clockwise) and "faces" (one face soup:
+ * no closedness, any orientation).  A face is a planar polygon: its outer cycle is a row of FV,
+ * its holes (if any) are holes."f", f the face's index in decimal (the result format's rule).
+ *
+ * Three steps, as api_int.h's api_kind asks:
+ *   parse   the shape of the request, with the JSON path of every problem (422): types, vertex
+ *           indices in range, finite coordinates, cycles of at least 3 indices, the limits below;
+ *           copies each solid into a `solid` (core/solid.h) so the JSON tree can be freed.
+ *   check   (the daemon's submit, and again at run) the geometry: solid_check() of each solid at
+ *           the run's precision, or for a soup the per-face checks of solid_check done here
+ *           (3 distinct vertices, non-zero area, planarity: the same tolerances), since a soup
+ *           need not be closed.  The first error is the 422, its message rewritten from
+ *           solid_check's "solids[2]: face 5: ..." to the JSON path "solids[2].FV[5]: ...".
+ *   run     check again keeping solid_check's fixed copies (orientation made consistent and
+ *           outward) and its warnings, arr3_build() them, write the complex (api/larjson3.c)
+ *           with the warnings in stats.warnings.
+ *
+ * The precision: options.precision, or else the rule of arr3.h's default (the power of two
+ * closest above extent * 2^-ARR3_GRID_BITS, extent the largest side of the box of every V),
+ * computed here and passed to the core, so the solids are checked at the grid step the core
+ * snaps them to.  A precision finer than extent * 2^-ARR3_GRID_BITS is refused at parse.
+ *
+ * solid_report does not say which of its messages are warnings; solid.c writes exactly two
+ * kinds, starting "orientation inconsistent" and "inward oriented" (is_warning() below), and
+ * the tests of this file pin them.
+ *
+ * Limits (422 naming the key): the #defines below; ARR3_MAX_FACES faces in all.
+ *
+ * Threads: reentrant, no globals.  Ownership: req is borrowed; a parsed request (*parsed)
+ * belongs to the caller, who frees it with api_solids_free().
+ */
+#include "api/api_int.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/arr3.h"
+#include "core/solid.h"
+
+#define SOLIDS_MAX_SOLIDS   100000u        /* entries of "solids" */
+#define SOLIDS_MAX_VERTICES 10000000u      /* rows of V, all solids together */
+#define SOLIDS_MAX_FACES    ARR3_MAX_FACES /* rows of FV, all solids together */
+#define SOLIDS_MAX_CYCLE    1000000u       /* vertex indices in one cycle */
+#define SOLIDS_MAX_INDICES  100000000u     /* vertex indices in all cycles together */
+#define SOLIDS_MAX_WARNINGS 64             /* stats.warnings: the last one counts those left out */
+#define GRID_LIMIT          4611686018427387904.0 /* 2^62: |x| / precision below (solid.c's) */
+#define WARN_LEN            200
+
+typedef struct solids_req {
+    solid *s; /* owned: ns solids; with soup, the face soup as s[0] (ns == 1) */
+    size_t ns;
+    int soup;         /* the request gave "faces" */
+    double precision; /* options.precision; 0: the default (precision_of) */
+    double extent;    /* largest side of the box of every vertex (0 without vertices) */
+    unsigned fields;  /* API_F3_* */
+} solids_req;
+
+typedef struct totals {
+    size_t nv, nf, nidx; /* rows of V, rows of FV, vertex indices in cycles, so far */
+} totals;
+
+typedef struct warn_list {
+    char msg[SOLIDS_MAX_WARNINGS][WARN_LEN];
+    const char *ptr[SOLIDS_MAX_WARNINGS]; /* msg[i], for api_lar3_fmt */
+    size_t n;                             /* kept */
+    size_t total;                         /* seen */
+} warn_list;
+
+/* ---- options --------------------------------------------------------------------------------- */
+
+static int parse_fields(const json_t *v, unsigned *out, api_error *err)
+{
+    size_t i;
+    json_t *name;
+    if (!json_is_array(v))
+        return api_fail(
+            err, API_EINVALID,
+            "options.fields: expected an array of names among \"V\", \"EV\", \"FV\", "
+            "\"FE\", \"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\"");
+    *out = 0;
+    json_array_foreach(v, i, name)
+    {
+        unsigned bit = 0;
+        for (unsigned k = 0; json_is_string(name) && k < API_NFIELDS3; k++)
+            if (strcmp(json_string_value(name), api_field3_names[k]) == 0) bit = 1u << k;
+        if (!bit)
+            return api_fail(err, API_EINVALID,
+                            "options.fields[%zu]: expected one of \"V\", \"EV\", \"FV\", \"FE\", "
+                            "\"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\"",
+                            i);
+        *out |= bit;
+    }
+    return API_OK;
+}
+
+static int parse_options(const json_t *o, solids_req *r, api_error *err)
+{
+    const char *key;
+    json_t *v;
+    int operators = 0;
+    r->fields = API_F3_DEFAULT;
+    if (!o) return API_OK;
+    if (!json_is_object(o)) return api_fail(err, API_EINVALID, "options: expected an object");
+    json_object_foreach((json_t *)o, key, v)
+    {
+        if (strcmp(key, "precision") == 0) {
+            if (!json_is_number(v) || !(json_number_value(v) > 0) ||
+                !isfinite(json_number_value(v)))
+                return api_fail(err, API_EINVALID, "options.precision: expected a number > 0");
+            r->precision = json_number_value(v);
+        } else if (strcmp(key, "operators") == 0) {
+            if (!json_is_boolean(v))
+                return api_fail(err, API_EINVALID, "options.operators: expected true or false");
+            operators = json_is_true(v);
+        } else if (strcmp(key, "fields") == 0) {
+            int rc = parse_fields(v, &r->fields, err);
+            if (rc != API_OK) return rc;
+        } else {
+            return api_fail(err, API_EINVALID,
+                            "options.%.64s: unknown option (expected precision, operators or "
+                            "fields)",
+                            key);
+        }
+    }
+    if (operators) r->fields |= API_F3_OPERATORS;
+    return API_OK;
+}
+
+/* ---- the geometry, copied ------------------------------------------------------------------- */
+
+/* A key of "holes": canonical decimal ("0", "17"; no sign, no leading zero) below nf. */
+static int face_key(const char *key, size_t nf, size_t *out)
+{
+    size_t v = 0, n = strlen(key);
+    if (n == 0 || n > 12 || (n > 1 && key[0] == '0')) return 0;
+    for (size_t i = 0; i < n; i++) {
+        if (key[i] < '0' || key[i] > '9') return 0;
+        v = v * 10 + (size_t)(key[i] - '0');
+    }
+    *out = v;
+    return v < nf;
+}
+
+/* Writes the JSON path of cycle FV[f], or holes.key[h] when key is not NULL, of the solid at
+ * path into where. */
+static const char *cycle_path(char *where, size_t cap, const char *path, size_t f, const char *key,
+                              size_t h)
+{
+    if (key)
+        snprintf(where, cap, "%s.holes.%s[%zu]", path, key, h);
+    else
+        snprintf(where, cap, "%s.FV[%zu]", path, f);
+    return where;
+}
+
+/* Checks one cycle (FV[f], or holes.key[h] when key is not NULL) of a solid with nv vertices;
+ * copies its indices to out when out is not NULL. */
+static int read_cycle(const json_t *row, size_t nv, uint32_t *out, const char *path, size_t f,
+                      const char *key, size_t h, api_error *err)
+{
+    char w[160];
+    size_t n = json_array_size(row);
+    if (!json_is_array(row))
+        return api_fail(err, API_EINVALID, "%s: expected an array of vertex indices",
+                        cycle_path(w, sizeof w, path, f, key, h));
+    if (n < 3)
+        return api_fail(err, API_EINVALID, "%s: expected at least 3 vertex indices, got %zu",
+                        cycle_path(w, sizeof w, path, f, key, h), n);
+    if (n > SOLIDS_MAX_CYCLE)
+        return api_fail(err, API_EINVALID, "%s: %zu vertex indices, at most %u in one cycle",
+                        cycle_path(w, sizeof w, path, f, key, h), n, SOLIDS_MAX_CYCLE);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *v = json_array_get(row, i);
+        json_int_t k = json_is_integer(v) ? json_integer_value(v) : -1;
+        if (nv == 0)
+            return api_fail(err, API_EINVALID, "%s[%zu]: a vertex index, but V is empty",
+                            cycle_path(w, sizeof w, path, f, key, h), i);
+        if (k < 0 || (uint64_t)k >= nv)
+            return api_fail(err, API_EINVALID,
+                            "%s[%zu]: expected a vertex index, an integer from 0 to %zu "
+                            "(V has %zu rows)",
+                            cycle_path(w, sizeof w, path, f, key, h), i, nv - 1, nv);
+        if (out) out[i] = (uint32_t)k;
+    }
+    return API_OK;
+}
+
+/* The holes of face f (a JSON array, checked) or NULL. */
+static const json_t *holes_of(const json_t *holes, size_t f)
+{
+    char k[24];
+    if (!holes) return NULL;
+    snprintf(k, sizeof k, "%zu", f);
+    return json_object_get(holes, k);
+}
+
+/* Reads o, the solid at path ("solids[2]", or "faces" for a soup), into *out. */
+static int parse_solid(const json_t *o, const char *path, int soup, totals *tot, solid *out,
+                       api_error *err)
+{
+    const json_t *V, *FV, *holes, *val;
+    const char *key;
+    size_t nv, nf, ncyc, nidx = 0, c, w;
+    if (!json_is_object(o))
+        return api_fail(err, API_EINVALID,
+                        "%s: expected an object {\"V\": [[x, y, z], ...], \"FV\": [[v, ...], "
+                        "...]}",
+                        path);
+    json_object_foreach((json_t *)o, key, val)
+    {
+        if (strcmp(key, "V") && strcmp(key, "FV") && strcmp(key, "holes"))
+            return api_fail(err, API_EINVALID, "%s.%.64s: unknown key (expected V, FV or holes)",
+                            path, key);
+    }
+    V = json_object_get(o, "V");
+    FV = json_object_get(o, "FV");
+    holes = json_object_get(o, "holes");
+    if (!V) return api_fail(err, API_EINVALID, "%s.V: required, an array of [x, y, z]", path);
+    if (!json_is_array(V))
+        return api_fail(err, API_EINVALID, "%s.V: expected an array of [x, y, z]", path);
+    nv = json_array_size(V);
+    if (nv > SOLIDS_MAX_VERTICES - tot->nv)
+        return api_fail(err, API_EINVALID, "%s.V: %zu vertices in all, at most %u allowed", path,
+                        tot->nv + nv, SOLIDS_MAX_VERTICES);
+    if (!FV)
+        return api_fail(err, API_EINVALID,
+                        "%s.FV: required, an array of faces (cycles of vertex indices)", path);
+    if (!json_is_array(FV))
+        return api_fail(err, API_EINVALID,
+                        "%s.FV: expected an array of faces (cycles of vertex indices)", path);
+    nf = json_array_size(FV);
+    if (nf > SOLIDS_MAX_FACES - tot->nf)
+        return api_fail(err, API_EINVALID, "%s.FV: %zu faces in all, at most %u allowed", path,
+                        tot->nf + nf, (unsigned)SOLIDS_MAX_FACES);
+    if (nf == 0 && !soup)
+        return api_fail(err, API_EINVALID,
+                        "%s.FV: expected the faces of a closed surface, got none", path);
+    for (size_t v = 0; v < nv; v++) {
+        const json_t *p = json_array_get(V, v);
+        if (!json_is_array(p) || json_array_size(p) != 3)
+            return api_fail(err, API_EINVALID, "%s.V[%zu]: expected 3 finite numbers [x, y, z]",
+                            path, v);
+        for (size_t a = 0; a < 3; a++) {
+            const json_t *x = json_array_get(p, a);
+            if (!json_is_number(x) || !isfinite(json_number_value(x)))
+                return api_fail(err, API_EINVALID, "%s.V[%zu][%zu]: expected a finite number", path,
+                                v, a);
+        }
+    }
+    /* shapes and sizes of every cycle, before anything is allocated */
+    ncyc = nf;
+    for (size_t f = 0; f < nf; f++) {
+        int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
+        if (rc != API_OK) return rc;
+        nidx += json_array_size(json_array_get(FV, f));
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    if (holes) {
+        if (!json_is_object(holes))
+            return api_fail(err, API_EINVALID,
+                            "%s.holes: expected an object {\"f\": [[v, ...], ...]} keyed by face "
+                            "index",
+                            path);
+        json_object_foreach((json_t *)holes, key, val)
+        {
+            size_t f;
+            if (!face_key(key, nf, &f))
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
+                                "rows of FV)",
+                                path, key, nf);
+            if (!json_is_array(val) || json_array_size(val) == 0)
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%s: expected a non-empty array of cycles", path, key);
+            for (size_t h = 0; h < json_array_size(val); h++) {
+                int rc = read_cycle(json_array_get(val, h), nv, NULL, path, f, key, h, err);
+                if (rc != API_OK) return rc;
+                nidx += json_array_size(json_array_get(val, h));
+                if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+                ncyc++;
+            }
+        }
+    }
+    /* copy */
+    out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
+    out->face_off = malloc((nf + 1) * sizeof *out->face_off);
+    out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
+    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
+        solid_free(out);
+        return api_fail(err, API_ENOMEM, "out of memory for %s", path);
+    }
+    out->nv = nv;
+    out->nf = nf;
+    out->ncyc = ncyc;
+    for (size_t v = 0; v < nv; v++)
+        for (size_t a = 0; a < 3; a++)
+            out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
+    c = w = 0;
+    for (size_t f = 0; f < nf; f++) {
+        const json_t *row = json_array_get(FV, f), *hs = holes_of(holes, f);
+        out->face_off[f] = (uint32_t)c;
+        out->cyc_off[c++] = (uint32_t)w;
+        read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
+        w += json_array_size(row);
+        for (size_t h = 0; h < json_array_size(hs); h++) {
+            row = json_array_get(hs, h);
+            out->cyc_off[c++] = (uint32_t)w;
+            read_cycle(row, nv, out->cyc + w, path, f, "", h, NULL);
+            w += json_array_size(row);
+        }
+    }
+    out->face_off[nf] = (uint32_t)c;
+    out->cyc_off[c] = (uint32_t)w;
+    if (c != ncyc || w != nidx) { /* cannot happen: the keys were checked canonical and < nf */
+        solid_free(out);
+        return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
+    }
+    tot->nv += nv;
+    tot->nf += nf;
+    tot->nidx += nidx;
+    return API_OK;
+too_many:
+    return api_fail(err, API_EINVALID, "%s: %zu vertex indices in the cycles in all, at most %u",
+                    path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
+}
+
+/* Largest side of the box of every vertex of every solid. */
+static double extent_of(const solids_req *r)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double e = 0;
+    for (size_t i = 0; i < r->ns; i++)
+        for (size_t v = 0; v < r->s[i].nv; v++)
+            for (int a = 0; a < 3; a++) {
+                double x = r->s[i].V[3 * v + a];
+                lo[a] = x < lo[a] ? x : lo[a];
+                hi[a] = x > hi[a] ? x : hi[a];
+            }
+    for (int a = 0; a < 3; a++)
+        if (hi[a] >= lo[a] && hi[a] - lo[a] > e) e = hi[a] - lo[a];
+    return isfinite(e) ? e : DBL_MAX;
+}
+
+/* The grid step of the run: the option, or arr3.h's default rule. */
+static double precision_of(const solids_req *r)
+{
+    double x;
+    int ex;
+    if (r->precision > 0) return r->precision;
+    if (!(r->extent > 0)) return 1; /* no extent: nothing to snap; any step checks the same */
+    x = ldexp(r->extent, -ARR3_GRID_BITS);
+    if (!(x > 0)) return DBL_TRUE_MIN;
+    return frexp(x, &ex) == 0.5 ? x : ldexp(1.0, ex);
+}
+
+void api_solids_free(void *parsed)
+{
+    solids_req *r = parsed;
+    if (!r) return;
+    for (size_t i = 0; i < r->ns; i++) solid_free(&r->s[i]);
+    free(r->s);
+    free(r);
+}
+
+int api_solids_parse(const json_t *req, void **parsed, api_error *err)
+{
+    const json_t *solids, *faces;
+    const char *key;
+    json_t *val;
+    solids_req *r;
+    totals tot = {0};
+    int rc;
+    *parsed = NULL;
+    json_object_foreach((json_t *)req, key, val)
+    {
+        if (strcmp(key, "kind") && strcmp(key, "solids") && strcmp(key, "faces") &&
+            strcmp(key, "options"))
+            return api_fail(err, API_EINVALID,
+                            "%.64s: unknown key (expected kind, solids or faces, and options)",
+                            key);
+    }
+    solids = json_object_get(req, "solids");
+    faces = json_object_get(req, "faces");
+    if (solids && faces)
+        return api_fail(err, API_EINVALID,
+                        "faces: not with \"solids\": give either solids (closed surfaces) or "
+                        "faces (one face soup)");
+    if (!solids && !faces)
+        return api_fail(err, API_EINVALID,
+                        "solids: required, an array of solids (or \"faces\": one face soup)");
+    r = calloc(1, sizeof *r);
+    if (!r) return api_fail(err, API_ENOMEM, "out of memory");
+    rc = parse_options(json_object_get(req, "options"), r, err);
+    if (rc != API_OK) goto fail;
+    if (solids) {
+        size_t n = json_array_size(solids);
+        if (!json_is_array(solids)) {
+            rc = api_fail(err, API_EINVALID,
+                          "solids: expected an array of solids {\"V\": ..., \"FV\": ...}");
+            goto fail;
+        }
+        if (n > SOLIDS_MAX_SOLIDS) {
+            rc = api_fail(err, API_EINVALID, "solids: %zu solids, at most %u allowed", n,
+                          SOLIDS_MAX_SOLIDS);
+            goto fail;
+        }
+        r->s = calloc(n ? n : 1, sizeof *r->s);
+        if (!r->s) {
+            rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", n);
+            goto fail;
+        }
+        r->ns = n;
+        for (size_t i = 0; i < n; i++) {
+            char path[32];
+            snprintf(path, sizeof path, "solids[%zu]", i);
+            rc = parse_solid(json_array_get(solids, i), path, 0, &tot, &r->s[i], err);
+            if (rc != API_OK) goto fail;
+        }
+    } else {
+        r->soup = 1;
+        r->s = calloc(1, sizeof *r->s);
+        if (!r->s) {
+            rc = api_fail(err, API_ENOMEM, "out of memory");
+            goto fail;
+        }
+        r->ns = 1;
+        rc = parse_solid(faces, "faces", 1, &tot, &r->s[0], err);
+        if (rc != API_OK) goto fail;
+    }
+    r->extent = extent_of(r);
+    if (r->precision > 0 && !(r->extent / r->precision <= ldexp(1.0, ARR3_GRID_BITS))) {
+        rc = api_fail(err, API_EINVALID,
+                      "options.precision: %g is finer than the input allows: its extent %g "
+                      "divided by the precision must be at most 2^%d",
+                      r->precision, r->extent, ARR3_GRID_BITS);
+        goto fail;
+    }
+    *parsed = r;
+    return API_OK;
+fail:
+    api_solids_free(r);
+    return rc;
+}
+
+/* ---- the geometry, checked ------------------------------------------------------------------ */
+
+/* The text of a solid_check message after its "label: " (msg itself when it has none). */
+static const char *after_label(const char *msg, const char *label)
+{
+    size_t n = strlen(label);
+    if (strncmp(msg, label, n) == 0 && msg[n] == ':' && msg[n + 1] == ' ') return msg + n + 2;
+    return msg;
+}
+
+static int is_warning(const char *text)
+{
+    return strncmp(text, "orientation inconsistent", 24) == 0 ||
+           strncmp(text, "inward oriented", 15) == 0;
+}
+
+/* "face 5: rest" -> "<label>.FV[5]: rest", "vertex 7: rest" -> "<label>.V[7]: rest",
+ * anything else -> "<label>: text". */
+static void json_path_message(const char *label, const char *text, char *out, size_t cap)
+{
+    static const struct {
+        const char *word, *key;
+    } map[] = {{"face ", "FV"}, {"vertex ", "V"}};
+    for (size_t m = 0; m < sizeof map / sizeof *map; m++) {
+        size_t n = strlen(map[m].word), d = 0;
+        if (strncmp(text, map[m].word, n) != 0) continue;
+        while (text[n + d] >= '0' && text[n + d] <= '9' && d < 12) d++;
+        if (d == 0 || text[n + d] != ':' || text[n + d + 1] != ' ') continue;
+        snprintf(out, cap, "%s.%s[%.*s]: %s", label, map[m].key, (int)d, text + n,
+                 text + n + d + 2);
+        return;
+    }
+    snprintf(out, cap, "%s: %s", label, text);
+}
+
+static void warn_add(warn_list *w, const char *label, const char *text)
+{
+    w->total++;
+    if (w->n < SOLIDS_MAX_WARNINGS - 1) {
+        json_path_message(label, text, w->msg[w->n], WARN_LEN);
+        w->ptr[w->n] = w->msg[w->n];
+        w->n++;
+    }
+}
+
+/* Closes the list: when some were left out, the last entry counts them. */
+static void warn_finish(warn_list *w)
+{
+    if (w->total > w->n) {
+        snprintf(w->msg[w->n], WARN_LEN, "%zu more warnings left out", w->total - w->n);
+        w->ptr[w->n] = w->msg[w->n];
+        w->n++;
+    }
+}
+
+/* solid_check of solids[i]; the fixed copy into *fixed (may be NULL), warnings into w (may be
+ * NULL). */
+static int check_solid(const solid *s, size_t i, double p, solid *fixed, warn_list *w,
+                       api_error *err)
+{
+    char label[32], where[API_ERRMAX];
+    solid_report *rep = malloc(sizeof *rep);
+    const char *first = NULL;
+    int rc = API_OK;
+    if (!rep) return api_fail(err, API_ENOMEM, "out of memory");
+    snprintf(label, sizeof label, "solids[%zu]", i);
+    if (solid_check(s, p, label, rep, fixed) == 0) {
+        for (size_t m = 0; w && m < rep->nmsg; m++)
+            warn_add(w, label, after_label(rep->msg[m], label));
+        if (w) w->total += rep->warnings > rep->nmsg ? rep->warnings - rep->nmsg : 0;
+        goto out;
+    }
+    for (size_t m = 0; m < rep->nmsg && !first; m++)
+        if (!is_warning(after_label(rep->msg[m], label))) first = after_label(rep->msg[m], label);
+    if (!first) first = "invalid solid";
+    if (strstr(first, "out of memory")) {
+        rc = api_fail(err, API_ENOMEM, "out of memory while checking %s", label);
+        goto out;
+    }
+    json_path_message(label, first, where, sizeof where);
+    if (rep->errors > 1)
+        rc = api_fail(err, API_EINVALID, "%s (and %zu more errors in %s)", where, rep->errors - 1,
+                      label);
+    else
+        rc = api_fail(err, API_EINVALID, "%s", where);
+out:
+    free(rep);
+    return rc;
+}
+
+static void sub3(const double *a, const double *b, double *d)
+{
+    d[0] = a[0] - b[0];
+    d[1] = a[1] - b[1];
+    d[2] = a[2] - b[2];
+}
+
+/* Distinct grid points among the vertices of cycle k of s, counted up to 3. */
+static int cycle_distinct(const solid *s, const int64_t *g, size_t k)
+{
+    const int64_t *u0 = NULL, *u1 = NULL;
+    for (uint32_t i = s->cyc_off[k]; i < s->cyc_off[k + 1]; i++) {
+        const int64_t *u = g + 3 * (size_t)s->cyc[i];
+        if (!u0) {
+            u0 = u;
+        } else if (memcmp(u, u0, 3 * sizeof *u) && (!u1 || memcmp(u, u1, 3 * sizeof *u))) {
+            if (u1) return 3;
+            u1 = u;
+        }
+    }
+    return u0 ? (u1 ? 2 : 1) : 0;
+}
+
+/* The per-face checks of solid_check (solid.c's stage "faces", same tolerances) on a soup. */
+static int check_soup(const solid *s, double p, api_error *err)
+{
+    int64_t *g = malloc((s->nv ? 3 * s->nv : 1) * sizeof *g);
+    const double *V = s->V;
+    int rc = API_OK;
+    if (!g) return api_fail(err, API_ENOMEM, "out of memory while checking the faces");
+    for (size_t v = 0; v < s->nv; v++)
+        for (int a = 0; a < 3; a++) {
+            double x = V[3 * v + a];
+            if (!(fabs(x) / p < GRID_LIMIT)) {
+                rc = api_fail(err, API_EINVALID,
+                              "faces.V[%zu][%d]: %.17g is too large for the precision %g", v, a, x,
+                              p);
+                goto out;
+            }
+            g[3 * v + a] = (int64_t)floor(x / p + 0.5);
+        }
+    for (size_t f = 0; f < s->nf; f++) {
+        size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
+        for (size_t k = k0; k < k1; k++)
+            if (cycle_distinct(s, g, k) < 3) {
+                if (k == k0)
+                    rc = api_fail(err, API_EINVALID,
+                                  "faces.FV[%zu]: fewer than 3 distinct vertices (at precision "
+                                  "%g)",
+                                  f, p);
+                else
+                    rc = api_fail(err, API_EINVALID,
+                                  "faces.holes.%zu[%zu]: fewer than 3 distinct vertices (at "
+                                  "precision %g)",
+                                  f, k - k0 - 1, p);
+                goto out;
+            }
+        /* Newell normal of the outer cycle about its first vertex */
+        uint32_t lo = s->cyc_off[k0], hi = s->cyc_off[k0 + 1];
+        const double *o = V + 3 * (size_t)s->cyc[lo];
+        double n[3] = {0, 0, 0}, bmin[3], bmax[3], m[3] = {0, 0, 0}, worst = 0, len, diag;
+        uint32_t wv = 0;
+        for (int a = 0; a < 3; a++) bmin[a] = bmax[a] = o[a];
+        for (uint32_t i = lo; i < hi; i++) {
+            const double *x = V + 3 * (size_t)s->cyc[i];
+            const double *y = V + 3 * (size_t)s->cyc[i + 1 < hi ? i + 1 : lo];
+            double dx[3], dy[3];
+            sub3(x, o, dx);
+            sub3(y, o, dy);
+            n[0] += dx[1] * dy[2] - dx[2] * dy[1];
+            n[1] += dx[2] * dy[0] - dx[0] * dy[2];
+            n[2] += dx[0] * dy[1] - dx[1] * dy[0];
+            for (int a = 0; a < 3; a++) {
+                bmin[a] = x[a] < bmin[a] ? x[a] : bmin[a];
+                bmax[a] = x[a] > bmax[a] ? x[a] : bmax[a];
+            }
+        }
+        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        diag = sqrt((bmax[0] - bmin[0]) * (bmax[0] - bmin[0]) +
+                    (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
+                    (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
+        if (!(len / 2 > p * diag / 2)) {
+            rc = api_fail(err, API_EINVALID,
+                          "faces.FV[%zu]: zero area (%.3g, no wider than the precision %g)", f,
+                          len / 2, p);
+            goto out;
+        }
+        /* the plane through the mean of all the face's vertices */
+        size_t cnt = s->cyc_off[k1] - s->cyc_off[k0];
+        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
+            double d[3];
+            sub3(V + 3 * (size_t)s->cyc[i], o, d);
+            for (int a = 0; a < 3; a++) m[a] += d[a];
+        }
+        for (int a = 0; a < 3; a++) m[a] = o[a] + m[a] / (double)cnt;
+        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
+            double d[3], dist;
+            sub3(V + 3 * (size_t)s->cyc[i], m, d);
+            dist = fabs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len;
+            if (dist > worst) worst = dist, wv = s->cyc[i];
+        }
+        if (worst > p) {
+            rc = api_fail(err, API_EINVALID,
+                          "faces.FV[%zu]: not planar (vertex %u is %.3g from its plane, "
+                          "precision %g)",
+                          f, wv, worst, p);
+            goto out;
+        }
+    }
+out:
+    free(g);
+    return rc;
+}
+
+/* Checks the geometry at precision p; fixed (ns entries, may be NULL) gets solid_check's fixed
+ * copies, w (may be NULL) the warnings. */
+static int validate(const solids_req *r, double p, solid *fixed, warn_list *w,
+                    const atomic_int *cancel, api_error *err)
+{
+    if (r->soup) return check_soup(&r->s[0], p, err);
+    for (size_t i = 0; i < r->ns; i++) {
+        int rc;
+        if (cancel && atomic_load(cancel)) return api_fail(err, API_ECANCELED, "canceled");
+        rc = check_solid(&r->s[i], i, p, fixed ? &fixed[i] : NULL, w, err);
+        if (rc != API_OK) return rc;
+    }
+    return API_OK;
+}
+
+int api_solids_check(const void *parsed, api_error *err)
+{
+    const solids_req *r = parsed;
+    return validate(r, precision_of(r), NULL, NULL, NULL, err);
+}
+
+int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+{
+    static const solid no_solid;
+    const solids_req *r = parsed;
+    double p = precision_of(r);
+    arr3_opts ao = {.precision = p,
+                    .threads = ro->threads,
+                    .cancel = ro->cancel,
+                    .progress = ro->progress,
+                    .udata = ro->udata};
+    solid *fixed = NULL;
+    warn_list *w = calloc(1, sizeof *w);
+    lar3 c = {0};
+    char msg[API_ERRMAX] = "";
+    int rc;
+    if (!w) return api_fail(err, API_ENOMEM, "out of memory");
+    if (ro->progress) ro->progress(ro->udata, "check", 0);
+    if (!r->soup && !(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed))) {
+        rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+        goto out;
+    }
+    rc = validate(r, p, fixed, w, ro->cancel, err);
+    if (rc != API_OK) goto out;
+    warn_finish(w);
+    if (r->soup)
+        rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
+    else
+        rc = arr3_build(r->ns ? fixed : &no_solid, r->ns, 0, &ao, &c, msg, sizeof msg);
+    if (rc != ARR_OK) {
+        rc = api_core_fail(err, rc, msg);
+        goto out;
+    }
+    api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
+    rc = api_lar3_write(out, &c, &fmt, err);
+out:
+    lar3_free(&c);
+    for (size_t i = 0; fixed && i < r->ns; i++) solid_free(&fixed[i]);
+    free(fixed);
+    free(w);
+    return rc;
+}

@@ -1,5 +1,5 @@
 /* render.h — pictures and maps of a 2D result (issue "pictures out"): LAR JSON in, SVG or
- * GeoJSON out.
+ * GeoJSON out; and meshes of a 3D result: Wavefront OBJ (render_obj, see below).
  *
  * Both renderers read a result as api_run_json() writes it (DESIGN.md "LAR JSON"): "dim" must be
  * 2; "V" and "FV" are required; "holes" and "EV" are optional.  The bounded faces are the rows of
@@ -80,6 +80,18 @@ int render_svg(const char *result_json, size_t len, const render_opts *o, char *
 /* Writes the bounded faces of the 2D result result_json[0..len) as a GeoJSON FeatureCollection
  * (one line, ending in "\n").  Returns API_OK, API_EINVALID or API_ENOMEM as render_svg(). */
 int render_geojson(const char *result_json, size_t len, char **out, size_t *outlen, api_error *err);
+
+/* Writes the bounded cells of the 3D result result_json[0..len) (dim 3; "V", "FV" and "CF"
+ * required, "holes" optional) as Wavefront OBJ (api/render_obj.c): a comment line, every
+ * vertex as "v x y z", then per cell "g cellN" and its faces triangulated ("f a b c", 1-based),
+ * each triangle facing out of the cell (a face listed -(f+1) in CF is reversed).  Faces may be
+ * non-convex and have holes.  With o->explode = k > 1 each cell is moved by (k - 1) * (its
+ * centroid - the centre of the box of V) and writes its own vertices (all of them first, cell
+ * by cell, then the groups).  Only o->explode is read (o may be NULL: the defaults).  Returns
+ * API_OK, API_EINVALID (a result it cannot read: the message names the JSON path, "CF[2][0]:
+ * ...", "dim: expected 3 ..."; explode out of range) or API_ENOMEM. */
+int render_obj(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
 
 /* Options from a URL's query, one parameter at a time (already percent-decoded, as
  * libmicrohttpd's MHD_get_connection_values gives them):

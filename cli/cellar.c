@@ -7,13 +7,19 @@
  *                                    the same for the request {"kind":"svg","svg":<the file>,
  *                                    "options":{...}} (the flags set options; --options gives
  *                                    the others)
+ *   cellar solids A.obj B.off ... [--faces] [--precision X] [--options JSON]
+ *                                    the same for the request {"kind":"solids","solids":[...]}
+ *                                    of the solids read from the files (.obj or .off by the
+ *                                    extension, "-": standard input as OBJ), or with --faces
+ *                                    {"kind":"solids","faces":{...}}: all their faces as one
+ *                                    soup; --format obj writes the cells as a Wavefront OBJ
  *   cellar gen lines N SCALING SEED  N random segments, as the seeds' randomLines(N, scaling)
  *   cellar gen grid K                K horizontal and K vertical segments: (K-1)^2 faces
  *
  * Exit status: 0 success, 1 the request failed (message "cellar: <where>: <what>" on stderr:
  * malformed or hostile SVG is "cellar: svg: line L, column C: ...") or an I/O error, 2 a usage
- * error.  Options (anywhere on the line): --threads N, --options JSON (gen, svg: the request's
- * "options"), the svg flags, --help, --version.
+ * error.  Options (anywhere on the line): --threads N, --options JSON (gen, svg, solids: the
+ * request's "options"), the svg and solids flags, --format, --help, --version.
  *
  * The random generator is our own (xoshiro256** seeded by splitmix64) and the arithmetic is
  * written one operation per statement (no contraction into fused multiply-adds), so that a seed
@@ -26,6 +32,7 @@
 #include "api/api.h"
 #include "api/render.h"
 #include "core/arr2.h"
+#include "core/solid.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -34,6 +41,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #define EXIT_USAGE 2
 
@@ -55,18 +63,28 @@ static const char usage_text[] =
     "             [--keep-dangling] [--flatten-tolerance X] [--options JSON]\n"
     "                                  the complex of an SVG drawing (\"-\": standard input):\n"
     "                                  runs {\"kind\":\"svg\",\"svg\":...,\"options\":...}\n"
+    "  cellar solids A.obj B.off ... [--faces] [--precision X] [--options JSON]\n"
+    "                                  the arrangement of the solids in the files (Wavefront\n"
+    "                                  OBJ or OFF by the extension, \"-\": OBJ on standard "
+    "input),\n"
+    "                                  each a closed surface: runs {\"kind\":\"solids\",\n"
+    "                                  \"solids\":[...]}; --faces: all their faces as one soup\n"
     "\n"
     "options:\n"
     "  --threads N       worker threads of the core (default 0: one per CPU)\n"
-    "  --options JSON    gen, svg: a JSON object used as the request's \"options\", e.g.\n"
+    "  --options JSON    gen, svg, solids: a JSON object used as the request's \"options\",\n"
+    "                    e.g.\n"
     "                    '{\"precision\":1e-6,\"fields\":[\"V\",\"EV\",\"stats\"]}'\n"
     "  svg: --normalize (into the unit square, y up), --y-up (y' = -y), --rect-diagonal\n"
     "       (a rect is its diagonal), --precision X (grid step), --keep-dangling,\n"
     "       --flatten-tolerance X (curves, in drawing units): the options of the same names\n"
-    "  run, svg: --format json|svg|geojson   the result JSON (default), a picture of it (SVG:\n"
-    "       faces filled, edges, y up) or a map (GeoJSON FeatureCollection of the faces);\n"
-    "       with svg: --explode K (faces moved apart, K >= 1), --numbers (vertex and face\n"
-    "       numbers), --width PX\n"
+    "  solids: --precision X (grid step), --faces (one face soup: no closedness)\n"
+    "  run, svg, solids: --format json|svg|geojson|obj   the result JSON (default), a picture\n"
+    "       of a 2D result (SVG: faces filled, edges, y up), a map of it (GeoJSON\n"
+    "       FeatureCollection of the faces) or the cells of a 3D result (Wavefront OBJ: a group\n"
+    "       per cell, faces triangulated facing out); with svg: --explode K (faces moved apart,\n"
+    "       K >= 1), --numbers (vertex and face numbers), --width PX; with obj: --explode K\n"
+    "       (cells moved apart)\n"
     "  --help            this text\n"
     "  --version         the version\n"
     "\n"
@@ -366,11 +384,13 @@ fail:
     return NULL;
 }
 
-/* What run and svg print: the result JSON, or a picture or map of it (api/render.h). */
+/* What run, svg and solids print: the result JSON, or a picture, map or mesh of it
+ * (api/render.h). */
 typedef struct out_format {
-    int kind; /* 0 json, 1 svg, 2 geojson */
+    int kind; /* 0 json, 1 svg, 2 geojson, 3 obj */
     render_opts ro;
-    const char *first; /* the first rendering flag given, for "needs --format svg" errors */
+    const char *first;   /* the first SVG-only flag given, for "is for --format svg" errors */
+    const char *explode; /* --explode when given: for --format svg or obj */
 } out_format;
 
 /* Writes the result (or its rendering) to stdout; returns the exit status. */
@@ -385,6 +405,10 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
     }
     if (of->kind == 2 && render_geojson(out, outlen, &pic, &piclen, &err) != API_OK) {
         fprintf(stderr, "cellar: --format geojson: %s\n", err.msg);
+        return 1;
+    }
+    if (of->kind == 3 && render_obj(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
+        fprintf(stderr, "cellar: --format obj: %s\n", err.msg);
         return 1;
     }
     fwrite(pic ? pic : out, 1, pic ? piclen : outlen, stdout);
@@ -416,11 +440,13 @@ static int run(char **pos, int npos, int threads, const out_format *of)
     return rc;
 }
 
-/* The svg command's flags: each sets the request option of the same name. */
+/* The svg and solids commands' flags: each sets the request option of the same name, but
+ * --faces, which makes the solids one face soup. */
 typedef struct svg_flags {
     int normalize, y_up, rect_diagonal, keep_dangling;
     double precision, tolerance; /* 0: not given */
-    const char *first;           /* the first flag given (for "is for svg" errors), or NULL */
+    const char *first;           /* the first svg-only flag given (for "is for svg" errors) */
+    int faces;                   /* solids --faces */
 } svg_flags;
 
 /* Parses a number > 0 for flag; returns 0 on success. */
@@ -500,6 +526,173 @@ out:
     return rc;
 }
 
+/* ---- solids ----------------------------------------------------------------------------- */
+
+/* Writes the cycle c of s (indices shifted by off) as a JSON array. */
+static void put_cycle(FILE *f, const solid *s, size_t c, size_t off)
+{
+    fputc('[', f);
+    for (uint32_t i = s->cyc_off[c]; i < s->cyc_off[c + 1]; i++)
+        fprintf(f, i > s->cyc_off[c] ? ",%zu" : "%zu", (size_t)s->cyc[i] + off);
+    fputc(']', f);
+}
+
+/* Writes {"V":[...],"FV":[...],"holes":{...}} of the n solids s as one (their vertices one
+ * after the other): one solid, or with n > 1 the face soup of them all. */
+static void put_solid_json(FILE *f, const solid *s, size_t n)
+{
+    size_t off = 0, face = 0;
+    int first = 1;
+    fputs("{\"V\":[", f);
+    for (size_t k = 0; k < n; k++)
+        for (size_t v = 0; v < s[k].nv; v++) {
+            fputs(first ? "[" : ",[", f);
+            first = 0;
+            for (int a = 0; a < 3; a++) {
+                if (a) fputc(',', f);
+                put_double(f, s[k].V[3 * v + a]);
+            }
+            fputc(']', f);
+        }
+    fputs("],\"FV\":[", f);
+    first = 1;
+    for (size_t k = 0; k < n; off += s[k].nv, k++)
+        for (size_t g = 0; g < s[k].nf; g++) {
+            if (!first) fputc(',', f);
+            first = 0;
+            put_cycle(f, &s[k], s[k].face_off[g], off);
+        }
+    fputs("],\"holes\":{", f);
+    first = 1;
+    off = 0;
+    for (size_t k = 0; k < n; off += s[k].nv, k++)
+        for (size_t g = 0; g < s[k].nf; g++, face++) {
+            if (s[k].face_off[g + 1] - s[k].face_off[g] < 2) continue;
+            fprintf(f, first ? "\"%zu\":[" : ",\"%zu\":[", face);
+            first = 0;
+            for (size_t c = s[k].face_off[g] + 1; c < s[k].face_off[g + 1]; c++) {
+                if (c > s[k].face_off[g] + 1) fputc(',', f);
+                put_cycle(f, &s[k], c, off);
+            }
+            fputc(']', f);
+        }
+    fputs("}}", f);
+}
+
+/* The reader of a file by its extension: 1 OBJ, 2 OFF, 0 neither. */
+static int solid_format(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (strcmp(path, "-") == 0) return 1;
+    if (!dot || strchr(dot, '/')) return 0;
+    if (strcasecmp(dot, ".obj") == 0) return 1;
+    if (strcasecmp(dot, ".off") == 0) return 2;
+    return 0;
+}
+
+/* cellar solids FILE...: the request {"kind":"solids",...} of the solids the files hold, run as
+ * `cellar run` runs it. */
+static int solids_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
+                          int threads, const out_format *of)
+{
+    size_t n = npos > 1 ? (size_t)npos - 1 : 0, blen = 0, outlen;
+    solid *sv = NULL;
+    char *body = NULL, *out = NULL, rerr[256];
+    json_t *opts = NULL;
+    json_error_t je;
+    api_error err;
+    FILE *m = NULL;
+    int rc = 1;
+    if (n == 0)
+        return usage_error("%s", "solids takes one or more files (.obj, .off, - for stdin)");
+    for (size_t i = 0; i < n; i++)
+        if (!solid_format(pos[i + 1]))
+            return usage_error("solids: \"%s\": expected a .obj or .off file (or - for OBJ on "
+                               "standard input)",
+                               pos[i + 1]);
+    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
+    if (!opts || !json_is_object(opts)) {
+        if (opts || !options_text)
+            fprintf(stderr, "cellar: --options: expected a JSON object\n");
+        else
+            fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column,
+                    je.text);
+        json_decref(opts);
+        return EXIT_USAGE;
+    }
+    if (fl->precision > 0 && json_object_set_new(opts, "precision", json_real(fl->precision))) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    sv = calloc(n, sizeof *sv);
+    if (!sv) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const char *path = pos[i + 1];
+        size_t len;
+        char *text = read_all(path, &len);
+        int r;
+        if (!text) goto out;
+        r = solid_format(path) == 2 ? solid_read_off(text, len, &sv[i], rerr, sizeof rerr)
+                                    : solid_read_obj(text, len, &sv[i], rerr, sizeof rerr);
+        free(text);
+        if (r != 0) {
+            fprintf(stderr, "cellar: %s: %s\n", strcmp(path, "-") ? path : "standard input", rerr);
+            goto out;
+        }
+    }
+    m = open_memstream(&body, &blen);
+    if (!m) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    fputs("{\"kind\":\"solids\",", m);
+    if (fl->faces) {
+        fputs("\"faces\":", m);
+        put_solid_json(m, sv, n);
+    } else {
+        fputs("\"solids\":[", m);
+        for (size_t i = 0; i < n; i++) {
+            if (i) fputc(',', m);
+            put_solid_json(m, &sv[i], 1);
+        }
+        fputc(']', m);
+    }
+    if (json_object_size(opts)) {
+        fputs(",\"options\":", m);
+        put_json(m, opts);
+    }
+    fputc('}', m);
+    if (fclose(m) != 0 || !body) {
+        m = NULL;
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    m = NULL;
+    if (api_run_json(body, blen, threads, &out, &outlen, &err) != API_OK) {
+        size_t i;
+        int k = -1;
+        /* name the file of "solids[i]..." too */
+        if (sscanf(err.msg, "solids[%zu]%n", &i, &k) == 1 && k > 0 && i < n)
+            fprintf(stderr, "cellar: %s (solids[%zu] is %s)\n", err.msg, i,
+                    strcmp(pos[i + 1], "-") ? pos[i + 1] : "standard input");
+        else
+            fprintf(stderr, "cellar: %s\n", err.msg);
+        goto out;
+    }
+    rc = write_result(out, outlen, of);
+out:
+    if (m) fclose(m);
+    free(body);
+    free(out);
+    for (size_t i = 0; sv && i < n; i++) solid_free(&sv[i]);
+    free(sv);
+    json_decref(opts);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     static char outbuf[1 << 16];
@@ -550,7 +743,11 @@ int main(int argc, char **argv)
                 rc = EXIT_USAGE;
                 goto out;
             }
-            if (!fl.first) fl.first = tol ? "--flatten-tolerance" : "--precision";
+            if (tol && !fl.first) fl.first = "--flatten-tolerance";
+            continue;
+        }
+        if (strcmp(a, "--faces") == 0) {
+            fl.faces = 1;
             continue;
         }
         if (strcmp(a, "--numbers") == 0) {
@@ -569,9 +766,11 @@ int main(int argc, char **argv)
                 of.kind = !strcmp(val, "json")      ? 0
                           : !strcmp(val, "svg")     ? 1
                           : !strcmp(val, "geojson") ? 2
+                          : !strcmp(val, "obj")     ? 3
                                                     : -1;
                 if (of.kind < 0) {
-                    rc = usage_error("--format: expected json, svg or geojson, not \"%s\"", val);
+                    rc = usage_error("--format: expected json, svg, geojson or obj, not \"%s\"",
+                                     val);
                     goto out;
                 }
                 continue;
@@ -581,7 +780,10 @@ int main(int argc, char **argv)
                 rc = usage_error("--%s", re.msg);
                 goto out;
             }
-            if (!of.first) of.first = a;
+            if (a[2] == 'e')
+                of.explode = a;
+            else if (!of.first)
+                of.first = a;
             continue;
         }
         if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
@@ -607,14 +809,23 @@ int main(int argc, char **argv)
             options_text = val;
         }
     }
-    if (fl.first && (npos == 0 || strcmp(pos[0], "svg") != 0)) {
+    const char *cmd = npos ? pos[0] : "";
+    if (fl.first && strcmp(cmd, "svg") != 0) {
         rc = usage_error("%s is for the svg command", fl.first);
+    } else if (fl.precision > 0 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
+        rc = usage_error("%s is for the svg and solids commands", "--precision");
+    } else if (fl.faces && strcmp(cmd, "solids") != 0) {
+        rc = usage_error("%s is for the solids command", "--faces");
     } else if (of.first && of.kind != 1) {
         rc = usage_error("%s is for --format svg", of.first);
+    } else if (of.explode && of.kind != 1 && of.kind != 3) {
+        rc = usage_error("%s is for --format svg or obj", of.explode);
     } else if (npos == 0) {
-        rc = usage_error("%s", "no command (run, gen, svg)");
+        rc = usage_error("%s", "no command (run, gen, svg, solids)");
     } else if (strcmp(pos[0], "svg") == 0) {
         rc = svg_command(pos, npos, options_text, &fl, threads, &of);
+    } else if (strcmp(pos[0], "solids") == 0) {
+        rc = solids_command(pos, npos, options_text, &fl, threads, &of);
     } else if (strcmp(pos[0], "run") == 0) {
         rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
                           : run(pos, npos, threads, &of);
@@ -628,7 +839,7 @@ int main(int argc, char **argv)
         else
             rc = usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
     } else {
-        rc = usage_error("unknown command \"%s\" (run, gen, svg)", pos[0]);
+        rc = usage_error("unknown command \"%s\" (run, gen, svg, solids)", pos[0]);
     }
 out:
     free(pos);

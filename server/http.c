@@ -58,7 +58,7 @@ typedef struct conn {
     int parked;    /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
-    int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON (from Accept) */
+    int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON, 3 OBJ (from Accept) */
     render_opts ro;  /* the picture's options (query parameters) */
     char rep[48];    /* the ETag suffix of the representation: "" for JSON */
     char job_id[33]; /* for the log */
@@ -239,13 +239,15 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
                      len, RENDER_MAX_BYTES);
         else if (c->fmt == 1)
             rc = render_svg(body, len, &c->ro, &pic, &piclen, &ae);
-        else
+        else if (c->fmt == 2)
             rc = render_geojson(body, len, &pic, &piclen, &ae);
+        else
+            rc = render_obj(body, len, &c->ro, &pic, &piclen, &ae);
         free(body);
         if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, NULL, NULL);
         body = pic;
         len = piclen;
-        ctype = c->fmt == 1 ? "image/svg+xml" : "application/geo+json";
+        ctype = c->fmt == 1 ? "image/svg+xml" : c->fmt == 2 ? "application/geo+json" : "model/obj";
     }
     snprintf(etag, sizeof etag, "\"%s%s\"", hash, c->rep);
     snprintf(loc, sizeof loc, "/v1/results/%s", hash);
@@ -260,8 +262,10 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
     return respond(c, 200, ctype, body, len, 0, hs, sizeof hs / sizeof *hs);
 }
 
-/* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, -1 none we have.
- * The highest q wins; at equal q an exact type beats a wildcard, then JSON, SVG, GeoJSON. */
+/* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, 3 OBJ, -1 none we
+ * have.  The highest q wins; at equal q an exact type beats a wildcard, then JSON, SVG, GeoJSON,
+ * OBJ.  Whether the result can be drawn that way (SVG and GeoJSON of 2D results, OBJ of 3D
+ * ones) is the renderer's to say: 422 naming "dim". */
 static int accept_format(const char *accept)
 {
     int best = -1, best_exact = 0;
@@ -282,9 +286,10 @@ static int accept_format(const char *accept)
         struct {
             const char *type;
             int fmt, exact;
-        } m[] = {{"application/json", 0, 1},     {"image/svg+xml", 1, 1},
-                 {"application/geo+json", 2, 1}, {"*/*", 0, 0},
-                 {"application/*", 0, 0},        {"image/*", 1, 0}};
+        } m[] = {
+            {"application/json", 0, 1}, {"image/svg+xml", 1, 1}, {"application/geo+json", 2, 1},
+            {"model/obj", 3, 1},        {"*/*", 0, 0},           {"application/*", 0, 0},
+            {"image/*", 1, 0},          {"model/*", 3, 0}};
         for (size_t i = 0; i < sizeof m / sizeof *m; i++)
             if (tl == strlen(m[i].type) && !strncasecmp(p, m[i].type, tl) && q > 0 &&
                 (q > best_q || (q == best_q && m[i].exact > best_exact) ||
@@ -322,8 +327,9 @@ static int negotiate(conn *c, enum MHD_Result *r)
     c->fmt = accept_format(acc);
     if (c->fmt < 0) {
         *r = problem(c, 406,
-                     "results are application/json, image/svg+xml (a picture) or "
-                     "application/geo+json (a map)",
+                     "results are application/json, image/svg+xml (a picture of a 2D result), "
+                     "application/geo+json (a map of a 2D result) or model/obj (the cells of a "
+                     "3D result)",
                      NULL, NULL);
         return 1;
     }
@@ -340,6 +346,8 @@ static int negotiate(conn *c, enum MHD_Result *r)
                  c->ro.edges, c->ro.width, c->ro.stroke);
     else if (c->fmt == 2)
         snprintf(c->rep, sizeof c->rep, ".geojson");
+    else if (c->fmt == 3)
+        snprintf(c->rep, sizeof c->rep, ".obj;%g", c->ro.explode);
     return 0;
 }
 

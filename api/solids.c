@@ -242,9 +242,9 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     if (nf > SOLIDS_MAX_FACES - tot->nf)
         return api_fail(err, API_EINVALID, "%s.FV: %zu faces in all, at most %u allowed", path,
                         tot->nf + nf, (unsigned)SOLIDS_MAX_FACES);
-    if (nf == 0 && !soup)
-        return api_fail(err, API_EINVALID,
-                        "%s.FV: expected the faces of a closed surface, got none", path);
+    if (nf == 0)
+        return api_fail(err, API_EINVALID, "%s.FV: expected %s, got none", path,
+                        soup ? "at least one face" : "the faces of a closed surface");
     for (size_t v = 0; v < nv; v++) {
         const json_t *p = json_array_get(V, v);
         if (!json_is_array(p) || json_array_size(p) != 3)

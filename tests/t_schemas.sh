@@ -1,7 +1,7 @@
 #!/bin/sh
 # t_schemas.sh — the JSON Schemas of schemas/ and the OpenAPI document against real documents:
 # the schemas are valid; every case request and its `cellar run` result validate, and so do
-# random requests with and without options; hand-made documents of every schema that must be
+# random requests with and without options, and solids requests with their 3D results; hand-made documents of every schema that must be
 # accepted are, and hand-made INVALID documents are rejected at the expected JSON path (so the
 # schemas can fail); the invalid requests are refused by `cellar run` too, so the request schema
 # and the C validator agree.
@@ -83,6 +83,33 @@ tally "gen result"
 check "operators present with options.operators" grep -q '"operators":{"d1":{"shape":\[' "$T/gen/g2.result.json"
 check "fields [] gives {\"dim\":2}" test "$(cat "$T/gen/g5.result.json")" = '{"dim":2}'
 
+# --- 3D: solids requests and their results (the results come from the 3D core, core/arr3.c)
+CUBE_V='[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]'
+CUBE_FV='[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]'
+HALF_V='[[0.5,0.5,0.5],[1.5,0.5,0.5],[1.5,1.5,0.5],[0.5,1.5,0.5],[0.5,0.5,1.5],[1.5,0.5,1.5],[1.5,1.5,1.5],[0.5,1.5,1.5]]'
+CUBE="{\"V\":$CUBE_V,\"FV\":$CUBE_FV}"
+mkdir "$T/solids"
+i=0
+for req in "{\"kind\":\"solids\",\"solids\":[$CUBE]}" \
+    "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"operators\":true}}" \
+    "{\"kind\":\"solids\",\"solids\":[{\"V\":$CUBE_V,\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,7,4,0]]}]}" \
+    '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0],[2,2,-1],[2,2,1],[2,5,1],[2,5,-1]],"FV":[[0,1,2,3],[8,9,10,11]],"holes":{"0":[[4,5,6,7]]}}}' \
+    "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"exterior\",\"stats\"],\"precision\":0.001}}"; do
+    i=$((i + 1))
+    printf '%s\n' "$req" >"$T/solids/s$i.request.json"
+    "$BIN" run "$T/solids/s$i.request.json" >"$T/solids/s$i.result.json" 2>"$T/err" ||
+        fail "cellar run solids request $i: $(head -c 200 "$T/err")"
+done
+$V request "$T"/solids/*.request.json >"$T/out" 2>&1
+tally "solids request"
+$V result "$T"/solids/*.result.json >"$T/out" 2>&1
+tally "solids result"
+$V openapi:Result "$T"/solids/*.result.json >"$T/out" 2>&1
+tally "solids result (openapi.json)"
+check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[18,3\]' "$T/solids/s2.result.json"
+check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s3.result.json"
+check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s5.result.json"
+
 # --- hand-made documents that must be accepted
 H=0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef
 J=0f1e2d3c4b5a69788796a5b4c3d2e1f0
@@ -93,6 +120,8 @@ JOB="\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0"
 SQUARE='"V":[[0,0],[0,1],[1,0],[1,1]],"EV":[[0,1],[0,2],[1,3],[2,3]],"FV":[[1,0,2,3]],"FE":[[-1,2,4,-3]],"holes":{},"exterior":[[0,1,3,2]]'
 CSR1='{"shape":[2,1],"indptr":[0,1,2],"indices":[0,0],"data":[-1,1]}'
 CSR0='{"shape":[1,0],"indptr":[0,0],"indices":[],"data":[]}'
+CUBE3='"V":[[0,0,0],[0,0,1],[0,1,0],[0,1,1],[1,0,0],[1,0,1],[1,1,0],[1,1,1]],"EV":[[0,1],[0,2],[0,4],[1,3],[1,5],[2,3],[2,6],[3,7],[4,5],[4,6],[5,7],[6,7]],"FV":[[2,6,4,0],[3,1,5,7],[4,5,1,0],[5,4,6,7],[6,2,3,7],[1,3,2,0]],"FE":[[7,-10,-3,2],[-4,5,11,-8],[9,-5,-1,3],[-9,10,12,-11],[-7,6,8,-12],[4,-6,-2,1]],"holes":{},"CF":[[1,2,3,4,5,6]],"CV":[[0,1,2,3,4,5,6,7]],"exterior":[-6,-5,-4,-3,-2,-1]'
+STATS3='{"input_solids":1,"input_faces":6,"planes":6,"coplanar_groups":0,"pairs_tested":12,"cuts":0,"rounds":1,"V":8,"E":12,"F":6,"C":1,"shells":2,"components":1,"precision":1.4901161193847656e-08,"ms":{"snap":0.03,"pairs":0.01,"cuts":0.005,"faces":0.35,"cells":0.02,"total":0.42},"volumes":[1],"warnings":["solids[0]: inward oriented (volume -1): every face flipped"]}'
 STATS=$(sed -n 's/.*"stats":\({.*}\)}$/\1/p' "$T/cases/orthogonal.result.json")
 check "a stats object to build documents from" test -n "$STATS"
 
@@ -112,10 +141,16 @@ good result dim_only '{"dim":2}'
 good result square "{\"dim\":2,$SQUARE}"
 good result stats_only "{\"dim\":2,\"stats\":$STATS}"
 good result operators "{\"dim\":2,\"operators\":{\"d1\":$CSR1,\"d2\":$CSR0}}"
+good result dim_only_3 '{"dim":3}'
+good result cube3 "{\"dim\":3,$CUBE3,\"stats\":$STATS3}"
+good result operators3 "{\"dim\":3,\"operators\":{\"d1\":$CSR1,\"d2\":$CSR0,\"d3\":{\"shape\":[0,0],\"indptr\":[0],\"indices\":[],\"data\":[]}}}"
 good result lone_edge '{"dim":2,"V":[[0,0],[1,0]],"EV":[[0,1]],"FV":[[0,1]],"FE":[[]],"holes":{"0":[[0,1]]},"exterior":[[0,1]]}'
 good request minimal '{"kind":"lines","lines":[]}'
 good request all_options '{"kind":"lines","lines":[[[0,0],[1,1]],[[0,1],[1,0]]],"options":{"precision":0.5,"keep_dangling":true,"exterior_last":true,"operators":true,"fields":["V","EV","FV","FE","holes","exterior","stats","operators"]}}'
 good request empty_options '{"kind":"lines","lines":[[[0,0],[1,1]]],"options":{}}'
+good request solids_minimal "{\"kind\":\"solids\",\"solids\":[$CUBE]}"
+good request solids_all_options "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"precision\":0.001,\"operators\":true,\"fields\":[\"V\",\"EV\",\"FV\",\"FE\",\"holes\",\"CF\",\"CV\",\"exterior\",\"stats\",\"operators\",\"CF\"]}}"
+good request faces_with_a_hole '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0]],"FV":[[0,1,2,3]],"holes":{"0":[[4,5,6,7]]}},"options":{"fields":[]}}'
 good request repeated_fields '{"kind":"lines","lines":[[[-1e9,2.5e-3],[1E3,7]]],"options":{"fields":["V","V"]}}'
 for s in job problem result request; do
     $V "$s" "$T"/good/$s.*.json >"$T/out" 2>&1
@@ -136,7 +171,20 @@ bad result string_in_V 'V[2][1]' "{\"dim\":2,\"V\":[[0,0],[0,1],[1,\"0\"],[1,1]]
 bad result negative_edge_index 'EV[1][0]' '{"dim":2,"EV":[[0,1],[-1,2]]}'
 bad result extra_key '(document)' "{\"dim\":2,$SQUARE,\"colour\":\"red\"}"
 bad result no_dim '(document)' "{$SQUARE}"
-bad result dim_3 'dim' '{"dim":3}'
+bad result dim_4 'dim' '{"dim":4}'
+bad result dim_2_with_CF '(document)' '{"dim":2,"CF":[[1]]}'
+bad result vertex3_2_coords 'V[1]' '{"dim":3,"V":[[0,0,0],[0,0]]}'
+bad result zero_in_CF 'CF[0][1]' '{"dim":3,"CF":[[1,0]]}'
+bad result empty_CF_row 'CF[1]' '{"dim":3,"CF":[[1],[]]}'
+bad result face3_2_vertices 'FV[0]' '{"dim":3,"FV":[[0,1]]}'
+bad result exterior_fraction 'exterior[0]' '{"dim":3,"exterior":[1.5]}'
+bad result exterior_cycles 'exterior[0]' '{"dim":3,"exterior":[[0,1,2]]}'
+bad result operators3_no_d3 'operators' "{\"dim\":3,\"operators\":{\"d1\":$CSR1,\"d2\":$CSR0}}"
+bad result extra_key_3 '(document)' "{\"dim\":3,$CUBE3,\"membership\":[]}"
+bad result stats3_no_volumes 'stats' "{\"dim\":3,\"stats\":$(printf '%s' "$STATS3" | sed 's/"volumes":\[1\],//')}"
+bad result stats3_zero_volume 'stats.volumes[0]' "{\"dim\":3,\"stats\":$(printf '%s' "$STATS3" | sed 's/"volumes":\[1\]/"volumes":[0]/')}"
+bad result stats3_2d_keys 'stats' "{\"dim\":3,\"stats\":$STATS}"
+bad result stats3_ms_2d 'stats.ms' "{\"dim\":3,\"stats\":$(printf '%s' "$STATS3" | sed 's/"snap":/"buckets":/')}"
 bad result vertex_3_coords 'V[0]' '{"dim":2,"V":[[0,0,0]]}'
 bad result edge_3_vertices 'EV[0]' '{"dim":2,"EV":[[0,1,2]]}'
 bad result fractional_index 'FV[0][1]' '{"dim":2,"FV":[[0,1.5,2]]}'
@@ -197,6 +245,20 @@ bad request exterior_last_null 'options.exterior_last' '{"kind":"lines","lines":
 bad request fields_unknown_name 'options.fields[1]' '{"kind":"lines","lines":[],"options":{"fields":["V","faces"]}}'
 bad request fields_string 'options.fields' '{"kind":"lines","lines":[],"options":{"fields":"V"}}'
 bad request options_array 'options' '{"kind":"lines","lines":[],"options":[]}'
+bad request solids_and_faces '(document)' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"faces\":$CUBE}"
+bad request solids_nor_faces '(document)' '{"kind":"solids"}'
+bad request solids_not_array 'solids' "{\"kind\":\"solids\",\"solids\":$CUBE}"
+bad request solid_vertex_2_numbers 'solids[0].V[1]' '{"kind":"solids","solids":[{"V":[[0,0,0],[1,0]],"FV":[[0,1,1]]}]}'
+bad request solid_face_2_vertices 'solids[0].FV[1]' '{"kind":"solids","solids":[{"V":[[0,0,0],[1,0,0]],"FV":[[0,1,1],[0,1]]}]}'
+bad request solid_negative_index 'solids[0].FV[0][1]' '{"kind":"solids","solids":[{"V":[[0,0,0],[1,0,0]],"FV":[[0,-1,1]]}]}'
+bad request solid_extra_key 'solids[0]' '{"kind":"solids","solids":[{"V":[],"FV":[[0,1,2]],"name":"a"}]}'
+bad request solid_no_faces 'solids[0].FV' '{"kind":"solids","solids":[{"V":[[0,0,0]],"FV":[]}]}'
+bad request faces_holes_key 'faces.holes' '{"kind":"solids","faces":{"V":[[0,0,0],[1,0,0],[1,1,0]],"FV":[[0,1,2]],"holes":{"x":[[0,1,2]]}}}'
+bad request faces_empty_hole_list 'faces.holes.0' '{"kind":"solids","faces":{"V":[[0,0,0],[1,0,0],[1,1,0]],"FV":[[0,1,2]],"holes":{"0":[]}}}'
+bad request solids_lines_key '(document)' "{\"kind\":\"solids\",\"faces\":$CUBE,\"lines\":[]}"
+bad request solids_option_2d 'options' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"keep_dangling\":true}}"
+bad request solids_precision_0 'options.precision' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"precision\":0}}"
+bad request solids_field_unknown 'options.fields[1]' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"C\"]}}"
 bad request duplicate_key 'not JSON' '{"kind":"lines","lines":[],"lines":[[[0,0],[1,1]]]}'
 for s in result job problem request; do
     $V "$s" "$T"/bad/$s.*.json >"$T/out" 2>&1

@@ -165,6 +165,8 @@ static const err_case err_cases[] = {
     /* the soup */
     {"{\"kind\":\"solids\",\"faces\":[]}", 422, "faces: expected an object", NULL},
     {"{\"kind\":\"solids\",\"faces\":{\"V\":[[0,0,0]]}}", 422, "faces.FV: required", NULL},
+    {"{\"kind\":\"solids\",\"faces\":{\"V\":[[0,0,0]],\"FV\":[]}}", 422,
+     "faces.FV: expected at least one face, got none", NULL},
     {"{\"kind\":\"solids\",\"faces\":{\"V\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0.5]],"
      "\"FV\":[[0,1,2],[0,1,2,3]]}}",
      422, "faces.FV[1]: not planar", NULL},

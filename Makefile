@@ -3,7 +3,7 @@
 #   make deps     install the Debian packages needed to build and test
 #   make test     deps + build + whole suite; last line: "N passed, N failed"
 #   make check    the suite again under AddressSanitizer + UndefinedBehaviorSanitizer
-#   make bench    reference programs (CGAL, GEOS) and the comparison table
+#   make bench    reference programs (CGAL, GEOS) and the comparison tables, 2D and 3D
 #   make run      build and start the service (see README)
 
 BUILD   ?= build
@@ -21,7 +21,8 @@ TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
               libxml2-dev
-DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev python3 python3-jsonschema sqlite3
+DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev python3 python3-jsonschema sqlite3 \
+              g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)
@@ -68,13 +69,21 @@ $(BUILD)/cellard: $(BUILD)/server/main.o $(BUILD)/libcellard.a $(BUILD)/libcella
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellard.a $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(TEST_LIBS) $(LDLIBS)
 
-tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN)
+tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool
+
+# The CGAL reference of the 3D tests (C++, header-only CGAL: about 1.5 min to compile).  Built
+# without sanitizers; make check copies it from $(BUILD) instead of compiling it again.
+$(BUILD)/tests/ref/cgal_bool: tests/ref/cgal_bool.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr
 
 test: deps
 	@$(MAKE) --no-print-directory tests
 	@tests/run.sh $(BUILD)
 
 check: deps
+	@$(MAKE) --no-print-directory $(BUILD)/tests/ref/cgal_bool
+	@mkdir -p build/san/tests/ref && cp -p $(BUILD)/tests/ref/cgal_bool build/san/tests/ref/
 	@$(MAKE) --no-print-directory BUILD=build/san OPT=-O1 \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" tests
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -82,8 +91,9 @@ check: deps
 
 bench: deps
 	@scripts/deps.sh $(DEPS_BENCH)
-	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement $(BUILD)/bench/geos_polygonize
-	@bench/run.sh $(BUILD)
+	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement \
+	    $(BUILD)/bench/geos_polygonize $(BUILD)/tests/ref/cgal_bool
+	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/run3d.sh $(BUILD) || s=1; exit $$s
 
 $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 	@mkdir -p $(dir $@)

@@ -22,8 +22,10 @@
  * associative), --fold linear left to right, R = R op Ai (slower: R grows at every step).
  * One JSON line is printed (also --op none, without the result's fields):
  *   {"op": "union", "kernel": "epeck", "inputs": n, "input_volumes": [v1, ...], "fold": "tree",
- *    "volume": V, "faces": F, "vertices": N, "components": K, "closed": true, "ms": T}
- * volume: of the result (17 significant digits); faces, vertices, components: its triangles,
+ *    "volume": V, "area": A, "faces": F, "vertices": N, "components": K, "closed": true, "ms": T}
+ * volume, area: of the result (17 significant digits; the area is the boundary's, which bounds
+ * how much snapping the vertices to a grid of step h may change the volume: about h * area);
+ * faces, vertices, components: its triangles,
  * vertices and connected components (xor: summed over its pieces, and "pieces": how many);
  * closed: CGAL::is_closed of the result; ms: wall time of the Boolean part only (not reading,
  * checking, triangulating or measuring).  --op none prints "volume_sum" (of the inputs) instead
@@ -224,9 +226,10 @@ static double to_d(const Kernel::FT &x)
 #endif
 }
 
-/* The volume of a closed, outward triangle mesh (see the file comment). */
-static double volume(const Mesh &m)
+/* The volume of a closed, outward triangle mesh (see the file comment), and its area. */
+static double volume(const Mesh &m, double *area = nullptr)
 {
+    if (area) *area = 0;
     if (m.number_of_faces() == 0) return 0;
     std::vector<P3> p(m.number_of_vertices());
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
@@ -256,6 +259,16 @@ static double volume(const Mesh &m)
         double s = sum + x;
         comp += std::fabs(sum) >= std::fabs(x) ? (sum - s) + x : (x - s) + sum;
         sum = s;
+        if (area) {
+            double u[3], w[3];
+            for (int k = 0; k < 3; k++) {
+                u[k] = t[1][k] - t[0][k];
+                w[k] = t[2][k] - t[0][k];
+            }
+            *area += 0.5 * std::sqrt(std::pow(u[1] * w[2] - u[2] * w[1], 2) +
+                                     std::pow(u[2] * w[0] - u[0] * w[2], 2) +
+                                     std::pow(u[0] * w[1] - u[1] * w[0], 2));
+        }
     }
     return (sum + comp) / 6;
 }
@@ -529,11 +542,13 @@ int main(int argc, char **argv)
     step("boolean (total)", ms);
 
     t0 = now_ms();
-    double v = 0;
+    double v = 0, area = 0;
     size_t nf = 0, nv = 0, ncc = 0;
     bool closed = true;
     for (Mesh &m : r) {
-        v += volume(m);
+        double a;
+        v += volume(m, &a);
+        area += a;
         auto fcc = m.add_property_map<Mesh::Face_index, std::size_t>("f:cc", 0).first;
         ncc += m.number_of_faces() ? PMP::connected_components(m, fcc) : 0;
         m.remove_property_map(fcc);
@@ -547,8 +562,8 @@ int main(int argc, char **argv)
                   ", \"faces\": %zu, \"vertices\": %zu, \"components\": %zu, \"closed\": %s, "
                   "\"ms\": %.3f",
                   nf, nv, ncc, closed ? "true" : "false", ms);
-    std::printf("%s, \"fold\": \"%s\", \"volume\": %s%s", js.c_str(), tree ? "tree" : "linear",
-                num(v).c_str(), tail);
+    std::printf("%s, \"fold\": \"%s\", \"volume\": %s, \"area\": %s%s", js.c_str(),
+                tree ? "tree" : "linear", num(v).c_str(), num(area).c_str(), tail);
     if (op == OP_XOR) std::printf(", \"pieces\": %zu", r.size());
     std::printf("}\n");
     if (outpath) {

@@ -360,7 +360,7 @@ static double precision_of(const solids_req *r)
     if (r->precision > 0) return r->precision;
     if (!(r->extent > 0)) return 1; /* no extent: nothing to snap; any step checks the same */
     x = ldexp(r->extent, -ARR3_GRID_BITS);
-    if (!(x > 0)) return DBL_TRUE_MIN;
+    if (!(x >= DBL_MIN)) return DBL_MIN; /* as the core floors its own default */
     return frexp(x, &ex) == 0.5 ? x : ldexp(1.0, ex);
 }
 

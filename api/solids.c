@@ -710,6 +710,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
+    if (!(c.stats.precision > 0)) c.stats.precision = p; /* no faces: the core snapped nothing */
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     rc = api_lar3_write(out, &c, &fmt, err);
 out:

@@ -90,7 +90,7 @@ HALF_V='[[0.5,0.5,0.5],[1.5,0.5,0.5],[1.5,1.5,0.5],[0.5,1.5,0.5],[0.5,0.5,1.5],[
 CUBE="{\"V\":$CUBE_V,\"FV\":$CUBE_FV}"
 mkdir "$T/solids"
 i=0
-for req in "{\"kind\":\"solids\",\"solids\":[$CUBE]}" \
+for req in "{\"kind\":\"solids\",\"solids\":[$CUBE]}" '{"kind":"solids","solids":[]}' \
     "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"operators\":true}}" \
     "{\"kind\":\"solids\",\"solids\":[{\"V\":$CUBE_V,\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,7,4,0]]}]}" \
     '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0],[2,2,-1],[2,2,1],[2,5,1],[2,5,-1]],"FV":[[0,1,2,3],[8,9,10,11]],"holes":{"0":[[4,5,6,7]]}}}' \
@@ -106,9 +106,9 @@ $V result "$T"/solids/*.result.json >"$T/out" 2>&1
 tally "solids result"
 $V openapi:Result "$T"/solids/*.result.json >"$T/out" 2>&1
 tally "solids result (openapi.json)"
-check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[18,3\]' "$T/solids/s2.result.json"
-check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s3.result.json"
-check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s5.result.json"
+check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[18,3\]' "$T/solids/s3.result.json"
+check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s4.result.json"
+check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s6.result.json"
 
 # --- hand-made documents that must be accepted
 H=0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef

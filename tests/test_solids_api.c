@@ -1165,3 +1165,15 @@ TEST(core_soup_and_fields)
           json_number_value(json_object_get(json_object_get(r, "stats"), "precision")));
     json_decref(r);
 }
+
+/* CORE: no solids: an empty complex, with the precision it would have used. */
+TEST(core_no_solids)
+{
+    json_t *r = run_ok("{\"kind\":\"solids\",\"solids\":[]}");
+    REQUIRE(r, "no result");
+    CHECK(stat_of(r, "V") == 0 && stat_of(r, "C") == 0 &&
+              json_array_size(json_object_get(r, "CF")) == 0 &&
+              json_number_value(json_object_get(json_object_get(r, "stats"), "precision")) == 1,
+          "empty complex");
+    json_decref(r);
+}

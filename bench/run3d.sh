@@ -11,8 +11,10 @@
 # "options": {"fields": ["stats"]}, so cellar prints its counts and the bounded cells' volumes,
 # not the complex) and as one OFF file per solid, with the same doubles.  Each program runs once
 # under /usr/bin/time; one row per case: wall time and peak RSS of each, the speed-up over CGAL,
-# cellar's bounded cells, the triangles of CGAL's union, the sum of cellar's cell volumes and
-# CGAL's union volume, their relative difference and whether they agree:
+# cellar's bounded cells, the triangles and cavities of CGAL's union, the sum of cellar's cell
+# volumes and CGAL's union volume with its cavities filled (filled_volume: a void that the solids
+# enclose is a bounded cell too: 4 random cubes can enclose one), their relative difference and
+# whether they agree:
 #   yes   within 1e-9 relative;
 #   snap  not within 1e-9, but within precision * area (cellar's grid step times the area of
 #         the union's boundary: how far snapping every vertex to the grid may move the volume);
@@ -91,7 +93,7 @@ volsum() {
 }
 
 row() {
-    printf '%-10s %8s %8s %8s %8s %7s %8s %8s  %-20s %-20s %8s  %s\n' "$@"
+    printf '%-10s %8s %8s %8s %8s %7s %8s %8s %4s  %-20s %-20s %8s  %s\n' "$@"
 }
 
 echo "3D benchmark ($(date -u +%Y-%m-%dT%H:%MZ), $(nproc 2>/dev/null || echo '?') CPUs)"
@@ -100,10 +102,11 @@ echo "  (Epeck, PMP corefinement, pairwise union tree).  Inputs: bench/gen3d.py 
 echo "  N random rotated cubes; grid10: 10x10x10 unit cubes overlapping by half, union 5.5^3,"
 echo "  1331 cells)."
 echo "  s = wall seconds of the whole process (reading included); MiB = peak RSS;"
-echo "  x CGAL = CGAL s / ours s; cells = our bounded cells; tris = triangles of CGAL's union;"
-echo "  volumes: sum of our cells' volumes, CGAL's union volume; rel = |difference| / CGAL's;"
+echo "  x CGAL = CGAL s / ours s; cells = our bounded cells; tris, cav = triangles, cavities of"
+echo "  CGAL's union; volumes: the sum of our cells' and CGAL's union's with its cavities filled"
+echo "  (a void enclosed by the solids is a bounded cell too); rel = |difference| / CGAL's;"
 echo "  agree: yes within 1e-9 relative, snap within precision * union area, else NO."
-row case "ours s" "ours MiB" "CGAL s" "CGAL MiB" "x CGAL" cells tris "ours volume" \
+row case "ours s" "ours MiB" "CGAL s" "CGAL MiB" "x CGAL" cells tris cav "ours volume" \
     "CGAL volume" rel agree
 inner=""
 status=0
@@ -119,7 +122,7 @@ for c in $CASES; do
         2>"$tmp/$c.info"; then
         echo "bench3d: gen3d.py $args failed:" >&2
         cat "$tmp/$c.info" >&2
-        row "$c" - - - - - - - "(no input)" - - NO
+        row "$c" - - - - - - - - "(no input)" - - NO
         status=1
         continue
     fi
@@ -136,7 +139,7 @@ for c in $CASES; do
     else
         cs=$T_S cm=- fail=1
     fi
-    oC='' ov='' oprec='' oms='' cv='' ca='' cf='' cms=''
+    oC='' ov='' oprec='' oms='' cv='' ca='' cf='' ch='' cms=''
     if [ "$fail" -eq 0 ] || [ "$om" != - ]; then
         oC=$(num C "$tmp/$c.ours") ov=$(volsum "$tmp/$c.ours")
         oprec=$(num precision "$tmp/$c.ours") oms=$(num total "$tmp/$c.ours")
@@ -148,8 +151,9 @@ for c in $CASES; do
         fi
     fi
     if [ "$cm" != - ]; then
-        cv=$(num volume "$tmp/$c.cgal") ca=$(num area "$tmp/$c.cgal")
-        cf=$(num faces "$tmp/$c.cgal") cms=$(num ms "$tmp/$c.cgal")
+        cv=$(num filled_volume "$tmp/$c.cgal") ca=$(num area "$tmp/$c.cgal")
+        cf=$(num faces "$tmp/$c.cgal") ch=$(num cavities "$tmp/$c.cgal")
+        cms=$(num ms "$tmp/$c.cgal")
     fi
     speed=$(awk -v c="$cs" -v o="$os" 'BEGIN {
         if (c !~ /^[0-9.]+$/ || o !~ /^[0-9.]+$/ || c + 0 < 0.01 || o + 0 < 0.01) print "-"
@@ -168,8 +172,8 @@ for c in $CASES; do
         [ "$agree" != NO ] || fail=1
     fi
     [ "$fail" -eq 0 ] || status=1
-    row "$c" "$os" "$om" "$cs" "$cm" "$speed" "${oC:--}" "${cf:--}" "${ov:--}" "${cv:--}" \
-        "$rel" "$agree"
+    row "$c" "$os" "$om" "$cs" "$cm" "$speed" "${oC:--}" "${cf:--}" "${ch:--}" "${ov:--}" \
+        "${cv:--}" "$rel" "$agree"
     inner="$inner$(awk -v c="$c" -v o="$oms" -v k="$cms" -v p="$oprec" '
         function f(x) { return x == "" ? "-" : sprintf("%.2f", x) }
         BEGIN { printf "%-10s %14s %14s %14s", c, f(o), f(k), p == "" ? "-" : p }')

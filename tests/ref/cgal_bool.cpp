@@ -22,15 +22,19 @@
  * associative), --fold linear left to right, R = R op Ai (slower: R grows at every step).
  * One JSON line is printed (also --op none, without the result's fields):
  *   {"op": "union", "kernel": "epeck", "inputs": n, "input_volumes": [v1, ...], "fold": "tree",
- *    "volume": V, "area": A, "faces": F, "vertices": N, "components": K, "closed": true, "ms": T}
- * volume, area: of the result (17 significant digits; the area is the boundary's, which bounds
- * how much snapping the vertices to a grid of step h may change the volume: about h * area);
- * faces, vertices, components: its triangles,
- * vertices and connected components (xor: summed over its pieces, and "pieces": how many);
- * closed: CGAL::is_closed of the result; ms: wall time of the Boolean part only (not reading,
- * checking, triangulating or measuring).  --op none prints "volume_sum" (of the inputs) instead
- * of the result's fields.  --out writes the result as OFF (17 digits); --time prints the time
- * of every step on stderr.
+ *    "volume": V, "filled_volume": W, "area": A, "faces": F, "vertices": N, "components": K,
+ *    "cavities": H, "closed": true, "ms": T}
+ * volume: of the result (17 significant digits).  filled_volume: inside its outer shells, that
+ * is with its cavities filled: a union of solids can enclose a void that lies in none of them
+ * (4 random cubes can), which is a bounded cell of the arrangement, so the arrangement's bounded
+ * cells add up to the union's filled_volume, not to its volume.  area: of its boundary (it
+ * bounds how much snapping the vertices to a grid of step h may change the volume: by about
+ * h * area).  faces, vertices: its triangles and vertices; components: the connected components
+ * of its boundary; cavities: those that are walls of voids (odd nesting level).  For xor, all
+ * are summed over its pieces, and "pieces" says how many.  closed: CGAL::is_closed of the
+ * result; ms: wall time of the Boolean part only (not reading, checking, triangulating or
+ * measuring).  --op none prints "volume_sum" (of the inputs) instead of the result's fields.
+ * --out writes the result as OFF (17 digits); --time prints the time of every step on stderr.
  *
  * Volumes are the divergence-theorem sum over the triangles, evaluated in double (Neumaier
  * summation, about the bounding box centre) on the vertices rounded to double: the result is
@@ -74,6 +78,7 @@ typedef CGAL::Exact_predicates_exact_constructions_kernel Kernel;
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -226,11 +231,32 @@ static double to_d(const Kernel::FT &x)
 #endif
 }
 
-/* The volume of a closed, outward triangle mesh (see the file comment), and its area. */
-static double volume(const Mesh &m, double *area = nullptr)
+/* What is printed of a closed, outward triangle mesh (see the file comment). */
+struct Measure {
+    double volume = 0, area = 0;
+    double filled = 0;     /* the volume inside the outer shells: cavities filled */
+    size_t components = 0; /* connected components of the surface */
+    size_t cavities = 0;   /* components at an odd nesting level: the walls of voids */
+};
+
+/* Neumaier's compensated sum. */
+struct Sum {
+    double s = 0, c = 0;
+    void add(double x)
+    {
+        double t = s + x;
+        c += std::fabs(s) >= std::fabs(x) ? (s - t) + x : (x - t) + s;
+        s = t;
+    }
+    double value() const { return s + c; }
+};
+
+/* nested: also the components and their nesting (the ray tests cost a little: not for the
+ * inputs, which bound a volume and are measured whole). */
+static Measure measure(Mesh &m, bool nested)
 {
-    if (area) *area = 0;
-    if (m.number_of_faces() == 0) return 0;
+    Measure r;
+    if (m.number_of_faces() == 0) return r;
     std::vector<P3> p(m.number_of_vertices());
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (Mesh::Vertex_index v : m.vertices()) {
@@ -244,7 +270,19 @@ static double volume(const Mesh &m, double *area = nullptr)
     }
     double c[3];
     for (int k = 0; k < 3; k++) c[k] = 0.5 * (lo[k] + hi[k]);
-    double sum = 0, comp = 0; /* Neumaier */
+
+    auto fcc = m.add_property_map<Mesh::Face_index, std::size_t>("f:cgal_bool_cc", 0).first;
+    std::vector<std::size_t> level(1, 0);
+    if (nested) {
+        auto fvol = m.add_property_map<Mesh::Face_index, std::size_t>("f:cgal_bool_vol", 0).first;
+        level.clear();
+        PMP::volume_connected_components(m, fvol,
+                                         CGAL::parameters::face_connected_component_map(fcc)
+                                             .nesting_levels(std::ref(level)));
+        m.remove_property_map(fvol);
+    }
+    std::vector<Sum> cc(level.size());
+    Sum all, area;
     for (Mesh::Face_index f : m.faces()) {
         P3 t[3];
         int n = 0;
@@ -256,21 +294,28 @@ static double volume(const Mesh &m, double *area = nullptr)
         double x = t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1]) -
                    t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0]) +
                    t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0]);
-        double s = sum + x;
-        comp += std::fabs(sum) >= std::fabs(x) ? (sum - s) + x : (x - s) + sum;
-        sum = s;
-        if (area) {
-            double u[3], w[3];
-            for (int k = 0; k < 3; k++) {
-                u[k] = t[1][k] - t[0][k];
-                w[k] = t[2][k] - t[0][k];
-            }
-            *area += 0.5 * std::sqrt(std::pow(u[1] * w[2] - u[2] * w[1], 2) +
-                                     std::pow(u[2] * w[0] - u[0] * w[2], 2) +
-                                     std::pow(u[0] * w[1] - u[1] * w[0], 2));
+        all.add(x);
+        cc.at(fcc[f]).add(x);
+        double u[3], w[3];
+        for (int k = 0; k < 3; k++) {
+            u[k] = t[1][k] - t[0][k];
+            w[k] = t[2][k] - t[0][k];
         }
+        area.add(0.5 * std::sqrt(std::pow(u[1] * w[2] - u[2] * w[1], 2) +
+                                 std::pow(u[2] * w[0] - u[0] * w[2], 2) +
+                                 std::pow(u[0] * w[1] - u[1] * w[0], 2)));
     }
-    return (sum + comp) / 6;
+    m.remove_property_map(fcc);
+    r.volume = all.value() / 6;
+    r.area = area.value();
+    r.components = level.size();
+    Sum filled;
+    for (size_t i = 0; i < level.size(); i++) {
+        if (level[i] == 0) filled.add(cc[i].value());
+        if (level[i] % 2) r.cavities++;
+    }
+    r.filled = filled.value() / 6;
+    return r;
 }
 
 /* A soup into a checked, triangulated, outward mesh; false with why. */
@@ -500,7 +545,7 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "cgal_bool: %s: %s\n", soups[i].label.c_str(), why.c_str());
                 return 1;
             }
-            vols[i] = volume(meshes[i][0]);
+            vols[i] = measure(meshes[i][0], false).volume;
         }
     } catch (const std::exception &e) {
         std::fprintf(stderr, "cgal_bool: checking the inputs: %s\n", e.what());
@@ -542,16 +587,16 @@ int main(int argc, char **argv)
     step("boolean (total)", ms);
 
     t0 = now_ms();
-    double v = 0, area = 0;
-    size_t nf = 0, nv = 0, ncc = 0;
+    Measure all;
+    size_t nf = 0, nv = 0;
     bool closed = true;
     for (Mesh &m : r) {
-        double a;
-        v += volume(m, &a);
-        area += a;
-        auto fcc = m.add_property_map<Mesh::Face_index, std::size_t>("f:cc", 0).first;
-        ncc += m.number_of_faces() ? PMP::connected_components(m, fcc) : 0;
-        m.remove_property_map(fcc);
+        Measure one = measure(m, true);
+        all.volume += one.volume;
+        all.area += one.area;
+        all.filled += one.filled;
+        all.components += one.components;
+        all.cavities += one.cavities;
         nf += m.number_of_faces();
         nv += m.number_of_vertices();
         closed = closed && CGAL::is_closed(m);
@@ -559,11 +604,12 @@ int main(int argc, char **argv)
     step("result volume, components", now_ms() - t0);
     char tail[256];
     std::snprintf(tail, sizeof tail,
-                  ", \"faces\": %zu, \"vertices\": %zu, \"components\": %zu, \"closed\": %s, "
-                  "\"ms\": %.3f",
-                  nf, nv, ncc, closed ? "true" : "false", ms);
-    std::printf("%s, \"fold\": \"%s\", \"volume\": %s, \"area\": %s%s", js.c_str(),
-                tree ? "tree" : "linear", num(v).c_str(), num(area).c_str(), tail);
+                  ", \"faces\": %zu, \"vertices\": %zu, \"components\": %zu, \"cavities\": %zu, "
+                  "\"closed\": %s, \"ms\": %.3f",
+                  nf, nv, all.components, all.cavities, closed ? "true" : "false", ms);
+    std::printf("%s, \"fold\": \"%s\", \"volume\": %s, \"filled_volume\": %s, \"area\": %s%s",
+                js.c_str(), tree ? "tree" : "linear", num(all.volume).c_str(),
+                num(all.filled).c_str(), num(all.area).c_str(), tail);
     if (op == OP_XOR) std::printf(", \"pieces\": %zu", r.size());
     std::printf("}\n");
     if (outpath) {

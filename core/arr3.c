@@ -1133,9 +1133,6 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
             x[i2] = L->V[2 * j + 1];
             x[k] = (g->d - g->nd[i1] * x[i1] - g->nd[i2] * x[i2]) / g->nd[k];
         }
-        if (getenv("ARR3_DEBUG"))
-            fprintf(stderr, "group %u new vertex %s planes %u %u at %.3f %.3f %.3f\n", gi,
-                    ok ? "3planes" : "lifted", pl[0], pl[1], x[0], x[1], x[2]);
         if (grow(&r->newp, &r->capnew, 3 * (r->nnew + 1), sizeof *r->newp)) return ARR_ENOMEM;
         for (int k = 0; k < 3; k++) r->newp[3 * r->nnew + k] = llround(x[k]);
         g->rgid[j] = 0x80000000u | (uint32_t)r->nnew; /* resolved after the round */
@@ -1421,17 +1418,16 @@ static int inc_cmp(const void *pa, const void *pb)
 }
 
 typedef struct fanctx {
-    const ctx *c;
-    const outface *of;
-    int64_t e[3]; /* the edge's direction */
-    i128 wref[3]; /* w of the reference face */
+    const i128 *fn; /* 3 per face: its own integer Newell normal */
+    int64_t e[3];   /* the edge's direction */
+    i128 wref[3];   /* w of the reference face */
     const i128 *nref;
     int sref;
 } fanctx;
 
 static const i128 *face_n(const fanctx *x, uint32_t f)
 {
-    return x->c->G[x->of[f].group].n;
+    return x->fn + 3 * (size_t)f;
 }
 
 /* sign of e . (w_a x w_b) with w_f = s_f (n_f x e): s_a s_b |e|^2 det(n_a, n_b, e). */
@@ -1457,6 +1453,10 @@ static int fan_half(const fanctx *x, const inc *a)
     return 0;
 }
 
+/* Angular order about the edge; faces in one direction (coincident near the edge: rounding can
+ * make two faces of different planes share a tiny cycle) are ordered as if each face were
+ * moved by (f+1) epsilon along its normal, which turns it by s_f (f+1) epsilon: the same
+ * perturbation at every edge, so the cells stay consistent. */
 static int fan_cmp(const void *pa, const void *pb, void *vx)
 {
     const fanctx *x = vx;
@@ -1465,7 +1465,8 @@ static int fan_cmp(const void *pa, const void *pb, void *vx)
     if (ha != hb) return ha - hb;
     int cr = fan_cross(x, a, b);
     if (cr) return -cr;
-    return (a->f > b->f) - (a->f < b->f);
+    int64_t ka = a->s * ((int64_t)a->f + 1), kb = b->s * ((int64_t)b->f + 1);
+    return (ka > kb) - (ka < kb);
 }
 
 static double face_cone6(const ctx *c, const asm3 *A, uint32_t f, const double *o)
@@ -1555,6 +1556,7 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
     size_t ne = 0, cape = 0;
     uint32_t *sp = NULL, *shell_id = NULL, *fcomp = NULL, *cell = NULL;
     double *cone = NULL, *svol = NULL;
+    i128 *fn = NULL;
     /* edges and incidences */
     for (size_t f = 0; f < nf; f++) {
         const outface *F = &A->of[f];
@@ -1577,6 +1579,24 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         }
     }
     qsort(I, ni, sizeof *I, inc_cmp);
+    /* each face's own normal, from its outer cycle as rounded (the plane's when degenerate):
+     * what the fan order must agree with is the faces as they are, not their planes */
+    fn = malloc((3 * nf + 1) * sizeof *fn);
+    if (!fn) goto done;
+    for (size_t f = 0; f < nf; f++) {
+        const outface *F = &A->of[f];
+        uint32_t c0 = A->ocyc_off[F->c0], c1 = A->ocyc_off[F->c0 + 1];
+        i128 *n = fn + 3 * f;
+        n[0] = n[1] = n[2] = 0;
+        for (uint32_t i = c0; i < c1; i++) {
+            const int64_t *p = c->P + 3 * (size_t)A->ocyc[i];
+            const int64_t *q = c->P + 3 * (size_t)A->ocyc[i + 1 < c1 ? i + 1 : c0];
+            n[0] += (i128)(p[1] - q[1]) * (p[2] + q[2]);
+            n[1] += (i128)(p[2] - q[2]) * (p[0] + q[0]);
+            n[2] += (i128)(p[0] - q[0]) * (p[1] + q[1]);
+        }
+        if (!n[0] && !n[1] && !n[2]) memcpy(n, c->G[F->group].n, sizeof(i128) * 3);
+    }
     /* face sides around edges: node 2f (+ side), 2f+1 (- side) */
     sp = malloc((2 * nf + 1) * sizeof *sp);
     fcomp = malloc((nf + 1) * sizeof *fcomp);
@@ -1589,7 +1609,7 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         /* drop pairs of the same face walking the edge both ways (inside a face) */
         uint32_t e = I[i].e;
         const int64_t *pa = c->P + 3 * (size_t)evv[2 * e], *pb = c->P + 3 * (size_t)evv[2 * e + 1];
-        fanctx x = {c, A->of, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, {0}, NULL, 0};
+        fanctx x = {fn, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, {0}, NULL, 0};
         x.nref = face_n(&x, I[i].f);
         x.sref = I[i].s;
         cross_i128(x.nref, x.e, x.wref);
@@ -1750,6 +1770,7 @@ done:
     free(cell);
     free(cone);
     free(svol);
+    free(fn);
     return rc;
 }
 

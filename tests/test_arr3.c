@@ -353,3 +353,41 @@ TEST(five_cubes_of_the_seeds)
     lar3_free(&c);
     free_all(s, 5);
 }
+
+/* n cubes of edge 0.5 * (0.5 + rand) randomly rotated, in the unit box (like the seeds'
+ * randomcubes.jl).  Returns the solids (malloc'd). */
+static solid *random_cubes(size_t n, uint64_t seed)
+{
+    solid *s = calloc(n, sizeof *s);
+    uint64_t st = seed;
+    for (size_t i = 0; i < n; i++) {
+        double u[3], len;
+        do {
+            for (int k = 0; k < 3; k++) u[k] = 2 * test_rnd(&st) - 1;
+            len = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        } while (len < 0.1 || len > 1);
+        for (int k = 0; k < 3; k++) u[k] /= len;
+        double a = 2 * M_PI * test_rnd(&st), e = 0.5 * (0.5 + test_rnd(&st));
+        double t[3] = {test_rnd(&st), test_rnd(&st), test_rnd(&st)};
+        s[i] = cube_rt(e, u, a, t);
+    }
+    return s;
+}
+
+TEST(random_rotated_cubes)
+{
+    static const size_t sizes[] = {2, 3, 5, 8, 12, 20};
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++)
+        for (uint64_t seed = 1; seed <= 6; seed++) {
+            size_t n = sizes[si];
+            solid *s = random_cubes(n, seed * 7919 + n);
+            lar3 c;
+            long eu;
+            if (run3(s, n, 0, 0, &c, &eu))
+                test_fail(__FILE__, __func__, __LINE__, "n=%zu seed=%llu", n,
+                          (unsigned long long)seed);
+            lar3_free(&c);
+            free_all(s, n);
+            free(s);
+        }
+}

@@ -220,6 +220,8 @@ def main(argv):
         else:
             pos.append(a)
             i += 1
+    if not pos:
+        die("no generator (cubes, grid, tets or larcubes)")
     kind, args = pos[0], pos[1:]
     info = {"kind": kind}
     try:

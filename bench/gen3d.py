@@ -18,7 +18,8 @@ Output (at least one; default --json -):
 Every solid is closed and outward oriented (each face counter-clockwise seen from outside).
 Both outputs print each coordinate with repr(), the shortest string that reads back as the same
 double, so cellar (strtod) and cgal_bool (strtod) see identical numbers.  Standard library only;
-random.Random(SEED) makes the numbers the same on every machine (Python 3.2 and later).
+random.Random(SEED) draws the same numbers on every machine (Python 3.2 and later); the rotations
+also go through the C library's sin and cos, which glibc rounds correctly but others may not.
 
 cubes: like the LAR.jl example examples/3d/randomcubes.jl (a cube of edge 0.5 centred at the
   origin, scaled by a random factor, rotated, translated by a random point of [0,1]^3), with the

@@ -44,6 +44,7 @@
 #define PARALLEL_EPS  1e-12
 #define RAY_EPS       1e-6 /* grid units */
 #define RAY_TRIES     8
+#define TINY_EDGE     4 /* grid units (per axis): see merge_tiny_edges() */
 #define FAR_PX        1024 /* grid units: a point of three planes farther is not used */
 
 /* ------------------------------------------------------------------ small tools */
@@ -179,6 +180,12 @@ static int cmpd(const void *pa, const void *pb)
     return (a > b) - (a < b);
 }
 
+static int cmpu32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
 static int ekcmp(const void *pa, const void *pb, void *vk)
 {
     const uint64_t *k = vk;
@@ -253,6 +260,8 @@ typedef struct group {
     double nd[3], d; /* unit normal and offset: nd . x = d (grid units) */
     lar2 res;        /* this group's arrangement (last round it ran) */
     uint32_t *rgid;  /* res.nv: global vertex of each arrangement vertex */
+    uint32_t *rseg;  /* res.ne: a segment each arrangement edge is a whole piece of, or NONE */
+    i128 ni[3];      /* the unit normal scaled by 2^40 and rounded: the fan order's planes */
     int dirty;
 } group;
 
@@ -581,6 +590,7 @@ static void group_plane(ctx *c, group *g)
     double n[3] = {(double)g->n[0], (double)g->n[1], (double)g->n[2]};
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     for (int a = 0; a < 3; a++) g->nd[a] = len > 0 ? n[a] / len : 0;
+    for (int a = 0; a < 3; a++) g->ni[a] = (i128)llround(ldexp(g->nd[a], 40));
     g->k = 0;
     for (int a = 1; a < 3; a++)
         if (fabs(n[a]) > fabs(n[g->k])) g->k = a;
@@ -980,6 +990,21 @@ static int greq_split(greq *r, uint32_t seg, uint32_t ref)
     return PUSH(r->split, r->nsplit, r->capsplit, key2(seg, ref));
 }
 
+/* The vertex of L at grid point p (V is sorted by x then y), or NONE. */
+static uint32_t out_vertex(const lar2 *L, ipt p)
+{
+    size_t lo = 0, hi = L->nv;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        double x = L->V[2 * mid], y = L->V[2 * mid + 1];
+        if (x < (double)p.x || (x == (double)p.x && y < (double)p.y)) lo = mid + 1;
+        else hi = mid;
+    }
+    if (lo < L->nv && L->V[2 * lo] == (double)p.x && L->V[2 * lo + 1] == (double)p.y)
+        return (uint32_t)lo;
+    return NONE;
+}
+
 /* Runs group gi's arrangement and records what it asks of the segments. */
 static int group_run(ctx *c, uint32_t gi, gwork *w)
 {
@@ -1047,6 +1072,8 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
     lar2_free(&g->res);
     free(g->rgid);
     g->rgid = NULL;
+    free(g->rseg);
+    g->rseg = NULL;
     arr2_opts ao = {0};
     ao.precision = 1;
     ao.threads = 1;
@@ -1063,9 +1090,14 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
     /* output edges, to find the pieces that came out whole */
     w->oedge.n = 0;
     if (w->oedge.cap) memset(w->oedge.key, 0xff, w->oedge.cap * sizeof *w->oedge.key);
-    for (size_t e = 0; e < L->ne; e++)
-        if (umap_put(&w->oedge, key2(L->EV[2 * e], L->EV[2 * e + 1]), 0, NULL) == NONE)
+    g->rseg = malloc((L->ne + 1) * sizeof *g->rseg);
+    if (!g->rseg) return ARR_ENOMEM;
+    for (size_t e = 0; e < L->ne; e++) {
+        g->rseg[e] = NONE;
+        if (umap_put(&w->oedge, key2(L->EV[2 * e], L->EV[2 * e + 1]), (uint32_t)e, NULL) ==
+            NONE)
             return ARR_ENOMEM;
+    }
     /* the out vertex at a projected point: V is sorted by x then y */
     w->nhit = 0;
     for (size_t i = 0; i < w->npc; i++) {
@@ -1080,16 +1112,15 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
             if (L->V[2 * mid] < (double)x0) lo = mid + 1;
             else hi = mid;
         }
-        uint32_t iu = NONE, iv = NONE;
         size_t start = lo;
-        for (size_t j = start; j < L->nv && L->V[2 * j] <= (double)x1; j++) {
-            ipt o = {llround(L->V[2 * j]), llround(L->V[2 * j + 1])};
-            if (o.x == p.x && o.y == p.y) iu = (uint32_t)j;
-            if (o.x == q.x && o.y == q.y) iv = (uint32_t)j;
+        uint32_t iu = out_vertex(L, p), iv = out_vertex(L, q);
+        if (iu != NONE && iv != NONE) {
+            uint32_t e = umap_get(&w->oedge, iu < iv ? key2(iu, iv) : key2(iv, iu));
+            if (e != NONE) { /* whole */
+                if (g->rseg[e] == NONE) g->rseg[e] = w->pc[i].seg;
+                continue;
+            }
         }
-        if (iu != NONE && iv != NONE &&
-            umap_get(&w->oedge, iu < iv ? key2(iu, iv) : key2(iv, iu)) != NONE)
-            continue; /* whole */
         for (size_t j = start; j < L->nv && L->V[2 * j] <= (double)x1; j++) {
             ipt o = {llround(L->V[2 * j]), llround(L->V[2 * j + 1])};
             if (o.y < y0 || o.y > y1) continue;
@@ -1173,6 +1204,56 @@ static void gwork_free(gwork *w)
     free(w->hit);
 }
 
+/* An edge on the planes of three groups or more is where rounding split a point at which
+ * several planes (nearly) meet; when it is shorter than TINY_EDGE its ends are one point at
+ * this precision, and two rounded copies of one point give a fan of faces about a direction
+ * that is only noise.  Merges the ends of such edges; returns how many, or -1. */
+static int merge_tiny_edges(ctx *c)
+{
+    umap first = {0}; /* edge -> first group */
+    uint64_t *cand = NULL;
+    size_t nc = 0, cap = 0;
+    int merged = 0;
+    for (size_t gi = 0; gi < c->ng; gi++) {
+        const group *g = &c->G[gi];
+        for (size_t e = 0; g->rgid && e < g->res.ne; e++) {
+            uint32_t a = vfind(c, g->rgid[g->res.EV[2 * e]]);
+            uint32_t b = vfind(c, g->rgid[g->res.EV[2 * e + 1]]);
+            const int64_t *p = c->P + 3 * (size_t)a, *q = c->P + 3 * (size_t)b;
+            if (llabs(p[0] - q[0]) > TINY_EDGE || llabs(p[1] - q[1]) > TINY_EDGE ||
+                llabs(p[2] - q[2]) > TINY_EDGE)
+                continue;
+            uint64_t k = a < b ? key2(a, b) : key2(b, a);
+            int found;
+            uint32_t g0 = umap_put(&first, k, (uint32_t)gi, &found);
+            if (g0 == NONE) goto oom;
+            if (found && g0 != gi && PUSH(cand, nc, cap, k)) goto oom;
+        }
+    }
+    /* a candidate seen from two groups; a third makes it degenerate */
+    qsort(cand, nc, sizeof *cand, cmpu64);
+    for (size_t i = 0; i < nc;) {
+        size_t j = i;
+        while (j < nc && cand[j] == cand[i]) j++;
+        if (j - i >= 2) { /* three groups or more (first + two more) */
+            uint32_t a = vfind(c, (uint32_t)(cand[i] >> 32)), b = vfind(c, (uint32_t)cand[i]);
+            if (a != b) {
+                if (a < b) c->alias[b] = a;
+                else c->alias[a] = b;
+                merged++;
+            }
+        }
+        i = j;
+    }
+    free(cand);
+    umap_free(&first);
+    return merged;
+oom:
+    free(cand);
+    umap_free(&first);
+    return -1;
+}
+
 static int stage_rounds(ctx *c, char *err, size_t el)
 {
     uint32_t *todo = malloc((c->ng + 1) * sizeof *todo);
@@ -1186,7 +1267,16 @@ static int stage_rounds(ctx *c, char *err, size_t el)
         size_t nt = 0;
         for (size_t g = 0; g < c->ng; g++)
             if (c->G[g].dirty) todo[nt++] = (uint32_t)g;
-        if (!nt) break;
+        if (!nt) {
+            int m = merge_tiny_edges(c);
+            if (m < 0) {
+                rc = seterr(err, el, ARR_ENOMEM, "out of memory");
+                goto done;
+            }
+            if (!m) break;
+            for (size_t g = 0; g < c->ng; g++) c->G[g].dirty = 1;
+            continue;
+        }
         if (round >= ARR3_MAX_ROUNDS) {
             rc = seterr(err, el, ARR_EINTERNAL,
                         "solids: the faces' arrangements did not settle in %d rounds (%zu plane "
@@ -1332,6 +1422,7 @@ typedef struct outface {
 } outface;
 
 typedef struct asm3 {
+    umap eplane; /* (lo, hi) global edge -> a segment it is a piece of: its two planes */
     outface *of;
     size_t nof, capof;
     uint32_t *ocyc_off, *ocyc;
@@ -1350,6 +1441,93 @@ static int asm_cycle(const ctx *c, asm3 *A, const group *g, const lar2 *L, uint3
     A->ocyc_off[A->nocyc + 1] = (uint32_t)A->nocv;
     A->nocyc++;
     return 0;
+}
+
+typedef struct dedupctx {
+    const asm3 *A;
+    const uint32_t *off, *sv; /* each face's sorted vertices */
+} dedupctx;
+
+static int face_vs_cmp(const void *pa, const void *pb, void *vx)
+{
+    const dedupctx *x = vx;
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    uint32_t la = x->off[a + 1] - x->off[a], lb = x->off[b + 1] - x->off[b];
+    if (la != lb) return la < lb ? -1 : 1;
+    int r = memcmp(x->sv + x->off[a], x->sv + x->off[b], la * sizeof *x->sv);
+    if (r) {
+        for (uint32_t i = 0; i < la; i++)
+            if (x->sv[x->off[a] + i] != x->sv[x->off[b] + i])
+                return x->sv[x->off[a] + i] < x->sv[x->off[b] + i] ? -1 : 1;
+    }
+    return (a > b) - (a < b);
+}
+
+/* Faces of different planes with the same vertices (rounding can give two nearly coincident
+ * planes one small polygon) are one face: the first is kept. */
+static int faces_dedup(asm3 *A)
+{
+    size_t nf = A->nof;
+    uint32_t *off = malloc((nf + 1) * sizeof *off), *sv = malloc((A->nocv + 1) * sizeof *sv);
+    uint32_t *ord = malloc((nf + 1) * sizeof *ord);
+    uint8_t *drop = calloc(nf + 1, 1);
+    uint32_t *noff = NULL, *ncyc = NULL;
+    int rc = -1;
+    if (!off || !sv || !ord || !drop) goto done;
+    off[0] = 0;
+    for (size_t f = 0; f < nf; f++) {
+        const outface *F = &A->of[f];
+        uint32_t a = A->ocyc_off[F->c0], b = A->ocyc_off[F->c0 + F->nc];
+        memcpy(sv + off[f], A->ocyc + a, (b - a) * sizeof *sv);
+        qsort(sv + off[f], b - a, sizeof *sv, cmpu32);
+        off[f + 1] = off[f] + (b - a);
+        ord[f] = (uint32_t)f;
+    }
+    dedupctx x = {A, off, sv};
+    qsort_r(ord, nf, sizeof *ord, face_vs_cmp, &x);
+    size_t ndrop = 0;
+    for (size_t i = 1; i < nf; i++) {
+        uint32_t a = ord[i - 1], b = ord[i];
+        if (off[a + 1] - off[a] == off[b + 1] - off[b] &&
+            !memcmp(sv + off[a], sv + off[b], (off[a + 1] - off[a]) * sizeof *sv)) {
+            drop[b] = 1; /* ord is by index among equals: a < b, a kept */
+            ndrop++;
+        }
+    }
+    if (ndrop) { /* compact faces and their cycles */
+        noff = malloc((A->nocyc + 1) * sizeof *noff);
+        ncyc = malloc((A->nocv + 1) * sizeof *ncyc);
+        if (!noff || !ncyc) goto done;
+        size_t nof = 0, nc = 0, nv = 0;
+        noff[0] = 0;
+        for (size_t f = 0; f < nf; f++) {
+            if (drop[f]) continue;
+            outface F = A->of[f];
+            uint32_t c0 = (uint32_t)nc;
+            for (uint32_t cy = F.c0; cy < F.c0 + F.nc; cy++) {
+                for (uint32_t i = A->ocyc_off[cy]; i < A->ocyc_off[cy + 1]; i++)
+                    ncyc[nv++] = A->ocyc[i];
+                noff[++nc] = (uint32_t)nv;
+            }
+            F.c0 = c0;
+            A->of[nof++] = F;
+        }
+        free(A->ocyc_off);
+        free(A->ocyc);
+        A->ocyc_off = noff, A->ocyc = ncyc;
+        noff = ncyc = NULL;
+        A->nof = nof, A->nocyc = nc, A->nocv = nv;
+        A->capoff = nc + 1, A->capocv = nv + 1;
+    }
+    rc = 0;
+done:
+    free(off);
+    free(sv);
+    free(ord);
+    free(drop);
+    free(noff);
+    free(ncyc);
+    return rc;
 }
 
 static int stage_faces(ctx *c, asm3 *A)
@@ -1394,9 +1572,19 @@ static int stage_faces(ctx *c, asm3 *A)
             if (PUSH(A->of, A->nof, A->capof, o)) goto oom;
         }
     }
+    for (size_t gi = 0; gi < c->ng; gi++) {
+        const group *g = &c->G[gi];
+        for (size_t e = 0; g->rseg && e < g->res.ne; e++) {
+            if (g->rseg[e] == NONE) continue;
+            uint32_t a = vfind(c, g->rgid[g->res.EV[2 * e]]);
+            uint32_t b = vfind(c, g->rgid[g->res.EV[2 * e + 1]]);
+            if (umap_put(&A->eplane, a < b ? key2(a, b) : key2(b, a), g->rseg[e], NULL) == NONE)
+                goto oom;
+        }
+    }
     free(gf_off);
     free(gf);
-    return 0;
+    return faces_dedup(A);
 oom:
     free(gf_off);
     free(gf);
@@ -1418,52 +1606,66 @@ static int inc_cmp(const void *pa, const void *pb)
 }
 
 typedef struct fanctx {
-    const i128 *fn; /* 3 per face: its own integer Newell normal */
-    int64_t e[3];   /* the edge's direction */
-    i128 wref[3];   /* w of the reference face */
-    const i128 *nref;
+    const ctx *c;
+    const outface *of;
+    int planes;           /* 1: the edge's direction is sigma (nP x nQ), exactly; 0: e */
+    const i128 *nP, *nQ;  /* the planes of the segment the edge is a piece of */
+    int sigma;
+    int64_t e[3];         /* the rounded direction */
+    const i128 *nref;     /* the reference face's normal and sign */
     int sref;
 } fanctx;
 
 static const i128 *face_n(const fanctx *x, uint32_t f)
 {
-    return x->fn + 3 * (size_t)f;
+    return x->c->G[x->of[f].group].ni;
 }
 
-/* sign of e . (w_a x w_b) with w_f = s_f (n_f x e): s_a s_b |e|^2 det(n_a, n_b, e). */
-static int fan_cross(const fanctx *x, const inc *a, const inc *b)
+static i128 dot_i128(const i128 *a, const i128 *b)
 {
-    i128 nbe[3];
-    cross_i128(face_n(x, b->f), x->e, nbe);
-    return a->s * b->s * sign_dot3(face_n(x, a->f), nbe);
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/* Sign of det(na, nb, E), E the edge's direction: with E = sigma (nP x nQ) this is
+ * sigma ((na.nP)(nb.nQ) - (na.nQ)(nb.nP)), exact (normals < 2^41, dots < 2^83). */
+static int fan_det(const fanctx *x, const i128 *na, const i128 *nb)
+{
+    if (x->planes) {
+        i128 u[3] = {dot_i128(na, x->nP), -dot_i128(na, x->nQ), 0};
+        i128 v[3] = {dot_i128(nb, x->nQ), dot_i128(nb, x->nP), 0};
+        return x->sigma * sign_dot3(u, v);
+    }
+    i128 nbe[3];
+    cross_i128(nb, x->e, nbe);
+    return sign_dot3(na, nbe);
+}
+
+/* w_f = s_f (n_f x E) points from the edge into face f; e . (w_a x w_b) has the sign of
+ * s_a s_b det(n_a, n_b, E). */
 static int fan_half(const fanctx *x, const inc *a)
 {
-    i128 nae[3];
-    cross_i128(face_n(x, a->f), x->e, nae);
-    int cr = x->sref * a->s * sign_dot3(x->nref, nae);
+    const i128 *na = face_n(x, a->f);
+    int cr = x->sref * a->s * fan_det(x, x->nref, na);
     if (cr > 0) return 0;
     if (cr < 0) return 1;
-    for (int k = 0; k < 3; k++) /* parallel: same direction? */
-        if (x->wref[k] != 0) {
-            i128 wa = a->s > 0 ? nae[k] : -nae[k];
-            return ((wa > 0) == (x->wref[k] > 0)) ? 0 : 1;
-        }
+    /* parallel to the reference: the same way or the opposite */
+    int same = na[0] == x->nref[0] && na[1] == x->nref[1] && na[2] == x->nref[2];
+    int opp = na[0] == -x->nref[0] && na[1] == -x->nref[1] && na[2] == -x->nref[2];
+    if (same) return a->s == x->sref ? 0 : 1;
+    if (opp) return a->s != x->sref ? 0 : 1;
     return 0;
 }
 
-/* Angular order about the edge; faces in one direction (coincident near the edge: rounding can
- * make two faces of different planes share a tiny cycle) are ordered as if each face were
- * moved by (f+1) epsilon along its normal, which turns it by s_f (f+1) epsilon: the same
- * perturbation at every edge, so the cells stay consistent. */
+/* Angular order about the edge, exact for the planes' normals; faces in one direction are
+ * ordered as if each face were moved by (f+1) epsilon along its normal, which turns it by
+ * s_f (f+1) epsilon: the same perturbation at every edge, so the cells stay consistent. */
 static int fan_cmp(const void *pa, const void *pb, void *vx)
 {
     const fanctx *x = vx;
     const inc *a = pa, *b = pb;
     int ha = fan_half(x, a), hb = fan_half(x, b);
     if (ha != hb) return ha - hb;
-    int cr = fan_cross(x, a, b);
+    int cr = a->s * b->s * fan_det(x, face_n(x, a->f), face_n(x, b->f));
     if (cr) return -cr;
     int64_t ka = a->s * ((int64_t)a->f + 1), kb = b->s * ((int64_t)b->f + 1);
     return (ka > kb) - (ka < kb);
@@ -1556,7 +1758,6 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
     size_t ne = 0, cape = 0;
     uint32_t *sp = NULL, *shell_id = NULL, *fcomp = NULL, *cell = NULL;
     double *cone = NULL, *svol = NULL;
-    i128 *fn = NULL;
     /* edges and incidences */
     for (size_t f = 0; f < nf; f++) {
         const outface *F = &A->of[f];
@@ -1579,24 +1780,6 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         }
     }
     qsort(I, ni, sizeof *I, inc_cmp);
-    /* each face's own normal, from its outer cycle as rounded (the plane's when degenerate):
-     * what the fan order must agree with is the faces as they are, not their planes */
-    fn = malloc((3 * nf + 1) * sizeof *fn);
-    if (!fn) goto done;
-    for (size_t f = 0; f < nf; f++) {
-        const outface *F = &A->of[f];
-        uint32_t c0 = A->ocyc_off[F->c0], c1 = A->ocyc_off[F->c0 + 1];
-        i128 *n = fn + 3 * f;
-        n[0] = n[1] = n[2] = 0;
-        for (uint32_t i = c0; i < c1; i++) {
-            const int64_t *p = c->P + 3 * (size_t)A->ocyc[i];
-            const int64_t *q = c->P + 3 * (size_t)A->ocyc[i + 1 < c1 ? i + 1 : c0];
-            n[0] += (i128)(p[1] - q[1]) * (p[2] + q[2]);
-            n[1] += (i128)(p[2] - q[2]) * (p[0] + q[0]);
-            n[2] += (i128)(p[0] - q[0]) * (p[1] + q[1]);
-        }
-        if (!n[0] && !n[1] && !n[2]) memcpy(n, c->G[F->group].n, sizeof(i128) * 3);
-    }
     /* face sides around edges: node 2f (+ side), 2f+1 (- side) */
     sp = malloc((2 * nf + 1) * sizeof *sp);
     fcomp = malloc((nf + 1) * sizeof *fcomp);
@@ -1609,11 +1792,21 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         /* drop pairs of the same face walking the edge both ways (inside a face) */
         uint32_t e = I[i].e;
         const int64_t *pa = c->P + 3 * (size_t)evv[2 * e], *pb = c->P + 3 * (size_t)evv[2 * e + 1];
-        fanctx x = {fn, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, {0}, NULL, 0};
+        fanctx x = {c, A->of, 0, NULL, NULL, 0, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]},
+                    NULL, 0};
+        uint32_t sg = umap_get(&A->eplane, key2(evv[2 * e], evv[2 * e + 1]));
+        if (sg != NONE && c->S[sg].p0 != c->S[sg].p1) {
+            x.nP = c->G[c->S[sg].p0].ni;
+            x.nQ = c->G[c->S[sg].p1].ni;
+            i128 E[3] = {x.nP[1] * x.nQ[2] - x.nP[2] * x.nQ[1],
+                         x.nP[2] * x.nQ[0] - x.nP[0] * x.nQ[2],
+                         x.nP[0] * x.nQ[1] - x.nP[1] * x.nQ[0]};
+            i128 d = E[0] * x.e[0] + E[1] * x.e[1] + E[2] * x.e[2];
+            x.sigma = (d > 0) - (d < 0);
+            x.planes = x.sigma != 0;
+        }
         x.nref = face_n(&x, I[i].f);
         x.sref = I[i].s;
-        cross_i128(x.nref, x.e, x.wref);
-        for (int k = 0; k < 3; k++) x.wref[k] = x.sref > 0 ? x.wref[k] : -x.wref[k];
         qsort_r(I + i, j - i, sizeof *I, fan_cmp, &x);
         for (size_t k = i; k < j; k++) {
             const inc *f0 = &I[k], *f1 = &I[k + 1 < j ? k + 1 : i];
@@ -1770,7 +1963,6 @@ done:
     free(cell);
     free(cone);
     free(svol);
-    free(fn);
     return rc;
 }
 
@@ -1792,11 +1984,6 @@ static int cmpi32(const void *pa, const void *pb)
     return (a > b) - (a < b);
 }
 
-static int cmpu32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
 
 /* Renumbers vertices (by coordinates) and edges (by vertex pair) and fills the rest of out. */
 static int stage_output(ctx *c, asm3 *A, lar3 *out)
@@ -1948,6 +2135,7 @@ static void ctx_free(ctx *c)
     for (size_t g = 0; c->G && g < c->ng; g++) {
         lar2_free(&c->G[g].res);
         free(c->G[g].rgid);
+        free(c->G[g].rseg);
     }
     free(c->G);
     for (size_t s = 0; s < c->ns; s++) free(c->S[s].sp);
@@ -2010,6 +2198,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     free(A.of);
     free(A.ocyc_off);
     free(A.ocyc);
+    umap_free(&A.eplane);
     ctx_free(&c);
     return ARR_OK;
 oom:
@@ -2023,6 +2212,7 @@ fail : {
     free(A.of);
     free(A.ocyc_off);
     free(A.ocyc);
+    umap_free(&A.eplane);
     ctx_free(&c);
     return rc;
 }

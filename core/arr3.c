@@ -287,6 +287,7 @@ typedef struct greq {
 typedef struct ctx {
     const arr3_opts *o;
     int threads;
+    size_t fins;     /* faces with one cell on both sides (stage_cells) */
     double step;     /* grid step */
     int64_t oi[3];   /* origin: world = (oi + g) * step */
     /* vertices */
@@ -1919,7 +1920,10 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
     for (size_t i = 0; i < 2 * nf; i++) {
         uint32_t r = uf_find(cu, shell_id[i]);
         uint32_t other = uf_find(cu, shell_id[i ^ 1]);
-        if (r == other) continue; /* both sides in one cell: not on its boundary */
+        if (r == other) { /* both sides in one cell: not on its boundary */
+            c->fins += (i & 1) == 0;
+            continue;
+        }
         if (r == ext_root) next++;
         else out->cf_off[cell[r] + 1]++;
     }
@@ -2153,10 +2157,9 @@ static void ctx_free(ctx *c)
     free(c->req);
 }
 
-int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
-               char *err, size_t errlen)
+static int build_once(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
+                      char *err, size_t errlen, size_t *fins)
 {
-    static const arr3_opts defaults = {0};
     ctx c = {0};
     asm3 A = {0};
     uint64_t *pairs = NULL;
@@ -2165,7 +2168,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     double t0 = now_ms(), t;
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
-    c.o = opts ? opts : &defaults;
+    c.o = opts;
     c.threads = c.o->threads > 0 ? c.o->threads : par_ncpu();
     c.st = &out->stats;
     if ((rc = stage_input(&c, solids, ns, soup, err, errlen))) goto fail;
@@ -2192,6 +2195,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     out->stats.ms_faces = now_ms() - t;
     t = now_ms();
     if (stage_cells(&c, &A, out) || stage_output(&c, &A, out)) goto oom;
+    *fins = c.fins;
     out->stats.ms_cells = now_ms() - t;
     out->stats.ms_total = now_ms() - t0;
     progress(&c, "cells", 1);
@@ -2215,6 +2219,31 @@ fail : {
     umap_free(&A.eplane);
     ctx_free(&c);
     return rc;
+}
+
+/* A closed surface has no face with one cell on both sides; rounding can still make one where
+ * planes nearly coincide along a line (the faces' order about such an edge is then only noise).
+ * The arrangement is then made again on a grid twice as coarse, up to ARR3_RETRIES times, and
+ * stats.precision says which grid was used. */
+int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
+               char *err, size_t errlen)
+{
+    static const arr3_opts defaults = {0};
+    arr3_opts o = opts ? *opts : defaults;
+    for (int attempt = 0;; attempt++) {
+        size_t fins = 0;
+        int rc = build_once(solids, ns, soup, &o, out, err, errlen, &fins);
+        if (rc || soup || fins == 0) return rc;
+        if (attempt == ARR3_RETRIES) {
+            lar3_free(out);
+            return seterr(err, errlen, ARR_EINTERNAL,
+                          "solids: %zu faces have one cell on both sides at precision %g (planes "
+                          "too nearly coincident for this grid); try a coarser precision",
+                          fins, o.precision);
+        }
+        o.precision = 2 * out->stats.precision;
+        lar3_free(out);
+    }
 }
 
 void lar3_free(lar3 *c)

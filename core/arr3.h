@@ -34,6 +34,7 @@
 #define ARR3_GRID_BITS  26       /* extent / precision must be <= 2^ARR3_GRID_BITS */
 #define ARR3_MAX_FACES  2000000u /* input faces, all solids together */
 #define ARR3_MAX_ROUNDS 32       /* rounds of the plane-group arrangements before giving up */
+#define ARR3_RETRIES    3        /* runs again on a grid twice as coarse (see arr3_build) */
 
 typedef struct arr3_opts {
     double precision; /* grid step; 0: the power of two closest above extent * 2^-ARR3_GRID_BITS

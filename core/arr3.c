@@ -39,13 +39,13 @@
 #include "core/num.h"
 #include "core/par.h"
 
-#define NONE          UINT32_MAX
-#define COPLANAR_TOL  2.0  /* grid units: faces this close to each other's plane share it */
-#define PARALLEL_EPS  1e-12
-#define RAY_EPS       1e-6 /* grid units */
-#define RAY_TRIES     8
-#define TINY_EDGE     4 /* grid units (per axis): see merge_tiny_edges() */
-#define FAR_PX        1024 /* grid units: a point of three planes farther is not used */
+#define NONE         UINT32_MAX
+#define COPLANAR_TOL 2.0 /* grid units: faces this close to each other's plane share it */
+#define PARALLEL_EPS 1e-12
+#define RAY_EPS      1e-6 /* grid units */
+#define RAY_TRIES    8
+#define TINY_EDGE    4    /* grid units (per axis): see merge_tiny_edges() */
+#define FAR_PX       1024 /* grid units: a point of three planes farther is not used */
 
 /* ------------------------------------------------------------------ small tools */
 
@@ -81,7 +81,7 @@ static int grow(void *pp, size_t *cap, size_t need, size_t elem)
     return 0;
 }
 
-#define PUSH(arr, n, cap, val)                                                                 \
+#define PUSH(arr, n, cap, val)                                                                     \
     (grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
 
 static uint64_t mix64(uint64_t x)
@@ -254,9 +254,9 @@ typedef struct iface { /* an input face */
 } iface;
 
 typedef struct group {
-    uint32_t rep; /* representative face: the plane's */
-    int k;        /* dropped axis: the largest component of the normal */
-    i128 n[3];    /* integer Newell normal of rep */
+    uint32_t rep;    /* representative face: the plane's */
+    int k;           /* dropped axis: the largest component of the normal */
+    i128 n[3];       /* integer Newell normal of rep */
     double nd[3], d; /* unit normal and offset: nd . x = d (grid units) */
     lar2 res;        /* this group's arrangement (last round it ran) */
     uint32_t *rgid;  /* res.nv: global vertex of each arrangement vertex */
@@ -266,36 +266,36 @@ typedef struct group {
 } group;
 
 typedef struct seg3 {
-    uint32_t a, b;        /* endpoints (global vertex ids) */
-    uint32_t p0, p1;      /* the planes (groups) it lies on; p0 == p1 for a flat edge */
-    uint32_t *sp;         /* split points */
+    uint32_t a, b;   /* endpoints (global vertex ids) */
+    uint32_t p0, p1; /* the planes (groups) it lies on; p0 == p1 for a flat edge */
+    uint32_t *sp;    /* split points */
     uint32_t nsp, capsp;
 } seg3;
 
 /* What one group's round asks for, applied after the round. */
 typedef struct greq {
-    int64_t *newp;  /* 3 per new vertex proposed: grid coordinates */
+    int64_t *newp; /* 3 per new vertex proposed: grid coordinates */
     size_t nnew, capnew;
     uint64_t *split; /* (segment << 32 | vertex ref): ref < 2^31 a global id, else new index */
     size_t nsplit, capsplit;
     uint64_t *merge; /* pairs of global ids with one projection: to merge */
     size_t nmerge, capmerge;
-    int rc;          /* ARR_* of this group's run */
+    int rc; /* ARR_* of this group's run */
     char err[160];
 } greq;
 
 typedef struct ctx {
     const arr3_opts *o;
     int threads;
-    size_t fins;     /* faces with one cell on both sides (stage_cells) */
-    double step;     /* grid step */
-    int64_t oi[3];   /* origin: world = (oi + g) * step */
+    size_t fins;   /* faces with one cell on both sides (stage_cells) */
+    double step;   /* grid step */
+    int64_t oi[3]; /* origin: world = (oi + g) * step */
     /* vertices */
     int64_t *P;
     size_t nv, capv;
     uint32_t *alias; /* union-find over merged vertices */
     size_t capalias;
-    uint32_t *vtab;  /* open addressing over P */
+    uint32_t *vtab; /* open addressing over P */
     size_t vcap;
     /* input faces */
     iface *F;
@@ -310,12 +310,12 @@ typedef struct ctx {
     /* segments */
     seg3 *S;
     size_t ns, caps;
-    umap edge_seg;       /* (lo, hi) -> E segment */
-    uint32_t *sg_off;    /* ns+1: groups of segment s: sg[sg_off[s] ..) */
+    umap edge_seg;    /* (lo, hi) -> E segment */
+    uint32_t *sg_off; /* ns+1: groups of segment s: sg[sg_off[s] ..) */
     uint32_t *sg;
-    uint32_t *gs_off;    /* ng+1: segments of group g */
+    uint32_t *gs_off; /* ng+1: segments of group g */
     uint32_t *gs;
-    greq *req;           /* ng */
+    greq *req; /* ng */
     arr3_stats *st;
 } ctx;
 
@@ -634,8 +634,10 @@ static void uf_union(uint32_t *p, uint32_t a, uint32_t b)
 {
     a = uf_find(p, a), b = uf_find(p, b);
     if (a == b) return;
-    if (a < b) p[b] = a;
-    else p[a] = b;
+    if (a < b)
+        p[b] = a;
+    else
+        p[a] = b;
 }
 
 /* Do faces a and b have an edge (two consecutive vertices, either way) in common? */
@@ -674,8 +676,8 @@ static int stage_groups(ctx *c, uint64_t *pairs, size_t *np)
     }
     for (size_t i = 0; i < *np; i++) {
         uint32_t a = (uint32_t)(pairs[i] >> 32), b = (uint32_t)pairs[i];
-        double dot = tmp[a].nd[0] * tmp[b].nd[0] + tmp[a].nd[1] * tmp[b].nd[1] +
-                     tmp[a].nd[2] * tmp[b].nd[2];
+        double dot =
+            tmp[a].nd[0] * tmp[b].nd[0] + tmp[a].nd[1] * tmp[b].nd[1] + tmp[a].nd[2] * tmp[b].nd[2];
         if (fabs(dot) < 0.99) continue;
         if (face_on_plane(c, b, &tmp[a]) && face_on_plane(c, a, &tmp[b])) uf_union(par, a, b);
     }
@@ -683,8 +685,10 @@ static int stage_groups(ctx *c, uint64_t *pairs, size_t *np)
     size_t ng = 0;
     for (size_t f = 0; f < c->nf; f++) {
         uint32_t r = uf_find(par, (uint32_t)f);
-        if (r == f) c->F[f].group = (uint32_t)ng++;
-        else c->F[f].group = c->F[r].group;
+        if (r == f)
+            c->F[f].group = (uint32_t)ng++;
+        else
+            c->F[f].group = c->F[r].group;
     }
     c->G = calloc(ng + 1, sizeof *c->G);
     c->req = calloc(ng + 1, sizeof *c->req);
@@ -813,7 +817,7 @@ static int clip_face(ctx *c, uint32_t f, const group *g, const double *u, xing *
             if (PUSH(*xs, *nx, *cap, xi)) return -1;
         }
     }
-    qsort(*xs, *nx, sizeof **xs, xing_cmp);
+    if (*nx > 1) qsort(*xs, *nx, sizeof **xs, xing_cmp);
     return 0;
 }
 
@@ -851,8 +855,10 @@ static int cut_pair(ctx *c, uint32_t a, uint32_t b, cutbuf *cb)
             c->st->cuts++;
             if (add_endpoint_split(c, s) || add_endpoint_split(c, e)) return -1;
         }
-        if (a1->lam <= b1->lam) i += 2;
-        else j += 2;
+        if (a1->lam <= b1->lam)
+            i += 2;
+        else
+            j += 2;
     }
     return 0;
 }
@@ -896,7 +902,7 @@ static int stage_incidence(ctx *c)
         if (PUSH(pr, n, cap, key2(c->S[s].p1, (uint32_t)s))) goto oom;
     }
     /* sort and dedup */
-    qsort(pr, n, sizeof *pr, cmpu64);
+    if (n > 1) qsort(pr, n, sizeof *pr, cmpu64);
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         if (!m || pr[i] != pr[m - 1]) pr[m++] = pr[i];
@@ -926,7 +932,6 @@ oom:
     free(pr);
     return -1;
 }
-
 
 /* ------------------------------------------------------------------ stage 4: group rounds */
 
@@ -959,9 +964,12 @@ static int three_planes(const ctx *c, uint32_t g0, uint32_t g1, uint32_t g2, dou
             }
     const double *a = c->G[g[0]].nd, *b = c->G[g[1]].nd, *e = c->G[g[2]].nd;
     double da = c->G[g[0]].d, db = c->G[g[1]].d, de = c->G[g[2]].d;
-    double bc[3] = {b[1] * e[2] - b[2] * e[1], b[2] * e[0] - b[0] * e[2], b[0] * e[1] - b[1] * e[0]};
-    double ca[3] = {e[1] * a[2] - e[2] * a[1], e[2] * a[0] - e[0] * a[2], e[0] * a[1] - e[1] * a[0]};
-    double ab[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    double bc[3] = {b[1] * e[2] - b[2] * e[1], b[2] * e[0] - b[0] * e[2],
+                    b[0] * e[1] - b[1] * e[0]};
+    double ca[3] = {e[1] * a[2] - e[2] * a[1], e[2] * a[0] - e[0] * a[2],
+                    e[0] * a[1] - e[1] * a[0]};
+    double ab[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0]};
     double det = a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2];
     if (fabs(det) < 1e-6) return -1;
     for (int k = 0; k < 3; k++) x[k] = (da * bc[k] + db * ca[k] + de * ab[k]) / det;
@@ -975,8 +983,8 @@ typedef struct gwork { /* scratch of one worker */
     size_t capsg;
     sortkey *sk;
     size_t capsk;
-    umap at;    /* projected point -> global id */
-    umap oedge; /* output edges */
+    umap at;       /* projected point -> global id */
+    umap oedge;    /* output edges */
     uint32_t *hit; /* (piece, out vertex) pairs of the scan */
     size_t nhit, caphit;
 } gwork;
@@ -998,8 +1006,10 @@ static uint32_t out_vertex(const lar2 *L, ipt p)
     while (lo < hi) {
         size_t mid = (lo + hi) / 2;
         double x = L->V[2 * mid], y = L->V[2 * mid + 1];
-        if (x < (double)p.x || (x == (double)p.x && y < (double)p.y)) lo = mid + 1;
-        else hi = mid;
+        if (x < (double)p.x || (x == (double)p.x && y < (double)p.y))
+            lo = mid + 1;
+        else
+            hi = mid;
     }
     if (lo < L->nv && L->V[2 * lo] == (double)p.x && L->V[2 * lo + 1] == (double)p.y)
         return (uint32_t)lo;
@@ -1034,7 +1044,7 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
             double t = (p[0] - pa[0]) * d[0] + (p[1] - pa[1]) * d[1] + (p[2] - pa[2]) * d[2];
             w->sk[m++] = (sortkey){t, v};
         }
-        qsort(w->sk + 1, m - 1, sizeof *w->sk, sortkey_cmp);
+        if (m - 1 > 1) qsort(w->sk + 1, m - 1, sizeof *w->sk, sortkey_cmp);
         w->sk[m++] = (sortkey){DBL_MAX, b};
         uint32_t prev = NONE;
         for (size_t j = 0; j < m; j++) {
@@ -1064,7 +1074,8 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
     if (grow(&w->sg, &w->capsg, 4 * w->npc + 4, sizeof *w->sg)) return ARR_ENOMEM;
     size_t nseg = 0;
     for (size_t i = 0; i < w->npc; i++) {
-        ipt p = proj(c->P + 3 * (size_t)w->pc[i].u, g->k), q = proj(c->P + 3 * (size_t)w->pc[i].v, g->k);
+        ipt p = proj(c->P + 3 * (size_t)w->pc[i].u, g->k),
+            q = proj(c->P + 3 * (size_t)w->pc[i].v, g->k);
         if (p.x == q.x && p.y == q.y) continue;
         w->sg[4 * nseg] = (double)p.x, w->sg[4 * nseg + 1] = (double)p.y;
         w->sg[4 * nseg + 2] = (double)q.x, w->sg[4 * nseg + 3] = (double)q.y;
@@ -1095,14 +1106,14 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
     if (!g->rseg) return ARR_ENOMEM;
     for (size_t e = 0; e < L->ne; e++) {
         g->rseg[e] = NONE;
-        if (umap_put(&w->oedge, key2(L->EV[2 * e], L->EV[2 * e + 1]), (uint32_t)e, NULL) ==
-            NONE)
+        if (umap_put(&w->oedge, key2(L->EV[2 * e], L->EV[2 * e + 1]), (uint32_t)e, NULL) == NONE)
             return ARR_ENOMEM;
     }
     /* the out vertex at a projected point: V is sorted by x then y */
     w->nhit = 0;
     for (size_t i = 0; i < w->npc; i++) {
-        ipt p = proj(c->P + 3 * (size_t)w->pc[i].u, g->k), q = proj(c->P + 3 * (size_t)w->pc[i].v, g->k);
+        ipt p = proj(c->P + 3 * (size_t)w->pc[i].u, g->k),
+            q = proj(c->P + 3 * (size_t)w->pc[i].v, g->k);
         if (p.x == q.x && p.y == q.y) continue;
         int64_t x0 = p.x < q.x ? p.x : q.x, x1 = p.x ^ q.x ^ x0;
         int64_t y0 = p.y < q.y ? p.y : q.y, y1 = p.y ^ q.y ^ y0;
@@ -1110,8 +1121,10 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
         size_t lo = 0, hi = L->nv;
         while (lo < hi) {
             size_t mid = (lo + hi) / 2;
-            if (L->V[2 * mid] < (double)x0) lo = mid + 1;
-            else hi = mid;
+            if (L->V[2 * mid] < (double)x0)
+                lo = mid + 1;
+            else
+                hi = mid;
         }
         size_t start = lo;
         uint32_t iu = out_vertex(L, p), iv = out_vertex(L, q);
@@ -1144,8 +1157,10 @@ static int group_run(ctx *c, uint32_t gi, gwork *w)
             uint32_t cand[2] = {S->p0, S->p1};
             for (int k = 0; k < 2; k++) {
                 if (cand[k] == gi || cand[k] == pl[0] || cand[k] == pl[1]) continue;
-                if (pl[0] == NONE) pl[0] = cand[k];
-                else if (pl[1] == NONE) pl[1] = cand[k];
+                if (pl[0] == NONE)
+                    pl[0] = cand[k];
+                else if (pl[1] == NONE)
+                    pl[1] = cand[k];
             }
         }
         double x[3];
@@ -1232,15 +1247,17 @@ static int merge_tiny_edges(ctx *c)
         }
     }
     /* a candidate seen from two groups; a third makes it degenerate */
-    qsort(cand, nc, sizeof *cand, cmpu64);
+    if (nc > 1) qsort(cand, nc, sizeof *cand, cmpu64);
     for (size_t i = 0; i < nc;) {
         size_t j = i;
         while (j < nc && cand[j] == cand[i]) j++;
         if (j - i >= 2) { /* three groups or more (first + two more) */
             uint32_t a = vfind(c, (uint32_t)(cand[i] >> 32)), b = vfind(c, (uint32_t)cand[i]);
             if (a != b) {
-                if (a < b) c->alias[b] = a;
-                else c->alias[a] = b;
+                if (a < b)
+                    c->alias[b] = a;
+                else
+                    c->alias[a] = b;
                 merged++;
             }
         }
@@ -1294,8 +1311,10 @@ static int stage_rounds(ctx *c, char *err, size_t el)
             uint32_t gi = todo[i];
             greq *q = &c->req[gi];
             if (q->rc) {
-                if (q->rc == ARR_ECANCELED) rc = seterr(err, el, ARR_ECANCELED, "cancelled");
-                else rc = seterr(err, el, q->rc, "solids: plane %u: %s", gi, q->err);
+                if (q->rc == ARR_ECANCELED)
+                    rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+                else
+                    rc = seterr(err, el, q->rc, "solids: plane %u: %s", gi, q->err);
                 goto done;
             }
             uint32_t *ids = NULL;
@@ -1336,8 +1355,10 @@ static int stage_rounds(ctx *c, char *err, size_t el)
                 uint32_t a = vfind(c, (uint32_t)(q->merge[k] >> 32));
                 uint32_t b = vfind(c, (uint32_t)q->merge[k]);
                 if (a == b) continue;
-                if (a < b) c->alias[b] = a;
-                else c->alias[a] = b;
+                if (a < b)
+                    c->alias[b] = a;
+                else
+                    c->alias[a] = b;
                 merged = 1;
             }
         }
@@ -1372,7 +1393,7 @@ static void face_inner_point(const lar2 *L, uint32_t f, double *out)
         double *ys = malloc(n * sizeof *ys);
         if (ys) {
             for (size_t i = 0; i < n; i++) ys[i] = L->V[2 * L->cyc[c0 + i] + 1];
-            qsort(ys, n, sizeof *ys, cmpd);
+            if (n > 1) qsort(ys, n, sizeof *ys, cmpd);
             for (size_t i = 0; i + 1 < n; i++)
                 if (ys[i + 1] - ys[i] > best_gap) best_gap = ys[i + 1] - ys[i], yl = ys[i];
             free(ys);
@@ -1389,14 +1410,13 @@ static void face_inner_point(const lar2 *L, uint32_t f, double *out)
             if (nx < 512) xs[nx++] = p[0] + (y - p[1]) * (q[0] - p[0]) / (q[1] - p[1]);
         }
     }
-    qsort(xs, nx, sizeof *xs, cmpd);
+    if (nx > 1) qsort(xs, nx, sizeof *xs, cmpd);
     double bw = -1, bx = 0;
     for (size_t i = 0; i + 1 < nx; i += 2)
         if (xs[i + 1] - xs[i] > bw) bw = xs[i + 1] - xs[i], bx = (xs[i] + xs[i + 1]) / 2;
     out[0] = bx;
     out[1] = y;
 }
-
 
 /* Is 2D point x inside input face f (projected dropping axis k), even-odd over its cycles? */
 static int inside_input_face(const ctx *c, uint32_t f, int k, const double *x)
@@ -1480,7 +1500,7 @@ static int faces_dedup(asm3 *A)
         const outface *F = &A->of[f];
         uint32_t a = A->ocyc_off[F->c0], b = A->ocyc_off[F->c0 + F->nc];
         memcpy(sv + off[f], A->ocyc + a, (b - a) * sizeof *sv);
-        qsort(sv + off[f], b - a, sizeof *sv, cmpu32);
+        if (b - a > 1) qsort(sv + off[f], b - a, sizeof *sv, cmpu32);
         off[f + 1] = off[f] + (b - a);
         ord[f] = (uint32_t)f;
     }
@@ -1609,11 +1629,11 @@ static int inc_cmp(const void *pa, const void *pb)
 typedef struct fanctx {
     const ctx *c;
     const outface *of;
-    int planes;           /* 1: the edge's direction is sigma (nP x nQ), exactly; 0: e */
-    const i128 *nP, *nQ;  /* the planes of the segment the edge is a piece of */
+    int planes;          /* 1: the edge's direction is sigma (nP x nQ), exactly; 0: e */
+    const i128 *nP, *nQ; /* the planes of the segment the edge is a piece of */
     int sigma;
-    int64_t e[3];         /* the rounded direction */
-    const i128 *nref;     /* the reference face's normal and sign */
+    int64_t e[3];     /* the rounded direction */
+    const i128 *nref; /* the reference face's normal and sign */
     int sref;
 } fanctx;
 
@@ -1720,7 +1740,8 @@ static uint32_t ray_hit(const ctx *c, const asm3 *A, const uint32_t *fcomp, uint
             for (uint32_t i = c0; i < c1; i++) {
                 const int64_t *P = c->P + 3 * (size_t)A->ocyc[i];
                 const int64_t *Q = c->P + 3 * (size_t)A->ocyc[i + 1 < c1 ? i + 1 : c0];
-                double px = (double)P[i1], py = (double)P[i2], qx = (double)Q[i1], qy = (double)Q[i2];
+                double px = (double)P[i1], py = (double)P[i2], qx = (double)Q[i1],
+                       qy = (double)Q[i2];
                 double ex = qx - px, ey = qy - py, l2 = ex * ex + ey * ey;
                 double tt = l2 > 0 ? ((X - px) * ex + (Y - py) * ey) / l2 : 0;
                 if (tt < 0) tt = 0;
@@ -1780,7 +1801,7 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
             }
         }
     }
-    qsort(I, ni, sizeof *I, inc_cmp);
+    if (ni > 1) qsort(I, ni, sizeof *I, inc_cmp);
     /* face sides around edges: node 2f (+ side), 2f+1 (- side) */
     sp = malloc((2 * nf + 1) * sizeof *sp);
     fcomp = malloc((nf + 1) * sizeof *fcomp);
@@ -1793,7 +1814,7 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         /* drop pairs of the same face walking the edge both ways (inside a face) */
         uint32_t e = I[i].e;
         const int64_t *pa = c->P + 3 * (size_t)evv[2 * e], *pb = c->P + 3 * (size_t)evv[2 * e + 1];
-        fanctx x = {c, A->of, 0, NULL, NULL, 0, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]},
+        fanctx x = {c,    A->of, 0, NULL, NULL, 0, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]},
                     NULL, 0};
         uint32_t sg = umap_get(&A->eplane, key2(evv[2 * e], evv[2 * e + 1]));
         if (sg != NONE && c->S[sg].p0 != c->S[sg].p1) {
@@ -1882,14 +1903,16 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
         double p[3];
         pt(c, best, p);
         static const double dirs[RAY_TRIES][3] = {
-            {0.1234567, 0.0765432, -1},  {-0.21, 0.137, -1},   {0.0571, -0.3117, -1},
-            {-0.0917, -0.1553, -1},      {0.3311, 0.2718, -1}, {0.01, 0.7, -1},
-            {-0.6, 0.05, -1},            {0.45, -0.45, -1}};
+            {0.1234567, 0.0765432, -1}, {-0.21, 0.137, -1},   {0.0571, -0.3117, -1},
+            {-0.0917, -0.1553, -1},     {0.3311, 0.2718, -1}, {0.01, 0.7, -1},
+            {-0.6, 0.05, -1},           {0.45, -0.45, -1}};
         uint32_t hit = NONE - 1;
         for (int t = 0; t < RAY_TRIES && hit == NONE - 1; t++)
             hit = ray_hit(c, A, fcomp, (uint32_t)k, p, dirs[t]);
-        if (hit == NONE || hit == NONE - 1) uf_union(cu, outer[k], EXT);
-        else uf_union(cu, outer[k], shell_id[hit]);
+        if (hit == NONE || hit == NONE - 1)
+            uf_union(cu, outer[k], EXT);
+        else
+            uf_union(cu, outer[k], shell_id[hit]);
     }
     /* cells: classes of shells; the one holding EXT is the exterior */
     cell = malloc((nsh + 2) * sizeof *cell);
@@ -1924,8 +1947,10 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
             c->fins += (i & 1) == 0;
             continue;
         }
-        if (r == ext_root) next++;
-        else out->cf_off[cell[r] + 1]++;
+        if (r == ext_root)
+            next++;
+        else
+            out->cf_off[cell[r] + 1]++;
     }
     for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
     out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
@@ -1987,7 +2012,6 @@ static int cmpi32(const void *pa, const void *pb)
     int32_t a = *(const int32_t *)pa, b = *(const int32_t *)pb;
     return (a > b) - (a < b);
 }
-
 
 /* Renumbers vertices (by coordinates) and edges (by vertex pair) and fills the rest of out. */
 static int stage_output(ctx *c, asm3 *A, lar3 *out)
@@ -2095,7 +2119,7 @@ static int stage_output(ctx *c, asm3 *A, lar3 *out)
                             goto done;
                         }
             }
-            qsort(buf, nb, sizeof *buf, cmpu32);
+            if (nb > 1) qsort(buf, nb, sizeof *buf, cmpu32);
             for (size_t i = 0; i < nb; i++)
                 if (i == 0 || buf[i] != buf[i - 1])
                     if (PUSH(cv, ncv, capcv, buf[i])) {
@@ -2103,14 +2127,15 @@ static int stage_output(ctx *c, asm3 *A, lar3 *out)
                         goto done;
                     }
             out->cv_off[k + 1] = (uint32_t)ncv;
-            qsort(out->cf + out->cf_off[k], out->cf_off[k + 1] - out->cf_off[k], sizeof *out->cf,
-                  cmpi32);
+            if (out->cf_off[k + 1] - out->cf_off[k] > 1)
+                qsort(out->cf + out->cf_off[k], out->cf_off[k + 1] - out->cf_off[k],
+                      sizeof *out->cf, cmpi32);
         }
         free(buf);
         out->cv = cv ? cv : malloc(sizeof *out->cv);
         if (!out->cv) goto done;
     }
-    qsort(out->ext, out->next, sizeof *out->ext, cmpi32);
+    if (out->next > 1) qsort(out->ext, out->next, sizeof *out->ext, cmpi32);
     out->stats.nv = out->nv;
     out->stats.ne = out->ne;
     out->stats.nf = out->nf;
@@ -2123,7 +2148,6 @@ done:
     free(enew);
     return rc;
 }
-
 
 /* ------------------------------------------------------------------ entry */
 

@@ -67,12 +67,12 @@ typedef struct lar3 {
     size_t ne;
     uint32_t *EV; /* 2*ne, v0 < v1, sorted */
     size_t nf;
-    double *FN;        /* 3*nf: unit normal of each face (its orientation) */
-    uint32_t *fc_off;  /* nf+1 */
-    uint32_t *fc;      /* cycle ids */
-    uint32_t *fe_off;  /* nf+1 */
-    int32_t *fe;       /* signed edges of each face (+: walked from EV[0] to EV[1]) */
-    uint32_t *fsrc;    /* nf: the input face (index over all solids' faces) it lies on */
+    double *FN;       /* 3*nf: unit normal of each face (its orientation) */
+    uint32_t *fc_off; /* nf+1 */
+    uint32_t *fc;     /* cycle ids */
+    uint32_t *fe_off; /* nf+1 */
+    int32_t *fe;      /* signed edges of each face (+: walked from EV[0] to EV[1]) */
+    uint32_t *fsrc;   /* nf: the input face (index over all solids' faces) it lies on */
     size_t ncyc;
     uint32_t *cyc_off; /* ncyc+1 */
     uint32_t *cyc;     /* vertex ids */
@@ -83,7 +83,7 @@ typedef struct lar3 {
     uint32_t *cv;      /* sorted vertex ids of each cell */
     double *cvol;      /* nc: volume of each bounded cell */
     size_t next;
-    int32_t *ext;      /* signed faces of the exterior cell (same sign rule) */
+    int32_t *ext;             /* signed faces of the exterior cell (same sign rule) */
     uint32_t *solid_face_off; /* nsolids+1: input faces of solid s are [off[s], off[s+1]) */
     size_t nsolids;
     arr3_stats stats;

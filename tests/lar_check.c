@@ -343,8 +343,8 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
         }
         for (size_t e = 0; e < c->ne; e++)
             if (acc[e]) {
-                bad(msg, len, "%s %zu: d2.d3 != 0 at edge %zu", k < c->nc ? "cell" : "exterior",
-                    k, e);
+                bad(msg, len, "%s %zu: d2.d3 != 0 at edge %zu", k < c->nc ? "cell" : "exterior", k,
+                    e);
                 goto done;
             }
     }

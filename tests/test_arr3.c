@@ -112,8 +112,8 @@ TEST(two_offset_cubes)
     lar3 c;
     long eu;
     if (!run3(s, 2, 0, 0, &c, &eu)) {
-        CHECK(c.nv == 22 && c.ne == 36 && c.nf == 18 && c.nc == 3, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
+        CHECK(c.nv == 22 && c.ne == 36 && c.nf == 18 && c.nc == 3, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
         double want[3] = {.125, .875, .875};
         CHECK(volumes_are(&c, want, 3, 1e-12), "volumes");
         CHECK(eu == 0, "euler %ld", eu);
@@ -129,8 +129,8 @@ TEST(cube_and_rotated_cube)
     lar3 c;
     long eu;
     if (!run3(s, 2, 0, 0, &c, &eu)) {
-        CHECK(c.nv == 20 && c.ne == 34 && c.nf == 18 && c.nc == 3, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
+        CHECK(c.nv == 20 && c.ne == 34 && c.nf == 18 && c.nc == 3, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
         CHECK(eu == 0, "euler %ld", eu);
         double tot = 0;
         for (size_t k = 0; k < c.nc; k++) tot += c.cvol[k];
@@ -179,8 +179,8 @@ TEST(cubes_sharing_a_face)
     lar3 c;
     long eu;
     if (!run3(s, 2, 0, 0, &c, &eu)) {
-        CHECK(c.nv == 12 && c.ne == 20 && c.nf == 11 && c.nc == 2, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
+        CHECK(c.nv == 12 && c.ne == 20 && c.nf == 11 && c.nc == 2, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
         double want[2] = {1, 1};
         CHECK(volumes_are(&c, want, 2, 1e-12), "volumes");
         CHECK(eu == 0, "euler %ld", eu);
@@ -197,8 +197,8 @@ TEST(cube_on_top_of_another)
     lar3 c;
     long eu;
     if (!run3(s, 2, 0, 0, &c, &eu)) {
-        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
+        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
         size_t holes = 0;
         for (size_t f = 0; f < c.nf; f++) holes += c.fc_off[f + 1] - c.fc_off[f] - 1;
         CHECK(holes == 1, "%zu holes", holes);
@@ -231,8 +231,8 @@ TEST(cube_inside_cube_is_a_cavity)
     lar3 c;
     long eu;
     if (!run3(s, 2, 0, 0, &c, &eu)) {
-        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
+        CHECK(c.nv == 16 && c.ne == 24 && c.nf == 12 && c.nc == 2, "V %zu E %zu F %zu C %zu", c.nv,
+              c.ne, c.nf, c.nc);
         double want[2] = {1, 26};
         CHECK(volumes_are(&c, want, 2, 1e-12), "volumes");
         size_t big = c.cvol[0] > c.cvol[1] ? 0 : 1;
@@ -344,10 +344,10 @@ TEST(five_cubes_of_the_seeds)
          * the exterior, 2 faces with a hole, 3 cells with a torus boundary. */
         size_t holes = 0;
         for (size_t f = 0; f < c.nf; f++) holes += c.fc_off[f + 1] - c.fc_off[f] - 1;
-        printf("# fivecubes: V %zu E %zu F %zu C %zu (+1), %zu faces with holes, euler %ld\n",
-               c.nv, c.ne, c.nf, c.nc, holes, eu);
-        CHECK(c.nv == 137 && c.ne == 268 && c.nf == 157 && c.nc == 26,
-              "V %zu E %zu F %zu C %zu", c.nv, c.ne, c.nf, c.nc);
+        printf("# fivecubes: V %zu E %zu F %zu C %zu (+1), %zu faces with holes, euler %ld\n", c.nv,
+               c.ne, c.nf, c.nc, holes, eu);
+        CHECK(c.nv == 137 && c.ne == 268 && c.nf == 157 && c.nc == 26, "V %zu E %zu F %zu C %zu",
+              c.nv, c.ne, c.nf, c.nc);
         CHECK(holes == 2, "%zu holes", holes);
     }
     lar3_free(&c);
@@ -390,4 +390,96 @@ TEST(random_rotated_cubes)
             free_all(s, n);
             free(s);
         }
+}
+
+/* Volume of the union of n boxes (6 numbers each) with its voids filled, by coordinate
+ * compression: the compressed cells not covered by any box and not reachable from outside
+ * through faces of other such cells are voids, and a void the boxes enclose is a bounded cell of
+ * the arrangement too. */
+static double filled_union_volume(const double *bx, size_t n)
+{
+    double *c[3];
+    size_t m[3];
+    for (int a = 0; a < 3; a++) {
+        c[a] = malloc((2 * n + 2) * sizeof(double));
+        for (size_t i = 0; i < n; i++)
+            c[a][2 * i] = bx[6 * i + a], c[a][2 * i + 1] = bx[6 * i + 3 + a];
+        qsort(c[a], 2 * n, sizeof(double), cmp_double);
+        m[a] = 0;
+        for (size_t i = 0; i < 2 * n; i++)
+            if (!m[a] || c[a][i] != c[a][m[a] - 1]) c[a][m[a]++] = c[a][i];
+    }
+    /* cells (i, j, k) of the compressed grid, with a layer of outside around: index + 1 */
+    size_t X = m[0] + 1, Y = m[1] + 1, Z = m[2] + 1, N = X * Y * Z;
+    char *st = calloc(N, 1); /* 0 empty, 1 covered, 2 reached from outside */
+    size_t *stack = malloc(N * sizeof *stack), sp = 0;
+    for (size_t i = 1; i + 1 < X; i++)
+        for (size_t j = 1; j + 1 < Y; j++)
+            for (size_t k = 1; k + 1 < Z; k++) {
+                double p[3] = {(c[0][i - 1] + c[0][i]) / 2, (c[1][j - 1] + c[1][j]) / 2,
+                               (c[2][k - 1] + c[2][k]) / 2};
+                for (size_t b = 0; b < n; b++)
+                    if (p[0] > bx[6 * b] && p[0] < bx[6 * b + 3] && p[1] > bx[6 * b + 1] &&
+                        p[1] < bx[6 * b + 4] && p[2] > bx[6 * b + 2] && p[2] < bx[6 * b + 5]) {
+                        st[(i * Y + j) * Z + k] = 1;
+                        break;
+                    }
+            }
+    st[0] = 2;
+    stack[sp++] = 0;
+    while (sp) {
+        size_t q = stack[--sp], i = q / (Y * Z), j = q / Z % Y, k = q % Z;
+        long d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        for (int t = 0; t < 6; t++) {
+            long a = (long)i + d[t][0], b = (long)j + d[t][1], e = (long)k + d[t][2];
+            if (a < 0 || b < 0 || e < 0 || a >= (long)X || b >= (long)Y || e >= (long)Z) continue;
+            size_t r = ((size_t)a * Y + (size_t)b) * Z + (size_t)e;
+            if (st[r]) continue;
+            st[r] = 2;
+            stack[sp++] = r;
+        }
+    }
+    double v = 0;
+    for (size_t i = 1; i + 1 < X; i++)
+        for (size_t j = 1; j + 1 < Y; j++)
+            for (size_t k = 1; k + 1 < Z; k++)
+                if (st[(i * Y + j) * Z + k] != 2)
+                    v +=
+                        (c[0][i] - c[0][i - 1]) * (c[1][j] - c[1][j - 1]) * (c[2][k] - c[2][k - 1]);
+    free(st);
+    free(stack);
+    for (int a = 0; a < 3; a++) free(c[a]);
+    return v;
+}
+
+/* Random boxes on a lattice of step 1/4: faces share planes, edges and corners everywhere (the
+ * coplanar cases), and the cells must fill the union (voids filled) exactly. */
+TEST(random_boxes_on_a_lattice)
+{
+    for (uint64_t seed = 1; seed <= 60; seed++) {
+        size_t n = 4 + seed % 27;
+        uint64_t st = seed * 1000 + 7;
+        double *bx = malloc(6 * n * sizeof *bx);
+        solid *s = calloc(n, sizeof *s);
+        for (size_t i = 0; i < n; i++) {
+            for (int a = 0; a < 3; a++) {
+                double lo = floor(test_rnd(&st) * 8) / 4, len = (1 + floor(test_rnd(&st) * 6)) / 4;
+                bx[6 * i + a] = lo, bx[6 * i + 3 + a] = lo + len;
+            }
+            s[i] = box(bx[6 * i], bx[6 * i + 1], bx[6 * i + 2], bx[6 * i + 3], bx[6 * i + 4],
+                       bx[6 * i + 5]);
+        }
+        lar3 c;
+        long eu;
+        if (!run3(s, n, 0, 0, &c, &eu)) {
+            double sum = 0, want = filled_union_volume(bx, n);
+            for (size_t k = 0; k < c.nc; k++) sum += c.cvol[k];
+            CHECK(fabs(sum - want) < 1e-12, "seed %llu: cells %.17g, union %.17g",
+                  (unsigned long long)seed, sum, want);
+        }
+        lar3_free(&c);
+        free_all(s, n);
+        free(s);
+        free(bx);
+    }
 }

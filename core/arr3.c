@@ -989,6 +989,9 @@ typedef struct gwork { /* scratch of one worker */
     size_t nhit, caphit;
 } gwork;
 
+/* Grid coordinates stay below 2^(ARR3_GRID_BITS - 1) + 2^4 in magnitude (the origin is the
+ * box's centre), so both fit in 32 bits. */
+_Static_assert(ARR3_GRID_BITS <= 31, "ipt_key packs two coordinates in 64 bits");
 static uint64_t ipt_key(ipt p)
 {
     return (uint64_t)(p.x + (1LL << 31)) << 32 | (uint64_t)(p.y + (1LL << 31));
@@ -1976,6 +1979,9 @@ static int stage_cells(ctx *c, asm3 *A, lar3 *out)
             out->cvol[k] += ((i & 1) ? cone[i / 2] : -cone[i / 2]) * h3;
         }
     }
+    /* a bounded cell of less than half a grid cube is a fold of rounding, not a region */
+    for (size_t k = 0; k < nc; k++)
+        if (!(out->cvol[k] / (h3 * 6) >= 0.5)) c->fins++;
     free(fill);
     free(cu);
     out->ne = ne;
@@ -2245,8 +2251,9 @@ fail : {
     return rc;
 }
 
-/* A closed surface has no face with one cell on both sides; rounding can still make one where
- * planes nearly coincide along a line (the faces' order about such an edge is then only noise).
+/* A closed surface has no face with one cell on both sides, and no cell without volume; rounding
+ * can still make them where planes nearly coincide along a line (the faces' order about such an
+ * edge is then only noise).
  * The arrangement is then made again on a grid twice as coarse, up to ARR3_RETRIES times, and
  * stats.precision says which grid was used. */
 int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
@@ -2261,8 +2268,9 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
         if (attempt == ARR3_RETRIES) {
             lar3_free(out);
             return seterr(err, errlen, ARR_EINTERNAL,
-                          "solids: %zu faces have one cell on both sides at precision %g (planes "
-                          "too nearly coincident for this grid); try a coarser precision",
+                          "solids: %zu faces have one cell on both sides or cells have no volume "
+                          "at precision %g (planes too nearly coincident for this grid); try a "
+                          "coarser precision",
                           fins, o.precision);
         }
         o.precision = 2 * out->stats.precision;

@@ -31,7 +31,7 @@
 #include "core/arr2.h" /* ARR_* codes */
 #include "core/solid.h"
 
-#define ARR3_GRID_BITS  26       /* extent / precision must be <= 2^ARR3_GRID_BITS */
+#define ARR3_GRID_BITS  30       /* extent / precision must be <= 2^ARR3_GRID_BITS */
 #define ARR3_MAX_FACES  2000000u /* input faces, all solids together */
 #define ARR3_MAX_ROUNDS 32       /* rounds of the plane-group arrangements before giving up */
 #define ARR3_RETRIES    3        /* runs again on a grid twice as coarse (see arr3_build) */

@@ -228,15 +228,40 @@ static long find_edge3(const lar3 *c, uint32_t u, uint32_t v)
     return -1;
 }
 
+/* Six times the signed volume of the cone from o over face f's cycles (fans). */
+static double cone6(const lar3 *c, uint32_t f, const double *o)
+{
+    double s = 0;
+    for (uint32_t cy = c->fc_off[f]; cy < c->fc_off[f + 1]; cy++) {
+        uint32_t c0 = c->cyc_off[c->fc[cy]], c1 = c->cyc_off[c->fc[cy] + 1];
+        const double *q0 = c->V + 3 * (size_t)c->cyc[c0];
+        double a[3] = {q0[0] - o[0], q0[1] - o[1], q0[2] - o[2]};
+        for (uint32_t i = c0 + 1; i + 1 < c1; i++) {
+            const double *q1 = c->V + 3 * (size_t)c->cyc[i], *q2 = c->V + 3 * (size_t)c->cyc[i + 1];
+            double b[3] = {q1[0] - o[0], q1[1] - o[1], q1[2] - o[2]};
+            double d[3] = {q2[0] - o[0], q2[1] - o[1], q2[2] - o[2]};
+            s += a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) +
+                 a[2] * (b[0] * d[1] - b[1] * d[0]);
+        }
+    }
+    return s;
+}
+
+/* The cones are taken from a vertex of the cell, so that a small cell far from the origin does
+ * not lose its volume to cancellation. */
 double lar3_cell_volume(const lar3 *c, size_t k)
 {
     double v = 0;
+    if (c->cf_off[k] == c->cf_off[k + 1]) return 0;
+    int32_t s0 = c->cf[c->cf_off[k]];
+    uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1;
+    const double *o = c->V + 3 * (size_t)c->cyc[c->cyc_off[c->fc[c->fc_off[f0]]]];
     for (uint32_t i = c->cf_off[k]; i < c->cf_off[k + 1]; i++) {
         int32_t s = c->cf[i];
         uint32_t f = (uint32_t)(s > 0 ? s : -s) - 1;
-        v += (s > 0 ? 1 : -1) * lar3_face_cone(c, f);
+        v += (s > 0 ? 1 : -1) * cone6(c, f, o);
     }
-    return v;
+    return v / 6;
 }
 
 /* Adds sign * FE(f) into acc (per edge). */
@@ -354,10 +379,12 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
                 seen[f] / 16);
             goto done;
         }
-    double total = 0, ext = 0;
+    double total = 0, ext = 0, total_scale = 0;
+    for (size_t k = 0; k < c->nc; k++) total_scale += fabs(c->cvol[k]);
+    total_scale = total_scale / (c->nc + 1) + 1e-300;
     for (size_t k = 0; k < c->nc; k++) {
         double v = lar3_cell_volume(c, k);
-        if (!(v > 0) || fabs(v - c->cvol[k]) > 1e-9 * (fabs(v) + 1)) {
+        if (!(v > 0) || fabs(v - c->cvol[k]) > 1e-9 * (fabs(v) + total_scale)) {
             bad(msg, len, "cell %zu: volume %.17g (cvol %.17g)", k, v, c->cvol[k]);
             goto done;
         }

@@ -16,6 +16,7 @@
 
 #include "api/api.h"
 #include "core/arr2.h"
+#include "core/boolexpr.h"
 #include "core/arr3.h"
 
 typedef struct api_buf {
@@ -163,5 +164,11 @@ typedef struct api_lar3_fmt {
  * API_ENOMEM (b failed or a scratch allocation failed) or API_EINTERNAL (c breaks an invariant
  * the writer relies on: an index out of range, offsets that decrease). */
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err);
+
+/* Compiles a request's "op" (api/boolop.c): a named operation ("union", "intersection",
+ * "difference", "xor") over all ninputs inputs, or an expression tree such as
+ * ["-", 0, ["+", 1, 2]] with operators + & - ^ and input indices.  Returns API_OK with *out
+ * checked (bool_expr_free it), or API_EINVALID naming the JSON path under "op". */
+int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err);
 
 #endif

@@ -1,0 +1,79 @@
+/* boolop.c — the "op" of a request (issue "Boolean chains"): a named variadic operation or an
+ * expression tree, compiled to a core bool_expr.
+ *
+ *   "op": "union" | "intersection" | "difference" | "xor"      (over all inputs)
+ *   "op": ["-", 0, ["+", 1, 2]]   operators + & - ^ (union, intersection, difference, xor), each
+ *                                 with two operands or more ("-": the first minus the others);
+ *                                 an operand is an input index or a nested expression.
+ * Errors name the JSON path ("op[2][1]: input 7 out of range (3 inputs)").  Nesting is limited
+ * to API_BOOL_MAX_DEPTH levels (jansson's own limit is far above).
+ */
+#include "api/api_int.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define API_BOOL_MAX_DEPTH 64
+
+static int compile(const json_t *t, size_t ninputs, bool_expr *e, char *path, size_t plen,
+                   int depth, api_error *err)
+{
+    if (json_is_integer(t)) {
+        json_int_t i = json_integer_value(t);
+        if (i < 0 || (size_t)i >= ninputs)
+            return api_fail(err, API_EINVALID, "%s: input %lld out of range (%zu inputs)", path,
+                            (long long)i, ninputs);
+        if (bool_expr_push(e, (int32_t)i)) return api_fail(err, API_ENOMEM, "out of memory");
+        return API_OK;
+    }
+    if (!json_is_array(t) || json_array_size(t) < 3)
+        return api_fail(err, API_EINVALID,
+                        "%s: expected an input index or [operator, operand, operand, ...]", path);
+    if (depth >= API_BOOL_MAX_DEPTH)
+        return api_fail(err, API_EINVALID, "%s: expressions nest deeper than %d levels", path,
+                        API_BOOL_MAX_DEPTH);
+    const char *s = json_string_value(json_array_get(t, 0));
+    int32_t op;
+    if (s && !strcmp(s, "+"))
+        op = BOOL_OR;
+    else if (s && !strcmp(s, "&"))
+        op = BOOL_AND;
+    else if (s && !strcmp(s, "-"))
+        op = BOOL_SUB;
+    else if (s && !strcmp(s, "^"))
+        op = BOOL_XOR;
+    else
+        return api_fail(err, API_EINVALID,
+                        "%s[0]: expected an operator: \"+\", \"&\", \"-\" or \"^\"", path);
+    size_t n = json_array_size(t), len = strlen(path);
+    for (size_t i = 1; i < n; i++) {
+        snprintf(path + len, plen - len, "[%zu]", i);
+        int rc = compile(json_array_get(t, i), ninputs, e, path, plen, depth + 1, err);
+        path[len] = 0;
+        if (rc) return rc;
+        /* a - b - c is a - (b + c): the rest are or-ed, then subtracted once */
+        int32_t join = op == BOOL_SUB ? (i >= 3 ? BOOL_OR : 0) : (i >= 2 ? op : 0);
+        if (join && bool_expr_push(e, join)) return api_fail(err, API_ENOMEM, "out of memory");
+    }
+    if (op == BOOL_SUB && bool_expr_push(e, BOOL_SUB))
+        return api_fail(err, API_ENOMEM, "out of memory");
+    return API_OK;
+}
+
+int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (ninputs == 0) return api_fail(err, API_EINVALID, "op: there are no inputs to combine");
+    if (json_is_string(op)) {
+        if (bool_expr_named(json_string_value(op), ninputs, out))
+            return api_fail(err, API_EINVALID,
+                            "op: expected \"union\", \"intersection\", \"difference\", \"xor\" or "
+                            "an expression such as [\"-\", 0, [\"+\", 1, 2]]");
+        return API_OK;
+    }
+    char path[4096] = "op";
+    int rc = compile(op, ninputs, out, path, sizeof path, 0, err);
+    if (!rc && bool_expr_check(out, ninputs)) rc = api_fail(err, API_EINTERNAL, "op: bad program");
+    if (rc) bool_expr_free(out);
+    return rc;
+}

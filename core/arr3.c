@@ -1443,15 +1443,30 @@ static int inside_input_face(const ctx *c, uint32_t f, int k, const double *x)
 typedef struct outface {
     uint32_t group, src;
     uint32_t c0, nc; /* cycles in ocyc_off */
+    uint32_t s0, ns; /* the solids whose surface holds it: fsol[s0 .. s0 + ns) */
 } outface;
 
 typedef struct asm3 {
     umap eplane; /* (lo, hi) global edge -> a segment it is a piece of: its two planes */
+    uint32_t *fsol; /* solids of the faces (outface.s0, ns) */
+    size_t nfsol, capfsol;
     outface *of;
     size_t nof, capof;
     uint32_t *ocyc_off, *ocyc;
     size_t nocyc, nocv, capoff, capocv;
 } asm3;
+
+/* Adds solid s to the list that starts at fsol[s0] (the face's, the last list), or removes it
+ * when there: a face on two faces of one solid is inside that solid on both sides. */
+static int fsol_toggle(asm3 *A, size_t s0, uint32_t s)
+{
+    for (size_t i = s0; i < A->nfsol; i++)
+        if (A->fsol[i] == s) {
+            A->fsol[i] = A->fsol[--A->nfsol];
+            return 0;
+        }
+    return PUSH(A->fsol, A->nfsol, A->capfsol, s);
+}
 
 static int asm_cycle(const ctx *c, asm3 *A, const group *g, const lar2 *L, uint32_t cy, int rev)
 {
@@ -1495,9 +1510,10 @@ static int faces_dedup(asm3 *A)
     uint32_t *off = malloc((nf + 1) * sizeof *off), *sv = malloc((A->nocv + 1) * sizeof *sv);
     uint32_t *ord = malloc((nf + 1) * sizeof *ord);
     uint8_t *drop = calloc(nf + 1, 1);
+    uint32_t *drop_to = malloc((nf + 1) * sizeof *drop_to);
     uint32_t *noff = NULL, *ncyc = NULL;
     int rc = -1;
-    if (!off || !sv || !ord || !drop) goto done;
+    if (!off || !sv || !ord || !drop || !drop_to) goto done;
     off[0] = 0;
     for (size_t f = 0; f < nf; f++) {
         const outface *F = &A->of[f];
@@ -1514,8 +1530,21 @@ static int faces_dedup(asm3 *A)
         uint32_t a = ord[i - 1], b = ord[i];
         if (off[a + 1] - off[a] == off[b + 1] - off[b] &&
             !memcmp(sv + off[a], sv + off[b], (off[a + 1] - off[a]) * sizeof *sv)) {
+            uint32_t keep = a;
+            while (drop[keep]) keep = drop_to[keep]; /* the first of a run of equals */
             drop[b] = 1; /* ord is by index among equals: a < b, a kept */
+            drop_to[b] = keep;
             ndrop++;
+            /* the kept face lies on the solids of both: a new list, their symmetric difference */
+            outface *K = &A->of[keep];
+            const outface *D = &A->of[b];
+            size_t s0 = A->nfsol;
+            for (uint32_t j = 0; j < K->ns; j++)
+                if (fsol_toggle(A, s0, A->fsol[K->s0 + j])) goto done;
+            for (uint32_t j = 0; j < D->ns; j++)
+                if (fsol_toggle(A, s0, A->fsol[D->s0 + j])) goto done;
+            K->s0 = (uint32_t)s0;
+            K->ns = (uint32_t)(A->nfsol - s0);
         }
     }
     if (ndrop) { /* compact faces and their cycles */
@@ -1549,6 +1578,7 @@ done:
     free(sv);
     free(ord);
     free(drop);
+    free(drop_to);
     free(noff);
     free(ncyc);
     return rc;
@@ -1578,15 +1608,22 @@ static int stage_faces(ctx *c, asm3 *A)
         int rev = g->n[g->k] < 0;
         for (uint32_t f = 0; f < L->nf; f++) {
             uint32_t src = gf[gf_off[gi]];
+            size_t s0 = A->nfsol;
             if (!single) {
                 double x[2];
                 face_inner_point(L, f, x);
                 src = NONE;
-                for (uint32_t i = gf_off[gi]; i < gf_off[gi + 1] && src == NONE; i++)
-                    if (inside_input_face(c, gf[i], g->k, x)) src = gf[i];
+                for (uint32_t i = gf_off[gi]; i < gf_off[gi + 1]; i++) {
+                    if (!inside_input_face(c, gf[i], g->k, x)) continue;
+                    if (src == NONE) src = gf[i];
+                    if (fsol_toggle(A, s0, c->F[gf[i]].solid)) goto oom;
+                }
                 if (src == NONE) continue;
+            } else if (fsol_toggle(A, s0, c->F[src].solid)) {
+                goto oom;
             }
-            outface o = {(uint32_t)gi, src, (uint32_t)A->nocyc, 0};
+            outface o = {(uint32_t)gi, src, (uint32_t)A->nocyc, 0, (uint32_t)s0,
+                         (uint32_t)(A->nfsol - s0)};
             if (asm_cycle(c, A, g, L, L->face_cycle[f], rev)) goto oom;
             o.nc++;
             for (uint32_t h = L->hole_off[f]; h < L->hole_off[f + 1]; h++) {
@@ -2106,6 +2143,17 @@ static int stage_output(ctx *c, asm3 *A, lar3 *out)
         out->fe_off[f + 1] = (uint32_t)nfe;
     }
     umap_free(&em);
+    out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
+    out->fsol = malloc((A->nfsol + 1) * sizeof *out->fsol);
+    if (!out->fsol_off || !out->fsol) goto done;
+    out->fsol_off[0] = 0;
+    for (size_t f = 0, n = 0; f < nf; f++) {
+        const outface *F = &A->of[f];
+        memcpy(out->fsol + n, A->fsol + F->s0, F->ns * sizeof *out->fsol);
+        if (F->ns > 1) qsort(out->fsol + n, F->ns, sizeof *out->fsol, cmpu32);
+        n += F->ns;
+        out->fsol_off[f + 1] = (uint32_t)n;
+    }
     for (size_t cy = 0; cy <= A->nocyc; cy++) out->cyc_off[cy] = A->ocyc_off[cy];
     for (size_t i = 0; i < A->nocv; i++) out->cyc[i] = newid[A->ocyc[i]];
     /* CV: sorted vertices of each cell's faces */
@@ -2232,6 +2280,7 @@ static int build_once(const solid *solids, size_t ns, int soup, const arr3_opts 
     free(A.of);
     free(A.ocyc_off);
     free(A.ocyc);
+    free(A.fsol);
     umap_free(&A.eplane);
     ctx_free(&c);
     return ARR_OK;
@@ -2246,6 +2295,7 @@ fail : {
     free(A.of);
     free(A.ocyc_off);
     free(A.ocyc);
+    free(A.fsol);
     umap_free(&A.eplane);
     ctx_free(&c);
     return rc;
@@ -2297,6 +2347,8 @@ void lar3_free(lar3 *c)
     free(c->cvol);
     free(c->ext);
     free(c->solid_face_off);
+    free(c->fsol_off);
+    free(c->fsol);
     memset(c, 0, sizeof *c);
 }
 

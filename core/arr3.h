@@ -73,6 +73,10 @@ typedef struct lar3 {
     uint32_t *fe_off; /* nf+1 */
     int32_t *fe;      /* signed edges of each face (+: walked from EV[0] to EV[1]) */
     uint32_t *fsrc;   /* nf: the input face (index over all solids' faces) it lies on */
+    uint32_t *fsol_off; /* nf+1: the solids whose surface holds face f (an odd number of their
+                           faces do): fsol[fsol_off[f] .. fsol_off[f+1]), ascending; crossing f
+                           goes into or out of exactly these solids */
+    uint32_t *fsol;
     size_t ncyc;
     uint32_t *cyc_off; /* ncyc+1 */
     uint32_t *cyc;     /* vertex ids */

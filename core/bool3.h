@@ -1,0 +1,47 @@
+/* bool3.h — Boolean chains of a 3D arrangement (issue "Boolean chains"): which input solids
+ * each cell lies in, and the cells and boundary of any Boolean expression of the solids.
+ *
+ * Membership is exact and needs no ray: the exterior cell lies in no solid, and crossing a face
+ * goes into or out of exactly the solids whose surface holds that face (lar3.fsol: the input
+ * faces covering it, by a point strictly inside the face, counted modulo 2 per solid).  A walk
+ * over the cells through their faces, from the exterior, so gives every cell's membership; a
+ * cell reached twice with two different memberships would be a broken complex, and is reported.
+ * This is the parity test along a path of cells instead of along a ray: it never meets an edge
+ * or a vertex, since it crosses faces only, each at a point of its interior.
+ *
+ * A result is the chain of the cells where the expression is 1; its boundary is the faces with
+ * such a cell on exactly one side, each signed so that its normal points out of the result
+ * (∂3 of the chain).
+ *
+ * Threads: reentrant, no globals.  Ownership: inputs borrowed; results freed with
+ * bool3_result_free().
+ */
+#ifndef CELLAR_BOOL3_H
+#define CELLAR_BOOL3_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/arr3.h"
+#include "core/boolexpr.h"
+
+/* Fills mem (c->nc rows of c->nsolids bytes, 0/1) with each bounded cell's membership.
+ * Returns 0, -1 when out of memory, or the number of cells found with two memberships (> 0: the
+ * complex is inconsistent; mem then holds the first one found). */
+long bool3_membership(const lar3 *c, uint8_t *mem);
+
+typedef struct bool3_result {
+    size_t ncells;
+    uint32_t *cells; /* the selected bounded cells, ascending */
+    size_t nfaces;
+    int32_t *faces; /* the boundary: ±(f+1), + when face f's normal points out of the result */
+    double volume;  /* of the selected cells */
+} bool3_result;
+
+/* The cells where e (checked for c->nsolids inputs) is 1, and their boundary.  0 or -1
+ * (out of memory; *r then empty). */
+int bool3_select(const lar3 *c, const uint8_t *mem, const bool_expr *e, bool3_result *r);
+
+void bool3_result_free(bool3_result *r);
+
+#endif

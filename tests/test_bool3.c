@@ -1,0 +1,167 @@
+/* test_bool3.c — Boolean chains of 3D arrangements (core/bool3.c): membership, the selected
+ * cells, and their boundary, closed and outward (∂2 of the boundary is 0, its enclosed volume is
+ * the cells' volume). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/arr3.h"
+#include "core/bool3.h"
+#include "core/boolexpr.h"
+#include "core/solid.h"
+#include "tests/check.h"
+#include "tests/lar_check.h"
+
+static const uint32_t cube_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                          {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+
+static solid box(double x0, double y0, double z0, double x1, double y1, double z1)
+{
+    solid s = {0};
+    s.nv = 8;
+    s.V = malloc(24 * sizeof *s.V);
+    s.nf = s.ncyc = 6;
+    s.face_off = malloc(7 * sizeof *s.face_off);
+    s.cyc_off = malloc(7 * sizeof *s.cyc_off);
+    s.cyc = malloc(24 * sizeof *s.cyc);
+    for (int i = 0; i < 8; i++) {
+        s.V[3 * i] = i & 1 ? x1 : x0;
+        s.V[3 * i + 1] = i & 2 ? y1 : y0;
+        s.V[3 * i + 2] = i & 4 ? z1 : z0;
+    }
+    for (int f = 0; f <= 6; f++) s.face_off[f] = (uint32_t)f, s.cyc_off[f] = (uint32_t)(4 * f);
+    for (int f = 0; f < 6; f++) memcpy(s.cyc + 4 * f, cube_faces[f], 4 * sizeof(uint32_t));
+    return s;
+}
+
+/* Checks the result's boundary: closed (every edge's signed count is 0) and enclosing the
+ * volume of its cells; returns its area. */
+static double check_boundary(const lar3 *c, const bool3_result *r)
+{
+    long *acc = calloc(c->ne + 1, sizeof *acc);
+    double vol = 0, area = 0;
+    for (size_t i = 0; i < r->nfaces; i++) {
+        int32_t s = r->faces[i];
+        uint32_t f = (uint32_t)abs(s) - 1;
+        for (uint32_t j = c->fe_off[f]; j < c->fe_off[f + 1]; j++) {
+            int32_t e = c->fe[j];
+            acc[abs(e) - 1] += (s > 0 ? 1 : -1) * (e > 0 ? 1 : -1);
+        }
+        vol += (s > 0 ? 1 : -1) * lar3_face_cone(c, f);
+        /* area: |sum of cross products| over the cycles, along the normal */
+        for (uint32_t cy = c->fc_off[f]; cy < c->fc_off[f + 1]; cy++) {
+            uint32_t c0 = c->cyc_off[c->fc[cy]], c1 = c->cyc_off[c->fc[cy] + 1];
+            double n[3] = {0, 0, 0};
+            for (uint32_t k = c0; k < c1; k++) {
+                const double *p = c->V + 3 * c->cyc[k],
+                             *q = c->V + 3 * c->cyc[k + 1 < c1 ? k + 1 : c0];
+                n[0] += p[1] * q[2] - p[2] * q[1];
+                n[1] += p[2] * q[0] - p[0] * q[2];
+                n[2] += p[0] * q[1] - p[1] * q[0];
+            }
+            area += (n[0] * c->FN[3 * f] + n[1] * c->FN[3 * f + 1] + n[2] * c->FN[3 * f + 2]) / 2;
+        }
+    }
+    size_t open = 0;
+    for (size_t e = 0; e < c->ne; e++) open += acc[e] != 0;
+    CHECK(open == 0, "the boundary is open at %zu edges", open);
+    CHECK(fabs(vol - r->volume) < 1e-9 * (fabs(vol) + 1), "boundary encloses %.17g, cells %.17g",
+          vol, r->volume);
+    free(acc);
+    return area;
+}
+
+typedef struct want {
+    const char *op;
+    size_t faces;
+    double volume, area; /* area < 0: not checked */
+} want;
+
+static void run_ops(solid *s, size_t n, const want *w, size_t nw)
+{
+    arr3_opts o = {0};
+    lar3 c;
+    char err[256], msg[256];
+    REQUIRE(!arr3_build(s, n, 0, &o, &c, err, sizeof err), "arr3_build: %s", err);
+    CHECK(!lar3_check(&c, 1e-6, NULL, msg, sizeof msg), "lar3_check: %s", msg);
+    uint8_t *mem = malloc(c.nc * n + 1);
+    long bad = bool3_membership(&c, mem);
+    CHECK(bad == 0, "membership: %ld inconsistent cells", bad);
+    /* every bounded cell lies in some solid, unless it is a void the solids enclose */
+    for (size_t i = 0; i < nw; i++) {
+        bool_expr e;
+        REQUIRE(!bool_expr_named(w[i].op, n, &e), "%s", w[i].op);
+        bool3_result r;
+        REQUIRE(!bool3_select(&c, mem, &e, &r), "select");
+        CHECK(r.nfaces == w[i].faces, "%s: %zu boundary faces, want %zu", w[i].op, r.nfaces,
+              w[i].faces);
+        CHECK(fabs(r.volume - w[i].volume) < 1e-9, "%s: volume %.17g, want %.17g", w[i].op,
+              r.volume, w[i].volume);
+        double area = check_boundary(&c, &r);
+        if (w[i].area >= 0)
+            CHECK(fabs(area - w[i].area) < 1e-9, "%s: area %.17g, want %.17g", w[i].op, area,
+                  w[i].area);
+        bool3_result_free(&r);
+        bool_expr_free(&e);
+    }
+    free(mem);
+    lar3_free(&c);
+}
+
+TEST(two_offset_cubes)
+{
+    solid s[2] = {box(0, 0, 0, 1, 1, 1), box(.5, .5, .5, 1.5, 1.5, 1.5)};
+    want w[] = {{"union", 12, 1.875, 6 * 1 + 6 * 1 - 6 * .25},
+                {"intersection", 6, 0.125, 6 * .25},
+                {"difference", 9, 0.875, 6 - 3 * .25 + 3 * .25},
+                {"xor", 18, 1.75, -1}};
+    run_ops(s, 2, w, sizeof w / sizeof *w);
+    solid_free(&s[0]), solid_free(&s[1]);
+}
+
+TEST(touching_and_coplanar)
+{
+    solid a[2] = {box(0, 0, 0, 1, 1, 1), box(1, 0, 0, 2, 1, 1)}; /* sharing a face */
+    want wa[] = {{"union", 10, 2, 10}, {"intersection", 0, 0, 0}, {"difference", 6, 1, 6}};
+    run_ops(a, 2, wa, 3);
+    solid b[2] = {box(0, 0, 0, 1, 1, 1), box(0, 0, 0, 1, 1, 1)}; /* a cube minus itself */
+    want wb[] = {
+        {"difference", 0, 0, 0}, {"union", 6, 1, 6}, {"intersection", 6, 1, 6}, {"xor", 0, 0, 0}};
+    run_ops(b, 2, wb, 4);
+    solid d[2] = {box(0, 0, 0, 3, 3, 3), box(1, 1, 1, 2, 2, 2)}; /* a cavity */
+    want wd[] = {{"difference", 12, 26, 54 + 6}, {"union", 6, 27, 54}, {"intersection", 6, 1, 6}};
+    run_ops(d, 2, wd, 3);
+    solid x[2] = {box(0, 0, 0, 1, 1, 1), box(.5, 0, 0, 1.5, 1, 1)}; /* xor, shifted by half */
+    want wx[] = {
+        {"xor", 12, 1, 2 * (2 + 4 * .5)}, {"union", 14, 1.5, 8}, {"intersection", 6, .5, 4}};
+    run_ops(x, 2, wx, 3);
+    for (int i = 0; i < 2; i++)
+        solid_free(&a[i]), solid_free(&b[i]), solid_free(&d[i]), solid_free(&x[i]);
+}
+
+/* Three cubes and an expression tree: 0 - (1 + 2). */
+TEST(expression_tree)
+{
+    solid s[3] = {box(0, 0, 0, 2, 2, 2), box(1, 0, 0, 3, 1, 1), box(0, 1, 1, 1, 3, 3)};
+    arr3_opts o = {0};
+    lar3 c;
+    char err[256];
+    REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
+    uint8_t *mem = malloc(c.nc * 3 + 1);
+    CHECK(bool3_membership(&c, mem) == 0, "membership");
+    bool_expr e = {0};
+    int32_t prog[] = {0, 1, 2, BOOL_OR, BOOL_SUB};
+    for (size_t i = 0; i < 5; i++) bool_expr_push(&e, prog[i]);
+    REQUIRE(!bool_expr_check(&e, 3), "check");
+    bool3_result r;
+    REQUIRE(!bool3_select(&c, mem, &e, &r), "select");
+    /* 8 - (1*1*1 inside of cube 1) - (1*1*1 inside of cube 2) */
+    CHECK(fabs(r.volume - 6) < 1e-12, "volume %.17g", r.volume);
+    check_boundary(&c, &r);
+    bool3_result_free(&r);
+    bool_expr_free(&e);
+    free(mem);
+    lar3_free(&c);
+    for (int i = 0; i < 3; i++) solid_free(&s[i]);
+}

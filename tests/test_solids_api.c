@@ -193,8 +193,8 @@ static const err_case err_cases[] = {
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":{\"precision\":\"0.1\"}}", 422,
      "options.precision: expected a number > 0", NULL},
     {SOLIDS(CUBE) "x", 400, "malformed JSON", NULL},
-    {"{\"kind\":\"solids\",\"solids\":[" CUBE "],\"options\":{\"precision\":1e-9}}", 422,
-     "options.precision: 1e-09 is finer than the input allows", NULL},
+    {"{\"kind\":\"solids\",\"solids\":[" CUBE "],\"options\":{\"precision\":1e-10}}", 422,
+     "options.precision: 1e-10 is finer than the input allows", NULL},
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":{\"operators\":1}}", 422,
      "options.operators: expected true or false", NULL},
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":{\"fields\":[\"V\",\"faces\"]}}", 422,
@@ -1154,13 +1154,13 @@ TEST(core_soup_and_fields)
     CHECK(json_number_value(json_object_get(json_object_get(r, "stats"), "precision")) == 0.001,
           "precision");
     json_decref(r);
-    /* the default precision: the power of two above extent * 2^-26 (a cube of side 3: 2^-24) */
+    /* the default precision: the power of two above extent * 2^-30 (a cube of side 3: 2^-28) */
     r = run_ok("{\"kind\":\"solids\",\"solids\":[{\"V\":[[0,0,0],[3,0,0],[3,3,0],[0,3,0],[0,0,3],"
                "[3,0,3],[3,3,3],[0,3,3]],\"FV\":" CUBE_FV
                "}],\"options\":{\"fields\":[\"stats\"]}}");
     REQUIRE(r, "no result");
     CHECK(json_number_value(json_object_get(json_object_get(r, "stats"), "precision")) ==
-              ldexp(1, -24),
+              ldexp(1, -28),
           "default precision %.17g",
           json_number_value(json_object_get(json_object_get(r, "stats"), "precision")));
     json_decref(r);

@@ -1,0 +1,426 @@
+/* test_bool2.c — 2D Booleans (core/bool2.h, kind "polygons"): hand-made cases with known areas
+ * and boundaries, the seeds' bool2 test03 (two complexes combined through the arrangement of
+ * their boundaries), expression trees, a differential test against GEOS (GEOSUnion,
+ * GEOSIntersection, GEOSDifference, GEOSSymDifference areas to 1e-9 relative on random star
+ * polygons with holes and random rectangles), and the request's error paths. */
+#define GEOS_USE_ONLY_R_API
+#include <geos_c.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "api/api.h"
+#include "core/bool2.h"
+#include "tests/check.h"
+
+/* ---- building inputs ------------------------------------------------------------------------ */
+
+#define PB_MAXP  64
+#define PB_MAXR  256
+#define PB_MAXPT 8192
+
+typedef struct pb {
+    uint32_t poly_off[PB_MAXP + 1], ring_off[PB_MAXR + 1];
+    double xy[2 * PB_MAXPT];
+    size_t np, nr, npt;
+} pb;
+
+static void pb_ring(pb *b, const double *pts, size_t n)
+{
+    memcpy(b->xy + 2 * b->npt, pts, 2 * n * sizeof *pts);
+    b->npt += n;
+    b->ring_off[++b->nr] = (uint32_t)b->npt;
+}
+
+static void pb_end(pb *b)
+{
+    b->poly_off[++b->np] = (uint32_t)b->nr;
+}
+
+static void pb_rect(pb *b, double x0, double y0, double x1, double y1)
+{
+    double r[8] = {x0, y0, x1, y0, x1, y1, x0, y1};
+    pb_ring(b, r, 4);
+}
+
+static bool2_input pb_input(const pb *b)
+{
+    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy};
+}
+
+/* Runs a named operation; returns the status, result in *r. */
+static int run_named(const pb *b, const char *name, bool2_result *r)
+{
+    bool_expr e;
+    char err[256];
+    bool2_input in = pb_input(b);
+    if (bool_expr_named(name, b->np, &e) || bool_expr_check(&e, b->np)) return -1;
+    int rc = bool2_build(&in, &e, &(arr2_opts){.threads = 1}, r, err, sizeof err);
+    if (rc) fprintf(stderr, "bool2_build: %s\n", err);
+    bool_expr_free(&e);
+    return rc;
+}
+
+/* The result's invariants: cycles closed and consistent with EV, outer cycles CCW and holes
+ * CW, the sum of their signed areas is the area of the selected faces. */
+static void check_result(const char *what, const bool2_result *r)
+{
+    double sum = 0;
+    for (size_t k = 0; k < r->nrcyc; k++) {
+        uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
+        double s = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t v = r->rv[a + i], w = r->rv[a + (i + 1) % n];
+            int32_t se = r->re[a + i];
+            uint32_t e = (uint32_t)abs(se) - 1;
+            uint32_t v0 = r->c.EV[2 * e], v1 = r->c.EV[2 * e + 1];
+            CHECK((se > 0 && v0 == v && v1 == w) || (se < 0 && v1 == v && v0 == w),
+                  "%s: cycle %zu step %u: edge %d does not join %u-%u", what, k, i, se, v, w);
+            const double *p = r->c.V + 2 * v, *q = r->c.V + 2 * w;
+            s += p[0] * q[1] - p[1] * q[0];
+        }
+        sum += s / 2;
+    }
+    for (size_t q = 0; q < r->npoly; q++) {
+        uint32_t k = r->poly_outer[q], a = r->rc_off[k], n = r->rc_off[k + 1] - a;
+        double s = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            const double *p = r->c.V + 2 * r->rv[a + i], *w = r->c.V + 2 * r->rv[a + (i + 1) % n];
+            s += p[0] * w[1] - p[1] * w[0];
+        }
+        CHECK(s > 0, "%s: outer cycle %u is not counter-clockwise", what, k);
+    }
+    CHECK(fabs(sum - r->area) <= 1e-9 * fmax(1, fabs(r->area)),
+          "%s: cycles bound %.17g, selected faces %.17g", what, sum, r->area);
+    size_t nh = r->npoly ? r->ph_off[r->npoly] : 0;
+    CHECK(r->npoly + nh == r->nrcyc, "%s: %zu polygons + %zu holes != %zu cycles", what, r->npoly,
+          nh, r->nrcyc);
+}
+
+static size_t boundary_edges(const bool2_result *r)
+{
+    return r->nrcyc ? r->rc_off[r->nrcyc] : 0;
+}
+
+/* ---- hand-made cases ------------------------------------------------------------------------ */
+
+TEST(bool2_two_squares)
+{
+    pb b = {0};
+    pb_rect(&b, 0, 0, 2, 2);
+    pb_end(&b);
+    pb_rect(&b, 1, 1, 3, 3);
+    pb_end(&b);
+    struct {
+        const char *op;
+        double area;
+        size_t edges, polys;
+    } want[] = {
+        {"union", 7, 8, 1}, {"intersection", 1, 4, 1}, {"difference", 3, 6, 1}, {"xor", 6, 12, 2}};
+    for (size_t t = 0; t < 4; t++) {
+        bool2_result r;
+        REQUIRE(run_named(&b, want[t].op, &r) == ARR_OK, "%s failed", want[t].op);
+        CHECK(r.c.nf == 3, "%s: %zu faces", want[t].op, r.c.nf);
+        CHECK(fabs(r.area - want[t].area) < 1e-12, "%s: area %g, want %g", want[t].op, r.area,
+              want[t].area);
+        CHECK(boundary_edges(&r) == want[t].edges, "%s: %zu boundary edges, want %zu", want[t].op,
+              boundary_edges(&r), want[t].edges);
+        CHECK(r.npoly == want[t].polys, "%s: %zu polygons, want %zu", want[t].op, r.npoly,
+              want[t].polys);
+        check_result(want[t].op, &r);
+        /* membership: every face in at least one input, the middle one in both */
+        for (size_t f = 0; f < r.c.nf; f++)
+            CHECK(r.member[2 * f] || r.member[2 * f + 1], "%s: face %zu in no input", want[t].op,
+                  f);
+        bool2_free(&r);
+    }
+}
+
+TEST(bool2_square_with_hole_minus_square)
+{
+    pb b = {0};
+    pb_rect(&b, 0, 0, 10, 10);
+    pb_rect(&b, 3, 3, 7, 7); /* the hole; same orientation as the outer ring: free */
+    pb_end(&b);
+    pb_rect(&b, 5, -1, 11, 5);
+    pb_end(&b);
+    bool2_result r;
+    REQUIRE(run_named(&b, "difference", &r) == ARR_OK, "difference failed");
+    /* 100 - 16 = 84; minus the square [5,10]x[0,5] (25) plus its part in the hole [5,7]x[3,5]
+     * (4): 84 - 21 = 63 */
+    CHECK(fabs(r.area - 63) < 1e-12, "area %g, want 63", r.area);
+    CHECK(r.npoly == 1 && r.ph_off[1] == 0, "%zu polygons, %u holes", r.npoly,
+          r.npoly ? r.ph_off[1] : 0);
+    check_result("hole minus square", &r);
+    bool2_free(&r);
+    REQUIRE(run_named(&b, "union", &r) == ARR_OK, "union failed");
+    CHECK(fabs(r.area - (100 - 12 + 11)) < 1e-12, "union area %g, want 99", r.area);
+    check_result("hole union square", &r);
+    bool2_free(&r);
+    /* the ring with a hole alone: one polygon with one hole */
+    pb one = {0};
+    pb_rect(&one, 0, 0, 10, 10);
+    pb_rect(&one, 3, 3, 7, 7);
+    pb_end(&one);
+    REQUIRE(run_named(&one, "union", &r) == ARR_OK, "single failed");
+    CHECK(r.npoly == 1 && r.ph_off[1] == 1 && fabs(r.area - 84) < 1e-12,
+          "%zu polygons, %u holes, area %g", r.npoly, r.npoly ? r.ph_off[1] : 0, r.area);
+    check_result("square with hole", &r);
+    bool2_free(&r);
+}
+
+TEST(bool2_self_difference_is_empty)
+{
+    pb b = {0};
+    double tri[6] = {0, 0, 4, 1, 1, 3};
+    pb_ring(&b, tri, 3);
+    pb_end(&b);
+    pb_ring(&b, tri, 3);
+    pb_end(&b);
+    bool2_result r;
+    REQUIRE(run_named(&b, "difference", &r) == ARR_OK, "difference failed");
+    CHECK(r.ncells == 0 && r.area == 0 && r.nrcyc == 0 && r.npoly == 0,
+          "%zu cells, area %g, %zu cycles", r.ncells, r.area, r.nrcyc);
+    bool2_free(&r);
+    REQUIRE(run_named(&b, "intersection", &r) == ARR_OK, "intersection failed");
+    CHECK(r.ncells == 1 && fabs(r.area - 5.5) < 1e-12 && boundary_edges(&r) == 3,
+          "%zu cells, area %g", r.ncells, r.area);
+    bool2_free(&r);
+}
+
+TEST(bool2_touching_squares)
+{
+    /* sharing the edge x = 1: the union is one rectangle whose boundary has 6 edges (the
+     * arrangement keeps the vertices (1,0) and (1,1)), the shared edge is not on it */
+    pb b = {0};
+    pb_rect(&b, 0, 0, 1, 1);
+    pb_end(&b);
+    double ccw[8] = {1, 1, 2, 1, 2, 0, 1, 0}; /* clockwise input: orientation is free */
+    pb_ring(&b, ccw, 4);
+    pb_end(&b);
+    bool2_result r;
+    REQUIRE(run_named(&b, "union", &r) == ARR_OK, "union failed");
+    CHECK(r.ncells == 2 && r.npoly == 1 && boundary_edges(&r) == 6 && fabs(r.area - 2) < 1e-12,
+          "%zu cells, %zu polygons, %zu edges, area %g", r.ncells, r.npoly, boundary_edges(&r),
+          r.area);
+    check_result("touching union", &r);
+    bool2_free(&r);
+    REQUIRE(run_named(&b, "intersection", &r) == ARR_OK, "intersection failed");
+    CHECK(r.ncells == 0 && r.area == 0, "touching intersection: %zu cells", r.ncells);
+    bool2_free(&r);
+    /* squares touching at a corner: two polygons, the walk splits at the shared vertex */
+    pb c = {0};
+    pb_rect(&c, 0, 0, 1, 1);
+    pb_end(&c);
+    pb_rect(&c, 1, 1, 2, 2);
+    pb_end(&c);
+    REQUIRE(run_named(&c, "union", &r) == ARR_OK, "corner union failed");
+    CHECK(r.npoly == 2 && r.nrcyc == 2 && boundary_edges(&r) == 8, "%zu polygons, %zu cycles",
+          r.npoly, r.nrcyc);
+    check_result("corner union", &r);
+    bool2_free(&r);
+}
+
+/* The seeds' test/py/bool2/test03.py: two 2-complexes (V1, FV1) and (V2, FV2); their boundary
+ * rings (BE1, BE2 walked), and each face as an input of its own. */
+static const double t03_ring1[] = {3, 0,  11, 0,  13, 10, 10, 3,  10, 11, 8, 4,
+                                   8, 11, 6,  11, 6,  4,  4,  11, 4,  3,  1, 10};
+static const double t03_ring2[] = {0, 3, 0, 8, 14, 11, 3, 7, 14, 7, 14, 5, 3, 5, 14, 2};
+static const double t03_faces[][13] = {{6, 3, 0, 11, 0, 10, 3, 8, 4, 6, 4, 4, 3},
+                                       {3, 11, 0, 13, 10, 10, 3},
+                                       {3, 10, 11, 8, 4, 10, 3},
+                                       {4, 8, 11, 6, 11, 6, 4, 8, 4},
+                                       {3, 4, 11, 4, 3, 6, 4},
+                                       {3, 3, 0, 1, 10, 4, 3},
+                                       {4, 0, 3, 0, 8, 3, 7, 3, 5},
+                                       {3, 0, 3, 14, 2, 3, 5},
+                                       {3, 14, 11, 0, 8, 3, 7},
+                                       {4, 14, 5, 14, 7, 3, 7, 3, 5}};
+
+TEST(bool2_seeds_test03)
+{
+    pb b = {0};
+    pb_ring(&b, t03_ring1, 12);
+    pb_end(&b);
+    pb_ring(&b, t03_ring2, 8);
+    pb_end(&b);
+    bool2_result u, x;
+    REQUIRE(run_named(&b, "union", &u) == ARR_OK, "union failed");
+    REQUIRE(run_named(&b, "intersection", &x) == ARR_OK, "intersection failed");
+    /* |A| = 71, |B| = 59.5 (the faces' areas) */
+    CHECK(fabs(u.area + x.area - (71 + 59.5)) < 1e-9, "union %g + intersection %g != 130.5", u.area,
+          x.area);
+    check_result("test03 union", &u);
+    check_result("test03 intersection", &x);
+    /* the same through the faces: (f0 + ... + f5) & (f6 + ... + f9) */
+    pb fb = {0};
+    for (size_t i = 0; i < 10; i++) {
+        pb_ring(&fb, t03_faces[i] + 1, (size_t)t03_faces[i][0]);
+        pb_end(&fb);
+    }
+    /* compile it the way the API does, through a request */
+    char body[4096];
+    int n = snprintf(body, sizeof body, "{\"kind\":\"polygons\",\"op\":%s,\"polygons\":[",
+                     "[\"&\", [\"+\",0,1,2,3,4,5], [\"+\",6,7,8,9]]");
+    for (size_t i = 0; i < 10; i++) {
+        n += snprintf(body + n, sizeof body - n, "%s[[", i ? "," : "");
+        for (int k = 0; k < (int)t03_faces[i][0]; k++)
+            n += snprintf(body + n, sizeof body - n, "%s[%g,%g]", k ? "," : "",
+                          t03_faces[i][1 + 2 * k], t03_faces[i][2 + 2 * k]);
+        n += snprintf(body + n, sizeof body - n, "]]");
+    }
+    snprintf(body + n, sizeof body - n, "]}");
+    char *out = NULL;
+    size_t outlen;
+    api_error err = {0};
+    int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
+    REQUIRE(rc == API_OK, "api: %d %s", rc, err.msg);
+    json_t *res = json_loads(out, 0, NULL);
+    REQUIRE(res, "result is not JSON");
+    double area = json_number_value(json_object_get(json_object_get(res, "result"), "area"));
+    CHECK(fabs(area - x.area) < 1e-9, "faces' expression area %.17g, rings' intersection %.17g",
+          area, x.area);
+    json_t *mem = json_object_get(res, "membership");
+    CHECK(json_array_size(mem) == json_array_size(json_object_get(res, "FV")),
+          "membership rows %zu", json_array_size(mem));
+    CHECK(json_array_size(json_array_get(mem, 0)) == 10, "membership columns");
+    json_decref(res);
+    free(out);
+    bool2_free(&u);
+    bool2_free(&x);
+}
+
+/* ---- GEOS ------------------------------------------------------------------------------------ */
+
+static GEOSGeometry *geos_ring(GEOSContextHandle_t h, const double *xy, size_t n)
+{
+    GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, (unsigned)n + 1, 2);
+    for (size_t i = 0; i <= n; i++)
+        GEOSCoordSeq_setXY_r(h, cs, (unsigned)i, xy[2 * (i % n)], xy[2 * (i % n) + 1]);
+    return GEOSGeom_createLinearRing_r(h, cs);
+}
+
+static GEOSGeometry *geos_poly(GEOSContextHandle_t h, const pb *b, size_t p)
+{
+    uint32_t r0 = b->poly_off[p], nr = b->poly_off[p + 1] - r0;
+    GEOSGeometry *holes[PB_MAXR];
+    for (uint32_t k = 1; k < nr; k++)
+        holes[k - 1] = geos_ring(h, b->xy + 2 * b->ring_off[r0 + k],
+                                 b->ring_off[r0 + k + 1] - b->ring_off[r0 + k]);
+    GEOSGeometry *shell =
+        geos_ring(h, b->xy + 2 * b->ring_off[r0], b->ring_off[r0 + 1] - b->ring_off[r0]);
+    return GEOSGeom_createPolygon_r(h, shell, holes, nr - 1);
+}
+
+/* The area of the named operation over b's polygons by GEOS (difference: the first minus the
+ * union of the others). */
+static double geos_area(const pb *b, const char *op)
+{
+    GEOSContextHandle_t h = GEOS_init_r();
+    GEOSGeometry *acc = geos_poly(h, b, 0), *rest = NULL;
+    for (size_t p = 1; p < b->np; p++) {
+        GEOSGeometry *g = geos_poly(h, b, p), *t;
+        if (!strcmp(op, "difference")) {
+            if (!rest) {
+                rest = g;
+                continue;
+            }
+            t = GEOSUnion_r(h, rest, g);
+            GEOSGeom_destroy_r(h, rest);
+            GEOSGeom_destroy_r(h, g);
+            rest = t;
+            continue;
+        }
+        if (!strcmp(op, "union"))
+            t = GEOSUnion_r(h, acc, g);
+        else if (!strcmp(op, "intersection"))
+            t = GEOSIntersection_r(h, acc, g);
+        else
+            t = GEOSSymDifference_r(h, acc, g);
+        GEOSGeom_destroy_r(h, acc);
+        GEOSGeom_destroy_r(h, g);
+        acc = t;
+    }
+    if (rest) {
+        GEOSGeometry *t = GEOSDifference_r(h, acc, rest);
+        GEOSGeom_destroy_r(h, acc);
+        GEOSGeom_destroy_r(h, rest);
+        acc = t;
+    }
+    double a = -1;
+    if (acc) GEOSArea_r(h, acc, &a);
+    GEOSGeom_destroy_r(h, acc);
+    GEOS_finish_r(h);
+    return a;
+}
+
+/* A star-shaped polygon around (cx, cy) with n vertices, with a small square hole at the
+ * centre when hole != 0. */
+static void random_star(pb *b, uint64_t *st, double cx, double cy, int hole)
+{
+    double pts[2 * 64];
+    size_t n = 5 + (size_t)(test_rnd(st) * 20);
+    for (size_t i = 0; i < n; i++) {
+        double ang = 2 * M_PI * (i + 0.2 + 0.6 * test_rnd(st)) / n;
+        double rad = 0.4 + 0.6 * test_rnd(st);
+        pts[2 * i] = cx + rad * cos(ang);
+        pts[2 * i + 1] = cy + rad * sin(ang);
+    }
+    pb_ring(b, pts, n);
+    if (hole) { /* inside the kernel: the star's radii are all >= 0.4 */
+        double s = 0.1 + 0.1 * test_rnd(st);
+        double hr[8] = {cx - s, cy - s, cx - s, cy + s, cx + s, cy + s, cx + s, cy - s};
+        pb_ring(b, hr, 4);
+    }
+    pb_end(b);
+}
+
+static void differential(const char *what, const pb *b)
+{
+    const char *ops[] = {"union", "intersection", "difference", "xor"};
+    for (size_t t = 0; t < 4; t++) {
+        bool2_result r;
+        REQUIRE(run_named(b, ops[t], &r) == ARR_OK, "%s %s failed", what, ops[t]);
+        double g = geos_area(b, ops[t]);
+        CHECK(g >= 0, "%s %s: GEOS failed", what, ops[t]);
+        CHECK(fabs(r.area - g) <= 1e-9 * fmax(1, g), "%s %s: area %.17g, GEOS %.17g", what, ops[t],
+              r.area, g);
+        check_result(what, &r);
+        bool2_free(&r);
+    }
+}
+
+TEST(bool2_geos_random_stars)
+{
+    for (uint64_t seed = 1; seed <= 12; seed++) {
+        uint64_t st = seed * 0x9e3779b97f4a7c15ull;
+        pb b = {0};
+        size_t np = 2 + (size_t)(test_rnd(&st) * 4);
+        for (size_t p = 0; p < np; p++)
+            random_star(&b, &st, test_rnd(&st), test_rnd(&st), test_rnd(&st) < 0.5);
+        char what[64];
+        snprintf(what, sizeof what, "stars seed %d (%zu polygons)", (int)seed, np);
+        differential(what, &b);
+    }
+}
+
+TEST(bool2_geos_random_rectangles)
+{
+    /* on a coarse lattice: shared edges, collinear overlaps, vertices on edges */
+    for (uint64_t seed = 1; seed <= 12; seed++) {
+        uint64_t st = seed * 0x2545f4914f6cdd1dull;
+        pb b = {0};
+        size_t np = 2 + (size_t)(test_rnd(&st) * 5);
+        for (size_t p = 0; p < np; p++) {
+            double x0 = floor(test_rnd(&st) * 8), y0 = floor(test_rnd(&st) * 8);
+            double x1 = x0 + 1 + floor(test_rnd(&st) * 5), y1 = y0 + 1 + floor(test_rnd(&st) * 5);
+            pb_rect(&b, x0, y0, x1, y1);
+            pb_end(&b);
+        }
+        char what[64];
+        snprintf(what, sizeof what, "rectangles seed %d (%zu)", (int)seed, np);
+        differential(what, &b);
+    }
+}

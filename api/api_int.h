@@ -91,6 +91,11 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
 void api_solids_free(void *parsed);
 int api_solids_check(const void *parsed, api_error *err);
 
+/* The "polygons" kind (api/polygons.c): 2D Booleans. */
+int api_polygons_parse(const json_t *req, void **parsed, api_error *err);
+int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
+void api_polygons_free(void *parsed);
+
 /* The result fields a request may ask for (options.fields), as bits. */
 enum {
     API_F_V = 1u << 0,
@@ -129,6 +134,9 @@ typedef struct api_lar2_fmt {
     /* may be NULL: appends more members to the "stats" object, each as ,"key":value */
     void (*stats_more)(api_buf *b, const void *udata);
     const void *stats_udata; /* passed to stats_more */
+    /* may be NULL: appends more top-level members after the others, each as ,"key":value */
+    void (*more)(api_buf *b, const void *udata);
+    const void *more_udata; /* passed to more */
 } api_lar2_fmt;
 
 /* Appends the LAR JSON object of c (borrowed) to b.  Returns API_OK, API_ENOMEM (b failed or a

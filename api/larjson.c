@@ -530,6 +530,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         put_key(b, &first, "stats");
         put_stats(b, &c->stats, fmt);
     }
+    if (fmt->more) fmt->more(b, fmt->more_udata);
     api_buf_putc(b, '}');
     if (b->failed) rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
 out:

@@ -24,6 +24,7 @@ static const api_kind kinds[] = {
     {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL},
     {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check},
     {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check},
+    {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 

@@ -424,3 +424,80 @@ TEST(bool2_geos_random_rectangles)
         differential(what, &b);
     }
 }
+
+/* ---- the request ----------------------------------------------------------------------------- */
+
+TEST(bool2_api_errors)
+{
+    struct {
+        const char *body, *msg; /* msg: the start of the error message (its JSON path) */
+    } cases[] = {
+        {"{\"kind\":\"polygons\",\"op\":\"union\"}", "polygons: required"},
+        {"{\"kind\":\"polygons\",\"polygons\":[],\"op\":\"union\"}", "polygons: expected"},
+        {"{\"kind\":\"polygons\",\"polygons\":{},\"op\":\"union\"}", "polygons: expected"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[]],\"op\":\"union\"}", "polygons[0]: expected"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]],[[[0,0],[1,0]]]],\"op\":"
+         "\"union\"}",
+         "polygons[1][0]: expected a ring of at least 3 points"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]],[[[0,0],[1,0],[0,1]],[[0,0],"
+         "[1,0],7]]],\"op\":\"union\"}",
+         "polygons[1][1][2]: expected [x, y]"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1,2]]]],\"op\":\"union\"}",
+         "polygons[0][0][2]: expected [x, y]"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,\"a\"],[0,1]]]],\"op\":\"union\"}",
+         "polygons[0][0][1][1]: expected a finite number"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]]}", "op: required"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"merge\"}",
+         "op: expected"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":[\"-\",0,[\"+\",0,"
+         "3]]}",
+         "op[2][2]: input 3 out of range (1 inputs)"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":[\"*\",0,0]}",
+         "op[0]: expected an operator"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":[\"+\",0]}",
+         "op: expected an input index"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+         "\"options\":{\"precision\":-1}}",
+         "options.precision: expected"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+         "\"options\":{\"nope\":1}}",
+         "options.nope: unknown option"},
+        {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+         "\"lines\":[]}",
+         "lines: unknown key"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char *out = NULL;
+        size_t outlen;
+        api_error err = {0};
+        int rc = api_run_json(cases[i].body, strlen(cases[i].body), 1, &out, &outlen, &err);
+        CHECK(rc == API_EINVALID, "case %zu: status %d, want 422", i, rc);
+        CHECK(strncmp(err.msg, cases[i].msg, strlen(cases[i].msg)) == 0,
+              "case %zu: message \"%s\", want \"%s...\"", i, err.msg, cases[i].msg);
+        free(out);
+    }
+}
+
+TEST(bool2_api_result)
+{
+    const char *body = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[2,0],[2,2],[0,2]]],"
+                       "[[[1,1],[3,1],[3,3],[1,3]]]],\"op\":[\"^\",0,1],"
+                       "\"options\":{\"fields\":[\"V\",\"FV\"]}}";
+    char *out = NULL;
+    size_t outlen;
+    api_error err = {0};
+    int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
+    REQUIRE(rc == API_OK, "status %d: %s", rc, err.msg);
+    json_t *res = json_loads(out, 0, NULL);
+    REQUIRE(res, "not JSON: %s", out);
+    json_t *result = json_object_get(res, "result");
+    CHECK(json_array_size(json_object_get(res, "membership")) == 3, "membership rows");
+    CHECK(json_array_size(json_object_get(result, "cells")) == 2, "xor: 2 cells");
+    CHECK(json_array_size(json_object_get(result, "FV")) == 2, "xor: 2 polygons");
+    CHECK(json_array_size(json_object_get(result, "FE")) == 2, "xor: 2 FE rows");
+    CHECK(json_object_size(json_object_get(result, "holes")) == 0, "xor: no holes");
+    CHECK(json_number_value(json_object_get(result, "area")) == 6, "xor: area 6");
+    CHECK(!json_object_get(res, "EV"), "fields: no EV");
+    json_decref(res);
+    free(out);
+}

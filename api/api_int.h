@@ -16,6 +16,7 @@
 
 #include "api/api.h"
 #include "core/arr2.h"
+#include "core/bool3.h"
 #include "core/boolexpr.h"
 #include "core/arr3.h"
 
@@ -166,6 +167,11 @@ typedef struct api_lar3_fmt {
     unsigned fields;             /* API_F3_* bits */
     const char *const *warnings; /* borrowed, nwarnings strings for stats.warnings (may be NULL) */
     size_t nwarnings;
+    /* a Boolean operation (may be NULL): "membership" (cells x solids, 0/1, c->nc rows of
+     * c->nsolids bytes) and "result" (the cells, the outward boundary faces, their cycles and
+     * signed edges, the volume), written whatever the fields */
+    const uint8_t *membership;
+    const bool3_result *result;
 } api_lar3_fmt;
 
 /* Appends the LAR JSON object of the 3-complex c (borrowed; core/arr3.h) to b.  Returns API_OK,

@@ -284,6 +284,65 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
     api_buf_puts(b, "]}");
 }
 
+/* A cycle walked backwards when reversed (the face turned to point out of the result). */
+static void put_cycle_dir(api_buf *b, const lar3 *c, uint32_t cy, int reversed)
+{
+    uint32_t c0 = c->cyc_off[cy], c1 = c->cyc_off[cy + 1], n = c1 - c0;
+    api_buf_putc(b, '[');
+    for (uint32_t i = 0; i < n; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_u64(b, c->cyc[reversed ? c0 + (n - i) % n : c0 + i]);
+    }
+    api_buf_putc(b, ']');
+}
+
+/* "result": {"cells": [...], "faces": [±(f+1), ...], "FV": [...], "FE": [...], "holes": {...},
+ * "volume": v}: row i of FV, FE and holes is result face i (faces[i]), oriented out of the
+ * result (a face listed -(f+1) has its cycles reversed and its edges' signs flipped). */
+static void put_result(api_buf *b, const lar3 *c, const bool3_result *r)
+{
+    put_key(b, "result");
+    api_buf_puts(b, "{\"cells\":");
+    put_u32_list(b, r->cells, r->ncells);
+    api_buf_puts(b, ",\"faces\":");
+    put_i32_list(b, r->faces, r->nfaces);
+    api_buf_puts(b, ",\"FV\":[");
+    for (size_t i = 0; i < r->nfaces; i++) {
+        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+        if (i) api_buf_putc(b, ',');
+        put_cycle_dir(b, c, c->fc[c->fc_off[f]], r->faces[i] < 0);
+    }
+    api_buf_puts(b, "],\"FE\":[");
+    for (size_t i = 0; i < r->nfaces; i++) {
+        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+        api_buf_puts(b, i ? ",[" : "[");
+        for (uint32_t j = c->fe_off[f]; j < c->fe_off[f + 1]; j++) {
+            if (j > c->fe_off[f]) api_buf_putc(b, ',');
+            api_buf_i64(b, r->faces[i] > 0 ? c->fe[j] : -(int64_t)c->fe[j]);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_puts(b, "],\"holes\":{");
+    int first = 1;
+    for (size_t i = 0; i < r->nfaces; i++) {
+        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+        if (c->fc_off[f + 1] - c->fc_off[f] < 2) continue;
+        if (!first) api_buf_putc(b, ',');
+        first = 0;
+        api_buf_putc(b, '"');
+        api_buf_u64(b, i);
+        api_buf_puts(b, "\":[");
+        for (uint32_t k = c->fc_off[f] + 1; k < c->fc_off[f + 1]; k++) {
+            if (k > c->fc_off[f] + 1) api_buf_putc(b, ',');
+            put_cycle_dir(b, c, c->fc[k], r->faces[i] < 0);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_puts(b, "},\"volume\":");
+    api_buf_double(b, r->volume);
+    api_buf_putc(b, '}');
+}
+
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err)
 {
     unsigned fl = fmt->fields;
@@ -367,6 +426,20 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         rc = put_operators(b, c, err);
         if (rc != API_OK) return rc;
     }
+    if (fmt->membership) {
+        put_key(b, "membership");
+        api_buf_putc(b, '[');
+        for (size_t k = 0; k < c->nc; k++) {
+            api_buf_puts(b, k ? ",[" : "[");
+            for (size_t s = 0; s < c->nsolids; s++) {
+                if (s) api_buf_putc(b, ',');
+                api_buf_putc(b, fmt->membership[k * c->nsolids + s] ? '1' : '0');
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    if (fmt->result) put_result(b, c, fmt->result);
     if (fl & API_F3_STATS) {
         put_key(b, "stats");
         put_stats(b, c, fmt);

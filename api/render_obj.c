@@ -59,6 +59,7 @@ typedef struct omodel {
     size_t nc;
     size_t *cell_off; /* owned, nc + 1 */
     int32_t *cf;      /* owned: ±(f+1), 1 <= f+1 <= nf */
+    int result;       /* the one cell is a Boolean result's boundary ("result".faces) */
 } omodel;
 
 static void omodel_free(omodel *m)
@@ -280,6 +281,42 @@ static int read_result(const char *text, size_t len, omodel *m, api_error *err)
             m->cf[w++] = (int32_t)json_integer_value(json_array_get(row, i));
     }
     m->cell_off[m->nc] = w;
+    /* a Boolean result: its boundary is the one solid written */
+    const json_t *res = json_object_get(root, "result"), *rf = json_object_get(res, "faces");
+    if (res) {
+        if (!json_is_array(rf)) {
+            rc = api_fail(err, API_EINVALID, "result.faces: expected an array of signed faces");
+            goto fail;
+        }
+        size_t n = json_array_size(rf);
+        int32_t *cf = malloc(n * sizeof *cf + 1);
+        if (!cf) goto nomem;
+        for (size_t i = 0; i < n; i++) {
+            const json_t *x = json_array_get(rf, i);
+            json_int_t k = json_is_integer(x) ? json_integer_value(x) : 0;
+            if (k == 0 || k < -(json_int_t)m->nf || k > (json_int_t)m->nf) {
+                free(cf);
+                rc = api_fail(err, API_EINVALID,
+                              "result.faces[%zu]: expected a signed face +(f+1) or -(f+1), "
+                              "0 <= f < %zu",
+                              i, m->nf);
+                goto fail;
+            }
+            cf[i] = (int32_t)k;
+        }
+        size_t *co = realloc(m->cell_off, 2 * sizeof *co);
+        if (!co) {
+            free(cf);
+            goto nomem;
+        }
+        m->cell_off = co;
+        free(m->cf);
+        m->cf = cf;
+        m->nc = 1;
+        m->cell_off[0] = 0;
+        m->cell_off[1] = n;
+        m->result = 1;
+    }
     json_decref(root);
     return API_OK;
 nomem:
@@ -695,8 +732,8 @@ static int obj_write(const omodel *m, const render_opts *o, api_buf *b, api_erro
     if (!explode) {
         for (size_t v = 0; v < m->nv; v++) put_vertex(b, m->xyz + 3 * v, zero);
         for (size_t c = 0; c < m->nc; c++) {
-            api_buf_puts(b, "g cell");
-            api_buf_u64(b, c);
+            api_buf_puts(b, m->result ? "g result" : "g cell");
+            if (!m->result) api_buf_u64(b, c);
             api_buf_putc(b, '\n');
             for (size_t i = m->cell_off[c]; i < m->cell_off[c + 1]; i++) {
                 size_t f = (size_t)llabs(m->cf[i]) - 1;

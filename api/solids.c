@@ -63,6 +63,8 @@ typedef struct solids_req {
     double precision; /* options.precision; 0: the default (precision_of) */
     double extent;    /* largest side of the box of every vertex (0 without vertices) */
     unsigned fields;  /* API_F3_* */
+    int has_op;       /* the request gave "op" */
+    bool_expr op;     /* its program (api/boolop.c) */
 } solids_req;
 
 typedef struct totals {
@@ -368,6 +370,7 @@ void api_solids_free(void *parsed)
 {
     solids_req *r = parsed;
     if (!r) return;
+    bool_expr_free(&r->op);
     for (size_t i = 0; i < r->ns; i++) solid_free(&r->s[i]);
     free(r->s);
     free(r);
@@ -385,9 +388,9 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
     json_object_foreach((json_t *)req, key, val)
     {
         if (strcmp(key, "kind") && strcmp(key, "solids") && strcmp(key, "faces") &&
-            strcmp(key, "options"))
+            strcmp(key, "options") && strcmp(key, "op"))
             return api_fail(err, API_EINVALID,
-                            "%.64s: unknown key (expected kind, solids or faces, and options)",
+                            "%.64s: unknown key (expected kind, solids or faces, op and options)",
                             key);
     }
     solids = json_object_get(req, "solids");
@@ -437,6 +440,16 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
         r->ns = 1;
         rc = parse_solid(faces, "faces", 1, &tot, &r->s[0], err);
         if (rc != API_OK) goto fail;
+    }
+    if (json_object_get(req, "op")) {
+        if (r->soup) {
+            rc = api_fail(err, API_EINVALID,
+                          "op: needs \"solids\" (a face soup has no inside to combine)");
+            goto fail;
+        }
+        rc = api_bool_parse(json_object_get(req, "op"), r->ns, &r->op, err);
+        if (rc != API_OK) goto fail;
+        r->has_op = 1;
     }
     r->extent = extent_of(r);
     if (r->precision > 0 && !(r->extent / r->precision <= ldexp(1.0, ARR3_GRID_BITS))) {
@@ -691,6 +704,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     solid *fixed = NULL;
     warn_list *w = calloc(1, sizeof *w);
     lar3 c = {0};
+    bool3_result res = {0};
+    uint8_t *mem = NULL;
     char msg[API_ERRMAX] = "";
     int rc;
     if (!w) return api_fail(err, API_ENOMEM, "out of memory");
@@ -712,8 +727,31 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     }
     if (!(c.stats.precision > 0)) c.stats.precision = p; /* no faces: the core snapped nothing */
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
+    if (r->has_op) { /* membership of every cell, then the chain of the expression */
+        mem = malloc(c.nc * c.nsolids + 1);
+        if (!mem) {
+            rc = api_fail(err, API_ENOMEM, "out of memory");
+            goto out;
+        }
+        long bad = bool3_membership(&c, mem);
+        if (bad) {
+            rc = bad < 0 ? api_fail(err, API_ENOMEM, "out of memory")
+                         : api_fail(err, API_EINTERNAL,
+                                    "op: %ld cells reached with two memberships (a broken complex)",
+                                    bad);
+            goto out;
+        }
+        if (bool3_select(&c, mem, &r->op, &res)) {
+            rc = api_fail(err, API_ENOMEM, "out of memory");
+            goto out;
+        }
+        fmt.membership = mem;
+        fmt.result = &res;
+    }
     rc = api_lar3_write(out, &c, &fmt, err);
 out:
+    bool3_result_free(&res);
+    free(mem);
     lar3_free(&c);
     for (size_t i = 0; fixed && i < r->ns; i++) solid_free(&fixed[i]);
     free(fixed);

@@ -63,7 +63,7 @@ static const char usage_text[] =
     "             [--keep-dangling] [--flatten-tolerance X] [--options JSON]\n"
     "                                  the complex of an SVG drawing (\"-\": standard input):\n"
     "                                  runs {\"kind\":\"svg\",\"svg\":...,\"options\":...}\n"
-    "  cellar solids A.obj B.off ... [--faces] [--precision X] [--options JSON]\n"
+    "  cellar solids A.obj B.off ... [--faces] [--precision X] [--op OP] [--options JSON]\n"
     "                                  the arrangement of the solids in the files (Wavefront\n"
     "                                  OBJ or OFF by the extension, \"-\": OBJ on standard "
     "input),\n"
@@ -78,7 +78,9 @@ static const char usage_text[] =
     "  svg: --normalize (into the unit square, y up), --y-up (y' = -y), --rect-diagonal\n"
     "       (a rect is its diagonal), --precision X (grid step), --keep-dangling,\n"
     "       --flatten-tolerance X (curves, in drawing units): the options of the same names\n"
-    "  solids: --precision X (grid step), --faces (one face soup: no closedness)\n"
+    "  solids: --precision X (grid step), --faces (one face soup: no closedness),\n"
+    "       --op union|intersection|difference|xor|'[\"-\",0,[\"+\",1,2]]' (a Boolean\n"
+    "       result; with --format obj the result solid is written)\n"
     "  run, svg, solids: --format json|svg|geojson|obj   the result JSON (default), a picture\n"
     "       of a 2D result (SVG: faces filled, edges, y up), a map of it (GeoJSON\n"
     "       FeatureCollection of the faces) or the cells of a 3D result (Wavefront OBJ: a group\n"
@@ -447,6 +449,7 @@ typedef struct svg_flags {
     double precision, tolerance; /* 0: not given */
     const char *first;           /* the first svg-only flag given (for "is for svg" errors) */
     int faces;                   /* solids --faces */
+    const char *op;              /* solids --op: a name, or a JSON expression tree */
 } svg_flags;
 
 /* Parses a number > 0 for flag; returns 0 on success. */
@@ -660,6 +663,19 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         }
         fputc(']', m);
     }
+    if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
+        json_t *op =
+            fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
+        if (!op) {
+            fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a "
+                            "JSON expression such as '[\"-\", 0, [\"+\", 1, 2]]'\n");
+            rc = EXIT_USAGE;
+            goto out;
+        }
+        fputs(",\"op\":", m);
+        put_json(m, op);
+        json_decref(op);
+    }
     if (json_object_size(opts)) {
         fputs(",\"options\":", m);
         put_json(m, opts);
@@ -748,6 +764,14 @@ int main(int argc, char **argv)
         }
         if (strcmp(a, "--faces") == 0) {
             fl.faces = 1;
+            continue;
+        }
+        if (strcmp(a, "--op") == 0 || strncmp(a, "--op=", 5) == 0) {
+            if (!a[4] && i + 1 == argc) {
+                rc = usage_error("%s", "--op needs a value");
+                goto out;
+            }
+            fl.op = a[4] ? a + 5 : argv[++i];
             continue;
         }
         if (strcmp(a, "--numbers") == 0) {

@@ -51,6 +51,61 @@ PY
     check "$name: cell volumes add up to CGAL's union" test $? -eq 0
 }
 
+# compare_op NAME OP GENARGS...: the Boolean result's volume against CGAL's (1e-9 relative, or
+# the snapping bound when that is larger), and its boundary closed (every edge's signed count
+# over the result's FE rows is 0) and enclosing its volume (cones of its FV/holes cycles).
+compare_op() {
+    name=$1
+    op=$2
+    shift 2
+    rm -rf "$T/off" && mkdir -p "$T/off"
+    # shellcheck disable=SC2086
+    $GEN "$@" --off "$T/off" 2>/dev/null || { fail "$name: gen3d"; return; }
+    if ! "$CELLAR" solids "$T"/off/*.off --op "$op" >"$T/ours.json" 2>"$T/err"; then
+        fail "$name: cellar solids --op $op ($(head -c 200 "$T/err"))"
+        return
+    fi
+    if ! "$CGAL" --op "$op" "$T"/off/*.off >"$T/cgal.json" 2>"$T/err"; then
+        fail "$name: cgal_bool --op $op ($(head -c 200 "$T/err"))"
+        return
+    fi
+    python3 - "$T/ours.json" "$T/cgal.json" "$name $op" <<'PY'
+import json, sys
+from collections import Counter
+ours = json.load(open(sys.argv[1]))
+cgal = json.loads(open(sys.argv[2]).read().strip().splitlines()[-1])
+r, V = ours["result"], ours["V"]
+vol, ref = r["volume"], cgal["volume"]
+tol = max(1e-9 * abs(ref), ours["stats"]["precision"] * cgal["area"]) + 1e-15
+acc = Counter()
+for row in r["FE"]:
+    for e in row:
+        acc[abs(e)] += 1 if e > 0 else -1
+closed = all(v == 0 for v in acc.values())
+def cone(cyc):
+    s, p0 = 0.0, V[cyc[0]]
+    for i in range(1, len(cyc) - 1):
+        a, b = V[cyc[i]], V[cyc[i + 1]]
+        s += (p0[0] * (a[1] * b[2] - a[2] * b[1]) - p0[1] * (a[0] * b[2] - a[2] * b[0])
+              + p0[2] * (a[0] * b[1] - a[1] * b[0]))
+    return s / 6
+enc = sum(cone(c) for c in r["FV"]) + sum(cone(c) for hs in r["holes"].values() for c in hs)
+ok = abs(vol - ref) <= tol and closed and abs(enc - vol) <= 1e-9 * (abs(vol) + 1)
+print("  %s: %d cells, %d faces, volume %.15g, CGAL %.15g, rel %.2g, closed %s, encloses %.15g"
+      % (sys.argv[3], len(r["cells"]), len(r["faces"]), vol, ref,
+         abs(vol - ref) / max(abs(ref), 1e-300), closed, enc))
+sys.exit(0 if ok else 1)
+PY
+    check "$name: $op as CGAL's, closed and outward" test $? -eq 0
+}
+
+for seed in 1 2 3; do
+    for op in union intersection difference; do
+        compare_op "cubes 3 seed $seed" "$op" cubes 3 "$seed" --size 0.9
+        compare_op "tets 3 seed $seed" "$op" tets 3 "$seed" --size 1.5
+    done
+done
+
 for seed in 1 2 3 4 5; do
     compare "cubes 6 seed $seed" cubes 6 "$seed"
 done

@@ -10,7 +10,10 @@
  * faces x inputs; the bool_expr selects faces; the result's boundary is the set of edges with a
  * selected face on exactly one side (the exterior counts as unselected), walked into cycles with
  * the selected region on the left: outer cycles counter-clockwise, holes clockwise.  At a vertex
- * where the region touches itself the walk takes the tightest turn, so cycles split there.
+ * of several boundary edges the walk takes the tightest turn: where the region touches itself
+ * (two squares sharing a corner) the cycles split; where the outside touches itself (a hole
+ * touching the outer boundary at a vertex) one cycle passes the vertex twice and there is no
+ * hole, the region being simply connected.
  *
  * The classification is exact against the INPUT coordinates; the faces are those of the SNAPPED
  * arrangement.  A face narrower than the grid step (a sliver that snapping created or nearly

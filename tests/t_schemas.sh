@@ -110,6 +110,30 @@ check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[
 check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s4.result.json"
 check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s6.result.json"
 
+# --- 2D Booleans: polygons requests and their results (core/bool2.c)
+SQ1='[[[0,0],[2,0],[2,2],[0,2]]]'
+SQ2='[[[1,1],[3,1],[3,3],[1,3]]]'
+RINGHOLE='[[[0,0],[10,0],[10,10],[0,10]],[[4,4],[7,4],[7,7],[4,7]]]'
+mkdir "$T/polygons"
+i=0
+for req in "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"union\"}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"difference\",\"options\":{\"operators\":true,\"exterior_last\":true}}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]]}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[]}}"; do
+    i=$((i + 1))
+    printf '%s\n' "$req" >"$T/polygons/p$i.request.json"
+    "$BIN" run "$T/polygons/p$i.request.json" >"$T/polygons/p$i.result.json" 2>"$T/err" ||
+        fail "cellar run polygons request $i: $(head -c 200 "$T/err")"
+done
+$V request "$T"/polygons/*.request.json >"$T/out" 2>&1
+tally "polygons request"
+$V result "$T"/polygons/*.result.json >"$T/out" 2>&1
+tally "polygons result"
+$V openapi:Result "$T"/polygons/*.result.json >"$T/out" 2>&1
+tally "polygons result (openapi.json)"
+check "polygons: a square with a hole minus two squares has a hole" grep -q '"holes":{"0":\[\[' "$T/polygons/p3.result.json"
+check "polygons: xor of a polygon with itself is empty" grep -q '"result":{"cells":\[\],"FV":\[\],"FE":\[\],"holes":{},"area":0}' "$T/polygons/p4.result.json"
+
 # --- hand-made documents that must be accepted
 H=0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef
 J=0f1e2d3c4b5a69788796a5b4c3d2e1f0
@@ -151,6 +175,7 @@ good request empty_options '{"kind":"lines","lines":[[[0,0],[1,1]]],"options":{}
 good request solids_minimal "{\"kind\":\"solids\",\"solids\":[$CUBE]}"
 good request solids_all_options "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"precision\":0.001,\"operators\":true,\"fields\":[\"V\",\"EV\",\"FV\",\"FE\",\"holes\",\"CF\",\"CV\",\"exterior\",\"stats\",\"operators\",\"CF\"]}}"
 good request faces_with_a_hole '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0]],"FV":[[0,1,2,3]],"holes":{"0":[[4,5,6,7]]}},"options":{"fields":[]}}'
+good request polygons_tree '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]],[[[0,0],[2,0],[0,2],[0,0]],[[0.1,0.1],[0.2,0.1],[0.1,0.2]]]],"op":["^",0,["&",1,0]],"options":{"precision":0.001}}'
 good request repeated_fields '{"kind":"lines","lines":[[[-1e9,2.5e-3],[1E3,7]]],"options":{"fields":["V","V"]}}'
 for s in job problem result request; do
     $V "$s" "$T"/good/$s.*.json >"$T/out" 2>&1
@@ -259,6 +284,15 @@ bad request solids_lines_key '(document)' "{\"kind\":\"solids\",\"faces\":$CUBE,
 bad request solids_option_2d 'options' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"keep_dangling\":true}}"
 bad request solids_precision_0 'options.precision' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"precision\":0}}"
 bad request solids_field_unknown 'options.fields[1]' "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"C\"]}}"
+bad request polygons_no_op '(document)' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]]]}'
+bad request polygons_ring_2_points 'polygons[0][1]' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]],[[0,0],[1,0]]]],"op":"union"}'
+bad request polygons_point_3_numbers 'polygons[0][0][2]' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1,1]]]],"op":"union"}'
+bad request polygons_empty 'polygons' '{"kind":"polygons","polygons":[],"op":"union"}'
+bad request polygons_no_rings 'polygons[0]' '{"kind":"polygons","polygons":[[]],"op":"union"}'
+bad request polygons_op_name 'op' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]]],"op":"merge"}'
+bad request polygons_op_operator 'op[0]' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]]],"op":["*",0,0]}'
+bad request polygons_op_negative 'op[2]' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]]],"op":["+",0,-1]}'
+bad request polygons_option_3d 'options.fields[0]' '{"kind":"polygons","polygons":[[[[0,0],[1,0],[1,1]]]],"op":"union","options":{"fields":["CF"]}}'
 bad request duplicate_key 'not JSON' '{"kind":"lines","lines":[],"lines":[[[0,0],[1,1]]]}'
 for s in result job problem request; do
     $V "$s" "$T"/bad/$s.*.json >"$T/out" 2>&1

@@ -91,7 +91,8 @@ static const err_case err_cases[] = {
     {"{\"kind\":\"lines\",\"lines\":\"0 0 1 1\"}", 422, "lines: expected an array of segments"},
     {"{\"kind\":\"lines\"}", 422, "lines: required"},
     {"{\"lines\":[]}", 422, "kind: required, expected \"lines\""},
-    {"{\"kind\":\"mesh\",\"lines\":[]}", 422, "kind: expected \"lines\", \"svg\" or \"solids\""},
+    {"{\"kind\":\"mesh\",\"lines\":[]}", 422,
+     "kind: expected \"lines\", \"svg\", \"solids\" or \"polygons\""},
     {"{\"kind\":5,\"lines\":[]}", 422, "kind: expected \"lines\""},
     {"[1,2]", 422, "request: expected an object"},
     {"\"lines\"", 422, "request: expected an object"},
@@ -655,9 +656,9 @@ TEST(check_json_canonical)
               n == strlen(canon),
           "%d %s", rc, canon ? canon : err.msg);
     free(canon);
-    CHECK(api_kind_count() == 3 && strcmp(api_kind_name(0), "lines") == 0 &&
+    CHECK(api_kind_count() == 4 && strcmp(api_kind_name(0), "lines") == 0 &&
               strcmp(api_kind_name(1), "svg") == 0 && strcmp(api_kind_name(2), "solids") == 0 &&
-              api_kind_name(3) == NULL,
+              strcmp(api_kind_name(3), "polygons") == 0 && api_kind_name(4) == NULL,
           "kinds");
 }
 

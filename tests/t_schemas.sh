@@ -94,7 +94,8 @@ for req in "{\"kind\":\"solids\",\"solids\":[$CUBE]}" '{"kind":"solids","solids"
     "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"operators\":true}}" \
     "{\"kind\":\"solids\",\"solids\":[{\"V\":$CUBE_V,\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,7,4,0]]}]}" \
     '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0],[2,2,-1],[2,2,1],[2,5,1],[2,5,-1]],"FV":[[0,1,2,3],[8,9,10,11]],"holes":{"0":[[4,5,6,7]]}}}' \
-    "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"exterior\",\"stats\"],\"precision\":0.001}}"; do
+    "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"exterior\",\"stats\"],\"precision\":0.001}}" \
+    "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"op\":[\"-\",0,1]}"; do
     i=$((i + 1))
     printf '%s\n' "$req" >"$T/solids/s$i.request.json"
     "$BIN" run "$T/solids/s$i.request.json" >"$T/solids/s$i.result.json" 2>"$T/err" ||
@@ -108,6 +109,7 @@ $V openapi:Result "$T"/solids/*.result.json >"$T/out" 2>&1
 tally "solids result (openapi.json)"
 check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[18,3\]' "$T/solids/s3.result.json"
 check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s4.result.json"
+check "op: membership and result" grep -q '"membership":\[\[.*"result":{"cells":\[' "$T/solids/s7.result.json"
 check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s6.result.json"
 
 # --- 2D Booleans: polygons requests and their results (core/bool2.c)
@@ -205,7 +207,7 @@ bad result face3_2_vertices 'FV[0]' '{"dim":3,"FV":[[0,1]]}'
 bad result exterior_fraction 'exterior[0]' '{"dim":3,"exterior":[1.5]}'
 bad result exterior_cycles 'exterior[0]' '{"dim":3,"exterior":[[0,1,2]]}'
 bad result operators3_no_d3 'operators' "{\"dim\":3,\"operators\":{\"d1\":$CSR1,\"d2\":$CSR0}}"
-bad result extra_key_3 '(document)' "{\"dim\":3,$CUBE3,\"membership\":[]}"
+bad result extra_key_3 '(document)' "{\"dim\":3,$CUBE3,\"colour\":\"red\"}"
 bad result stats3_no_volumes 'stats' "{\"dim\":3,\"stats\":$(printf '%s' "$STATS3" | sed 's/"volumes":\[1\],//')}"
 bad result stats3_zero_volume 'stats.volumes[0]' "{\"dim\":3,\"stats\":$(printf '%s' "$STATS3" | sed 's/"volumes":\[1\]/"volumes":[0]/')}"
 bad result stats3_2d_keys 'stats' "{\"dim\":3,\"stats\":$STATS}"

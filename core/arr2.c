@@ -332,7 +332,6 @@ static void intersect_leaf(void *vc, size_t l, int w)
 
 /* ---- split (snap rounding) ----------------------------------------------------------------- */
 
-
 static void hotpixel_leaf(void *vc, size_t l, int w)
 {
     ctx *c = vc;

@@ -1447,7 +1447,7 @@ typedef struct outface {
 } outface;
 
 typedef struct asm3 {
-    umap eplane; /* (lo, hi) global edge -> a segment it is a piece of: its two planes */
+    umap eplane;    /* (lo, hi) global edge -> a segment it is a piece of: its two planes */
     uint32_t *fsol; /* solids of the faces (outface.s0, ns) */
     size_t nfsol, capfsol;
     outface *of;
@@ -1622,8 +1622,8 @@ static int stage_faces(ctx *c, asm3 *A)
             } else if (fsol_toggle(A, s0, c->F[src].solid)) {
                 goto oom;
             }
-            outface o = {(uint32_t)gi, src, (uint32_t)A->nocyc, 0, (uint32_t)s0,
-                         (uint32_t)(A->nfsol - s0)};
+            outface o = {
+                (uint32_t)gi, src, (uint32_t)A->nocyc, 0, (uint32_t)s0, (uint32_t)(A->nfsol - s0)};
             if (asm_cycle(c, A, g, L, L->face_cycle[f], rev)) goto oom;
             o.nc++;
             for (uint32_t h = L->hole_off[f]; h < L->hole_off[f + 1]; h++) {

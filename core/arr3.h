@@ -67,12 +67,12 @@ typedef struct lar3 {
     size_t ne;
     uint32_t *EV; /* 2*ne, v0 < v1, sorted */
     size_t nf;
-    double *FN;       /* 3*nf: unit normal of each face (its orientation) */
-    uint32_t *fc_off; /* nf+1 */
-    uint32_t *fc;     /* cycle ids */
-    uint32_t *fe_off; /* nf+1 */
-    int32_t *fe;      /* signed edges of each face (+: walked from EV[0] to EV[1]) */
-    uint32_t *fsrc;   /* nf: the input face (index over all solids' faces) it lies on */
+    double *FN;         /* 3*nf: unit normal of each face (its orientation) */
+    uint32_t *fc_off;   /* nf+1 */
+    uint32_t *fc;       /* cycle ids */
+    uint32_t *fe_off;   /* nf+1 */
+    int32_t *fe;        /* signed edges of each face (+: walked from EV[0] to EV[1]) */
+    uint32_t *fsrc;     /* nf: the input face (index over all solids' faces) it lies on */
     uint32_t *fsol_off; /* nf+1: the solids whose surface holds face f (an odd number of their
                            faces do): fsol[fsol_off[f] .. fsol_off[f+1]), ascending; crossing f
                            goes into or out of exactly these solids */

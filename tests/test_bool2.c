@@ -316,7 +316,7 @@ static GEOSGeometry *geos_poly(GEOSContextHandle_t h, const pb *b, size_t p)
 
 /* The area of the named operation over b's polygons by GEOS (difference: the first minus the
  * union of the others). */
-static double geos_area(const pb *b, const char *op)
+static double geos_area(const pb *b, const char *op, size_t *npoly, size_t *nholes)
 {
     GEOSContextHandle_t h = GEOS_init_r();
     GEOSGeometry *acc = geos_poly(h, b, 0), *rest = NULL;
@@ -350,7 +350,17 @@ static double geos_area(const pb *b, const char *op)
         acc = t;
     }
     double a = -1;
-    if (acc) GEOSArea_r(h, acc, &a);
+    *npoly = *nholes = 0;
+    if (acc) {
+        GEOSArea_r(h, acc, &a);
+        int ng = GEOSisEmpty_r(h, acc) ? 0 : GEOSGetNumGeometries_r(h, acc);
+        for (int i = 0; i < ng; i++) {
+            const GEOSGeometry *p = GEOSGetGeometryN_r(h, acc, i);
+            if (GEOSGeomTypeId_r(h, p) != GEOS_POLYGON || GEOSisEmpty_r(h, p)) continue;
+            (*npoly)++;
+            *nholes += (size_t)GEOSGetNumInteriorRings_r(h, p);
+        }
+    }
     GEOSGeom_destroy_r(h, acc);
     GEOS_finish_r(h);
     return a;
@@ -383,10 +393,14 @@ static void differential(const char *what, const pb *b)
     for (size_t t = 0; t < 4; t++) {
         bool2_result r;
         REQUIRE(run_named(b, ops[t], &r) == ARR_OK, "%s %s failed", what, ops[t]);
-        double g = geos_area(b, ops[t]);
+        size_t gp, gh;
+        double g = geos_area(b, ops[t], &gp, &gh);
         CHECK(g >= 0, "%s %s: GEOS failed", what, ops[t]);
         CHECK(fabs(r.area - g) <= 1e-9 * fmax(1, g), "%s %s: area %.17g, GEOS %.17g", what, ops[t],
               r.area, g);
+        size_t holes = r.npoly ? r.ph_off[r.npoly] : 0;
+        CHECK(r.npoly == gp && holes == gh, "%s %s: %zu polygons and %zu holes, GEOS %zu and %zu",
+              what, ops[t], r.npoly, holes, gp, gh);
         check_result(what, &r);
         bool2_free(&r);
     }

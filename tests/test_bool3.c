@@ -6,6 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
+#include "api/api_int.h"
 #include "core/arr3.h"
 #include "core/bool3.h"
 #include "core/boolexpr.h"
@@ -164,4 +167,67 @@ TEST(expression_tree)
     free(mem);
     lar3_free(&c);
     for (int i = 0; i < 3; i++) solid_free(&s[i]);
+}
+
+/* The cells selected by an expression tree given as JSON text (compiled by the API's parser). */
+static uint8_t *select_json(const lar3 *c, const uint8_t *mem, const char *tree)
+{
+    json_t *j = json_loads(tree, JSON_DECODE_ANY, NULL);
+    bool_expr e;
+    api_error err;
+    uint8_t *sel = calloc(c->nc + 1, 1);
+    if (!j || api_bool_parse(j, c->nsolids, &e, &err) != API_OK) {
+        test_fail(__FILE__, __func__, __LINE__, "%s: %s", tree, j ? err.msg : "bad JSON");
+        json_decref(j);
+        return sel;
+    }
+    uint8_t stack[64];
+    for (size_t k = 0; k < c->nc; k++)
+        sel[k] = (uint8_t)bool_expr_eval(&e, mem + k * c->nsolids, stack);
+    bool_expr_free(&e);
+    json_decref(j);
+    return sel;
+}
+
+/* Associativity, distributivity and De Morgan's laws, as sets of cells, on random boxes. */
+TEST(expression_identities)
+{
+    static const char *const same[][2] = {
+        {"[\"-\",0,[\"+\",1,2]]", "[\"&\",[\"-\",0,1],[\"-\",0,2]]"},
+        {"[\"-\",0,1,2]", "[\"-\",0,[\"+\",1,2]]"},
+        {"[\"-\",0,[\"&\",1,2]]", "[\"+\",[\"-\",0,1],[\"-\",0,2]]"},
+        {"[\"+\",[\"+\",0,1],2]", "[\"+\",0,[\"+\",1,2]]"},
+        {"[\"&\",[\"&\",0,1],2]", "[\"&\",0,1,2]"},
+        {"[\"^\",[\"^\",0,1],2]", "[\"^\",0,[\"^\",1,2]]"},
+        {"[\"&\",0,[\"+\",1,2]]", "[\"+\",[\"&\",0,1],[\"&\",0,2]]"},
+        {"[\"^\",0,1]", "[\"-\",[\"+\",0,1],[\"&\",0,1]]"},
+    };
+    for (uint64_t seed = 1; seed <= 6; seed++) {
+        uint64_t st = seed * 7777;
+        solid s[3];
+        for (int i = 0; i < 3; i++) {
+            double p[3], q[3];
+            for (int a = 0; a < 3; a++) {
+                p[a] = test_rnd(&st);
+                q[a] = p[a] + 0.3 + test_rnd(&st);
+            }
+            s[i] = box(p[0], p[1], p[2], q[0], q[1], q[2]);
+        }
+        arr3_opts o = {0};
+        lar3 c;
+        char err[256];
+        REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
+        uint8_t *mem = malloc(c.nc * 3 + 1);
+        CHECK(bool3_membership(&c, mem) == 0, "membership");
+        for (size_t i = 0; i < sizeof same / sizeof *same; i++) {
+            uint8_t *a = select_json(&c, mem, same[i][0]), *b = select_json(&c, mem, same[i][1]);
+            CHECK(!memcmp(a, b, c.nc), "seed %llu: %s and %s select different cells",
+                  (unsigned long long)seed, same[i][0], same[i][1]);
+            free(a);
+            free(b);
+        }
+        free(mem);
+        lar3_free(&c);
+        for (int i = 0; i < 3; i++) solid_free(&s[i]);
+    }
 }

@@ -532,43 +532,108 @@ static int box_overlap(const int64_t *a, const int64_t *b, int64_t slack)
     return 1;
 }
 
-static int cmp_facex(const void *pa, const void *pb, void *vc)
-{
-    const iface *F = vc;
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    if (F[a].box[0] != F[b].box[0]) return F[a].box[0] < F[b].box[0] ? -1 : 1;
-    return (a > b) - (a < b);
-}
+/* The box-kd-tree of the seeds ("Construction of independent buckets"), in 3D: the faces'
+ * boxes (grown by the coplanar slack) are split at the mean of their centres along the axis
+ * where the centres spread most; a box meeting both sides goes to both.  A bucket stops
+ * splitting when it is small, when a split would leave 7/8 of it on each side, or when it would
+ * copy more than a third of its boxes to both sides.  Every pair of
+ * boxes that meet shares at least one bucket; pairs found in two buckets are made unique at the
+ * end. */
+#define KD_LEAF 24
 
-/* Candidate pairs (a < b) of faces whose boxes meet (with slack for the coplanar tolerance):
- * a sweep along x over the faces sorted by their boxes' low x. */
-static int face_pairs(ctx *c, uint64_t **out, size_t *nout)
+typedef struct kdwork {
+    const iface *F;
+    int64_t slack;
+    uint64_t *pairs;
+    size_t np, cap;
+    int fail;
+} kdwork;
+
+static void kd_leaf(kdwork *w, const uint32_t *ids, size_t n)
 {
-    uint32_t *ord = malloc((c->nf + 1) * sizeof *ord);
-    uint64_t *pairs = NULL;
-    size_t np = 0, cap = 0;
-    if (!ord) return -1;
-    for (size_t i = 0; i < c->nf; i++) ord[i] = (uint32_t)i;
-    qsort_r(ord, c->nf, sizeof *ord, cmp_facex, c->F);
-    int64_t slack = (int64_t)ceil(COPLANAR_TOL);
-    for (size_t i = 0; i < c->nf; i++) {
-        const iface *A = &c->F[ord[i]];
-        for (size_t j = i + 1; j < c->nf; j++) {
-            const iface *B = &c->F[ord[j]];
-            if (B->box[0] > A->box[3] + slack) break;
-            if (!box_overlap(A->box, B->box, slack)) continue;
-            uint32_t a = ord[i], b = ord[j];
-            if (a > b) a = ord[j], b = ord[i];
-            if (PUSH(pairs, np, cap, key2(a, b))) {
-                free(ord);
-                free(pairs);
-                return -1;
+    for (size_t i = 0; i < n && !w->fail; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            if (!box_overlap(w->F[ids[i]].box, w->F[ids[j]].box, w->slack)) continue;
+            uint32_t a = ids[i] < ids[j] ? ids[i] : ids[j], b = ids[i] ^ ids[j] ^ a;
+            if (PUSH(w->pairs, w->np, w->cap, key2(a, b))) {
+                w->fail = 1;
+                return;
             }
         }
+}
+
+static void kd_split(kdwork *w, uint32_t *ids, size_t n, int depth)
+{
+    if (w->fail) return;
+    if (n <= KD_LEAF || depth > 40) {
+        kd_leaf(w, ids, n);
+        return;
     }
-    free(ord);
-    *out = pairs;
-    *nout = np;
+    double mean[3] = {0, 0, 0}, lo[3], hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = DBL_MAX, hi[a] = -DBL_MAX;
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            const int64_t *b = w->F[ids[i]].box;
+            double ctr = ((double)b[a] + (double)b[3 + a]) / 2;
+            mean[a] += ctr;
+            if (ctr < lo[a]) lo[a] = ctr;
+            if (ctr > hi[a]) hi[a] = ctr;
+        }
+    int ax = 0;
+    for (int a = 1; a < 3; a++)
+        if (hi[a] - lo[a] > hi[ax] - lo[ax]) ax = a;
+    double t = mean[ax] / (double)n;
+    size_t nl = 0, nr = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int64_t *b = w->F[ids[i]].box;
+        nl += (double)(b[ax] - w->slack) <= t;
+        nr += (double)(b[3 + ax] + w->slack) > t;
+    }
+    /* no split that leaves 7/8 on a side, nor one that copies more than a third of the boxes
+     * to both sides (the boxes are then as large as the bucket: splitting only repeats them) */
+    if ((nl * 8 >= n * 7 && nr * 8 >= n * 7) || (nl + nr - n) * 3 > n) {
+        kd_leaf(w, ids, n);
+        return;
+    }
+    uint32_t *l = malloc((nl + 1) * sizeof *l), *r = malloc((nr + 1) * sizeof *r);
+    if (!l || !r) {
+        free(l);
+        free(r);
+        w->fail = 1;
+        return;
+    }
+    nl = nr = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int64_t *b = w->F[ids[i]].box;
+        if ((double)(b[ax] - w->slack) <= t) l[nl++] = ids[i];
+        if ((double)(b[3 + ax] + w->slack) > t) r[nr++] = ids[i];
+    }
+    kd_split(w, l, nl, depth + 1);
+    free(l);
+    kd_split(w, r, nr, depth + 1);
+    free(r);
+}
+
+/* Candidate pairs (a < b) of faces whose boxes meet (with slack for the coplanar tolerance),
+ * sorted, each once. */
+static int face_pairs(ctx *c, uint64_t **out, size_t *nout)
+{
+    uint32_t *ids = malloc((c->nf + 1) * sizeof *ids);
+    kdwork w = {c->F, (int64_t)ceil(COPLANAR_TOL), NULL, 0, 0, 0};
+    if (!ids) return -1;
+    for (size_t i = 0; i < c->nf; i++) ids[i] = (uint32_t)i;
+    kd_split(&w, ids, c->nf, 0);
+    free(ids);
+    if (w.fail) {
+        free(w.pairs);
+        return -1;
+    }
+    if (w.np > 1) qsort(w.pairs, w.np, sizeof *w.pairs, cmpu64);
+    size_t m = 0;
+    for (size_t i = 0; i < w.np; i++)
+        if (!m || w.pairs[i] != w.pairs[m - 1]) w.pairs[m++] = w.pairs[i];
+    *out = w.pairs;
+    *nout = m;
     return 0;
 }
 

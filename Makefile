@@ -93,7 +93,11 @@ bench: deps
 	@scripts/deps.sh $(DEPS_BENCH)
 	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement \
 	    $(BUILD)/bench/geos_polygonize $(BUILD)/tests/ref/cgal_bool
-	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/run3d.sh $(BUILD) || s=1; exit $$s
+	@if command -v npm >/dev/null 2>&1 && [ ! -d bench/node_modules/manifold-3d ]; then \
+	    npm ci --prefix bench --no-audit --no-fund >/dev/null 2>&1 || \
+	    echo "bench: npm ci --prefix bench failed: manifold is skipped" >&2; fi
+	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/run3d.sh $(BUILD) || s=1; echo; \
+	    bench/runbool.sh $(BUILD) || s=1; exit $$s
 
 $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 	@mkdir -p $(dir $@)

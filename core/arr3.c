@@ -263,6 +263,8 @@ typedef struct group {
     uint32_t *rseg;  /* res.ne: a segment each arrangement edge is a whole piece of, or NONE */
     i128 ni[3];      /* the unit normal scaled by 2^40 and rounded: the fan order's planes */
     int dirty;
+    int trivial;     /* one face that nothing cuts or splits: it is its own arrangement */
+    uint32_t nfaces; /* input faces in the group */
 } group;
 
 typedef struct seg3 {
@@ -773,7 +775,10 @@ static int stage_groups(ctx *c, uint64_t *pairs, size_t *np)
     uint32_t *cnt = calloc(ng + 1, sizeof *cnt);
     if (!cnt) goto oom;
     for (size_t f = 0; f < c->nf; f++) cnt[c->F[f].group]++;
-    for (size_t g = 0; g < ng; g++) ncop += cnt[g] > 1;
+    for (size_t g = 0; g < ng; g++) {
+        ncop += cnt[g] > 1;
+        c->G[g].nfaces = cnt[g];
+    }
     free(cnt);
     c->st->planes = ng;
     c->st->coplanar_groups = ncop;
@@ -1085,11 +1090,35 @@ static uint32_t out_vertex(const lar2 *L, ipt p)
 }
 
 /* Runs group gi's arrangement and records what it asks of the segments. */
+/* Is group gi one face whose segments are its own edges, none split?  Then its arrangement is
+ * the face itself (most faces of a large mesh), and arr2 is not run for it. */
+static int group_trivial(const ctx *c, uint32_t gi)
+{
+    if (c->G[gi].nfaces != 1) return 0;
+    for (uint32_t i = c->gs_off[gi]; i < c->gs_off[gi + 1]; i++) {
+        const seg3 *S = &c->S[c->gs[i]];
+        if (S->nsp || umap_get(&c->edge_seg, key2(S->a, S->b)) != c->gs[i]) return 0;
+    }
+    return 1;
+}
+
 static int group_run(ctx *c, uint32_t gi, gwork *w)
 {
     group *g = &c->G[gi];
     greq *r = &c->req[gi];
     r->nnew = r->nsplit = r->nmerge = 0;
+    /* the worker's maps are cleared for every group: keep them near this group's size */
+    size_t want = 4 * (size_t)(c->gs_off[gi + 1] - c->gs_off[gi]) + 64;
+    if (w->at.cap > 16 * want) umap_free(&w->at);
+    if (w->oedge.cap > 16 * want) umap_free(&w->oedge);
+    g->trivial = group_trivial(c, gi);
+    if (g->trivial) {
+        lar2_free(&g->res);
+        free(g->rgid);
+        free(g->rseg);
+        g->rgid = g->rseg = NULL;
+        return ARR_OK;
+    }
     w->npc = 0;
     w->at.n = 0;
     if (w->at.cap) memset(w->at.key, 0xff, w->at.cap * sizeof *w->at.key);
@@ -1671,6 +1700,28 @@ static int stage_faces(ctx *c, asm3 *A)
         const lar2 *L = &g->res;
         int single = gf_off[gi + 1] - gf_off[gi] == 1 && c->F[gf[gf_off[gi]]].nc == 1;
         int rev = g->n[g->k] < 0;
+        if (g->trivial) { /* the input face as it is: its outer cycle is CCW about n (Newell) */
+            uint32_t src = gf[gf_off[gi]];
+            const iface *F = &c->F[src];
+            size_t s0 = A->nfsol;
+            if (fsol_toggle(A, s0, F->solid)) goto oom;
+            outface o = {(uint32_t)gi, src, (uint32_t)A->nocyc, F->nc, (uint32_t)s0, 1};
+            for (uint32_t cy = F->c0; cy < F->c0 + F->nc; cy++) {
+                const uint32_t *v = cyc_v(c, cy);
+                for (uint32_t i = 0; i < cyc_len(c, cy); i++)
+                    if (PUSH(A->ocyc, A->nocv, A->capocv, vfind(c, v[i]))) goto oom;
+                if (grow(&A->ocyc_off, &A->capoff, A->nocyc + 2, sizeof *A->ocyc_off)) goto oom;
+                A->ocyc_off[++A->nocyc] = (uint32_t)A->nocv;
+            }
+            if (PUSH(A->of, A->nof, A->capof, o)) goto oom;
+            for (uint32_t i = c->gs_off[gi]; i < c->gs_off[gi + 1]; i++) {
+                const seg3 *S = &c->S[c->gs[i]];
+                uint32_t a = vfind(c, S->a), b = vfind(c, S->b);
+                if (umap_put(&A->eplane, a < b ? key2(a, b) : key2(b, a), c->gs[i], NULL) == NONE)
+                    goto oom;
+            }
+            continue;
+        }
         for (uint32_t f = 0; f < L->nf; f++) {
             uint32_t src = gf[gf_off[gi]];
             size_t s0 = A->nfsol;

@@ -35,9 +35,22 @@ typedef ipt ipt_y;
 RADIX_PASS(ipt_x, KEY_IPT_X)
 RADIX_PASS(ipt_y, KEY_IPT_Y)
 
+/* Below this many elements an insertion sort beats the passes' fixed cost (a histogram of
+ * 2^RBITS counts each): the 3D core sorts many tiny arrangements. */
+#define SMALL 48
+
 int sort_u64(uint64_t *a, size_t n)
 {
     if (n < 2) return 0;
+    if (n <= SMALL) {
+        for (size_t i = 1; i < n; i++) {
+            uint64_t x = a[i];
+            size_t j = i;
+            for (; j > 0 && a[j - 1] > x; j--) a[j] = a[j - 1];
+            a[j] = x;
+        }
+        return 0;
+    }
     uint64_t *tmp = malloc(n * sizeof *tmp);
     size_t *cnt = malloc(RSIZE * sizeof *cnt);
     if (!tmp || !cnt) {
@@ -62,6 +75,16 @@ int sort_u64(uint64_t *a, size_t n)
 int sort_ipt(ipt *a, size_t n)
 {
     if (n < 2) return 0;
+    if (n <= SMALL) { /* by x, then y: the order of the passes below */
+        for (size_t i = 1; i < n; i++) {
+            ipt x = a[i];
+            size_t j = i;
+            for (; j > 0 && (a[j - 1].x > x.x || (a[j - 1].x == x.x && a[j - 1].y > x.y)); j--)
+                a[j] = a[j - 1];
+            a[j] = x;
+        }
+        return 0;
+    }
     ipt *tmp = malloc(n * sizeof *tmp);
     size_t *cnt = malloc(RSIZE * sizeof *cnt);
     if (!tmp || !cnt) {

@@ -47,14 +47,15 @@
 #include "core/arr3.h"
 #include "core/solid.h"
 
-#define SOLIDS_MAX_SOLIDS   100000u        /* entries of "solids" */
-#define SOLIDS_MAX_VERTICES 10000000u      /* rows of V, all solids together */
-#define SOLIDS_MAX_FACES    ARR3_MAX_FACES /* rows of FV, all solids together */
-#define SOLIDS_MAX_CYCLE    1000000u       /* vertex indices in one cycle */
-#define SOLIDS_MAX_INDICES  100000000u     /* vertex indices in all cycles together */
-#define SOLIDS_MAX_WARNINGS 64             /* stats.warnings: the last one counts those left out */
-#define GRID_LIMIT          4611686018427387904.0 /* 2^62: |x| / precision below (solid.c's) */
-#define WARN_LEN            200
+#define SOLIDS_MAX_SOLIDS     100000u        /* entries of "solids" */
+#define SOLIDS_MAX_VERTICES   10000000u      /* rows of V, all solids together */
+#define SOLIDS_MAX_FACES      ARR3_MAX_FACES /* rows of FV, all solids together */
+#define SOLIDS_MAX_CYCLE      1000000u       /* vertex indices in one cycle */
+#define SOLIDS_MAX_INDICES    100000000u     /* vertex indices in all cycles together */
+#define SOLIDS_MAX_MEMBERSHIP 200000000u     /* cells x solids of an op's membership matrix */
+#define SOLIDS_MAX_WARNINGS   64 /* stats.warnings: the last one counts those left out */
+#define GRID_LIMIT            4611686018427387904.0 /* 2^62: |x| / precision below (solid.c's) */
+#define WARN_LEN              200
 
 typedef struct solids_req {
     solid *s; /* owned: ns solids; with soup, the face soup as s[0] (ns == 1) */
@@ -728,6 +729,13 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (!(c.stats.precision > 0)) c.stats.precision = p; /* no faces: the core snapped nothing */
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
+        if (c.nsolids && c.nc > SOLIDS_MAX_MEMBERSHIP / c.nsolids) {
+            rc = api_fail(err, API_EINVALID,
+                          "op: the membership matrix would have %zu cells x %zu solids, more than "
+                          "%u entries; combine fewer solids per request",
+                          c.nc, c.nsolids, SOLIDS_MAX_MEMBERSHIP);
+            goto out;
+        }
         mem = malloc(c.nc * c.nsolids + 1);
         if (!mem) {
             rc = api_fail(err, API_ENOMEM, "out of memory");

@@ -35,6 +35,12 @@ void api_buf_u64(api_buf *b, uint64_t v);
 void api_buf_i64(api_buf *b, int64_t v);
 void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
 void api_buf_free(api_buf *b);
+void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n); /* [a0,a1,...] */
+void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n);
+/* {"shape":[nrows,ncols],"indptr":[...],"indices":[...],"data":[±1,...]}: a CSR matrix whose
+ * row r holds indices/data[indptr[r] .. indptr[r+1]). */
+void api_buf_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
+                 const uint32_t *indices, const int8_t *data);
 
 static inline void api_buf_putc(api_buf *b, char c)
 {

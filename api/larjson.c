@@ -274,12 +274,22 @@ static int check_complex(const lar2 *c, api_error *err)
 
 /* ---- writers ------------------------------------------------------------------------------- */
 
-static void put_u32_list(api_buf *b, const uint32_t *a, size_t n)
+void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n)
 {
     api_buf_putc(b, '[');
     for (size_t i = 0; i < n; i++) {
         if (i) api_buf_putc(b, ',');
         api_buf_u64(b, a[i]);
+    }
+    api_buf_putc(b, ']');
+}
+
+void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
+{
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (i) api_buf_putc(b, ',');
+        api_buf_i64(b, a[i]);
     }
     api_buf_putc(b, ']');
 }
@@ -344,9 +354,8 @@ static void put_stats(api_buf *b, const arr2_stats *s, const api_lar2_fmt *fmt)
     api_buf_putc(b, '}');
 }
 
-/* Writes {"shape":[nrows,ncols],"indptr":..,"indices":..,"data":..} of a CSR matrix. */
-static void put_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
-                    const uint32_t *indices, const int8_t *data)
+void api_buf_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
+                 const uint32_t *indices, const int8_t *data)
 {
     api_buf_puts(b, "{\"shape\":[");
     api_buf_u64(b, nrows);
@@ -358,7 +367,7 @@ static void put_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr
         api_buf_u64(b, indptr[i]);
     }
     api_buf_puts(b, "],\"indices\":");
-    put_u32_list(b, indices, indptr[nrows]);
+    api_buf_u32_list(b, indices, indptr[nrows]);
     api_buf_puts(b, ",\"data\":[");
     for (size_t i = 0; i < indptr[nrows]; i++) {
         if (i) api_buf_putc(b, ',');
@@ -399,7 +408,7 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
         idx[k1] = (uint32_t)e, val[k1] = 1;
     }
     api_buf_puts(b, "{\"d1\":");
-    put_csr(b, c->nv, c->ne, ptr, idx, val);
+    api_buf_csr(b, c->nv, c->ne, ptr, idx, val);
     /* d2: row e holds the FE rows (faces) that contain ±(e+1), with that sign. */
     memset(ptr, 0, (c->ne + 1) * sizeof *ptr);
     for (size_t f = 0; f < r->nrows; f++) {
@@ -419,7 +428,7 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
         }
     }
     api_buf_puts(b, ",\"d2\":");
-    put_csr(b, c->ne, r->nrows, ptr, idx, val);
+    api_buf_csr(b, c->ne, r->nrows, ptr, idx, val);
     api_buf_putc(b, '}');
 out:
     free(ptr);
@@ -459,7 +468,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
             if (e) api_buf_putc(b, ',');
-            put_u32_list(b, c->EV + 2 * e, 2);
+            api_buf_u32_list(b, c->EV + 2 * e, 2);
         }
         api_buf_putc(b, ']');
     }
@@ -470,7 +479,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
             const uint32_t *v;
             size_t k = fv_row(&r, f, &v);
             if (f) api_buf_putc(b, ',');
-            put_u32_list(b, v, k);
+            api_buf_u32_list(b, v, k);
         }
         api_buf_putc(b, ']');
     }
@@ -504,7 +513,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
                 const uint32_t *v;
                 size_t k = cycle_of(c, c->hole_cyc[h], &v);
                 if (h > c->hole_off[f]) api_buf_putc(b, ',');
-                put_u32_list(b, v, k);
+                api_buf_u32_list(b, v, k);
             }
             api_buf_putc(b, ']');
         }
@@ -517,7 +526,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
             const uint32_t *v;
             size_t k = cycle_of(c, c->ext_cyc[x], &v);
             if (x) api_buf_putc(b, ',');
-            put_u32_list(b, v, k);
+            api_buf_u32_list(b, v, k);
         }
         api_buf_putc(b, ']');
     }

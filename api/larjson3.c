@@ -101,29 +101,9 @@ static void put_key(api_buf *b, const char *key)
     api_buf_puts(b, "\":");
 }
 
-static void put_u32_list(api_buf *b, const uint32_t *a, size_t n)
-{
-    api_buf_putc(b, '[');
-    for (size_t i = 0; i < n; i++) {
-        if (i) api_buf_putc(b, ',');
-        api_buf_u64(b, a[i]);
-    }
-    api_buf_putc(b, ']');
-}
-
-static void put_i32_list(api_buf *b, const int32_t *a, size_t n)
-{
-    api_buf_putc(b, '[');
-    for (size_t i = 0; i < n; i++) {
-        if (i) api_buf_putc(b, ',');
-        api_buf_i64(b, a[i]);
-    }
-    api_buf_putc(b, ']');
-}
-
 static void put_cycle(api_buf *b, const lar3 *c, uint32_t cy)
 {
-    put_u32_list(b, c->cyc + c->cyc_off[cy], c->cyc_off[cy + 1] - c->cyc_off[cy]);
+    api_buf_u32_list(b, c->cyc + c->cyc_off[cy], c->cyc_off[cy + 1] - c->cyc_off[cy]);
 }
 
 /* Rows of signed lists (FE, CF): row r is a[off[r] .. off[r+1]). */
@@ -132,7 +112,7 @@ static void put_signed_rows(api_buf *b, const uint32_t *off, const int32_t *a, s
     api_buf_putc(b, '[');
     for (size_t r = 0; r < n; r++) {
         if (r) api_buf_putc(b, ',');
-        put_i32_list(b, a + off[r], off[r + 1] - off[r]);
+        api_buf_i32_list(b, a + off[r], off[r + 1] - off[r]);
     }
     api_buf_putc(b, ']');
 }
@@ -171,23 +151,7 @@ static int put_csr_from_columns(api_buf *b, size_t nrows, size_t ncols, const ui
             idx[at] = (uint32_t)j;
             val[at] = ent[i] > 0 ? 1 : -1;
         }
-    api_buf_puts(b, "{\"shape\":[");
-    api_buf_u64(b, nrows);
-    api_buf_putc(b, ',');
-    api_buf_u64(b, ncols);
-    api_buf_puts(b, "],\"indptr\":[");
-    for (size_t r = 0; r <= nrows; r++) {
-        if (r) api_buf_putc(b, ',');
-        api_buf_u64(b, ptr[r]);
-    }
-    api_buf_puts(b, "],\"indices\":");
-    put_u32_list(b, idx, nnz);
-    api_buf_puts(b, ",\"data\":[");
-    for (size_t i = 0; i < nnz; i++) {
-        if (i) api_buf_putc(b, ',');
-        api_buf_puts(b, val[i] > 0 ? "1" : "-1");
-    }
-    api_buf_puts(b, "]}");
+    api_buf_csr(b, nrows, ncols, ptr, idx, val);
     free(ptr), free(fill), free(idx), free(val);
     return API_OK;
 }
@@ -303,9 +267,9 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r)
 {
     put_key(b, "result");
     api_buf_puts(b, "{\"cells\":");
-    put_u32_list(b, r->cells, r->ncells);
+    api_buf_u32_list(b, r->cells, r->ncells);
     api_buf_puts(b, ",\"faces\":");
-    put_i32_list(b, r->faces, r->nfaces);
+    api_buf_i32_list(b, r->faces, r->nfaces);
     api_buf_puts(b, ",\"FV\":[");
     for (size_t i = 0; i < r->nfaces; i++) {
         uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
@@ -368,7 +332,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
             if (e) api_buf_putc(b, ',');
-            put_u32_list(b, c->EV + 2 * e, 2);
+            api_buf_u32_list(b, c->EV + 2 * e, 2);
         }
         api_buf_putc(b, ']');
     }
@@ -413,13 +377,13 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t k = 0; k < c->nc; k++) {
             if (k) api_buf_putc(b, ',');
-            put_u32_list(b, c->cv + c->cv_off[k], c->cv_off[k + 1] - c->cv_off[k]);
+            api_buf_u32_list(b, c->cv + c->cv_off[k], c->cv_off[k + 1] - c->cv_off[k]);
         }
         api_buf_putc(b, ']');
     }
     if (fl & API_F3_EXTERIOR) {
         put_key(b, "exterior");
-        put_i32_list(b, c->ext, c->next);
+        api_buf_i32_list(b, c->ext, c->next);
     }
     if (fl & API_F3_OPERATORS) {
         put_key(b, "operators");

@@ -179,16 +179,6 @@ fail:
     return rc;
 }
 
-static void put_u32_row(api_buf *b, const uint32_t *a, size_t n)
-{
-    api_buf_putc(b, '[');
-    for (size_t i = 0; i < n; i++) {
-        if (i) api_buf_putc(b, ',');
-        api_buf_u64(b, a[i]);
-    }
-    api_buf_putc(b, ']');
-}
-
 /* The "membership" and "result" members (api_lar2_fmt.more). */
 static void put_bool2(api_buf *b, const void *udata)
 {
@@ -203,12 +193,12 @@ static void put_bool2(api_buf *b, const void *udata)
         api_buf_putc(b, ']');
     }
     api_buf_puts(b, "],\"result\":{\"cells\":");
-    put_u32_row(b, r->cells, r->ncells);
+    api_buf_u32_list(b, r->cells, r->ncells);
     api_buf_puts(b, ",\"FV\":[");
     for (size_t q = 0; q < r->npoly; q++) {
         uint32_t k = r->poly_outer[q];
         if (q) api_buf_putc(b, ',');
-        put_u32_row(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+        api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
     }
     api_buf_puts(b, "],\"FE\":[");
     for (size_t q = 0; q < r->npoly; q++) {
@@ -236,7 +226,7 @@ static void put_bool2(api_buf *b, const void *udata)
         for (uint32_t h = r->ph_off[q]; h < r->ph_off[q + 1]; h++) {
             uint32_t k = r->ph_cyc[h];
             if (h > r->ph_off[q]) api_buf_putc(b, ',');
-            put_u32_row(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+            api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
         }
         api_buf_putc(b, ']');
     }

@@ -191,4 +191,17 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
  * checked (bool_expr_free it), or API_EINVALID naming the JSON path under "op". */
 int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err);
 
+/* Readers of results (LAR JSON), for the renderers (api/render.c).
+ * api_result_load: parses text and checks that it is an object with "dim" equal to dim (why
+ *   completes the message "dim: expected D (why)"); *root is the caller's (json_decref).
+ * api_result_cycle: checks that row is an array of at least minlen vertex indices < nv, named by
+ *   what printf'd with a (and b unless b == SIZE_MAX), and copies them to out (may be NULL).
+ * api_face_key: a key of "holes", canonical decimal ("0", "17": no sign, no leading zero) below
+ *   nf, into *out; 0 when it is not one. */
+int api_result_load(const char *text, size_t len, int dim, const char *why, json_t **root,
+                    api_error *err);
+int api_result_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
+                     const char *what, size_t a, size_t b);
+int api_face_key(const char *key, size_t nf, size_t *out);
+
 #endif

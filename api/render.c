@@ -244,10 +244,8 @@ static const uint32_t *ring_idx(const rmodel *m, size_t r)
     return m->idx + m->ring_off[r];
 }
 
-/* Reads a cycle (a JSON array of vertex indices) named path (printf'd with a, b) into out
- * (may be NULL: check only).  */
-static int read_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
-                      const char *what, size_t a, size_t b)
+int api_result_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
+                     const char *what, size_t a, size_t b)
 {
     size_t n = json_array_size(row);
     char path[96];
@@ -255,9 +253,12 @@ static int read_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out
         snprintf(path, sizeof path, what, a);
     else
         snprintf(path, sizeof path, what, a, b);
-    if (!json_is_array(row) || n < minlen)
+    if (!json_is_array(row) || n < minlen) {
+        if (minlen <= 1)
+            return api_fail(err, API_EINVALID, "%s: expected an array of vertex indices", path);
         return api_fail(err, API_EINVALID, "%s: expected an array of at least %zu vertex indices",
                         path, minlen);
+    }
     for (size_t i = 0; i < n; i++) {
         const json_t *v = json_array_get(row, i);
         json_int_t k = json_is_integer(v) ? json_integer_value(v) : -1;
@@ -304,8 +305,7 @@ static size_t bounded_rows(const json_t *root, const json_t *FV, const double *x
     return rows;
 }
 
-/* Parses a key of "holes": canonical decimal ("0", "17"; no sign, no leading zero). */
-static int parse_face_key(const char *key, size_t *out)
+int api_face_key(const char *key, size_t nf, size_t *out)
 {
     size_t v = 0, n = strlen(key);
     if (n == 0 || n > 19 || (n > 1 && key[0] == '0')) return 0;
@@ -314,18 +314,16 @@ static int parse_face_key(const char *key, size_t *out)
         v = v * 10 + (size_t)(key[i] - '0');
     }
     *out = v;
-    return 1;
+    return v < nf;
 }
 
-static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
+int api_result_load(const char *text, size_t len, int dim, const char *why, json_t **out,
+                    api_error *err)
 {
-    json_t *root = NULL;
     json_error_t je;
-    const json_t *dim, *V, *FV, *EV, *holes, *val;
-    const char *key;
-    size_t rows, nring, nidx, r, w;
-    int rc;
-    *m = (rmodel){0};
+    json_t *root;
+    const json_t *d;
+    *out = NULL;
     if (!text || len == 0) return api_fail(err, API_EINVALID, "result: empty");
     root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
     if (!root) {
@@ -334,24 +332,35 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
         return api_fail(err, API_EINVALID, "result: malformed JSON at line %d, column %d: %s",
                         je.line, je.column, je.text);
     }
-    if (!json_is_object(root)) {
+    int rc = API_OK;
+    d = json_object_get(root, "dim");
+    if (!json_is_object(root))
         rc = api_fail(err, API_EINVALID, "result: expected a JSON object (LAR JSON)");
-        goto fail;
-    }
-    dim = json_object_get(root, "dim");
-    if (!dim) {
+    else if (!d)
         rc = api_fail(err, API_EINVALID, "dim: required (not a LAR JSON result)");
-        goto fail;
+    else if (json_is_integer(d) && json_integer_value(d) != dim)
+        rc = api_fail(err, API_EINVALID, "dim: expected %d (%s), got %lld", dim, why,
+                      (long long)json_integer_value(d));
+    else if (!json_is_integer(d))
+        rc = api_fail(err, API_EINVALID, "dim: expected %d (%s)", dim, why);
+    if (rc != API_OK) {
+        json_decref(root);
+        return rc;
     }
-    if (!json_is_integer(dim) || json_integer_value(dim) != 2) {
-        if (json_is_integer(dim))
-            rc =
-                api_fail(err, API_EINVALID, "dim: expected 2 (only 2D results are drawn), got %lld",
-                         (long long)json_integer_value(dim));
-        else
-            rc = api_fail(err, API_EINVALID, "dim: expected 2 (only 2D results are drawn)");
-        goto fail;
-    }
+    *out = root;
+    return API_OK;
+}
+
+static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
+{
+    json_t *root = NULL;
+    const json_t *V, *FV, *EV, *holes, *val;
+    const char *key;
+    size_t rows, nring, nidx, r, w;
+    int rc;
+    *m = (rmodel){0};
+    rc = api_result_load(text, len, 2, "only 2D results are drawn", &root, err);
+    if (rc != API_OK) return rc;
     V = json_object_get(root, "V");
     FV = json_object_get(root, "FV");
     EV = json_object_get(root, "EV");
@@ -409,7 +418,7 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
                 rc = api_fail(err, API_EINVALID, "EV[%zu]: expected 2 vertex indices", e);
                 goto fail;
             }
-            rc = read_cycle(row, m->nv, 2, m->ev + 2 * e, err, "EV[%zu]", e, SIZE_MAX);
+            rc = api_result_cycle(row, m->nv, 2, m->ev + 2 * e, err, "EV[%zu]", e, SIZE_MAX);
             if (rc != API_OK) goto fail;
         }
     }
@@ -420,7 +429,7 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
     }
     rows = json_array_size(FV);
     for (size_t f = 0; f < rows; f++) {
-        rc = read_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
+        rc = api_result_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
         if (rc != API_OK) goto fail;
     }
     m->nf = bounded_rows(root, FV, m->xy);
@@ -428,7 +437,7 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
     nidx = 0;
     for (size_t f = 0; f < m->nf; f++) {
         const json_t *row = json_array_get(FV, f);
-        rc = read_cycle(row, m->nv, 3, NULL, err, "FV[%zu]", f, SIZE_MAX);
+        rc = api_result_cycle(row, m->nv, 3, NULL, err, "FV[%zu]", f, SIZE_MAX);
         if (rc != API_OK) goto fail;
         nidx += json_array_size(row);
     }
@@ -440,7 +449,7 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
         json_object_foreach((json_t *)holes, key, val)
         {
             size_t f;
-            if (!parse_face_key(key, &f) || f >= m->nf) {
+            if (!api_face_key(key, m->nf, &f)) {
                 rc = api_fail(err, API_EINVALID, "holes.%.40s: not a bounded face (there are %zu)",
                               key, m->nf);
                 goto fail;
@@ -451,7 +460,7 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
             }
             for (size_t h = 0; h < json_array_size(val); h++) {
                 const json_t *row = json_array_get(val, h);
-                rc = read_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
+                rc = api_result_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
                 if (rc != API_OK) goto fail;
                 nidx += json_array_size(row);
                 nring++;
@@ -471,14 +480,14 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
         char k[24];
         m->face_ring[f] = r;
         m->ring_off[r++] = w;
-        read_cycle(row, m->nv, 3, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
+        api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
         w += json_array_size(row);
         snprintf(k, sizeof k, "%zu", f);
         if (json_is_object(holes)) hs = json_object_get(holes, k);
         for (size_t h = 0; h < json_array_size(hs); h++) {
             row = json_array_get(hs, h);
             m->ring_off[r++] = w;
-            read_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
+            api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
             w += json_array_size(row);
         }
     }

@@ -73,74 +73,16 @@ static void omodel_free(omodel *m)
     *m = (omodel){0};
 }
 
-/* Checks the cycle row at path (printf'd with a, b) and copies it to out (may be NULL). */
-static int read_cycle(const json_t *row, size_t nv, uint32_t *out, api_error *err, const char *fmt,
-                      size_t a, size_t b)
-{
-    size_t n = json_array_size(row);
-    char path[96];
-    snprintf(path, sizeof path, fmt, a, b);
-    if (!json_is_array(row) || n < 1)
-        return api_fail(err, API_EINVALID, "%s: expected an array of vertex indices", path);
-    for (size_t i = 0; i < n; i++) {
-        const json_t *v = json_array_get(row, i);
-        json_int_t k = json_is_integer(v) ? json_integer_value(v) : -1;
-        if (k < 0 || (uint64_t)k >= nv)
-            return api_fail(err, API_EINVALID, "%s[%zu]: expected a vertex index < %zu", path, i,
-                            nv);
-        if (out) out[i] = (uint32_t)k;
-    }
-    return API_OK;
-}
-
-/* A key of "holes": canonical decimal below nf. */
-static int face_key(const char *key, size_t nf, size_t *out)
-{
-    size_t v = 0, n = strlen(key);
-    if (n == 0 || n > 12 || (n > 1 && key[0] == '0')) return 0;
-    for (size_t i = 0; i < n; i++) {
-        if (key[i] < '0' || key[i] > '9') return 0;
-        v = v * 10 + (size_t)(key[i] - '0');
-    }
-    *out = v;
-    return v < nf;
-}
-
 static int read_result(const char *text, size_t len, omodel *m, api_error *err)
 {
     json_t *root = NULL;
-    json_error_t je;
-    const json_t *dim, *V, *FV, *holes, *CF, *val;
+    const json_t *V, *FV, *holes, *CF, *val;
     const char *key;
     size_t nidx = 0, ncf = 0, r, w;
     int rc;
     *m = (omodel){0};
-    if (!text || len == 0) return api_fail(err, API_EINVALID, "result: empty");
-    root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
-    if (!root) {
-        if (json_error_code(&je) == json_error_out_of_memory)
-            return api_fail(err, API_ENOMEM, "out of memory reading the result");
-        return api_fail(err, API_EINVALID, "result: malformed JSON at line %d, column %d: %s",
-                        je.line, je.column, je.text);
-    }
-    if (!json_is_object(root)) {
-        rc = api_fail(err, API_EINVALID, "result: expected a JSON object (LAR JSON)");
-        goto fail;
-    }
-    dim = json_object_get(root, "dim");
-    if (!dim) {
-        rc = api_fail(err, API_EINVALID, "dim: required (not a LAR JSON result)");
-        goto fail;
-    }
-    if (!json_is_integer(dim) || json_integer_value(dim) != 3) {
-        if (json_is_integer(dim))
-            rc = api_fail(err, API_EINVALID,
-                          "dim: expected 3 (OBJ is written of 3D results), got %lld",
-                          (long long)json_integer_value(dim));
-        else
-            rc = api_fail(err, API_EINVALID, "dim: expected 3 (OBJ is written of 3D results)");
-        goto fail;
-    }
+    rc = api_result_load(text, len, 3, "OBJ is written of 3D results", &root, err);
+    if (rc != API_OK) return rc;
     V = json_object_get(root, "V");
     FV = json_object_get(root, "FV");
     CF = json_object_get(root, "CF");
@@ -188,7 +130,7 @@ static int read_result(const char *text, size_t len, omodel *m, api_error *err)
     m->nf = json_array_size(FV);
     m->nrings = m->nf;
     for (size_t f = 0; f < m->nf; f++) {
-        rc = read_cycle(json_array_get(FV, f), m->nv, NULL, err, "FV[%zu]", f, 0);
+        rc = api_result_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
         if (rc != API_OK) goto fail;
         nidx += json_array_size(json_array_get(FV, f));
     }
@@ -200,7 +142,7 @@ static int read_result(const char *text, size_t len, omodel *m, api_error *err)
         json_object_foreach((json_t *)holes, key, val)
         {
             size_t f;
-            if (!face_key(key, m->nf, &f)) {
+            if (!api_face_key(key, m->nf, &f)) {
                 rc = api_fail(err, API_EINVALID, "holes.%.40s: not a face (there are %zu)", key,
                               m->nf);
                 goto fail;
@@ -211,7 +153,7 @@ static int read_result(const char *text, size_t len, omodel *m, api_error *err)
             }
             for (size_t h = 0; h < json_array_size(val); h++) {
                 const json_t *row = json_array_get(val, h);
-                rc = read_cycle(row, m->nv, NULL, err, "holes.%zu[%zu]", f, h);
+                rc = api_result_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
                 if (rc != API_OK) goto fail;
                 nidx += json_array_size(row);
                 m->nrings++;
@@ -256,14 +198,14 @@ static int read_result(const char *text, size_t len, omodel *m, api_error *err)
         char k[24];
         m->face_ring[f] = r;
         m->ring_off[r++] = w;
-        read_cycle(row, m->nv, m->idx + w, NULL, "FV[%zu]", f, 0);
+        api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
         w += json_array_size(row);
         snprintf(k, sizeof k, "%zu", f);
         if (json_is_object(holes)) hs = json_object_get(holes, k);
         for (size_t h = 0; h < json_array_size(hs); h++) {
             row = json_array_get(hs, h);
             m->ring_off[r++] = w;
-            read_cycle(row, m->nv, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
+            api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
             w += json_array_size(row);
         }
     }

@@ -141,19 +141,6 @@ static int parse_options(const json_t *o, solids_req *r, api_error *err)
 
 /* ---- the geometry, copied ------------------------------------------------------------------- */
 
-/* A key of "holes": canonical decimal ("0", "17"; no sign, no leading zero) below nf. */
-static int face_key(const char *key, size_t nf, size_t *out)
-{
-    size_t v = 0, n = strlen(key);
-    if (n == 0 || n > 12 || (n > 1 && key[0] == '0')) return 0;
-    for (size_t i = 0; i < n; i++) {
-        if (key[i] < '0' || key[i] > '9') return 0;
-        v = v * 10 + (size_t)(key[i] - '0');
-    }
-    *out = v;
-    return v < nf;
-}
-
 /* Writes the JSON path of cycle FV[f], or holes.key[h] when key is not NULL, of the solid at
  * path into where. */
 static const char *cycle_path(char *where, size_t cap, const char *path, size_t f, const char *key,
@@ -277,7 +264,7 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
         json_object_foreach((json_t *)holes, key, val)
         {
             size_t f;
-            if (!face_key(key, nf, &f))
+            if (!api_face_key(key, nf, &f))
                 return api_fail(err, API_EINVALID,
                                 "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
                                 "rows of FV)",

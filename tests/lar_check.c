@@ -17,21 +17,38 @@ static int bad(char *msg, size_t len, const char *fmt, ...)
     return -1;
 }
 
-/* Edge index of {u, v} by binary search in the sorted EV, or -1. */
-static long find_edge(const lar2 *c, uint32_t u, uint32_t v)
+/* Edge index of {u, v} by binary search in the sorted EV (ne edges), or -1. */
+static long find_ev(const uint32_t *EV, size_t ne, uint32_t u, uint32_t v)
 {
     uint32_t a = u < v ? u : v, b = u < v ? v : u;
-    size_t lo = 0, hi = c->ne;
+    size_t lo = 0, hi = ne;
     while (lo < hi) {
         size_t mid = (lo + hi) / 2;
-        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
+        uint32_t x = EV[2 * mid], y = EV[2 * mid + 1];
         if (x < a || (x == a && y < b))
             lo = mid + 1;
         else
             hi = mid;
     }
-    if (lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b) return (long)lo;
+    if (lo < ne && EV[2 * lo] == a && EV[2 * lo + 1] == b) return (long)lo;
     return -1;
+}
+
+static long find_edge(const lar2 *c, uint32_t u, uint32_t v)
+{
+    return find_ev(c->EV, c->ne, u, v);
+}
+
+/* EV: every row v0 < v1 < nv, rows sorted and unique.  0, or -1 with a message. */
+static int ev_check(const uint32_t *EV, size_t ne, size_t nv, char *msg, size_t len)
+{
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = EV[2 * e], b = EV[2 * e + 1];
+        if (a >= b || b >= nv) return bad(msg, len, "EV[%zu] = [%u, %u] not v0 < v1 < nv", e, a, b);
+        if (e && (EV[2 * e - 2] > a || (EV[2 * e - 2] == a && EV[2 * e - 1] >= b)))
+            return bad(msg, len, "EV not sorted and unique at %zu", e);
+    }
+    return 0;
 }
 
 double lar_face_area(const lar2 *c, size_t f)
@@ -84,17 +101,7 @@ int lar_check(const lar2 *c, char *msg, size_t len)
         bad(msg, len, "out of memory");
         goto out;
     }
-    for (size_t e = 0; e < c->ne; e++) {
-        uint32_t a = c->EV[2 * e], b = c->EV[2 * e + 1];
-        if (a >= b || b >= c->nv) {
-            bad(msg, len, "EV[%zu] = [%u, %u] not v0 < v1 < nv", e, a, b);
-            goto out;
-        }
-        if (e && (c->EV[2 * e - 2] > a || (c->EV[2 * e - 2] == a && c->EV[2 * e - 1] >= b))) {
-            bad(msg, len, "EV not sorted and unique at %zu", e);
-            goto out;
-        }
-    }
+    if (ev_check(c->EV, c->ne, c->nv, msg, len)) goto out;
     /* every cycle a closed walk; every directed edge used once */
     for (size_t cy = 0; cy < c->ncyc; cy++) {
         uint32_t s = c->cyc_off[cy], t = c->cyc_off[cy + 1];
@@ -212,22 +219,6 @@ out:
 
 /* ------------------------------------------------------------------ 3D */
 
-static long find_edge3(const lar3 *c, uint32_t u, uint32_t v)
-{
-    uint32_t a = u < v ? u : v, b = u < v ? v : u;
-    size_t lo = 0, hi = c->ne;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
-        if (x < a || (x == a && y < b))
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    if (lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b) return (long)lo;
-    return -1;
-}
-
 /* Six times the signed volume of the cone from o over face f's cycles (fans). */
 static double cone6(const lar3 *c, uint32_t f, const double *o)
 {
@@ -283,17 +274,7 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
         bad(msg, len, "out of memory");
         goto done;
     }
-    for (size_t e = 0; e < c->ne; e++) {
-        uint32_t a = c->EV[2 * e], b = c->EV[2 * e + 1];
-        if (a >= b || b >= c->nv) {
-            bad(msg, len, "EV[%zu] = (%u, %u): not v0 < v1 < V", e, a, b);
-            goto done;
-        }
-        if (e && (c->EV[2 * e - 2] > a || (c->EV[2 * e - 2] == a && c->EV[2 * e - 1] >= b))) {
-            bad(msg, len, "EV[%zu]: not sorted or repeated", e);
-            goto done;
-        }
-    }
+    if (ev_check(c->EV, c->ne, c->nv, msg, len)) goto done;
     for (size_t f = 0; f < c->nf; f++) {
         /* FE equals the signed sum of the cycles' edges */
         memset(acc, 0, c->ne * sizeof *acc);
@@ -308,7 +289,7 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
             }
             for (uint32_t i = c0; i < c1; i++) {
                 uint32_t u = c->cyc[i], v = c->cyc[i + 1 < c1 ? i + 1 : c0];
-                long e = find_edge3(c, u, v);
+                long e = find_ev(c->EV, c->ne, u, v);
                 if (e < 0) {
                     bad(msg, len, "face %zu walks (%u, %u), not an edge", f, u, v);
                     goto done;

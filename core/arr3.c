@@ -525,6 +525,15 @@ static const uint32_t *cyc_v(const ctx *c, uint32_t cy)
     return c->icyc + c->icyc_off[cy];
 }
 
+/* Edge i of input cycle cy, as (lower id, higher id): how every face sharing it sees it. */
+static void cyc_edge(const ctx *c, uint32_t cy, uint32_t i, uint32_t *lo, uint32_t *hi)
+{
+    const uint32_t *v = cyc_v(c, cy);
+    uint32_t p = v[i], q = v[(i + 1) % cyc_len(c, cy)];
+    *lo = p < q ? p : q;
+    *hi = p ^ q ^ *lo;
+}
+
 /* ------------------------------------------------------------------ stage 2: pairs, groups */
 
 static int box_overlap(const int64_t *a, const int64_t *b, int64_t slack)
@@ -807,14 +816,9 @@ static int stage_edges(ctx *c)
     for (size_t f = 0; f < c->nf; f++) {
         const iface *F = &c->F[f];
         for (uint32_t cy = F->c0; cy < F->c0 + F->nc; cy++) {
-            const uint32_t *v = cyc_v(c, cy);
-            uint32_t len = cyc_len(c, cy);
-            for (uint32_t i = 0; i < len; i++) {
-                uint32_t a = v[i], b = v[(i + 1) % len];
-                if (a > b) {
-                    uint32_t t = a;
-                    a = b, b = t;
-                }
+            for (uint32_t i = 0; i < cyc_len(c, cy); i++) {
+                uint32_t a, b;
+                cyc_edge(c, cy, i, &a, &b);
                 int found;
                 uint32_t s = umap_put(&c->edge_seg, key2(a, b), (uint32_t)c->ns, &found);
                 if (s == NONE) return -1;
@@ -865,14 +869,9 @@ static int clip_face(ctx *c, uint32_t f, const group *g, const double *u, xing *
     const iface *F = &c->F[f];
     *nx = 0;
     for (uint32_t cy = F->c0; cy < F->c0 + F->nc; cy++) {
-        const uint32_t *v = cyc_v(c, cy);
-        uint32_t len = cyc_len(c, cy);
-        for (uint32_t i = 0; i < len; i++) {
-            uint32_t a = v[i], b = v[(i + 1) % len];
-            if (a > b) {
-                uint32_t t = a;
-                a = b, b = t;
-            }
+        for (uint32_t i = 0; i < cyc_len(c, cy); i++) {
+            uint32_t a, b;
+            cyc_edge(c, cy, i, &a, &b);
             double pa[3], pb[3];
             pt(c, a, pa);
             pt(c, b, pb);
@@ -957,11 +956,10 @@ static int stage_incidence(ctx *c)
     for (size_t f = 0; f < c->nf; f++) {
         const iface *F = &c->F[f];
         for (uint32_t cy = F->c0; cy < F->c0 + F->nc; cy++) {
-            const uint32_t *v = cyc_v(c, cy);
-            uint32_t len = cyc_len(c, cy);
-            for (uint32_t i = 0; i < len; i++) {
-                uint32_t a = v[i], b = v[(i + 1) % len];
-                uint32_t s = umap_get(&c->edge_seg, a < b ? key2(a, b) : key2(b, a));
+            for (uint32_t i = 0; i < cyc_len(c, cy); i++) {
+                uint32_t a, b;
+                cyc_edge(c, cy, i, &a, &b);
+                uint32_t s = umap_get(&c->edge_seg, key2(a, b));
                 if (PUSH(pr, n, cap, key2(F->group, s))) goto oom;
             }
         }

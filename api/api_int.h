@@ -134,6 +134,10 @@ typedef struct api_lar2_opts {
  * {.fields = API_F_DEFAULT}; after the last key, operators adds API_F_OPERATORS to fields. */
 int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_error *err);
 
+/* Reads the whole "options" object o (may be NULL) of a kind whose options are exactly those of
+ * api_lar2_option ("lines", "polygons"): API_OK, or an error naming options.KEY. */
+int api_lar2_options(const json_t *o, api_lar2_opts *opt, api_error *err);
+
 /* How api_lar2_write() presents a 2-complex. */
 typedef struct api_lar2_fmt {
     unsigned fields;   /* API_F_* bits */

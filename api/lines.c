@@ -81,7 +81,7 @@ int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_erro
     return API_NOT_MINE;
 }
 
-static int parse_options(const json_t *o, api_lar2_opts *opt, api_error *err)
+int api_lar2_options(const json_t *o, api_lar2_opts *opt, api_error *err)
 {
     const char *key;
     json_t *v;
@@ -166,7 +166,7 @@ int api_lines_parse(const json_t *req, void **parsed, api_error *err)
     if ((rc = api_only_keys(req, "lines", err)) != API_OK) return rc;
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
-    rc = parse_options(json_object_get(req, "options"), &r->opt, err);
+    rc = api_lar2_options(json_object_get(req, "options"), &r->opt, err);
     if (rc != API_OK) goto fail;
     rc = parse_lines(json_object_get(req, "lines"), &r->seg, &r->n, err);
     if (rc != API_OK) goto fail;

@@ -44,27 +44,6 @@ void api_polygons_free(void *parsed)
     free(r);
 }
 
-static int parse_options(const json_t *o, api_lar2_opts *opt, api_error *err)
-{
-    const char *key;
-    json_t *v;
-    *opt = (api_lar2_opts){.fields = API_F_DEFAULT};
-    if (!o) return API_OK;
-    if (!json_is_object(o)) return api_fail(err, API_EINVALID, "options: expected an object");
-    json_object_foreach((json_t *)o, key, v)
-    {
-        int rc = api_lar2_option(key, v, opt, err);
-        if (rc == API_NOT_MINE)
-            return api_fail(err, API_EINVALID,
-                            "options.%.64s: unknown option (expected precision, keep_dangling, "
-                            "exterior_last, operators or fields)",
-                            key);
-        if (rc != API_OK) return rc;
-    }
-    if (opt->operators) opt->fields |= API_F_OPERATORS;
-    return API_OK;
-}
-
 /* Counts the rings and points of "polygons" and checks every shape and number. */
 static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
 {
@@ -160,7 +139,7 @@ int api_polygons_parse(const json_t *req, void **parsed, api_error *err)
     }
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
-    rc = parse_options(json_object_get(req, "options"), &r->opt, err);
+    rc = api_lar2_options(json_object_get(req, "options"), &r->opt, err);
     if (rc != API_OK) goto fail;
     rc = parse_polygons(json_object_get(req, "polygons"), r, err);
     if (rc != API_OK) goto fail;

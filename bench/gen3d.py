@@ -5,7 +5,7 @@ Usage:
   gen3d.py cubes N SEED [--size S]   N randomly rotated cubes in [0,1]^3
   gen3d.py grid K [--step H]         a K x K x K grid of overlapping axis-aligned unit cubes
   gen3d.py tets N SEED [--size S]    N random tetrahedra in [0,1]^3
-  gen3d.py larcubes FILE             the cuboids of a LAR.jl input (shared/data/mesh/
+  gen3d.py larcubes FILE             the cuboids of a LAR.jl input (tests/data/mesh/
                                      fivecubes-input.json: 1-based FV in cuboid order)
 Output (at least one; default --json -):
   --json PATH     a cellar request {"kind": "solids", "solids": [{"V": [[x,y,z],...],

@@ -81,6 +81,8 @@ static const char usage_text[] =
     "  solids: --precision X (grid step), --faces (one face soup: no closedness),\n"
     "       --op union|intersection|difference|xor|'[\"-\",0,[\"+\",1,2]]' (a Boolean\n"
     "       result; with --format obj the result solid is written)\n"
+    "  svg, solids: --format request   print the request instead of running it (to post it\n"
+    "       to the service: ... --format request | curl --data-binary @- ...)\n"
     "  run, svg, solids: --format json|svg|geojson|obj   the result JSON (default), a picture\n"
     "       of a 2D result (SVG: faces filled, edges, y up), a map of it (GeoJSON\n"
     "       FeatureCollection of the faces) or the cells of a 3D result (Wavefront OBJ: a group\n"
@@ -422,6 +424,18 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
     return 0;
 }
 
+/* --format request: the request a command would run, a line of JSON, for curl. */
+static int write_request(const char *body, size_t len)
+{
+    fwrite(body, 1, len, stdout);
+    fputc('\n', stdout);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
 static int run(char **pos, int npos, int threads, const out_format *of)
 {
     size_t len, outlen;
@@ -512,6 +526,10 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
     body = req ? json_dumps(req, JSON_COMPACT) : NULL;
     if (!body) {
         fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    if (of->kind == 4) {
+        rc = write_request(body, strlen(body));
         goto out;
     }
     if (api_run_json(body, strlen(body), threads, &out, &outlen, &err) != API_OK) {
@@ -687,6 +705,10 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         goto out;
     }
     m = NULL;
+    if (of->kind == 4) {
+        rc = write_request(body, blen);
+        goto out;
+    }
     if (api_run_json(body, blen, threads, &out, &outlen, &err) != API_OK) {
         size_t i;
         int k = -1;
@@ -791,10 +813,11 @@ int main(int argc, char **argv)
                           : !strcmp(val, "svg")     ? 1
                           : !strcmp(val, "geojson") ? 2
                           : !strcmp(val, "obj")     ? 3
+                          : !strcmp(val, "request") ? 4
                                                     : -1;
                 if (of.kind < 0) {
-                    rc = usage_error("--format: expected json, svg, geojson or obj, not \"%s\"",
-                                     val);
+                    rc = usage_error(
+                        "--format: expected json, svg, geojson, obj or request, not \"%s\"", val);
                     goto out;
                 }
                 continue;
@@ -844,6 +867,8 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for --format svg", of.first);
     } else if (of.explode && of.kind != 1 && of.kind != 3) {
         rc = usage_error("%s is for --format svg or obj", of.explode);
+    } else if (of.kind == 4 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
+        rc = usage_error("%s", "--format request is for the svg and solids commands");
     } else if (npos == 0) {
         rc = usage_error("%s", "no command (run, gen, svg, solids)");
     } else if (strcmp(pos[0], "svg") == 0) {

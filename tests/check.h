@@ -39,7 +39,7 @@ int test_failed_now(void); /* non-zero once the running test has a failure */
         }                                                                                          \
     } while (0)
 
-/* The directory of the shared data (../shared/data by default, CELLAR_DATA overrides). */
+/* The test data (tests/data, relative to the repository's top, where tests/run.sh runs). */
 const char *test_data_dir(void);
 /* Reads a whole file into a NUL-terminated buffer the caller frees; NULL on error. */
 char *test_read_file(const char *path, size_t *len);

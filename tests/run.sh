@@ -1,13 +1,13 @@
 #!/bin/sh
 # Runs every test program of a build directory and every shell test (tests/t_*.sh), adds up
-# their "N passed, N failed" lines and prints the total as the last line.
-# Usage: tests/run.sh BUILD_DIR
+# their "N passed, N failed[, N skipped]" lines and prints the total as the last line.
+# Every test runs from the repository's top (its data is tests/data).
+# Usage: tests/run.sh BUILD_DIR   (relative to the repository's top, or absolute)
 set -u
+cd "$(dirname "$0")/.."
 B=${1:-build}
 export CELLAR_BIN="$B/cellar" CELLAR_BUILD="$B"
-: "${CELLAR_DATA:=$(cd "$(dirname "$0")/../.." && pwd)/shared/data}"
-export CELLAR_DATA
-P=0; F=0
+P=0; F=0; S=0
 log=$(mktemp)
 for t in "$B"/tests/test_* tests/t_*.sh; do
     [ -x "$t" ] || continue
@@ -23,11 +23,12 @@ for t in "$B"/tests/test_* tests/t_*.sh; do
     fi
     p=${last%% passed*}; f=${last#*, }; f=${f%% failed*}
     P=$((P + p)); F=$((F + f))
+    case $last in *skipped*) s=${last##*, }; S=$((S + ${s%% skipped*})) ;; esac
     if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then
         echo "FAIL $t: exited $rc"
         F=$((F + 1))
     fi
 done
 rm -f "$log"
-echo "$P passed, $F failed"
+echo "$P passed, $F failed, $S skipped"
 [ "$F" -eq 0 ]

@@ -98,5 +98,20 @@ check "gen --options rejects an unknown option (exit 2)" status 2 "$BIN" gen gri
 check "gen --options error names the option" grep -q 'options.bogus: unknown option' "$T/err"
 check "gen --options rejects a non-object (exit 2)" status 2 "$BIN" gen grid 3 --options '[1]'
 
+# --format request: the request svg and solids would run, which run gives the same result for
+printf '<svg xmlns="http://www.w3.org/2000/svg"><rect width="4" height="3"/><line x1="2" y1="-1" x2="2" y2="4"/></svg>' >"$T/d.svg"
+check "svg --format request exits 0" status 0 "$BIN" svg "$T/d.svg" --y-up --format request
+cp "$T/out" "$T/svgreq"
+check "svg --format request prints the svg request with its options" grep -q '^{"kind":"svg","svg":"<svg .*","options":{"y_up":true}}$' "$T/svgreq"
+check "... which run - computes as svg does" sh -c "'$BIN' run - <'$T/svgreq' | sed 's/\"ms\":{[^}]*}//' >'$T/a' && '$BIN' svg '$T/d.svg' --y-up | sed 's/\"ms\":{[^}]*}//' >'$T/b' && cmp -s '$T/a' '$T/b'"
+check "... two faces" test "$(stat "$T/a" F)" = 2
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n' >"$T/t.obj"
+check "solids --format request exits 0" status 0 "$BIN" solids "$T/t.obj" "$T/t.obj" --op union --format request
+cp "$T/out" "$T/solreq"
+check "solids --format request prints the solids request with the op" grep -q '^{"kind":"solids","solids":\[{"V":\[\[0,0,0\],.*"op":"union"}$' "$T/solreq"
+check "... which run - computes as solids does" sh -c "'$BIN' run - <'$T/solreq' | sed 's/\"ms\":{[^}]*}//' >'$T/a' && '$BIN' solids '$T/t.obj' '$T/t.obj' --op union | sed 's/\"ms\":{[^}]*}//' >'$T/b' && cmp -s '$T/a' '$T/b'"
+check "run --format request exits 2" status 2 "$BIN" run "$T/square.json" --format request
+check "... and says it is for svg and solids" grep -q -- '--format request is for the svg and solids' "$T/err"
+
 echo "$P passed, $F failed"
 [ "$F" -eq 0 ]

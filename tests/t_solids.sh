@@ -206,7 +206,7 @@ check "... and says why" errhas '^cellar: --format svg: dim: expected 2'
 
 # --- the daemon: Accept: model/obj
 if ! command -v curl >/dev/null 2>&1 || [ ! -x "$(dirname "$BIN")/cellard" ]; then
-    echo "skip daemon checks: no curl or no cellard next to $BIN"
+    fail "the daemon checks need curl and cellard next to $BIN"
     finish
 fi
 "$(dirname "$BIN")/cellard" --listen 127.0.0.1:0 --db "$T/c.db" 2>"$T/log" &

@@ -1,14 +1,14 @@
 #!/bin/sh
 # t_svg.sh — black-box tests of `cellar svg`: the flags become the request's options, stdin,
 # exit statuses and messages on malformed and hostile drawings, results valid against the schema.
-# Usage: CELLAR_BIN=build/cellar tests/t_svg.sh   (tests/run.sh sets CELLAR_BIN and CELLAR_DATA)
+# Usage: CELLAR_BIN=build/cellar tests/t_svg.sh   (tests/run.sh sets CELLAR_BIN)
 # Prints one line per check ("ok ..." / "FAIL ...") and a last line "N passed, N failed".
 set -u
 . "$(dirname "$0")/lib.sh"
 BIN=${CELLAR_BIN:-build/cellar}
 case $BIN in /*) ;; *) [ -e "$BIN" ] && BIN="$(pwd)/$BIN" ;; esac # before the cd below
 cd "$(dirname "$0")/.."
-D=${CELLAR_DATA:-../shared/data}/svg
+D=tests/data/svg
 PY=${PYTHON:-python3}
 # a number of the result in $T/out: json EXPR (python, the result is r)
 json() { $PY -c "import json,sys; r=json.load(open('$T/out')); print($1)"; }

@@ -294,7 +294,7 @@ TEST(l_prism_crossing_a_box)
     free_all(s, 2);
 }
 
-/* The seeds' five random cubes (shared/data/mesh/fivecubes-input.json; quads in LAR cuboid
+/* The seeds' five random cubes (tests/data/mesh/fivecubes-input.json; quads in LAR cuboid
  * order a, b, d, c), oriented by solid_check. */
 static int load_fivecubes(solid *s)
 {

@@ -9,7 +9,7 @@
  *   index out of range, non-finite coordinates, bad precision; the message cap;
  * - the readers' syntax (OBJ v/t/n forms, negative indices, comments, ignored statements; OFF
  *   headers, comments, colours) and their errors with line numbers, hostile counts included;
- * - the LAR.jl arrangement outputs of shared/data/mesh: read as one face soup (every triangle
+ * - the LAR.jl arrangement outputs of tests/data/mesh: read as one face soup (every triangle
  *   twice: non-manifold), then each 3-cell as a solid: the bounded cells' volumes add up to
  *   the exterior cell's.
  */
@@ -867,7 +867,7 @@ TEST(off_errors_name_the_line)
     free(big);
 }
 
-/* ---- the arrangement outputs of shared/data/mesh ------------------------------------------ */
+/* ---- the arrangement outputs of tests/data/mesh ------------------------------------------- */
 
 /* The text of an OBJ file with only the faces of group `g` (1-based "g" statements in file
  * order), every other line kept; the caller frees. */

@@ -1,6 +1,6 @@
 /* test_svg.c — the SVG reader (core/svg.h) and the "svg" kind (api/svg.c).
  *
- * - every drawing of shared/data/svg is read without error or warning and gives a valid complex
+ * - every drawing of tests/data/svg is read without error or warning and gives a valid complex
  *   (tests/lar_check.h);
  * - the lar-cc floor plans give the faces GEOS gives on the same segments (count, sorted areas
  *   to 1e-9 relative plus what snapping can move, as in test_geos.c); pyinters-Emergency.svg

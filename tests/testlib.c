@@ -42,8 +42,7 @@ int test_failed_now(void)
 
 const char *test_data_dir(void)
 {
-    const char *d = getenv("CELLAR_DATA");
-    return d && *d ? d : "../shared/data";
+    return "tests/data"; /* tests/run.sh runs every test from the repository's top */
 }
 
 char *test_read_file(const char *path, size_t *len)

@@ -198,8 +198,9 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
                                         "planes",
                                         "coplanar_groups",
                                         "pairs_tested",
+                                        "split_faces",
                                         "cuts",
-                                        "rounds",
+                                        "points",
                                         "V",
                                         "E",
                                         "F",
@@ -207,9 +208,9 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
                                         "shells",
                                         "components"};
     const size_t counts[] = {s->input_solids, s->input_faces, s->planes, s->coplanar_groups,
-                             s->pairs_tested, s->cuts,        s->rounds, c->nv,
-                             c->ne,           c->nf,          c->nc,     s->shells,
-                             s->components};
+                             s->pairs_tested, s->split_faces, s->cuts,   s->points,
+                             c->nv,           c->ne,          c->nf,     c->nc,
+                             s->shells,       s->components};
     static const char *const ms_names[] = {"snap", "pairs", "cuts", "faces", "cells", "total"};
     const double ms[] = {s->ms_snap,  s->ms_pairs, s->ms_cuts,
                          s->ms_faces, s->ms_cells, s->ms_total};

@@ -1,24 +1,26 @@
 /* arr3.h — the arrangement of solids given as face models (the 3D pipeline of DESIGN.md).
  *
  * arr3_build() takes validated solids (solid_check()'s fixed copies: closed, outward oriented)
- * or one face soup, and returns the 3-complex of the partition of space they induce:
- *   1. unification: every vertex is snapped to one integer grid of step `precision`, and equal
- *      grid points become one vertex;
- *   2. bucketing: a box-kd-tree of the faces' boxes gives the candidate pairs of faces;
- *   3. intersection: faces lying in one plane (within the precision) form one plane group; for
- *      each pair of faces of different groups the segment(s) where they cut each other are
- *      computed once, in 3D, and shared by both groups, as are the faces' own edges; each plane
- *      group is split by a 2D arrangement (arr2) in its plane, projected on the two coordinates
- *      that drop the largest normal component (so grid points stay exact).  A point where a
- *      group's arrangement splits a shared segment is added to that segment for every group
- *      that uses it, and the groups concerned run again, until no group splits anything new:
- *      neighbouring faces then agree exactly on every vertex and edge;
- *   4. reconstruction: the faces around each edge are sorted by exact angle (integer normals,
- *      256-bit determinants); the face sides around edges give the shells; the shell of negative
- *      volume of each connected part is its outside, and it is attached, by a ray, to the cell of
- *      another part that contains it (a cavity) or to the exterior.
+ * or one face soup, and returns the 3-complex of the partition of space they induce.  The only
+ * tolerance is the snapping grid: every vertex is snapped once to the grid of step `precision`
+ * (equal grid points are one vertex), and from then on every decision is an exact predicate on
+ * integer planes and implicit points (core/pred.h); coordinates are rounded to doubles only when
+ * the result is written.
+ *   1. pieces: a face whose snapped vertices lie exactly in one plane is one piece; a face that
+ *      does not is split into triangles, each with its own exact plane (stats.split_faces);
+ *   2. pairs: a box-kd-tree of the pieces' boxes gives the pairs of pieces of different solids;
+ *   3. cuts: for each pair, where the two pieces meet on the line of their planes, exactly:
+ *      segments (crossings, and contacts along an edge) and single points (a vertex on a face,
+ *      edges crossing), given to both planes, so every contact becomes part of the complex;
+ *   4. planes: each plane's pieces, cuts and contact points are arranged exactly in that plane
+ *      (coplanar pieces of all solids together); its faces are the regions covered by pieces;
+ *   5. cells: the faces around each edge are sorted exactly; the face sides give the shells;
+ *      the outside shell of each connected part and the cell holding a part nested in another
+ *      are found by exact rays (a line through a rational point of the part, symbolically
+ *      perturbed, so that it never passes through an edge or a vertex).
+ * See core/arr3.c, core/arr3_plane.c and core/arr3_cells.c.
  *
- * Threads: reentrant, no globals; plane groups run on opts->threads threads.
+ * Threads: reentrant, no globals; planes run on opts->threads threads.
  * Ownership: inputs borrowed; the caller owns the lar3 it passes, lar3_free() frees it.
  */
 #ifndef CELLAR_ARR3_H
@@ -31,10 +33,8 @@
 #include "core/arr2.h" /* ARR_* codes */
 #include "core/solid.h"
 
-#define ARR3_GRID_BITS  30       /* extent / precision must be <= 2^ARR3_GRID_BITS */
-#define ARR3_MAX_FACES  2000000u /* input faces, all solids together */
-#define ARR3_MAX_ROUNDS 32       /* rounds of the plane-group arrangements before giving up */
-#define ARR3_RETRIES    3        /* runs again on a grid twice as coarse (see arr3_build) */
+#define ARR3_GRID_BITS 30       /* extent / precision must be <= 2^ARR3_GRID_BITS */
+#define ARR3_MAX_FACES 2000000u /* input faces, all solids together */
 
 typedef struct arr3_opts {
     double precision; /* grid step; 0: the power of two closest above extent * 2^-ARR3_GRID_BITS
@@ -47,11 +47,12 @@ typedef struct arr3_opts {
 
 typedef struct arr3_stats {
     size_t input_solids, input_faces;
-    size_t planes;          /* plane groups */
-    size_t coplanar_groups; /* plane groups holding faces of more than one input face */
-    size_t pairs_tested;    /* candidate face pairs from the box-kd-tree */
-    size_t cuts;            /* cut segments between faces */
-    size_t rounds;          /* rounds of plane-group arrangements until stable */
+    size_t planes;          /* exact planes holding pieces */
+    size_t coplanar_groups; /* planes holding pieces of more than one input face */
+    size_t split_faces;     /* input faces not planar on the grid, split into triangles */
+    size_t pairs_tested;    /* candidate piece pairs from the box-kd-tree */
+    size_t cuts;            /* segments where pieces of different solids meet */
+    size_t points;          /* vertices made by the arrangement (implicit, exact) */
     size_t nv, ne, nf, nc;  /* result counts (nc: bounded cells) */
     size_t shells, components;
     double precision;
@@ -92,6 +93,12 @@ typedef struct lar3 {
     size_t nsolids;
     arr3_stats stats;
 } lar3;
+
+/* The grid step for an input whose bounding box's largest side is `extent`: `precision` when
+ * it is > 0 (ARR_ELIMIT, with a message, when extent / precision > 2^ARR3_GRID_BITS), else the
+ * default, the power of two closest above extent * 2^-ARR3_GRID_BITS.  The only place the rule
+ * lives: the API checks solids at the step this returns. */
+int arr3_grid_step(double extent, double precision, double *step, char *err, size_t errlen);
 
 /* Builds the arrangement of ns solids (borrowed; each closed and outward oriented, as
  * solid_check()'s fixed copy) or, with soup != 0, of the faces of all of them taken one by one

@@ -333,22 +333,75 @@ static int load_fivecubes(solid *s)
     return 0;
 }
 
+/* The volumes of the bounded cells of LAR.jl's own arrangement of the five cubes
+ * (tests/data/mesh/fivecubes.obj: "g cellN" groups of triangles, cell1 the exterior), each cell
+ * read as a solid and oriented by solid_check; sorted into vol[26]. */
+static int fivecubes_reference(double *vol)
+{
+    char path[512], err[200];
+    snprintf(path, sizeof path, "%s/mesh/fivecubes.obj", test_data_dir());
+    size_t len;
+    char *text = test_read_file(path, &len);
+    if (!text) return -1;
+    int n = 0, cur = 0;
+    for (int g = 2; g <= 27; g++) {
+        /* keep the v lines and the f lines of group g */
+        char *t = malloc(len + 1);
+        size_t k = 0;
+        cur = 0;
+        for (const char *p = text; *p;) {
+            const char *e = strchr(p, '\n');
+            e = e ? e + 1 : p + strlen(p);
+            if (p[0] == 'g' && p[1] == ' ') cur++;
+            if (!(p[0] == 'f' && p[1] == ' ') || cur == g) {
+                memcpy(t + k, p, (size_t)(e - p));
+                k += (size_t)(e - p);
+            }
+            p = e;
+        }
+        t[k] = 0;
+        solid s;
+        solid_report r;
+        if (solid_read_obj(t, k, &s, err, sizeof err) == 0) {
+            if (solid_check(&s, 1e-7, "cell", &r, NULL) == 0) vol[n++] = fabs(r.volume);
+            solid_free(&s);
+        }
+        free(t);
+    }
+    free(text);
+    qsort(vol, (size_t)n, sizeof *vol, cmp_double);
+    return n == 26 ? 0 : -1;
+}
+
 TEST(five_cubes_of_the_seeds)
 {
     solid s[5] = {0};
+    double ref[26], got[26];
     REQUIRE(!load_fivecubes(s), "cannot load fivecubes-input.json");
+    REQUIRE(!fivecubes_reference(ref), "cannot read the 26 cells of fivecubes.obj");
     lar3 c;
     long eu;
     if (!run3(s, 5, 0, 1e-5, &c, &eu)) {
-        /* The reference (fivecubes-arrangement.json, Julia): 137 V, 268 E, 157 F, 27 cells with
-         * the exterior, 2 faces with a hole, 3 cells with a torus boundary. */
-        size_t holes = 0;
-        for (size_t f = 0; f < c.nf; f++) holes += c.fc_off[f + 1] - c.fc_off[f] - 1;
-        printf("# fivecubes: V %zu E %zu F %zu C %zu (+1), %zu faces with holes, euler %ld\n", c.nv,
-               c.ne, c.nf, c.nc, holes, eu);
-        CHECK(c.nv == 137 && c.ne == 268 && c.nf == 157 && c.nc == 26, "V %zu E %zu F %zu C %zu",
-              c.nv, c.ne, c.nf, c.nc);
-        CHECK(holes == 2, "%zu holes", holes);
+        /* LAR.jl's arrangement (fivecubes-arrangement.json) has 137 V, 268 E, 157 F and 26
+         * bounded cells: it takes each quad as planar.  The file's corners are planar only to
+         * 2e-6, so on the grid of 1e-5 the quads are not exactly planar and each becomes two
+         * triangles (more vertices, edges and faces); the cells are the same 26, with the same
+         * volumes up to the snapping (1e-5 times a cell's area) and the file's 6 digits (some
+         * quads happen to be exactly planar on the grid and stay whole). */
+        printf("# fivecubes: V %zu E %zu F %zu C %zu (+1), %zu split faces\n", c.nv, c.ne, c.nf,
+               c.nc, c.stats.split_faces);
+        CHECK(c.nc == 26, "%zu bounded cells, LAR.jl has 26", c.nc);
+        CHECK(c.stats.split_faces > 0 && c.stats.split_faces <= 30, "%zu quads split",
+              c.stats.split_faces);
+        if (c.nc == 26) {
+            double worst = 0;
+            for (int i = 0; i < 26; i++) got[i] = c.cvol[i];
+            qsort(got, 26, sizeof *got, cmp_double);
+            for (int i = 0; i < 26; i++)
+                if (fabs(got[i] - ref[i]) > worst) worst = fabs(got[i] - ref[i]);
+            printf("# fivecubes: cell volumes within %.3g of LAR.jl's\n", worst);
+            CHECK(worst < 6e-5, "a cell volume differs by %.3g from LAR.jl's", worst);
+        }
     }
     lar3_free(&c);
     free_all(s, 5);

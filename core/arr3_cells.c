@@ -1,0 +1,769 @@
+/* arr3_cells.c — the 3-cells of the arrangement and the lar3 it returns (stage 5 of arr3.h).
+ *
+ * Fans.  The faces around an edge are sorted by angle about the edge's direction d (integer:
+ * n_P x n_S of a plane pair the edge lies on, oriented from its lower to its higher vertex).
+ * Face f meets the edge walking along d (s = +1) or against it (s = -1); it leaves the edge in
+ * direction t = s (n_f x d).  With the identities (n_a x d) x (n_b x d) = d det(n_a, n_b, d) and
+ * (n_a x d) . (n_b x d) = (n_a . n_b) |d|^2, the order of two faces about d is decided by the
+ * signs of det(n_a, n_b, d) and n_a . n_b only: exact integers, no point involved.  Between two
+ * consecutive faces a and b (counter-clockwise about d) lies one cell: a's side s_a and b's side
+ * -s_b face it.  Face sides so linked form the shells.
+ *
+ * Nesting.  Each connected part (faces linked through edges) has one outside shell, and a part
+ * lying inside a cell of another must become a cavity of that cell.  Both questions are answered
+ * by rays: a line parallel to axis k through a rational point q strictly inside an input piece
+ * of the part (the centroid of a triangle of it), perturbed symbolically to q + (eps, eps^2) in
+ * the other two coordinates, so that it meets no edge and no vertex.  A face is hit when the
+ * perturbed point lies in its projection (even-odd crossings, exact: an edge's side is the sign
+ * of q against the plane through the edge parallel to e_k, a combination of the face's plane and
+ * the edge's side plane); hits are ordered by where they meet the line (exact fractions, ties
+ * broken by the perturbation's derivatives).  The part's own first hit from -infinity shows its
+ * outside shell; the nearest hit of another part below q shows the cell holding the part.
+ *
+ * Volumes are sums of cones over the faces' cycles from the points' approximations (each within
+ * 2^-50 of the exact point), so a cell's volume is exact up to rounding.
+ */
+#include "core/arr3_int.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define U (DBL_EPSILON / 2)
+
+/* ---- small tools ------------------------------------------------------------------------ */
+
+typedef struct emap { /* (lo, hi) -> edge id, open addressing */
+    uint64_t *key;
+    uint32_t *val;
+    size_t cap, n;
+} emap;
+
+static int emap_rehash(emap *m, size_t ncap)
+{
+    uint64_t *k = malloc(ncap * sizeof *k);
+    uint32_t *v = malloc(ncap * sizeof *v);
+    if (!k || !v) {
+        free(k);
+        free(v);
+        return -1;
+    }
+    memset(k, 0xff, ncap * sizeof *k);
+    for (size_t i = 0; i < m->cap; i++) {
+        if (m->key[i] == UINT64_MAX) continue;
+        size_t h = a3_mix64(m->key[i]) & (ncap - 1);
+        while (k[h] != UINT64_MAX) h = (h + 1) & (ncap - 1);
+        k[h] = m->key[i];
+        v[h] = m->val[i];
+    }
+    free(m->key);
+    free(m->val);
+    m->key = k;
+    m->val = v;
+    m->cap = ncap;
+    return 0;
+}
+
+static uint32_t emap_put(emap *m, uint64_t key, uint32_t val, int *found)
+{
+    if (2 * (m->n + 1) > m->cap && emap_rehash(m, m->cap ? 2 * m->cap : 1024)) return NONE;
+    size_t h = a3_mix64(key) & (m->cap - 1);
+    while (m->key[h] != UINT64_MAX) {
+        if (m->key[h] == key) {
+            *found = 1;
+            return m->val[h];
+        }
+        h = (h + 1) & (m->cap - 1);
+    }
+    m->key[h] = key;
+    m->val[h] = val;
+    m->n++;
+    *found = 0;
+    return val;
+}
+
+static uint32_t emap_get(const emap *m, uint64_t key)
+{
+    size_t h = a3_mix64(key) & (m->cap - 1);
+    while (m->key[h] != UINT64_MAX) {
+        if (m->key[h] == key) return m->val[h];
+        h = (h + 1) & (m->cap - 1);
+    }
+    return NONE;
+}
+
+static int cmpu32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+static int cmpi32(const void *pa, const void *pb)
+{
+    int32_t a = *(const int32_t *)pa, b = *(const int32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+static int sgn128(i128 v)
+{
+    return (v > 0) - (v < 0);
+}
+
+/* sign(a/b - c/d) for b, d != 0 */
+static int cmp_frac(i128 a, i128 b, i128 c, i128 d)
+{
+    double l = (double)a * (double)d, r = (double)c * (double)b;
+    double e = (fabs(l) + fabs(r)) * (8 * U);
+    int s;
+    if (l - r > e)
+        s = 1;
+    else if (r - l > e)
+        s = -1;
+    else {
+        xint x, y;
+        xi_mul_i128(&x, a, d);
+        xi_mul_i128(&y, c, b);
+        s = xi_cmp(&x, &y);
+    }
+    return s * sgn128(b) * sgn128(d);
+}
+
+/* ---- fans ----------------------------------------------------------------------------------- */
+
+typedef struct inc {
+    uint32_t e, f;
+    int s; /* +1: f walks e from its lower to its higher vertex */
+} inc;
+
+typedef struct fanctx {
+    const a3 *A;
+    i128 d[3];
+    const int64_t *n0; /* the first face's normal */
+    int s0;
+} fanctx;
+
+static const int64_t *face_n(const a3 *A, uint32_t f)
+{
+    return A->pl[A->f_plane[f]].n;
+}
+
+static int fan_half(const fanctx *x, const inc *a)
+{
+    const int64_t *na = face_n(x->A, a->f);
+    int s = det3_sign(x->n0, na, x->d) * x->s0 * a->s;
+    if (s > 0) return 0;
+    if (s < 0) return 1;
+    i128 dot = (i128)x->n0[0] * na[0] + (i128)x->n0[1] * na[1] + (i128)x->n0[2] * na[2];
+    return sgn128(dot) * x->s0 * a->s > 0 ? 0 : 1;
+}
+
+static int fan_cmp(const void *pa, const void *pb, void *vx)
+{
+    const fanctx *x = vx;
+    const inc *a = pa, *b = pb;
+    int ha = fan_half(x, a), hb = fan_half(x, b);
+    if (ha != hb) return ha - hb;
+    int s = det3_sign(face_n(x->A, a->f), face_n(x->A, b->f), x->d) * a->s * b->s;
+    if (s > 0) return -1;
+    if (s < 0) return 1;
+    return (a->f > b->f) - (a->f < b->f);
+}
+
+/* ---- probes --------------------------------------------------------------------------------- */
+
+typedef struct probe {
+    int64_t Q[3]; /* the point is Q / 3 */
+    int k, i, j;
+} probe;
+
+/* sign(p_ax - Q_ax / 3) */
+static int cmp_q(const a3 *A, const xpt *p, const probe *pr, int ax)
+{
+    if (p->kind == PT_GRID) {
+        i128 v = 3 * (i128)A->g[3 * (size_t)p->a + ax] - pr->Q[ax];
+        return sgn128(v);
+    }
+    double v = 3 * p->x[ax] - (double)pr->Q[ax];
+    double e = (3 * fabs(p->x[ax]) + fabs((double)pr->Q[ax])) * (XPT_REL + 8 * U);
+    if (v > e) return 1;
+    if (v < -e) return -1;
+    xhom h;
+    xint l, r, q;
+    xpt_hom(&A->G, p, &h);
+    xi_set_i64(&q, 3);
+    xi_mul(&l, &q, &h.X[ax]);
+    xi_set_i64(&q, pr->Q[ax]);
+    xi_mul(&r, &q, &h.W);
+    return xi_cmp(&l, &r);
+}
+
+/* Sign of the plane through line (P, S) parallel to e_k at the probe point, and the sign of that
+ * plane's i coefficient. */
+static int pi_side(const a3 *A, const plane3 *P, const plane3 *S, const probe *pr, int *si)
+{
+    int k = pr->k, i = pr->i, j = pr->j;
+    i128 pi_i = (i128)S->n[k] * P->n[i] - (i128)P->n[k] * S->n[i];
+    i128 pi_j = (i128)S->n[k] * P->n[j] - (i128)P->n[k] * S->n[j];
+    *si = sgn128(pi_i);
+    /* value = pi_i Q_i + pi_j Q_j + 3 (S_k d_P - P_k d_S) */
+    double t0 = (double)pi_i * (double)pr->Q[i], t1 = (double)pi_j * (double)pr->Q[j];
+    double t2 = 3 * (double)S->n[k] * (double)P->d, t3 = 3 * (double)P->n[k] * (double)S->d;
+    double v = t0 + t1 + t2 - t3;
+    double e = (fabs(t0) + fabs(t1) + fabs(t2) + fabs(t3)) * (16 * U);
+    (void)A;
+    if (v > e) return 1;
+    if (v < -e) return -1;
+    xint s, t, a, b;
+    xi_mul_i128(&s, pi_i, pr->Q[i]);
+    xi_mul_i128(&t, pi_j, pr->Q[j]);
+    xi_add(&s, &s, &t);
+    xi_mul_i128(&a, (i128)3 * S->n[k], P->d);
+    xi_mul_i128(&b, (i128)3 * P->n[k], S->d);
+    xi_add(&s, &s, &a);
+    xi_sub(&s, &s, &b);
+    return xi_sign(&s);
+}
+
+/* Does the perturbed probe line meet face f? */
+static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
+{
+    const plane3 *P = &A->pl[A->f_plane[f]];
+    if (P->n[pr->k] == 0) return 0;
+    int par = 0;
+    for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+        uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+        if (n < 2) continue;
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n], S = A->side[o + t];
+            int sa = cmp_q(A, &A->pt[a], pr, pr->j) > 0, sb = cmp_q(A, &A->pt[b], pr, pr->j) > 0;
+            if (sa == sb || S == NONE) continue;
+            int si, s = pi_side(A, P, &A->pl[S], pr, &si);
+            if (s == 0) s = si;
+            par ^= s == -si;
+        }
+    }
+    return par;
+}
+
+/* Where the probe line meets plane P: x_k = num / den. */
+static void probe_t(const plane3 *P, const probe *pr, i128 *num, i128 *den)
+{
+    *num = -((i128)P->n[pr->i] * pr->Q[pr->i] + (i128)P->n[pr->j] * pr->Q[pr->j] + 3 * P->d);
+    *den = 3 * (i128)P->n[pr->k];
+}
+
+/* Order of faces f and g along the perturbed probe line (both hit). */
+static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
+{
+    const plane3 *F = &A->pl[A->f_plane[f]], *G = &A->pl[A->f_plane[g]];
+    i128 nf, df, ng, dg;
+    probe_t(F, pr, &nf, &df);
+    probe_t(G, pr, &ng, &dg);
+    int c = cmp_frac(nf, df, ng, dg);
+    if (c) return c;
+    c = cmp_frac(-F->n[pr->i], F->n[pr->k], -G->n[pr->i], G->n[pr->k]);
+    if (c) return c;
+    return cmp_frac(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
+}
+
+/* sign(t_f - q_k) */
+static int probe_vs_q(const a3 *A, uint32_t f, const probe *pr)
+{
+    i128 num, den;
+    probe_t(&A->pl[A->f_plane[f]], pr, &num, &den);
+    return sgn128(3 * num - (i128)pr->Q[pr->k] * den) * sgn128(den);
+}
+
+/* The probe of piece pi: the centroid of a triangle of it, on a line along its normal's axis. */
+static int piece_probe(const a3 *A, uint32_t pi, probe *pr)
+{
+    const piece *pc = &A->pc[pi];
+    int k = plane_axis(&A->pl[pc->plane]);
+    uint32_t *cyc[64], **cp = cyc, *tri = NULL;
+    size_t len[64], *lp = len, ntri = 0, captri = 0;
+    int rc = -1;
+    if (pc->nc > 64) {
+        cp = malloc(pc->nc * sizeof *cp);
+        lp = malloc(pc->nc * sizeof *lp);
+        if (!cp || !lp) goto done;
+    }
+    for (uint32_t c = 0; c < pc->nc; c++) {
+        uint32_t o = A->pc_off[pc->c0 + c];
+        cp[c] = A->pcv + o;
+        lp[c] = A->pc_off[pc->c0 + c + 1] - o;
+    }
+    int r = a3_triangulate(A, k, cp, lp, pc->nc, &tri, &ntri, &captri);
+    if (r == -1) goto done;
+    if (r || !ntri) {
+        rc = -2;
+        goto done;
+    }
+    for (int a = 0; a < 3; a++)
+        pr->Q[a] = A->g[3 * (size_t)tri[0] + a] + A->g[3 * (size_t)tri[1] + a] +
+                   A->g[3 * (size_t)tri[2] + a];
+    pr->k = k;
+    pr->i = (k + 1) % 3;
+    pr->j = (k + 2) % 3;
+    rc = 0;
+done:
+    if (cp != cyc) free(cp);
+    if (lp != len) free(lp);
+    free(tri);
+    return rc;
+}
+
+/* ---- cells and output ------------------------------------------------------------------ */
+
+static int vcmp(const void *pa, const void *pb, void *vx)
+{
+    const a3 *A = vx;
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    for (int k = 0; k < 3; k++) {
+        int c = cmp_coord(&A->G, &A->pt[a], &A->pt[b], k);
+        if (c) return c;
+    }
+    return (a > b) - (a < b);
+}
+
+static double face_cone6(const a3 *A, uint32_t f)
+{
+    double s = 0;
+    for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+        uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+        const double *p0 = A->pt[A->ent[o]].x;
+        for (uint32_t i = 1; i + 1 < n; i++) {
+            const double *p1 = A->pt[A->ent[o + i]].x, *p2 = A->pt[A->ent[o + i + 1]].x;
+            s += p0[0] * (p1[1] * p2[2] - p1[2] * p2[1]) - p0[1] * (p1[0] * p2[2] - p1[2] * p2[0]) +
+                 p0[2] * (p1[0] * p2[1] - p1[1] * p2[0]);
+        }
+    }
+    return s;
+}
+
+int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
+{
+    size_t nf = A->nf;
+    int rc = ARR_ENOMEM;
+    emap em = {0};
+    inc *I = NULL;
+    size_t ni = 0, capi = 0, ne = 0, cape = 0;
+    uint32_t *ev = NULL, *eside = NULL, *eplane = NULL, *ioff = NULL;
+    uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
+    uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
+    double *cone = NULL, *fbox = NULL;
+    uint64_t *ek = NULL;
+    inc *tmp = NULL;
+    size_t capeside = 0, capeplane = 0;
+    /* edges and incidences */
+    for (size_t f = 0; f < nf; f++)
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+            if (n < 2) continue;
+            for (uint32_t t = 0; t < n; t++) {
+                uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n];
+                uint32_t lo = a < b ? a : b, hi = a ^ b ^ lo;
+                int found;
+                uint32_t e = emap_put(&em, (uint64_t)lo << 32 | hi, (uint32_t)ne, &found);
+                if (e == NONE) goto done;
+                if (!found) {
+                    if (a3_grow(&ev, &cape, 2 * ne + 2, sizeof *ev) ||
+                        a3_grow(&eside, &capeside, ne + 1, sizeof *eside) ||
+                        a3_grow(&eplane, &capeplane, ne + 1, sizeof *eplane))
+                        goto done;
+                    ev[2 * ne] = lo, ev[2 * ne + 1] = hi;
+                    eside[ne] = A->side[o + t];
+                    eplane[ne] = A->f_plane[f];
+                    ne++;
+                }
+                inc x = {e, (uint32_t)f, a == lo ? 1 : -1};
+                if (A3_PUSH(I, ni, capi, x)) goto done;
+            }
+        }
+    /* incidences by edge (counting sort keeps face order) */
+    ioff = calloc(ne + 2, sizeof *ioff);
+    tmp = malloc((ni + 1) * sizeof *tmp);
+    if (!ioff || !tmp) goto done;
+    for (size_t i = 0; i < ni; i++) ioff[I[i].e + 2]++;
+    for (size_t e = 0; e < ne; e++) ioff[e + 2] += ioff[e + 1];
+    for (size_t i = 0; i < ni; i++) tmp[ioff[I[i].e + 1]++] = I[i];
+    free(I);
+    I = tmp;
+    tmp = NULL;
+    /* fans: face sides 2f (+, the normal's side) and 2f+1 (-) */
+    sp = malloc((2 * nf + 1) * sizeof *sp);
+    fcomp = malloc((nf + 1) * sizeof *fcomp);
+    if (!sp || !fcomp) goto done;
+    for (size_t i = 0; i < 2 * nf; i++) sp[i] = (uint32_t)i;
+    for (size_t i = 0; i < nf; i++) fcomp[i] = (uint32_t)i;
+    for (size_t e = 0; e < ne; e++) {
+        inc *F = I + ioff[e];
+        size_t n = ioff[e + 1] - ioff[e];
+        if (n >= 3) {
+            fanctx x = {A, {0, 0, 0}, NULL, 0};
+            const plane3 *P = &A->pl[eplane[e]];
+            if (eside[e] == NONE) {
+                rc = ARR_EINTERNAL;
+                snprintf(err, errlen, "solids: an edge of %zu faces has no line (a bug)", n);
+                goto done;
+            }
+            cross_ll(P->n, A->pl[eside[e]].n, x.d);
+            int ax = 0;
+            for (int a = 1; a < 3; a++)
+                if ((x.d[a] < 0 ? -x.d[a] : x.d[a]) > (x.d[ax] < 0 ? -x.d[ax] : x.d[ax])) ax = a;
+            int c = cmp_coord(&A->G, &A->pt[ev[2 * e + 1]], &A->pt[ev[2 * e]], ax);
+            if ((c > 0) != (x.d[ax] > 0))
+                for (int a = 0; a < 3; a++) x.d[a] = -x.d[a];
+            x.n0 = face_n(A, F[0].f);
+            x.s0 = F[0].s;
+            qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
+        }
+        for (size_t k = 0; k < n; k++) {
+            const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
+            uint32_t n0 = 2 * f0->f + (f0->s > 0 ? 0 : 1);
+            uint32_t n1 = 2 * f1->f + (f1->s > 0 ? 1 : 0);
+            a3_uf_union(sp, n0, n1);
+            a3_uf_union(fcomp, f0->f, f1->f);
+        }
+    }
+    /* shells */
+    shell = malloc((2 * nf + 1) * sizeof *shell);
+    if (!shell) goto done;
+    size_t nsh = 0;
+    for (size_t i = 0; i < 2 * nf; i++) shell[i] = NONE;
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t r = a3_uf_find(sp, (uint32_t)i);
+        if (shell[r] == NONE) shell[r] = (uint32_t)nsh++;
+        shell[i] = shell[r];
+    }
+    /* components, and an input piece of each */
+    size_t ncomp = 0;
+    outer = malloc((nf + 1) * sizeof *outer);           /* by component: its outside shell */
+    cpiece = malloc((nf + 1) * sizeof *cpiece);         /* by component: a piece of it */
+    uint32_t *croot = malloc((nf + 1) * sizeof *croot); /* by face root: component */
+    if (!outer || !cpiece || !croot) {
+        free(croot);
+        goto done;
+    }
+    for (size_t f = 0; f < nf; f++) croot[f] = NONE;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t r = a3_uf_find(fcomp, (uint32_t)f);
+        if (croot[r] == NONE) {
+            croot[r] = (uint32_t)ncomp;
+            outer[ncomp] = NONE;
+            cpiece[ncomp] = NONE;
+            ncomp++;
+        }
+    }
+    for (size_t f = 0; f < nf; f++) sp[2 * f] = a3_uf_find(fcomp, (uint32_t)f); /* roots */
+    for (size_t f = 0; f < nf; f++) fcomp[f] = croot[sp[2 * f]];
+    free(croot);
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t c = fcomp[f];
+        for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
+            if (cpiece[c] == NONE || A->cov[i] < cpiece[c]) cpiece[c] = A->cov[i];
+    }
+    A->st->shells = nsh;
+    A->st->components = ncomp;
+    /* face boxes (approximate, for the probes' first filter) */
+    fbox = malloc((4 * nf + 1) * sizeof *fbox);
+    if (!fbox) goto done;
+    cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
+    if (!cu) goto done;
+    for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
+    uint32_t EXT = (uint32_t)nsh;
+    int boxk = -1;
+    for (size_t c = 0; c < ncomp; c++) {
+        probe pr;
+        int r = piece_probe(A, cpiece[c], &pr);
+        if (r == -1) goto done;
+        if (r) {
+            rc = ARR_EINTERNAL;
+            snprintf(err, errlen, "solids: no point found inside input face %u",
+                     A->pc[cpiece[c]].face);
+            goto done;
+        }
+        if (boxk != pr.k) { /* boxes of the faces in this probe's projection */
+            boxk = pr.k;
+            for (size_t f = 0; f < nf; f++) {
+                double *b = fbox + 4 * f;
+                b[0] = b[1] = DBL_MAX, b[2] = b[3] = -DBL_MAX;
+                for (uint32_t e = A->cyc_off[A->f_cyc[f]]; e < A->cyc_off[A->f_cyc[f] + 1]; e++) {
+                    const double *x = A->pt[A->ent[e]].x;
+                    double u = x[pr.i], v = x[pr.j];
+                    if (u < b[0]) b[0] = u;
+                    if (v < b[1]) b[1] = v;
+                    if (u > b[2]) b[2] = u;
+                    if (v > b[3]) b[3] = v;
+                }
+            }
+        }
+        double qi = (double)pr.Q[pr.i] / 3, qj = (double)pr.Q[pr.j] / 3;
+        uint32_t own = NONE, below = NONE;
+        for (size_t f = 0; f < nf; f++) {
+            const double *b = fbox + 4 * f;
+            double m = (fabs(b[0]) + fabs(b[2]) + fabs(b[1]) + fabs(b[3]) + 1) * 0x1p-40;
+            if (qi < b[0] - m || qi > b[2] + m || qj < b[1] - m || qj > b[3] + m) continue;
+            if (fcomp[f] != c && ncomp == 1) continue;
+            if (!probe_hits(A, (uint32_t)f, &pr)) continue;
+            if (fcomp[f] == c) {
+                if (own == NONE || probe_cmp(A, (uint32_t)f, own, &pr) < 0) own = (uint32_t)f;
+            } else if (probe_vs_q(A, (uint32_t)f, &pr) < 0) {
+                if (below == NONE || probe_cmp(A, (uint32_t)f, below, &pr) > 0) below = (uint32_t)f;
+            }
+        }
+        if (own == NONE) {
+            rc = ARR_EINTERNAL;
+            snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
+            goto done;
+        }
+        if (getenv("A3DEBUG")) {
+            fprintf(stderr, "comp %zu piece %u k=%d Q=(%lld %lld %lld) own f%u below f%s\n", c,
+                    cpiece[c], pr.k, (long long)pr.Q[0], (long long)pr.Q[1], (long long)pr.Q[2],
+                    own, below == NONE ? "-" : "x");
+            for (size_t f = 0; f < nf; f++)
+                if (probe_hits(A, (uint32_t)f, &pr)) {
+                    i128 nu, de;
+                    probe_t(&A->pl[A->f_plane[f]], &pr, &nu, &de);
+                    fprintf(stderr, "  hit f%zu comp %u t=%g n_k=%lld\n", f, fcomp[f],
+                            (double)nu / (double)de, (long long)A->pl[A->f_plane[f]].n[pr.k]);
+                }
+        }
+        int up = A->pl[A->f_plane[own]].n[pr.k] > 0;
+        outer[c] = shell[2 * own + (up ? 1 : 0)]; /* the side facing -k */
+        if (below == NONE) {
+            a3_uf_union(cu, outer[c], EXT);
+        } else {
+            int bup = A->pl[A->f_plane[below]].n[pr.k] > 0;
+            a3_uf_union(cu, outer[c], shell[2 * below + (bup ? 0 : 1)]); /* facing +k */
+        }
+    }
+    /* cells: classes of shells; the one holding EXT is the exterior */
+    cell = malloc((nsh + 2) * sizeof *cell);
+    if (!cell) goto done;
+    size_t nc = 0;
+    for (size_t s = 0; s <= nsh; s++) cell[s] = NONE;
+    uint32_t ext_root = a3_uf_find(cu, EXT);
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t r = a3_uf_find(cu, shell[i]);
+        if (r == ext_root || cell[r] != NONE) continue;
+        cell[r] = (uint32_t)nc++;
+    }
+    cone = malloc((nf + 1) * sizeof *cone);
+    if (!cone) goto done;
+    for (size_t f = 0; f < nf; f++) cone[f] = face_cone6(A, (uint32_t)f);
+    out->nc = nc;
+    out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
+    out->cvol = calloc(nc + 1, sizeof *out->cvol);
+    if (!out->cf_off || !out->cvol) goto done;
+    size_t next = 0;
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t r = a3_uf_find(cu, shell[i]), o = a3_uf_find(cu, shell[i ^ 1]);
+        if (r == o) continue; /* both sides in one cell: not on its boundary */
+        if (r == ext_root)
+            next++;
+        else
+            out->cf_off[cell[r] + 1]++;
+    }
+    for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
+    out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
+    out->ext = malloc((next + 1) * sizeof *out->ext);
+    uint32_t *fill = calloc(nc + 1, sizeof *fill);
+    if (!out->cf || !out->ext || !fill) {
+        free(fill);
+        goto done;
+    }
+    out->next = 0;
+    double h3 = A->step * A->step * A->step / 6;
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t r = a3_uf_find(cu, shell[i]);
+        if (r == a3_uf_find(cu, shell[i ^ 1])) continue;
+        /* the - side's cell has the normal pointing out of it: +(f+1) */
+        int32_t sf = (i & 1) ? (int32_t)(i / 2 + 1) : -(int32_t)(i / 2 + 1);
+        if (r == ext_root) {
+            out->ext[out->next++] = sf;
+        } else {
+            uint32_t k = cell[r];
+            out->cf[out->cf_off[k] + fill[k]++] = sf;
+            out->cvol[k] += ((i & 1) ? cone[i / 2] : -cone[i / 2]) * h3;
+        }
+    }
+    free(fill);
+    /* ---- output: vertices sorted by position, edges sorted, faces */
+    newid = malloc((A->npt + 1) * sizeof *newid);
+    used = malloc((A->npt + 1) * sizeof *used);
+    if (!newid || !used) goto done;
+    for (size_t p = 0; p < A->npt; p++) newid[p] = NONE;
+    size_t nu = 0;
+    for (size_t i = 0; i < A->nent; i++)
+        if (newid[A->ent[i]] == NONE) newid[A->ent[i]] = 0, used[nu++] = A->ent[i];
+    if (nu > 1) qsort_r(used, nu, sizeof *used, vcmp, A);
+    for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+    out->nv = nu;
+    out->V = malloc((3 * nu + 1) * sizeof *out->V);
+    if (!out->V) goto done;
+    for (size_t i = 0; i < nu; i++)
+        for (int k = 0; k < 3; k++)
+            out->V[3 * i + k] = ((double)A->oi[k] + A->pt[used[i]].x[k]) * A->step;
+    ek = malloc((ne + 1) * sizeof *ek);
+    if (!ek) goto done;
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = newid[ev[2 * e]], b = newid[ev[2 * e + 1]];
+        ek[e] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+    }
+    out->ne = ne;
+    out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
+    if (!out->EV) goto done;
+    {
+        emap km = {0};
+        uint64_t *srt = malloc((ne + 1) * sizeof *srt);
+        if (!srt) goto done;
+        memcpy(srt, ek, ne * sizeof *srt);
+        /* radix sort of 64-bit keys (8 passes of 8 bits) */
+        uint64_t *buf = malloc((ne + 1) * sizeof *buf);
+        if (!buf) {
+            free(srt);
+            goto done;
+        }
+        for (int pass = 0; pass < 8; pass++) {
+            size_t cnt[257] = {0};
+            int sh = 8 * pass;
+            for (size_t i = 0; i < ne; i++) cnt[((srt[i] >> sh) & 255) + 1]++;
+            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+            for (size_t i = 0; i < ne; i++) buf[cnt[(srt[i] >> sh) & 255]++] = srt[i];
+            uint64_t *t = srt;
+            srt = buf, buf = t;
+        }
+        free(buf);
+        for (size_t i = 0; i < ne; i++) {
+            int found;
+            out->EV[2 * i] = (uint32_t)(srt[i] >> 32);
+            out->EV[2 * i + 1] = (uint32_t)srt[i];
+            if (emap_put(&km, srt[i], (uint32_t)i, &found) == NONE) {
+                free(srt);
+                free(km.key), free(km.val);
+                goto done;
+            }
+        }
+        free(srt);
+        /* faces */
+        out->nf = nf;
+        out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
+        out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
+        out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
+        out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+        out->fe = malloc((A->nent + 1) * sizeof *out->fe);
+        out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
+        out->ncyc = A->ncyc;
+        out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
+        out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
+        out->fsol = malloc((A->f_cov[nf] + 1) * sizeof *out->fsol);
+        if (!out->FN || !out->fc_off || !out->fc || !out->fe_off || !out->fe || !out->fsrc ||
+            !out->cyc_off || !out->cyc || !out->fsol_off || !out->fsol) {
+            free(km.key), free(km.val);
+            goto done;
+        }
+        size_t nfe = 0, nfs = 0;
+        out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
+        for (size_t f = 0; f < nf; f++) {
+            const plane3 *P = &A->pl[A->f_plane[f]];
+            double len = sqrt(P->nd[0] * P->nd[0] + P->nd[1] * P->nd[1] + P->nd[2] * P->nd[2]);
+            for (int k = 0; k < 3; k++) out->FN[3 * f + k] = P->nd[k] / len;
+            out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
+            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+                out->fc[cy] = cy;
+                uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+                if (n < 2) continue;
+                for (uint32_t t = 0; t < n; t++) {
+                    uint32_t a = newid[A->ent[o + t]], b = newid[A->ent[o + (t + 1) % n]];
+                    uint32_t e =
+                        emap_get(&km, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a);
+                    out->fe[nfe++] = a < b ? (int32_t)(e + 1) : -(int32_t)(e + 1);
+                }
+            }
+            out->fc_off[f + 1] = A->f_cyc[f + 1];
+            out->fe_off[f + 1] = (uint32_t)nfe;
+            /* solids covering f an odd number of times */
+            size_t s0 = nfs;
+            for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
+                out->fsol[nfs++] = A->pc[A->cov[i]].solid;
+            if (nfs - s0 > 1) qsort(out->fsol + s0, nfs - s0, sizeof *out->fsol, cmpu32);
+            size_t m = s0;
+            for (size_t i = s0; i < nfs;) {
+                size_t j = i;
+                while (j < nfs && out->fsol[j] == out->fsol[i]) j++;
+                if ((j - i) & 1) out->fsol[m++] = out->fsol[i];
+                i = j;
+            }
+            nfs = m;
+            out->fsol_off[f + 1] = (uint32_t)nfs;
+        }
+        free(km.key), free(km.val);
+        for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
+        for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+    }
+    /* CV: sorted vertices of each cell's faces; CF rows sorted */
+    out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
+    if (!out->cv_off) goto done;
+    {
+        uint32_t *buf = NULL, *cv = NULL;
+        size_t nb = 0, capb = 0, ncv = 0, capcv = 0;
+        for (size_t k = 0; k < nc; k++) {
+            nb = 0;
+            for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
+                uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
+                for (uint32_t cy = out->fc_off[f]; cy < out->fc_off[f + 1]; cy++)
+                    for (uint32_t j = out->cyc_off[cy]; j < out->cyc_off[cy + 1]; j++)
+                        if (A3_PUSH(buf, nb, capb, out->cyc[j])) {
+                            free(buf), free(cv);
+                            goto done;
+                        }
+            }
+            if (nb > 1) qsort(buf, nb, sizeof *buf, cmpu32);
+            for (size_t i = 0; i < nb; i++)
+                if (i == 0 || buf[i] != buf[i - 1])
+                    if (A3_PUSH(cv, ncv, capcv, buf[i])) {
+                        free(buf), free(cv);
+                        goto done;
+                    }
+            out->cv_off[k + 1] = (uint32_t)ncv;
+            if (out->cf_off[k + 1] - out->cf_off[k] > 1)
+                qsort(out->cf + out->cf_off[k], out->cf_off[k + 1] - out->cf_off[k],
+                      sizeof *out->cf, cmpi32);
+        }
+        free(buf);
+        out->cv = cv ? cv : malloc(sizeof *out->cv);
+        if (!out->cv) goto done;
+    }
+    if (out->next > 1) qsort(out->ext, out->next, sizeof *out->ext, cmpi32);
+    out->stats.nv = out->nv;
+    out->stats.ne = out->ne;
+    out->stats.nf = out->nf;
+    out->stats.nc = out->nc;
+    rc = ARR_OK;
+done:
+    if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
+    free(em.key);
+    free(em.val);
+    free(I);
+    free(tmp);
+    free(ev);
+    free(eside);
+    free(eplane);
+    free(ioff);
+    free(sp);
+    free(fcomp);
+    free(shell);
+    free(cu);
+    free(cell);
+    free(outer);
+    free(cpiece);
+    free(newid);
+    free(used);
+    free(cone);
+    free(fbox);
+    free(ek);
+    return rc;
+}

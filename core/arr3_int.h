@@ -1,0 +1,161 @@
+/* arr3_int.h — what the three files of the 3D arrangement share (not a public interface):
+ *   arr3.c        the input (snapping, pieces, planes), candidate pairs, cuts, the driver;
+ *   arr3_plane.c  the exact arrangement of one plane;
+ *   arr3_cells.c  the 3-cells (fans about edges, shells, nesting) and the lar3 it returns.
+ *
+ * Vocabulary.
+ *   vertex  an input vertex on the grid (int64 triple, centred on oi); equal triples are one.
+ *   piece   a planar polygon of the input: an input face whose vertices lie exactly in one
+ *           plane, or one triangle of a face that does not.  It has cycles of vertex ids (the
+ *           first its outer one) and, for each cycle entry, the "vertical" plane through that
+ *           edge parallel to the axis its plane's normal is largest on (the edge's line in the
+ *           piece's plane is the two planes' intersection).
+ *   plane   an exact integer plane, canonical (reduced, first non-zero normal component > 0),
+ *           so that two pieces are coplanar exactly when their plane ids are equal.
+ *   point   an xpt (core/pred.h); ids below nv are the vertices (GRID).
+ *   cut     a segment where two pieces of different solids meet, on the line where their planes
+ *           meet: it is given to both planes, each with the other as its side plane.  A point
+ *           where they only touch is a contact point, given to both planes too.
+ */
+#ifndef CELLAR_ARR3_INT_H
+#define CELLAR_ARR3_INT_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/arr3.h"
+#include "core/pred.h"
+
+#define NONE UINT32_MAX
+
+typedef struct piece {
+    uint32_t solid; /* solid index (in a soup: the input face, so that faces meet each other) */
+    uint32_t face;  /* input face (index over all solids) */
+    uint32_t plane;
+    uint32_t c0, nc; /* cycles pc_off[c0 .. c0 + nc) */
+    int64_t box[6];  /* lo xyz, hi xyz */
+} piece;
+
+typedef struct cseg {
+    uint32_t plane, p0, p1, side;
+} cseg;
+
+typedef struct cpt {
+    uint32_t plane, p;
+} cpt;
+
+/* The faces of one plane's arrangement (arr3_plane.c), in that plane's own point numbering:
+ * ids below the plane's base are global points, from base on they are the plane's new points. */
+typedef struct pfaces {
+    uint32_t nf, ncyc, nent, ncov, nnew;
+    uint32_t *f_cyc;   /* nf+1: face f has cycles f_cyc[f] .. f_cyc[f+1] (outer first) */
+    uint32_t *cyc_off; /* ncyc+1 */
+    uint32_t *ent;     /* point of each cycle entry */
+    uint32_t *side;    /* side plane of the edge from each entry to the next (NONE: none) */
+    uint32_t *f_cov;   /* nf+1 */
+    uint32_t *cov;     /* pieces covering each face */
+    xpt *newp;         /* nnew new points (crossings) */
+    uint32_t base;     /* ent >= base: newp[ent - base] */
+} pfaces;
+
+void pfaces_free(pfaces *f);
+
+/* The whole state of one arrangement. */
+typedef struct a3 {
+    const arr3_opts *o;
+    int threads;
+    arr3_stats *st;
+    double step;   /* grid step */
+    int64_t oi[3]; /* world = (oi + g) * step */
+    int soup;
+    /* vertices */
+    int64_t *g;
+    size_t nv, capv;
+    uint32_t *vtab;
+    size_t vcap;
+    /* planes (canonical, deduplicated by a hash) */
+    plane3 *pl;
+    size_t npl, cappl;
+    uint32_t *pltab;
+    size_t plcap;
+    /* pieces and their cycles */
+    piece *pc;
+    size_t npc, cappc;
+    uint32_t *pc_off; /* npcyc+1 */
+    size_t npcyc, cappc_off;
+    uint32_t *pcv;  /* vertex ids */
+    uint32_t *pcvp; /* vertical plane of each entry's edge */
+    size_t npcv, cappcv, cappcvp;
+    size_t nfaces; /* input faces */
+    uint32_t *solid_face_off;
+    size_t nsolids;
+    size_t split_faces; /* input faces split into triangles */
+    /* points */
+    xpt *pt;
+    size_t npt, cappt;
+    geo G;
+    /* per plane: pieces, cuts, contact points (CSR over plane ids) */
+    uint32_t *pp_off, *pp;
+    cseg *cs;
+    size_t ncs, capcs;
+    cpt *cp;
+    size_t ncp, capcp;
+    uint32_t *cs_off, *cp_off;
+    /* the planes' arrangements */
+    pfaces *pf;
+    /* the faces of the complex, global point ids */
+    size_t nf;
+    uint32_t *f_plane;
+    uint32_t *f_cyc;   /* nf+1 */
+    uint32_t *cyc_off; /* ncyc+1 */
+    size_t ncyc;
+    uint32_t *ent, *side;
+    size_t nent;
+    uint32_t *f_cov, *cov;
+} a3;
+
+/* ---- shared tools (arr3.c) ------------------------------------------------------------- */
+
+int a3_grow(void *pp, size_t *cap, size_t need, size_t elem);
+#define A3_PUSH(arr, n, cap, val)                                                                  \
+    (a3_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
+uint64_t a3_mix64(uint64_t x);
+int a3_cancelled(const a3 *A);
+void a3_progress(const a3 *A, const char *stage, double f);
+uint32_t a3_uf_find(uint32_t *p, uint32_t x);
+void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b);
+
+/* Deduplication of points by position: a hash over cells of one grid unit, exact equality
+ * inside.  Points are added with their id; pset_find returns the id of an equal point or NONE. */
+typedef struct pset {
+    uint64_t *key;  /* cell hash keys (0: empty) */
+    uint32_t *head; /* first id of each slot's list */
+    size_t cap, n;
+    uint32_t *next; /* by id - base: next id in the same slot */
+    size_t capnext;
+    uint32_t base;
+} pset;
+
+void pset_clear(pset *s, uint32_t base);
+void pset_free(pset *s);
+/* pts(id) gives the point of an id. */
+typedef const xpt *(*pset_get)(const void *ctx, uint32_t id);
+uint32_t pset_find(const pset *s, const geo *G, const xpt *p, pset_get get, const void *ctx);
+int pset_add(pset *s, const xpt *p, uint32_t id);
+
+/* Triangulates the polygon with cycles cyc[0..nc) (vertex ids, lengths len[]; the first the
+ * outer one) projected along axis k; appends 3 vertex ids per triangle to *tri.  Returns 0, -1
+ * (out of memory) or -2 (not a simple polygon with holes in that projection). */
+int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t nc, uint32_t **tri,
+                   size_t *ntri, size_t *captri);
+
+/* ---- the stages ------------------------------------------------------------------------ */
+
+/* Arranges every plane (in parallel); fills A->pf.  Returns ARR_OK or an ARR_* code. */
+int a3_planes(a3 *A, char *err, size_t errlen);
+
+/* From A's faces: the edges, the fans, the shells, the cells, and the lar3. */
+int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen);
+
+#endif

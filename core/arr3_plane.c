@@ -1,0 +1,990 @@
+/* arr3_plane.c — the exact arrangement of one plane (stage 4 of arr3.h).
+ *
+ * Input: the pieces lying in plane P (their edges, each with the vertical plane through it), the
+ * cuts given to P (each with the other piece's plane as its side plane) and the contact points
+ * given to P.  Every segment lies on the line where P meets its side plane S, so every 2D
+ * question is a 3D predicate of core/pred.h:
+ *   side     which side of a segment's line a point of P lies on is the sign of the point
+ *            against S (orient_plane), known to be zero for the segment's own points;
+ *   order    points on one line are ordered by one coordinate (the largest component of the
+ *            line's direction n_P x n_S);
+ *   cross    two segments crossing properly meet at an LPI (when one is an input edge: that
+ *            edge against the other's side plane) or at the TPI of P and both side planes;
+ *   angle    the direction of an edge is +-(n_P x n_S); two directions compare by the sign of
+ *            det(n_P, n_S1, n_S2) (the cross product of two such directions is n_P times it).
+ * Steps: all pairs of segments (and contact points) whose boxes meet, from a sweep along u,
+ * give the split points; equal points are merged (pset); the segments are cut at their split
+ * points into edges, equal edges merged (the pieces whose boundary an edge lies on are kept);
+ * the half-edges around each vertex are sorted by angle and walked into cycles, counter-
+ * clockwise in the projection along the normal's largest axis k (u = k+1, v = k+2).  Each
+ * connected component's outside cycle is the one left of the highest-angle half-edge at its
+ * lowest vertex (v, then u); a component is placed in the face holding it by a ray down from
+ * that vertex to the nearest edge of another component below (exact comparisons of edges that
+ * straddle the ray).  Which pieces cover a face follows from walking from the unbounded face
+ * across edges, each crossing toggling the pieces whose boundary that edge is: no sample point.
+ * The faces covered by at least one piece are P's faces of the complex, their cycles turned to
+ * run counter-clockwise about P's normal.
+ *
+ * Threads: planes run on par_for(); each worker has its own scratch (pwork) and writes only its
+ * plane's pfaces.  Nothing here depends on the number of threads.
+ */
+#include "core/arr3_int.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/par.h"
+
+#define NEWBASE 0x80000000u /* output ids from here are the plane's new points */
+#define UNB     UINT32_MAX  /* the unbounded face */
+
+typedef struct pseg {
+    uint32_t p0, p1; /* local points; p0 == p1: a contact point, not a segment */
+    uint32_t side;
+    uint32_t va, vb; /* input edge (va < vb), or NONE */
+    uint32_t piece;  /* boundary of this piece, or NONE */
+    int ax;          /* largest |component| of n_P x n_side */
+    double lo[2], hi[2];
+} pseg;
+
+typedef struct split {
+    uint32_t seg, pt;
+} split;
+
+typedef struct pedge {
+    uint32_t a, b; /* a < b */
+    uint32_t side, va, vb;
+    uint32_t prov, nprov; /* pieces: prov[prov .. prov + nprov) */
+    int sig;              /* +1: a -> b runs along n_P x n_side */
+    i128 du, dv;          /* n_P x n_side projected (u, v) */
+} pedge;
+
+typedef struct pwork {
+    const a3 *A;
+    uint32_t P; /* the plane */
+    int k, u, v, sgnk;
+    /* local points */
+    xpt *lp;
+    uint32_t *lg; /* global id, or NONE for a new point */
+    size_t nlp, caplp, caplg;
+    uint32_t *htab; /* global -> local */
+    size_t hcap;
+    uint32_t *hused;
+    size_t nhused, caphused;
+    uint32_t *alias;
+    size_t capalias;
+    pset ps;
+    /* segments and splits */
+    pseg *sg;
+    size_t nsg, capsg;
+    split *sp;
+    size_t nsp, capsp;
+    uint32_t *order, *active;
+    size_t caporder, capactive;
+    uint32_t *tmp;
+    size_t captmp;
+    /* edges */
+    pedge *ed;
+    size_t ned, caped;
+    uint32_t *prov;
+    size_t nprov, capprov;
+    /* half-edges */
+    uint32_t *voff, *vh; /* outgoing half-edges by vertex */
+    size_t capvoff, capvh;
+    uint32_t *pos, *next, *hcyc;
+    size_t cappos, capnext, caphcyc;
+    uint32_t *cyc_h; /* first half-edge of each cycle */
+    size_t ncyc, capcyc_h;
+    uint32_t *comp, *low, *ext, *host, *iso;
+    size_t capcomp, caplow, capext, caphost, capiso;
+    uint8_t *used;
+    size_t capused;
+    /* faces, coverage */
+    uint32_t *fof, *aoff, *adj, *queue, *covo, *covn, *cov;
+    size_t capfof, capaoff, capadj, capqueue, capcovo, capcovn, capcov, ncov;
+    uint32_t *x1, *x2;
+    size_t capx1, capx2;
+    int fail;
+} pwork;
+
+#define GROW(w, arr, need) a3_grow(&(w)->arr, &(w)->cap##arr, (need), sizeof *(w)->arr)
+
+/* ---- local points -------------------------------------------------------------------- */
+
+static uint32_t lp_new(pwork *w, xpt p, uint32_t gid)
+{
+    if (GROW(w, lp, w->nlp + 1) || GROW(w, lg, w->nlp + 1)) return NONE;
+    w->lp[w->nlp] = p;
+    w->lg[w->nlp] = gid;
+    return (uint32_t)w->nlp++;
+}
+
+static uint32_t lp_global(pwork *w, uint32_t gid)
+{
+    if (2 * (w->nhused + 1) > w->hcap) {
+        size_t ncap = w->hcap ? 2 * w->hcap : 256;
+        uint32_t *t = malloc(ncap * sizeof *t);
+        if (!t) return NONE;
+        memset(t, 0xff, ncap * sizeof *t);
+        for (size_t i = 0; i < w->nhused; i++) {
+            uint32_t l = w->hused[i];
+            size_t h = a3_mix64(w->lg[l]) & (ncap - 1);
+            while (t[h] != NONE) h = (h + 1) & (ncap - 1);
+            t[h] = l;
+        }
+        free(w->htab);
+        w->htab = t;
+        w->hcap = ncap;
+    }
+    size_t h = a3_mix64(gid) & (w->hcap - 1);
+    while (w->htab[h] != NONE) {
+        if (w->lg[w->htab[h]] == gid) return w->htab[h];
+        h = (h + 1) & (w->hcap - 1);
+    }
+    uint32_t l = lp_new(w, w->A->pt[gid], gid);
+    if (l == NONE || GROW(w, hused, w->nhused + 1)) return NONE;
+    w->htab[h] = l;
+    w->hused[w->nhused++] = l;
+    return l;
+}
+
+static void lp_reset(pwork *w)
+{
+    if (w->htab && w->nhused) memset(w->htab, 0xff, w->hcap * sizeof *w->htab);
+    w->nhused = 0;
+    w->nlp = 0;
+}
+
+/* ---- predicates on segments ---------------------------------------------------------- */
+
+/* Sign of local point x against segment s's side plane (0: on s's line). */
+static int seg_side(const pwork *w, const pseg *s, uint32_t x)
+{
+    if (x == s->p0 || x == s->p1) return 0;
+    const xpt *p = &w->lp[x];
+    if (s->va != NONE) {
+        if (p->kind == PT_GRID && (p->a == s->va || p->a == s->vb)) return 0;
+        if (p->kind == PT_LPI && p->a == s->va && p->b == s->vb) return 0;
+    }
+    return orient_plane(&w->A->G, p, s->side);
+}
+
+static int lcmp(const pwork *w, uint32_t a, uint32_t b, int ax)
+{
+    if (a == b) return 0;
+    return cmp_coord(&w->A->G, &w->lp[a], &w->lp[b], ax);
+}
+
+/* Is x (on s's line) strictly between s's endpoints? */
+static int strictly_inside(const pwork *w, const pseg *s, uint32_t x)
+{
+    if (x == s->p0 || x == s->p1) return 0;
+    int a = lcmp(w, x, s->p0, s->ax), b = lcmp(w, x, s->p1, s->ax);
+    return a * b < 0;
+}
+
+static int add_split(pwork *w, uint32_t seg, uint32_t pt)
+{
+    split s = {seg, pt};
+    return A3_PUSH(w->sp, w->nsp, w->capsp, s);
+}
+
+static int axis_of(const i128 *d)
+{
+    int ax = 0;
+    for (int i = 1; i < 3; i++)
+        if ((d[i] < 0 ? -d[i] : d[i]) > (d[ax] < 0 ? -d[ax] : d[ax])) ax = i;
+    return ax;
+}
+
+/* The point where the lines of s and t (crossing properly inside both) meet. */
+static xpt crossing(const pwork *w, const pseg *s, const pseg *t)
+{
+    const geo *G = &w->A->G;
+    if (s->va != NONE) return xpt_lpi(G, s->va, s->vb, t->side);
+    if (t->va != NONE) return xpt_lpi(G, t->va, t->vb, s->side);
+    uint32_t a = w->P, b = s->side, c = t->side, x;
+    if (a > b) x = a, a = b, b = x;
+    if (b > c) x = b, b = c, c = x;
+    if (a > b) x = a, a = b, b = x;
+    return xpt_tpi(G, a, b, c);
+}
+
+static int test_pair(pwork *w, uint32_t i, uint32_t j)
+{
+    const pseg *s = &w->sg[i], *t = &w->sg[j];
+    int sp = s->p0 == s->p1, tp = t->p0 == t->p1;
+    if (sp && tp) return 0;
+    if (sp || tp) {
+        const pseg *g = sp ? t : s;
+        uint32_t x = sp ? s->p0 : t->p0;
+        if (seg_side(w, g, x) == 0 && strictly_inside(w, g, x)) return add_split(w, sp ? j : i, x);
+        return 0;
+    }
+    int o1 = seg_side(w, s, t->p0), o2 = seg_side(w, s, t->p1);
+    if (o1 * o2 > 0) return 0;
+    int o3 = seg_side(w, t, s->p0), o4 = seg_side(w, t, s->p1);
+    if (o3 * o4 > 0) return 0;
+    if (o1 == 0 && o2 == 0) { /* collinear: each endpoint inside the other splits it */
+        for (int e = 0; e < 2; e++) {
+            uint32_t x = e ? t->p1 : t->p0;
+            if (strictly_inside(w, s, x) && add_split(w, i, x)) return -1;
+            x = e ? s->p1 : s->p0;
+            if (strictly_inside(w, t, x) && add_split(w, j, x)) return -1;
+        }
+        return 0;
+    }
+    if (o1 == 0 && strictly_inside(w, s, t->p0) && add_split(w, i, t->p0)) return -1;
+    if (o2 == 0 && strictly_inside(w, s, t->p1) && add_split(w, i, t->p1)) return -1;
+    if (o3 == 0 && strictly_inside(w, t, s->p0) && add_split(w, j, s->p0)) return -1;
+    if (o4 == 0 && strictly_inside(w, t, s->p1) && add_split(w, j, s->p1)) return -1;
+    if (o1 * o2 < 0 && o3 * o4 < 0) {
+        uint32_t x = lp_new(w, crossing(w, s, t), NONE);
+        if (x == NONE || add_split(w, i, x) || add_split(w, j, x)) return -1;
+    }
+    return 0;
+}
+
+/* ---- the sweep ----------------------------------------------------------------------- */
+
+static int cmp_lo(const void *pa, const void *pb, void *vw)
+{
+    const pwork *w = vw;
+    double a = w->sg[*(const uint32_t *)pa].lo[0], b = w->sg[*(const uint32_t *)pb].lo[0];
+    return (a > b) - (a < b);
+}
+
+static void seg_box(pwork *w, pseg *s)
+{
+    for (int d = 0; d < 2; d++) {
+        int ax = d ? w->v : w->u;
+        double a = w->lp[s->p0].x[ax], b = w->lp[s->p1].x[ax];
+        double lo = a < b ? a : b, hi = a < b ? b : a;
+        double m = (fabs(lo) + fabs(hi)) * 0x1p-45 + 0x1p-30;
+        s->lo[d] = lo - m;
+        s->hi[d] = hi + m;
+    }
+}
+
+static int sweep(pwork *w)
+{
+    size_t n = w->nsg, na = 0;
+    if (GROW(w, order, n + 1) || GROW(w, active, n + 1)) return -1;
+    for (size_t i = 0; i < n; i++) w->order[i] = (uint32_t)i;
+    if (n > 1) qsort_r(w->order, n, sizeof *w->order, cmp_lo, w);
+    for (size_t q = 0; q < n; q++) {
+        uint32_t i = w->order[q];
+        const pseg *s = &w->sg[i];
+        size_t m = 0;
+        for (size_t a = 0; a < na; a++) {
+            uint32_t j = w->active[a];
+            const pseg *t = &w->sg[j];
+            if (t->hi[0] < s->lo[0]) continue; /* done with it */
+            w->active[m++] = j;
+            if (t->hi[1] < s->lo[1] || s->hi[1] < t->lo[1]) continue;
+            if (test_pair(w, j, i)) return -1;
+        }
+        na = m;
+        w->active[na++] = i;
+    }
+    return 0;
+}
+
+/* ---- merging points, cutting segments into edges -------------------------------------- */
+
+static const xpt *get_local(const void *ctx, uint32_t id)
+{
+    const pwork *w = ctx;
+    return &w->lp[id];
+}
+
+static int dedup_local(pwork *w)
+{
+    if (GROW(w, alias, w->nlp + 1)) return -1;
+    pset_clear(&w->ps, 0);
+    for (size_t i = 0; i < w->nlp; i++) {
+        w->alias[i] = (uint32_t)i;
+        if (w->lg[i] == NONE) {
+            uint32_t q = pset_find(&w->ps, &w->A->G, &w->lp[i], get_local, w);
+            if (q != NONE) {
+                w->alias[i] = q;
+                continue;
+            }
+        }
+        if (pset_add(&w->ps, &w->lp[i], (uint32_t)i)) return -1;
+    }
+    return 0;
+}
+
+typedef struct sortctx {
+    const pwork *w;
+    int ax;
+} sortctx;
+
+static int cmp_along(const void *pa, const void *pb, void *vc)
+{
+    const sortctx *c = vc;
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    int r = lcmp(c->w, a, b, c->ax);
+    return r ? r : (a > b) - (a < b);
+}
+
+static int cmp_split(const void *pa, const void *pb)
+{
+    const split *a = pa, *b = pb;
+    if (a->seg != b->seg) return a->seg < b->seg ? -1 : 1;
+    return (a->pt > b->pt) - (a->pt < b->pt);
+}
+
+static int add_edge(pwork *w, const pseg *s, uint32_t a, uint32_t b)
+{
+    if (a == b) return 0;
+    pedge e = {a < b ? a : b, a < b ? b : a, s->side, s->va, s->vb, s->piece, 0, 0, 0, 0};
+    return A3_PUSH(w->ed, w->ned, w->caped, e);
+}
+
+static int cmp_edge(const void *pa, const void *pb)
+{
+    const pedge *a = pa, *b = pb;
+    if (a->a != b->a) return a->a < b->a ? -1 : 1;
+    if (a->b != b->b) return a->b < b->b ? -1 : 1;
+    if (a->prov != b->prov) return a->prov < b->prov ? -1 : 1; /* piece, before merging */
+    return 0;
+}
+
+static int make_edges(pwork *w)
+{
+    w->ned = 0;
+    for (size_t i = 0; i < w->nsp; i++) w->sp[i].pt = w->alias[w->sp[i].pt];
+    if (w->nsp > 1) qsort(w->sp, w->nsp, sizeof *w->sp, cmp_split);
+    size_t j = 0;
+    for (size_t i = 0; i < w->nsg; i++) {
+        pseg *s = &w->sg[i];
+        s->p0 = w->alias[s->p0];
+        s->p1 = w->alias[s->p1];
+        size_t n = 0;
+        while (j < w->nsp && w->sp[j].seg < i) j++;
+        if (s->p0 == s->p1) {
+            while (j < w->nsp && w->sp[j].seg == i) j++;
+            continue;
+        }
+        if (GROW(w, tmp, 2)) return -1;
+        w->tmp[n++] = s->p0;
+        w->tmp[n++] = s->p1;
+        for (; j < w->nsp && w->sp[j].seg == i; j++) {
+            if (GROW(w, tmp, n + 1)) return -1;
+            w->tmp[n++] = w->sp[j].pt;
+        }
+        if (n > 2) {
+            sortctx c = {w, s->ax};
+            qsort_r(w->tmp, n, sizeof *w->tmp, cmp_along, &c);
+        } else if (lcmp(w, w->tmp[0], w->tmp[1], s->ax) > 0) {
+            uint32_t t = w->tmp[0];
+            w->tmp[0] = w->tmp[1], w->tmp[1] = t;
+        }
+        for (size_t q = 0; q + 1 < n; q++)
+            if (w->tmp[q] != w->tmp[q + 1] && add_edge(w, s, w->tmp[q], w->tmp[q + 1])) return -1;
+    }
+    /* equal edges: one, with the pieces whose boundary it is (each counted modulo 2) */
+    if (w->ned > 1) qsort(w->ed, w->ned, sizeof *w->ed, cmp_edge);
+    size_t m = 0;
+    w->nprov = 0;
+    for (size_t i = 0; i < w->ned;) {
+        size_t k = i;
+        pedge e = w->ed[i];
+        e.nprov = 0;
+        e.prov = (uint32_t)w->nprov;
+        for (; k < w->ned && w->ed[k].a == e.a && w->ed[k].b == e.b; k++) {
+            uint32_t pc = w->ed[k].prov;
+            if (w->ed[k].va != NONE && e.va == NONE) {
+                e.va = w->ed[k].va;
+                e.vb = w->ed[k].vb;
+                e.side = w->ed[k].side;
+            }
+            if (pc == NONE) continue;
+            if (e.nprov && w->prov[w->nprov - 1] == pc) { /* twice: cancels */
+                w->nprov--;
+                e.nprov--;
+                continue;
+            }
+            if (A3_PUSH(w->prov, w->nprov, w->capprov, pc)) return -1;
+            e.nprov++;
+        }
+        w->ed[m++] = e;
+        i = k;
+    }
+    w->ned = m;
+    return 0;
+}
+
+/* ---- half-edges, cycles ---------------------------------------------------------------- */
+
+/* Half-edge h: edge h/2, from a to b when h is even.  Its direction is dsig(h) (n_P x n_side). */
+static uint32_t h_from(const pwork *w, uint32_t h)
+{
+    const pedge *e = &w->ed[h >> 1];
+    return (h & 1) ? e->b : e->a;
+}
+
+static int h_sig(const pwork *w, uint32_t h)
+{
+    int s = w->ed[h >> 1].sig;
+    return (h & 1) ? -s : s;
+}
+
+static int h_half(const pwork *w, uint32_t h)
+{
+    const pedge *e = &w->ed[h >> 1];
+    int s = h_sig(w, h);
+    i128 du = s > 0 ? e->du : -e->du, dv = s > 0 ? e->dv : -e->dv;
+    return (dv > 0 || (dv == 0 && du > 0)) ? 0 : 1;
+}
+
+static int cmp_angle(const void *pa, const void *pb, void *vw)
+{
+    const pwork *w = vw;
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    int ha = h_half(w, a), hb = h_half(w, b);
+    if (ha != hb) return ha - hb;
+    const plane3 *pl = w->A->pl;
+    const pedge *ea = &w->ed[a >> 1], *eb = &w->ed[b >> 1];
+    i128 nb[3] = {pl[eb->side].n[0], pl[eb->side].n[1], pl[eb->side].n[2]};
+    int d = det3_sign(pl[w->P].n, pl[ea->side].n, nb) * h_sig(w, a) * h_sig(w, b) * w->sgnk;
+    if (d > 0) return -1; /* b is counter-clockwise from a */
+    if (d < 0) return 1;
+    return (a > b) - (a < b);
+}
+
+static int make_cycles(pwork *w)
+{
+    const plane3 *pl = w->A->pl;
+    size_t nh = 2 * w->ned, np = w->nlp;
+    if (GROW(w, voff, np + 2) || GROW(w, vh, nh + 1) || GROW(w, pos, nh + 1) ||
+        GROW(w, next, nh + 1) || GROW(w, hcyc, nh + 1))
+        return -1;
+    for (size_t i = 0; i < w->ned; i++) {
+        pedge *e = &w->ed[i];
+        i128 d[3];
+        cross_ll(pl[w->P].n, pl[e->side].n, d);
+        int ax = axis_of(d);
+        int c = lcmp(w, e->b, e->a, ax);
+        e->sig = (c > 0) == (d[ax] > 0) ? 1 : -1;
+        e->du = d[w->u];
+        e->dv = d[w->v];
+    }
+    memset(w->voff, 0, (np + 2) * sizeof *w->voff);
+    for (size_t h = 0; h < nh; h++) w->voff[h_from(w, (uint32_t)h) + 2]++;
+    for (size_t p = 0; p < np; p++) w->voff[p + 2] += w->voff[p + 1];
+    for (size_t h = 0; h < nh; h++) w->vh[w->voff[h_from(w, (uint32_t)h) + 1]++] = (uint32_t)h;
+    for (size_t p = 0; p < np; p++) {
+        uint32_t o = w->voff[p], n = w->voff[p + 1] - o;
+        if (n > 1) qsort_r(w->vh + o, n, sizeof *w->vh, cmp_angle, w);
+        for (uint32_t i = 0; i < n; i++) w->pos[w->vh[o + i]] = i;
+    }
+    /* next(h): at h's end, the half-edge just clockwise of h's twin */
+    for (size_t h = 0; h < nh; h++) {
+        uint32_t t = (uint32_t)h ^ 1, b = h_from(w, t);
+        uint32_t o = w->voff[b], n = w->voff[b + 1] - o;
+        w->next[h] = w->vh[o + (w->pos[t] + n - 1) % n];
+    }
+    w->ncyc = 0;
+    for (size_t h = 0; h < nh; h++) w->hcyc[h] = NONE;
+    for (size_t h = 0; h < nh; h++) {
+        if (w->hcyc[h] != NONE) continue;
+        if (GROW(w, cyc_h, w->ncyc + 1)) return -1;
+        w->cyc_h[w->ncyc] = (uint32_t)h;
+        for (uint32_t x = (uint32_t)h; w->hcyc[x] == NONE; x = w->next[x])
+            w->hcyc[x] = (uint32_t)w->ncyc;
+        w->ncyc++;
+    }
+    return 0;
+}
+
+/* ---- components, placement --------------------------------------------------------------- */
+
+/* Is a lower than b: v first, then u. */
+static int lower(const pwork *w, uint32_t a, uint32_t b)
+{
+    int c = lcmp(w, a, b, w->v);
+    if (c) return c < 0;
+    return lcmp(w, a, b, w->u) < 0;
+}
+
+/* Side of local point x against edge e directed along +u: > 0 above (left), < 0 below. */
+static int above_edge(const pwork *w, const pedge *e, uint32_t x)
+{
+    if (x == e->a || x == e->b) return 0;
+    const xpt *p = &w->lp[x];
+    int o;
+    if (e->va != NONE && ((p->kind == PT_GRID && (p->a == e->va || p->a == e->vb)) ||
+                          (p->kind == PT_LPI && p->a == e->va && p->b == e->vb)))
+        o = 0;
+    else
+        o = orient_plane(&w->A->G, p, e->side);
+    /* left of n_P x n_side about n_P is orient < 0; about the projection, times sgnk; along +u,
+     * times the sign of du */
+    int su = e->du > 0 ? 1 : -1;
+    return -o * w->sgnk * su;
+}
+
+static void ends_by_u(const pwork *w, const pedge *e, uint32_t *l, uint32_t *r)
+{
+    if (lcmp(w, e->a, e->b, w->u) < 0)
+        *l = e->a, *r = e->b;
+    else
+        *l = e->b, *r = e->a;
+}
+
+/* Is e1 above e2 where both straddle one vertical line (they do not cross)? */
+static int higher(const pwork *w, const pedge *e1, const pedge *e2)
+{
+    uint32_t l1, r1, l2, r2;
+    ends_by_u(w, e1, &l1, &r1);
+    ends_by_u(w, e2, &l2, &r2);
+    if (lcmp(w, l2, l1, w->u) >= 0) {
+        int s = above_edge(w, e1, l2);
+        if (s) return s < 0;
+        if (lcmp(w, r2, r1, w->u) <= 0) return above_edge(w, e1, r2) < 0;
+        return above_edge(w, e2, r1) > 0;
+    }
+    return above_edge(w, e2, l1) > 0;
+}
+
+/* The half-edge of e that runs along +u. */
+static uint32_t h_plus_u(const pwork *w, uint32_t e)
+{
+    uint32_t h = 2 * e;
+    int su = w->ed[e].du > 0 ? 1 : -1;
+    return h_sig(w, h) * su > 0 ? h : h + 1;
+}
+
+static int place_components(pwork *w, size_t ncomp)
+{
+    /* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below
+     * its lowest vertex (NONE: nothing below, the unbounded face) */
+    for (size_t c = 0; c < ncomp; c++) {
+        uint32_t lw = w->low[c];
+        uint32_t n = w->voff[lw + 1] - w->voff[lw];
+        w->ext[c] = n ? w->hcyc[w->vh[w->voff[lw] + n - 1]] : NONE;
+        w->host[c] = NONE;
+    }
+    if (ncomp < 2) return 0;
+    for (size_t c = 0; c < ncomp; c++) {
+        uint32_t x = w->low[c], best = NONE;
+        double xu = w->lp[x].x[w->u], xv = w->lp[x].x[w->v];
+        for (size_t e = 0; e < w->ned; e++) {
+            const pedge *E = &w->ed[e];
+            if (w->comp[E->a] == c) continue;
+            const xpt *A = &w->lp[E->a], *B = &w->lp[E->b];
+            double ulo = A->x[w->u] < B->x[w->u] ? A->x[w->u] : B->x[w->u];
+            double uhi = A->x[w->u] < B->x[w->u] ? B->x[w->u] : A->x[w->u];
+            double vlo = A->x[w->v] < B->x[w->v] ? A->x[w->v] : B->x[w->v];
+            double m = (fabs(ulo) + fabs(uhi) + fabs(xu)) * 0x1p-45 + 0x1p-30;
+            if (xu < ulo - m || xu > uhi + m || vlo > xv + (fabs(vlo) + fabs(xv)) * 0x1p-45 + m)
+                continue;
+            uint32_t l, r;
+            ends_by_u(w, E, &l, &r);
+            if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) continue;
+            if (above_edge(w, E, x) <= 0) continue; /* x is not above it */
+            if (best == NONE || higher(w, E, &w->ed[best])) best = (uint32_t)e;
+        }
+        if (best != NONE) w->host[c] = w->hcyc[h_plus_u(w, best)];
+    }
+    return 0;
+}
+
+/* ---- coverage ------------------------------------------------------------------------- */
+
+/* XOR of two sorted piece lists into out (sorted); returns its length. */
+static size_t cov_xor(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
+{
+    size_t i = 0, j = 0, n = 0;
+    while (i < na || j < nb) {
+        if (j == nb || (i < na && a[i] < b[j]))
+            out[n++] = a[i++];
+        else if (i == na || b[j] < a[i])
+            out[n++] = b[j++];
+        else
+            i++, j++;
+    }
+    return n;
+}
+
+static int cmpu32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* ---- output ------------------------------------------------------------------------------ */
+
+typedef struct outb {
+    pfaces *F;
+    size_t capfc, capco, cape, caps, capfv, capcov, capn;
+} outb;
+
+static uint32_t out_id(pwork *w, outb *o, uint32_t x, uint32_t *newid)
+{
+    if (w->lg[x] != NONE) return w->lg[x];
+    if (newid[x] == NONE) {
+        if (A3_PUSH(o->F->newp, o->F->nnew, o->capn, w->lp[x])) return NONE;
+        newid[x] = NEWBASE + o->F->nnew - 1;
+    }
+    return newid[x];
+}
+
+static int out_entry(outb *o, uint32_t id, uint32_t side)
+{
+    pfaces *F = o->F;
+    if (a3_grow(&F->ent, &o->cape, F->nent + 1, sizeof *F->ent) ||
+        a3_grow(&F->side, &o->caps, F->nent + 1, sizeof *F->side))
+        return -1;
+    F->ent[F->nent] = id;
+    F->side[F->nent] = side;
+    F->nent++;
+    return 0;
+}
+
+static int out_close_cycle(outb *o)
+{
+    pfaces *F = o->F;
+    if (a3_grow(&F->cyc_off, &o->capco, F->ncyc + 2, sizeof *F->cyc_off)) return -1;
+    F->ncyc++;
+    F->cyc_off[F->ncyc] = F->nent;
+    return 0;
+}
+
+/* Writes the cycle starting at half-edge h (or the lone point x when h == NONE), turned to run
+ * counter-clockwise about n_P when the projection flips it. */
+static int out_cycle(pwork *w, outb *o, uint32_t h, uint32_t x, uint32_t *newid)
+{
+    pfaces *F = o->F;
+    uint32_t start = F->nent;
+    if (h == NONE) {
+        uint32_t id = out_id(w, o, x, newid);
+        if (id == NONE || out_entry(o, id, NONE)) return -1;
+        return out_close_cycle(o);
+    }
+    uint32_t q = h;
+    do {
+        uint32_t id = out_id(w, o, h_from(w, q), newid);
+        if (id == NONE || out_entry(o, id, w->ed[q >> 1].side)) return -1;
+        q = w->next[q];
+    } while (q != h);
+    if (w->sgnk < 0) { /* reverse: points p0..pm-1 become pm-1..p0; edge i -> side of m-2-i */
+        uint32_t m = F->nent - start, *E = F->ent + start, *S = F->side + start;
+        for (uint32_t i = 0; i < m / 2; i++) {
+            uint32_t t = E[i];
+            E[i] = E[m - 1 - i], E[m - 1 - i] = t;
+        }
+        /* sides: new edge i runs from old point m-1-i to old point m-2-i: old edge m-2-i */
+        for (uint32_t i = 0; i < (m - 1) / 2; i++) {
+            uint32_t t = S[i];
+            S[i] = S[m - 2 - i], S[m - 2 - i] = t;
+        }
+    }
+    return out_close_cycle(o);
+}
+
+/* A plane holding one piece with one cycle and nothing else: the piece is the face. */
+static int trivial_plane(const a3 *A, uint32_t P, pfaces *F)
+{
+    uint32_t pi = A->pp[A->pp_off[P]];
+    const piece *pc = &A->pc[pi];
+    uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
+    const plane3 *pl = &A->pl[P];
+    int k = plane_axis(pl), u = (k + 1) % 3, v = (k + 2) % 3;
+    i128 s = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const int64_t *p = A->g + 3 * (size_t)A->pcv[o + i];
+        const int64_t *q = A->g + 3 * (size_t)A->pcv[o + (i + 1) % n];
+        s += (i128)p[u] * q[v] - (i128)p[v] * q[u];
+    }
+    int rev = (s > 0) != (pl->n[k] > 0);
+    F->nf = 1;
+    F->ncyc = 1;
+    F->nent = n;
+    F->ncov = 1;
+    F->f_cyc = malloc(2 * sizeof *F->f_cyc);
+    F->cyc_off = malloc(2 * sizeof *F->cyc_off);
+    F->ent = malloc(n * sizeof *F->ent);
+    F->side = malloc(n * sizeof *F->side);
+    F->f_cov = malloc(2 * sizeof *F->f_cov);
+    F->cov = malloc(sizeof *F->cov);
+    if (!F->f_cyc || !F->cyc_off || !F->ent || !F->side || !F->f_cov || !F->cov) return -1;
+    F->f_cyc[0] = 0, F->f_cyc[1] = 1;
+    F->cyc_off[0] = 0, F->cyc_off[1] = n;
+    F->f_cov[0] = 0, F->f_cov[1] = 1;
+    F->cov[0] = pi;
+    F->base = NEWBASE;
+    for (uint32_t i = 0; i < n; i++) {
+        if (!rev) {
+            F->ent[i] = A->pcv[o + i];
+            F->side[i] = A->pcvp[o + i];
+        } else {
+            F->ent[i] = A->pcv[o + n - 1 - i];
+            F->side[i] = A->pcvp[o + (2 * n - 2 - i) % n];
+        }
+    }
+    return 0;
+}
+
+/* ---- one plane ------------------------------------------------------------------------- */
+
+static int plane_run(pwork *w, uint32_t P, pfaces *F)
+{
+    const a3 *A = w->A;
+    const plane3 *pl = &A->pl[P];
+    memset(F, 0, sizeof *F);
+    F->base = NEWBASE;
+    if (A->pp_off[P + 1] - A->pp_off[P] == 1 && A->cs_off[P + 1] == A->cs_off[P] &&
+        A->cp_off[P + 1] == A->cp_off[P] && A->pc[A->pp[A->pp_off[P]]].nc == 1)
+        return trivial_plane(A, P, F);
+    w->P = P;
+    w->k = plane_axis(pl);
+    w->u = (w->k + 1) % 3;
+    w->v = (w->k + 2) % 3;
+    w->sgnk = pl->n[w->k] > 0 ? 1 : -1;
+    lp_reset(w);
+    w->nsg = w->nsp = 0;
+    /* segments: the pieces' edges, the cuts, the contact points */
+    for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
+        uint32_t pi = A->pp[i];
+        const piece *pc = &A->pc[pi];
+        for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc; cy++) {
+            uint32_t o = A->pc_off[cy], n = A->pc_off[cy + 1] - o;
+            for (uint32_t j = 0; j < n; j++) {
+                uint32_t a = A->pcv[o + j], b = A->pcv[o + (j + 1) % n];
+                pseg s = {lp_global(w, a),
+                          lp_global(w, b),
+                          A->pcvp[o + j],
+                          a < b ? a : b,
+                          a < b ? b : a,
+                          pi,
+                          0,
+                          {0, 0},
+                          {0, 0}};
+                if (s.p0 == NONE || s.p1 == NONE) return -1;
+                if (A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
+            }
+        }
+    }
+    for (uint32_t i = A->cs_off[P]; i < A->cs_off[P + 1]; i++) {
+        const cseg *c = &A->cs[i];
+        pseg s = {
+            lp_global(w, c->p0), lp_global(w, c->p1), c->side, NONE, NONE, NONE, 0, {0, 0}, {0, 0}};
+        if (s.p0 == NONE || s.p1 == NONE) return -1;
+        if (A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
+    }
+    for (uint32_t i = A->cp_off[P]; i < A->cp_off[P + 1]; i++) {
+        uint32_t x = lp_global(w, A->cp[i].p);
+        pseg s = {x, x, NONE, NONE, NONE, NONE, 0, {0, 0}, {0, 0}};
+        if (x == NONE || A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
+    }
+    for (size_t i = 0; i < w->nsg; i++) {
+        pseg *s = &w->sg[i];
+        if (s->p0 != s->p1) {
+            i128 d[3];
+            cross_ll(pl->n, A->pl[s->side].n, d);
+            s->ax = axis_of(d);
+        }
+        seg_box(w, s);
+    }
+    if (sweep(w) || dedup_local(w) || make_edges(w)) return -1;
+    if (make_cycles(w)) return -1;
+    /* the points in use: ends of edges, and contact points (which may stand alone) */
+    size_t np = w->nlp;
+    if (GROW(w, used, np + 1) || GROW(w, comp, np + 1)) return -1;
+    memset(w->used, 0, np);
+    for (size_t e = 0; e < w->ned; e++) w->used[w->ed[e].a] = w->used[w->ed[e].b] = 1;
+    for (size_t i = 0; i < w->nsg; i++)
+        if (w->sg[i].p0 == w->sg[i].p1) w->used[w->sg[i].p0] = 1;
+    for (size_t p = 0; p < np; p++) w->comp[p] = (uint32_t)p;
+    for (size_t e = 0; e < w->ned; e++) a3_uf_union(w->comp, w->ed[e].a, w->ed[e].b);
+    /* components numbered in point order, each with its lowest point */
+    size_t ncomp = 0;
+    if (GROW(w, iso, np + 1)) return -1;
+    for (size_t p = 0; p < np; p++) w->iso[p] = NONE;
+    for (size_t p = 0; p < np; p++) {
+        if (!w->used[p]) continue;
+        uint32_t r = a3_uf_find(w->comp, (uint32_t)p);
+        if (w->iso[r] == NONE) {
+            if (GROW(w, low, ncomp + 1) || GROW(w, ext, ncomp + 1) || GROW(w, host, ncomp + 1))
+                return -1;
+            w->low[ncomp] = (uint32_t)p;
+            w->iso[r] = (uint32_t)ncomp++;
+        }
+        uint32_t c = w->iso[r];
+        if (lower(w, (uint32_t)p, w->low[c])) w->low[c] = (uint32_t)p;
+    }
+    if (GROW(w, tmp, np + 1)) return -1;
+    for (size_t p = 0; p < np; p++) w->tmp[p] = a3_uf_find(w->comp, (uint32_t)p);
+    for (size_t p = 0; p < np; p++) w->comp[p] = w->used[p] ? w->iso[w->tmp[p]] : NONE;
+    if (place_components(w, ncomp)) return -1;
+    /* faces: every cycle that is not a component's outside is a bounded face.  fof[cy]: the
+     * face a cycle belongs to (itself, or the face holding its component, UNB for none). */
+    size_t ncy = w->ncyc;
+    if (GROW(w, fof, ncy + 1) || GROW(w, x1, ncy + 1)) return -1;
+    for (size_t cy = 0; cy < ncy; cy++) w->fof[cy] = (uint32_t)cy, w->x1[cy] = NONE;
+    for (size_t c = 0; c < ncomp; c++)
+        if (w->ext[c] != NONE) w->x1[w->ext[c]] = (uint32_t)c; /* cycle -> its component */
+    for (size_t c = 0; c < ncomp; c++) {
+        /* resolve the host of c: up through outside cycles to a bounded face (or UNB) */
+        uint32_t h = w->host[c];
+        size_t guard = 0;
+        while (h != NONE && w->x1[h] != NONE && guard++ <= ncomp) h = w->host[w->x1[h]];
+        if (guard > ncomp) return -2;
+        w->host[c] = h == NONE ? UNB : h;
+    }
+    for (size_t c = 0; c < ncomp; c++)
+        if (w->ext[c] != NONE) w->fof[w->ext[c]] = w->host[c];
+    /* adjacency of faces across edges, then the walk from the unbounded face */
+    size_t nfn = ncy + 1; /* node ncy: UNB */
+    if (GROW(w, aoff, nfn + 2) || GROW(w, adj, 4 * w->ned + 1) || GROW(w, queue, nfn + 1) ||
+        GROW(w, covo, nfn + 1) || GROW(w, covn, nfn + 1))
+        return -1;
+    memset(w->aoff, 0, (nfn + 2) * sizeof *w->aoff);
+#define NODE(f) ((f) == UNB ? (uint32_t)ncy : (f))
+    for (size_t e = 0; e < w->ned; e++) {
+        uint32_t f1 = NODE(w->fof[w->hcyc[2 * e]]), f2 = NODE(w->fof[w->hcyc[2 * e + 1]]);
+        if (f1 == f2) continue;
+        w->aoff[f1 + 2]++;
+        w->aoff[f2 + 2]++;
+    }
+    for (size_t f = 0; f < nfn; f++) w->aoff[f + 2] += w->aoff[f + 1];
+    for (size_t e = 0; e < w->ned; e++) {
+        uint32_t f1 = NODE(w->fof[w->hcyc[2 * e]]), f2 = NODE(w->fof[w->hcyc[2 * e + 1]]);
+        if (f1 == f2) continue;
+        w->adj[2 * w->aoff[f1 + 1]] = f2, w->adj[2 * w->aoff[f1 + 1]++ + 1] = (uint32_t)e;
+        w->adj[2 * w->aoff[f2 + 1]] = f1, w->adj[2 * w->aoff[f2 + 1]++ + 1] = (uint32_t)e;
+    }
+    for (size_t f = 0; f < nfn; f++) w->covo[f] = NONE;
+    w->ncov = 0;
+    size_t qh = 0, qt = 0;
+    w->queue[qt++] = (uint32_t)ncy;
+    w->covo[ncy] = 0;
+    w->covn[ncy] = 0;
+    while (qh < qt) {
+        uint32_t f = w->queue[qh++];
+        for (uint32_t i = w->aoff[f]; i < w->aoff[f + 1]; i++) {
+            uint32_t g = w->adj[2 * i], e = w->adj[2 * i + 1];
+            const pedge *E = &w->ed[e];
+            if (GROW(w, cov, w->ncov + w->covn[f] + E->nprov + 1) ||
+                GROW(w, x2, E->nprov + w->covn[f] + 1))
+                return -1;
+            /* the edge's pieces, sorted */
+            memcpy(w->x2, w->prov + E->prov, E->nprov * sizeof *w->x2);
+            if (E->nprov > 1) qsort(w->x2, E->nprov, sizeof *w->x2, cmpu32);
+            uint32_t *out = w->cov + w->ncov;
+            size_t n = cov_xor(w->cov + w->covo[f], w->covn[f], w->x2, E->nprov, out);
+            if (w->covo[g] == NONE) {
+                w->covo[g] = (uint32_t)w->ncov;
+                w->covn[g] = (uint32_t)n;
+                w->ncov += n;
+                w->queue[qt++] = g;
+            } else if (w->covn[g] != n || memcmp(w->cov + w->covo[g], out, n * sizeof *out) != 0) {
+                return -2; /* two coverings of one face: a broken arrangement */
+            }
+        }
+    }
+    /* output: bounded faces covered by a piece, with the components they hold */
+    outb o = {F, 0, 0, 0, 0, 0, 0, 0};
+    uint32_t *newid = w->x1; /* reuse: per local point */
+    if (GROW(w, x1, np + 1)) return -1;
+    newid = w->x1;
+    for (size_t p = 0; p < np; p++) newid[p] = NONE;
+    if (a3_grow(&F->f_cyc, &o.capfc, 1, sizeof *F->f_cyc) ||
+        a3_grow(&F->f_cov, &o.capfv, 1, sizeof *F->f_cov) ||
+        a3_grow(&F->cyc_off, &o.capco, 1, sizeof *F->cyc_off))
+        return -1;
+    F->f_cyc[0] = 0, F->f_cov[0] = 0, F->cyc_off[0] = 0;
+    for (size_t cy = 0; cy < ncy; cy++) {
+        if (w->fof[cy] != cy || w->covo[cy] == NONE || w->covn[cy] == 0) continue;
+        if (out_cycle(w, &o, w->cyc_h[cy], NONE, newid)) return -1;
+        for (size_t c = 0; c < ncomp; c++) {
+            if (w->host[c] != cy) continue;
+            if (out_cycle(w, &o, w->ext[c] == NONE ? NONE : w->cyc_h[w->ext[c]], w->low[c], newid))
+                return -1;
+        }
+        for (uint32_t i = 0; i < w->covn[cy]; i++)
+            if (A3_PUSH(F->cov, F->ncov, o.capcov, w->cov[w->covo[cy] + i])) return -1;
+        if (a3_grow(&F->f_cyc, &o.capfc, F->nf + 2, sizeof *F->f_cyc) ||
+            a3_grow(&F->f_cov, &o.capfv, F->nf + 2, sizeof *F->f_cov))
+            return -1;
+        F->nf++;
+        F->f_cyc[F->nf] = F->ncyc;
+        F->f_cov[F->nf] = F->ncov;
+    }
+#undef NODE
+    return 0;
+}
+
+/* ---- all planes --------------------------------------------------------------------------- */
+
+typedef struct planesctx {
+    a3 *A;
+    const uint32_t *planes;
+    pwork *w;
+    int *rc;
+} planesctx;
+
+static void plane_item(void *vc, size_t item, int worker)
+{
+    planesctx *c = vc;
+    pwork *w = &c->w[worker];
+    uint32_t P = c->planes[item];
+    if (w->fail || a3_cancelled(c->A)) {
+        c->rc[item] = -3;
+        return;
+    }
+    c->rc[item] = plane_run(w, P, &c->A->pf[P]);
+}
+
+static void pwork_free(pwork *w)
+{
+    free(w->lp), free(w->lg), free(w->htab), free(w->hused), free(w->alias);
+    pset_free(&w->ps);
+    free(w->sg), free(w->sp), free(w->order), free(w->active), free(w->tmp);
+    free(w->ed), free(w->prov);
+    free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->cyc_h);
+    free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);
+    free(w->fof), free(w->aoff), free(w->adj), free(w->queue), free(w->covo), free(w->covn);
+    free(w->cov), free(w->x1), free(w->x2);
+}
+
+int a3_planes(a3 *A, char *err, size_t errlen)
+{
+    size_t n = 0;
+    uint32_t *planes = malloc((A->npl + 1) * sizeof *planes);
+    int *rc = calloc(A->npl + 1, sizeof *rc);
+    pwork *w = calloc((size_t)A->threads, sizeof *w);
+    A->pf = calloc(A->npl + 1, sizeof *A->pf);
+    int r = ARR_OK;
+    if (!planes || !rc || !w || !A->pf) {
+        r = ARR_ENOMEM;
+        goto done;
+    }
+    for (size_t p = 0; p < A->npl; p++)
+        if (A->pp_off[p + 1] > A->pp_off[p]) planes[n++] = (uint32_t)p;
+    for (int t = 0; t < A->threads; t++) w[t].A = A;
+    planesctx c = {A, planes, w, rc};
+    par_for(A->threads, n, plane_item, &c);
+    for (size_t i = 0; i < n && r == ARR_OK; i++) {
+        if (rc[i] == -1) r = ARR_ENOMEM;
+        if (rc[i] == -3) r = ARR_ECANCELED;
+        if (rc[i] == -2) r = ARR_EINTERNAL;
+    }
+done:
+    if (r != ARR_OK && err && errlen)
+        snprintf(err, errlen, "%s",
+                 r == ARR_ENOMEM      ? "out of memory"
+                 : r == ARR_ECANCELED ? "cancelled"
+                                      : "solids: a plane's arrangement is inconsistent (a bug)");
+    for (int t = 0; w && t < A->threads; t++) pwork_free(&w[t]);
+    free(w);
+    free(planes);
+    free(rc);
+    return r;
+}

@@ -1,0 +1,329 @@
+/* pred.c — see pred.h.
+ *
+ * Filters.  An LPI's or TPI's approximation is the exact value rounded three times (numerator,
+ * denominator, quotient), so each coordinate is within XPT_REL |x|.  A sum of k products of
+ * such coordinates with integer coefficients (themselves rounded once to doubles) is then within
+ * (XPT_REL + (k + 2) u) of the sum of the absolute values of its terms; the filters below use
+ * (XPT_REL + 16 u) times that sum, which covers every sum here with room to spare.  When the
+ * computed value is not farther from zero than that, the exact path decides.
+ */
+#include "core/pred.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+
+#define U   (DBL_EPSILON / 2)
+#define REL (XPT_REL + 16 * U)
+
+/* ---- small integer tools ---------------------------------------------------------------- */
+
+static u128 uabs128(i128 v)
+{
+    return v < 0 ? (u128)0 - (u128)v : (u128)v;
+}
+
+static u128 gcd128(u128 a, u128 b)
+{
+    while (b) {
+        u128 t = a % b;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+static int sgn128(i128 v)
+{
+    return (v > 0) - (v < 0);
+}
+
+/* ---- planes ----------------------------------------------------------------------------- */
+
+void plane_reduce(plane3 *p)
+{
+    u128 g = gcd128(gcd128(uabs128(p->n[0]), uabs128(p->n[1])), uabs128(p->n[2]));
+    g = gcd128(g, uabs128(p->d));
+    if (g > 1) {
+        for (int i = 0; i < 3; i++) p->n[i] = (int64_t)((i128)p->n[i] / (i128)g);
+        p->d /= (i128)g;
+    }
+    for (int i = 0; i < 3; i++) p->nd[i] = (double)p->n[i];
+    p->dd = (double)p->d;
+}
+
+int plane_canon(plane3 *p)
+{
+    int s = 1;
+    for (int i = 0; i < 3; i++)
+        if (p->n[i]) {
+            s = p->n[i] > 0 ? 1 : -1;
+            break;
+        }
+    if (s < 0) {
+        for (int i = 0; i < 3; i++) p->n[i] = -p->n[i], p->nd[i] = -p->nd[i];
+        p->d = -p->d;
+        p->dd = -p->dd;
+    }
+    return s;
+}
+
+int plane_axis(const plane3 *p)
+{
+    int k = 0;
+    for (int i = 1; i < 3; i++)
+        if (llabs(p->n[i]) > llabs(p->n[k])) k = i;
+    return k;
+}
+
+int plane_through(const int64_t *p, const int64_t *q, const int64_t *r, plane3 *out)
+{
+    i128 u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    i128 v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    i128 n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    if (!n[0] && !n[1] && !n[2]) return -1;
+    /* |n_i| <= 2 (2^30 + 2)^2 < 2^62: fits int64 */
+    for (int i = 0; i < 3; i++) out->n[i] = (int64_t)n[i];
+    out->d = -(n[0] * p[0] + n[1] * p[1] + n[2] * p[2]);
+    plane_reduce(out);
+    return 0;
+}
+
+int plane_vertical(const int64_t *a, const int64_t *b, int k, plane3 *out)
+{
+    int64_t d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    int i = (k + 1) % 3, j = (k + 2) % 3;
+    /* d x e_k: component i is d_j, component j is -d_i, component k is 0 */
+    out->n[i] = d[j];
+    out->n[j] = -d[i];
+    out->n[k] = 0;
+    if (!out->n[i] && !out->n[j]) return -1;
+    out->d = -((i128)out->n[0] * a[0] + (i128)out->n[1] * a[1] + (i128)out->n[2] * a[2]);
+    plane_reduce(out);
+    return 0;
+}
+
+/* n . g + d of a grid point: |.| < 2^62 2^30 3 + 2^93 < 2^95 */
+static i128 plane_eval(const plane3 *p, const int64_t *g)
+{
+    return (i128)p->n[0] * g[0] + (i128)p->n[1] * g[1] + (i128)p->n[2] * g[2] + p->d;
+}
+
+/* ---- points ----------------------------------------------------------------------------- */
+
+xpt xpt_grid(const geo *G, uint32_t v)
+{
+    xpt p = {{0, 0, 0}, v, 0, 0, PT_GRID};
+    for (int i = 0; i < 3; i++) p.x[i] = (double)G->g[3 * (size_t)v + i];
+    return p;
+}
+
+/* LPI: s_a, s_b and the homogeneous coordinates in 128 bits. */
+static void lpi_parts(const geo *G, const xpt *p, i128 *X, i128 *W)
+{
+    const int64_t *ga = G->g + 3 * (size_t)p->a, *gb = G->g + 3 * (size_t)p->b;
+    const plane3 *pl = G->pl + p->c;
+    i128 sa = plane_eval(pl, ga), sb = plane_eval(pl, gb);
+    i128 w = sa - sb;
+    for (int i = 0; i < 3; i++) X[i] = sa * gb[i] - sb * ga[i];
+    if (w < 0) {
+        w = -w;
+        for (int i = 0; i < 3; i++) X[i] = -X[i];
+    }
+    *W = w;
+}
+
+xpt xpt_lpi(const geo *G, uint32_t a, uint32_t b, uint32_t c)
+{
+    xpt p = {{0, 0, 0}, a < b ? a : b, a < b ? b : a, c, PT_LPI};
+    i128 X[3], W;
+    lpi_parts(G, &p, X, &W);
+    for (int i = 0; i < 3; i++) p.x[i] = (double)X[i] / (double)W;
+    return p;
+}
+
+static void tpi_hom(const geo *G, const xpt *p, xhom *h)
+{
+    const plane3 *A = G->pl + p->a, *B = G->pl + p->b, *C = G->pl + p->c;
+    i128 cbc[3], cca[3], cab[3];
+    cross_ll(B->n, C->n, cbc);
+    cross_ll(C->n, A->n, cca);
+    cross_ll(A->n, B->n, cab);
+    xint t;
+    xi_zero(&h->W);
+    for (int i = 0; i < 3; i++) {
+        xi_mul_i128(&t, A->n[i], cbc[i]);
+        xi_add(&h->W, &h->W, &t);
+    }
+    for (int i = 0; i < 3; i++) {
+        xi_zero(&h->X[i]);
+        xi_mul_i128(&t, A->d, cbc[i]);
+        xi_add(&h->X[i], &h->X[i], &t);
+        xi_mul_i128(&t, B->d, cca[i]);
+        xi_add(&h->X[i], &h->X[i], &t);
+        xi_mul_i128(&t, C->d, cab[i]);
+        xi_add(&h->X[i], &h->X[i], &t);
+        xi_neg(&h->X[i]);
+    }
+    if (h->W.neg) {
+        xi_neg(&h->W);
+        for (int i = 0; i < 3; i++) xi_neg(&h->X[i]);
+    }
+}
+
+xpt xpt_tpi(const geo *G, uint32_t pa, uint32_t pb, uint32_t pc)
+{
+    xpt p = {{0, 0, 0}, pa, pb, pc, PT_TPI};
+    xhom h;
+    tpi_hom(G, &p, &h);
+    double w = xi_to_double(&h.W);
+    for (int i = 0; i < 3; i++) p.x[i] = xi_to_double(&h.X[i]) / w;
+    return p;
+}
+
+void xpt_hom(const geo *G, const xpt *p, xhom *h)
+{
+    if (p->kind == PT_GRID) {
+        for (int i = 0; i < 3; i++) xi_set_i64(&h->X[i], G->g[3 * (size_t)p->a + i]);
+        xi_set_i64(&h->W, 1);
+    } else if (p->kind == PT_LPI) {
+        i128 X[3], W;
+        lpi_parts(G, p, X, &W);
+        for (int i = 0; i < 3; i++) xi_set_i128(&h->X[i], X[i]);
+        xi_set_i128(&h->W, W);
+    } else {
+        tpi_hom(G, p, h);
+    }
+}
+
+/* ---- predicates ------------------------------------------------------------------------- */
+
+static int sign_xint_sum_i128(i128 a, i128 b, i128 c, i128 d)
+{
+    /* sign(a * b - c * d) */
+    xint x, y;
+    xi_mul_i128(&x, a, b);
+    xi_mul_i128(&y, c, d);
+    return xi_cmp(&x, &y);
+}
+
+int orient_plane(const geo *G, const xpt *p, uint32_t pl)
+{
+    const plane3 *P = G->pl + pl;
+    if (p->kind == PT_GRID) return sgn128(plane_eval(P, G->g + 3 * (size_t)p->a));
+    if (p->kind == PT_LPI) {
+        if (p->c == pl) return 0;
+        /* on the line ab: o = (s_a o_b - s_b o_a) / (s_a - s_b), s about plane c, o about pl */
+        const int64_t *ga = G->g + 3 * (size_t)p->a, *gb = G->g + 3 * (size_t)p->b;
+        i128 oa = plane_eval(P, ga), ob = plane_eval(P, gb);
+        if (oa == 0 && ob == 0) return 0;
+        const plane3 *C = G->pl + p->c;
+        i128 sa = plane_eval(C, ga), sb = plane_eval(C, gb);
+        int sw = sgn128(sa - sb);
+        double t1 = (double)sa * (double)ob, t2 = (double)sb * (double)oa;
+        double v = t1 - t2, e = (fabs(t1) + fabs(t2)) * (8 * U);
+        if (v > e) return sw;
+        if (v < -e) return -sw;
+        return sign_xint_sum_i128(sa, ob, sb, oa) * sw;
+    }
+    if (p->a == pl || p->b == pl || p->c == pl) return 0;
+    {
+        double t0 = P->nd[0] * p->x[0], t1 = P->nd[1] * p->x[1], t2 = P->nd[2] * p->x[2];
+        double v = t0 + t1 + t2 + P->dd;
+        double e = (fabs(t0) + fabs(t1) + fabs(t2) + fabs(P->dd)) * REL;
+        if (v > e) return 1;
+        if (v < -e) return -1;
+    }
+    xhom h;
+    xint s, t, c;
+    xpt_hom(G, p, &h);
+    xi_zero(&s);
+    for (int i = 0; i < 3; i++) {
+        xi_set_i64(&c, P->n[i]);
+        xi_mul(&t, &c, &h.X[i]);
+        xi_add(&s, &s, &t);
+    }
+    xi_set_i128(&c, P->d);
+    xi_mul(&t, &c, &h.W);
+    xi_add(&s, &s, &t);
+    return xi_sign(&s);
+}
+
+int cmp_coord(const geo *G, const xpt *p, const xpt *q, int k)
+{
+    if (p->kind == PT_GRID && q->kind == PT_GRID) {
+        int64_t a = G->g[3 * (size_t)p->a + k], b = G->g[3 * (size_t)q->a + k];
+        return (a > b) - (a < b);
+    }
+    {
+        double a = p->x[k], b = q->x[k];
+        double e = (p->kind == PT_GRID ? 0 : fabs(a)) + (q->kind == PT_GRID ? 0 : fabs(b));
+        e = e * (XPT_REL + 4 * U);
+        double v = a - b;
+        if (v > e) return 1;
+        if (v < -e) return -1;
+    }
+    if (p->kind == PT_LPI && q->kind == PT_GRID) {
+        i128 X[3], W;
+        lpi_parts(G, p, X, &W);
+        return sgn128(X[k] - W * G->g[3 * (size_t)q->a + k]);
+    }
+    if (q->kind == PT_LPI && p->kind == PT_GRID) return -cmp_coord(G, q, p, k);
+    xhom hp, hq;
+    xint l, r;
+    xpt_hom(G, p, &hp);
+    xpt_hom(G, q, &hq);
+    xi_mul(&l, &hp.X[k], &hq.W);
+    xi_mul(&r, &hq.X[k], &hp.W);
+    return xi_cmp(&l, &r);
+}
+
+int xpt_equal(const geo *G, const xpt *p, const xpt *q)
+{
+    if (p->kind == q->kind && p->a == q->a && p->b == q->b && p->c == q->c) return 1;
+    if (p->kind == PT_GRID && q->kind == PT_GRID) return 0; /* vertices are unique points */
+    for (int k = 0; k < 3; k++)
+        if (cmp_coord(G, p, q, k) != 0) return 0;
+    return 1;
+}
+
+void cross_ll(const int64_t *a, const int64_t *b, i128 *out)
+{
+    out[0] = (i128)a[1] * b[2] - (i128)a[2] * b[1];
+    out[1] = (i128)a[2] * b[0] - (i128)a[0] * b[2];
+    out[2] = (i128)a[0] * b[1] - (i128)a[1] * b[0];
+}
+
+int dot_sign(const int64_t *a, const i128 *b)
+{
+    double t0 = (double)a[0] * (double)b[0], t1 = (double)a[1] * (double)b[1],
+           t2 = (double)a[2] * (double)b[2];
+    double v = t0 + t1 + t2, e = (fabs(t0) + fabs(t1) + fabs(t2)) * (8 * U);
+    if (v > e) return 1;
+    if (v < -e) return -1;
+    xint s, t;
+    xi_zero(&s);
+    for (int i = 0; i < 3; i++) {
+        xi_mul_i128(&t, a[i], b[i]);
+        xi_add(&s, &s, &t);
+    }
+    return xi_sign(&s);
+}
+
+int det3_sign(const int64_t *a, const int64_t *b, const i128 *c)
+{
+    i128 ab[3];
+    cross_ll(a, b, ab); /* det(a, b, c) = (a x b) . c */
+    double t0 = (double)ab[0] * (double)c[0], t1 = (double)ab[1] * (double)c[1],
+           t2 = (double)ab[2] * (double)c[2];
+    double v = t0 + t1 + t2, e = (fabs(t0) + fabs(t1) + fabs(t2)) * (8 * U);
+    if (v > e) return 1;
+    if (v < -e) return -1;
+    xint s, t;
+    xi_zero(&s);
+    for (int i = 0; i < 3; i++) {
+        xi_mul_i128(&t, ab[i], c[i]);
+        xi_add(&s, &s, &t);
+    }
+    return xi_sign(&s);
+}

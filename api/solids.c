@@ -13,23 +13,17 @@
  *   parse   the shape of the request, with the JSON path of every problem (422): types, vertex
  *           indices in range, finite coordinates, cycles of at least 3 indices, the limits below;
  *           copies each solid into a `solid` (core/solid.h) so the JSON tree can be freed.
- *   check   (the daemon's submit, and again at run) the geometry: solid_check() of each solid at
- *           the run's precision, or for a soup the per-face checks of solid_check done here
- *           (3 distinct vertices, non-zero area, planarity: the same tolerances), since a soup
- *           need not be closed.  The first error is the 422, its message rewritten from
- *           solid_check's "solids[2]: face 5: ..." to the JSON path "solids[2].FV[5]: ...".
+ *   check   (the daemon's submit, and again at run) the geometry: solid_check() of each solid,
+ *           or solid_check_faces() of a soup (no closedness asked), at the grid step.  The
+ *           first error is the 422; its location (solid_report's info: a face or a vertex)
+ *           becomes the JSON path, "solids[2].FV[5]: ...".
  *   run     check again keeping solid_check's fixed copies (orientation made consistent and
- *           outward) and its warnings, arr3_build() them, write the complex (api/larjson3.c)
- *           with the warnings in stats.warnings.
+ *           outward) and its warnings (told apart by info, never by their text), arr3_build()
+ *           them, write the complex (api/larjson3.c) with the warnings in stats.warnings.
  *
- * The precision: options.precision, or else the rule of arr3.h's default (the power of two
- * closest above extent * 2^-ARR3_GRID_BITS, extent the largest side of the box of every V),
- * computed here and passed to the core, so the solids are checked at the grid step the core
- * snaps them to.  A precision finer than extent * 2^-ARR3_GRID_BITS is refused at parse.
- *
- * solid_report does not say which of its messages are warnings; solid.c writes exactly two
- * kinds, starting "orientation inconsistent" and "inward oriented" (is_warning() below), and
- * the tests of this file pin them.
+ * The grid step: arr3_solids_step() of the solids and options.precision, at parse; its refusal
+ * (a precision finer than the input allows) is the 422 at options.precision.  The rule lives in
+ * the core only; here it is called, never repeated.
  *
  * Limits (422 naming the key): the #defines below; ARR3_MAX_FACES faces in all.
  *
@@ -54,15 +48,14 @@
 #define SOLIDS_MAX_INDICES    100000000u     /* vertex indices in all cycles together */
 #define SOLIDS_MAX_MEMBERSHIP 200000000u     /* cells x solids of an op's membership matrix */
 #define SOLIDS_MAX_WARNINGS   64 /* stats.warnings: the last one counts those left out */
-#define GRID_LIMIT            4611686018427387904.0 /* 2^62: |x| / precision below (solid.c's) */
 #define WARN_LEN              200
 
 typedef struct solids_req {
     solid *s; /* owned: ns solids; with soup, the face soup as s[0] (ns == 1) */
     size_t ns;
     int soup;         /* the request gave "faces" */
-    double precision; /* options.precision; 0: the default (precision_of) */
-    double extent;    /* largest side of the box of every vertex (0 without vertices) */
+    double precision; /* options.precision; 0: the default */
+    double step;      /* the grid step the core will use (arr3_solids_step) */
     unsigned fields;  /* API_F3_* */
     int has_op;       /* the request gave "op" */
     bool_expr op;     /* its program (api/boolop.c) */
@@ -325,35 +318,6 @@ too_many:
                     path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
 }
 
-/* Largest side of the box of every vertex of every solid. */
-static double extent_of(const solids_req *r)
-{
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    double e = 0;
-    for (size_t i = 0; i < r->ns; i++)
-        for (size_t v = 0; v < r->s[i].nv; v++)
-            for (int a = 0; a < 3; a++) {
-                double x = r->s[i].V[3 * v + a];
-                lo[a] = x < lo[a] ? x : lo[a];
-                hi[a] = x > hi[a] ? x : hi[a];
-            }
-    for (int a = 0; a < 3; a++)
-        if (hi[a] >= lo[a] && hi[a] - lo[a] > e) e = hi[a] - lo[a];
-    return isfinite(e) ? e : DBL_MAX;
-}
-
-/* The grid step of the run: the option, or arr3.h's default rule. */
-static double precision_of(const solids_req *r)
-{
-    double x;
-    int ex;
-    if (r->precision > 0) return r->precision;
-    if (!(r->extent > 0)) return 1; /* no extent: nothing to snap; any step checks the same */
-    x = ldexp(r->extent, -ARR3_GRID_BITS);
-    if (!(x >= DBL_MIN)) return DBL_MIN; /* as the core floors its own default */
-    return frexp(x, &ex) == 0.5 ? x : ldexp(1.0, ex);
-}
-
 void api_solids_free(void *parsed)
 {
     solids_req *r = parsed;
@@ -439,13 +403,12 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
         if (rc != API_OK) goto fail;
         r->has_op = 1;
     }
-    r->extent = extent_of(r);
-    if (r->precision > 0 && !(r->extent / r->precision <= ldexp(1.0, ARR3_GRID_BITS))) {
-        rc = api_fail(err, API_EINVALID,
-                      "options.precision: %g is finer than the input allows: its extent %g "
-                      "divided by the precision must be at most 2^%d",
-                      r->precision, r->extent, ARR3_GRID_BITS);
-        goto fail;
+    {
+        char msg[API_ERRMAX];
+        if (arr3_solids_step(r->s, r->ns, r->precision, &r->step, msg, sizeof msg) != ARR_OK) {
+            rc = api_fail(err, API_EINVALID, "options.%s", msg); /* "precision: ..." */
+            goto fail;
+        }
     }
     *parsed = r;
     return API_OK;
@@ -456,44 +419,29 @@ fail:
 
 /* ---- the geometry, checked ------------------------------------------------------------------ */
 
-/* The text of a solid_check message after its "label: " (msg itself when it has none). */
-static const char *after_label(const char *msg, const char *label)
+/* A solid_check message as a JSON path message: about face f of solids[i] it reads
+ * "solids[i].FV[f]: what", about vertex v "solids[i].V[v]: what", about hole h of face f
+ * "solids[i].holes.f[h]: what", else "solids[i]: what" (label is "solids[i]" or "faces"). */
+static void json_path_message(const solid_report *rep, size_t m, const char *label, char *out,
+                              size_t cap)
 {
-    size_t n = strlen(label);
-    if (strncmp(msg, label, n) == 0 && msg[n] == ':' && msg[n + 1] == ' ') return msg + n + 2;
-    return msg;
+    const solid_msg_info *in = &rep->info[m];
+    const char *what = rep->msg[m] + in->what;
+    if (in->at == SOLID_AT_FACE)
+        snprintf(out, cap, "%s.FV[%zu]: %s", label, in->index, what);
+    else if (in->at == SOLID_AT_VERTEX)
+        snprintf(out, cap, "%s.V[%zu]: %s", label, in->index, what);
+    else if (in->at == SOLID_AT_HOLE)
+        snprintf(out, cap, "%s.holes.%zu[%zu]: %s", label, in->index, in->sub, what);
+    else
+        snprintf(out, cap, "%s: %s", label, what);
 }
 
-static int is_warning(const char *text)
-{
-    return strncmp(text, "orientation inconsistent", 24) == 0 ||
-           strncmp(text, "inward oriented", 15) == 0;
-}
-
-/* "face 5: rest" -> "<label>.FV[5]: rest", "vertex 7: rest" -> "<label>.V[7]: rest",
- * anything else -> "<label>: text". */
-static void json_path_message(const char *label, const char *text, char *out, size_t cap)
-{
-    static const struct {
-        const char *word, *key;
-    } map[] = {{"face ", "FV"}, {"vertex ", "V"}};
-    for (size_t m = 0; m < sizeof map / sizeof *map; m++) {
-        size_t n = strlen(map[m].word), d = 0;
-        if (strncmp(text, map[m].word, n) != 0) continue;
-        while (text[n + d] >= '0' && text[n + d] <= '9' && d < 12) d++;
-        if (d == 0 || text[n + d] != ':' || text[n + d + 1] != ' ') continue;
-        snprintf(out, cap, "%s.%s[%.*s]: %s", label, map[m].key, (int)d, text + n,
-                 text + n + d + 2);
-        return;
-    }
-    snprintf(out, cap, "%s: %s", label, text);
-}
-
-static void warn_add(warn_list *w, const char *label, const char *text)
+static void warn_add(warn_list *w, const solid_report *rep, size_t m, const char *label)
 {
     w->total++;
     if (w->n < SOLIDS_MAX_WARNINGS - 1) {
-        json_path_message(label, text, w->msg[w->n], WARN_LEN);
+        json_path_message(rep, m, label, w->msg[w->n], WARN_LEN);
         w->ptr[w->n] = w->msg[w->n];
         w->n++;
     }
@@ -509,31 +457,37 @@ static void warn_finish(warn_list *w)
     }
 }
 
-/* solid_check of solids[i]; the fixed copy into *fixed (may be NULL), warnings into w (may be
- * NULL). */
-static int check_solid(const solid *s, size_t i, double p, solid *fixed, warn_list *w,
+/* solid_check (or, for the soup, solid_check_faces) of solids[i] at the grid step p; the fixed
+ * copy into *fixed (may be NULL), warnings into w (may be NULL).  The first error is the 422. */
+static int check_solid(const solid *s, size_t i, int soup, double p, solid *fixed, warn_list *w,
                        api_error *err)
 {
     char label[32], where[API_ERRMAX];
     solid_report *rep = malloc(sizeof *rep);
-    const char *first = NULL;
     int rc = API_OK;
     if (!rep) return api_fail(err, API_ENOMEM, "out of memory");
-    snprintf(label, sizeof label, "solids[%zu]", i);
-    if (solid_check(s, p, label, rep, fixed) == 0) {
-        for (size_t m = 0; w && m < rep->nmsg; m++)
-            warn_add(w, label, after_label(rep->msg[m], label));
+    if (soup)
+        snprintf(label, sizeof label, "faces");
+    else
+        snprintf(label, sizeof label, "solids[%zu]", i);
+    int bad = soup ? solid_check_faces(s, p, label, rep) : solid_check(s, p, label, rep, fixed);
+    if (bad == 0) {
+        for (size_t m = 0; w && m < rep->nmsg; m++) warn_add(w, rep, m, label);
         if (w) w->total += rep->warnings > rep->nmsg ? rep->warnings - rep->nmsg : 0;
         goto out;
     }
-    for (size_t m = 0; m < rep->nmsg && !first; m++)
-        if (!is_warning(after_label(rep->msg[m], label))) first = after_label(rep->msg[m], label);
-    if (!first) first = "invalid solid";
-    if (strstr(first, "out of memory")) {
+    size_t first = rep->nmsg;
+    for (size_t m = 0; m < rep->nmsg && first == rep->nmsg; m++)
+        if (!rep->info[m].warning) first = m;
+    if (first == rep->nmsg) {
+        rc = api_fail(err, API_EINVALID, "%s: invalid solid", label);
+        goto out;
+    }
+    if (strcmp(rep->msg[first] + rep->info[first].what, "out of memory") == 0) {
         rc = api_fail(err, API_ENOMEM, "out of memory while checking %s", label);
         goto out;
     }
-    json_path_message(label, first, where, sizeof where);
+    json_path_message(rep, first, label, where, sizeof where);
     if (rep->errors > 1)
         rc = api_fail(err, API_EINVALID, "%s (and %zu more errors in %s)", where, rep->errors - 1,
                       label);
@@ -544,130 +498,15 @@ out:
     return rc;
 }
 
-static void sub3(const double *a, const double *b, double *d)
+/* Checks the geometry at the grid step; fixed (ns entries, may be NULL) gets solid_check's
+ * fixed copies, w (may be NULL) the warnings. */
+static int validate(const solids_req *r, solid *fixed, warn_list *w, const atomic_int *cancel,
+                    api_error *err)
 {
-    d[0] = a[0] - b[0];
-    d[1] = a[1] - b[1];
-    d[2] = a[2] - b[2];
-}
-
-/* Distinct grid points among the vertices of cycle k of s, counted up to 3. */
-static int cycle_distinct(const solid *s, const int64_t *g, size_t k)
-{
-    const int64_t *u0 = NULL, *u1 = NULL;
-    for (uint32_t i = s->cyc_off[k]; i < s->cyc_off[k + 1]; i++) {
-        const int64_t *u = g + 3 * (size_t)s->cyc[i];
-        if (!u0) {
-            u0 = u;
-        } else if (memcmp(u, u0, 3 * sizeof *u) && (!u1 || memcmp(u, u1, 3 * sizeof *u))) {
-            if (u1) return 3;
-            u1 = u;
-        }
-    }
-    return u0 ? (u1 ? 2 : 1) : 0;
-}
-
-/* The per-face checks of solid_check (solid.c's stage "faces", same tolerances) on a soup. */
-static int check_soup(const solid *s, double p, api_error *err)
-{
-    int64_t *g = malloc((s->nv ? 3 * s->nv : 1) * sizeof *g);
-    const double *V = s->V;
-    int rc = API_OK;
-    if (!g) return api_fail(err, API_ENOMEM, "out of memory while checking the faces");
-    for (size_t v = 0; v < s->nv; v++)
-        for (int a = 0; a < 3; a++) {
-            double x = V[3 * v + a];
-            if (!(fabs(x) / p < GRID_LIMIT)) {
-                rc = api_fail(err, API_EINVALID,
-                              "faces.V[%zu][%d]: %.17g is too large for the precision %g", v, a, x,
-                              p);
-                goto out;
-            }
-            g[3 * v + a] = (int64_t)floor(x / p + 0.5);
-        }
-    for (size_t f = 0; f < s->nf; f++) {
-        size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
-        for (size_t k = k0; k < k1; k++)
-            if (cycle_distinct(s, g, k) < 3) {
-                if (k == k0)
-                    rc = api_fail(err, API_EINVALID,
-                                  "faces.FV[%zu]: fewer than 3 distinct vertices (at precision "
-                                  "%g)",
-                                  f, p);
-                else
-                    rc = api_fail(err, API_EINVALID,
-                                  "faces.holes.%zu[%zu]: fewer than 3 distinct vertices (at "
-                                  "precision %g)",
-                                  f, k - k0 - 1, p);
-                goto out;
-            }
-        /* Newell normal of the outer cycle about its first vertex */
-        uint32_t lo = s->cyc_off[k0], hi = s->cyc_off[k0 + 1];
-        const double *o = V + 3 * (size_t)s->cyc[lo];
-        double n[3] = {0, 0, 0}, bmin[3], bmax[3], m[3] = {0, 0, 0}, worst = 0, len, diag;
-        uint32_t wv = 0;
-        for (int a = 0; a < 3; a++) bmin[a] = bmax[a] = o[a];
-        for (uint32_t i = lo; i < hi; i++) {
-            const double *x = V + 3 * (size_t)s->cyc[i];
-            const double *y = V + 3 * (size_t)s->cyc[i + 1 < hi ? i + 1 : lo];
-            double dx[3], dy[3];
-            sub3(x, o, dx);
-            sub3(y, o, dy);
-            n[0] += dx[1] * dy[2] - dx[2] * dy[1];
-            n[1] += dx[2] * dy[0] - dx[0] * dy[2];
-            n[2] += dx[0] * dy[1] - dx[1] * dy[0];
-            for (int a = 0; a < 3; a++) {
-                bmin[a] = x[a] < bmin[a] ? x[a] : bmin[a];
-                bmax[a] = x[a] > bmax[a] ? x[a] : bmax[a];
-            }
-        }
-        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        diag = sqrt((bmax[0] - bmin[0]) * (bmax[0] - bmin[0]) +
-                    (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
-                    (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
-        if (!(len / 2 > p * diag / 2)) {
-            rc = api_fail(err, API_EINVALID,
-                          "faces.FV[%zu]: zero area (%.3g, no wider than the precision %g)", f,
-                          len / 2, p);
-            goto out;
-        }
-        /* the plane through the mean of all the face's vertices */
-        size_t cnt = s->cyc_off[k1] - s->cyc_off[k0];
-        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
-            double d[3];
-            sub3(V + 3 * (size_t)s->cyc[i], o, d);
-            for (int a = 0; a < 3; a++) m[a] += d[a];
-        }
-        for (int a = 0; a < 3; a++) m[a] = o[a] + m[a] / (double)cnt;
-        for (uint32_t i = s->cyc_off[k0]; i < s->cyc_off[k1]; i++) {
-            double d[3], dist;
-            sub3(V + 3 * (size_t)s->cyc[i], m, d);
-            dist = fabs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len;
-            if (dist > worst) worst = dist, wv = s->cyc[i];
-        }
-        if (worst > p) {
-            rc = api_fail(err, API_EINVALID,
-                          "faces.FV[%zu]: not planar (vertex %u is %.3g from its plane, "
-                          "precision %g)",
-                          f, wv, worst, p);
-            goto out;
-        }
-    }
-out:
-    free(g);
-    return rc;
-}
-
-/* Checks the geometry at precision p; fixed (ns entries, may be NULL) gets solid_check's fixed
- * copies, w (may be NULL) the warnings. */
-static int validate(const solids_req *r, double p, solid *fixed, warn_list *w,
-                    const atomic_int *cancel, api_error *err)
-{
-    if (r->soup) return check_soup(&r->s[0], p, err);
     for (size_t i = 0; i < r->ns; i++) {
         int rc;
         if (cancel && atomic_load(cancel)) return api_fail(err, API_ECANCELED, "canceled");
-        rc = check_solid(&r->s[i], i, p, fixed ? &fixed[i] : NULL, w, err);
+        rc = check_solid(&r->s[i], i, r->soup, r->step, fixed ? &fixed[i] : NULL, w, err);
         if (rc != API_OK) return rc;
     }
     return API_OK;
@@ -676,15 +515,14 @@ static int validate(const solids_req *r, double p, solid *fixed, warn_list *w,
 int api_solids_check(const void *parsed, api_error *err)
 {
     const solids_req *r = parsed;
-    return validate(r, precision_of(r), NULL, NULL, NULL, err);
+    return validate(r, NULL, NULL, NULL, err);
 }
 
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
 {
     static const solid no_solid;
     const solids_req *r = parsed;
-    double p = precision_of(r);
-    arr3_opts ao = {.precision = p,
+    arr3_opts ao = {.precision = r->step,
                     .threads = ro->threads,
                     .cancel = ro->cancel,
                     .progress = ro->progress,
@@ -702,7 +540,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
         goto out;
     }
-    rc = validate(r, p, fixed, w, ro->cancel, err);
+    rc = validate(r, r->soup ? NULL : fixed, w, ro->cancel, err);
     if (rc != API_OK) goto out;
     warn_finish(w);
     if (r->soup)
@@ -713,7 +551,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
-    if (!(c.stats.precision > 0)) c.stats.precision = p; /* no faces: the core snapped nothing */
+    if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         if (c.nsolids && c.nc > SOLIDS_MAX_MEMBERSHIP / c.nsolids) {

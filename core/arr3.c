@@ -621,11 +621,8 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
     if (!A->solid_face_off) return seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
     if (!nfaces) return ARR_OK;
-    double ext = 0;
-    for (int a = 0; a < 3; a++)
-        if (hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
     double step;
-    if ((rc = arr3_grid_step(ext, A->o->precision, &step, err, el)) != ARR_OK) return rc;
+    if ((rc = arr3_solids_step(solids, ns, A->o->precision, &step, err, el)) != ARR_OK) return rc;
     A->step = step;
     A->st->precision = step;
     for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
@@ -762,6 +759,25 @@ int arr3_grid_step(double extent, double precision, double *step, char *err, siz
                       precision, extent, ARR3_GRID_BITS);
     *step = precision;
     return ARR_OK;
+}
+
+int arr3_solids_step(const solid *s, size_t n, double precision, double *step, char *err,
+                     size_t errlen)
+{
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    double ext = 0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t v = 0; v < s[i].nv; v++)
+            for (int a = 0; a < 3; a++) {
+                double x = s[i].V[3 * v + a];
+                if (!isfinite(x)) continue;
+                if (x < lo[a]) lo[a] = x;
+                if (x > hi[a]) hi[a] = x;
+            }
+    for (int a = 0; a < 3; a++)
+        if (hi[a] >= lo[a] && hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
+    if (!isfinite(ext)) ext = DBL_MAX;
+    return arr3_grid_step(ext, precision, step, err, errlen);
 }
 
 /* ------------------------------------------------------------------ pairs */

@@ -100,6 +100,11 @@ typedef struct lar3 {
  * lives: the API checks solids at the step this returns. */
 int arr3_grid_step(double extent, double precision, double *step, char *err, size_t errlen);
 
+/* The same for solids s[0..n) (borrowed): extent is the largest side of the box of every vertex
+ * of every solid (a non-finite coordinate is left to the checks: it is skipped here). */
+int arr3_solids_step(const solid *s, size_t n, double precision, double *step, char *err,
+                     size_t errlen);
+
 /* Builds the arrangement of ns solids (borrowed; each closed and outward oriented, as
  * solid_check()'s fixed copy) or, with soup != 0, of the faces of all of them taken one by one
  * (no closedness assumed, any orientation).  Returns ARR_OK and fills *out, or an ARR_* code with

@@ -18,9 +18,12 @@
  *             between merged-equal vertices is no edge).  A cycle needs 3 distinct merged
  *             vertices.  The Newell normal of the outer cycle gives the plane and the area;
  *             a face is zero-area when its area is at most precision * (box diagonal) / 2 — a
- *             triangle whose height is one grid step — and not planar when a vertex of any of
- *             its cycles is farther than the precision from the plane through the mean of its
- *             vertices.  These two are the only tolerances, and both are the precision.
+ *             triangle whose height is one grid step — an error; and a face one of whose
+ *             vertices (of any cycle) is farther than the precision from the plane through the
+ *             mean of its vertices gets a warning, "not planar ...: split into triangles": the
+ *             3D pipeline splits every face that is not exactly planar on the grid (see
+ *             core/arr3.h), and says so here only where the input is not planar within the
+ *             precision, which a user would want to know.
  *   edges     the half-edges, keyed by their undirected merged vertex pair, are sorted (qsort,
  *             n log n): a key used once is an open edge, more than twice a non-manifold one.
  *   orient    faces paired across each manifold edge must walk it in opposite directions.  A
@@ -100,7 +103,15 @@ typedef struct ck {
     signed char *flip; /* nf: 1 when the fixed copy reverses the face */
 } ck;
 
-__attribute__((format(printf, 3, 4))) static void note(ck *c, int error, const char *fmt, ...)
+/* Records a message: error or warning, about the whole solid (at SOLID_AT_SOLID), face `index`
+ * or vertex `index`.  The text is "label: face 5: what" (or "vertex 5: ", or nothing); info
+ * says the same as fields, so that callers never read the text to tell them apart. */
+__attribute__((format(printf, 6, 7))) static void note_at(ck *c, int error, int at, size_t index,
+                                                          size_t sub, const char *fmt, ...);
+#define note(c, error, at, index, ...) note_at(c, error, at, index, 0, __VA_ARGS__)
+
+__attribute__((format(printf, 6, 7))) static void note_at(ck *c, int error, int at, size_t index,
+                                                          size_t sub, const char *fmt, ...)
 {
     solid_report *r = c->rep;
     if (error)
@@ -108,10 +119,24 @@ __attribute__((format(printf, 3, 4))) static void note(ck *c, int error, const c
     else
         r->warnings++;
     if (r->nmsg >= SOLID_MAX_MESSAGES) return;
+    solid_msg_info *in = &r->info[r->nmsg];
     char *m = r->msg[r->nmsg++];
     size_t cap = sizeof r->msg[0];
     int k = snprintf(m, cap, "%s: ", c->label);
-    if (k < 0 || (size_t)k >= cap) return;
+    in->warning = !error;
+    in->at = (uint8_t)at;
+    in->index = index;
+    in->sub = sub;
+    if (k >= 0 && (size_t)k < cap && at == SOLID_AT_HOLE)
+        k += snprintf(m + k, cap - (size_t)k, "face %zu: hole %zu: ", index, sub + 1);
+    else if (k >= 0 && (size_t)k < cap && at != SOLID_AT_SOLID)
+        k += snprintf(m + k, cap - (size_t)k, "%s %zu: ", at == SOLID_AT_FACE ? "face" : "vertex",
+                      index);
+    if (k < 0 || (size_t)k >= cap) {
+        in->what = (uint16_t)(cap - 1);
+        return;
+    }
+    in->what = (uint16_t)k;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(m + k, cap - (size_t)k, fmt, ap);
@@ -130,39 +155,41 @@ static int check_shape(ck *c)
 {
     const solid *s = c->s;
     if (s->nf == 0) {
-        note(c, 1, "no faces");
+        note(c, 1, SOLID_AT_SOLID, 0, "no faces");
         return -1;
     }
     if (s->nv > NONE || s->ncyc >= NONE || s->nf > s->ncyc || !s->face_off || !s->cyc_off ||
         (s->nv && !s->V)) {
-        note(c, 1, "malformed solid (counts %zu V, %zu faces, %zu cycles, or missing arrays)",
-             s->nv, s->nf, s->ncyc);
+        note(c, 1, SOLID_AT_SOLID, 0,
+             "malformed solid (counts %zu V, %zu faces, %zu cycles, or missing arrays)", s->nv,
+             s->nf, s->ncyc);
         return -1;
     }
     if (s->face_off[0] != 0 || s->face_off[s->nf] != s->ncyc || s->cyc_off[0] != 0) {
-        note(c, 1, "malformed solid (face_off or cyc_off do not start at 0 and end at ncyc)");
+        note(c, 1, SOLID_AT_SOLID, 0,
+             "malformed solid (face_off or cyc_off do not start at 0 and end at ncyc)");
         return -1;
     }
     for (size_t f = 0; f < s->nf; f++)
         if (s->face_off[f + 1] <= s->face_off[f]) {
-            note(c, 1, "face %zu: malformed (no outer cycle)", f);
+            note(c, 1, SOLID_AT_FACE, f, "malformed (no outer cycle)");
             return -1;
         }
     for (size_t k = 0; k < s->ncyc; k++)
         if (s->cyc_off[k + 1] < s->cyc_off[k]) {
-            note(c, 1, "malformed solid (cyc_off decreases at cycle %zu)", k);
+            note(c, 1, SOLID_AT_SOLID, 0, "malformed solid (cyc_off decreases at cycle %zu)", k);
             return -1;
         }
     if (s->cyc_off[s->ncyc] && !s->cyc) {
-        note(c, 1, "malformed solid (no cyc array)");
+        note(c, 1, SOLID_AT_SOLID, 0, "malformed solid (no cyc array)");
         return -1;
     }
     int bad = 0;
     for (size_t f = 0; f < s->nf; f++)
         for (uint32_t i = s->cyc_off[s->face_off[f]]; i < s->cyc_off[s->face_off[f + 1]]; i++)
             if (s->cyc[i] >= s->nv) {
-                note(c, 1, "face %zu: vertex index %u out of range (%zu vertices)", f, s->cyc[i],
-                     s->nv);
+                note(c, 1, SOLID_AT_FACE, f, "vertex index %u out of range (%zu vertices)",
+                     s->cyc[i], s->nv);
                 bad = 1;
                 break;
             }
@@ -170,12 +197,12 @@ static int check_shape(ck *c)
         const double *x = vert(c, (uint32_t)v);
         for (int a = 0; a < 3; a++)
             if (!isfinite(x[a])) {
-                note(c, 1, "vertex %zu: coordinate %d is not finite", v, a);
+                note(c, 1, SOLID_AT_VERTEX, v, "coordinate %d is not finite", a);
                 bad = 1;
                 break;
             } else if (!(fabs(x[a]) / c->p < GRID_LIMIT)) {
-                note(c, 1, "vertex %zu: coordinate %.17g is too large for precision %g", v, x[a],
-                     c->p);
+                note(c, 1, SOLID_AT_VERTEX, v, "coordinate %.17g is too large for precision %g",
+                     x[a], c->p);
                 bad = 1;
                 break;
             }
@@ -268,10 +295,10 @@ static int check_faces(ck *c)
         for (size_t k = k0; k < k1; k++)
             if (cycle_distinct(c, k) < 3) {
                 if (k == k0)
-                    note(c, 1, "face %zu: fewer than 3 distinct vertices (at precision %g)", f,
+                    note(c, 1, SOLID_AT_FACE, f, "fewer than 3 distinct vertices (at precision %g)",
                          c->p);
                 else
-                    note(c, 1, "face %zu: hole %zu has fewer than 3 distinct vertices", f, k - k0);
+                    note_at(c, 1, SOLID_AT_HOLE, f, k - k0 - 1, "fewer than 3 distinct vertices");
                 degenerate = 1;
             }
         if (degenerate) continue;
@@ -298,8 +325,8 @@ static int check_faces(ck *c)
                            (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
         c->area[f] = len / 2;
         if (!(len / 2 > c->p * diag / 2)) {
-            note(c, 1, "face %zu: zero area (%.3g, no wider than the precision %g)", f, len / 2,
-                 c->p);
+            note(c, 1, SOLID_AT_FACE, f, "zero area (%.3g, no wider than the precision %g)",
+                 len / 2, c->p);
             continue;
         }
         /* plane through the mean of all the face's vertices */
@@ -319,9 +346,13 @@ static int check_faces(ck *c)
             double dist = fabs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len;
             if (dist > worst) worst = dist, wv = cy[i];
         }
-        if (worst > c->p)
-            note(c, 1, "face %zu: not planar (vertex %u is %.3g from its plane, precision %g)", f,
+        if (worst > c->p) {
+            note(c, 0, SOLID_AT_FACE, f,
+                 "not planar (vertex %u is %.3g from its plane, precision %g): split into "
+                 "triangles",
                  wv, worst, c->p);
+            c->rep->split_faces++;
+        }
     }
     return 0;
 }
@@ -370,11 +401,12 @@ static int check_edges(ck *c, int *bad)
         if (j - i == 2) {
             c->pair[c->npair++] = (uint32_t)i;
         } else if (j - i == 1) {
-            note(c, 1, "face %u: open surface (edge %u-%u has no other face)", h->face, h->a, h->b);
+            note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)", h->a,
+                 h->b);
             *bad = 1;
         } else {
-            note(c, 1, "face %u: non-manifold edge %u-%u (used %zu times)", h->face, h->a, h->b,
-                 j - i);
+            note(c, 1, SOLID_AT_FACE, h->face, "non-manifold edge %u-%u (used %zu times)", h->a,
+                 h->b, j - i);
             *bad = 1;
         }
     }
@@ -399,8 +431,8 @@ static int orient(ck *c, int *bad)
         if (first == SIZE_MAX) first = e;
         inconsistent++;
         if (h[0].face == h[1].face) {
-            note(c, 1, "face %u: walks edge %u-%u twice in the same direction (no flip can fix it)",
-                 h->face, h->a, h->b);
+            note(c, 1, SOLID_AT_FACE, h->face,
+                 "walks edge %u-%u twice in the same direction (no flip can fix it)", h->a, h->b);
             *bad = 1;
         }
     }
@@ -438,7 +470,7 @@ static int orient(ck *c, int *bad)
                     comp_flips += (size_t)want;
                     queue[tail++] = g;
                 } else if (c->flip[g] != want && !conflict) {
-                    note(c, 1,
+                    note(c, 1, SOLID_AT_SOLID, 0,
                          "faces %u and %u: cannot be oriented consistently (edge %u-%u: "
                          "non-orientable, or a hole walked the wrong way)",
                          f, g, h->a, h->b);
@@ -456,7 +488,7 @@ static int orient(ck *c, int *bad)
     }
     if (!*bad && flips) {
         const half *h = &c->he[c->pair[first]];
-        note(c, 0,
+        note(c, 0, SOLID_AT_SOLID, 0,
              "orientation inconsistent at %zu edges (first: %u-%u, faces %u and %u): flipped "
              "%zu of %zu faces",
              inconsistent, h[0].a, h[0].b, h[0].face, h[1].face, flips, nf);
@@ -514,12 +546,13 @@ static int check_volume(ck *c)
     }
     double vol = vol6 / 6;
     if (!(fabs(vol) > c->p * area / 2)) {
-        note(c, 1, "degenerate: volume %.3g for area %.3g (thinner than the precision %g)", vol,
-             area, c->p);
+        note(c, 1, SOLID_AT_SOLID, 0,
+             "degenerate: volume %.3g for area %.3g (thinner than the precision %g)", vol, area,
+             c->p);
         return -1;
     }
     if (vol < 0) {
-        note(c, 0, "inward oriented (volume %.6g): every face flipped", vol);
+        note(c, 0, SOLID_AT_SOLID, 0, "inward oriented (volume %.6g): every face flipped", vol);
         for (size_t f = 0; f < s->nf; f++) c->flip[f] ^= 1;
         vol = -vol;
     }
@@ -563,8 +596,8 @@ fail:
     return -1;
 }
 
-int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
-                solid *fixed)
+static int check(const solid *s, double precision, const char *label, solid_report *rep,
+                 solid *fixed, int faces_only)
 {
     solid_report local;
     ck c = {.s = s, .p = precision, .rep = rep ? rep : &local, .label = label ? label : "solid"};
@@ -572,22 +605,24 @@ int solid_check(const solid *s, double precision, const char *label, solid_repor
     if (fixed) memset(fixed, 0, sizeof *fixed);
     int bad = 0;
     if (!(precision > 0) || !isfinite(precision)) {
-        note(&c, 1, "precision %g is not a positive number", precision);
+        note(&c, 1, SOLID_AT_SOLID, 0, "precision %g is not a positive number", precision);
         goto done;
     }
     if (!s) {
-        note(&c, 1, "no solid");
+        note(&c, 1, SOLID_AT_SOLID, 0, "no solid");
         goto done;
     }
     if (check_shape(&c)) goto done;
-    if (merge_vertices(&c) || check_faces(&c) || check_edges(&c, &bad)) goto oom;
+    if (merge_vertices(&c) || check_faces(&c)) goto oom;
+    if (faces_only) goto done;
+    if (check_edges(&c, &bad)) goto oom;
     if (bad) goto done;
     if (orient(&c, &bad)) goto oom;
     if (bad || check_volume(&c)) goto done;
     if (c.rep->errors == 0 && fixed && make_fixed(&c, fixed)) goto oom;
     goto done;
 oom:
-    note(&c, 1, "out of memory");
+    note(&c, 1, SOLID_AT_SOLID, 0, "out of memory");
 done:
     free(c.merged);
     free(c.area);
@@ -596,6 +631,17 @@ done:
     free(c.flip);
     if (c.rep->errors && fixed) solid_free(fixed);
     return c.rep->errors ? -1 : 0;
+}
+
+int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
+                solid *fixed)
+{
+    return check(s, precision, label, rep, fixed, 0);
+}
+
+int solid_check_faces(const solid *s, double precision, const char *label, solid_report *rep)
+{
+    return check(s, precision, label, rep, NULL, 1);
 }
 
 /* ---- readers: text ---------------------------------------------------------------------- */

@@ -8,7 +8,9 @@
  * solid and face:
  *   - an index out of range, a face with fewer than 3 distinct vertices (after merging vertices
  *     closer than the precision), a zero-area face;
- *   - a non-planar face: a vertex farther than the precision from the face's Newell plane;
+ *   - a face farther than the precision from planar (a vertex that far from the plane through
+ *     the mean of its vertices): a warning, since the 3D pipeline splits such a face into
+ *     triangles, each exactly planar (counted in split_faces);
  *   - an open surface (an edge used once), a non-manifold one (an edge used more than twice);
  *   - inconsistent orientation (an edge walked twice in the same direction): reported; when the
  *     faces can be made consistent by flipping some of them (the surface is orientable), they are
@@ -39,12 +41,25 @@ void solid_free(solid *s); /* frees the arrays, zeroes the struct; safe twice */
 
 #define SOLID_MAX_MESSAGES 32
 
+enum { SOLID_AT_SOLID = 0, SOLID_AT_FACE = 1, SOLID_AT_VERTEX = 2, SOLID_AT_HOLE = 3 };
+
+/* What a message is, as fields: callers never need to read the text to tell them apart. */
+typedef struct solid_msg_info {
+    uint8_t warning; /* 1: a warning (the solid is usable); 0: an error */
+    uint8_t at;      /* SOLID_AT_*: the whole solid, face `index`, vertex `index`, or hole `sub`
+                        (0-based) of face `index` */
+    uint16_t what;   /* offset in the text where the description starts (after the location) */
+    size_t index, sub;
+} solid_msg_info;
+
 typedef struct solid_report {
     size_t errors, warnings; /* counts (the messages kept are capped) */
     size_t nmsg;
-    char msg[SOLID_MAX_MESSAGES][160]; /* "face 12: not planar (vertex 7 is 0.03 off)" */
-    double volume;                     /* signed volume of the (fixed) solid */
-    size_t flipped_faces;              /* faces the fixed copy reverses */
+    char msg[SOLID_MAX_MESSAGES][160]; /* "label: face 12: open surface (edge 3-4 ...)" */
+    solid_msg_info info[SOLID_MAX_MESSAGES];
+    double volume;        /* signed volume of the (fixed) solid */
+    size_t flipped_faces; /* faces the fixed copy reverses */
+    size_t split_faces;   /* faces farther than the precision from planar (warned) */
 } solid_report;
 
 /* Checks s (borrowed) at `precision` (> 0).  Returns 0 when it is usable (rep->errors == 0),
@@ -52,6 +67,10 @@ typedef struct solid_report {
  * not (rep says why).  `label` prefixes the messages ("solids[2]"). */
 int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
                 solid *fixed);
+
+/* The per-face checks of solid_check only (shape, indices, distinct vertices, zero area,
+ * planarity), for a face soup: no closedness, no orientation, no volume. */
+int solid_check_faces(const solid *s, double precision, const char *label, solid_report *rep);
 
 /* Readers, one solid per file: Wavefront OBJ (v and f lines; f with v, v/t, v//n, v/t/n and
  * negative indices; other lines ignored) and OFF ("OFF" header, counts, comments).  Return 0,

@@ -507,8 +507,9 @@ done:
 static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t **cyc,
                      const size_t *len, size_t nc)
 {
-    piece P = {solid, face, pl, (uint32_t)A->npcyc, (uint32_t)nc, {0}};
+    piece P = {solid, face, pl, (uint32_t)A->npcyc, (uint32_t)nc, {0}, 1};
     int k = plane_axis(&A->pl[pl]);
+    P.sgn = (area2(A, k, cyc[0], len[0]) > 0) == (A->pl[pl].n[k] > 0) ? 1 : -1;
     for (int a = 0; a < 3; a++) P.box[a] = INT64_MAX, P.box[3 + a] = INT64_MIN;
     for (size_t c = 0; c < nc; c++) {
         if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + 2, sizeof *A->pc_off)) return -1;
@@ -575,6 +576,24 @@ static int face_plane(const a3 *A, uint32_t **cyc, const size_t *len, size_t nc,
             if (s) return 1;
         }
     return 0;
+}
+
+/* The dot product of the normals of triangles abc and def (grid vertices): |.| < 2^124. */
+static i128 tri_dot(const a3 *A, uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t e,
+                    uint32_t f)
+{
+    const int64_t *P[6] = {A->g + 3 * (size_t)a, A->g + 3 * (size_t)b, A->g + 3 * (size_t)c,
+                           A->g + 3 * (size_t)d, A->g + 3 * (size_t)e, A->g + 3 * (size_t)f};
+    i128 n[2][3];
+    for (int t = 0; t < 2; t++) {
+        const int64_t *p = P[3 * t], *q = P[3 * t + 1], *r = P[3 * t + 2];
+        i128 u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+        i128 v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+        n[t][0] = u[1] * v[2] - u[2] * v[1];
+        n[t][1] = u[2] * v[0] - u[0] * v[2];
+        n[t][2] = u[0] * v[1] - u[1] * v[0];
+    }
+    return n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2];
 }
 
 /* Newell's normal of a cycle (for the projection of a face that is not planar). */
@@ -698,7 +717,28 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
             /* not planar on the grid: triangles, each with its own exact plane */
             int k = newell_axis(A, cyc[0], len[0]);
             ntri = 0;
-            int r = a3_triangulate(A, k, cyc, len, nc, &tri, &ntri, &captri);
+            int r;
+            if (nc == 1 && len[0] == 4) {
+                /* a quad: the diagonal whose two triangles' normals agree best (the larger dot
+                 * product of their normals), as CGAL's triangulate_faces chooses */
+                if (a3_grow(&tri, &captri, 6, sizeof *tri)) goto oom;
+                const uint32_t *q = cyc[0];
+                i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
+                i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
+                int a = d02 > d13 ? 0 : 1;
+                uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
+                memcpy(tri, t, sizeof t);
+                ntri = 2;
+                /* a3_triangulate's convention: counter-clockwise in the projection */
+                for (int h = 0; h < 2; h++)
+                    if (orient2v(A, k, tri[3 * h], tri[3 * h + 1], tri[3 * h + 2]) < 0) {
+                        uint32_t x = tri[3 * h + 1];
+                        tri[3 * h + 1] = tri[3 * h + 2], tri[3 * h + 2] = x;
+                    }
+                r = 0;
+            } else {
+                r = a3_triangulate(A, k, cyc, len, nc, &tri, &ntri, &captri);
+            }
             if (r == -1) goto oom;
             if (r == -2 || ntri == 0) {
                 rc = seterr(err, el, ARR_EINVAL,
@@ -708,8 +748,13 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 goto fail;
             }
             A->split_faces++;
+            int ccw = area2(A, k, cyc[0], len[0]) > 0; /* the triangles come counter-clockwise */
             for (size_t t = 0; t < ntri; t++) {
                 uint32_t *tc = tri + 3 * t;
+                if (!ccw) {
+                    uint32_t x = tc[1];
+                    tc[1] = tc[2], tc[2] = x;
+                }
                 size_t tl = 3;
                 plane3 tp;
                 if (plane_through(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],

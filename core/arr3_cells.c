@@ -171,6 +171,59 @@ static int fan_cmp(const void *pa, const void *pb, void *vx)
     return (a->f > b->f) - (a->f < b->f);
 }
 
+/* For solids: around an edge, the wedges between consecutive faces of one solid alternate
+ * inside and outside it.  Face f (walking the edge s = +-1) has its side s toward the next wedge
+ * counter-clockwise; a piece covering it, of outward orientation g about f's normal, puts the
+ * next wedge inside its solid when s != g, the previous one when -s != g.  A solid whose
+ * consecutive faces disagree about a wedge passes through itself along this edge: an input
+ * that intersects itself (or that the grid makes so), reported with where. */
+typedef struct fanside {
+    uint32_t solid;
+    int first_prev, last_next;
+} fanside;
+
+static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, const lar3 *out,
+                     char *err, size_t errlen)
+{
+    fanside st[8];
+    size_t ns = 0;
+    for (size_t k = 0; k < n; k++) {
+        uint32_t f = F[k].f;
+        for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++) {
+            const piece *pc = &A->pc[A->cov[i]];
+            int prev_in = -F[k].s != pc->sgn, next_in = F[k].s != pc->sgn;
+            size_t j = 0;
+            while (j < ns && st[j].solid != pc->solid) j++;
+            if (j == ns) {
+                if (ns == sizeof st / sizeof *st) continue; /* only in a pile of 8 solids */
+                st[ns].solid = pc->solid;
+                st[ns].first_prev = prev_in;
+                st[ns].last_next = next_in;
+                ns++;
+                continue;
+            }
+            if (st[j].last_next != prev_in) goto bad;
+            st[j].last_next = next_in;
+        }
+    }
+    for (size_t j = 0; j < ns; j++)
+        if (st[j].last_next != st[j].first_prev) goto bad;
+    return ARR_OK;
+bad : {
+    const piece *pc = &A->pc[A->cov[A->f_cov[F[0].f]]];
+    const xpt *a = &A->pt[ends[0]], *b = &A->pt[ends[1]];
+    snprintf(err, errlen,
+             "solids[%u]: face %u: the surface passes through itself along the edge (%.9g, %.9g, "
+             "%.9g)-(%.9g, %.9g, %.9g): the solid intersects itself on the grid of step %g",
+             pc->solid, pc->face - out->solid_face_off[pc->solid],
+             ((double)A->oi[0] + a->x[0]) * A->step, ((double)A->oi[1] + a->x[1]) * A->step,
+             ((double)A->oi[2] + a->x[2]) * A->step, ((double)A->oi[0] + b->x[0]) * A->step,
+             ((double)A->oi[1] + b->x[1]) * A->step, ((double)A->oi[2] + b->x[2]) * A->step,
+             A->step);
+    return ARR_EINVAL;
+}
+}
+
 /* ---- probes --------------------------------------------------------------------------------- */
 
 typedef struct probe {
@@ -418,11 +471,21 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             x.n0 = face_n(A, F[0].f);
             x.s0 = F[0].s;
             qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
+            if (getenv("A3DEBUG")) {
+                fprintf(stderr, "fan e%zu (%u %u) d=(%g %g %g):", e, ev[2 * e], ev[2 * e + 1],
+                        (double)x.d[0], (double)x.d[1], (double)x.d[2]);
+                for (size_t k = 0; k < n; k++) fprintf(stderr, " f%u%+d", F[k].f, F[k].s);
+                fprintf(stderr, "\n");
+            }
         }
+        if (!A->soup && (rc = fan_check(A, F, n, ev + 2 * e, out, err, errlen)) != ARR_OK)
+            goto done;
+        rc = ARR_ENOMEM;
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
             uint32_t n0 = 2 * f0->f + (f0->s > 0 ? 0 : 1);
             uint32_t n1 = 2 * f1->f + (f1->s > 0 ? 1 : 0);
+            if (getenv("A3LINKS")) fprintf(stderr, "L %u %u %zu\n", n0, n1, e);
             a3_uf_union(sp, n0, n1);
             a3_uf_union(fcomp, f0->f, f1->f);
         }
@@ -465,7 +528,30 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             if (cpiece[c] == NONE || A->cov[i] < cpiece[c]) cpiece[c] = A->cov[i];
     }
     A->st->shells = nsh;
-    A->st->components = ncomp;
+    {
+        /* reported: parts connected through any shared vertex (solids that touch at a point are
+         * one); the probes below work on parts connected through edges */
+        uint32_t *vf = malloc((A->npt + 1) * sizeof *vf), *vu = malloc((ncomp + 1) * sizeof *vu);
+        if (!vf || !vu) {
+            free(vf), free(vu);
+            goto done;
+        }
+        for (size_t p = 0; p < A->npt; p++) vf[p] = NONE;
+        for (size_t c = 0; c < ncomp; c++) vu[c] = (uint32_t)c;
+        for (size_t f = 0; f < nf; f++)
+            for (uint32_t e = A->cyc_off[A->f_cyc[f]]; e < A->cyc_off[A->f_cyc[f + 1]]; e++) {
+                uint32_t p = A->ent[e];
+                if (vf[p] == NONE)
+                    vf[p] = fcomp[f];
+                else
+                    a3_uf_union(vu, vf[p], fcomp[f]);
+            }
+        size_t nvc = 0;
+        for (size_t c = 0; c < ncomp; c++) nvc += a3_uf_find(vu, (uint32_t)c) == c;
+        free(vf);
+        free(vu);
+        A->st->components = nvc;
+    }
     /* face boxes (approximate, for the probes' first filter) */
     fbox = malloc((4 * nf + 1) * sizeof *fbox);
     if (!fbox) goto done;
@@ -549,6 +635,22 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         uint32_t r = a3_uf_find(cu, shell[i]);
         if (r == ext_root || cell[r] != NONE) continue;
         cell[r] = (uint32_t)nc++;
+    }
+    /* closed solids: every face separates its solids' inside from their outside, so its two
+     * sides lie in two cells; one cell on both sides means a surface that passes through
+     * itself (an input that intersects itself, or that the grid makes so) */
+    for (size_t f = 0; f < nf && !A->soup; f++) {
+        if (a3_uf_find(cu, shell[2 * f]) != a3_uf_find(cu, shell[2 * f + 1])) continue;
+        const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
+        const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
+        rc = ARR_EINVAL;
+        snprintf(err, errlen,
+                 "solids[%u]: face %u: the surface passes through itself near (%.9g, %.9g, %.9g): "
+                 "the solid intersects itself on the grid of step %g",
+                 pc->solid, pc->face - out->solid_face_off[pc->solid],
+                 ((double)A->oi[0] + x->x[0]) * A->step, ((double)A->oi[1] + x->x[1]) * A->step,
+                 ((double)A->oi[2] + x->x[2]) * A->step, A->step);
+        goto done;
     }
     cone = malloc((nf + 1) * sizeof *cone);
     if (!cone) goto done;

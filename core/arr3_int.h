@@ -35,6 +35,8 @@ typedef struct piece {
     uint32_t plane;
     uint32_t c0, nc; /* cycles pc_off[c0 .. c0 + nc) */
     int64_t box[6];  /* lo xyz, hi xyz */
+    int sgn;         /* +1: the order of its outer cycle turns about the plane's normal (for a
+                        solid: the plane's normal points out of it); -1: the other way */
 } piece;
 
 typedef struct cseg {

@@ -369,6 +369,36 @@ static int half_cmp(const void *pa, const void *pb)
     return (a->b > b->b) - (a->b < b->b);
 }
 
+static int half_idx_cmp(const void *pa, const void *pb)
+{
+    const half *a = pa, *b = pb;
+    uint32_t a0 = a->a < a->b ? a->a : a->b, a1 = a->a ^ a->b ^ a0;
+    uint32_t b0 = b->a < b->b ? b->a : b->b, b1 = b->a ^ b->b ^ b0;
+    if (a0 != b0) return a0 < b0 ? -1 : 1;
+    if (a1 != b1) return a1 < b1 ? -1 : 1;
+    return (a->face > b->face) - (a->face < b->face);
+}
+
+/* The halves he[i..j) share one edge in space (their merged ends).  When their input vertex
+ * indices pair them two by two (a surface touching itself, like a mesh with two vertices at one
+ * point), lists those pairs and returns 1; else returns 0 (a non-manifold edge). */
+static int pair_by_index(ck *c, size_t i, size_t j)
+{
+    qsort(c->he + i, j - i, sizeof *c->he, half_idx_cmp);
+    for (size_t k = i; k < j; k += 2) {
+        const half *x = &c->he[k], *y = &c->he[k + 1];
+        uint32_t x0 = x->a < x->b ? x->a : x->b, y0 = y->a < y->b ? y->a : y->b;
+        if (x0 != y0 || (x->a ^ x->b) != (y->a ^ y->b)) return 0;
+        if (k + 2 < j) {
+            const half *z = &c->he[k + 2];
+            uint32_t z0 = z->a < z->b ? z->a : z->b;
+            if (z0 == x0 && (z->a ^ z->b) == (x->a ^ x->b)) return 0; /* three on one */
+        }
+    }
+    for (size_t k = i; k < j; k += 2) c->pair[c->npair++] = (uint32_t)k;
+    return 1;
+}
+
 /* Builds and sorts the half-edges, reports open and non-manifold edges, and lists the
  * manifold ones in c->pair.  Returns -1 out of memory; *bad is set on any error reported. */
 static int check_edges(ck *c, int *bad)
@@ -398,6 +428,16 @@ static int check_edges(ck *c, int *bad)
     for (size_t i = 0, j; i < c->nhe; i = j) {
         for (j = i + 1; j < c->nhe && c->he[j].key == c->he[i].key; j++) continue;
         const half *h = &c->he[i];
+        if (j - i > 2 && (j - i) % 2 == 0 && pair_by_index(c, i, j)) {
+            /* the surface meets itself along this edge in space, but every pair of faces
+             * shares its own vertices: a closed surface touching itself, which the
+             * arrangement takes as it is */
+            note(c, 0, SOLID_AT_FACE, h->face,
+                 "edge %u-%u lies on %zu faces: the surface touches itself there (its vertex "
+                 "indices pair the faces two by two)",
+                 h->a, h->b, j - i);
+            continue;
+        }
         if (j - i == 2) {
             c->pair[c->npair++] = (uint32_t)i;
         } else if (j - i == 1) {

@@ -33,7 +33,8 @@ SERVER_SRC := $(filter-out server/main.c,$(wildcard server/*.c))
 SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o) $(BUILD)/gen/openapi.o
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
-TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/ref/geos_ref.o
+TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
+            $(BUILD)/tests/ref/geos_ref.o
 
 .PHONY: all deps test check bench run clean format format-check tests
 all: $(BUILD)/cellar $(BUILD)/cellard

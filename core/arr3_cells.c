@@ -321,14 +321,6 @@ static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
     return cmp_frac(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
 }
 
-/* sign(t_f - q_k) */
-static int probe_vs_q(const a3 *A, uint32_t f, const probe *pr)
-{
-    i128 num, den;
-    probe_t(&A->pl[A->f_plane[f]], pr, &num, &den);
-    return sgn128(3 * num - (i128)pr->Q[pr->k] * den) * sgn128(den);
-}
-
 /* The probe of piece pi: the centroid of a triangle of it, on a line along its normal's axis. */
 static int piece_probe(const a3 *A, uint32_t pi, probe *pr)
 {
@@ -380,16 +372,83 @@ static int vcmp(const void *pa, const void *pb, void *vx)
     return (a > b) - (a < b);
 }
 
-static double face_cone6(const a3 *A, uint32_t f)
+/* ---- double-double: volumes from points known to 2^-100 ---------------------------------- */
+
+typedef struct dd {
+    double hi, lo;
+} dd;
+
+static dd two_sum(double a, double b)
 {
-    double s = 0;
+    double s = a + b, bb = s - a;
+    dd r = {s, (a - (s - bb)) + (b - bb)};
+    return r;
+}
+
+/* Dekker's exact product (no fused multiply-add needed) */
+static void split(double a, double *h, double *l)
+{
+    double t = 134217729.0 * a; /* 2^27 + 1 */
+    *h = t - (t - a);
+    *l = a - *h;
+}
+
+static dd two_prod(double a, double b)
+{
+    double p = a * b, ah, al, bh, bl;
+    split(a, &ah, &al);
+    split(b, &bh, &bl);
+    dd r = {p, ((ah * bh - p) + ah * bl + al * bh) + al * bl};
+    return r;
+}
+
+static dd dd_add(dd a, dd b)
+{
+    dd s = two_sum(a.hi, b.hi);
+    s.lo += a.lo + b.lo;
+    return two_sum(s.hi, s.lo);
+}
+
+static dd dd_neg(dd a)
+{
+    dd r = {-a.hi, -a.lo};
+    return r;
+}
+
+static dd dd_mul(dd a, dd b)
+{
+    dd p = two_prod(a.hi, b.hi);
+    p.lo += a.hi * b.lo + a.lo * b.hi;
+    return two_sum(p.hi, p.lo);
+}
+
+/* Point v's coordinates minus the origin org, in double-double. */
+static void dd_rel(const double *dh, const double *dl, uint32_t v, const dd *org, dd *p)
+{
+    for (int k = 0; k < 3; k++) {
+        dd x = {dh[3 * (size_t)v + k], dl[3 * (size_t)v + k]};
+        p[k] = dd_add(x, dd_neg(org[k]));
+    }
+}
+
+/* Six times the cone volume over face f's cycles from org, in double-double: taken from a
+ * vertex of the cell, the terms are as small as the cell, so a sliver keeps its volume. */
+static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f, const dd *org)
+{
+    dd s = {0, 0};
     for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
         uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
-        const double *p0 = A->pt[A->ent[o]].x;
+        dd p[3][3];
+        if (n >= 3) dd_rel(dh, dl, A->ent[o], org, p[0]);
         for (uint32_t i = 1; i + 1 < n; i++) {
-            const double *p1 = A->pt[A->ent[o + i]].x, *p2 = A->pt[A->ent[o + i + 1]].x;
-            s += p0[0] * (p1[1] * p2[2] - p1[2] * p2[1]) - p0[1] * (p1[0] * p2[2] - p1[2] * p2[0]) +
-                 p0[2] * (p1[0] * p2[1] - p1[1] * p2[0]);
+            dd_rel(dh, dl, A->ent[o + i], org, p[1]);
+            dd_rel(dh, dl, A->ent[o + i + 1], org, p[2]);
+            dd c0 = dd_add(dd_mul(p[1][1], p[2][2]), dd_neg(dd_mul(p[1][2], p[2][1])));
+            dd c1 = dd_add(dd_mul(p[1][2], p[2][0]), dd_neg(dd_mul(p[1][0], p[2][2])));
+            dd c2 = dd_add(dd_mul(p[1][0], p[2][1]), dd_neg(dd_mul(p[1][1], p[2][0])));
+            s = dd_add(s, dd_mul(p[0][0], c0));
+            s = dd_add(s, dd_mul(p[0][1], c1));
+            s = dd_add(s, dd_mul(p[0][2], c2));
         }
     }
     return s;
@@ -405,7 +464,10 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t *ev = NULL, *eside = NULL, *eplane = NULL, *ioff = NULL;
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
     uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
-    double *cone = NULL, *fbox = NULL;
+    double *fbox = NULL, *dh = NULL, *dl = NULL;
+    uint32_t *hits = NULL;
+    size_t caphits = 0;
+    dd *cvol = NULL;
     uint64_t *ek = NULL;
     inc *tmp = NULL;
     size_t capeside = 0, capeplane = 0;
@@ -586,7 +648,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             }
         }
         double qi = (double)pr.Q[pr.i] / 3, qj = (double)pr.Q[pr.j] / 3;
-        uint32_t own = NONE, below = NONE;
+        /* the part's first face along the line: beyond it (toward -k) lies its outside; the
+         * nearest face of another part there says which cell holds the part */
+        uint32_t own = NONE, below = NONE, nhit = 0;
         for (size_t f = 0; f < nf; f++) {
             const double *b = fbox + 4 * f;
             double m = (fabs(b[0]) + fabs(b[2]) + fabs(b[1]) + fabs(b[3]) + 1) * 0x1p-40;
@@ -595,10 +659,15 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             if (!probe_hits(A, (uint32_t)f, &pr)) continue;
             if (fcomp[f] == c) {
                 if (own == NONE || probe_cmp(A, (uint32_t)f, own, &pr) < 0) own = (uint32_t)f;
-            } else if (probe_vs_q(A, (uint32_t)f, &pr) < 0) {
-                if (below == NONE || probe_cmp(A, (uint32_t)f, below, &pr) > 0) below = (uint32_t)f;
+            } else {
+                if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
+                hits[nhit++] = (uint32_t)f;
             }
         }
+        for (uint32_t h = 0; own != NONE && h < nhit; h++)
+            if (probe_cmp(A, hits[h], own, &pr) < 0 &&
+                (below == NONE || probe_cmp(A, hits[h], below, &pr) > 0))
+                below = hits[h];
         if (own == NONE) {
             rc = ARR_EINTERNAL;
             snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
@@ -652,9 +721,15 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                  ((double)A->oi[2] + x->x[2]) * A->step, A->step);
         goto done;
     }
-    cone = malloc((nf + 1) * sizeof *cone);
-    if (!cone) goto done;
-    for (size_t f = 0; f < nf; f++) cone[f] = face_cone6(A, (uint32_t)f);
+    /* the points to 2^-100 (volumes and the written coordinates come from these) */
+    dh = malloc((3 * A->npt + 1) * sizeof *dh);
+    dl = malloc((3 * A->npt + 1) * sizeof *dl);
+    cvol = calloc(nc + 1, sizeof *cvol);
+    if (!dh || !dl || !cvol) goto done;
+    for (size_t i = 0; i < A->nent; i++) {
+        uint32_t p = A->ent[i];
+        xpt_dd(&A->G, &A->pt[p], dh + 3 * (size_t)p, dl + 3 * (size_t)p);
+    }
     out->nc = nc;
     out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
     out->cvol = calloc(nc + 1, sizeof *out->cvol);
@@ -688,8 +763,23 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         } else {
             uint32_t k = cell[r];
             out->cf[out->cf_off[k] + fill[k]++] = sf;
-            out->cvol[k] += ((i & 1) ? cone[i / 2] : -cone[i / 2]) * h3;
         }
+    }
+    for (size_t k = 0; k < nc; k++) {
+        dd org[3] = {{0, 0}, {0, 0}, {0, 0}};
+        if (out->cf_off[k + 1] > out->cf_off[k]) {
+            int32_t s0 = out->cf[out->cf_off[k]];
+            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, v0 = A->ent[A->cyc_off[A->f_cyc[f0]]];
+            for (int a = 0; a < 3; a++)
+                org[a].hi = dh[3 * (size_t)v0 + a], org[a].lo = dl[3 * (size_t)v0 + a];
+        }
+        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
+            int32_t sf = out->cf[i];
+            uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
+            dd c = face_cone6(A, dh, dl, f, org);
+            cvol[k] = dd_add(cvol[k], sf > 0 ? c : dd_neg(c));
+        }
+        out->cvol[k] = (cvol[k].hi + cvol[k].lo) * h3;
     }
     free(fill);
     /* ---- output: vertices sorted by position, edges sorted, faces */
@@ -707,7 +797,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     if (!out->V) goto done;
     for (size_t i = 0; i < nu; i++)
         for (int k = 0; k < 3; k++)
-            out->V[3 * i + k] = ((double)A->oi[k] + A->pt[used[i]].x[k]) * A->step;
+            out->V[3 * i + k] =
+                ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
+                A->step;
     ek = malloc((ne + 1) * sizeof *ek);
     if (!ek) goto done;
     for (size_t e = 0; e < ne; e++) {
@@ -864,8 +956,11 @@ done:
     free(cpiece);
     free(newid);
     free(used);
-    free(cone);
+    free(cvol);
+    free(dh);
+    free(dl);
     free(fbox);
+    free(hits);
     free(ek);
     return rc;
 }

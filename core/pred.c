@@ -196,6 +196,43 @@ void xpt_hom(const geo *G, const xpt *p, xhom *h)
     }
 }
 
+/* X / W as hi + lo: hi the nearest-ish double, lo the rounded rest, from the exact residual
+ * X - hi W (hi = m 2^e with m an integer of 53 bits). */
+static void quot_dd(const xint *X, const xint *W, double *hi, double *lo)
+{
+    double w = xi_to_double(W), h = xi_to_double(X) / w;
+    int ex;
+    *hi = h;
+    *lo = 0;
+    if (h == 0 || !isfinite(h)) return;
+    double f = frexp(h, &ex);
+    int64_t m = (int64_t)ldexp(f, 53);
+    int e = ex - 53;
+    xint M, T, R, Xs;
+    xi_set_i64(&M, m);
+    xi_mul(&T, W, &M);
+    if (e >= 0) {
+        xi_shl(&T, &T, e);
+        xi_sub(&R, X, &T);
+        *lo = xi_to_double(&R) / w;
+    } else {
+        xi_shl(&Xs, X, -e);
+        xi_sub(&R, &Xs, &T);
+        *lo = ldexp(xi_to_double(&R) / w, e);
+    }
+}
+
+void xpt_dd(const geo *G, const xpt *p, double hi[3], double lo[3])
+{
+    if (p->kind == PT_GRID) {
+        for (int i = 0; i < 3; i++) hi[i] = (double)G->g[3 * (size_t)p->a + i], lo[i] = 0;
+        return;
+    }
+    xhom h;
+    xpt_hom(G, p, &h);
+    for (int i = 0; i < 3; i++) quot_dd(&h.X[i], &h.W, &hi[i], &lo[i]);
+}
+
 /* ---- predicates ------------------------------------------------------------------------- */
 
 static int sign_xint_sum_i128(i128 a, i128 b, i128 c, i128 d)

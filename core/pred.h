@@ -95,6 +95,10 @@ xpt xpt_tpi(const geo *G, uint32_t pa, uint32_t pb, uint32_t pc);
 
 void xpt_hom(const geo *G, const xpt *p, xhom *h);
 
+/* The point's coordinates as unevaluated sums hi + lo of two doubles (within 2^-100 of each
+ * coordinate): what volumes and written coordinates are computed from. */
+void xpt_dd(const geo *G, const xpt *p, double hi[3], double lo[3]);
+
 /* ---- exact predicates ------------------------------------------------------------------ */
 
 /* Sign of n . p + d for plane id pl: which side of the plane p lies on (0: on it). */

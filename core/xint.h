@@ -194,6 +194,29 @@ static inline double xi_to_double(const xint *a)
     return a->neg ? -v : v;
 }
 
+/* r = a * 2^bits (r may alias a) */
+static inline void xi_shl(xint *r, const xint *a, int bits)
+{
+    int limbs = bits / 64, sh = bits % 64, n = a->n;
+    uint64_t w[XI_LIMBS + 1];
+    if (n == 0) {
+        xi_zero(r);
+        return;
+    }
+    assert(n + limbs + 1 <= XI_LIMBS + 1);
+    memset(w, 0, sizeof w);
+    for (int i = 0; i < n; i++) {
+        w[i + limbs] |= sh ? a->w[i] << sh : a->w[i];
+        if (sh) w[i + limbs + 1] |= a->w[i] >> (64 - sh);
+    }
+    n = n + limbs + 1;
+    while (n > 0 && w[n - 1] == 0) n--;
+    assert(n <= XI_LIMBS);
+    r->neg = a->neg;
+    memcpy(r->w, w, (size_t)n * sizeof *w);
+    r->n = n;
+}
+
 /* a * b of two 128-bit values, as an xint */
 static inline void xi_mul_i128(xint *r, i128 a, i128 b)
 {

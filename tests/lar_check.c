@@ -219,8 +219,9 @@ out:
 
 /* ------------------------------------------------------------------ 3D */
 
-/* Six times the signed volume of the cone from o over face f's cycles (fans). */
-static double cone6(const lar3 *c, uint32_t f, const double *o)
+/* Six times the signed volume of the cone from o over face f's cycles (fans); *abs (may be NULL)
+ * gets the sum of the terms' magnitudes, which bounds the rounding error of the sum. */
+static double cone6a(const lar3 *c, uint32_t f, const double *o, double *abs)
 {
     double s = 0;
     for (uint32_t cy = c->fc_off[f]; cy < c->fc_off[f + 1]; cy++) {
@@ -231,18 +232,24 @@ static double cone6(const lar3 *c, uint32_t f, const double *o)
             const double *q1 = c->V + 3 * (size_t)c->cyc[i], *q2 = c->V + 3 * (size_t)c->cyc[i + 1];
             double b[3] = {q1[0] - o[0], q1[1] - o[1], q1[2] - o[2]};
             double d[3] = {q2[0] - o[0], q2[1] - o[1], q2[2] - o[2]};
-            s += a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) +
-                 a[2] * (b[0] * d[1] - b[1] * d[0]);
+            double t = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) +
+                       a[2] * (b[0] * d[1] - b[1] * d[0]);
+            s += t;
+            if (abs)
+                *abs += fabs(a[0]) * (fabs(b[1] * d[2]) + fabs(b[2] * d[1])) +
+                        fabs(a[1]) * (fabs(b[0] * d[2]) + fabs(b[2] * d[0])) +
+                        fabs(a[2]) * (fabs(b[0] * d[1]) + fabs(b[1] * d[0]));
         }
     }
     return s;
 }
 
 /* The cones are taken from a vertex of the cell, so that a small cell far from the origin does
- * not lose its volume to cancellation. */
-double lar3_cell_volume(const lar3 *c, size_t k)
+ * not lose its volume to cancellation.  *err (may be NULL): a bound of the rounding of the sum
+ * (the coordinates are themselves rounded: a cell thinner than that has no reliable sign). */
+static double cell_volume(const lar3 *c, size_t k, double *err)
 {
-    double v = 0;
+    double v = 0, abs = 0;
     if (c->cf_off[k] == c->cf_off[k + 1]) return 0;
     int32_t s0 = c->cf[c->cf_off[k]];
     uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1;
@@ -250,9 +257,15 @@ double lar3_cell_volume(const lar3 *c, size_t k)
     for (uint32_t i = c->cf_off[k]; i < c->cf_off[k + 1]; i++) {
         int32_t s = c->cf[i];
         uint32_t f = (uint32_t)(s > 0 ? s : -s) - 1;
-        v += (s > 0 ? 1 : -1) * cone6(c, f, o);
+        v += (s > 0 ? 1 : -1) * cone6a(c, f, o, &abs);
     }
+    if (err) *err = abs * 0x1p-48 / 6;
     return v / 6;
+}
+
+double lar3_cell_volume(const lar3 *c, size_t k)
+{
+    return cell_volume(c, k, NULL);
 }
 
 /* Adds sign * FE(f) into acc (per edge). */
@@ -283,11 +296,16 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
         int first = 1;
         for (uint32_t cy = c->fc_off[f]; cy < c->fc_off[f + 1]; cy++) {
             uint32_t c0 = c->cyc_off[c->fc[cy]], c1 = c->cyc_off[c->fc[cy] + 1];
-            if (c1 - c0 < 3) {
+            /* a hole may be a contact: one vertex (nothing walked) or an edge walked both ways */
+            if (c1 - c0 < (cy == c->fc_off[f] ? 3u : 1u)) {
                 bad(msg, len, "face %zu: a cycle of %u vertices", f, c1 - c0);
                 goto done;
             }
-            for (uint32_t i = c0; i < c1; i++) {
+            if (c1 - c0 == 2 && c->cyc[c0] == c->cyc[c0 + 1]) {
+                bad(msg, len, "face %zu: a hole walks one vertex twice", f);
+                goto done;
+            }
+            for (uint32_t i = c0; i < c1 && c1 - c0 > 1; i++) {
                 uint32_t u = c->cyc[i], v = c->cyc[i + 1 < c1 ? i + 1 : c0];
                 long e = find_ev(c->EV, c->ne, u, v);
                 if (e < 0) {
@@ -364,8 +382,11 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len)
     for (size_t k = 0; k < c->nc; k++) total_scale += fabs(c->cvol[k]);
     total_scale = total_scale / (c->nc + 1) + 1e-300;
     for (size_t k = 0; k < c->nc; k++) {
-        double v = lar3_cell_volume(c, k);
-        if (!(v > 0) || fabs(v - c->cvol[k]) > 1e-9 * (fabs(v) + total_scale)) {
+        /* the core's volume (from exact points) must be positive; the one from the written
+         * doubles must agree with it within its rounding */
+        double err, v = cell_volume(c, k, &err);
+        if (!(c->cvol[k] > 0) || !(v > -err) ||
+            fabs(v - c->cvol[k]) > 1e-9 * (fabs(v) + total_scale) + err) {
             bad(msg, len, "cell %zu: volume %.17g (cvol %.17g)", k, v, c->cvol[k]);
             goto done;
         }

@@ -321,6 +321,18 @@ static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
     return cmp_frac(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
 }
 
+typedef struct probe_sort {
+    const a3 *A;
+    const probe *pr;
+} probe_sort;
+
+/* Faces hit by a probe, from the highest to the lowest along the line. */
+static int probe_desc(const void *pa, const void *pb, void *vx)
+{
+    const probe_sort *x = vx;
+    return probe_cmp(x->A, *(const uint32_t *)pb, *(const uint32_t *)pa, x->pr);
+}
+
 /* The probe of piece pi: the centroid of a triangle of it, on a line along its normal's axis. */
 static int piece_probe(const a3 *A, uint32_t pi, probe *pr)
 {
@@ -465,8 +477,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
     uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
     double *fbox = NULL, *dh = NULL, *dl = NULL;
-    uint32_t *hits = NULL;
-    size_t caphits = 0;
+    uint32_t *hits = NULL, *hoff = NULL, *stack = NULL;
+    size_t caphits = 0, capstack = 0;
+    probe *probes = NULL;
     dd *cvol = NULL;
     uint64_t *ek = NULL;
     inc *tmp = NULL;
@@ -621,10 +634,16 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     if (!cu) goto done;
     for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
     uint32_t EXT = (uint32_t)nsh;
+    /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
+     * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
     int boxk = -1;
+    probes = malloc((ncomp + 1) * sizeof *probes);
+    hoff = calloc(ncomp + 2, sizeof *hoff);
+    if (!probes || !hoff) goto done;
+    size_t nhit = 0;
     for (size_t c = 0; c < ncomp; c++) {
-        probe pr;
-        int r = piece_probe(A, cpiece[c], &pr);
+        probe *pr = &probes[c];
+        int r = piece_probe(A, cpiece[c], pr);
         if (r == -1) goto done;
         if (r) {
             rc = ARR_EINTERNAL;
@@ -632,67 +651,79 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                      A->pc[cpiece[c]].face);
             goto done;
         }
-        if (boxk != pr.k) { /* boxes of the faces in this probe's projection */
-            boxk = pr.k;
+        if (boxk != pr->k) { /* boxes of the faces in this probe's projection */
+            boxk = pr->k;
             for (size_t f = 0; f < nf; f++) {
-                double *b = fbox + 4 * f;
-                b[0] = b[1] = DBL_MAX, b[2] = b[3] = -DBL_MAX;
+                double *bx = fbox + 4 * f;
+                bx[0] = bx[1] = DBL_MAX, bx[2] = bx[3] = -DBL_MAX;
                 for (uint32_t e = A->cyc_off[A->f_cyc[f]]; e < A->cyc_off[A->f_cyc[f] + 1]; e++) {
                     const double *x = A->pt[A->ent[e]].x;
-                    double u = x[pr.i], v = x[pr.j];
-                    if (u < b[0]) b[0] = u;
-                    if (v < b[1]) b[1] = v;
-                    if (u > b[2]) b[2] = u;
-                    if (v > b[3]) b[3] = v;
+                    double u = x[pr->i], v = x[pr->j];
+                    if (u < bx[0]) bx[0] = u;
+                    if (v < bx[1]) bx[1] = v;
+                    if (u > bx[2]) bx[2] = u;
+                    if (v > bx[3]) bx[3] = v;
                 }
             }
         }
-        double qi = (double)pr.Q[pr.i] / 3, qj = (double)pr.Q[pr.j] / 3;
-        /* the part's first face along the line: beyond it (toward -k) lies its outside; the
-         * nearest face of another part there says which cell holds the part */
-        uint32_t own = NONE, below = NONE, nhit = 0;
+        double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
+        uint32_t own = NONE;
+        size_t h0 = nhit;
         for (size_t f = 0; f < nf; f++) {
-            const double *b = fbox + 4 * f;
-            double m = (fabs(b[0]) + fabs(b[2]) + fabs(b[1]) + fabs(b[3]) + 1) * 0x1p-40;
-            if (qi < b[0] - m || qi > b[2] + m || qj < b[1] - m || qj > b[3] + m) continue;
+            const double *bx = fbox + 4 * f;
+            double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
+            if (qi < bx[0] - m || qi > bx[2] + m || qj < bx[1] - m || qj > bx[3] + m) continue;
             if (fcomp[f] != c && ncomp == 1) continue;
-            if (!probe_hits(A, (uint32_t)f, &pr)) continue;
+            if (!probe_hits(A, (uint32_t)f, pr)) continue;
             if (fcomp[f] == c) {
-                if (own == NONE || probe_cmp(A, (uint32_t)f, own, &pr) < 0) own = (uint32_t)f;
+                if (own == NONE || probe_cmp(A, (uint32_t)f, own, pr) < 0) own = (uint32_t)f;
             } else {
                 if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
                 hits[nhit++] = (uint32_t)f;
             }
         }
-        for (uint32_t h = 0; own != NONE && h < nhit; h++)
-            if (probe_cmp(A, hits[h], own, &pr) < 0 &&
-                (below == NONE || probe_cmp(A, hits[h], below, &pr) > 0))
-                below = hits[h];
         if (own == NONE) {
             rc = ARR_EINTERNAL;
             snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
             goto done;
         }
-        if (getenv("A3DEBUG")) {
-            fprintf(stderr, "comp %zu piece %u k=%d Q=(%lld %lld %lld) own f%u below f%s\n", c,
-                    cpiece[c], pr.k, (long long)pr.Q[0], (long long)pr.Q[1], (long long)pr.Q[2],
-                    own, below == NONE ? "-" : "x");
-            for (size_t f = 0; f < nf; f++)
-                if (probe_hits(A, (uint32_t)f, &pr)) {
-                    i128 nu, de;
-                    probe_t(&A->pl[A->f_plane[f]], &pr, &nu, &de);
-                    fprintf(stderr, "  hit f%zu comp %u t=%g n_k=%lld\n", f, fcomp[f],
-                            (double)nu / (double)de, (long long)A->pl[A->f_plane[f]].n[pr.k]);
-                }
-        }
-        int up = A->pl[A->f_plane[own]].n[pr.k] > 0;
+        int up = A->pl[A->f_plane[own]].n[pr->k] > 0;
         outer[c] = shell[2 * own + (up ? 1 : 0)]; /* the side facing -k */
-        if (below == NONE) {
-            a3_uf_union(cu, outer[c], EXT);
-        } else {
-            int bup = A->pl[A->f_plane[below]].n[pr.k] > 0;
-            a3_uf_union(cu, outer[c], shell[2 * below + (bup ? 0 : 1)]); /* facing +k */
+        size_t m = h0;
+        for (size_t h = h0; h < nhit; h++)
+            if (probe_cmp(A, hits[h], own, pr) < 0) hits[m++] = hits[h];
+        nhit = m;
+        hoff[c + 1] = (uint32_t)nhit;
+    }
+    /* pass 2: walk down each part's ray from just beyond its first face.  Entering another
+     * part from its outside (the side we come from is that part's outer shell) and leaving it
+     * again are skipped (a stack of parts); the first face met outside every part whose side
+     * toward us is not an outer shell is the wall of the cell holding the part.  No such face:
+     * the part lies in the exterior. */
+    for (size_t c = 0; c < ncomp; c++) {
+        probe *pr = &probes[c];
+        uint32_t *H = hits + hoff[c], nh = hoff[c + 1] - hoff[c], host = EXT;
+        size_t depth = 0;
+        if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
+        for (uint32_t h = 0; h < nh && host == EXT; h++) {
+            uint32_t f = H[h], d = fcomp[f];
+            int fup = A->pl[A->f_plane[f]].n[pr->k] > 0;
+            uint32_t s_up = shell[2 * f + (fup ? 0 : 1)], s_down = shell[2 * f + (fup ? 1 : 0)];
+            if (depth && s_down == outer[stack[depth - 1]] && d == stack[depth - 1]) {
+                depth--; /* leaving the part we were inside */
+                continue;
+            }
+            if (s_up == outer[d]) { /* entering part d from its outside */
+                if (a3_grow(&stack, &capstack, depth + 1, sizeof *stack)) goto done;
+                stack[depth++] = d;
+                continue;
+            }
+            if (!depth) host = s_up;
         }
+        if (getenv("A3DEBUG"))
+            fprintf(stderr, "comp %zu k=%d outer %u host %u (ext %u), %u hits beyond\n", c, pr->k,
+                    outer[c], host, EXT, nh);
+        a3_uf_union(cu, outer[c], host);
     }
     /* cells: classes of shells; the one holding EXT is the exterior */
     cell = malloc((nsh + 2) * sizeof *cell);
@@ -961,6 +992,9 @@ done:
     free(dl);
     free(fbox);
     free(hits);
+    free(hoff);
+    free(stack);
+    free(probes);
     free(ek);
     return rc;
 }

@@ -235,10 +235,15 @@ static double cone6a(const lar3 *c, uint32_t f, const double *o, double *abs)
             double t = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) +
                        a[2] * (b[0] * d[1] - b[1] * d[0]);
             s += t;
-            if (abs)
-                *abs += fabs(a[0]) * (fabs(b[1] * d[2]) + fabs(b[2] * d[1])) +
-                        fabs(a[1]) * (fabs(b[0] * d[2]) + fabs(b[2] * d[0])) +
-                        fabs(a[2]) * (fabs(b[0] * d[1]) + fabs(b[1] * d[0]));
+            if (abs) { /* rounding of the sum, and of the coordinates themselves (eps each) */
+                double na = fabs(a[0]) + fabs(a[1]) + fabs(a[2]);
+                double nb = fabs(b[0]) + fabs(b[1]) + fabs(b[2]);
+                double nd = fabs(d[0]) + fabs(d[1]) + fabs(d[2]);
+                abs[0] += fabs(a[0]) * (fabs(b[1] * d[2]) + fabs(b[2] * d[1])) +
+                          fabs(a[1]) * (fabs(b[0] * d[2]) + fabs(b[2] * d[0])) +
+                          fabs(a[2]) * (fabs(b[0] * d[1]) + fabs(b[1] * d[0]));
+                abs[1] += 2 * (nb * nd + na * nd + na * nb);
+            }
         }
     }
     return s;
@@ -249,7 +254,7 @@ static double cone6a(const lar3 *c, uint32_t f, const double *o, double *abs)
  * (the coordinates are themselves rounded: a cell thinner than that has no reliable sign). */
 static double cell_volume(const lar3 *c, size_t k, double *err)
 {
-    double v = 0, abs = 0;
+    double v = 0, abs[2] = {0, 0}, big = 0;
     if (c->cf_off[k] == c->cf_off[k + 1]) return 0;
     int32_t s0 = c->cf[c->cf_off[k]];
     uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1;
@@ -257,9 +262,12 @@ static double cell_volume(const lar3 *c, size_t k, double *err)
     for (uint32_t i = c->cf_off[k]; i < c->cf_off[k + 1]; i++) {
         int32_t s = c->cf[i];
         uint32_t f = (uint32_t)(s > 0 ? s : -s) - 1;
-        v += (s > 0 ? 1 : -1) * cone6a(c, f, o, &abs);
+        v += (s > 0 ? 1 : -1) * cone6a(c, f, o, abs);
     }
-    if (err) *err = abs * 0x1p-48 / 6;
+    for (size_t i = 0; err && i < 3 * c->nv; i++)
+        if (fabs(c->V[i]) > big) big = fabs(c->V[i]);
+    /* each written coordinate is within half an ulp of its point: eps of its largest */
+    if (err) *err = (abs[0] * 0x1p-48 + abs[1] * big * 0x1p-52) / 6;
     return v / 6;
 }
 

@@ -105,6 +105,7 @@ static int arrange(solid *in, size_t n, double precision, run *r, const char *wh
     r->step = r->c.stats.precision;
     if (lar3_check(&r->c, 4 * r->step, NULL, msg, sizeof msg)) {
         test_fail(__FILE__, __func__, __LINE__, "%s: lar3_check: %s", what, msg);
+        dump(in, n, what);
         goto out;
     }
     uint8_t *mem = malloc(r->c.nc * n + 1);
@@ -375,4 +376,214 @@ TEST(contacts_off_the_grid)
             shape_rotation(u, 2 * M_PI * test_rnd(&seed), R);
             contact_case(&scenes[i], 1, &R[0][0], tr);
         }
+}
+
+/* ---- the volumes of each solid, from the cells ---------------------------------------------- */
+
+/* Checks that the cells inside each solid add up to its volume (within tol) and that the
+ * Booleans' boundaries are closed (done by arrange). */
+static void solid_volumes(const run *r, solid *s, size_t n, double tol, const char *what)
+{
+    uint8_t *mem = malloc(r->c.nc * n + 1);
+    if (bool3_membership(&r->c, mem) != 0) {
+        test_fail(__FILE__, __func__, __LINE__, "%s: membership", what);
+        free(mem);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        double v = 0, want = shape_volume(&s[i]);
+        for (size_t k = 0; k < r->c.nc; k++)
+            if (mem[k * n + i]) v += r->c.cvol[k];
+        CHECK(near(v, want, tol), "%s: solid %zu: its cells add up to %.17g, its volume %.17g",
+              what, i, v, want);
+    }
+    free(mem);
+}
+
+/* Two boxes whose faces z = 0 overlap on [1,2]^2, triangulated along crossing diagonals: one
+ * exact arrangement of the plane z = 0 splits them together. */
+TEST(coplanar_faces_with_different_triangulations)
+{
+    /* A = [0,2]^2 x [-1,0], its top split along (0,0)-(2,2); B = [1,3]^2 x [-1,0] or x [0,1],
+     * its top or bottom split along (3,1)-(1,3) */
+    for (int below = 0; below < 2; below++) {
+        const double VA[8][3] = {{0, 0, -1}, {2, 0, -1}, {2, 2, -1}, {0, 2, -1},
+                                 {0, 0, 0},  {2, 0, 0},  {2, 2, 0},  {0, 2, 0}};
+        static const int FA[] = {0,  3, 2, 1, -1, 4,  5, 6, -1, 4, 6,  7, -1, 0, 1, 5,  4,
+                                 -1, 1, 2, 6, 5,  -1, 2, 3, 7,  6, -1, 3, 0,  4, 7, -1, -2};
+        double z0 = below ? -1 : 0, z1 = below ? 0 : 1;
+        const double VB[8][3] = {{1, 1, z0}, {3, 1, z0}, {3, 3, z0}, {1, 3, z0},
+                                 {1, 1, z1}, {3, 1, z1}, {3, 3, z1}, {1, 3, z1}};
+        /* B's face at z = 0 as two triangles along (3,1)-(1,3) */
+        static const int FB_top[] = {0,  3, 2, 1, -1, 4,  5, 7, -1, 5, 6,  7, -1, 0, 1, 5,  4,
+                                     -1, 1, 2, 6, 5,  -1, 2, 3, 7,  6, -1, 3, 0,  4, 7, -1, -2};
+        static const int FB_bottom[] = {0,  3, 1, -1, 1, 3,  2, -1, 4, 5, 6,  7, -1, 0, 1, 5,  4,
+                                        -1, 1, 2, 6,  5, -1, 2, 3,  7, 6, -1, 3, 0,  4, 7, -1, -2};
+        solid s[2] = {shape_poly(&VA[0][0], 8, FA),
+                      shape_poly(&VB[0][0], 8, below ? FB_top : FB_bottom)};
+        run r;
+        const char *what = below ? "overlapping boxes, coplanar tops" : "box on box, face on face";
+        if (arrange(s, 2, 0, &r, what) == 0) {
+            double want[3] = {below ? 7 : 8, below ? 1 : 0, below ? 3 : 4};
+            for (int k = 0; k < 3; k++)
+                CHECK(near(r.vol[k], want[k], 1e-12), "%s: op %d: %.17g, want %g", what, k,
+                      r.vol[k], want[k]);
+            CHECK(r.c.stats.coplanar_groups >= 1, "%s: no plane holds both", what);
+            solid_volumes(&r, s, 2, 1e-12, what);
+        }
+        lar3_free(&r.c);
+        solid_free(&s[0]);
+        solid_free(&s[1]);
+    }
+}
+
+/* B's bottom face lies 0.5 to 20 grid steps from A's top face and turns away from it by a
+ * small angle: the two planes meet along a line where they are nearly parallel. */
+TEST(near_coplanar_faces)
+{
+    static const double steps[] = {0.5, 1, 2, 5, 20, -0.5, -3};
+    static const double angles[] = {1e-9, 1e-7, 1e-5, 1e-3, 0};
+    uint64_t seed = 99;
+    int rounds = stress(1);
+    for (int t = 0; t < rounds; t++)
+        for (size_t i = 0; i < sizeof steps / sizeof *steps; i++)
+            for (size_t j = 0; j < sizeof angles / sizeof *angles; j++) {
+                const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+                const double blo[3] = {0.2, 0.2, 1}, bhi[3] = {1.2, 0.8, 2};
+                solid s[2] = {shape_box(lo, hi), shape_box(blo, bhi)};
+                double u[3] = {0, 1, 0}, R[3][3], c[3] = {0.7, 0.5, 1}, tr[3];
+                if (t) { /* random axes in the plane, random pivots */
+                    double a = 2 * M_PI * test_rnd(&seed);
+                    u[0] = cos(a), u[1] = sin(a);
+                    c[0] = 0.2 + test_rnd(&seed), c[1] = 0.2 + 0.6 * test_rnd(&seed);
+                }
+                shape_rotation(u, angles[j], R);
+                double step;
+                char err[200], what[160];
+                arr3_solids_step(s, 2, 0, &step, err, sizeof err);
+                for (int a = 0; a < 3; a++)
+                    tr[a] = c[a] - (R[a][0] * c[0] + R[a][1] * c[1] + R[a][2] * c[2]) +
+                            (a == 2 ? steps[i] * step : 0);
+                shape_transform(&s[1], R, tr);
+                snprintf(what, sizeof what, "near-coplanar: %g steps apart, angle %g", steps[i],
+                         angles[j]);
+                run r;
+                double area = shape_area(&s[0]) + shape_area(&s[1]);
+                if (arrange(s, 2, 0, &r, what) == 0) {
+                    double va = shape_volume(&s[0]), vb = shape_volume(&s[1]);
+                    double tol = 2 * r.step * area;
+                    solid_volumes(&r, s, 2, tol, what);
+                    CHECK(near(r.vol[0], va + vb - r.vol[1], tol) &&
+                              near(r.vol[2], va - r.vol[1], tol),
+                          "%s: union %.17g, intersection %.17g, difference %.17g", what, r.vol[0],
+                          r.vol[1], r.vol[2]);
+                }
+                lar3_free(&r.c);
+                solid_free(&s[0]);
+                solid_free(&s[1]);
+            }
+}
+
+/* Slabs whose top and bottom are fans of slivers (aspect 1e3 to 1e5), turned at random, cut by
+ * a small box far from the thin ends of the slivers. */
+TEST(sliver_fans)
+{
+    uint64_t seed = 7;
+    int rounds = stress(3);
+    for (int t = 0; t < rounds; t++) {
+        double spread = t % 3 == 0 ? 8 : t % 3 == 1 ? 30 : 100;
+        solid s[2];
+        s[0] = shape_fan_slab(24, 60, 1, 0.05, spread, 0.5);
+        const double lo[3] = {2 + 50 * test_rnd(&seed), 0.2, 0.1};
+        const double hi[3] = {lo[0] + 0.5 + test_rnd(&seed), 0.7, 0.8};
+        s[1] = shape_box(lo, hi);
+        double u[3], len = 0, R[3][3], tr[3] = {100, -50, 25};
+        for (int a = 0; a < 3; a++) u[a] = test_rnd(&seed) - 0.5, len += u[a] * u[a];
+        for (int a = 0; a < 3; a++) u[a] /= sqrt(len);
+        shape_rotation(u, 2 * M_PI * test_rnd(&seed), R);
+        for (int i = 0; i < 2; i++) shape_transform(&s[i], R, tr);
+        char what[120];
+        snprintf(what, sizeof what, "sliver fan %d (spread %g)", t, spread);
+        run r;
+        double area = shape_area(&s[0]) + shape_area(&s[1]);
+        if (arrange(s, 2, 0, &r, what) == 0) {
+            solid_volumes(&r, s, 2, 2 * r.step * area, what);
+            /* the box is inside the slab's thickness only partly: it pokes out of the top */
+            CHECK(r.vol[1] > 0 && r.vol[1] < shape_volume(&s[1]), "%s: intersection %.17g", what,
+                  r.vol[1]);
+        }
+        lar3_free(&r.c);
+        solid_free(&s[0]);
+        solid_free(&s[1]);
+    }
+}
+
+/* Random scenes on a lattice of step 1/4: boxes, tetrahedra, prisms placed so that they share
+ * planes, edges and vertices all the time.  The coordinates are on the grid, so nothing is
+ * rounded: each solid's cells must add up to its volume exactly (to double rounding). */
+static solid random_lattice_solid(uint64_t *st)
+{
+    double o[3];
+    for (int a = 0; a < 3; a++) o[a] = (double)(int)(8 * test_rnd(st)) / 4;
+    int kind = (int)(3 * test_rnd(st));
+    if (kind == 0) {
+        double hi[3];
+        for (int a = 0; a < 3; a++) hi[a] = o[a] + (double)(1 + (int)(4 * test_rnd(st))) / 4;
+        return shape_box(o, hi);
+    }
+    if (kind == 1) {
+        double p[4][3];
+        double vol;
+        do {
+            for (int i = 0; i < 4; i++)
+                for (int a = 0; a < 3; a++) p[i][a] = o[a] + (double)(int)(5 * test_rnd(st)) / 4;
+            double u[3], v[3], w[3];
+            for (int a = 0; a < 3; a++)
+                u[a] = p[1][a] - p[0][a], v[a] = p[2][a] - p[0][a], w[a] = p[3][a] - p[0][a];
+            vol = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+                  u[2] * (v[0] * w[1] - v[1] * w[0]);
+        } while (vol == 0);
+        return shape_tet(p[0], p[1], p[2], p[3]);
+    }
+    /* a prism over a lattice triangle, along an axis */
+    double b[3][3], dir[3] = {0, 0, 0};
+    int ax = (int)(3 * test_rnd(st));
+    double area;
+    do {
+        for (int i = 0; i < 3; i++)
+            for (int a = 0; a < 3; a++)
+                b[i][a] = a == ax ? o[a] : o[a] + (double)(int)(5 * test_rnd(st)) / 4;
+        int u = (ax + 1) % 3, v = (ax + 2) % 3;
+        area =
+            (b[1][u] - b[0][u]) * (b[2][v] - b[0][v]) - (b[1][v] - b[0][v]) * (b[2][u] - b[0][u]);
+    } while (area == 0);
+    dir[ax] = (double)(1 + (int)(4 * test_rnd(st))) / 4;
+    return shape_prism((const double(*)[3])b, 3, dir);
+}
+
+TEST(random_lattice_scenes)
+{
+    uint64_t seed = 2024;
+    int rounds = stress(20);
+    for (int t = 0; t < rounds; t++) {
+        size_t n = 2 + (size_t)(7 * test_rnd(&seed));
+        solid s[8];
+        for (size_t i = 0; i < n; i++) s[i] = random_lattice_solid(&seed);
+        char what[80];
+        snprintf(what, sizeof what, "lattice scene %d (%zu solids)", t, n);
+        run r;
+        if (arrange(s, n, 0x1p-20, &r, what) == 0) solid_volumes(&r, s, n, 1e-12, what);
+        lar3_free(&r.c);
+        /* the same scene turned and moved: off the grid, contacts become near-contacts or
+         * small overlaps, and every volume moves by at most the snapping */
+        double u[3], len = 0, R[3][3], tr[3], area = 0;
+        for (int a = 0; a < 3; a++) u[a] = test_rnd(&seed) - 0.5, len += u[a] * u[a];
+        for (int a = 0; a < 3; a++) u[a] /= sqrt(len), tr[a] = 10 * test_rnd(&seed);
+        shape_rotation(u, 2 * M_PI * test_rnd(&seed), R);
+        for (size_t i = 0; i < n; i++) shape_transform(&s[i], R, tr), area += shape_area(&s[i]);
+        snprintf(what, sizeof what, "lattice scene %d turned", t);
+        if (arrange(s, n, 0, &r, what) == 0) solid_volumes(&r, s, n, 2 * r.step * area, what);
+        lar3_free(&r.c);
+        for (size_t i = 0; i < n; i++) solid_free(&s[i]);
+    }
 }

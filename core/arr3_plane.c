@@ -43,9 +43,9 @@
 typedef struct pseg {
     uint32_t p0, p1; /* local points; p0 == p1: a contact point, not a segment */
     uint32_t side;
-    uint32_t va, vb; /* input edge (va < vb), or NONE */
-    uint32_t piece;  /* boundary of this piece, or NONE */
-    int ax;          /* largest |component| of n_P x n_side */
+    uint32_t va, vb;      /* input edge (va < vb), or NONE */
+    uint32_t prov, nprov; /* the pieces whose boundary it is: sprov[prov .. prov + nprov) */
+    int ax;               /* largest |component| of n_P x n_side */
     double lo[2], hi[2];
 } pseg;
 
@@ -81,6 +81,10 @@ typedef struct pwork {
     size_t nsg, capsg;
     split *sp;
     size_t nsp, capsp;
+    uint32_t *sprov; /* the segments' pieces */
+    size_t nsprov, capsprov;
+    uint32_t *grp, *rank;
+    size_t capgrp, caprank;
     uint32_t *order, *active;
     size_t caporder, capactive;
     uint32_t *tmp;
@@ -341,7 +345,8 @@ static int cmp_split(const void *pa, const void *pb)
 static int add_edge(pwork *w, const pseg *s, uint32_t a, uint32_t b)
 {
     if (a == b) return 0;
-    pedge e = {a < b ? a : b, a < b ? b : a, s->side, s->va, s->vb, s->piece, 0, 0, 0, 0};
+    /* prov/nprov refer to the segment's pieces (sprov) until the edges are merged */
+    pedge e = {a < b ? a : b, a < b ? b : a, s->side, s->va, s->vb, s->prov, s->nprov, 0, 0, 0};
     return A3_PUSH(w->ed, w->ned, w->caped, e);
 }
 
@@ -350,7 +355,117 @@ static int cmp_edge(const void *pa, const void *pb)
     const pedge *a = pa, *b = pb;
     if (a->a != b->a) return a->a < b->a ? -1 : 1;
     if (a->b != b->b) return a->b < b->b ? -1 : 1;
-    if (a->prov != b->prov) return a->prov < b->prov ? -1 : 1; /* piece, before merging */
+    return (a->prov > b->prov) - (a->prov < b->prov);
+}
+
+/* XOR of two sorted piece lists into out (sorted); returns its length. */
+static size_t cov_xor(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
+{
+    size_t i = 0, j = 0, n = 0;
+    while (i < na || j < nb) {
+        if (j == nb || (i < na && a[i] < b[j]))
+            out[n++] = a[i++];
+        else if (i == na || b[j] < a[i])
+            out[n++] = b[j++];
+        else
+            i++, j++;
+    }
+    return n;
+}
+
+static int cmp_side(const void *pa, const void *pb, void *vw)
+{
+    const pwork *w = vw;
+    uint32_t x = *(const uint32_t *)pa, y = *(const uint32_t *)pb;
+    const pseg *a = &w->sg[x], *b = &w->sg[y];
+    if (a->side != b->side) return a->side < b->side ? -1 : 1;
+    return (x > y) - (x < y);
+}
+
+/* Segments with one side plane lie on one line: their union is cut at all their endpoints
+ * into elementary pieces, each with the pieces (XOR) of the segments covering it.  Overlapping
+ * collinear edges (coplanar faces' shared lines) then cost one sort, not a test per pair. */
+static int merge_collinear(pwork *w)
+{
+    size_t n = w->nsg, ng = 0;
+    if (GROW(w, grp, n + 1)) return -1;
+    for (size_t i = 0; i < n; i++)
+        if (w->sg[i].p0 != w->sg[i].p1) w->grp[ng++] = (uint32_t)i;
+    if (ng > 1) qsort_r(w->grp, ng, sizeof *w->grp, cmp_side, w);
+    for (size_t g0 = 0; g0 < ng;) {
+        size_t g1 = g0 + 1;
+        while (g1 < ng && w->sg[w->grp[g1]].side == w->sg[w->grp[g0]].side) g1++;
+        if (g1 - g0 < 2) {
+            g0 = g1;
+            continue;
+        }
+        int ax = w->sg[w->grp[g0]].ax;
+        uint32_t side = w->sg[w->grp[g0]].side;
+        /* the group's points, sorted along the line */
+        size_t m = 0;
+        if (GROW(w, tmp, 2 * (g1 - g0))) return -1;
+        for (size_t k = g0; k < g1; k++) {
+            w->tmp[m++] = w->sg[w->grp[k]].p0;
+            w->tmp[m++] = w->sg[w->grp[k]].p1;
+        }
+        sortctx c = {w, ax};
+        qsort_r(w->tmp, m, sizeof *w->tmp, cmp_along, &c);
+        size_t u = 0;
+        for (size_t k = 0; k < m; k++)
+            if (!u || w->tmp[k] != w->tmp[u - 1]) w->tmp[u++] = w->tmp[k];
+        m = u;
+        /* each segment's range of ranks over the elementary intervals */
+        if (GROW(w, rank, 2 * (g1 - g0))) return -1;
+        for (size_t k = g0; k < g1; k++) {
+            const pseg *sg = &w->sg[w->grp[k]];
+            for (int e = 0; e < 2; e++) {
+                uint32_t x = e ? sg->p1 : sg->p0;
+                size_t lo = 0, hi = m;
+                while (lo < hi) { /* the rank of x: the first not before it */
+                    size_t mid = (lo + hi) / 2;
+                    if (cmp_along(&w->tmp[mid], &x, &c) < 0)
+                        lo = mid + 1;
+                    else
+                        hi = mid;
+                }
+                w->rank[2 * (k - g0) + (size_t)e] = (uint32_t)lo;
+            }
+            if (w->rank[2 * (k - g0)] > w->rank[2 * (k - g0) + 1]) {
+                uint32_t t = w->rank[2 * (k - g0)];
+                w->rank[2 * (k - g0)] = w->rank[2 * (k - g0) + 1];
+                w->rank[2 * (k - g0) + 1] = t;
+            }
+        }
+        /* the elementary intervals, each with the XOR of its covering segments' pieces */
+        for (size_t i = 0; i + 1 < m; i++) {
+            size_t cover = 0, p0 = w->nsprov;
+            uint32_t va = NONE, vb = NONE;
+            for (size_t k = g0; k < g1; k++) {
+                if (!(w->rank[2 * (k - g0)] <= i && i < w->rank[2 * (k - g0) + 1])) continue;
+                const pseg *sg = &w->sg[w->grp[k]];
+                cover++;
+                if (sg->va != NONE) va = sg->va, vb = sg->vb;
+                size_t have = w->nsprov - p0;
+                if (GROW(w, sprov, w->nsprov + sg->nprov + 1) || GROW(w, x2, have + sg->nprov + 1))
+                    return -1;
+                size_t nx = cov_xor(w->sprov + p0, have, w->sprov + sg->prov, sg->nprov, w->x2);
+                memcpy(w->sprov + p0, w->x2, nx * sizeof *w->x2);
+                w->nsprov = p0 + nx;
+            }
+            if (!cover) continue;
+            pseg ns = {
+                w->tmp[i], w->tmp[i + 1], side,  va, vb, (uint32_t)p0, (uint32_t)(w->nsprov - p0),
+                ax,        {0, 0},        {0, 0}};
+            if (A3_PUSH(w->sg, w->nsg, w->capsg, ns)) return -1;
+        }
+        for (size_t k = g0; k < g1; k++) w->sg[w->grp[k]].side = NONE; /* replaced */
+        g0 = g1;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < w->nsg; i++)
+        if (w->sg[i].side != NONE || w->sg[i].p0 == w->sg[i].p1) w->sg[k++] = w->sg[i];
+    w->nsg = k;
+    for (size_t i = 0; i < w->nsg; i++) seg_box(w, &w->sg[i]);
     return 0;
 }
 
@@ -397,21 +512,20 @@ static int make_edges(pwork *w)
         e.nprov = 0;
         e.prov = (uint32_t)w->nprov;
         for (; k < w->ned && w->ed[k].a == e.a && w->ed[k].b == e.b; k++) {
-            uint32_t pc = w->ed[k].prov;
-            if (w->ed[k].va != NONE && e.va == NONE) {
-                e.va = w->ed[k].va;
-                e.vb = w->ed[k].vb;
-                e.side = w->ed[k].side;
+            const pedge *x = &w->ed[k];
+            if (x->va != NONE && e.va == NONE) {
+                e.va = x->va;
+                e.vb = x->vb;
+                e.side = x->side;
             }
-            if (pc == NONE) continue;
-            if (e.nprov && w->prov[w->nprov - 1] == pc) { /* twice: cancels */
-                w->nprov--;
-                e.nprov--;
-                continue;
-            }
-            if (A3_PUSH(w->prov, w->nprov, w->capprov, pc)) return -1;
-            e.nprov++;
+            if (GROW(w, prov, w->nprov + e.nprov + x->nprov + 1) ||
+                GROW(w, x2, e.nprov + x->nprov + 1))
+                return -1;
+            size_t nx = cov_xor(w->prov + e.prov, e.nprov, w->sprov + x->prov, x->nprov, w->x2);
+            memcpy(w->prov + e.prov, w->x2, nx * sizeof *w->x2);
+            e.nprov = (uint32_t)nx;
         }
+        w->nprov = e.prov + e.nprov;
         w->ed[m++] = e;
         i = k;
     }
@@ -597,21 +711,6 @@ static int place_components(pwork *w, size_t ncomp)
 
 /* ---- coverage ------------------------------------------------------------------------- */
 
-/* XOR of two sorted piece lists into out (sorted); returns its length. */
-static size_t cov_xor(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
-{
-    size_t i = 0, j = 0, n = 0;
-    while (i < na || j < nb) {
-        if (j == nb || (i < na && a[i] < b[j]))
-            out[n++] = a[i++];
-        else if (i == na || b[j] < a[i])
-            out[n++] = b[j++];
-        else
-            i++, j++;
-    }
-    return n;
-}
-
 static int cmpu32(const void *pa, const void *pb)
 {
     uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
@@ -748,7 +847,7 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     w->v = (w->k + 2) % 3;
     w->sgnk = pl->n[w->k] > 0 ? 1 : -1;
     lp_reset(w);
-    w->nsg = w->nsp = 0;
+    w->nsg = w->nsp = w->nsprov = 0;
     /* segments: the pieces' edges, the cuts, the contact points */
     for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
         uint32_t pi = A->pp[i];
@@ -762,10 +861,12 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
                           A->pcvp[o + j],
                           a < b ? a : b,
                           a < b ? b : a,
-                          pi,
+                          (uint32_t)w->nsprov,
+                          1,
                           0,
                           {0, 0},
                           {0, 0}};
+                if (A3_PUSH(w->sprov, w->nsprov, w->capsprov, pi)) return -1;
                 if (s.p0 == NONE || s.p1 == NONE) return -1;
                 if (A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
             }
@@ -774,13 +875,13 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     for (uint32_t i = A->cs_off[P]; i < A->cs_off[P + 1]; i++) {
         const cseg *c = &A->cs[i];
         pseg s = {
-            lp_global(w, c->p0), lp_global(w, c->p1), c->side, NONE, NONE, NONE, 0, {0, 0}, {0, 0}};
+            lp_global(w, c->p0), lp_global(w, c->p1), c->side, NONE, NONE, 0, 0, 0, {0, 0}, {0, 0}};
         if (s.p0 == NONE || s.p1 == NONE) return -1;
         if (A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
     }
     for (uint32_t i = A->cp_off[P]; i < A->cp_off[P + 1]; i++) {
         uint32_t x = lp_global(w, A->cp[i].p);
-        pseg s = {x, x, NONE, NONE, NONE, NONE, 0, {0, 0}, {0, 0}};
+        pseg s = {x, x, NONE, NONE, NONE, 0, 0, 0, {0, 0}, {0, 0}};
         if (x == NONE || A3_PUSH(w->sg, w->nsg, w->capsg, s)) return -1;
     }
     for (size_t i = 0; i < w->nsg; i++) {
@@ -792,7 +893,7 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         }
         seg_box(w, s);
     }
-    if (sweep(w) || dedup_local(w) || make_edges(w)) return -1;
+    if (merge_collinear(w) || sweep(w) || dedup_local(w) || make_edges(w)) return -1;
     if (make_cycles(w)) return -1;
     /* the points in use: ends of edges, and contact points (which may stand alone) */
     size_t np = w->nlp;
@@ -947,6 +1048,7 @@ static void pwork_free(pwork *w)
     free(w->lp), free(w->lg), free(w->htab), free(w->hused), free(w->alias);
     pset_free(&w->ps);
     free(w->sg), free(w->sp), free(w->order), free(w->active), free(w->tmp);
+    free(w->sprov), free(w->grp), free(w->rank);
     free(w->ed), free(w->prov);
     free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->cyc_h);
     free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);

@@ -502,6 +502,42 @@ done:
     return rc;
 }
 
+/* The id of the vertical plane of edge (v, w) along axis k: each edge is shared by two pieces,
+ * so the plane is made once per (edge, axis).  NONE - 1 when the edge is parallel to e_k. */
+static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
+{
+    uint32_t lo = v < w ? v : w, hi = v ^ w ^ lo;
+    uint64_t key = ((uint64_t)lo << 32 | hi) * 3 + (uint64_t)k + 1;
+    if (2 * (A->nvp + 1) > A->vpcap) {
+        size_t ncap = A->vpcap ? 2 * A->vpcap : 4096;
+        uint64_t *nk = calloc(ncap, sizeof *nk);
+        uint32_t *nv = malloc(ncap * sizeof *nv);
+        if (!nk || !nv) {
+            free(nk), free(nv);
+            return NONE;
+        }
+        for (size_t i = 0; i < A->vpcap; i++) {
+            if (!A->vpkey[i]) continue;
+            size_t h = a3_mix64(A->vpkey[i]) & (ncap - 1);
+            while (nk[h]) h = (h + 1) & (ncap - 1);
+            nk[h] = A->vpkey[i], nv[h] = A->vpval[i];
+        }
+        free(A->vpkey), free(A->vpval);
+        A->vpkey = nk, A->vpval = nv, A->vpcap = ncap;
+    }
+    size_t h = a3_mix64(key) & (A->vpcap - 1);
+    while (A->vpkey[h]) {
+        if (A->vpkey[h] == key) return A->vpval[h];
+        h = (h + 1) & (A->vpcap - 1);
+    }
+    plane3 vp;
+    if (plane_vertical(A->g + 3 * (size_t)lo, A->g + 3 * (size_t)hi, k, &vp)) return NONE - 1;
+    uint32_t id = plane_id(A, &vp);
+    if (id == NONE) return NONE;
+    A->vpkey[h] = key, A->vpval[h] = id, A->nvp++;
+    return id;
+}
+
 /* Adds a piece with the given cycles (vertex lists) on plane pl (canonical id); its cycle
  * entries get the vertical planes of their edges. */
 static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t **cyc,
@@ -516,12 +552,8 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t
         A->pc_off[A->npcyc] = (uint32_t)A->npcv;
         for (size_t i = 0; i < len[c]; i++) {
             uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
-            plane3 vp;
-            uint32_t vid = NONE;
-            if (plane_vertical(A->g + 3 * (size_t)v, A->g + 3 * (size_t)w, k, &vp) == 0)
-                vid = plane_id(A, &vp);
-            else
-                return -2; /* an edge along the normal's largest axis: impossible in-plane */
+            uint32_t vid = vertical_id(A, v, w, k);
+            if (vid == NONE - 1) return -2; /* an edge along the normal's largest axis */
             if (vid == NONE) return -1;
             if (a3_grow(&A->pcv, &A->cappcv, A->npcv + 1, sizeof *A->pcv) ||
                 a3_grow(&A->pcvp, &A->cappcvp, A->npcv + 1, sizeof *A->pcvp))
@@ -1310,6 +1342,35 @@ static int merge_planes(a3 *A, pset *ps)
     size_t ncov = 0;
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
+        if (F->trivial) { /* one piece, one cycle: itself, counter-clockwise about n_P */
+            uint32_t pi = A->pp[A->pp_off[p]];
+            const piece *pc = &A->pc[pi];
+            uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
+            int rev = pc->sgn < 0;
+            if (a3_grow(&A->f_cyc, &capfc, A->nf + 2, sizeof *A->f_cyc) ||
+                a3_grow(&A->f_plane, &capfp, A->nf + 1, sizeof *A->f_plane) ||
+                a3_grow(&A->f_cov, &capf, A->nf + 2, sizeof *A->f_cov) ||
+                a3_grow(&A->cyc_off, &capc, A->ncyc + 2, sizeof *A->cyc_off) ||
+                a3_grow(&A->ent, &cape, A->nent + n, sizeof *A->ent) ||
+                a3_grow(&A->side, &capside, A->nent + n, sizeof *A->side) ||
+                A3_PUSH(A->cov, ncov, capcov, pi))
+                goto done;
+            A->f_cyc[A->nf] = (uint32_t)A->ncyc;
+            A->f_cov[A->nf] = (uint32_t)ncov - 1;
+            A->f_plane[A->nf] = (uint32_t)p;
+            A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+            for (uint32_t i = 0; i < n; i++) {
+                A->ent[A->nent + i] = rev ? A->pcv[o + n - 1 - i] : A->pcv[o + i];
+                A->side[A->nent + i] = rev ? A->pcvp[o + (2 * n - 2 - i) % n] : A->pcvp[o + i];
+            }
+            A->nent += n;
+            A->ncyc++;
+            A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+            A->nf++;
+            A->f_cyc[A->nf] = (uint32_t)A->ncyc;
+            A->f_cov[A->nf] = (uint32_t)ncov;
+            continue;
+        }
         if (!F->nf && !F->nnew) continue;
         if (a3_grow(&map, &capmap, F->nnew + 1, sizeof *map)) goto done;
         for (uint32_t i = 0; i < F->nnew; i++) {
@@ -1372,6 +1433,8 @@ static void a3_free(a3 *A)
     free(A->vtab);
     free(A->pl);
     free(A->pltab);
+    free(A->vpkey);
+    free(A->vpval);
     free(A->pc);
     free(A->pc_off);
     free(A->pcv);

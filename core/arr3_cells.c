@@ -546,12 +546,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             x.n0 = face_n(A, F[0].f);
             x.s0 = F[0].s;
             qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
-            if (getenv("A3DEBUG")) {
-                fprintf(stderr, "fan e%zu (%u %u) d=(%g %g %g):", e, ev[2 * e], ev[2 * e + 1],
-                        (double)x.d[0], (double)x.d[1], (double)x.d[2]);
-                for (size_t k = 0; k < n; k++) fprintf(stderr, " f%u%+d", F[k].f, F[k].s);
-                fprintf(stderr, "\n");
-            }
         }
         if (!A->soup && (rc = fan_check(A, F, n, ev + 2 * e, out, err, errlen)) != ARR_OK)
             goto done;
@@ -560,7 +554,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
             uint32_t n0 = 2 * f0->f + (f0->s > 0 ? 0 : 1);
             uint32_t n1 = 2 * f1->f + (f1->s > 0 ? 1 : 0);
-            if (getenv("A3LINKS")) fprintf(stderr, "L %u %u %zu\n", n0, n1, e);
             a3_uf_union(sp, n0, n1);
             a3_uf_union(fcomp, f0->f, f1->f);
         }
@@ -720,9 +713,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             }
             if (!depth) host = s_up;
         }
-        if (getenv("A3DEBUG"))
-            fprintf(stderr, "comp %zu k=%d outer %u host %u (ext %u), %u hits beyond\n", c, pr->k,
-                    outer[c], host, EXT, nh);
         a3_uf_union(cu, outer[c], host);
     }
     /* cells: classes of shells; the one holding EXT is the exterior */
@@ -929,36 +919,43 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
         for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     }
-    /* CV: sorted vertices of each cell's faces; CF rows sorted */
+    /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
+     * read off in vertex order, a small one sorted); CF rows sorted */
     out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
     if (!out->cv_off) goto done;
     {
-        uint32_t *buf = NULL, *cv = NULL;
-        size_t nb = 0, capb = 0, ncv = 0, capcv = 0;
+        uint32_t *cv = NULL, *stamp = calloc(out->nv + 1, sizeof *stamp);
+        size_t ncv = 0, capcv = 0;
+        if (!stamp) goto done;
         for (size_t k = 0; k < nc; k++) {
-            nb = 0;
+            size_t start = ncv;
             for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
                 uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
                 for (uint32_t cy = out->fc_off[f]; cy < out->fc_off[f + 1]; cy++)
-                    for (uint32_t j = out->cyc_off[cy]; j < out->cyc_off[cy + 1]; j++)
-                        if (A3_PUSH(buf, nb, capb, out->cyc[j])) {
-                            free(buf), free(cv);
+                    for (uint32_t j = out->cyc_off[cy]; j < out->cyc_off[cy + 1]; j++) {
+                        uint32_t v = out->cyc[j];
+                        if (stamp[v] == k + 1) continue;
+                        stamp[v] = (uint32_t)k + 1;
+                        if (A3_PUSH(cv, ncv, capcv, v)) {
+                            free(stamp), free(cv);
                             goto done;
                         }
-            }
-            if (nb > 1) qsort(buf, nb, sizeof *buf, cmpu32);
-            for (size_t i = 0; i < nb; i++)
-                if (i == 0 || buf[i] != buf[i - 1])
-                    if (A3_PUSH(cv, ncv, capcv, buf[i])) {
-                        free(buf), free(cv);
-                        goto done;
                     }
+            }
+            size_t m = ncv - start;
+            if (m > out->nv / 16) {
+                size_t w = start;
+                for (uint32_t v = 0; v < out->nv; v++)
+                    if (stamp[v] == k + 1) cv[w++] = v;
+            } else if (m > 1) {
+                qsort(cv + start, m, sizeof *cv, cmpu32);
+            }
             out->cv_off[k + 1] = (uint32_t)ncv;
             if (out->cf_off[k + 1] - out->cf_off[k] > 1)
                 qsort(out->cf + out->cf_off[k], out->cf_off[k + 1] - out->cf_off[k],
                       sizeof *out->cf, cmpi32);
         }
-        free(buf);
+        free(stamp);
         out->cv = cv ? cv : malloc(sizeof *out->cv);
         if (!out->cv) goto done;
     }

@@ -59,6 +59,7 @@ typedef struct pfaces {
     uint32_t *cov;     /* pieces covering each face */
     xpt *newp;         /* nnew new points (crossings) */
     uint32_t base;     /* ent >= base: newp[ent - base] */
+    int trivial;       /* one piece of one cycle, nothing else: the piece is the face (no arrays) */
 } pfaces;
 
 void pfaces_free(pfaces *f);
@@ -81,6 +82,9 @@ typedef struct a3 {
     size_t npl, cappl;
     uint32_t *pltab;
     size_t plcap;
+    uint64_t *vpkey; /* the vertical plane of each (edge, axis) seen: key -> vpval */
+    uint32_t *vpval;
+    size_t vpcap, nvp;
     /* pieces and their cycles */
     piece *pc;
     size_t npc, cappc;

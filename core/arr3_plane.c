@@ -787,49 +787,6 @@ static int out_cycle(pwork *w, outb *o, uint32_t h, uint32_t x, uint32_t *newid)
     return out_close_cycle(o);
 }
 
-/* A plane holding one piece with one cycle and nothing else: the piece is the face. */
-static int trivial_plane(const a3 *A, uint32_t P, pfaces *F)
-{
-    uint32_t pi = A->pp[A->pp_off[P]];
-    const piece *pc = &A->pc[pi];
-    uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
-    const plane3 *pl = &A->pl[P];
-    int k = plane_axis(pl), u = (k + 1) % 3, v = (k + 2) % 3;
-    i128 s = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        const int64_t *p = A->g + 3 * (size_t)A->pcv[o + i];
-        const int64_t *q = A->g + 3 * (size_t)A->pcv[o + (i + 1) % n];
-        s += (i128)p[u] * q[v] - (i128)p[v] * q[u];
-    }
-    int rev = (s > 0) != (pl->n[k] > 0);
-    F->nf = 1;
-    F->ncyc = 1;
-    F->nent = n;
-    F->ncov = 1;
-    F->f_cyc = malloc(2 * sizeof *F->f_cyc);
-    F->cyc_off = malloc(2 * sizeof *F->cyc_off);
-    F->ent = malloc(n * sizeof *F->ent);
-    F->side = malloc(n * sizeof *F->side);
-    F->f_cov = malloc(2 * sizeof *F->f_cov);
-    F->cov = malloc(sizeof *F->cov);
-    if (!F->f_cyc || !F->cyc_off || !F->ent || !F->side || !F->f_cov || !F->cov) return -1;
-    F->f_cyc[0] = 0, F->f_cyc[1] = 1;
-    F->cyc_off[0] = 0, F->cyc_off[1] = n;
-    F->f_cov[0] = 0, F->f_cov[1] = 1;
-    F->cov[0] = pi;
-    F->base = NEWBASE;
-    for (uint32_t i = 0; i < n; i++) {
-        if (!rev) {
-            F->ent[i] = A->pcv[o + i];
-            F->side[i] = A->pcvp[o + i];
-        } else {
-            F->ent[i] = A->pcv[o + n - 1 - i];
-            F->side[i] = A->pcvp[o + (2 * n - 2 - i) % n];
-        }
-    }
-    return 0;
-}
-
 /* ---- one plane ------------------------------------------------------------------------- */
 
 static int plane_run(pwork *w, uint32_t P, pfaces *F)
@@ -839,8 +796,10 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     memset(F, 0, sizeof *F);
     F->base = NEWBASE;
     if (A->pp_off[P + 1] - A->pp_off[P] == 1 && A->cs_off[P + 1] == A->cs_off[P] &&
-        A->cp_off[P + 1] == A->cp_off[P] && A->pc[A->pp[A->pp_off[P]]].nc == 1)
-        return trivial_plane(A, P, F);
+        A->cp_off[P + 1] == A->cp_off[P] && A->pc[A->pp[A->pp_off[P]]].nc == 1) {
+        F->trivial = 1; /* merge_planes writes the piece as it is */
+        return 0;
+    }
     w->P = P;
     w->k = plane_axis(pl);
     w->u = (w->k + 1) % 3;

@@ -40,10 +40,35 @@ static int sgn128(i128 v)
 
 /* ---- planes ----------------------------------------------------------------------------- */
 
+/* Binary gcd on 64 bits (no division). */
+static uint64_t gcd64(uint64_t a, uint64_t b)
+{
+    if (!a) return b;
+    if (!b) return a;
+    int s = __builtin_ctzll(a | b);
+    a >>= __builtin_ctzll(a);
+    do {
+        b >>= __builtin_ctzll(b);
+        if (a > b) {
+            uint64_t t = a;
+            a = b, b = t;
+        }
+        b -= a;
+    } while (b);
+    return a << s;
+}
+
 void plane_reduce(plane3 *p)
 {
-    u128 g = gcd128(gcd128(uabs128(p->n[0]), uabs128(p->n[1])), uabs128(p->n[2]));
-    g = gcd128(g, uabs128(p->d));
+    u128 g = gcd64(gcd64((uint64_t)uabs128(p->n[0]), (uint64_t)uabs128(p->n[1])),
+                   (uint64_t)uabs128(p->n[2]));
+    u128 ad = uabs128(p->d);
+    if (g > 1) { /* most normals are already primitive: then so is the plane */
+        if (ad >> 64 == 0)
+            g = gcd64((uint64_t)g, (uint64_t)ad);
+        else
+            g = gcd128(ad % g, g);
+    }
     if (g > 1) {
         for (int i = 0; i < 3; i++) p->n[i] = (int64_t)((i128)p->n[i] / (i128)g);
         p->d /= (i128)g;

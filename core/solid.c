@@ -5,10 +5,10 @@
  *   shape     the offset arrays are well formed, every index is in range, every coordinate is
  *             finite and small enough for the grid.  A failure here stops the check: nothing
  *             after it could be trusted.
- *   merge     every vertex is snapped to the grid of step `precision` (rounded to the nearest
- *             grid point, the pixel convention of core/num.h), and vertices on the same grid
- *             point are one: the merged vertex is the smallest input index among them.  We chose
- *             the grid over a sorted sweep with a distance test because the grid is what the 3D
+ *   merge     every vertex is snapped to the grid of step `precision` (llround of x / precision,
+ *             halves away from zero: exactly core/arr3.c's rule), and vertices on the same grid
+ *             point are one (a hash): the merged vertex is the smallest input index among them.  We
+ * chose the grid over a sorted sweep with a distance test because the grid is what the 3D
  *             pipeline's unification does with the same solid, and because it never chains
  *             merges (a, b, c each within the precision of the next, a far from c).  The price,
  *             paid knowingly: two vertices closer than the precision on either side of a pixel
@@ -212,39 +212,43 @@ static int check_shape(ck *c)
 
 /* ---- check: merge --------------------------------------------------------------------- */
 
-typedef struct gpt {
-    int64_t g[3];
-    uint32_t v;
-} gpt;
-
-static int gpt_cmp(const void *pa, const void *pb)
+/* Grid point -> the first vertex on it: open addressing over the vertices' grid points. */
+static uint64_t gmix(const int64_t *g)
 {
-    const gpt *a = pa, *b = pb;
-    for (int i = 0; i < 3; i++)
-        if (a->g[i] != b->g[i]) return a->g[i] < b->g[i] ? -1 : 1;
-    return (a->v > b->v) - (a->v < b->v);
+    uint64_t h = (uint64_t)g[0] * 0x9e3779b97f4a7c15ULL;
+    h ^= (uint64_t)g[1] * 0xc2b2ae3d27d4eb4fULL + (h << 6) + (h >> 2);
+    h ^= (uint64_t)g[2] * 0x165667b19e3779f9ULL + (h << 6) + (h >> 2);
+    h ^= h >> 31;
+    return h * 0xff51afd7ed558ccdULL;
 }
 
+/* The merged vertex of each vertex: the smallest index on its grid point (llround of x / p,
+ * the rule of core/arr3.c, so that both see the same vertices). */
 static int merge_vertices(ck *c)
 {
-    size_t nv = c->s->nv;
-    gpt *g = malloc((nv ? nv : 1) * sizeof *g);
+    size_t nv = c->s->nv, cap = 16;
+    while (cap < 2 * nv + 2) cap *= 2;
+    int64_t *g = malloc((nv ? 3 * nv : 1) * sizeof *g);
+    uint32_t *tab = malloc(cap * sizeof *tab);
     c->merged = malloc((nv ? nv : 1) * sizeof *c->merged);
-    if (!g || !c->merged) goto fail;
+    if (!g || !tab || !c->merged) goto fail;
+    memset(tab, 0xff, cap * sizeof *tab);
     for (size_t v = 0; v < nv; v++) {
         const double *x = vert(c, (uint32_t)v);
-        for (int a = 0; a < 3; a++) g[v].g[a] = (int64_t)floor(x[a] / c->p + 0.5);
-        g[v].v = (uint32_t)v;
-    }
-    qsort(g, nv, sizeof *g, gpt_cmp);
-    for (size_t i = 0, j; i < nv; i = j) {
-        for (j = i + 1; j < nv && !memcmp(g[j].g, g[i].g, sizeof g[i].g); j++) continue;
-        for (size_t k = i; k < j; k++) c->merged[g[k].v] = g[i].v;
+        int64_t *gv = g + 3 * v;
+        for (int a = 0; a < 3; a++) gv[a] = (int64_t)llround(x[a] / c->p);
+        size_t h = gmix(gv) & (cap - 1);
+        while (tab[h] != NONE && memcmp(g + 3 * (size_t)tab[h], gv, 3 * sizeof *gv))
+            h = (h + 1) & (cap - 1);
+        if (tab[h] == NONE) tab[h] = (uint32_t)v;
+        c->merged[v] = tab[h];
     }
     free(g);
+    free(tab);
     return 0;
 fail:
     free(g);
+    free(tab);
     return -1;
 }
 
@@ -359,14 +363,28 @@ static int check_faces(ck *c)
 
 /* ---- check: edges --------------------------------------------------------------------- */
 
-static int half_cmp(const void *pa, const void *pb)
+/* Sorts the half-edges by key, stably (so those of one edge stay in face order): LSD radix on
+ * the key's bytes, skipping the bytes every key shares. */
+static int sort_halves(ck *c)
 {
-    const half *a = pa, *b = pb;
-    if (a->key != b->key) return a->key < b->key ? -1 : 1;
-    if (a->face != b->face) return a->face < b->face ? -1 : 1;
-    if (a->fwd != b->fwd) return a->fwd < b->fwd ? -1 : 1;
-    if (a->a != b->a) return a->a < b->a ? -1 : 1;
-    return (a->b > b->b) - (a->b < b->b);
+    size_t n = c->nhe;
+    half *tmp = malloc((n ? n : 1) * sizeof *tmp), *src = c->he, *dst = tmp;
+    if (!tmp) return -1;
+    uint64_t all_or = 0, all_and = ~(uint64_t)0;
+    for (size_t i = 0; i < n; i++) all_or |= src[i].key, all_and &= src[i].key;
+    for (int pass = 0; pass < 8; pass++) {
+        int sh = 8 * pass;
+        if (((all_or ^ all_and) >> sh & 255) == 0) continue; /* the same byte everywhere */
+        size_t cnt[257] = {0};
+        for (size_t i = 0; i < n; i++) cnt[(src[i].key >> sh & 255) + 1]++;
+        for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+        for (size_t i = 0; i < n; i++) dst[cnt[src[i].key >> sh & 255]++] = src[i];
+        half *t = src;
+        src = dst, dst = t;
+    }
+    if (src != c->he) memcpy(c->he, src, n * sizeof *c->he);
+    free(tmp);
+    return 0;
 }
 
 static int half_idx_cmp(const void *pa, const void *pb)
@@ -424,7 +442,7 @@ static int check_edges(ck *c, int *bad)
                 h->fwd = u < w;
             }
         }
-    qsort(c->he, c->nhe, sizeof *c->he, half_cmp);
+    if (sort_halves(c)) return -1;
     for (size_t i = 0, j; i < c->nhe; i = j) {
         for (j = i + 1; j < c->nhe && c->he[j].key == c->he[i].key; j++) continue;
         const half *h = &c->he[i];

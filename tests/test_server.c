@@ -1144,10 +1144,16 @@ SERVER_TEST(post_poll_fetch, "--workers 2 --job-threads 1")
     const char *small = medium(1, &slen), *sexp = small ? expect(small, slen, &selen) : NULL;
     REQUIRE(sexp, "no expected result");
     jobv j2, d2;
-    REQUIRE(submit(d, small, slen, &j2) == 0, "second job");
-    CHECK(wait_state(d, j2.id, "done", 30 * slowdown(), &d2), "second job: %s", d2.state);
-    snprintf(v, sizeof v, "/v1/jobs/%.32s/result", j2.id);
-    http_get(d, v, &r);
+    /* a job this small may have ended before the POST is answered: then the answer is the
+     * result itself (200), else the job (202) */
+    http_post(d, small, slen, NULL, &r);
+    if (r.status == 202) {
+        REQUIRE(job_parse(&r, &j2) == 0, "second job: %s", r.body.p ? r.body.p : "");
+        hresp_free(&r);
+        CHECK(wait_state(d, j2.id, "done", 30 * slowdown(), &d2), "second job: %s", d2.state);
+        snprintf(v, sizeof v, "/v1/jobs/%.32s/result", j2.id);
+        http_get(d, v, &r);
+    }
     CHECK(r.status == 200 && same_result(r.body.p, r.body.n, sexp, selen) == 1,
           "second job's result: %ld", r.status);
     vq_add(d, "result", &r);

@@ -1342,33 +1342,36 @@ static int merge_planes(a3 *A, pset *ps)
     size_t ncov = 0;
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
-        if (F->trivial) { /* one piece, one cycle: itself, counter-clockwise about n_P */
-            uint32_t pi = A->pp[A->pp_off[p]];
-            const piece *pc = &A->pc[pi];
-            uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
-            int rev = pc->sgn < 0;
-            if (a3_grow(&A->f_cyc, &capfc, A->nf + 2, sizeof *A->f_cyc) ||
-                a3_grow(&A->f_plane, &capfp, A->nf + 1, sizeof *A->f_plane) ||
-                a3_grow(&A->f_cov, &capf, A->nf + 2, sizeof *A->f_cov) ||
-                a3_grow(&A->cyc_off, &capc, A->ncyc + 2, sizeof *A->cyc_off) ||
-                a3_grow(&A->ent, &cape, A->nent + n, sizeof *A->ent) ||
-                a3_grow(&A->side, &capside, A->nent + n, sizeof *A->side) ||
-                A3_PUSH(A->cov, ncov, capcov, pi))
-                goto done;
-            A->f_cyc[A->nf] = (uint32_t)A->ncyc;
-            A->f_cov[A->nf] = (uint32_t)ncov - 1;
-            A->f_plane[A->nf] = (uint32_t)p;
-            A->cyc_off[A->ncyc] = (uint32_t)A->nent;
-            for (uint32_t i = 0; i < n; i++) {
-                A->ent[A->nent + i] = rev ? A->pcv[o + n - 1 - i] : A->pcv[o + i];
-                A->side[A->nent + i] = rev ? A->pcvp[o + (2 * n - 2 - i) % n] : A->pcvp[o + i];
+        if (F->trivial) { /* simple pieces of one solid: each one a face, counter-clockwise
+                           * about n_P */
+            for (uint32_t k = A->pp_off[p]; k < A->pp_off[p + 1]; k++) {
+                uint32_t pi = A->pp[k];
+                const piece *pc = &A->pc[pi];
+                uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
+                int rev = pc->sgn < 0;
+                if (a3_grow(&A->f_cyc, &capfc, A->nf + 2, sizeof *A->f_cyc) ||
+                    a3_grow(&A->f_plane, &capfp, A->nf + 1, sizeof *A->f_plane) ||
+                    a3_grow(&A->f_cov, &capf, A->nf + 2, sizeof *A->f_cov) ||
+                    a3_grow(&A->cyc_off, &capc, A->ncyc + 2, sizeof *A->cyc_off) ||
+                    a3_grow(&A->ent, &cape, A->nent + n, sizeof *A->ent) ||
+                    a3_grow(&A->side, &capside, A->nent + n, sizeof *A->side) ||
+                    A3_PUSH(A->cov, ncov, capcov, pi))
+                    goto done;
+                A->f_cyc[A->nf] = (uint32_t)A->ncyc;
+                A->f_cov[A->nf] = (uint32_t)ncov - 1;
+                A->f_plane[A->nf] = (uint32_t)p;
+                A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+                for (uint32_t i = 0; i < n; i++) {
+                    A->ent[A->nent + i] = rev ? A->pcv[o + n - 1 - i] : A->pcv[o + i];
+                    A->side[A->nent + i] = rev ? A->pcvp[o + (2 * n - 2 - i) % n] : A->pcvp[o + i];
+                }
+                A->nent += n;
+                A->ncyc++;
+                A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+                A->nf++;
+                A->f_cyc[A->nf] = (uint32_t)A->ncyc;
+                A->f_cov[A->nf] = (uint32_t)ncov;
             }
-            A->nent += n;
-            A->ncyc++;
-            A->cyc_off[A->ncyc] = (uint32_t)A->nent;
-            A->nf++;
-            A->f_cyc[A->nf] = (uint32_t)A->ncyc;
-            A->f_cov[A->nf] = (uint32_t)ncov;
             continue;
         }
         if (!F->nf && !F->nnew) continue;

@@ -171,15 +171,19 @@ static int fan_cmp(const void *pa, const void *pb, void *vx)
     return (a->f > b->f) - (a->f < b->f);
 }
 
-/* For solids: around an edge, the wedges between consecutive faces of one solid alternate
- * inside and outside it.  Face f (walking the edge s = +-1) has its side s toward the next wedge
- * counter-clockwise; a piece covering it, of outward orientation g about f's normal, puts the
- * next wedge inside its solid when s != g, the previous one when -s != g.  A solid whose
- * consecutive faces disagree about a wedge passes through itself along this edge: an input
- * that intersects itself (or that the grid makes so), reported with where. */
+/* For solids: around an edge, each solid's winding number in the wedges between consecutive
+ * faces is 0 or 1 (outside or inside).  Face f (walking the edge s = +-1) has its side s toward
+ * the next wedge counter-clockwise; a piece covering it, of outward orientation g about f's
+ * normal, enters its solid toward the next wedge when s != g (+1) and leaves it when s == g
+ * (-1).  Two pieces of one solid on one face turning opposite ways (a surface touching itself
+ * face to face: an inner wall) add up to 0.  A solid whose winding about the edge takes more
+ * than two values, or does not come back to where it started, passes through itself along this
+ * edge: an input that intersects itself (or that the grid makes so), reported with where. */
 typedef struct fanside {
     uint32_t solid;
-    int first_prev, last_next;
+    int w, lo, hi; /* winding after the last face, relative to the first wedge; its range */
+    int dw;        /* of the current face */
+    size_t face;   /* the face dw belongs to */
 } fanside;
 
 static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, const lar3 *out,
@@ -187,27 +191,33 @@ static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, 
 {
     fanside st[8];
     size_t ns = 0;
-    for (size_t k = 0; k < n; k++) {
+    for (size_t k = 0; k <= n; k++) {
+        /* the face before k is complete: its windings apply */
+        for (size_t j = 0; j < ns; j++) {
+            if (st[j].face + 1 != k || !st[j].dw) continue;
+            st[j].w += st[j].dw;
+            st[j].dw = 0;
+            if (st[j].w < st[j].lo) st[j].lo = st[j].w;
+            if (st[j].w > st[j].hi) st[j].hi = st[j].w;
+            if (st[j].hi - st[j].lo > 1) goto bad;
+        }
+        if (k == n) break;
         uint32_t f = F[k].f;
         for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++) {
             const piece *pc = &A->pc[A->cov[i]];
-            int prev_in = -F[k].s != pc->sgn, next_in = F[k].s != pc->sgn;
             size_t j = 0;
             while (j < ns && st[j].solid != pc->solid) j++;
             if (j == ns) {
                 if (ns == sizeof st / sizeof *st) continue; /* only in a pile of 8 solids */
-                st[ns].solid = pc->solid;
-                st[ns].first_prev = prev_in;
-                st[ns].last_next = next_in;
+                st[ns] = (fanside){pc->solid, 0, 0, 0, 0, k};
                 ns++;
-                continue;
             }
-            if (st[j].last_next != prev_in) goto bad;
-            st[j].last_next = next_in;
+            st[j].dw += F[k].s != pc->sgn ? 1 : -1;
+            st[j].face = k;
         }
     }
     for (size_t j = 0; j < ns; j++)
-        if (st[j].last_next != st[j].first_prev) goto bad;
+        if (st[j].w != 0) goto bad;
     return ARR_OK;
 bad : {
     const piece *pc = &A->pc[A->cov[A->f_cov[F[0].f]]];

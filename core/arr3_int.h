@@ -59,7 +59,8 @@ typedef struct pfaces {
     uint32_t *cov;     /* pieces covering each face */
     xpt *newp;         /* nnew new points (crossings) */
     uint32_t base;     /* ent >= base: newp[ent - base] */
-    int trivial;       /* one piece of one cycle, nothing else: the piece is the face (no arrays) */
+    int trivial;       /* simple pieces of one solid turning one way, nothing else: each piece is a
+                          face as it is (no arrays) */
 } pfaces;
 
 void pfaces_free(pfaces *f);

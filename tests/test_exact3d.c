@@ -437,6 +437,63 @@ TEST(coplanar_faces_with_different_triangulations)
     }
 }
 
+/* One solid made of two boxes stacked on a common face (each with its own vertices): its
+ * surface touches itself face to face, an inner wall with the solid on both sides.  Two cells;
+ * with a box crossing the wall the Booleans are the closed forms, in either order. */
+TEST(solid_touching_itself_face_to_face)
+{
+    double V[16][3];
+    int F[2 * 6 * 5 + 1];
+    static const int box[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                  {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    size_t nfv = 0;
+    for (int b = 0; b < 2; b++) {
+        for (int i = 0; i < 8; i++) {
+            V[8 * b + i][0] = i & 1 ? 1.5 : 0.25;
+            V[8 * b + i][1] = i & 2 ? 1.25 : 0;
+            V[8 * b + i][2] = b + (i & 4 ? 1 : 0);
+        }
+        for (int f = 0; f < 6; f++) {
+            for (int k = 0; k < 4; k++) F[nfv++] = 8 * b + box[f][k];
+            F[nfv++] = -1;
+        }
+    }
+    F[nfv] = -2;
+    const double lo[3] = {1, 0.5, 0.5}, hi[3] = {2, 1, 1.75};
+    for (int order = 0; order < 2; order++) {
+        solid two = shape_poly(&V[0][0], 16, F), b = shape_box(lo, hi);
+        double vtwo = shape_volume(&two), vb = shape_volume(&b);
+        double common = (1.5 - 1) * (1 - 0.5) * (1.75 - 0.5);
+        solid s[2] = {order ? b : two, order ? two : b};
+        run r;
+        const char *what =
+            order ? "box and a solid with an inner wall" : "a solid with an inner wall and a box";
+        CHECK(near(vtwo, 2 * 1.25 * 1.25, 1e-15), "volume of the stacked boxes: %g", vtwo);
+        if (arrange(s, 2, 0, &r, what) == 0) {
+            double want[3] = {vtwo + vb - common, common, (order ? vb : vtwo) - common};
+            for (int k = 0; k < 3; k++)
+                CHECK(near(r.vol[k], want[k], 1e-12), "%s: op %d: %.17g, want %.17g", what, k,
+                      r.vol[k], want[k]);
+            solid_volumes(&r, s, 2, 1e-12, what);
+        }
+        lar3_free(&r.c);
+        solid_free(&two);
+        solid_free(&b);
+    }
+    /* alone: two cells of the stacked boxes' volumes, and the wall between them */
+    solid one = shape_poly(&V[0][0], 16, F);
+    run r;
+    if (arrange(&one, 1, 0, &r, "a solid with an inner wall") == 0) {
+        CHECK(r.c.nc == 2 && near(r.c.cvol[0], 1.25 * 1.25, 1e-15) &&
+                  near(r.c.cvol[1], 1.25 * 1.25, 1e-15),
+              "two cells of 1.5625: %zu cells", r.c.nc);
+        CHECK(r.c.nv == 12 && r.c.ne == 20 && r.c.nf == 11, "V/E/F %zu/%zu/%zu, want 12/20/11",
+              r.c.nv, r.c.ne, r.c.nf);
+    }
+    lar3_free(&r.c);
+    solid_free(&one);
+}
+
 /* B's bottom face lies 0.5 to 20 grid steps from A's top face and turns away from it by a
  * small angle: the two planes meet along a line where they are nearly parallel. */
 TEST(near_coplanar_faces)

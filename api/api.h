@@ -57,6 +57,18 @@ int api_run_json(const char *body, size_t len, int threads, char **out, size_t *
 int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,
                     size_t *outlen, api_error *err);
 
+/* A solids request whose solids are already read (the CLI's OBJ / OFF files): the same result
+ * bytes as api_run_json() on {"kind": "solids", "solids" (or "faces" when soup): s, "op": op,
+ * "options": options}, without writing and parsing that JSON.  s (a malloc'd array of n
+ * struct solid of core/solid.h) is taken over, array and solids: freed here, success or not; op and
+ * options (jansson values, may be NULL) are borrowed.  The same limits and checks as the JSON
+ * request, with its messages. */
+struct solid;
+struct json_t;
+int api_solids_run_direct(struct solid *s, size_t n, int soup, const struct json_t *op,
+                          const struct json_t *options, const api_run_opts *ro, char **out,
+                          size_t *outlen, api_error *err);
+
 /* Validates body[0..len) as api_run_json() would, without running the core: the daemon rejects
  * a bad request at once instead of queueing it.  When canon is not NULL, sets *canon to the
  * canonical form of the request (compact, keys sorted, one line, no final newline: what the

@@ -591,3 +591,128 @@ out:
     free(w);
     return rc;
 }
+
+/* ---- solids already read -------------------------------------------------------------------- */
+
+/* parse_solid's checks on a solid read from a file (the reader has checked the indices and the
+ * numbers; the limits and the shapes of the cycles are checked here, with the same messages). */
+static int check_read_solid(const solid *s, const char *path, int soup, totals *tot, api_error *err)
+{
+    char w[160];
+    if (s->nv > SOLIDS_MAX_VERTICES - tot->nv)
+        return api_fail(err, API_EINVALID, "%s.V: %zu vertices in all, at most %u allowed", path,
+                        tot->nv + s->nv, SOLIDS_MAX_VERTICES);
+    if (s->nf > SOLIDS_MAX_FACES - tot->nf)
+        return api_fail(err, API_EINVALID, "%s.FV: %zu faces in all, at most %u allowed", path,
+                        tot->nf + s->nf, (unsigned)SOLIDS_MAX_FACES);
+    if (s->nf == 0)
+        return api_fail(err, API_EINVALID, "%s.FV: expected %s, got none", path,
+                        soup ? "at least one face" : "the faces of a closed surface");
+    for (size_t v = 0; v < 3 * s->nv; v++)
+        if (!isfinite(s->V[v]))
+            return api_fail(err, API_EINVALID, "%s.V[%zu][%zu]: expected a finite number", path,
+                            v / 3, v % 3);
+    size_t nidx = s->cyc_off[s->ncyc];
+    if (nidx > SOLIDS_MAX_INDICES - tot->nidx)
+        return api_fail(err, API_EINVALID,
+                        "%s: %zu vertex indices in the cycles in all, at most %u", path,
+                        tot->nidx + nidx, SOLIDS_MAX_INDICES);
+    for (size_t f = 0; f < s->nf; f++)
+        for (uint32_t c = s->face_off[f]; c < s->face_off[f + 1]; c++) {
+            size_t n = s->cyc_off[c + 1] - s->cyc_off[c], h = c - s->face_off[f] - 1;
+            char key[24];
+            snprintf(key, sizeof key, "%zu", f);
+            const char *k = c == s->face_off[f] ? NULL : key;
+            if (n < 3)
+                return api_fail(err, API_EINVALID,
+                                "%s: expected at least 3 vertex indices, got %zu",
+                                cycle_path(w, sizeof w, path, f, k, h), n);
+            if (n > SOLIDS_MAX_CYCLE)
+                return api_fail(err, API_EINVALID,
+                                "%s: %zu vertex indices, at most %u in one cycle",
+                                cycle_path(w, sizeof w, path, f, k, h), n, SOLIDS_MAX_CYCLE);
+            for (uint32_t i = s->cyc_off[c]; i < s->cyc_off[c + 1]; i++)
+                if (s->cyc[i] >= s->nv)
+                    return api_fail(err, API_EINVALID,
+                                    "%s[%u]: expected a vertex index below %zu (V has %zu rows)",
+                                    cycle_path(w, sizeof w, path, f, k, h), i - s->cyc_off[c],
+                                    s->nv, s->nv);
+        }
+    tot->nv += s->nv;
+    tot->nf += s->nf;
+    tot->nidx += nidx;
+    return API_OK;
+}
+
+int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const json_t *options,
+                          const api_run_opts *ro, char **out, size_t *outlen, api_error *err)
+{
+    api_run_opts dflt = {0};
+    api_buf b = {0};
+    totals tot = {0};
+    int rc;
+    *out = NULL;
+    *outlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    if (!ro) ro = &dflt;
+    solids_req *r = calloc(1, sizeof *r);
+    if (!r) {
+        for (size_t i = 0; i < n; i++) solid_free(&s[i]);
+        free(s);
+        return api_fail(err, API_ENOMEM, "out of memory");
+    }
+    r->s = s; /* taken over: api_solids_free frees them */
+    r->ns = n;
+    r->soup = soup;
+    if (soup && n != 1) {
+        rc = api_fail(err, API_EINTERNAL, "internal error: a face soup is one solid");
+        goto out;
+    }
+    if (!soup && n > SOLIDS_MAX_SOLIDS) {
+        rc = api_fail(err, API_EINVALID, "solids: %zu solids, at most %u allowed", n,
+                      SOLIDS_MAX_SOLIDS);
+        goto out;
+    }
+    rc = parse_options(options, r, err);
+    if (rc != API_OK) goto out;
+    for (size_t i = 0; i < n; i++) {
+        char path[32];
+        if (soup)
+            snprintf(path, sizeof path, "faces");
+        else
+            snprintf(path, sizeof path, "solids[%zu]", i);
+        rc = check_read_solid(&s[i], path, soup, &tot, err);
+        if (rc != API_OK) goto out;
+    }
+    if (op) {
+        if (soup) {
+            rc = api_fail(err, API_EINVALID,
+                          "op: needs \"solids\" (a face soup has no inside to combine)");
+            goto out;
+        }
+        rc = api_bool_parse(op, n, &r->op, err);
+        if (rc != API_OK) goto out;
+        r->has_op = 1;
+    }
+    {
+        char msg[API_ERRMAX];
+        if (arr3_solids_step(r->s, r->ns, r->precision, &r->step, msg, sizeof msg) != ARR_OK) {
+            rc = api_fail(err, API_EINVALID, "options.%s", msg);
+            goto out;
+        }
+    }
+    rc = api_solids_run(r, ro, &b, err);
+    if (rc != API_OK) goto out;
+    api_buf_putc(&b, '\n');
+    if (b.failed) {
+        rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+        goto out;
+    }
+    *out = b.p;
+    *outlen = b.len;
+    b.p = NULL;
+out:
+    api_buf_free(&b);
+    api_solids_free(r);
+    return rc;
+}

@@ -619,7 +619,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
     size_t n = npos > 1 ? (size_t)npos - 1 : 0, blen = 0, outlen;
     solid *sv = NULL;
     char *body = NULL, *out = NULL, rerr[256];
-    json_t *opts = NULL;
+    json_t *opts = NULL, *op = NULL;
     json_error_t je;
     api_error err;
     FILE *m = NULL;
@@ -664,6 +664,26 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
             goto out;
         }
     }
+    if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
+        op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
+        if (!op) {
+            fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a "
+                            "JSON expression such as '[\"-\", 0, [\"+\", 1, 2]]'\n");
+            rc = EXIT_USAGE;
+            goto out;
+        }
+    }
+    if (!fl->faces && of->kind != 4) {
+        /* the solids as read, straight to the run: the bytes of `cellar run` on the request
+         * that --format request prints, without writing and parsing it */
+        api_run_opts ro = {.threads = threads};
+        int r = api_solids_run_direct(sv, n, 0, op, json_object_size(opts) ? opts : NULL, &ro, &out,
+                                      &outlen, &err);
+        sv = NULL; /* taken over, array and all */
+        if (r != API_OK) goto failed;
+        rc = write_result(out, outlen, of);
+        goto out;
+    }
     m = open_memstream(&body, &blen);
     if (!m) {
         fprintf(stderr, "cellar: out of memory\n");
@@ -681,18 +701,9 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         }
         fputc(']', m);
     }
-    if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
-        json_t *op =
-            fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
-        if (!op) {
-            fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a "
-                            "JSON expression such as '[\"-\", 0, [\"+\", 1, 2]]'\n");
-            rc = EXIT_USAGE;
-            goto out;
-        }
+    if (op) {
         fputs(",\"op\":", m);
         put_json(m, op);
-        json_decref(op);
     }
     if (json_object_size(opts)) {
         fputs(",\"options\":", m);
@@ -710,6 +721,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         goto out;
     }
     if (api_run_json(body, blen, threads, &out, &outlen, &err) != API_OK) {
+    failed:;
         size_t i;
         int k = -1;
         /* name the file of "solids[i]..." too */
@@ -727,6 +739,7 @@ out:
     free(out);
     for (size_t i = 0; sv && i < n; i++) solid_free(&sv[i]);
     free(sv);
+    json_decref(op);
     json_decref(opts);
     return rc;
 }

@@ -7,6 +7,8 @@ Usage:
   gen3d.py tets N SEED [--size S]    N random tetrahedra in [0,1]^3
   gen3d.py larcubes FILE             the cuboids of a LAR.jl input (tests/data/mesh/
                                      fivecubes-input.json: 1-based FV in cuboid order)
+  gen3d.py mesh FILE.off SCENE       a mesh (as read) and a second solid made from it:
+                                     SCENE rot, box or shell (below)
 Output (at least one; default --json -):
   --json PATH     a cellar request {"kind": "solids", "solids": [{"V": [[x,y,z],...],
                   "FV": [[v,...],...]}, ...]} (0-based indices; '-' = stdout)
@@ -45,6 +47,13 @@ grid: cube (i, j, k), 0 <= i, j, k < K, is [H i, H i + 1] x [H j, H j + 1] x [H 
 tets: tetrahedron i: centre uniform in [0,1]^3, four vertices centre + S * (uniform in
   [-1/2, 1/2])^3, redrawn while its volume is below S^3 / 100 (slivers).  Default S = twice
   the cubes' (1 for N = 10): a random tetrahedron fills only about 1/70 of its box.
+mesh: the mesh M of FILE.off (its numbers kept as read) and, as tests/real3d.py builds them
+  against CGAL:  rot    M turned by 0.7 rad about the axis (0.3, 1, 0.2) through the centre c of
+                        its bounding box and moved by (0.15, 0.1, 0.05) * its largest extent e;
+                 box    the box [c - (0.3, 0.2, *) e, c + (0.1, 0.25, *) e], z from 0.1 e below
+                        M to 0.1 e above: through M from top to bottom;
+                 shell  M scaled by 0.8 about c (inside M: the union is M, the difference a
+                        shell).
 larcubes: faces grouped into solids by shared vertices, each quad [a,b,c,d] (LAR cuboid order)
   made the cycle [a,b,d,c], each face turned outward (the solids are convex).
 """
@@ -171,6 +180,55 @@ def larcubes(path):
     return out
 
 
+def read_off(path):
+    d = [t for line in open(path) for t in line.split("#")[0].split()]
+    if not d or not d[0].endswith("OFF"):
+        raise ValueError("%s: not an OFF file" % path)
+    nv, nf = int(d[1]), int(d[2])
+    q = 4
+    V, F = [], []
+    for _ in range(nv):
+        V.append([float(d[q]), float(d[q + 1]), float(d[q + 2])])
+        q += 3
+    for _ in range(nf):
+        n = int(d[q])
+        F.append([int(x) for x in d[q + 1:q + 1 + n]])
+        q += 1 + n
+    return V, F
+
+
+def mesh(path, scene):
+    V, F = read_off(path)
+    lo = [min(v[i] for v in V) for i in range(3)]
+    hi = [max(v[i] for v in V) for i in range(3)]
+    c = [(lo[i] + hi[i]) / 2 for i in range(3)]
+    e = max(hi[i] - lo[i] for i in range(3))
+
+    def turned(R, t, sc):
+        return [[sum(R[a][b] * (v[b] - c[b]) for b in range(3)) * sc + c[a] + t[a]
+                 for a in range(3)] for v in V]
+    if scene == "rot":
+        u = [0.3, 1, 0.2]
+        n = math.sqrt(sum(x * x for x in u))
+        x, y, z = (t / n for t in u)
+        co, si = math.cos(0.7), math.sin(0.7)
+        R = [[co + x * x * (1 - co), x * y * (1 - co) - z * si, x * z * (1 - co) + y * si],
+             [y * x * (1 - co) + z * si, co + y * y * (1 - co), y * z * (1 - co) - x * si],
+             [z * x * (1 - co) - y * si, z * y * (1 - co) + x * si, co + z * z * (1 - co)]]
+        other = (turned(R, [0.15 * e, 0.1 * e, 0.05 * e], 1.0), F)
+    elif scene == "box":
+        bl = [c[0] - 0.3 * e, c[1] - 0.2 * e, lo[2] - 0.1 * e]
+        bh = [c[0] + 0.1 * e, c[1] + 0.25 * e, hi[2] + 0.1 * e]
+        other = ([[x, y, z] for x in (bl[0], bh[0]) for y in (bl[1], bh[1])
+                  for z in (bl[2], bh[2])], CUBE_FV)
+    elif scene == "shell":
+        I = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        other = (turned(I, [0, 0, 0], 0.8), F)
+    else:
+        raise ValueError("unknown scene '%s' (rot, box or shell)" % scene)
+    return [(V, F), other]
+
+
 def write_json(solids, options, f):
     f.write('{"kind": "solids", ')
     if options is not None:
@@ -222,7 +280,7 @@ def main(argv):
             pos.append(a)
             i += 1
     if not pos:
-        die("no generator (cubes, grid, tets or larcubes)")
+        die("no generator (cubes, grid, tets, larcubes or mesh)")
     kind, args = pos[0], pos[1:]
     info = {"kind": kind}
     try:
@@ -245,9 +303,11 @@ def main(argv):
                             V=(L + 1) ** 3, E=3 * L * (L + 1) ** 2, F=3 * L * L * (L + 1))
         elif kind == "larcubes" and len(args) == 1:
             solids = larcubes(args[0])
+        elif kind == "mesh" and len(args) == 2:
+            solids = mesh(args[0], args[1])
         else:
             die("bad arguments for '%s'" % kind)
-    except ValueError as e:
+    except (ValueError, OSError, IndexError) as e:
         die(str(e))
     options = None
     if "--options" in opt:

@@ -538,8 +538,8 @@ static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
     return id;
 }
 
-/* Adds a piece with the given cycles (vertex lists) on plane pl (canonical id); its cycle
- * entries get the vertical planes of their edges. */
+/* Adds a piece with the given cycles (vertex lists) on plane pl (canonical id); the vertical
+ * planes of its edges are left to stage_sides. */
 static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t **cyc,
                      const size_t *len, size_t nc)
 {
@@ -552,14 +552,14 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t
         A->pc_off[A->npcyc] = (uint32_t)A->npcv;
         for (size_t i = 0; i < len[c]; i++) {
             uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
-            uint32_t vid = vertical_id(A, v, w, k);
-            if (vid == NONE - 1) return -2; /* an edge along the normal's largest axis */
-            if (vid == NONE) return -1;
+            const int64_t *gv = A->g + 3 * (size_t)v, *gw = A->g + 3 * (size_t)w;
+            if (gv[(k + 1) % 3] == gw[(k + 1) % 3] && gv[(k + 2) % 3] == gw[(k + 2) % 3])
+                return -2; /* an edge along the normal's largest axis: not in the plane */
             if (a3_grow(&A->pcv, &A->cappcv, A->npcv + 1, sizeof *A->pcv) ||
                 a3_grow(&A->pcvp, &A->cappcvp, A->npcv + 1, sizeof *A->pcvp))
                 return -1;
             A->pcv[A->npcv] = v;
-            A->pcvp[A->npcv] = vid;
+            A->pcvp[A->npcv] = SIDE_LAZY; /* made by stage_sides where needed */
             A->npcv++;
             for (int a = 0; a < 3; a++) {
                 int64_t x = A->g[3 * (size_t)v + a];
@@ -1312,6 +1312,63 @@ static int plane_inputs(a3 *A)
     return 0;
 }
 
+int a3_plane_simple(const a3 *A, uint32_t P)
+{
+    if (A->cs_off[P + 1] != A->cs_off[P] || A->cp_off[P + 1] != A->cp_off[P]) return 0;
+    if (A->pp_off[P + 1] == A->pp_off[P]) return 1;
+    const piece *p0 = &A->pc[A->pp[A->pp_off[P]]];
+    for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
+        const piece *pc = &A->pc[A->pp[i]];
+        if (pc->nc != 1 || pc->solid != p0->solid || pc->sgn != p0->sgn) return 0;
+    }
+    return 1;
+}
+
+const plane3 *a3_side(const a3 *A, uint32_t fp, uint32_t a, uint32_t b, uint32_t S, plane3 *tmp)
+{
+    if (S == NONE) return NULL;
+    if (S != SIDE_LAZY) return &A->pl[S];
+    /* a and b are input vertices (points a, b are their grid points) */
+    if (plane_vertical(A->g + 3 * (size_t)a, A->g + 3 * (size_t)b, plane_axis(&A->pl[fp]), tmp))
+        return NULL;
+    return tmp;
+}
+
+/* The vertical planes of the edges of the pieces that go through a plane arrangement (where
+ * they are the lines of the segments, shared by id).  Serial: it adds planes. */
+static int stage_sides(a3 *A)
+{
+    uint32_t npl0 = (uint32_t)A->npl;
+    for (uint32_t P = 0; P < npl0; P++) {
+        if (A->pp_off[P + 1] == A->pp_off[P] || a3_plane_simple(A, P)) continue;
+        int k = plane_axis(&A->pl[P]);
+        for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
+            const piece *pc = &A->pc[A->pp[i]];
+            for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc; cy++) {
+                uint32_t o = A->pc_off[cy], n = A->pc_off[cy + 1] - o;
+                for (uint32_t j = 0; j < n; j++) {
+                    if (A->pcvp[o + j] != SIDE_LAZY) continue;
+                    uint32_t vid = vertical_id(A, A->pcv[o + j], A->pcv[o + (j + 1) % n], k);
+                    if (vid >= NONE - 1)
+                        return -1; /* out of memory (or an edge along e_k,
+                                      which add_piece has refused) */
+                    A->pcvp[o + j] = vid;
+                }
+            }
+        }
+    }
+    if (A->npl == npl0) return 0;
+    /* the new planes hold no pieces, cuts or contact points: extend the offsets */
+    uint32_t **off[3] = {&A->pp_off, &A->cs_off, &A->cp_off};
+    for (int i = 0; i < 3; i++) {
+        uint32_t *o = realloc(*off[i], (A->npl + 2) * sizeof *o);
+        if (!o) return -1;
+        for (size_t P = npl0 + 1; P < A->npl + 2; P++) o[P] = o[npl0];
+        *off[i] = o;
+    }
+    return 0;
+}
+
 /* ------------------------------------------------------------------ merge the planes */
 
 typedef struct newctx {
@@ -1498,7 +1555,8 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     free(pairs);
     pairs = NULL;
     out->stats.cuts = A.ncs / 2;
-    if (dedup_cut_points(&A, &ps) || plane_inputs(&A)) goto oom;
+    if (dedup_cut_points(&A, &ps) || plane_inputs(&A) || stage_sides(&A)) goto oom;
+    A.G.pl = A.pl; /* stage_sides may have moved the planes */
     out->stats.ms_cuts = now_ms() - t;
     if (a3_cancelled(&A)) goto cancel;
     t = now_ms();

@@ -302,7 +302,10 @@ static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
             uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n], S = A->side[o + t];
             int sa = cmp_q(A, &A->pt[a], pr, pr->j) > 0, sb = cmp_q(A, &A->pt[b], pr, pr->j) > 0;
             if (sa == sb || S == NONE) continue;
-            int si, s = pi_side(A, P, &A->pl[S], pr, &si);
+            plane3 tmp;
+            const plane3 *SP = a3_side(A, A->f_plane[f], a, b, S, &tmp);
+            if (!SP) continue;
+            int si, s = pi_side(A, P, SP, pr, &si);
             if (s == 0) s = si;
             par ^= s == -si;
         }
@@ -541,12 +544,14 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         if (n >= 3) {
             fanctx x = {A, {0, 0, 0}, NULL, 0};
             const plane3 *P = &A->pl[eplane[e]];
-            if (eside[e] == NONE) {
+            plane3 tmp;
+            const plane3 *SP = a3_side(A, eplane[e], ev[2 * e], ev[2 * e + 1], eside[e], &tmp);
+            if (!SP) {
                 rc = ARR_EINTERNAL;
                 snprintf(err, errlen, "solids: an edge of %zu faces has no line (a bug)", n);
                 goto done;
             }
-            cross_ll(P->n, A->pl[eside[e]].n, x.d);
+            cross_ll(P->n, SP->n, x.d);
             int ax = 0;
             for (int a = 1; a < 3; a++)
                 if ((x.d[a] < 0 ? -x.d[a] : x.d[a]) > (x.d[ax] < 0 ? -x.d[ax] : x.d[ax])) ax = a;

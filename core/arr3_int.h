@@ -28,6 +28,9 @@
 #include "core/pred.h"
 
 #define NONE UINT32_MAX
+/* The side plane of an edge between two input vertices whose plane needs no arrangement: not
+ * made (nor added to the planes) unless asked for, by a3_side(). */
+#define SIDE_LAZY (NONE - 2)
 
 typedef struct piece {
     uint32_t solid; /* solid index (in a soup: the input face, so that faces meet each other) */
@@ -156,6 +159,16 @@ int pset_add(pset *s, const xpt *p, uint32_t id);
  * (out of memory) or -2 (not a simple polygon with holes in that projection). */
 int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t nc, uint32_t **tri,
                    size_t *ntri, size_t *captri);
+
+/* Does plane P keep its pieces as they are (nothing from another solid reaches it; simple
+ * pieces of one solid turning one way)?  Such a plane's pieces skip the plane arrangement and
+ * their edges' side planes are made only when asked for (SIDE_LAZY). */
+int a3_plane_simple(const a3 *A, uint32_t P);
+
+/* The side plane of the edge from point a to point b of a face on plane fp with side entry S:
+ * A->pl[S], or, for S == SIDE_LAZY (a and b input vertices), that vertical plane made in *tmp.
+ * NULL when S is NONE (an edge with no side: a contact hole). */
+const plane3 *a3_side(const a3 *A, uint32_t fp, uint32_t a, uint32_t b, uint32_t S, plane3 *tmp);
 
 /* ---- the stages ------------------------------------------------------------------------ */
 

@@ -795,22 +795,14 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     const plane3 *pl = &A->pl[P];
     memset(F, 0, sizeof *F);
     F->base = NEWBASE;
-    if (A->cs_off[P + 1] == A->cs_off[P] && A->cp_off[P + 1] == A->cp_off[P]) {
-        /* Nothing from another solid reaches this plane: when its pieces are simple polygons
-         * of one solid turning the same way, they are its faces as they are (in a surface
-         * that does not pass through itself, two such pieces meet at most along their edges;
-         * the same side facing out, they cannot overlap).  Pieces turning both ways (a surface
+    if (a3_plane_simple(A, P)) {
+        /* Nothing from another solid reaches this plane, and its pieces are simple polygons of
+         * one solid turning the same way: they are its faces as they are (in a surface that
+         * does not pass through itself, two such pieces meet at most along their edges; the
+         * same side facing out, they cannot overlap).  Pieces turning both ways (a surface
          * touching itself face to face) go through the arrangement. */
-        const piece *p0 = &A->pc[A->pp[A->pp_off[P]]];
-        int simple = 1;
-        for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1] && simple; i++) {
-            const piece *pc = &A->pc[A->pp[i]];
-            simple = pc->nc == 1 && pc->solid == p0->solid && pc->sgn == p0->sgn;
-        }
-        if (simple) {
-            F->trivial = 1; /* merge_planes writes the pieces as they are */
-            return 0;
-        }
+        F->trivial = 1; /* merge_planes writes the pieces as they are */
+        return 0;
     }
     w->P = P;
     w->k = plane_axis(pl);

@@ -14,7 +14,9 @@
 //   ms_warm     with --warm only: the same Boolean run a second time in the process (the first
 //               run includes WASM tier-up and heap growth: 3 times slower for 100 cubes, alike
 //               for 1000).
-// Each OFF face (convex: gen3d.py writes quads and triangles) is cut into a fan of triangles.
+// Each OFF face is cut into a fan of triangles; a quad along the diagonal whose two triangles'
+// normals agree best (as CGAL's triangulate_faces and cellar do: the same solid when a quad is
+// not planar).
 // Manifold's JS Mesh holds Float32Array positions; so that it computes with the same doubles as
 // cellar and CGAL, each input Manifold's vertices are then put back to the file's doubles with
 // warpBatch (keyed by their float32 roundings, which are distinct for the inputs here); --float32
@@ -35,6 +37,17 @@ function usage() {
   console.error('usage: manifold_bool.mjs [--op union|intersection|difference] [--float32] ' +
                 'A.off B.off ...');
   process.exit(1);
+}
+
+// The dot product of the normals of triangles abc and def (vertex indices into pos).
+function dotNormals(pos, a, b, c, d, e, f) {
+  const n = (p, q, r) => {
+    const u = [0, 1, 2].map((k) => pos[3 * q + k] - pos[3 * p + k]);
+    const w = [0, 1, 2].map((k) => pos[3 * r + k] - pos[3 * p + k]);
+    return [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+  };
+  const x = n(a, b, c), y = n(d, e, f);
+  return x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
 }
 
 // readOff(path): {pos: Float64Array (x,y,z per vertex), tri: Uint32Array (fans of the faces)}.
@@ -59,6 +72,15 @@ function readOff(path) {
       v.push(x);
     }
     if (n < 3) throw new Error(`${path}: face ${f} has ${n} vertices`);
+    if (n === 4) {
+      // a quad (planar only up to rounding, or not at all): along the diagonal whose two
+      // triangles' normals agree best, as CGAL's triangulate_faces and cellar choose
+      const d02 = dotNormals(pos, v[0], v[1], v[2], v[2], v[3], v[0]);
+      const d13 = dotNormals(pos, v[1], v[2], v[3], v[3], v[0], v[1]);
+      if (d02 > d13) tri.push(v[0], v[1], v[2], v[2], v[3], v[0]);
+      else tri.push(v[1], v[2], v[3], v[3], v[0], v[1]);
+      continue;
+    }
     for (let k = 1; k + 1 < n; k++) tri.push(v[0], v[k], v[k + 1]);
   }
   if (pos.some((x) => !Number.isFinite(x))) throw new Error(`${path}: bad coordinates`);

@@ -1385,6 +1385,7 @@ void pfaces_free(pfaces *f)
     free(f->f_cov);
     free(f->cov);
     free(f->newp);
+    free(f->direct);
     memset(f, 0, sizeof *f);
 }
 
@@ -1399,10 +1400,12 @@ static int merge_planes(a3 *A, pset *ps)
     size_t ncov = 0;
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
-        if (F->trivial) { /* simple pieces of one solid: each one a face, counter-clockwise
-                           * about n_P */
-            for (uint32_t k = A->pp_off[p]; k < A->pp_off[p + 1]; k++) {
-                uint32_t pi = A->pp[k];
+        /* pieces written as they are (all of a simple plane's, or those that nothing reaches):
+         * each one a face, counter-clockwise about n_P */
+        uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;
+        {
+            for (uint32_t k = 0; k < nd; k++) {
+                uint32_t pi = F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k];
                 const piece *pc = &A->pc[pi];
                 uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
                 int rev = pc->sgn < 0;
@@ -1429,9 +1432,12 @@ static int merge_planes(a3 *A, pset *ps)
                 A->f_cyc[A->nf] = (uint32_t)A->ncyc;
                 A->f_cov[A->nf] = (uint32_t)ncov;
             }
+        }
+        if (F->trivial) continue;
+        if (!F->nf && !F->nnew) {
+            pfaces_free(F);
             continue;
         }
-        if (!F->nf && !F->nnew) continue;
         if (a3_grow(&map, &capmap, F->nnew + 1, sizeof *map)) goto done;
         for (uint32_t i = 0; i < F->nnew; i++) {
             uint32_t q = pset_find(ps, &A->G, &F->newp[i], get_global, A);

@@ -84,16 +84,6 @@ static uint32_t emap_put(emap *m, uint64_t key, uint32_t val, int *found)
     return val;
 }
 
-static uint32_t emap_get(const emap *m, uint64_t key)
-{
-    size_t h = a3_mix64(key) & (m->cap - 1);
-    while (m->key[h] != UINT64_MAX) {
-        if (m->key[h] == key) return m->val[h];
-        h = (h + 1) & (m->cap - 1);
-    }
-    return NONE;
-}
-
 static int cmpu32(const void *pa, const void *pb)
 {
     uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
@@ -458,12 +448,40 @@ static void dd_rel(const double *dh, const double *dl, uint32_t v, const dd *org
 
 /* Six times the cone volume over face f's cycles from org, in double-double: taken from a
  * vertex of the cell, the terms are as small as the cell, so a sliver keeps its volume. */
-static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f, const dd *org)
+static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f, const dd *org,
+                     const int64_t *gorg)
 {
     dd s = {0, 0};
     for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
         uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
         dd p[3][3];
+        if (gorg && n >= 3) {
+            /* the origin and every point of the cycle on the grid: exact in 128 bits (grid
+             * coordinates below 2^31 in magnitude: differences below 2^32, each term below
+             * 2^96, the sum of a cycle's 3 (n - 2) terms far below 2^127) */
+            uint32_t i = 0;
+            while (i < n && A->pt[A->ent[o + i]].kind == PT_GRID) i++;
+            if (i == n) {
+                i128 acc = 0;
+                int64_t q[3][3];
+                for (int k = 0; k < 3; k++)
+                    q[0][k] = A->g[3 * (size_t)A->pt[A->ent[o]].a + k] - gorg[k];
+                for (i = 1; i + 1 < n; i++) {
+                    for (int k = 0; k < 3; k++) {
+                        q[1][k] = A->g[3 * (size_t)A->pt[A->ent[o + i]].a + k] - gorg[k];
+                        q[2][k] = A->g[3 * (size_t)A->pt[A->ent[o + i + 1]].a + k] - gorg[k];
+                    }
+                    i128 c0 = (i128)q[1][1] * q[2][2] - (i128)q[1][2] * q[2][1];
+                    i128 c1 = (i128)q[1][2] * q[2][0] - (i128)q[1][0] * q[2][2];
+                    i128 c2 = (i128)q[1][0] * q[2][1] - (i128)q[1][1] * q[2][0];
+                    acc += q[0][0] * c0 + q[0][1] * c1 + q[0][2] * c2;
+                }
+                double hi = (double)acc;
+                dd t = {hi, (double)(acc - (i128)hi)};
+                s = dd_add(s, t);
+                continue;
+            }
+        }
         if (n >= 3) dd_rel(dh, dl, A->ent[o], org, p[0]);
         for (uint32_t i = 1; i + 1 < n; i++) {
             dd_rel(dh, dl, A->ent[o + i], org, p[1]);
@@ -497,7 +515,18 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint64_t *ek = NULL;
     inc *tmp = NULL;
     size_t capeside = 0, capeplane = 0;
+    uint32_t *ent_e = NULL; /* the edge of each cycle entry (to the next one) */
     /* edges and incidences */
+    {
+        size_t cap = 1024;
+        while (cap < 2 * A->nent) cap *= 2;
+        ent_e = malloc((A->nent + 1) * sizeof *ent_e);
+        if (!ent_e || emap_rehash(&em, cap) || a3_grow(&ev, &cape, A->nent + 2, sizeof *ev) ||
+            a3_grow(&eside, &capeside, A->nent / 2 + 1, sizeof *eside) ||
+            a3_grow(&eplane, &capeplane, A->nent / 2 + 1, sizeof *eplane) ||
+            a3_grow(&I, &capi, A->nent + 1, sizeof *I))
+            goto done;
+    }
     for (size_t f = 0; f < nf; f++)
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
@@ -520,6 +549,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                 }
                 inc x = {e, (uint32_t)f, a == lo ? 1 : -1};
                 if (A3_PUSH(I, ni, capi, x)) goto done;
+                ent_e[o + t] = e;
             }
         }
     /* incidences by edge (counting sort keeps face order) */
@@ -762,9 +792,11 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     dl = malloc((3 * A->npt + 1) * sizeof *dl);
     cvol = calloc(nc + 1, sizeof *cvol);
     if (!dh || !dl || !cvol) goto done;
+    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN; /* not yet */
     for (size_t i = 0; i < A->nent; i++) {
         uint32_t p = A->ent[i];
-        xpt_dd(&A->G, &A->pt[p], dh + 3 * (size_t)p, dl + 3 * (size_t)p);
+        if (isnan(dh[3 * (size_t)p]))
+            xpt_dd(&A->G, &A->pt[p], dh + 3 * (size_t)p, dl + 3 * (size_t)p);
     }
     out->nc = nc;
     out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
@@ -803,16 +835,25 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     }
     for (size_t k = 0; k < nc; k++) {
         dd org[3] = {{0, 0}, {0, 0}, {0, 0}};
+        const int64_t *gorg = NULL; /* the origin's grid point, when it is one */
         if (out->cf_off[k + 1] > out->cf_off[k]) {
+            /* a vertex of the cell's first face, on the grid when one is */
             int32_t s0 = out->cf[out->cf_off[k]];
-            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, v0 = A->ent[A->cyc_off[A->f_cyc[f0]]];
+            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
+            uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0, v0 = A->ent[o0];
+            for (uint32_t i = 0; i < n0; i++)
+                if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
+                    v0 = A->ent[o0 + i];
+                    gorg = A->g + 3 * (size_t)A->pt[v0].a;
+                    break;
+                }
             for (int a = 0; a < 3; a++)
                 org[a].hi = dh[3 * (size_t)v0 + a], org[a].lo = dl[3 * (size_t)v0 + a];
         }
         for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
             int32_t sf = out->cf[i];
             uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
-            dd c = face_cone6(A, dh, dl, f, org);
+            dd c = face_cone6(A, dh, dl, f, org, gorg);
             cvol[k] = dd_add(cvol[k], sf > 0 ? c : dd_neg(c));
         }
         out->cvol[k] = (cvol[k].hi + cvol[k].lo) * h3;
@@ -846,37 +887,32 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
     if (!out->EV) goto done;
     {
-        emap km = {0};
-        uint64_t *srt = malloc((ne + 1) * sizeof *srt);
-        if (!srt) goto done;
-        memcpy(srt, ek, ne * sizeof *srt);
-        /* radix sort of 64-bit keys (8 passes of 8 bits) */
-        uint64_t *buf = malloc((ne + 1) * sizeof *buf);
-        if (!buf) {
-            free(srt);
+        /* edges in the order of their new keys: LSD radix sort of the old ids by key, skipping
+         * the bytes every key shares; newe[old] = new id */
+        uint32_t *idx = malloc((ne + 1) * sizeof *idx), *buf = malloc((ne + 1) * sizeof *buf);
+        uint32_t *newe = malloc((ne + 1) * sizeof *newe);
+        if (!idx || !buf || !newe) {
+            free(idx), free(buf), free(newe);
             goto done;
         }
+        uint64_t all_or = 0, all_and = ~(uint64_t)0;
+        for (size_t e = 0; e < ne; e++) idx[e] = (uint32_t)e, all_or |= ek[e], all_and &= ek[e];
         for (int pass = 0; pass < 8; pass++) {
-            size_t cnt[257] = {0};
             int sh = 8 * pass;
-            for (size_t i = 0; i < ne; i++) cnt[((srt[i] >> sh) & 255) + 1]++;
-            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
-            for (size_t i = 0; i < ne; i++) buf[cnt[(srt[i] >> sh) & 255]++] = srt[i];
-            uint64_t *t = srt;
-            srt = buf, buf = t;
+            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
+            size_t cnt[257] = {0};
+            for (size_t i = 0; i < ne; i++) cnt[((ek[idx[i]] >> sh) & 255) + 1]++;
+            for (int q = 0; q < 256; q++) cnt[q + 1] += cnt[q];
+            for (size_t i = 0; i < ne; i++) buf[cnt[(ek[idx[i]] >> sh) & 255]++] = idx[i];
+            uint32_t *t = idx;
+            idx = buf, buf = t;
         }
-        free(buf);
         for (size_t i = 0; i < ne; i++) {
-            int found;
-            out->EV[2 * i] = (uint32_t)(srt[i] >> 32);
-            out->EV[2 * i + 1] = (uint32_t)srt[i];
-            if (emap_put(&km, srt[i], (uint32_t)i, &found) == NONE) {
-                free(srt);
-                free(km.key), free(km.val);
-                goto done;
-            }
+            out->EV[2 * i] = (uint32_t)(ek[idx[i]] >> 32);
+            out->EV[2 * i + 1] = (uint32_t)ek[idx[i]];
+            newe[idx[i]] = (uint32_t)i;
         }
-        free(srt);
+        free(idx), free(buf);
         /* faces */
         out->nf = nf;
         out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
@@ -892,7 +928,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         out->fsol = malloc((A->f_cov[nf] + 1) * sizeof *out->fsol);
         if (!out->FN || !out->fc_off || !out->fc || !out->fe_off || !out->fe || !out->fsrc ||
             !out->cyc_off || !out->cyc || !out->fsol_off || !out->fsol) {
-            free(km.key), free(km.val);
+            free(newe);
             goto done;
         }
         size_t nfe = 0, nfs = 0;
@@ -908,8 +944,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                 if (n < 2) continue;
                 for (uint32_t t = 0; t < n; t++) {
                     uint32_t a = newid[A->ent[o + t]], b = newid[A->ent[o + (t + 1) % n]];
-                    uint32_t e =
-                        emap_get(&km, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a);
+                    uint32_t e = newe[ent_e[o + t]];
                     out->fe[nfe++] = a < b ? (int32_t)(e + 1) : -(int32_t)(e + 1);
                 }
             }
@@ -930,7 +965,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             nfs = m;
             out->fsol_off[f + 1] = (uint32_t)nfs;
         }
-        free(km.key), free(km.val);
+        free(newe);
         for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
         for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     }
@@ -1008,5 +1043,6 @@ done:
     free(stack);
     free(probes);
     free(ek);
+    free(ent_e);
     return rc;
 }

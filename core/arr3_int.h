@@ -64,6 +64,8 @@ typedef struct pfaces {
     uint32_t base;     /* ent >= base: newp[ent - base] */
     int trivial;       /* simple pieces of one solid turning one way, nothing else: each piece is a
                           face as it is (no arrays) */
+    uint32_t *direct;  /* else, pieces that nothing reaches: each a face as it is */
+    uint32_t ndirect;
 } pfaces;
 
 void pfaces_free(pfaces *f);

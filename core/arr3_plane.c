@@ -110,6 +110,8 @@ typedef struct pwork {
     size_t capfof, capaoff, capadj, capqueue, capcovo, capcovn, capcov, ncov;
     uint32_t *x1, *x2;
     size_t capx1, capx2;
+    uint8_t *reached; /* by piece of the plane: goes through the arrangement */
+    size_t capreached;
     int fail;
 } pwork;
 
@@ -789,6 +791,74 @@ static int out_cycle(pwork *w, outb *o, uint32_t h, uint32_t x, uint32_t *newid)
 
 /* ---- one plane ------------------------------------------------------------------------- */
 
+/* A conservative box of point p in grid units (the approximation's error and one unit more). */
+static void pt_box(const xpt *p, int64_t *lo, int64_t *hi)
+{
+    for (int a = 0; a < 3; a++) {
+        double x = p->x[a], m = fabs(x) * 0x1p-45 + 1;
+        lo[a] = (int64_t)floor(x - m);
+        hi[a] = (int64_t)ceil(x + m);
+    }
+}
+
+static int box_meets(const int64_t *lo, const int64_t *hi, const int64_t *b)
+{
+    for (int a = 0; a < 3; a++)
+        if (hi[a] < b[a] || lo[a] > b[3 + a]) return 0;
+    return 1;
+}
+
+/* Marks in w->reached the pieces of plane w->P that go through the arrangement; lists the others
+ * in F->direct, to be written as they are.  Only in a plane whose pieces all belong to one solid
+ * and turn one way: there a piece whose closed box meets no cut and no contact point can gain
+ * no vertex (every new point lies on a cut or is a contact point, inside the closed boxes of all
+ * the pieces it touches), and two such pieces meet at most along their edges, so it is a face of
+ * the arrangement as it is.  Pieces with holes, and every piece of a plane shared by solids or
+ * by both ways of turning, are reached. */
+static int reached_pieces(pwork *w, pfaces *F)
+{
+    const a3 *A = w->A;
+    uint32_t P = w->P, o = A->pp_off[P], m = A->pp_off[P + 1] - o;
+    uint32_t nt = (A->cs_off[P + 1] - A->cs_off[P]) + (A->cp_off[P + 1] - A->cp_off[P]);
+    if (GROW(w, reached, m + 1)) return -1;
+    memset(w->reached, 1, m);
+    if (!m) return 0;
+    const piece *p0 = &A->pc[A->pp[o]];
+    for (uint32_t i = 0; i < m; i++) {
+        const piece *pc = &A->pc[A->pp[o + i]];
+        if (pc->solid != p0->solid || pc->sgn != p0->sgn) return 0; /* all reached */
+    }
+    if ((uint64_t)m * nt > ((uint64_t)1 << 24)) return 0; /* too many pairs to look at */
+    memset(w->reached, 0, m);
+    for (uint32_t i = 0; i < m; i++)
+        if (A->pc[A->pp[o + i]].nc != 1) w->reached[i] = 1;
+    for (uint32_t t = A->cs_off[P]; t < A->cs_off[P + 1]; t++) {
+        int64_t lo[3], hi[3], l1[3], h1[3];
+        pt_box(&A->pt[A->cs[t].p0], lo, hi);
+        pt_box(&A->pt[A->cs[t].p1], l1, h1);
+        for (int a = 0; a < 3; a++) {
+            if (l1[a] < lo[a]) lo[a] = l1[a];
+            if (h1[a] > hi[a]) hi[a] = h1[a];
+        }
+        for (uint32_t i = 0; i < m; i++)
+            if (!w->reached[i] && box_meets(lo, hi, A->pc[A->pp[o + i]].box)) w->reached[i] = 1;
+    }
+    for (uint32_t t = A->cp_off[P]; t < A->cp_off[P + 1]; t++) {
+        int64_t lo[3], hi[3];
+        pt_box(&A->pt[A->cp[t].p], lo, hi);
+        for (uint32_t i = 0; i < m; i++)
+            if (!w->reached[i] && box_meets(lo, hi, A->pc[A->pp[o + i]].box)) w->reached[i] = 1;
+    }
+    uint32_t nd = 0;
+    for (uint32_t i = 0; i < m; i++) nd += !w->reached[i];
+    if (!nd) return 0;
+    F->direct = malloc(nd * sizeof *F->direct);
+    if (!F->direct) return -1;
+    for (uint32_t i = 0; i < m; i++)
+        if (!w->reached[i]) F->direct[F->ndirect++] = A->pp[o + i];
+    return 0;
+}
+
 static int plane_run(pwork *w, uint32_t P, pfaces *F)
 {
     const a3 *A = w->A;
@@ -811,10 +881,12 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     w->sgnk = pl->n[w->k] > 0 ? 1 : -1;
     lp_reset(w);
     w->nsg = w->nsp = w->nsprov = 0;
+    if (reached_pieces(w, F)) return -1;
     /* segments: the pieces' edges, the cuts, the contact points */
     for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
         uint32_t pi = A->pp[i];
         const piece *pc = &A->pc[pi];
+        if (!w->reached[i - A->pp_off[P]]) continue; /* in F->direct */
         for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc; cy++) {
             uint32_t o = A->pc_off[cy], n = A->pc_off[cy + 1] - o;
             for (uint32_t j = 0; j < n; j++) {
@@ -1016,7 +1088,7 @@ static void pwork_free(pwork *w)
     free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->cyc_h);
     free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);
     free(w->fof), free(w->aoff), free(w->adj), free(w->queue), free(w->covo), free(w->covn);
-    free(w->cov), free(w->x1), free(w->x2);
+    free(w->cov), free(w->x1), free(w->x2), free(w->reached);
 }
 
 int a3_planes(a3 *A, char *err, size_t errlen)

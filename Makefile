@@ -3,6 +3,7 @@
 #   make deps     install the Debian packages needed to build and test
 #   make test     deps + build + whole suite; last line: "N passed, N failed"
 #   make check    the suite again under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make stress   the random 3D families, STRESS (default 1000) seeds each (not in CI)
 #   make bench    reference programs (CGAL, GEOS) and the comparison tables, 2D and 3D
 #   make run      build and start the service (see README)
 
@@ -36,7 +37,7 @@ TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
             $(BUILD)/tests/ref/geos_ref.o
 
-.PHONY: all deps test check bench run clean format format-check tests
+.PHONY: all deps test check stress bench run clean format format-check tests
 all: $(BUILD)/cellar $(BUILD)/cellard
 
 deps:
@@ -90,6 +91,13 @@ check: deps
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" tests
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    CELLAR_SANITIZED=1 tests/run.sh build/san
+
+# The random 3D families at STRESS seeds each (contacts, slivers, near-coplanar faces, lattice
+# scenes, real meshes), every invariant and every volume checked: tens of minutes, not in CI.
+STRESS ?= 1000
+stress: deps
+	@$(MAKE) --no-print-directory tests
+	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d
 
 bench: deps
 	@scripts/deps.sh $(DEPS_BENCH)

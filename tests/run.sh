@@ -2,15 +2,20 @@
 # Runs every test program of a build directory and every shell test (tests/t_*.sh), adds up
 # their "N passed, N failed[, N skipped]" lines and prints the total as the last line.
 # Every test runs from the repository's top (its data is tests/data).
-# Usage: tests/run.sh BUILD_DIR   (relative to the repository's top, or absolute)
+# Usage: tests/run.sh BUILD_DIR [NAME ...]   (BUILD_DIR relative to the repository's top, or
+# absolute; NAMEs, e.g. test_exact3d t_real3d, run only those: make stress)
 set -u
 cd "$(dirname "$0")/.."
 B=${1:-build}
+[ $# -gt 0 ] && shift
+ONLY=" $* "
 export CELLAR_BIN="$B/cellar" CELLAR_BUILD="$B"
 P=0; F=0; S=0
 log=$(mktemp)
 for t in "$B"/tests/test_* tests/t_*.sh; do
     [ -x "$t" ] || continue
+    n=$(basename "$t" .sh)
+    [ "$ONLY" = "  " ] || case $ONLY in *" $n "*) ;; *) continue ;; esac
     echo "== $t"
     "$t" >"$log" 2>&1
     rc=$?

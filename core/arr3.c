@@ -644,13 +644,70 @@ static int newell_axis(const a3 *A, const uint32_t *v, size_t n)
     return k;
 }
 
+static int add_contact(a3 *A, uint32_t plane, uint32_t p);
+
+static int cmp_u32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* Is grid point c strictly inside the segment from u to w? (exact; coordinates below 2^31) */
+static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
+{
+    const int64_t *gu = A->g + 3 * (size_t)u, *gc = A->g + 3 * (size_t)c,
+                  *gw = A->g + 3 * (size_t)w;
+    int64_t d[3], e[3];
+    for (int a = 0; a < 3; a++) d[a] = gw[a] - gu[a], e[a] = gc[a] - gu[a];
+    if ((i128)d[1] * e[2] != (i128)d[2] * e[1] || (i128)d[2] * e[0] != (i128)d[0] * e[2] ||
+        (i128)d[0] * e[1] != (i128)d[1] * e[0])
+        return 0;
+    i128 de = (i128)d[0] * e[0] + (i128)d[1] * e[1] + (i128)d[2] * e[2];
+    i128 dd = (i128)d[0] * d[0] + (i128)d[1] * d[1] + (i128)d[2] * d[2];
+    return de > 0 && de < dd;
+}
+
+/* A face of a solid left out because its vertices lie on one line on the grid (a sliver the
+ * grid flattens, or one that was flat already) leaves its neighbours meeting along that line
+ * with a vertex of one inside an edge of another.  Each such vertex becomes a contact point of
+ * the plane of the piece whose edge it lies in, so the plane's arrangement splits that edge
+ * there and the surface stays closed.  Pieces pc0 .. npc are the solid's; drop[0..n) the
+ * vertices of its left-out faces (sorted here).  Returns -1 out of memory. */
+static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
+{
+    qsort(drop, n, sizeof *drop, cmp_u32);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!m || drop[i] != drop[m - 1]) drop[m++] = drop[i];
+    uint8_t *in = calloc(A->nv + 1, 1);
+    if (!in) return -1;
+    for (size_t i = 0; i < m; i++) in[drop[i]] = 1;
+    int rc = 0;
+    for (size_t pi = pc0; pi < A->npc && !rc; pi++) {
+        const piece *pc = &A->pc[pi];
+        for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc && !rc; cy++) {
+            uint32_t o = A->pc_off[cy], len = A->pc_off[cy + 1] - o;
+            for (uint32_t j = 0; j < len && !rc; j++) {
+                uint32_t u = A->pcv[o + j], w = A->pcv[o + (j + 1) % len];
+                if (!in[u] || !in[w]) continue;
+                for (size_t i = 0; i < m && !rc; i++)
+                    if (drop[i] != u && drop[i] != w && inside_segment(A, u, drop[i], w))
+                        rc = add_contact(A, pc->plane, drop[i]);
+            }
+        }
+    }
+    free(in);
+    return rc;
+}
+
 static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t el)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     size_t nfaces = 0;
     int rc = ARR_OK;
-    uint32_t *map = NULL, *tv = NULL, **cyc = NULL, *tri = NULL;
+    uint32_t *map = NULL, *tv = NULL, **cyc = NULL, *tri = NULL, *drop = NULL;
     size_t capmap = 0, captv = 0, capcyc = 0, ntri = 0, captri = 0, *len = NULL, caplen = 0;
+    size_t ndrop = 0, capdrop = 0;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
             for (int a = 0; a < 3; a++) {
@@ -687,8 +744,11 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
             if ((map[i] = vertex_at(A, g)) == NONE) goto oom;
         }
         A->solid_face_off[s] = (uint32_t)face;
+        size_t pc0 = A->npc;
+        ndrop = 0;
         for (size_t f = 0; f < so->nf; f++, face++) {
             size_t nc = 0, ntv = 0;
+            int gone = 0;
             size_t ncy = so->face_off[f + 1] - so->face_off[f];
             if (a3_grow(&cyc, &capcyc, ncy + 1, sizeof *cyc) ||
                 a3_grow(&len, &caplen, ncy + 1, sizeof *len))
@@ -716,6 +776,12 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                         ntv = start;
                         continue;
                     }
+                    if (cy == so->face_off[f] && ncy == 1) {
+                        /* a face of two points on the grid: its edges are its neighbours'
+                         * edges between the same two points; left out */
+                        gone = 1;
+                        break;
+                    }
                     rc = seterr(err, el, ARR_EINVAL,
                                 "solids[%zu]: face %zu: fewer than 3 distinct vertices on the "
                                 "grid of step %g",
@@ -724,16 +790,25 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 }
                 len[nc++] = ntv - start;
             }
-            if (nc == 0) continue;
+            if (nc == 0 || gone) continue;
             for (size_t c = 0, off = 0; c < nc; off += len[c], c++) cyc[c] = tv + off;
             plane3 p;
             uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s;
             int planar = face_plane(A, cyc, len, nc, &p);
             if (planar < 0) {
                 if (A->soup) continue;
-                rc = seterr(err, el, ARR_EINVAL,
-                            "solids[%zu]: face %zu: zero area on the grid of step %g", s, f, step);
-                goto fail;
+                if (nc > 1) {
+                    rc = seterr(err, el, ARR_EINVAL,
+                                "solids[%zu]: face %zu: zero area on the grid of step %g (a face "
+                                "with holes whose vertices lie on one line)",
+                                s, f, step);
+                    goto fail;
+                }
+                /* all on one line: left out; where its vertices lie inside its neighbours'
+                 * edges, those edges are split there (mend_dropped) */
+                for (size_t i = 0; i < len[0]; i++)
+                    if (A3_PUSH(drop, ndrop, capdrop, cyc[0][i])) goto oom;
+                continue;
             }
             if (planar == 0) {
                 uint32_t id = plane_id(A, &p);
@@ -790,8 +865,14 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 size_t tl = 3;
                 plane3 tp;
                 if (plane_through(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
-                                  A->g + 3 * (size_t)tc[2], &tp))
-                    continue; /* collinear in space: no surface */
+                                  A->g + 3 * (size_t)tc[2], &tp)) {
+                    /* collinear in space: no surface, but its middle vertex may lie inside
+                     * an edge of a neighbour (mend_dropped) */
+                    if (!A->soup)
+                        for (int q = 0; q < 3; q++)
+                            if (A3_PUSH(drop, ndrop, capdrop, tc[q])) goto oom;
+                    continue;
+                }
                 uint32_t id = plane_id(A, &tp);
                 if (id == NONE) goto oom;
                 if ((r = add_piece(A, sol, (uint32_t)face, id, &tc, &tl, 1))) {
@@ -801,6 +882,7 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 }
             }
         }
+        if (ndrop && mend_dropped(A, pc0, drop, ndrop)) goto oom;
     }
     A->solid_face_off[ns] = (uint32_t)face;
     A->nfaces = face;
@@ -813,6 +895,7 @@ fail:
     free(cyc);
     free(len);
     free(tri);
+    free(drop);
     return rc;
 }
 

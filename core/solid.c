@@ -284,6 +284,35 @@ static int cycle_distinct(const ck *c, size_t k)
     return u1 == NONE ? 1 : 2;
 }
 
+/* Do the vertices of cycle k lie on one line on the grid (llround of x / p, exact)? */
+static int collinear_on_grid(const ck *c, size_t k)
+{
+    const uint32_t *cy = c->s->cyc;
+    uint32_t lo = c->s->cyc_off[k], hi = c->s->cyc_off[k + 1];
+    int64_t g0[3], d[3] = {0, 0, 0};
+    int have_d = 0;
+    for (int a = 0; a < 3; a++) g0[a] = (int64_t)llround(vert(c, cy[lo])[a] / c->p);
+    for (uint32_t i = lo + 1; i < hi; i++) {
+        int64_t e[3];
+        for (int a = 0; a < 3; a++) {
+            e[a] = (int64_t)llround(vert(c, cy[i])[a] / c->p) - g0[a];
+            if (e[a] > ((int64_t)1 << 61) || e[a] < -((int64_t)1 << 61)) return 0; /* too far */
+        }
+        if (!e[0] && !e[1] && !e[2]) continue;
+        if (!have_d) {
+            memcpy(d, e, sizeof d);
+            have_d = 1;
+            continue;
+        }
+        /* cross(d, e) == 0, in 128 bits (|d|, |e| < 2^61: products below 2^122) */
+        if ((__int128)d[1] * e[2] != (__int128)d[2] * e[1] ||
+            (__int128)d[2] * e[0] != (__int128)d[0] * e[2] ||
+            (__int128)d[0] * e[1] != (__int128)d[1] * e[0])
+            return 0;
+    }
+    return 1;
+}
+
 /* Degenerate cycles, zero area, planarity; fills c->area.  Appends nothing to the topology:
  * a bad face still has its edges, so what it does to its neighbours is reported too. */
 static int check_faces(ck *c)
@@ -296,6 +325,16 @@ static int check_faces(ck *c)
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
         c->area[f] = 0;
         int degenerate = 0;
+        if (k1 - k0 == 1 && (cycle_distinct(c, k0) < 3 || collinear_on_grid(c, k0))) {
+            /* a face without holes that the grid flattens onto a line (or a point): it bounds
+             * nothing, and the arrangement leaves it out, splitting its neighbours' edges at
+             * its vertices so that the surface stays closed */
+            note(c, 0, SOLID_AT_FACE, f, "degenerate on the grid of step %g (%s): left out", c->p,
+                 cycle_distinct(c, k0) < 3 ? "fewer than 3 distinct vertices"
+                                           : "its vertices on one line");
+            c->rep->degenerate_faces++;
+            continue;
+        }
         for (size_t k = k0; k < k1; k++)
             if (cycle_distinct(c, k) < 3) {
                 if (k == k0)
@@ -328,11 +367,13 @@ static int check_faces(ck *c)
                            (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
                            (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
         c->area[f] = len / 2;
-        if (!(len / 2 > c->p * diag / 2)) {
-            note(c, 1, SOLID_AT_FACE, f, "zero area (%.3g, no wider than the precision %g)",
-                 len / 2, c->p);
+        if (!(len > 0)) {
+            /* a face with holes whose outer cycle is flat in doubles (the grid test above
+             * only takes faces without holes) */
+            note(c, 1, SOLID_AT_FACE, f, "zero area (a face with holes, at precision %g)", c->p);
             continue;
         }
+        (void)diag;
         /* plane through the mean of all the face's vertices */
         double m[3] = {0, 0, 0};
         size_t cnt = s->cyc_off[k1] - s->cyc_off[k0];

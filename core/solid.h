@@ -6,8 +6,11 @@
  * (counter-clockwise seen from outside, holes clockwise).  solid_check() validates one solid
  * against a precision (the snapping grid step of the 3D pipeline) and reports every problem by
  * solid and face:
- *   - an index out of range, a face with fewer than 3 distinct vertices (after merging vertices
- *     closer than the precision), a zero-area face;
+ *   - an index out of range; a hole with fewer than 3 distinct vertices (after merging vertices
+ *     on one grid point), a face with holes of zero area;
+ *   - a face without holes whose vertices lie on one line on the grid (or on fewer than 3
+ *     points): a warning, since the 3D pipeline leaves it out and splits its neighbours' edges
+ *     at its vertices (counted in degenerate_faces);
  *   - a face farther than the precision from planar (a vertex that far from the plane through
  *     the mean of its vertices): a warning, since the 3D pipeline splits such a face into
  *     triangles, each exactly planar (counted in split_faces);
@@ -57,9 +60,11 @@ typedef struct solid_report {
     size_t nmsg;
     char msg[SOLID_MAX_MESSAGES][160]; /* "label: face 12: open surface (edge 3-4 ...)" */
     solid_msg_info info[SOLID_MAX_MESSAGES];
-    double volume;        /* signed volume of the (fixed) solid */
-    size_t flipped_faces; /* faces the fixed copy reverses */
-    size_t split_faces;   /* faces farther than the precision from planar (warned) */
+    double volume;           /* signed volume of the (fixed) solid */
+    size_t flipped_faces;    /* faces the fixed copy reverses */
+    size_t split_faces;      /* faces farther than the precision from planar (warned) */
+    size_t degenerate_faces; /* faces the grid flattens onto a line or a point (warned, left
+                                out) */
 } solid_report;
 
 /* Checks s (borrowed) at `precision` (> 0).  Returns 0 when it is usable (rep->errors == 0),

@@ -437,6 +437,57 @@ TEST(coplanar_faces_with_different_triangulations)
     }
 }
 
+/* A solid with a face that is flat on the grid: a "roof box" whose top is two planes meeting
+ * along AC, where the faces of one plane have a vertex E on AC that the other's do not (a
+ * T-junction), closed by the triangle A C E of zero area (E exactly on AC, or off it by far
+ * less than the grid step).  The flat face is left out with a warning and the other plane's
+ * edge AC is split at E: the volume is the roof box's, alone and cut by a box. */
+TEST(face_flat_on_the_grid)
+{
+    for (int off = 0; off < 2; off++) {
+        /* 0-3 bottom, A B C D top (D raised), E the middle of AC */
+        double V[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0},   {0, 1, 0},    {0, 0, 1},
+                          {1, 0, 1}, {1, 1, 1}, {0, 1, 1.5}, {0.5, 0.5, 1}};
+        if (off) V[8][2] += 1e-13; /* off the line by 1e-13: on it on the grid */
+        enum { A = 4, B = 5, C = 6, D = 7, E = 8 };
+        const int F[] = {0, 3, 2, 1,  -1, 0, 1, B,  A, -1, 1, 2,  C, B, -1, 2,  3, D, C, -1, 3,
+                         0, A, D, -1, A,  B, C, -1, A, C,  E, -1, C, D, E,  -1, E, D, A, -1, -2};
+        const int G[] = {0, 3, 2,  1, -1, 0, 1, B,  A, -1, 1, 2,  C, B, -1, 2,  3,
+                         D, C, -1, 3, 0,  A, D, -1, A, B,  C, -1, A, C, D,  -1, -2}; /* without E */
+        solid roof = shape_poly(&V[0][0], 9, F), plain = shape_poly(&V[0][0], 8, G);
+        double want = shape_volume(&plain);
+        const char *what = off ? "a face flat on the grid" : "a flat face";
+        solid_report rep;
+        solid fx = {0};
+        double step;
+        char err[300];
+        CHECK(arr3_solids_step(&roof, 1, 0, &step, err, sizeof err) == 0, "%s: step", what);
+        CHECK(solid_check(&roof, step, "s", &rep, &fx) == 0 && rep.degenerate_faces == 1 &&
+                  rep.warnings >= 1 && rep.info[0].warning,
+              "%s: taken with a warning: %zu errors, %zu degenerate, '%s'", what, rep.errors,
+              rep.degenerate_faces, rep.nmsg ? rep.msg[0] : "");
+        solid_free(&fx);
+        run r;
+        if (arrange(&roof, 1, 0, &r, what) == 0) {
+            CHECK(r.c.nc == 1 && near(r.c.cvol[0], want, 1e-12),
+                  "%s: one cell of %.17g: %zu, %.17g", what, want, r.c.nc,
+                  r.c.nc ? r.c.cvol[0] : 0);
+            CHECK(r.c.nv == 9, "%s: E is a vertex of the complex: %zu vertices", what, r.c.nv);
+        }
+        lar3_free(&r.c);
+        const double lo[3] = {0.25, -0.5, 0.5}, hi[3] = {0.75, 1.5, 2};
+        solid s[2] = {roof, shape_box(lo, hi)}, t[2] = {plain, shape_box(lo, hi)};
+        run r1, r2;
+        if (arrange(s, 2, 0, &r1, what) == 0 && arrange(t, 2, 0, &r2, "the same without E") == 0)
+            for (int k = 0; k < 3; k++)
+                CHECK(near(r1.vol[k], r2.vol[k], 1e-12), "%s and a box: op %d: %.17g, want %.17g",
+                      what, k, r1.vol[k], r2.vol[k]);
+        lar3_free(&r1.c);
+        lar3_free(&r2.c);
+        solid_free(&s[0]), solid_free(&s[1]), solid_free(&t[0]), solid_free(&t[1]);
+    }
+}
+
 /* One solid made of two boxes stacked on a common face (each with its own vertices): its
  * surface touches itself face to face, an inner wall with the solid on both sides.  Two cells;
  * with a box crossing the wall the Booleans are the closed forms, in either order. */

@@ -72,11 +72,16 @@ $(BUILD)/cellard: $(BUILD)/server/main.o $(BUILD)/libcellard.a $(BUILD)/libcella
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellard.a $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(TEST_LIBS) $(LDLIBS)
 
-tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool
+tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool \
+       $(BUILD)/tests/ref/cgal_nef
 
 # The CGAL reference of the 3D tests (C++, header-only CGAL: about 1.5 min to compile).  Built
 # without sanitizers; make check copies it from $(BUILD) instead of compiling it again.
 $(BUILD)/tests/ref/cgal_bool: tests/ref/cgal_bool.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr
+
+$(BUILD)/tests/ref/cgal_nef: tests/ref/cgal_nef.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr
 
@@ -85,8 +90,9 @@ test: deps
 	@tests/run.sh $(BUILD)
 
 check: deps
-	@$(MAKE) --no-print-directory $(BUILD)/tests/ref/cgal_bool
-	@mkdir -p build/san/tests/ref && cp -p $(BUILD)/tests/ref/cgal_bool build/san/tests/ref/
+	@$(MAKE) --no-print-directory $(BUILD)/tests/ref/cgal_bool $(BUILD)/tests/ref/cgal_nef
+	@mkdir -p build/san/tests/ref && cp -p $(BUILD)/tests/ref/cgal_bool $(BUILD)/tests/ref/cgal_nef \
+	    build/san/tests/ref/
 	@$(MAKE) --no-print-directory BUILD=build/san OPT=-O1 \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" tests
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \

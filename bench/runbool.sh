@@ -9,7 +9,8 @@
 # BENCHBOOL_CASES="cubes100 cubes1000 bunny.rot" picks the cases; BENCHBOOL_TIMEOUT (seconds,
 # default 900) stops a program that runs longer.
 #
-# Cases: cubesN (gen3d.py cubes N 1: N random rotated cubes) and MESH.SCENE for every mesh of
+# Cases: cubesN (gen3d.py cubes N 1: N random rotated cubes), grid10 (gen3d.py grid 10: 1000
+# axis-aligned cubes overlapping by half, every face on others) and MESH.SCENE for every mesh of
 # tests/data/mesh/real but cow (whose surface passes through itself: every program refuses it)
 # and SCENE rot, box, shell (gen3d.py mesh: the mesh with its turned and moved copy, with a box
 # through it, with its copy scaled by 0.8 inside it).
@@ -39,7 +40,7 @@ real_cases() {
         printf '%s.rot %s.box %s.shell ' "$n" "$n" "$n"
     done
 }
-CASES=${BENCHBOOL_CASES:-"cubes100 cubes1000 $(real_cases)"}
+CASES=${BENCHBOOL_CASES:-"cubes100 cubes1000 grid10 $(real_cases)"}
 LIMIT=${BENCHBOOL_TIMEOUT:-900}
 REPEAT=${BENCHBOOL_REPEAT:-3}
 OPTS='{"fields":["stats"]}'
@@ -75,6 +76,7 @@ gen_args() {
     cubes100) echo "cubes 100 1" ;;
     cubes1000) echo "cubes 1000 1" ;;
     tets100) echo "tets 100 1" ;;
+    grid10) echo "grid 10" ;;
     *.rot | *.box | *.shell)
         [ -f "$REAL/${1%.*}.off" ] || return 1
         echo "mesh $REAL/${1%.*}.off ${1##*.}"
@@ -161,7 +163,7 @@ mfver=$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$HERE/node_modules/manifol
     2>/dev/null | head -n 1)
 [ $have_mf -eq 1 ] || mfver="not installed"
 echo "  ${mfver:-?}, WASM, Manifold.union of all, double coordinates)."
-echo "  Inputs: bench/gen3d.py cubes N 1 (N random rotated cubes) and, for MESH.SCENE,"
+echo "  Inputs: bench/gen3d.py cubes N 1 (N random rotated cubes), grid 10 and, for MESH.SCENE,"
 echo "  gen3d.py mesh tests/data/mesh/real/MESH.off SCENE; one OFF file per solid."
 echo "  s = wall seconds of the whole process (start-up, reading included); MiB = peak RSS;"
 echo "  xC = CGAL s / ours s, xM = mf s / ours s; volumes of the union (cavities subtracted);"

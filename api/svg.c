@@ -174,6 +174,7 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
     static const double no_segment[4];
     const svg_req *r = parsed;
     arr2_opts ao = {.precision = r->opt.precision,
+                    .input_coords = 1,
                     .keep_dangling = r->opt.keep_dangling,
                     .threads = ro->threads,
                     .cancel = ro->cancel,

@@ -45,7 +45,8 @@
 #define SEG_CHUNK 512 /* segments per work item in the split stage */
 
 typedef struct seg2 {
-    ipt a, b; /* a < b lexicographically */
+    ipt a, b;    /* a < b lexicographically */
+    uint32_t id; /* the input segment */
 } seg2;
 
 typedef struct vbuf {
@@ -61,6 +62,7 @@ typedef struct scratch {
 
 typedef struct ctx {
     const arr2_opts *o;
+    const double *in; /* the input segments (borrowed) */
     int threads;
     atomic_int fail; /* set by workers: ARR_ENOMEM or ARR_ECANCELED */
     /* snap */
@@ -82,6 +84,7 @@ typedef struct ctx {
     vbuf inc[MAXW];            /* uint64: seg << 32 | pixel */
     uint32_t *sp_off, *sp_pix; /* pixels grouped by segment */
     vbuf edges[MAXW];          /* uint64: v0 << 32 | v1 */
+    vbuf etags[MAXW];          /* uint32: with opts.tags, the tag of each edge in edges */
     scratch scr[MAXW];
 } ctx;
 
@@ -251,6 +254,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
         if (k == 0) continue;
         c->seg[m].a = k < 0 ? a : b;
         c->seg[m].b = k < 0 ? b : a;
+        c->seg[m].id = (uint32_t)i;
         m++;
     }
     c->m = m;
@@ -435,6 +439,15 @@ static void split_segments(void *vc, size_t chunk, int w)
             atomic_store(&c->fail, ARR_ENOMEM);
             return;
         }
+        if (c->o->tags) {
+            vbuf *tb = &c->etags[w];
+            if (vbuf_reserve(tb, out->n + k, sizeof(uint32_t))) {
+                atomic_store(&c->fail, ARR_ENOMEM);
+                return;
+            }
+            uint32_t *t = tb->p, tag = c->o->tags[sg->id];
+            for (size_t i = 0; i + 1 < k; i++) t[tb->n++] = tag;
+        }
         uint64_t *e = out->p;
         for (size_t i = 0; i + 1 < k; i++) {
             uint32_t u = sc->val[i], v = sc->val[i + 1];
@@ -497,12 +510,80 @@ static void locate_chunk(void *vj, size_t chunk, int w)
     }
 }
 
+/* Sorts the n edges ev (v0 << 32 | v1) with their tags et by (edge, tag): LSD radix, the tags'
+ * bytes first, then the edges', each pass stable, passes whose byte is the same everywhere
+ * skipped.  Then makes the edges unique in place (*nu of them) and gives each the tags that lie
+ * on it an odd number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
+static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint32_t **toff,
+                         uint32_t **tags)
+{
+    uint64_t *kb = malloc((n ? n : 1) * sizeof *kb);
+    uint32_t *tb = malloc((n ? n : 1) * sizeof *tb);
+    uint32_t *off = NULL, *tg = NULL;
+    if (!kb || !tb) goto fail;
+    uint64_t *ks = ev, *kd = kb;
+    uint32_t *ts = et, *td = tb;
+    for (int part = 0; part < 2; part++) {
+        uint64_t all_or = 0, all_and = ~(uint64_t)0;
+        for (size_t i = 0; i < n; i++) {
+            uint64_t x = part ? ks[i] : ts[i];
+            all_or |= x, all_and &= x;
+        }
+        for (int pass = 0; pass < (part ? 8 : 4); pass++) {
+            int sh = 8 * pass;
+            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
+            size_t cnt[257] = {0};
+            for (size_t i = 0; i < n; i++) cnt[((part ? ks[i] : ts[i]) >> sh & 255) + 1]++;
+            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+            for (size_t i = 0; i < n; i++) {
+                size_t d = cnt[(part ? ks[i] : ts[i]) >> sh & 255]++;
+                kd[d] = ks[i], td[d] = ts[i];
+            }
+            uint64_t *kt = ks;
+            ks = kd, kd = kt;
+            uint32_t *tt = ts;
+            ts = td, td = tt;
+        }
+    }
+    off = malloc((n + 1) * sizeof *off);
+    tg = malloc((n ? n : 1) * sizeof *tg);
+    if (!off || !tg) goto fail;
+    size_t u = 0, nt = 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && ks[j] == ks[i]) j++;
+        off[u] = (uint32_t)nt;
+        for (size_t a = i; a < j;) { /* runs of one tag: kept when odd */
+            size_t b = a;
+            while (b < j && ts[b] == ts[a]) b++;
+            if ((b - a) & 1) tg[nt++] = ts[a];
+            a = b;
+        }
+        ev[u++] = ks[i]; /* u <= i: in place even when ks is ev */
+        i = j;
+    }
+    off[u] = (uint32_t)nt;
+    free(kb);
+    free(tb);
+    *nu = u;
+    *toff = off;
+    *tags = tg;
+    return 0;
+fail:
+    free(kb);
+    free(tb);
+    free(off);
+    free(tg);
+    return -1;
+}
+
 /* From the snapped segments to a sorted, duplicate-free edge list over the hot pixels. */
-static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_out, char *err,
-                       size_t el)
+static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_out,
+                       uint32_t **toff_out, uint32_t **tags_out, char *err, size_t el)
 {
     int rc = ARR_ENOMEM;
     uint64_t *kv = NULL, *inc = NULL, *ev = NULL;
+    uint32_t *et = NULL;
     size_t ncross = 0, ninc = 0, nev = 0;
     double t0 = now_ms();
 
@@ -576,10 +657,18 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     rc = ARR_ENOMEM;
     ev = gather(c->edges, c->threads, sizeof(uint64_t), &nev);
     if (!ev) goto fail;
-    if (sort_u64(ev, nev)) goto fail;
     size_t k = 0;
-    for (size_t i = 0; i < nev; i++)
-        if (k == 0 || ev[k - 1] != ev[i]) ev[k++] = ev[i];
+    if (c->o->tags) {
+        size_t nt;
+        et = gather(c->etags, c->threads, sizeof(uint32_t), &nt);
+        if (!et || nt != nev || unique_tagged(ev, et, nev, &k, toff_out, tags_out)) goto fail;
+        free(et);
+        et = NULL;
+    } else {
+        if (sort_u64(ev, nev)) goto fail;
+        for (size_t i = 0; i < nev; i++)
+            if (k == 0 || ev[k - 1] != ev[i]) ev[k++] = ev[i];
+    }
     *edges_out = ev;
     *ne_out = k;
     st->ms_split = now_ms() - t2;
@@ -589,6 +678,7 @@ fail:
     free(kv);
     free(inc);
     free(ev);
+    free(et);
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
     return rc;
 }
@@ -597,10 +687,13 @@ fail:
 
 typedef struct graph {
     size_t nv, ne;
-    ipt *P;        /* nv */
-    uint32_t *EV;  /* 2*ne */
-    uint32_t *off; /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
-    uint32_t *out; /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
+    ipt *P;         /* nv */
+    uint32_t *src;  /* nv, with input_coords: the first input endpoint on the vertex, or NONE */
+    uint32_t *toff; /* with tags: ne+1 */
+    uint32_t *tag;  /* with tags: each edge's odd tags */
+    uint32_t *EV;   /* 2*ne */
+    uint32_t *off;  /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
+    uint32_t *out;  /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
 } graph;
 
 static inline uint32_t he_tail(const graph *g, uint32_t h)
@@ -615,6 +708,9 @@ static inline uint32_t he_head(const graph *g, uint32_t h)
 static void graph_free(graph *g)
 {
     free(g->P);
+    free(g->src);
+    free(g->toff);
+    free(g->tag);
     free(g->EV);
     free(g->off);
     free(g->out);
@@ -717,18 +813,25 @@ static int graph_prune(graph *g, const uint8_t *drop)
     uint32_t *vmap = malloc((g->nv + 1) * sizeof *vmap);
     if (!vmap) return -1;
     for (size_t v = 0; v < g->nv; v++) vmap[v] = NONE;
-    size_t ne = 0;
+    size_t ne = 0, nt = 0;
     for (size_t e = 0; e < g->ne; e++) {
         if (drop[e]) continue;
         vmap[g->EV[2 * e]] = vmap[g->EV[2 * e + 1]] = 0;
         g->EV[2 * ne] = g->EV[2 * e];
         g->EV[2 * ne + 1] = g->EV[2 * e + 1];
+        if (g->toff) { /* a dropped edge is a bridge: its tags are even (rings are closed) */
+            uint32_t t0 = g->toff[e], t1 = g->toff[e + 1];
+            g->toff[ne] = (uint32_t)nt;
+            for (uint32_t t = t0; t < t1; t++) g->tag[nt++] = g->tag[t];
+        }
         ne++;
     }
+    if (g->toff) g->toff[ne] = (uint32_t)nt;
     size_t nv = 0;
     for (size_t v = 0; v < g->nv; v++)
         if (vmap[v] != NONE) {
             g->P[nv] = g->P[v];
+            if (g->src) g->src[nv] = g->src[v];
             vmap[v] = (uint32_t)nv++;
         }
     for (size_t i = 0; i < 2 * ne; i++) g->EV[i] = vmap[g->EV[i]];
@@ -1051,12 +1154,27 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         !out->face_cycle || !out->hole_off || !out->hole_cyc || !out->fe_off || !out->fe ||
         !out->cyc_off || !out->cyc || !out->ext_cyc)
         goto out;
+    out->VG = malloc((2 * g->nv + 1) * sizeof *out->VG);
+    if (!out->VG) goto out;
     for (size_t v = 0; v < g->nv; v++) {
-        out->V[2 * v] = unsnap(c, 0, g->P[v].x);
-        out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
+        uint32_t s = g->src ? g->src[v] : NONE;
+        if (s != NONE) { /* segment s / 2's start (even) or end (odd), as given */
+            out->V[2 * v] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1)];
+            out->V[2 * v + 1] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1) + 1];
+        } else {
+            out->V[2 * v] = unsnap(c, 0, g->P[v].x);
+            out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
+        }
+        out->VG[2 * v] = g->P[v].x;
+        out->VG[2 * v + 1] = g->P[v].y;
         instack[v] = NONE;
     }
     memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
+    if (g->toff) {
+        out->etag_off = g->toff;
+        out->etag = g->tag;
+        ((graph *)g)->toff = ((graph *)g)->tag = NULL; /* handed over */
+    }
     out->cyc_off[0] = 0;
     for (size_t cy = 0; cy < w->ncyc; cy++) {
         size_t len = w->hoff[cy + 1] - w->hoff[cy], p0 = np;
@@ -1284,6 +1402,31 @@ static void ctx_free(ctx *c)
     }
 }
 
+/* With input_coords: for every vertex (hot pixel, g->P sorted), the first input endpoint that
+ * snapped to it (2i for segment i's start, 2i+1 for its end), or NONE for a crossing. */
+static int vertex_sources(const ctx *c, const double *seg, size_t n, graph *g)
+{
+    g->src = malloc((g->nv + 1) * sizeof *g->src);
+    if (!g->src) return -1;
+    for (size_t v = 0; v < g->nv; v++) g->src[v] = NONE;
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 2; k++) {
+            ipt p = {snap_coord(c, 0, seg[4 * i + 2 * k]),
+                     snap_coord(c, 1, seg[4 * i + 2 * k + 1])};
+            size_t lo = 0, hi = g->nv;
+            while (lo < hi) {
+                size_t mid = lo + (hi - lo) / 2;
+                if (ipt_cmp(g->P[mid], p) < 0)
+                    lo = mid + 1;
+                else
+                    hi = mid;
+            }
+            if (lo < g->nv && ipt_cmp(g->P[lo], p) == 0 && g->src[lo] == NONE)
+                g->src[lo] = (uint32_t)(2 * i + (size_t)k);
+        }
+    return 0;
+}
+
 int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, char *err,
                size_t errlen)
 {
@@ -1299,6 +1442,7 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     if (err && errlen) err[0] = 0;
     if (!c) return seterr(err, errlen, ARR_ENOMEM, "out of memory");
     c->o = opts ? opts : &defaults;
+    c->in = seg;
     c->threads = c->o->threads > 0 ? c->o->threads : par_ncpu();
     if (c->threads > MAXW) c->threads = MAXW;
     atomic_init(&c->fail, 0);
@@ -1312,7 +1456,10 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     if ((rc = check_range(c, err, errlen))) goto fail;
     out->stats.ms_snap = now_ms() - t0;
     progress(c, "snap", 1);
-    if ((rc = stage_split(c, &out->stats, &ev, &nev, err, errlen))) goto fail;
+    uint32_t *toff = NULL, *tags = NULL;
+    if ((rc = stage_split(c, &out->stats, &ev, &nev, &toff, &tags, err, errlen))) goto fail;
+    g.toff = toff;
+    g.tag = tags;
     if (cancelled(c)) {
         rc = ARR_ECANCELED;
         goto fail;
@@ -1325,6 +1472,10 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     g.ne = nev;
     g.P = c->pix;
     c->pix = NULL;
+    if (c->o->input_coords && vertex_sources(c, seg, n, &g)) {
+        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        goto fail;
+    }
     g.EV = malloc((2 * nev + 1) * sizeof *g.EV);
     if (!g.EV) {
         rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
@@ -1359,6 +1510,9 @@ fail : {
 void lar2_free(lar2 *c)
 {
     free(c->V);
+    free(c->VG);
+    free(c->etag_off);
+    free(c->etag);
     free(c->EV);
     free(c->face_cycle);
     free(c->hole_off);

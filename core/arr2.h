@@ -38,6 +38,17 @@ typedef struct arr2_opts {
     const atomic_int *cancel; /* borrowed, may be NULL: non-zero asks to stop */
     void (*progress)(void *udata, const char *stage, double fraction); /* may be NULL */
     void *udata;                                                       /* passed to progress */
+    /* Provenance (may be NULL): a tag per input segment (borrowed, n of them).  Then each edge
+     * of the result lists the tags of the input segments lying on it an odd number of times
+     * (lar2.etag_off / etag): through snapping, splitting and the merging of collinear overlaps,
+     * so that crossing an edge changes exactly the inputs whose tags it lists (the 2D Booleans
+     * need nothing else). */
+    const uint32_t *tags;
+    /* Non-zero: a vertex that an input endpoint snapped to is written with that endpoint's
+     * input coordinates (the first such endpoint in input order: segment i's start is 2i, its
+     * end 2i+1); only the other vertices (crossings) are grid values.  Zero: all are grid
+     * values.  Topology is the grid's either way (lar2.VG). */
+    int input_coords;
 } arr2_opts;
 
 typedef struct arr2_stats {
@@ -75,7 +86,11 @@ typedef struct lar2 {
     uint32_t *cyc_off; /* ncyc+1 */
     uint32_t *cyc;     /* vertex ids */
     size_t next;
-    uint32_t *ext_cyc; /* cycles bounding the unbounded face (clockwise) */
+    uint32_t *ext_cyc;  /* cycles bounding the unbounded face (clockwise) */
+    int64_t *VG;        /* 2*nv: the vertices' grid coordinates (V = (origin + VG) * step, or the
+                           input's coordinates with input_coords); exact predicates use these */
+    uint32_t *etag_off; /* with opts.tags: ne+1, edge e's tags are etag[etag_off[e]..] */
+    uint32_t *etag;     /* ascending, each an input tag lying on e an odd number of times */
     arr2_stats stats;
 } lar2;
 

@@ -1,211 +1,57 @@
 /* bool2.c — Boolean operations on polygons with holes through one arrangement; see bool2.h.
  *
- * Steps: rings -> segments -> arr2_build(); per bounded face an interior point (face_point) and
- * its membership in every input (parity test, exact orientation on doubles); bool_expr per
- * face; boundary half-edges (selected face on the left); cycles walked with the tightest turn;
- * cycles grouped by the edge-connected region of selected faces they bound; holes go to the
- * outer cycle of their region (by an exact point-in-cycle test when a region has several).
+ * Stages, each a function below:
+ *   segments    every ring edge becomes a segment tagged with its polygon;
+ *   arrange     arr2_build() with the tags (each edge then lists the polygons lying on it an odd
+ *               number of times: crossing it changes exactly their membership) and the input
+ *               coordinates for the vertices that input points snapped to;
+ *   sides       the face on each side of every edge, from the face cycles (every cycle has its
+ *               face on its left; EXT stands for the unbounded face);
+ *   membership  a walk over the faces from EXT, whose row is all 0: crossing edge e flips the
+ *               polygons e lists.  Every face is reached; a face reached again must get the same
+ *               row (a hash of the row is compared: rows are consistent by construction, since
+ *               every ring is closed, so this only guards against a bug);
+ *   select      the expression on each face's row;
+ *   groups      selected faces joined across edges with a selected face on both sides: each
+ *               group is one result polygon (polygons of the result meet at most at vertices);
+ *   boundary    the edges with a selected face on one side only, directed with it on the
+ *               left; at each vertex, an edge coming in is followed by the next edge of its
+ *               group counter-clockwise around the vertex: the turn through the wedge outside
+ *               the group.  So a ring never passes a vertex twice: where the outside touches
+ *               the polygon (a hole touching the shell or another hole) the rings split there,
+ *               as OGC asks;
+ *   polygons    in each group one ring turns counter-clockwise (the shell: the boundary of the
+ *               unbounded part of the group's outside) and the others clockwise (holes: the
+ *               bounded parts).  No point-in-polygon test is needed: the group says which
+ *               holes are whose.
+ * Every decision is exact on the arrangement's grid coordinates (lar2.VG): angles by the sign of
+ * 128-bit cross products, orientation by the exact signed area.
  *
- * Exactness: orient() filters a double evaluation with Shewchuk's error bound and otherwise sums
- * the 16 exact products of the two-term differences as an expansion, so the sign is exact for
- * any finite doubles (barring underflow, far below the snapping grid).  The interior point
- * itself is computed in floating point, then checked exactly against the face's edges; when the
- * check fails (a sliver) the next widest gap between vertex heights is tried.
- *
- * Cost: membership is faces x input edges (with a bounding-box test per polygon first); known
- * to be simple rather than fast for thousands of faces against thousands of ring edges.
- *
- * Threads: reentrant, no globals.  Ownership: see bool2.h.
+ * Threads: reentrant (arr2_build() starts and joins its own threads); no globals.
+ * Ownership: see bool2.h.
  */
 #include "core/bool2.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- exact orientation on doubles ----------------------------------------------------------- */
+#define NONE UINT32_MAX
 
-static void two_sum(double a, double b, double *x, double *y)
-{
-    double s = a + b, bv = s - a, av = s - bv;
-    *x = s;
-    *y = (a - av) + (b - bv);
-}
+typedef __int128 i128;
 
-static void two_diff(double a, double b, double *x, double *y)
+static int seterr(char *err, size_t el, int code, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static int seterr(char *err, size_t el, int code, const char *fmt, ...)
 {
-    double s = a - b, bv = a - s, av = s + bv;
-    *x = s;
-    *y = (a - av) + (bv - b);
-}
-
-/* Adds one double to an expansion of n components (increasing magnitude); returns new n. */
-static int grow(double *e, int n, double b)
-{
-    double q = b;
-    for (int i = 0; i < n; i++) {
-        double s, t;
-        two_sum(q, e[i], &s, &t);
-        e[i] = t;
-        q = s;
+    if (err && el) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, el, fmt, ap);
+        va_end(ap);
     }
-    e[n] = q;
-    return n + 1;
-}
-
-/* Sign of (b - a) x (c - a): > 0 when a, b, c turn counter-clockwise.  Exact. */
-static int orient(double ax, double ay, double bx, double by, double cx, double cy)
-{
-    double l = (bx - ax) * (cy - ay), r = (by - ay) * (cx - ax), det = l - r;
-    double bound = 3.3306690738754716e-16 * (fabs(l) + fabs(r));
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
-    double u[2], v[2], w[2], z[2], e[17];
-    two_diff(bx, ax, &u[1], &u[0]);
-    two_diff(cy, ay, &v[1], &v[0]);
-    two_diff(by, ay, &w[1], &w[0]);
-    two_diff(cx, ax, &z[1], &z[0]);
-    int n = 0;
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++) {
-            double p = u[i] * v[j], q = w[i] * z[j];
-            n = grow(e, n, p);
-            n = grow(e, n, fma(u[i], v[j], -p));
-            n = grow(e, n, -q);
-            n = grow(e, n, -fma(w[i], z[j], -q));
-        }
-    for (int i = n - 1; i >= 0; i--)
-        if (e[i] != 0) return e[i] > 0 ? 1 : -1;
-    return 0;
-}
-
-/* Does the rightward ray from p cross segment ab (half-open in y: an endpoint at p's height
- * counts as above)?  A point on the segment does not cross it. */
-static int ray_crosses(double px, double py, double ax, double ay, double bx, double by)
-{
-    if ((ay > py) == (by > py)) return 0;
-    int o = orient(ax, ay, bx, by, px, py);
-    return by > ay ? o > 0 : o < 0;
-}
-
-int bool2_point_in(double px, double py, const uint32_t *ring_off, size_t nring, const double *xy)
-{
-    int in = 0;
-    for (size_t r = 0; r < nring; r++) {
-        uint32_t a = ring_off[r], n = ring_off[r + 1] - a;
-        for (uint32_t i = 0; i < n; i++) {
-            const double *p = xy + 2 * (a + i), *q = xy + 2 * (a + (i + 1) % n);
-            in ^= ray_crosses(px, py, p[0], p[1], q[0], q[1]);
-        }
-    }
-    return in;
-}
-
-/* ---- interior points ------------------------------------------------------------------------- */
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-typedef struct gap {
-    double lo, hi;
-} gap;
-
-static int cmp_gap_wide(const void *a, const void *b)
-{
-    const gap *g = a, *h = b;
-    double x = g->hi - g->lo, y = h->hi - h->lo;
-    return (x < y) - (x > y);
-}
-
-/* Even-odd over the face's edges (its outer cycle and holes). */
-static int face_contains(const lar2 *c, size_t f, double px, double py)
-{
-    int in = 0;
-    for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
-        uint32_t e = (uint32_t)abs(c->fe[i]) - 1;
-        const double *a = c->V + 2 * c->EV[2 * e], *b = c->V + 2 * c->EV[2 * e + 1];
-        in ^= ray_crosses(px, py, a[0], a[1], b[0], b[1]);
-    }
-    return in;
-}
-
-/* A point strictly inside face f, into *px, *py; scratch: ys and xs of 2 * (edges of f) doubles
- * each, gaps as many.  Returns 0, or -1 when no candidate checks out. */
-static int face_point(const lar2 *c, size_t f, double *ys, double *xs, gap *gaps, double *px,
-                      double *py)
-{
-    size_t ny = 0, ng = 0;
-    for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
-        uint32_t e = (uint32_t)abs(c->fe[i]) - 1;
-        ys[ny++] = c->V[2 * c->EV[2 * e] + 1];
-        ys[ny++] = c->V[2 * c->EV[2 * e + 1] + 1];
-    }
-    qsort(ys, ny, sizeof *ys, cmp_double);
-    for (size_t i = 1; i < ny; i++)
-        if (ys[i] > ys[i - 1]) gaps[ng++] = (gap){ys[i - 1], ys[i]};
-    qsort(gaps, ng, sizeof *gaps, cmp_gap_wide);
-    for (size_t g = 0; g < ng; g++) {
-        double y = gaps[g].lo + (gaps[g].hi - gaps[g].lo) / 2, best = 0, bx = 0;
-        size_t nx = 0;
-        if (!(y > gaps[g].lo && y < gaps[g].hi)) continue;
-        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
-            uint32_t e = (uint32_t)abs(c->fe[i]) - 1;
-            const double *a = c->V + 2 * c->EV[2 * e], *b = c->V + 2 * c->EV[2 * e + 1];
-            if ((a[1] > y) == (b[1] > y)) continue;
-            xs[nx++] = a[0] + (y - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-        }
-        qsort(xs, nx, sizeof *xs, cmp_double);
-        for (size_t i = 0; i + 1 < nx; i += 2)
-            if (xs[i + 1] - xs[i] > best) {
-                best = xs[i + 1] - xs[i];
-                bx = xs[i] + best / 2;
-            }
-        if (best > 0 && face_contains(c, f, bx, y)) {
-            *px = bx;
-            *py = y;
-            return 0;
-        }
-    }
-    return -1;
-}
-
-/* ---- the result's boundary ----------------------------------------------------------------- */
-
-static uint32_t uf_find(uint32_t *p, uint32_t x)
-{
-    while (p[x] != x) x = p[x] = p[p[x]];
-    return x;
-}
-
-/* Is the CCW angle from d = u - v to w1 - v larger than to w2 - v (both half-edges out of v)? */
-static int angle_larger(const double *V, uint32_t v, uint32_t u, uint32_t w1, uint32_t w2)
-{
-    const double *o = V + 2 * v, *d = V + 2 * u, *a = V + 2 * w1, *b = V + 2 * w2;
-    int h[2];
-    const double *w[2] = {a, b};
-    for (int k = 0; k < 2; k++) {
-        int s = orient(o[0], o[1], d[0], d[1], w[k][0], w[k][1]);
-        if (s > 0)
-            h[k] = 0;
-        else if (s < 0)
-            h[k] = 1;
-        else { /* collinear with d: same direction is angle 0 (taken last), opposite is pi */
-            int same = ((w[k][0] > o[0]) == (d[0] > o[0])) && ((w[k][0] < o[0]) == (d[0] < o[0])) &&
-                       ((w[k][1] > o[1]) == (d[1] > o[1])) && ((w[k][1] < o[1]) == (d[1] < o[1]));
-            h[k] = same ? 2 : 1;
-        }
-    }
-    if (h[0] != h[1]) return h[0] > h[1];
-    return orient(o[0], o[1], a[0], a[1], b[0], b[1]) < 0; /* b before a counter-clockwise */
-}
-
-static int seterr(char *err, size_t el, int code, const char *msg)
-{
-    if (el) snprintf(err, el, "%s", msg);
     return code;
 }
 
@@ -223,288 +69,441 @@ void bool2_free(bool2_result *r)
     memset(r, 0, sizeof *r);
 }
 
-/* Cycle k's signed area, shoelace. */
-static double cycle_area(const bool2_result *r, size_t k)
+/* ---- segments ----------------------------------------------------------------------------- */
+
+/* Every ring edge as a segment (x1, y1, x2, y2) tagged with its polygon.  A ring's closing edge
+ * is implicit; a last point equal to the first makes a zero-length segment, which arr2 drops. */
+static int stage_segments(const bool2_input *in, double **seg, uint32_t **tag, size_t *n)
 {
-    double s = 0;
-    uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
-    for (uint32_t i = 0; i < n; i++) {
-        const double *p = r->c.V + 2 * r->rv[a + i], *q = r->c.V + 2 * r->rv[a + (i + 1) % n];
-        s += p[0] * q[1] - p[1] * q[0];
-    }
-    return s / 2;
+    size_t nr = in->poly_off[in->npoly], np = in->ring_off[nr];
+    *seg = malloc((np ? np : 1) * 4 * sizeof **seg);
+    *tag = malloc((np ? np : 1) * sizeof **tag);
+    if (!*seg || !*tag) return -1;
+    size_t k = 0;
+    for (size_t p = 0; p < in->npoly; p++)
+        for (uint32_t r = in->poly_off[p]; r < in->poly_off[p + 1]; r++) {
+            uint32_t a = in->ring_off[r], m = in->ring_off[r + 1] - a;
+            for (uint32_t i = 0; i < m; i++) {
+                const double *u = in->xy + 2 * (a + i), *v = in->xy + 2 * (a + (i + 1) % m);
+                double *s = *seg + 4 * k;
+                s[0] = u[0], s[1] = u[1], s[2] = v[0], s[3] = v[1];
+                (*tag)[k++] = (uint32_t)p;
+            }
+        }
+    *n = k;
+    return 0;
 }
 
-/* Is (px, py) inside cycle k (even-odd)? */
-static int cycle_contains(const bool2_result *r, size_t k, double px, double py)
+/* ---- sides -------------------------------------------------------------------------------- */
+
+/* The edge from vertex u to vertex v (EV is sorted), or NONE. */
+static uint32_t find_edge(const lar2 *c, uint32_t u, uint32_t v)
 {
-    int in = 0;
-    uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
-    for (uint32_t i = 0; i < n; i++) {
-        const double *p = r->c.V + 2 * r->rv[a + i], *q = r->c.V + 2 * r->rv[a + (i + 1) % n];
-        in ^= ray_crosses(px, py, p[0], p[1], q[0], q[1]);
+    uint32_t a = u < v ? u : v, b = u < v ? v : u;
+    size_t lo = 0, hi = c->ne;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
+        if (x < a || (x == a && y < b))
+            lo = mid + 1;
+        else
+            hi = mid;
     }
-    return in;
+    return lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b ? (uint32_t)lo : NONE;
 }
+
+/* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
+ * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
+static int stage_sides(const lar2 *c, uint32_t *side, char *err, size_t el)
+{
+    for (size_t i = 0; i < 2 * c->ne; i++) side[i] = NONE;
+    size_t nf = c->nf;
+    for (size_t f = 0; f <= nf; f++) {
+        size_t ncy = f < nf ? 1 + c->hole_off[f + 1] - c->hole_off[f] : c->next;
+        for (size_t j = 0; j < ncy; j++) {
+            uint32_t cy = f == nf  ? c->ext_cyc[j]
+                          : j == 0 ? c->face_cycle[f]
+                                   : c->hole_cyc[c->hole_off[f] + j - 1];
+            uint32_t o = c->cyc_off[cy], n = c->cyc_off[cy + 1] - o;
+            if (n < 2) continue;
+            for (uint32_t i = 0; i < n; i++) {
+                uint32_t u = c->cyc[o + i], v = c->cyc[o + (i + 1) % n];
+                uint32_t e = find_edge(c, u, v);
+                if (e == NONE)
+                    return seterr(err, el, ARR_EINTERNAL, "internal: a cycle steps off the edges");
+                uint32_t *s = &side[2 * (size_t)e + (u < v ? 0 : 1)];
+                if (*s != NONE && *s != (uint32_t)f)
+                    return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in two faces");
+                *s = (uint32_t)f;
+            }
+        }
+    }
+    for (size_t i = 0; i < 2 * c->ne; i++)
+        if (side[i] == NONE)
+            return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in no face");
+    return ARR_OK;
+}
+
+/* ---- membership --------------------------------------------------------------------------- */
+
+static uint64_t mix64(uint64_t x)
+{
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+/* Rows of nf + 1 faces (the last is EXT, all 0) into member ((nf + 1) * ni bytes). */
+static int stage_membership(const lar2 *c, const uint32_t *side, size_t ni, uint8_t *member,
+                            char *err, size_t el)
+{
+    size_t nf = c->nf, nn = nf + 1;
+    uint32_t *aoff = calloc(nn + 2, sizeof *aoff), *adj = malloc((2 * c->ne + 1) * sizeof *adj);
+    uint32_t *queue = malloc((nn + 1) * sizeof *queue);
+    uint64_t *hash = malloc((nn + 1) * sizeof *hash);
+    uint8_t *seen = calloc(nn + 1, 1);
+    int rc = ARR_ENOMEM;
+    if (!aoff || !adj || !queue || !hash || !seen) goto done;
+    for (size_t e = 0; e < c->ne; e++)
+        if (side[2 * e] != side[2 * e + 1]) aoff[side[2 * e] + 2]++, aoff[side[2 * e + 1] + 2]++;
+    for (size_t f = 0; f < nn; f++) aoff[f + 2] += aoff[f + 1];
+    for (size_t e = 0; e < c->ne; e++)
+        if (side[2 * e] != side[2 * e + 1]) {
+            adj[aoff[side[2 * e] + 1]++] = (uint32_t)e;
+            adj[aoff[side[2 * e + 1] + 1]++] = (uint32_t)e;
+        }
+    memset(member + nf * ni, 0, ni);
+    hash[nf] = 0;
+    seen[nf] = 1;
+    size_t qh = 0, qt = 0;
+    queue[qt++] = (uint32_t)nf;
+    while (qh < qt) {
+        uint32_t f = queue[qh++];
+        for (uint32_t i = aoff[f]; i < aoff[f + 1]; i++) {
+            uint32_t e = adj[i], g = side[2 * e] == f ? side[2 * e + 1] : side[2 * e];
+            uint64_t h = hash[f];
+            for (uint32_t t = c->etag_off[e]; t < c->etag_off[e + 1]; t++) h ^= mix64(c->etag[t]);
+            if (seen[g]) {
+                if (hash[g] != h) {
+                    const double *a = c->V + 2 * c->EV[2 * e], *b = c->V + 2 * c->EV[2 * e + 1];
+                    rc = seterr(err, el, ARR_EINTERNAL,
+                                "internal: the faces beside the edge (%.17g, %.17g)-(%.17g, %.17g) "
+                                "get two memberships",
+                                a[0], a[1], b[0], b[1]);
+                    goto done;
+                }
+                continue;
+            }
+            seen[g] = 1;
+            hash[g] = h;
+            memcpy(member + (size_t)g * ni, member + (size_t)f * ni, ni);
+            for (uint32_t t = c->etag_off[e]; t < c->etag_off[e + 1]; t++)
+                member[(size_t)g * ni + c->etag[t]] ^= 1;
+            queue[qt++] = g;
+        }
+    }
+    rc = qt == nn ? ARR_OK
+                  : seterr(err, el, ARR_EINTERNAL, "internal: %zu faces out of reach", nn - qt);
+done:
+    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    free(aoff);
+    free(adj);
+    free(queue);
+    free(hash);
+    free(seen);
+    return rc;
+}
+
+/* ---- select, groups ----------------------------------------------------------------------- */
+
+static uint32_t uf_find(uint32_t *p, uint32_t x)
+{
+    while (p[x] != x) {
+        p[x] = p[p[x]];
+        x = p[x];
+    }
+    return x;
+}
+
+/* sel[f] for the nf + 1 faces (EXT never selected); out->cells. */
+static int stage_select(bool2_result *out, const bool_expr *op, uint8_t *sel)
+{
+    size_t nf = out->c.nf, ni = out->ninputs;
+    uint8_t *stack = malloc(op->depth + 1);
+    out->cells = malloc((nf + 1) * sizeof *out->cells);
+    if (!stack || !out->cells) {
+        free(stack);
+        return -1;
+    }
+    out->ncells = 0;
+    for (size_t f = 0; f < nf; f++) {
+        sel[f] = (uint8_t)(bool_expr_eval(op, out->member + f * ni, stack) != 0);
+        if (sel[f]) out->cells[out->ncells++] = (uint32_t)f;
+    }
+    sel[nf] = 0;
+    free(stack);
+    return 0;
+}
+
+/* grp[f]: the group (a representative face) of each selected face, joined across edges with a
+ * selected face on both sides. */
+static void stage_groups(const lar2 *c, const uint32_t *side, const uint8_t *sel, uint32_t *grp)
+{
+    for (size_t f = 0; f <= c->nf; f++) grp[f] = (uint32_t)f;
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t a = side[2 * e], b = side[2 * e + 1];
+        if (a != b && sel[a] && sel[b]) {
+            uint32_t ra = uf_find(grp, a), rb = uf_find(grp, b);
+            if (ra != rb) grp[ra < rb ? rb : ra] = ra < rb ? ra : rb; /* the smaller face leads */
+        }
+    }
+    for (size_t f = 0; f <= c->nf; f++) grp[f] = uf_find(grp, (uint32_t)f);
+}
+
+/* ---- boundary rings ----------------------------------------------------------------------- */
+
+typedef struct ray {
+    uint32_t v, grp; /* at vertex v, of group grp */
+    uint32_t h;      /* boundary half-edge 2e (EV0 -> EV1) or 2e+1 (the other way) */
+    int in;          /* 1: h ends at v; 0: h starts at v */
+    int64_t dx, dy;  /* from v toward h's other end, grid units */
+} ray;
+
+static int ray_half(const ray *r)
+{
+    return r->dy < 0 || (r->dy == 0 && r->dx < 0);
+}
+
+/* By vertex, group, then angle counter-clockwise from +x (exact). */
+static int ray_cmp(const void *pa, const void *pb)
+{
+    const ray *a = pa, *b = pb;
+    if (a->v != b->v) return a->v < b->v ? -1 : 1;
+    if (a->grp != b->grp) return a->grp < b->grp ? -1 : 1;
+    int ha = ray_half(a), hb = ray_half(b);
+    if (ha != hb) return ha - hb;
+    i128 x = (i128)a->dx * b->dy - (i128)a->dy * b->dx;
+    return x > 0 ? -1 : x < 0 ? 1 : 0;
+}
+
+static uint32_t he_tail(const lar2 *c, uint32_t h)
+{
+    return c->EV[2 * (size_t)(h >> 1) + (h & 1)];
+}
+
+static uint32_t he_head(const lar2 *c, uint32_t h)
+{
+    return c->EV[2 * (size_t)(h >> 1) + 1 - (h & 1)];
+}
+
+/* The result's rings: out->rc_off, rv, re (every ring with the selected side on its left), and
+ * ring_grp (the group of each ring). */
+static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *sel,
+                       const uint32_t *grp, uint32_t **ring_grp, char *err, size_t el)
+{
+    const lar2 *c = &out->c;
+    size_t nb = 0;
+    for (size_t e = 0; e < c->ne; e++) nb += sel[side[2 * e]] != sel[side[2 * e + 1]];
+    ray *rays = malloc((2 * nb + 1) * sizeof *rays);
+    uint32_t *next = malloc((2 * c->ne + 1) * sizeof *next);
+    uint8_t *done = calloc(2 * c->ne + 1, 1);
+    out->rc_off = malloc((nb + 1) * sizeof *out->rc_off);
+    out->rv = malloc((nb + 1) * sizeof *out->rv);
+    out->re = malloc((nb + 1) * sizeof *out->re);
+    *ring_grp = malloc((nb + 1) * sizeof **ring_grp);
+    int rc = ARR_ENOMEM;
+    if (!rays || !next || !done || !out->rc_off || !out->rv || !out->re || !*ring_grp) goto fail;
+    size_t nr = 0;
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t l = side[2 * e], r = side[2 * e + 1];
+        if (sel[l] == sel[r]) continue;
+        uint32_t h = (uint32_t)(2 * e + (sel[l] ? 0 : 1)), g = grp[sel[l] ? l : r];
+        uint32_t t = he_tail(c, h), d = he_head(c, h);
+        int64_t dx = c->VG[2 * d] - c->VG[2 * t], dy = c->VG[2 * d + 1] - c->VG[2 * t + 1];
+        rays[nr++] = (ray){t, g, h, 0, dx, dy};
+        rays[nr++] = (ray){d, g, h, 1, -dx, -dy};
+    }
+    qsort(rays, nr, sizeof *rays, ray_cmp);
+    /* an edge coming in is followed by the next ray of its group counter-clockwise: an edge
+     * going out (the rays of one group alternate around a vertex) */
+    for (size_t i = 0; i < 2 * c->ne; i++) next[i] = NONE;
+    for (size_t i = 0, j; i < nr; i = j) {
+        for (j = i + 1; j < nr && rays[j].v == rays[i].v && rays[j].grp == rays[i].grp; j++)
+            continue;
+        for (size_t k = i; k < j; k++) {
+            if (!rays[k].in) continue;
+            const ray *o = &rays[k + 1 < j ? k + 1 : i];
+            if (o->in)
+                return seterr(err, el, ARR_EINTERNAL,
+                              "internal: the result's boundary does not alternate at a vertex");
+            next[rays[k].h] = o->h;
+        }
+    }
+    size_t nring = 0, k = 0;
+    out->rc_off[0] = 0;
+    for (size_t e = 0; e < c->ne; e++)
+        for (uint32_t h = (uint32_t)(2 * e); h <= 2 * e + 1; h++) {
+            if (next[h] == NONE || done[h]) continue;
+            uint32_t x = h;
+            do {
+                if (done[x] || next[x] == NONE || k >= nb) {
+                    rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring is not closed");
+                    goto fail;
+                }
+                done[x] = 1;
+                out->rv[k] = he_tail(c, x);
+                out->re[k] = (x & 1) ? -(int32_t)((x >> 1) + 1) : (int32_t)((x >> 1) + 1);
+                k++;
+                x = next[x];
+            } while (x != h);
+            uint32_t s = side[2 * (size_t)(h >> 1) + (h & 1)]; /* the selected face */
+            (*ring_grp)[nring] = grp[s];
+            out->rc_off[++nring] = (uint32_t)k;
+        }
+    out->nrcyc = nring;
+    rc = ARR_OK;
+fail:
+    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    free(rays);
+    free(next);
+    free(done);
+    return rc;
+}
+
+/* Twice ring k's signed area in grid units, exactly. */
+static i128 ring_area2(const bool2_result *r, size_t k)
+{
+    const int64_t *G = r->c.VG;
+    i128 a = 0;
+    uint32_t b = r->rc_off[k], n = r->rc_off[k + 1] - b;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t u = r->rv[b + i], v = r->rv[b + (i + 1) % n];
+        a += (i128)G[2 * u] * G[2 * v + 1] - (i128)G[2 * v] * G[2 * u + 1];
+    }
+    return a;
+}
+
+/* Per group, its one counter-clockwise ring (the shell) and its clockwise ones (the holes), in
+ * the order of the groups' leading faces; the area of the result. */
+static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err, size_t el)
+{
+    size_t nr = out->nrcyc, nf = out->c.nf;
+    uint32_t *gi = malloc((nf + 2) * sizeof *gi); /* group (leading face) -> polygon */
+    int8_t *ccw = malloc(nr + 1);
+    out->poly_outer = malloc((nr + 1) * sizeof *out->poly_outer);
+    out->ph_off = calloc(nr + 2, sizeof *out->ph_off);
+    out->ph_cyc = malloc((nr + 1) * sizeof *out->ph_cyc);
+    int rc = ARR_ENOMEM;
+    if (!gi || !ccw || !out->poly_outer || !out->ph_off || !out->ph_cyc) goto done;
+    for (size_t f = 0; f <= nf; f++) gi[f] = NONE;
+    i128 total = 0;
+    for (size_t k = 0; k < nr; k++) {
+        i128 a = ring_area2(out, k);
+        total += a;
+        ccw[k] = a > 0;
+        if (a == 0) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
+            goto done;
+        }
+    }
+    /* one shell per group; polygons numbered in the order of their groups' leading faces */
+    size_t np = 0;
+    for (size_t k = 0; k < nr; k++)
+        if (ccw[k]) {
+            if (gi[ring_grp[k]] != NONE) {
+                rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon with two shells");
+                goto done;
+            }
+            gi[ring_grp[k]] = 0;
+        }
+    for (size_t f = 0; f < nf; f++)
+        if (gi[f] != NONE) out->poly_outer[np] = NONE, gi[f] = (uint32_t)np++;
+    for (size_t k = 0; k < nr; k++) {
+        uint32_t q = gi[ring_grp[k]];
+        if (q == NONE) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon without a shell");
+            goto done;
+        }
+        if (ccw[k])
+            out->poly_outer[q] = (uint32_t)k;
+        else
+            out->ph_off[q + 2]++;
+    }
+    for (size_t q = 0; q < np; q++) out->ph_off[q + 2] += out->ph_off[q + 1];
+    for (size_t k = 0; k < nr; k++)
+        if (!ccw[k]) out->ph_cyc[out->ph_off[gi[ring_grp[k]] + 1]++] = (uint32_t)k;
+    out->npoly = np;
+    double s = out->c.stats.precision;
+    out->area = (double)total / 2 * s * s;
+    rc = ARR_OK;
+done:
+    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    free(gi);
+    free(ccw);
+    return rc;
+}
+
+/* ---- the pipeline ------------------------------------------------------------------------- */
 
 int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opts,
                 bool2_result *out, char *err, size_t errlen)
 {
-    bool2_result r = {0};
-    double *seg = NULL, *ys = NULL, *xs = NULL, *bbox = NULL;
-    gap *gaps = NULL;
-    uint8_t *sel = NULL, *stack = NULL, *used = NULL, *ccw = NULL;
-    int32_t *left = NULL, *right = NULL;
-    uint32_t *hoff = NULL, *hto = NULL, *hedge = NULL, *uf = NULL, *region = NULL, *owner = NULL;
-    size_t nseg = 0, nring, npts, maxfe = 0, nh = 0;
+    static const arr2_opts defaults = {0};
+    double *seg = NULL;
+    uint32_t *tag = NULL, *side = NULL, *grp = NULL, *ring_grp = NULL;
+    uint8_t *sel = NULL;
+    size_t n = 0;
     int rc = ARR_ENOMEM;
     memset(out, 0, sizeof *out);
-    if (!in || !op || in->npoly == 0 || in->npoly > BOOL2_MAX_INPUTS)
-        return seterr(err, errlen, ARR_EINVAL, "bool2: between 1 and 100000 input polygons");
-    nring = in->poly_off[in->npoly];
-    npts = in->ring_off[nring];
-    r.ninputs = in->npoly;
-
-    /* rings -> segments, and each polygon's bounding box */
-    seg = malloc((npts ? npts : 1) * 4 * sizeof *seg);
-    bbox = malloc(in->npoly * 4 * sizeof *bbox);
-    if (!seg || !bbox) goto fail;
-    for (size_t p = 0; p < in->npoly; p++) {
-        double *bb = bbox + 4 * p;
-        bb[0] = bb[1] = INFINITY;
-        bb[2] = bb[3] = -INFINITY;
-        for (uint32_t k = in->poly_off[p]; k < in->poly_off[p + 1]; k++) {
-            uint32_t a = in->ring_off[k], n = in->ring_off[k + 1] - a;
-            for (uint32_t i = 0; i < n; i++) {
-                const double *s = in->xy + 2 * (a + i), *t = in->xy + 2 * (a + (i + 1) % n);
-                if (!isfinite(s[0]) || !isfinite(s[1])) {
-                    rc = seterr(err, errlen, ARR_EINVAL, "bool2: non-finite coordinate");
-                    goto out;
-                }
-                bb[0] = fmin(bb[0], s[0]);
-                bb[1] = fmin(bb[1], s[1]);
-                bb[2] = fmax(bb[2], s[0]);
-                bb[3] = fmax(bb[3], s[1]);
-                if (s[0] == t[0] && s[1] == t[1]) continue;
-                memcpy(seg + 4 * nseg, s, 2 * sizeof *s);
-                memcpy(seg + 4 * nseg + 2, t, 2 * sizeof *t);
-                nseg++;
-            }
-        }
+    if (err && errlen) err[0] = 0;
+    if (in->npoly > BOOL2_MAX_INPUTS)
+        return seterr(err, errlen, ARR_ELIMIT, "polygons: %zu, more than the limit of %u",
+                      in->npoly, BOOL2_MAX_INPUTS);
+    if (stage_segments(in, &seg, &tag, &n)) goto fail;
+    arr2_opts ao = opts ? *opts : defaults;
+    ao.tags = tag;
+    ao.input_coords = 1;
+    if ((rc = arr2_build(seg, n, &ao, &out->c, err, errlen)) != ARR_OK) goto fail;
+    free(seg);
+    free(tag);
+    seg = NULL, tag = NULL;
+    lar2 *c = &out->c;
+    size_t ni = in->npoly, nf = c->nf;
+    out->ninputs = ni;
+    if (ni && nf + 1 > BOOL2_MAX_MEMBERSHIP / ni) {
+        rc = seterr(err, errlen, ARR_ELIMIT,
+                    "polygons: %zu faces x %zu polygons is more than the membership table's "
+                    "limit of %u entries; combine fewer polygons per request",
+                    nf, ni, BOOL2_MAX_MEMBERSHIP);
+        goto fail;
     }
-    rc = arr2_build(seg, nseg, opts, &r.c, err, errlen);
-    if (rc != ARR_OK) goto out;
     rc = ARR_ENOMEM;
-    free(seg);
-    seg = NULL;
-
-    /* membership and selection */
-    const lar2 *c = &r.c;
-    for (size_t f = 0; f < c->nf; f++)
-        if (c->fe_off[f + 1] - c->fe_off[f] > maxfe) maxfe = c->fe_off[f + 1] - c->fe_off[f];
-    r.member = calloc(c->nf ? c->nf * r.ninputs : 1, 1);
-    sel = calloc(c->nf + 1, 1);
-    stack = malloc(op->depth + 1);
-    ys = malloc((2 * maxfe + 1) * sizeof *ys);
-    xs = malloc((2 * maxfe + 1) * sizeof *xs);
-    gaps = malloc((2 * maxfe + 1) * sizeof *gaps);
-    if (!r.member || !sel || !stack || !ys || !xs || !gaps) goto fail;
-    for (size_t f = 0; f < c->nf; f++) {
-        double px, py;
-        uint8_t *row = r.member + f * r.ninputs;
-        if (opts && opts->cancel && atomic_load(opts->cancel)) {
-            rc = seterr(err, errlen, ARR_ECANCELED, "canceled");
-            goto out;
-        }
-        if (face_point(c, f, ys, xs, gaps, &px, &py)) {
-            char m[96];
-            snprintf(m, sizeof m, "bool2: no interior point found for face %zu", f);
-            rc = seterr(err, errlen, ARR_EINTERNAL, m);
-            goto out;
-        }
-        for (size_t p = 0; p < r.ninputs; p++) {
-            const double *bb = bbox + 4 * p;
-            if (px < bb[0] || px > bb[2] || py < bb[1] || py > bb[3]) continue;
-            row[p] = (uint8_t)bool2_point_in(px, py, in->ring_off + in->poly_off[p],
-                                             in->poly_off[p + 1] - in->poly_off[p], in->xy);
-        }
-        sel[f] = (uint8_t)bool_expr_eval(op, row, stack);
-        if (sel[f]) {
-            double a = lar2_cycle_area(c, c->face_cycle[f]);
-            for (uint32_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++)
-                a += lar2_cycle_area(c, c->hole_cyc[h]);
-            r.area += a;
-            r.ncells++;
-        }
-    }
-    r.cells = malloc((r.ncells ? r.ncells : 1) * sizeof *r.cells);
-    if (!r.cells) goto fail;
-    for (size_t f = 0, k = 0; f < c->nf; f++)
-        if (sel[f]) r.cells[k++] = (uint32_t)f;
-
-    /* the faces on either side of each edge (-1: the exterior) */
-    left = malloc((c->ne + 1) * sizeof *left);
-    right = malloc((c->ne + 1) * sizeof *right);
-    uf = malloc((c->nf + 1) * sizeof *uf);
-    if (!left || !right || !uf) goto fail;
-    for (size_t e = 0; e < c->ne; e++) left[e] = right[e] = -1;
-    for (size_t f = 0; f < c->nf; f++) {
-        uf[f] = (uint32_t)f;
-        for (uint32_t i = c->fe_off[f]; i < c->fe_off[f + 1]; i++) {
-            int32_t s = c->fe[i];
-            if (s > 0)
-                left[s - 1] = (int32_t)f;
-            else
-                right[-s - 1] = (int32_t)f;
-        }
-    }
-    /* boundary half-edges, grouped by origin (counting sort); regions by union-find */
-    hoff = calloc(c->nv + 1, sizeof *hoff);
-    if (!hoff) goto fail;
-    for (size_t e = 0; e < c->ne; e++) {
-        int sl = left[e] >= 0 && sel[left[e]], sr = right[e] >= 0 && sel[right[e]];
-        if (sl && sr) {
-            uint32_t a = uf_find(uf, (uint32_t)left[e]), b = uf_find(uf, (uint32_t)right[e]);
-            uf[a] = b;
-        }
-        if (sl == sr) continue;
-        hoff[c->EV[2 * e + (sl ? 0 : 1)] + 1]++;
-        nh++;
-    }
-    for (size_t v = 0; v < c->nv; v++) hoff[v + 1] += hoff[v];
-    hto = malloc((nh + 1) * sizeof *hto);
-    hedge = malloc((nh + 1) * sizeof *hedge);
-    used = calloc(nh + 1, 1);
-    r.rc_off = malloc((nh + 1) * sizeof *r.rc_off);
-    r.rv = malloc((nh + 1) * sizeof *r.rv);
-    r.re = malloc((nh + 1) * sizeof *r.re);
-    if (!hto || !hedge || !used || !r.rc_off || !r.rv || !r.re) goto fail;
-    {
-        uint32_t *fill = malloc((c->nv + 1) * sizeof *fill);
-        if (!fill) goto fail;
-        memcpy(fill, hoff, (c->nv + 1) * sizeof *fill);
-        for (size_t e = 0; e < c->ne; e++) {
-            int sl = left[e] >= 0 && sel[left[e]], sr = right[e] >= 0 && sel[right[e]];
-            if (sl == sr) continue;
-            uint32_t from = c->EV[2 * e + (sl ? 0 : 1)], to = c->EV[2 * e + (sl ? 1 : 0)];
-            hto[fill[from]] = to;
-            hedge[fill[from]++] = (uint32_t)e;
-        }
-        free(fill);
-    }
-
-    /* walk the cycles: from each unused half-edge, at every vertex take the outgoing half-edge
-     * of largest counter-clockwise angle from the way back (the tightest turn) */
-    r.rc_off[0] = 0;
-    size_t len = 0;
-    for (size_t v = 0; v < c->nv; v++)
-        for (uint32_t h0 = hoff[v]; h0 < hoff[v + 1]; h0++) {
-            if (used[h0]) continue;
-            uint32_t h = h0, from = (uint32_t)v;
-            while (!used[h]) {
-                uint32_t e = hedge[h], to = hto[h], best = UINT32_MAX;
-                used[h] = 1;
-                r.rv[len] = from;
-                r.re[len++] = c->EV[2 * e] == from ? (int32_t)e + 1 : -(int32_t)e - 1;
-                for (uint32_t k = hoff[to]; k < hoff[to + 1]; k++)
-                    if (best == UINT32_MAX || angle_larger(c->V, to, from, hto[k], hto[best]))
-                        best = k;
-                if (best == UINT32_MAX) {
-                    rc = seterr(err, errlen, ARR_EINTERNAL, "bool2: open boundary walk");
-                    goto out;
-                }
-                from = to;
-                h = best;
-            }
-            if (h != h0) {
-                rc = seterr(err, errlen, ARR_EINTERNAL, "bool2: boundary walk closes elsewhere");
-                goto out;
-            }
-            r.rc_off[++r.nrcyc] = (uint32_t)len;
-        }
-
-    /* orientation (exact, at the cycle's smallest vertex: V is sorted) and region of each */
-    ccw = malloc(r.nrcyc + 1);
-    region = malloc((r.nrcyc + 1) * sizeof *region);
-    owner = malloc((r.nrcyc + 1) * sizeof *owner);
-    r.poly_outer = malloc((r.nrcyc + 1) * sizeof *r.poly_outer);
-    r.ph_off = calloc(r.nrcyc + 2, sizeof *r.ph_off);
-    r.ph_cyc = malloc((r.nrcyc + 1) * sizeof *r.ph_cyc);
-    if (!ccw || !region || !owner || !r.poly_outer || !r.ph_off || !r.ph_cyc) goto fail;
-    for (size_t k = 0; k < r.nrcyc; k++) {
-        uint32_t a = r.rc_off[k], n = r.rc_off[k + 1] - a, m = 0;
-        for (uint32_t i = 1; i < n; i++)
-            if (r.rv[a + i] < r.rv[a + m]) m = i;
-        const double *p = c->V + 2 * r.rv[a + (m + n - 1) % n], *o = c->V + 2 * r.rv[a + m],
-                     *q = c->V + 2 * r.rv[a + (m + 1) % n];
-        ccw[k] = orient(p[0], p[1], o[0], o[1], q[0], q[1]) > 0;
-        int32_t s = r.re[a];
-        region[k] = uf_find(uf, (uint32_t)(s > 0 ? left[s - 1] : right[-s - 1]));
-    }
-    /* outer cycles become polygons; a hole goes to the only outer cycle of its region, or to
-     * the smallest one of its region around the middle of its first edge */
-    for (size_t k = 0; k < r.nrcyc; k++)
-        if (ccw[k]) {
-            owner[k] = (uint32_t)r.npoly;
-            r.poly_outer[r.npoly++] = (uint32_t)k;
-        }
-    for (size_t k = 0; k < r.nrcyc; k++) {
-        if (ccw[k]) continue;
-        uint32_t a = r.rc_off[k], n = r.rc_off[k + 1] - a, best = UINT32_MAX;
-        const double *p = c->V + 2 * r.rv[a], *q = c->V + 2 * r.rv[a + (n > 1)];
-        double mx = p[0] + (q[0] - p[0]) / 2, my = p[1] + (q[1] - p[1]) / 2, barea = 0;
-        size_t cand = 0;
-        for (size_t j = 0; j < r.nrcyc; j++)
-            if (ccw[j] && region[j] == region[k]) cand++;
-        for (size_t j = 0; j < r.nrcyc; j++) {
-            if (!ccw[j] || region[j] != region[k]) continue;
-            if (cand > 1 && !cycle_contains(&r, j, mx, my)) continue;
-            double ar = cycle_area(&r, j);
-            if (best == UINT32_MAX || ar < barea) {
-                best = (uint32_t)j;
-                barea = ar;
-            }
-        }
-        if (best == UINT32_MAX) {
-            rc = seterr(err, errlen, ARR_EINTERNAL, "bool2: a hole of the result has no outer");
-            goto out;
-        }
-        owner[k] = owner[best];
-        r.ph_off[owner[k] + 1]++;
-    }
-    for (size_t q = 0; q < r.npoly; q++) r.ph_off[q + 1] += r.ph_off[q];
-    {
-        uint32_t *fill = malloc((r.npoly + 1) * sizeof *fill);
-        if (!fill) goto fail;
-        memcpy(fill, r.ph_off, (r.npoly + 1) * sizeof *fill);
-        for (size_t k = 0; k < r.nrcyc; k++)
-            if (!ccw[k]) r.ph_cyc[fill[owner[k]]++] = (uint32_t)k;
-        free(fill);
-    }
-    rc = ARR_OK;
-    *out = r;
-    goto done;
-fail:
-    rc = seterr(err, errlen, ARR_ENOMEM, "bool2: out of memory");
-out:
-    bool2_free(&r);
-done:
-    free(seg);
-    free(bbox);
-    free(ys);
-    free(xs);
-    free(gaps);
+    side = malloc((2 * c->ne + 1) * sizeof *side);
+    out->member = malloc((nf + 1) * (ni ? ni : 1));
+    sel = malloc(nf + 1);
+    grp = malloc((nf + 1) * sizeof *grp);
+    if (!side || !out->member || !sel || !grp) goto fail;
+    if ((rc = stage_sides(c, side, err, errlen)) != ARR_OK) goto fail;
+    if ((rc = stage_membership(c, side, ni, out->member, err, errlen)) != ARR_OK) goto fail;
+    rc = ARR_ENOMEM;
+    if (stage_select(out, op, sel)) goto fail;
+    stage_groups(c, side, sel, grp);
+    if ((rc = stage_rings(out, side, sel, grp, &ring_grp, err, errlen)) != ARR_OK) goto fail;
+    if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
+    free(side);
     free(sel);
-    free(stack);
-    free(used);
-    free(ccw);
-    free(left);
-    free(right);
-    free(hoff);
-    free(hto);
-    free(hedge);
-    free(uf);
-    free(region);
-    free(owner);
+    free(grp);
+    free(ring_grp);
+    return ARR_OK;
+fail:
+    if (rc == ARR_ENOMEM) seterr(err, errlen, rc, "out of memory");
+    free(seg);
+    free(tag);
+    free(side);
+    free(sel);
+    free(grp);
+    free(ring_grp);
+    bool2_free(out);
     return rc;
 }

@@ -1,23 +1,16 @@
 /* bool2.h — Boolean operations on polygons with holes, through one planar arrangement (issue
  * "Boolean chains", 2D).
  *
- * Every ring edge of every input polygon goes into ONE arr2_build() arrangement, so the result
- * shares the arrangement's snapped vertices and edges.  Each bounded face gets an interior point
- * (not a fixed offset from an edge: the middle of the widest inside stretch of a horizontal line
- * halfway across the largest gap between the face's vertex heights, checked exactly against the
- * face's cycles) that is classified against every input polygon by an exact even-odd test over
- * all its rings (half-open rule for the ray through vertices).  That is the membership table,
- * faces x inputs; the bool_expr selects faces; the result's boundary is the set of edges with a
- * selected face on exactly one side (the exterior counts as unselected), walked into cycles with
- * the selected region on the left: outer cycles counter-clockwise, holes clockwise.  At a vertex
- * of several boundary edges the walk takes the tightest turn: where the region touches itself
- * (two squares sharing a corner) the cycles split; where the outside touches itself (a hole
- * touching the outer boundary at a vertex) one cycle passes the vertex twice and there is no
- * hole, the region being simply connected.
- *
- * The classification is exact against the INPUT coordinates; the faces are those of the SNAPPED
- * arrangement.  A face narrower than the grid step (a sliver that snapping created or nearly
- * closed) may be classified on the wrong side: the grid step is the one tolerance (DESIGN.md).
+ * Every ring edge of every input polygon goes into ONE arr2_build() arrangement, tagged with its
+ * polygon, so the result shares the arrangement's snapped vertices and edges, and every edge
+ * knows the polygons whose rings lie on it an odd number of times.  Membership follows from the
+ * arrangement alone: the unbounded face lies in no polygon, and crossing an edge changes the
+ * membership of exactly the polygons it lists (no sample point, no ray).  The expression selects
+ * faces; selected faces joined across edges make the result's polygons; each one's boundary
+ * rings are walked turning through the outside at every vertex, so rings never pass a vertex
+ * twice: one shell (counter-clockwise) and holes (clockwise) per polygon, holes touching the
+ * shell or each other at a vertex as separate rings, as OGC asks.  Exact throughout on the grid
+ * (the precision is the one tolerance).
  *
  * Threads: reentrant (arr2_build() starts and joins its own threads); no globals.
  * Ownership: inputs are borrowed; the caller owns *out and frees it with bool2_free().
@@ -31,7 +24,8 @@
 #include "core/arr2.h"
 #include "core/boolexpr.h"
 
-#define BOOL2_MAX_INPUTS 100000u /* input polygons */
+#define BOOL2_MAX_INPUTS     100000u    /* input polygons */
+#define BOOL2_MAX_MEMBERSHIP 200000000u /* faces x polygons of the membership table */
 
 /* The input polygons, in CSR form (all borrowed):
  *   polygon p has rings poly_off[p] .. poly_off[p+1]) (first the outer boundary, then holes;
@@ -68,18 +62,14 @@ typedef struct bool2_result {
     uint32_t *ph_cyc;
 } bool2_result;
 
-/* Builds the arrangement of in's rings with opts (may be NULL: defaults), classifies its faces
- * and selects them with op (checked for in->npoly inputs, bool_expr_check()).  Returns ARR_OK
+/* Builds the arrangement of in's rings with opts (may be NULL: defaults; tags and input_coords
+ * are set here), labels its faces and selects them with op (checked for in->npoly inputs,
+ * bool_expr_check()).  Returns ARR_OK
  * and fills *out, or an ARR_* code with a message in err (errlen bytes) and *out zeroed. */
 int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opts,
                 bool2_result *out, char *err, size_t errlen);
 
 /* Frees what bool2_build() allocated; safe on a zeroed or already freed result. */
 void bool2_free(bool2_result *r);
-
-/* Is (px, py) inside the polygon of nring rings (ring_off/xy as in bool2_input, ring_off
- * borrowed from index 0) by the even-odd rule?  Exact for double inputs; a point exactly on
- * an edge falls on one side by the half-open rule (consistent across shared edges). */
-int bool2_point_in(double px, double py, const uint32_t *ring_off, size_t nring, const double *xy);
 
 #endif

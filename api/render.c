@@ -90,7 +90,7 @@ static int parse_bool(const char *s, int *out)
 
 int render_opts_is_query_key(const char *key)
 {
-    static const char *const keys[] = {"explode", "numbers", "edges", "width", "stroke"};
+    static const char *const keys[] = {"explode", "numbers", "edges", "width", "stroke", "cells"};
     for (size_t i = 0; key && i < sizeof keys / sizeof *keys; i++)
         if (!strcmp(key, keys[i])) return 1;
     return 0;
@@ -126,6 +126,10 @@ int render_opts_parse_query(const char *query_key, const char *value, render_opt
                             "width: expected an integer in [%d, %d] (pixels), got \"%.40s\"",
                             RENDER_WIDTH_MIN, RENDER_WIDTH_MAX, v);
         o->width = (int)w;
+    } else if (!strcmp(k, "cells")) {
+        if (strcmp(v, "all") && strcmp(v, "result"))
+            return api_fail(err, API_EINVALID, "cells: expected all or result, got \"%.40s\"", v);
+        o->cells = !strcmp(v, "all");
     } else if (!strcmp(k, "numbers") || !strcmp(k, "edges")) {
         if (!parse_bool(value, &b))
             return api_fail(err, API_EINVALID,
@@ -137,8 +141,8 @@ int render_opts_parse_query(const char *query_key, const char *value, render_opt
             o->edges = b;
     } else {
         return api_fail(err, API_EINVALID,
-                        "%.40s: unknown parameter (expected explode, numbers, edges, width or "
-                        "stroke)",
+                        "%.40s: unknown parameter (expected explode, numbers, edges, width, "
+                        "stroke or cells)",
                         k);
     }
     return API_OK;
@@ -222,12 +226,25 @@ typedef struct rmodel {
     size_t *ring_off; /* owned, nrings + 1 */
     uint32_t *idx;    /* owned, ring_off[nrings] */
     double cx, cy;    /* centre of the bounding box of V (0, 0 when V is empty) */
+    /* a Boolean's result ("result" of a polygons result), else npoly = 0 and has_result = 0:
+     * polygon q's rings (shell, then holes) are rings poly_ring[q] .. poly_ring[q+1] of the
+     * table above, after the faces' (rings nface_rings .. nrings) */
+    int has_result;
+    size_t npoly, nface_rings;
+    size_t *poly_ring; /* owned, npoly + 1 */
+    double res_area;
+    uint8_t *selected; /* owned, nf: the face is a cell of the result */
+    size_t ninputs;    /* membership row length (0: no "membership") */
+    uint8_t *member;   /* owned, nf * ninputs */
 } rmodel;
 
 static void rmodel_free(rmodel *m)
 {
     free(m->xy);
     free(m->ev);
+    free(m->poly_ring);
+    free(m->selected);
+    free(m->member);
     free(m->face_ring);
     free(m->ring_off);
     free(m->idx);
@@ -468,6 +485,48 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
         }
     }
 
+    /* a Boolean's result: its polygons' rings after the faces' */
+    const json_t *res = json_object_get(root, "result");
+    const json_t *rFV = NULL, *rholes = NULL;
+    size_t nres = 0;
+    if (res) {
+        rFV = json_object_get(res, "FV");
+        rholes = json_object_get(res, "holes");
+        if (!json_is_object(res) || !json_is_array(rFV) || !json_is_object(rholes)) {
+            rc = api_fail(err, API_EINVALID,
+                          "result: expected an object with \"FV\" (the result polygons' shells) "
+                          "and \"holes\"");
+            goto fail;
+        }
+        m->npoly = json_array_size(rFV);
+        for (size_t q = 0; q < m->npoly; q++) {
+            const json_t *row = json_array_get(rFV, q);
+            rc = api_result_cycle(row, m->nv, 3, NULL, err, "result.FV[%zu]", q, SIZE_MAX);
+            if (rc != API_OK) goto fail;
+            nidx += json_array_size(row);
+            nres++;
+        }
+        json_object_foreach((json_t *)rholes, key, val)
+        {
+            size_t q;
+            if (!api_face_key(key, m->npoly, &q) || !json_is_array(val)) {
+                rc = api_fail(err, API_EINVALID,
+                              "result.holes.%.40s: expected an array of rings of a result polygon "
+                              "(there are %zu)",
+                              key, m->npoly);
+                goto fail;
+            }
+            for (size_t h = 0; h < json_array_size(val); h++) {
+                const json_t *row = json_array_get(val, h);
+                rc = api_result_cycle(row, m->nv, 3, NULL, err, "result.holes.%zu[%zu]", q, h);
+                if (rc != API_OK) goto fail;
+                nidx += json_array_size(row);
+                nres++;
+            }
+        }
+    }
+    m->nface_rings = nring;
+    nring += nres;
     m->nrings = nring;
     m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
     m->ring_off = malloc((nring + 1) * sizeof *m->ring_off);
@@ -492,6 +551,58 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
         }
     }
     m->face_ring[m->nf] = r;
+    if (res) {
+        m->has_result = 1;
+        m->poly_ring = malloc((m->npoly + 1) * sizeof *m->poly_ring);
+        m->selected = calloc(m->nf + 1, 1);
+        if (!m->poly_ring || !m->selected) goto nomem;
+        for (size_t q = 0; q < m->npoly; q++) {
+            const json_t *row = json_array_get(rFV, q), *hs;
+            char k[24];
+            m->poly_ring[q] = r;
+            m->ring_off[r++] = w;
+            api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "result.FV[%zu]", q, SIZE_MAX);
+            w += json_array_size(row);
+            snprintf(k, sizeof k, "%zu", q);
+            hs = json_object_get(rholes, k);
+            for (size_t h = 0; h < json_array_size(hs); h++) {
+                row = json_array_get(hs, h);
+                m->ring_off[r++] = w;
+                api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "result.holes.%zu[%zu]", q, h);
+                w += json_array_size(row);
+            }
+        }
+        m->poly_ring[m->npoly] = r;
+        const json_t *cells = json_object_get(res, "cells"), *area = json_object_get(res, "area");
+        m->res_area = json_is_number(area) ? json_number_value(area) : 0;
+        for (size_t i = 0; i < json_array_size(cells); i++) {
+            const json_t *x = json_array_get(cells, i);
+            if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+                (uint64_t)json_integer_value(x) >= m->nf) {
+                rc = api_fail(err, API_EINVALID, "result.cells[%zu]: expected a face index < %zu",
+                              i, m->nf);
+                goto fail;
+            }
+            m->selected[json_integer_value(x)] = 1;
+        }
+        const json_t *mem = json_object_get(root, "membership");
+        if (json_is_array(mem) && json_array_size(mem) == m->nf && m->nf > 0) {
+            m->ninputs = json_array_size(json_array_get(mem, 0));
+            m->member = malloc(m->nf * m->ninputs + 1);
+            if (!m->member) goto nomem;
+            for (size_t f = 0; f < m->nf; f++) {
+                const json_t *row = json_array_get(mem, f);
+                if (json_array_size(row) != m->ninputs) {
+                    rc = api_fail(err, API_EINVALID, "membership[%zu]: expected %zu entries", f,
+                                  m->ninputs);
+                    goto fail;
+                }
+                for (size_t p = 0; p < m->ninputs; p++)
+                    m->member[f * m->ninputs + p] = json_is_true(json_array_get(row, p)) ||
+                                                    json_integer_value(json_array_get(row, p)) != 0;
+            }
+        }
+    }
     m->ring_off[r] = w;
     if (r != nring || w != nidx) { /* cannot happen: keys were checked canonical and < nf */
         rc = api_fail(err, API_EINTERNAL, "render: holes counted twice differently");
@@ -865,8 +976,9 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
     return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
 }
 
-/* The sorted keys of the edges walked by the faces' rings; NULL when out of memory. */
-static uint64_t *face_edge_keys(const rmodel *m, size_t *n)
+/* The sorted keys of the edges walked by the faces' rings of at least min_len vertices; NULL
+ * when out of memory. */
+static uint64_t *face_edge_keys(const rmodel *m, size_t min_len, size_t *n)
 {
     uint64_t *k = malloc(m->ring_off[m->nrings] * sizeof *k + 1);
     size_t w = 0;
@@ -874,6 +986,7 @@ static uint64_t *face_edge_keys(const rmodel *m, size_t *n)
     for (size_t r = 0; r < m->nrings; r++) {
         const uint32_t *v = ring_idx(m, r);
         size_t len = ring_len(m, r);
+        if (len < min_len) continue;
         for (size_t i = 0; i < len; i++) k[w++] = edge_key(v[i], v[(i + 1) % len]);
     }
     qsort(k, w, sizeof *k, cmp_u64);
@@ -899,6 +1012,7 @@ static int has_key(const uint64_t *k, size_t n, uint64_t key)
 typedef struct svg_parts {
     api_buf faces;   /* the <path> elements of the faces */
     api_buf edges;   /* the edges' path data */
+    api_buf result;  /* a Boolean's result region's path data */
     double *label;   /* 2 per face: where its number goes, in SVG coordinates */
     double *off;     /* 2 per face: its translation */
     double *ys, *xs; /* scratch of the label points */
@@ -910,6 +1024,7 @@ static void svg_parts_free(svg_parts *p)
 {
     api_buf_free(&p->faces);
     api_buf_free(&p->edges);
+    api_buf_free(&p->result);
     free(p->label);
     free(p->off);
     free(p->ys);
@@ -930,7 +1045,7 @@ static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_part
                 svg_ring(c, &p->edges, m, &p->vt, r, p->off[2 * f], p->off[2 * f + 1]);
     if (!m->ev) return API_OK;
     if (k1 > 0) {
-        p->keys = face_edge_keys(m, &nkeys);
+        p->keys = face_edge_keys(m, 0, &nkeys);
         if (!p->keys) return API_ENOMEM;
     }
     for (size_t e = 0; e < m->ne; e++) {
@@ -982,6 +1097,10 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
         api_buf_puts(&p.faces, "\"/>\n");
     }
     if (o->edges && svg_edges(m, o, &c, &p) != API_OK) goto nomem;
+    /* a Boolean's result region, on top, where the faces are (not exploded) */
+    if (m->has_result && !(k1 > 0))
+        for (size_t r = m->nface_rings; r < m->nrings; r++)
+            svg_ring(&c, &p.result, m, &p.vt, r, 0, 0);
     if (o->numbers) {
         double sx, sy;
         for (size_t v = 0; v < m->nv; v++) svg_track(&c, m->xy[2 * v], m->xy[2 * v + 1], &sx, &sy);
@@ -1000,7 +1119,7 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
                       p.label + 2 * f + 1);
         }
     }
-    if (p.faces.failed || p.edges.failed) goto nomem;
+    if (p.faces.failed || p.edges.failed || p.result.failed) goto nomem;
     if (c.overflow) {
         rc = api_fail(err, API_EINVALID,
                       "explode: the exploded drawing does not fit in doubles (coordinates too "
@@ -1062,6 +1181,14 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
         svg_number_attr(out, "stroke-width", round4(stroke_px * unit));
         api_buf_puts(out, " stroke-linecap=\"round\" stroke-linejoin=\"round\" d=\"");
         api_buf_put(out, p.edges.p, p.edges.len);
+        api_buf_puts(out, "\"/>\n");
+    }
+    if (p.result.len > 0) {
+        api_buf_puts(out, "<path id=\"result\" fill=\"#d62728\" fill-opacity=\"0.35\" "
+                          "fill-rule=\"evenodd\" stroke=\"#d62728\"");
+        svg_number_attr(out, "stroke-width", round4(2 * stroke_px * unit));
+        api_buf_puts(out, " stroke-linejoin=\"round\" d=\"");
+        api_buf_put(out, p.result.p, p.result.len);
         api_buf_puts(out, "\"/>\n");
     }
     if (o->numbers) {
@@ -1131,48 +1258,120 @@ int render_svg(const char *result_json, size_t len, const render_opts *o, char *
 
 /* ---- GeoJSON ------------------------------------------------------------------------------- */
 
-int render_geojson(const char *result_json, size_t len, char **out, size_t *outlen, api_error *err)
+/* Ring r as GeoJSON positions, closed: [[x,y],...,[x,y]]. */
+static void geojson_ring(api_buf *b, const rmodel *m, const vtext *vt, size_t r)
 {
+    const uint32_t *v = ring_idx(m, r);
+    size_t n = ring_len(m, r);
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i <= n; i++) {
+        api_buf_puts(b, i ? ",[" : "[");
+        vtext_put(b, vt, v[i % n]);
+        api_buf_putc(b, ']');
+    }
+    api_buf_putc(b, ']');
+}
+
+/* Face f as a Polygon Feature; its properties follow "props" (",\"...\":..." or ""). */
+static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f)
+{
+    int first_ring = 1;
+    api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"Polygon\","
+                    "\"coordinates\":[");
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
+        if (ring_len(m, r) < 3) continue; /* a dangling edge kept inside: encloses nothing */
+        if (!first_ring) api_buf_putc(b, ',');
+        first_ring = 0;
+        geojson_ring(b, m, vt, r);
+    }
+    api_buf_puts(b, "]},\"properties\":{\"face\":");
+    api_buf_u64(b, f);
+    api_buf_puts(b, ",\"area\":");
+    api_buf_double(b, face_area(m, f));
+    if (m->has_result) {
+        api_buf_puts(b, m->selected[f] ? ",\"selected\":true" : ",\"selected\":false");
+        if (m->member) {
+            api_buf_puts(b, ",\"membership\":[");
+            for (size_t p = 0; p < m->ninputs; p++) {
+                if (p) api_buf_putc(b, ',');
+                api_buf_putc(b, m->member[f * m->ninputs + p] ? '1' : '0');
+            }
+            api_buf_putc(b, ']');
+        }
+    }
+    api_buf_puts(b, "}}");
+}
+
+int render_geojson(const char *result_json, size_t len, const render_opts *o, char **out,
+                   size_t *outlen, api_error *err)
+{
+    render_opts def = RENDER_OPTS_INIT;
     rmodel m;
     api_buf b = {0};
     vtext vt;
-    int rc;
+    uint64_t *keys = NULL;
+    size_t nkeys = 0;
+    int rc, any = 0;
     *out = NULL;
     *outlen = 0;
+    if (!o) o = &def;
     rc = read_result(result_json, len, &m, err);
     if (rc != API_OK) return rc;
     if (vtext_make(&m, 0, ',', &vt) != API_OK) {
         rmodel_free(&m);
         return api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
     }
+    if (m.has_result && o->cells && !m.member) {
+        rc = api_fail(err, API_EINVALID,
+                      "membership: required for cells=all (the result has no \"membership\")");
+        goto done;
+    }
     api_buf_puts(&b, "{\"type\":\"FeatureCollection\",\"features\":[");
-    for (size_t f = 0; f < m.nf; f++) {
-        int first_ring = 1;
-        if (f) api_buf_putc(&b, ',');
-        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"Polygon\","
+    if (m.has_result) {
+        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"MultiPolygon\","
                          "\"coordinates\":[");
-        for (size_t r = m.face_ring[f]; r < m.face_ring[f + 1]; r++) {
-            const uint32_t *v = ring_idx(&m, r);
-            size_t n = ring_len(&m, r);
-            if (n < 3) continue; /* a dangling edge kept inside: encloses nothing */
-            if (!first_ring) api_buf_putc(&b, ',');
-            first_ring = 0;
-            api_buf_putc(&b, '[');
-            for (size_t i = 0; i <= n; i++) {
-                api_buf_puts(&b, i ? ",[" : "[");
-                vtext_put(&b, &vt, v[i % n]);
-                api_buf_putc(&b, ']');
+        for (size_t q = 0; q < m.npoly; q++) {
+            api_buf_puts(&b, q ? ",[" : "[");
+            for (size_t r = m.poly_ring[q]; r < m.poly_ring[q + 1]; r++) {
+                if (r > m.poly_ring[q]) api_buf_putc(&b, ',');
+                geojson_ring(&b, &m, &vt, r);
             }
             api_buf_putc(&b, ']');
         }
-        api_buf_puts(&b, "]},\"properties\":{\"face\":");
-        api_buf_u64(&b, f);
-        api_buf_puts(&b, ",\"area\":");
-        api_buf_double(&b, face_area(&m, f));
+        api_buf_puts(&b, "]},\"properties\":{\"result\":true,\"area\":");
+        api_buf_double(&b, m.res_area);
         api_buf_puts(&b, "}}");
+        any = 1;
+    }
+    if (!m.has_result || o->cells)
+        for (size_t f = 0; f < m.nf; f++) {
+            if (any) api_buf_putc(&b, ',');
+            any = 1;
+            geojson_face(&b, &m, &vt, f);
+        }
+    /* edges on no face: dangling, kept on request */
+    keys = face_edge_keys(&m, 3, &nkeys);
+    if (!keys && m.nf) {
+        rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+        goto done;
+    }
+    for (size_t e = 0; e < m.ne; e++) {
+        if (has_key(keys, nkeys, edge_key(m.ev[2 * e], m.ev[2 * e + 1]))) continue;
+        if (any) api_buf_putc(&b, ',');
+        any = 1;
+        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"LineString\","
+                         "\"coordinates\":[[");
+        vtext_put(&b, &vt, m.ev[2 * e]);
+        api_buf_puts(&b, "],[");
+        vtext_put(&b, &vt, m.ev[2 * e + 1]);
+        api_buf_puts(&b, "]]},\"properties\":{\"edge\":");
+        api_buf_u64(&b, e);
+        api_buf_puts(&b, ",\"dangling\":true}}");
     }
     api_buf_puts(&b, "]}\n");
+done:
+    free(keys);
     vtext_free(&vt);
     rmodel_free(&m);
-    return finish(&b, API_OK, out, outlen, err);
+    return finish(&b, rc, out, outlen, err);
 }

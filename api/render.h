@@ -28,14 +28,24 @@
  * with each), and an edge on no bounded face (kept dangling, bridges outside) moves by
  * (k - 1) * (its midpoint - C).  Vertex numbers stay at the vertices' own positions.
  *
- * GeoJSON (render_geojson, RFC 7946): a FeatureCollection of one Feature per bounded face, in face
- * order, geometry a Polygon: the outer ring (counter-clockwise) then the holes (clockwise) as
- * LAR gives them, each ring closed by repeating its first position; properties
- * {"face": f, "area": a}, a the face's area with the holes subtracted.  A hole of fewer than
- * 3 vertices (a dangling edge kept inside a face: it encloses nothing) is left out, since a ring
- * needs 4 positions.  The coordinates are the result's own plane coordinates, not longitude and
- * latitude: RFC 7946 allows that "by prior arrangement".  Numbers are printed with
- * api_format_double (exact doubles).
+ * A Boolean's result (kind polygons: the result has "result") is drawn with the result region
+ * on top of the faces and edges: one <path id="result"> holding its polygons' rings, filled
+ * translucent with fill-rule="evenodd" and outlined; exploded drawings leave it out (the
+ * region is not a face and does not move as one).
+ *
+ * GeoJSON (render_geojson, RFC 7946).  Of a Boolean's result: a FeatureCollection whose first
+ * Feature is the result region, one MultiPolygon (one polygon per result polygon: its shell
+ * counter-clockwise, then its holes clockwise; no polygon: "coordinates": []), properties
+ * {"result": true, "area": a}; with o->cells, then one Feature per bounded face of the
+ * arrangement (geometry a Polygon, properties {"face": f, "area": a, "selected": s,
+ * "membership": [0/1 per input]}).  Of any other 2D result: one Feature per bounded face, in
+ * face order, geometry a Polygon, properties {"face": f, "area": a}.  Rings are closed by
+ * repeating their first position; a hole of fewer than 3 vertices (a dangling edge kept inside
+ * a face: it encloses nothing) is left out, since a ring needs 4 positions.  Edges on no face
+ * (kept with keep_dangling) come last, each a LineString Feature with properties
+ * {"edge": e, "dangling": true}: never part of a ring.  The coordinates are the result's own plane
+ * coordinates, not longitude and latitude: RFC 7946 allows that "by prior arrangement".  Numbers
+ * are printed with api_format_double (exact doubles).
  *
  * Threads: reentrant, no globals.  Ownership: the result text and the options (and o->title)
  * are borrowed; *out is malloc'd and NUL-terminated, the caller frees it with free().  On
@@ -61,12 +71,14 @@ typedef struct render_opts {
     double stroke;     /* edge width in pixels; 0 (the default): auto, width / 800 in [0.5, 4] */
     const char *title; /* borrowed, may be NULL: the <title> text (escaped; bytes that are not
                           UTF-8 become '?'); NULL: "cellar: F faces, E edges, V vertices" */
+    int cells;         /* GeoJSON of a Boolean's result: 0 (the default) the result region
+                          only; 1 every face of the arrangement too, with its membership */
 } render_opts;
 
 /* The defaults above. */
 #define RENDER_OPTS_INIT                                                                           \
     {                                                                                              \
-        1.0, 0, 1, 800, 0.0, NULL                                                                  \
+        1.0, 0, 1, 800, 0.0, NULL, 0                                                               \
     }
 void render_opts_init(render_opts *o);
 
@@ -77,9 +89,11 @@ void render_opts_init(render_opts *o);
 int render_svg(const char *result_json, size_t len, const render_opts *o, char **out,
                size_t *outlen, api_error *err);
 
-/* Writes the bounded faces of the 2D result result_json[0..len) as a GeoJSON FeatureCollection
- * (one line, ending in "\n").  Returns API_OK, API_EINVALID or API_ENOMEM as render_svg(). */
-int render_geojson(const char *result_json, size_t len, char **out, size_t *outlen, api_error *err);
+/* Writes the 2D result result_json[0..len) as a GeoJSON FeatureCollection (one line, ending in
+ * "\n"; o may be NULL: the defaults, only o->cells is read).  Returns API_OK, API_EINVALID or
+ * API_ENOMEM as render_svg(). */
+int render_geojson(const char *result_json, size_t len, const render_opts *o, char **out,
+                   size_t *outlen, api_error *err);
 
 /* Writes the bounded cells of the 3D result result_json[0..len) (dim 3; "V", "FV" and "CF"
  * required, "holes" optional) as Wavefront OBJ (api/render_obj.c): a comment line, every
@@ -100,6 +114,7 @@ int render_obj(const char *result_json, size_t len, const render_opts *o, char *
  *   edges=B
  *   width=N     an integer in [16, 16384]
  *   stroke=S    a number in [0, 100] (0: auto)
+ *   cells=C     C "result" (the default) or "all" (GeoJSON of a Boolean: every face too)
  * value may be NULL (no "=").  Sets the field of *o and returns API_OK, or returns
  * API_EINVALID with a message naming the parameter ("explode: expected a number in [1, 100],
  * got \"x\"", "foo: unknown parameter ...") and leaves *o as it was.  The title is not a query

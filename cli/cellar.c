@@ -84,11 +84,13 @@ static const char usage_text[] =
     "  svg, solids: --format request   print the request instead of running it (to post it\n"
     "       to the service: ... --format request | curl --data-binary @- ...)\n"
     "  run, svg, solids: --format json|svg|geojson|obj   the result JSON (default), a picture\n"
-    "       of a 2D result (SVG: faces filled, edges, y up), a map of it (GeoJSON\n"
-    "       FeatureCollection of the faces) or the cells of a 3D result (Wavefront OBJ: a group\n"
-    "       per cell, faces triangulated facing out); with svg: --explode K (faces moved apart,\n"
-    "       K >= 1), --numbers (vertex and face numbers), --width PX; with obj: --explode K\n"
-    "       (cells moved apart)\n"
+    "       of a 2D result (SVG: faces filled, edges, y up, a Boolean's result on top), a map\n"
+    "       of it (GeoJSON FeatureCollection of the faces; of a Boolean, its result as one\n"
+    "       MultiPolygon) or the cells of a 3D result (Wavefront OBJ: a group per cell, faces\n"
+    "       triangulated facing out); with svg: --explode K (faces moved apart, K >= 1),\n"
+    "       --numbers (vertex and face numbers), --width PX; with geojson: --cells all (a\n"
+    "       Boolean's faces too, with membership) or result; with obj: --explode K (cells\n"
+    "       moved apart)\n"
     "  --help            this text\n"
     "  --version         the version\n"
     "\n"
@@ -395,6 +397,7 @@ typedef struct out_format {
     render_opts ro;
     const char *first;   /* the first SVG-only flag given, for "is for --format svg" errors */
     const char *explode; /* --explode when given: for --format svg or obj */
+    const char *cells;   /* --cells when given: for --format geojson */
 } out_format;
 
 /* Writes the result (or its rendering) to stdout; returns the exit status. */
@@ -407,7 +410,7 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
         fprintf(stderr, "cellar: --format svg: %s\n", err.msg);
         return 1;
     }
-    if (of->kind == 2 && render_geojson(out, outlen, &pic, &piclen, &err) != API_OK) {
+    if (of->kind == 2 && render_geojson(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
         fprintf(stderr, "cellar: --format geojson: %s\n", err.msg);
         return 1;
     }
@@ -815,7 +818,7 @@ int main(int argc, char **argv)
             continue;
         }
         if (strcmp(a, "--format") == 0 || strcmp(a, "--explode") == 0 ||
-            strcmp(a, "--width") == 0) {
+            strcmp(a, "--width") == 0 || strcmp(a, "--cells") == 0) {
             if (i + 1 == argc) {
                 rc = usage_error("%s needs a value", a);
                 goto out;
@@ -842,6 +845,8 @@ int main(int argc, char **argv)
             }
             if (a[2] == 'e')
                 of.explode = a;
+            else if (a[2] == 'c')
+                of.cells = a;
             else if (!of.first)
                 of.first = a;
             continue;
@@ -878,6 +883,8 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for the solids command", "--faces");
     } else if (of.first && of.kind != 1) {
         rc = usage_error("%s is for --format svg", of.first);
+    } else if (of.cells && of.kind != 2) {
+        rc = usage_error("%s is for --format geojson", of.cells);
     } else if (of.explode && of.kind != 1 && of.kind != 3) {
         rc = usage_error("%s is for --format svg or obj", of.explode);
     } else if (of.kind == 4 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {

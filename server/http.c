@@ -240,7 +240,7 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
         else if (c->fmt == 1)
             rc = render_svg(body, len, &c->ro, &pic, &piclen, &ae);
         else if (c->fmt == 2)
-            rc = render_geojson(body, len, &pic, &piclen, &ae);
+            rc = render_geojson(body, len, &c->ro, &pic, &piclen, &ae);
         else
             rc = render_obj(body, len, &c->ro, &pic, &piclen, &ae);
         free(body);
@@ -345,7 +345,7 @@ static int negotiate(conn *c, enum MHD_Result *r)
         snprintf(c->rep, sizeof c->rep, ".svg;%g;%d;%d;%d;%g", c->ro.explode, c->ro.numbers,
                  c->ro.edges, c->ro.width, c->ro.stroke);
     else if (c->fmt == 2)
-        snprintf(c->rep, sizeof c->rep, ".geojson");
+        snprintf(c->rep, sizeof c->rep, ".geojson;%d", c->ro.cells);
     else if (c->fmt == 3)
         snprintf(c->rep, sizeof c->rep, ".obj;%g", c->ro.explode);
     return 0;

@@ -234,6 +234,8 @@ typedef struct pic {
     int evenodd;      /* every face path has fill-rule="evenodd" */
     int has_edges;    /* a <path id="edges"> */
     shape edges;      /* its subpaths */
+    int has_result;   /* a <path id="result"> (a Boolean's result region) */
+    shape result;     /* its subpaths */
     size_t nvt, nft;  /* texts in vertex-numbers and face-numbers */
     double *vt, *ft;  /* 2 per text, indexed by its number, in SVG coordinates */
     int text_bad;     /* a text out of range or not a number */
@@ -249,6 +251,7 @@ static void pic_free(pic *p)
     free(p->fill);
     free(p->seen);
     shape_free(&p->edges);
+    shape_free(&p->result);
     free(p->vt);
     free(p->ft);
     *p = (pic){0};
@@ -310,7 +313,11 @@ static void walk(xmlNodePtr n, pic *p, const char *group, double scale)
         } else if (!strcmp(name, "path")) {
             char *fill = attr(n, "fill"), *id = attr(n, "id"), *d = attr(n, "d");
             char *rule = attr(n, "fill-rule");
-            if (fill && strcmp(fill, "none") != 0) {
+            if (id && !strcmp(id, "result")) {
+                p->has_result = 1;
+                if (!d || read_path(d, &p->result, 1) < 0) p->path_bad = 1;
+                if (!rule || strcmp(rule, "evenodd") != 0) p->evenodd = 0;
+            } else if (fill && strcmp(fill, "none") != 0) {
                 long moves;
                 size_t f = SIZE_MAX;
                 p->npaths++;
@@ -547,7 +554,7 @@ static void check_geojson(const char *name, const res *r)
     json_error_t je;
     json_t *g, *feats;
     double total = 0;
-    int rc = render_geojson(r->text, r->len, &text, &len, &err);
+    int rc = render_geojson(r->text, r->len, NULL, &text, &len, &err);
     REQUIRE(rc == API_OK, "%s: render_geojson: %d %s", name, rc, err.msg);
     g = json_loadb(text, len, 0, &je);
     free(text);
@@ -555,8 +562,61 @@ static void check_geojson(const char *name, const res *r)
     CHECK(!strcmp(json_string_value(json_object_get(g, "type")), "FeatureCollection"),
           "%s: not a FeatureCollection", name);
     feats = json_object_get(g, "features");
-    CHECK(json_array_size(feats) == r->nf, "%s: %zu features, %zu faces", name,
-          json_array_size(feats), r->nf);
+    /* one Polygon per face, then one LineString per edge on no face (kept dangling): each an
+     * edge of EV whose ends are its vertices, marked dangling (also those inside a face, which
+     * no ring of 3 or more vertices walks) */
+    {
+        size_t nfeat = json_array_size(feats), ndang = 0;
+        const json_t *EV = json_object_get(r->root, "EV"), *V = json_object_get(r->root, "V");
+        CHECK(nfeat >= r->nf, "%s: %zu features, %zu faces", name, nfeat, r->nf);
+        for (size_t i = r->nf; i < nfeat; i++) {
+            const json_t *ft = json_array_get(feats, i), *geom = json_object_get(ft, "geometry");
+            const json_t *props = json_object_get(ft, "properties"), *c, *ev;
+            json_int_t e = json_integer_value(json_object_get(props, "edge"));
+            ndang++;
+            c = json_object_get(geom, "coordinates");
+            ev = json_array_get(EV, (size_t)e);
+            CHECK(!strcmp(json_string_value(json_object_get(geom, "type")), "LineString") &&
+                      json_is_true(json_object_get(props, "dangling")) && ev &&
+                      json_array_size(c) == 2 &&
+                      json_equal(json_array_get(c, 0),
+                                 json_array_get(V, json_integer_value(json_array_get(ev, 0)))) &&
+                      json_equal(json_array_get(c, 1),
+                                 json_array_get(V, json_integer_value(json_array_get(ev, 1)))),
+                  "%s: feature %zu is not a dangling edge of EV", name, i);
+        }
+        /* the edges on no face's ring: those of EV minus those of the faces' rings */
+        if (EV) {
+            size_t on = 0;
+            for (size_t e = 0; e < json_array_size(EV); e++) {
+                json_int_t a = json_integer_value(json_array_get(json_array_get(EV, e), 0));
+                json_int_t b = json_integer_value(json_array_get(json_array_get(EV, e), 1));
+                int found = 0;
+                for (size_t f = 0; f < r->nf && !found; f++) {
+                    const shape *s = &r->face[f];
+                    for (size_t rr = 0; rr < s->nr && !found; rr++) {
+                        size_t n = shape_len(s, rr);
+                        for (size_t i = 0; i < n && !found; i++) {
+                            const double *p = shape_pt(s, rr, i), *q = shape_pt(s, rr, (i + 1) % n);
+                            const json_t *va = json_array_get(V, (size_t)a);
+                            const json_t *vb = json_array_get(V, (size_t)b);
+                            double ax = json_number_value(json_array_get(va, 0));
+                            double ay = json_number_value(json_array_get(va, 1));
+                            double bx = json_number_value(json_array_get(vb, 0));
+                            double by = json_number_value(json_array_get(vb, 1));
+                            found =
+                                n >= 3 && ((p[0] == ax && p[1] == ay && q[0] == bx && q[1] == by) ||
+                                           (p[0] == bx && p[1] == by && q[0] == ax && q[1] == ay));
+                        }
+                    }
+                }
+                on += found;
+            }
+            CHECK(ndang == json_array_size(EV) - on,
+                  "%s: %zu dangling features, %zu edges on no face", name, ndang,
+                  json_array_size(EV) - on);
+        }
+    }
     for (size_t f = 0; f < json_array_size(feats) && f < r->nf; f++) {
         const json_t *ft = json_array_get(feats, f), *geom = json_object_get(ft, "geometry");
         const json_t *props = json_object_get(ft, "properties");
@@ -778,6 +838,161 @@ TEST(render_keep_dangling_and_exterior_last)
                   -1, 1.5);
 }
 
+/* A Boolean's result: the SVG draws its region on top (one subpath per ring, in the result
+ * polygons' coordinates, y negated), the GeoJSON's first feature is the region as a MultiPolygon
+ * with the result's area, and cells=all adds every face with "selected" and "membership" equal
+ * to the result's own. */
+TEST(render_boolean_result)
+{
+    static const char *const ops[] = {"union", "intersection", "difference", "xor"};
+    for (size_t k = 0; k < 4; k++) {
+        char body[600];
+        res r;
+        render_opts o = RENDER_OPTS_INIT;
+        pic p = {0};
+        char *text = NULL;
+        size_t len = 0, nrings = 0, npos = 0;
+        api_error err;
+        const json_t *result, *rFV, *rholes, *val;
+        const char *key;
+        json_t *g = NULL;
+        /* two squares with holes; the second's hole touches the first's at a vertex */
+        snprintf(body, sizeof body,
+                 "{\"kind\":\"polygons\",\"polygons\":["
+                 "[[[0,0],[6,0],[6,6],[0,6]],[[1,1],[3,1],[3,3],[1,3]]],"
+                 "[[[2,2],[9,2],[9,9],[2,9]],[[3,3],[5,3],[5,5],[3,5]]]],\"op\":\"%s\"}",
+                 ops[k]);
+        if (!res_run(body, -1, &r)) continue;
+        result = json_object_get(r.root, "result");
+        rFV = json_object_get(result, "FV");
+        rholes = json_object_get(result, "holes");
+        REQUIRE(json_is_array(rFV) && json_is_object(rholes), "%s: no result polygons", ops[k]);
+        nrings = json_array_size(rFV);
+        json_object_foreach((json_t *)rholes, key, val) nrings += json_array_size(val);
+        check_svg(ops[k], &r, &o, &p);
+        CHECK(p.has_result && p.result.nr == nrings, "%s: result path has %zu subpaths, %zu rings",
+              ops[k], p.result.nr, nrings);
+        /* the subpaths are the rings' vertices, y negated */
+        for (size_t q = 0, ri = 0; q < json_array_size(rFV) && p.has_result; q++) {
+            char kq[24];
+            const json_t *hs;
+            snprintf(kq, sizeof kq, "%zu", q);
+            hs = json_object_get(rholes, kq);
+            for (size_t h = 0; h <= json_array_size(hs) && ri < p.result.nr; h++, ri++) {
+                const json_t *ring = h == 0 ? json_array_get(rFV, q) : json_array_get(hs, h - 1);
+                CHECK(shape_len(&p.result, ri) == json_array_size(ring),
+                      "%s: result subpath %zu has %zu points, ring %zu", ops[k], ri,
+                      shape_len(&p.result, ri), json_array_size(ring));
+                for (size_t i = 0; i < json_array_size(ring) && i < shape_len(&p.result, ri); i++) {
+                    size_t v = (size_t)json_integer_value(json_array_get(ring, i));
+                    if (shape_pt(&p.result, ri, i)[0] != vx(&r, v) ||
+                        shape_pt(&p.result, ri, i)[1] != -vy(&r, v))
+                        npos++;
+                }
+            }
+        }
+        CHECK(npos == 0, "%s: %zu result points are not the rings' vertices", ops[k], npos);
+        pic_free(&p);
+        /* exploded: no result layer */
+        o.explode = 2;
+        check_svg(ops[k], &r, &o, &p);
+        CHECK(!p.has_result, "%s: exploded drawing has a result layer", ops[k]);
+        pic_free(&p);
+
+        /* GeoJSON: the region, then (cells=all) the faces */
+        for (int cells = 0; cells < 2; cells++) {
+            const json_t *feats, *f0, *coords;
+            size_t want = 1 + (cells ? r.nf : 0);
+            o = (render_opts)RENDER_OPTS_INIT;
+            o.cells = cells;
+            REQUIRE(render_geojson(r.text, r.len, &o, &text, &len, &err) == API_OK, "%s: %s",
+                    ops[k], err.msg);
+            g = json_loadb(text, len, 0, NULL);
+            free(text);
+            feats = json_object_get(g, "features");
+            CHECK(json_array_size(feats) == want, "%s cells=%d: %zu features, want %zu", ops[k],
+                  cells, json_array_size(feats), want);
+            f0 = json_array_get(feats, 0);
+            coords = json_object_get(json_object_get(f0, "geometry"), "coordinates");
+            CHECK(
+                !strcmp(json_string_value(json_object_get(json_object_get(f0, "geometry"), "type")),
+                        "MultiPolygon") &&
+                    json_is_true(json_object_get(json_object_get(f0, "properties"), "result")),
+                "%s: first feature is not the result MultiPolygon", ops[k]);
+            CHECK(json_array_size(coords) == json_array_size(rFV), "%s: %zu polygons, want %zu",
+                  ops[k], json_array_size(coords), json_array_size(rFV));
+            CHECK(json_number_value(json_object_get(json_object_get(f0, "properties"), "area")) ==
+                      json_number_value(json_object_get(result, "area")),
+                  "%s: result area differs", ops[k]);
+            /* its rings enclose the result's area: shells counter-clockwise, holes clockwise */
+            {
+                double a = 0;
+                int bad_orient = 0;
+                for (size_t q = 0; q < json_array_size(coords); q++) {
+                    const json_t *poly = json_array_get(coords, q);
+                    for (size_t h = 0; h < json_array_size(poly); h++) {
+                        const json_t *ring = json_array_get(poly, h);
+                        double ra = 0;
+                        for (size_t i = 0; i + 1 < json_array_size(ring); i++) {
+                            const json_t *u = json_array_get(ring, i);
+                            const json_t *w = json_array_get(ring, i + 1);
+                            ra += json_number_value(json_array_get(u, 0)) *
+                                      json_number_value(json_array_get(w, 1)) -
+                                  json_number_value(json_array_get(w, 0)) *
+                                      json_number_value(json_array_get(u, 1));
+                        }
+                        if ((h == 0) != (ra > 0)) bad_orient++;
+                        a += ra / 2;
+                    }
+                }
+                CHECK(bad_orient == 0 &&
+                          fabs(a - json_number_value(json_object_get(result, "area"))) < 1e-9,
+                      "%s: rings enclose %g (%d misoriented), result area %g", ops[k], a,
+                      bad_orient, json_number_value(json_object_get(result, "area")));
+            }
+            if (cells) {
+                const json_t *cellsv = json_object_get(result, "cells");
+                const json_t *mem = json_object_get(r.root, "membership");
+                size_t bad = 0;
+                for (size_t f = 0; f < r.nf; f++) {
+                    const json_t *pr = json_object_get(json_array_get(feats, f + 1), "properties");
+                    int sel = 0;
+                    for (size_t i = 0; i < json_array_size(cellsv); i++)
+                        sel |= json_integer_value(json_array_get(cellsv, i)) == (json_int_t)f;
+                    if (json_integer_value(json_object_get(pr, "face")) != (json_int_t)f ||
+                        json_is_true(json_object_get(pr, "selected")) != sel ||
+                        !json_equal(json_object_get(pr, "membership"), json_array_get(mem, f)))
+                        bad++;
+                }
+                CHECK(bad == 0, "%s: %zu faces with wrong face, selected or membership", ops[k],
+                      bad);
+            }
+            json_decref(g);
+        }
+        res_free(&r);
+    }
+    /* cells=all needs the membership (a result edited to leave it out) */
+    {
+        res r;
+        render_opts o = RENDER_OPTS_INIT;
+        char *text = NULL, *cut;
+        size_t len = 0;
+        api_error err;
+        o.cells = 1;
+        if (res_run("{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\"}",
+                    1, &r)) {
+            json_object_del(r.root, "membership");
+            cut = json_dumps(r.root, 0);
+            CHECK(render_geojson(cut, strlen(cut), &o, &text, &len, &err) == 422 &&
+                      strstr(err.msg, "membership"),
+                  "cells=all without membership: %s", text ? text : err.msg);
+            free(text);
+            free(cut);
+            res_free(&r);
+        }
+    }
+}
+
 TEST(render_empty_result)
 {
     res r;
@@ -787,7 +1002,7 @@ TEST(render_empty_result)
     json_t *g;
     REQUIRE(res_run("{\"kind\":\"lines\",\"lines\":[]}", -1, &r), "run");
     check_request("empty", "{\"kind\":\"lines\",\"lines\":[]}", -1, 2);
-    CHECK(render_geojson(r.text, r.len, &out, &len, &err) == API_OK, "%s", err.msg);
+    CHECK(render_geojson(r.text, r.len, NULL, &out, &len, &err) == API_OK, "%s", err.msg);
     g = json_loads(out ? out : "", 0, NULL);
     CHECK(json_array_size(json_object_get(g, "features")) == 0 &&
               json_is_array(json_object_get(g, "features")),
@@ -862,7 +1077,7 @@ TEST(render_errors_are_422_with_a_message)
             size_t len = 7;
             api_error err = {0};
             int rc =
-                g ? render_geojson(cases[i].result, strlen(cases[i].result), &out, &len, &err)
+                g ? render_geojson(cases[i].result, strlen(cases[i].result), NULL, &out, &len, &err)
                   : render_svg(cases[i].result, strlen(cases[i].result), NULL, &out, &len, &err);
             CHECK(rc == 422 && err.status == 422, "case %zu (%s): %d %s", i, g ? "geojson" : "svg",
                   rc, err.msg);
@@ -898,7 +1113,7 @@ TEST(render_damaged_results)
         memcpy(copy, r.text, r.len);
         for (int k = 0; k < 3; k++)
             copy[(size_t)(test_rnd(&seed) * (double)r.len)] = "0123456789-,[]{}\"e."[t % 17];
-        rc = t % 2 ? render_geojson(copy, r.len, &out, &len, &err)
+        rc = t % 2 ? render_geojson(copy, r.len, NULL, &out, &len, &err)
                    : render_svg(copy, r.len, NULL, &out, &len, &err);
         CHECK(rc == API_OK || (rc == 422 && err.msg[0] && !out), "mutation %d: %d", t, rc);
         if (rc == API_OK) {
@@ -932,7 +1147,7 @@ TEST(render_missing_fields_of_real_results)
         CHECK(render_svg(r.text, r.len, NULL, &out, &len, &err) == 422 &&
                   strncmp(err.msg, cases[i].key, strlen(cases[i].key)) == 0,
               "fields %s: %d %s", cases[i].fields, err.status, err.msg);
-        CHECK(render_geojson(r.text, r.len, &out, &len, &err) == 422 &&
+        CHECK(render_geojson(r.text, r.len, NULL, &out, &len, &err) == 422 &&
                   strncmp(err.msg, cases[i].key, strlen(cases[i].key)) == 0,
               "fields %s (geojson): %d %s", cases[i].fields, err.status, err.msg);
         res_free(&r);

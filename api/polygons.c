@@ -4,7 +4,9 @@
  *    "op":"union"|"intersection"|"difference"|"xor"|["-", 0, ["+", 1, 2]], "options":{...}}
  *
  * Each polygon is a list of rings, the outer boundary first, then holes (>= 3 points each,
- * closed implicitly, any orientation: the even-odd rule over a polygon's rings decides).  The
+ * closed implicitly, any orientation: the even-odd rule over a polygon's rings decides), or a
+ * GeoJSON Polygon, MultiPolygon or Feature object, or a WKT string (POLYGON, MULTIPOLYGON);
+ * "polygons" may also be a GeoJSON FeatureCollection, one input per feature.  The
  * options are those of "lines" (api_lar2_option()).  The answer is the LAR JSON of the
  * arrangement of all ring edges (api_lar2_write()) with two more members:
  *   "membership": one row per bounded face (FV's rows), one 0/1 per input polygon;
@@ -44,82 +46,408 @@ void api_polygons_free(void *parsed)
     free(r);
 }
 
-/* Counts the rings and points of "polygons" and checks every shape and number. */
+/* ---- reading the polygons: native rings, GeoJSON geometries, WKT --------------------------- */
+
+/* The rings read so far: growing arrays, checked against the limits as they grow. */
+typedef struct pbuild {
+    double *xy; /* 2 per point */
+    size_t npts, cap;
+    uint32_t *ring_off; /* nrings + 1 */
+    size_t nrings, rcap;
+    uint32_t *poly_off; /* npoly + 1 */
+    size_t npoly;
+    size_t ring_start; /* first point of the ring being read */
+} pbuild;
+
+static void pbuild_free(pbuild *b)
+{
+    free(b->xy);
+    free(b->ring_off);
+    free(b->poly_off);
+}
+
+static int add_point(pbuild *b, double x, double y, api_error *err)
+{
+    if (b->npts >= ARR2_MAX_SEGMENTS)
+        return api_fail(err, API_EINVALID, "polygons: more than %u points in all, the limit",
+                        (unsigned)ARR2_MAX_SEGMENTS);
+    if (b->npts == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 256;
+        double *xy = realloc(b->xy, cap * 2 * sizeof *xy);
+        if (!xy) return api_fail(err, API_ENOMEM, "out of memory for %zu points", cap);
+        b->xy = xy;
+        b->cap = cap;
+    }
+    b->xy[2 * b->npts] = x;
+    b->xy[2 * b->npts + 1] = y;
+    b->npts++;
+    return API_OK;
+}
+
+/* Ends the ring begun at b->ring_start: a last point equal to the first (GeoJSON and WKT close
+ * their rings so) is dropped; fewer than 3 points left is an error at path. */
+static int end_ring(pbuild *b, const char *path, api_error *err)
+{
+    size_t n = b->npts - b->ring_start;
+    if (n >= 2 && b->xy[2 * b->ring_start] == b->xy[2 * (b->npts - 1)] &&
+        b->xy[2 * b->ring_start + 1] == b->xy[2 * (b->npts - 1) + 1])
+        b->npts--, n--;
+    if (n < 3)
+        return api_fail(err, API_EINVALID, "%s: a ring needs at least 3 distinct points (has %zu)",
+                        path, n);
+    if (b->nrings + 2 > b->rcap) {
+        size_t cap = b->rcap ? 2 * b->rcap : 64;
+        uint32_t *o = realloc(b->ring_off, cap * sizeof *o);
+        if (!o) return api_fail(err, API_ENOMEM, "out of memory for %zu rings", cap);
+        b->ring_off = o;
+        b->rcap = cap;
+    }
+    b->ring_off[0] = 0;
+    b->ring_off[++b->nrings] = (uint32_t)b->npts;
+    b->ring_start = b->npts;
+    return API_OK;
+}
+
+/* A position: [x, y] (native: exactly 2 numbers; GeoJSON: 2 or more, the rest ignored). */
+static int json_position(const json_t *pt, int geojson, pbuild *b, const char *path, api_error *err)
+{
+    double c[2];
+    if (!json_is_array(pt) || json_array_size(pt) < 2 || (!geojson && json_array_size(pt) != 2))
+        return api_fail(err, API_EINVALID, "%s: expected [x, y]%s", path,
+                        geojson ? " (a GeoJSON position)" : "");
+    for (size_t i = 0; i < json_array_size(pt); i++) {
+        const json_t *x = json_array_get(pt, i);
+        if (!json_is_number(x) || !isfinite(json_number_value(x)))
+            return api_fail(err, API_EINVALID, "%s[%zu]: expected a finite number", path, i);
+        if (i < 2) c[i] = json_number_value(x);
+    }
+    return add_point(b, c[0], c[1], err);
+}
+
+/* A polygon's rings [[pos, ...], ...] at path: native (at least one ring, open rings allowed)
+ * or GeoJSON (closed rings, none for an empty polygon). */
+static int json_rings(const json_t *rings, int geojson, pbuild *b, const char *path, api_error *err)
+{
+    char sub[160];
+    size_t j, k;
+    json_t *ring, *pt;
+    if (!json_is_array(rings) || (!geojson && json_array_size(rings) == 0))
+        return api_fail(err, API_EINVALID,
+                        "%s: expected a polygon: %sarray of rings [[x, y], ...], the outer "
+                        "boundary first",
+                        path, geojson ? "an " : "a non-empty ");
+    json_array_foreach(rings, j, ring)
+    {
+        snprintf(sub, sizeof sub, "%s[%zu]", path, j);
+        if (!json_is_array(ring) || json_array_size(ring) < 3)
+            return api_fail(err, API_EINVALID, "%s: expected a ring of at least 3 points [x, y]",
+                            sub);
+        json_array_foreach(ring, k, pt)
+        {
+            char at[200];
+            int rc;
+            snprintf(at, sizeof at, "%s[%zu]", sub, k);
+            rc = json_position(pt, geojson, b, at, err);
+            if (rc != API_OK) return rc;
+        }
+        int rc = end_ring(b, sub, err);
+        if (rc != API_OK) return rc;
+    }
+    return API_OK;
+}
+
+/* A GeoJSON object (RFC 7946) at path: a Polygon, a MultiPolygon (its parts' rings together:
+ * the even-odd rule makes them the parts' union, as they do not overlap) or a Feature holding
+ * one. */
+static int geojson_polygon(const json_t *o, pbuild *b, const char *path, api_error *err)
+{
+    const char *type = json_string_value(json_object_get(o, "type"));
+    const json_t *c = json_object_get(o, "coordinates");
+    char sub[160];
+    if (!type)
+        return api_fail(err, API_EINVALID,
+                        "%s.type: required (a GeoJSON Polygon, MultiPolygon or Feature)", path);
+    if (!strcmp(type, "Feature")) {
+        const json_t *g = json_object_get(o, "geometry");
+        snprintf(sub, sizeof sub, "%s.geometry", path);
+        if (json_is_null(g) || !g) return API_OK; /* an unlocated feature: the empty set */
+        if (!json_is_object(g) ||
+            !strcmp(json_string_value(json_object_get(g, "type")) ?: "", "Feature"))
+            return api_fail(err, API_EINVALID, "%s: expected a Polygon or MultiPolygon object",
+                            sub);
+        return geojson_polygon(g, b, sub, err);
+    }
+    snprintf(sub, sizeof sub, "%s.coordinates", path);
+    if (!strcmp(type, "Polygon")) return json_rings(c, 1, b, sub, err);
+    if (!strcmp(type, "MultiPolygon")) {
+        size_t i;
+        json_t *poly;
+        if (!json_is_array(c))
+            return api_fail(err, API_EINVALID, "%s: expected an array of polygons", sub);
+        json_array_foreach(c, i, poly)
+        {
+            char at[200];
+            snprintf(at, sizeof at, "%s[%zu]", sub, i);
+            int rc = json_rings(poly, 1, b, at, err);
+            if (rc != API_OK) return rc;
+        }
+        return API_OK;
+    }
+    return api_fail(err, API_EINVALID,
+                    "%s.type: \"%.40s\" is not an area (expected Polygon, MultiPolygon or "
+                    "Feature)",
+                    path, type);
+}
+
+/* ---- WKT: POLYGON and MULTIPOLYGON (OGC 06-103r4), with Z, M or ZM (extra ordinates ignored),
+ * EMPTY, and PostGIS's "SRID=n;" prefix.  Keywords are case-insensitive.  Errors give the
+ * character position (from 1). */
+typedef struct wkt {
+    const char *s, *p;
+    const char *path;
+    int dims; /* ordinates per position: 2..4, or 0 until the first position decides */
+} wkt;
+
+static void wkt_space(wkt *w)
+{
+    while (*w->p == ' ' || *w->p == '\t' || *w->p == '\n' || *w->p == '\r') w->p++;
+}
+
+static int wkt_fail(wkt *w, api_error *err, const char *what)
+{
+    char near[24];
+    size_t n = 0;
+    while (w->p[n] && n < 16) n++;
+    snprintf(near, sizeof near, "%.*s", (int)n, w->p);
+    for (char *c = near; *c; c++)
+        if ((unsigned char)*c < 0x20 || (unsigned char)*c >= 0x7f) *c = '?';
+    return api_fail(err, API_EINVALID, "%s: WKT at character %zu: expected %s%s%s%s", w->path,
+                    (size_t)(w->p - w->s) + 1, what, *w->p ? ", found \"" : ", found the end",
+                    *w->p ? near : "", *w->p ? "\"" : "");
+}
+
+/* The keyword kw (letters), case-insensitive, not followed by a letter. */
+static int wkt_word(wkt *w, const char *kw)
+{
+    size_t n = strlen(kw);
+    wkt_space(w);
+    for (size_t i = 0; i < n; i++)
+        if ((w->p[i] | 0x20) != (kw[i] | 0x20)) return 0;
+    if ((w->p[n] | 0x20) >= 'a' && (w->p[n] | 0x20) <= 'z') return 0;
+    w->p += n;
+    return 1;
+}
+
+static int wkt_char(wkt *w, char c)
+{
+    wkt_space(w);
+    if (*w->p != c) return 0;
+    w->p++;
+    return 1;
+}
+
+/* A number: [+-] digits [. digits] [e [+-] digits] (or . digits); no inf, nan or hex. */
+static int wkt_number(wkt *w, double *x)
+{
+    const char *q;
+    char buf[64];
+    size_t digits = 0;
+    wkt_space(w);
+    q = w->p;
+    if (*q == '+' || *q == '-') q++;
+    while (*q >= '0' && *q <= '9') q++, digits++;
+    if (*q == '.') {
+        q++;
+        while (*q >= '0' && *q <= '9') q++, digits++;
+    }
+    if (!digits) return 0;
+    if (*q == 'e' || *q == 'E') {
+        const char *e = q + 1;
+        if (*e == '+' || *e == '-') e++;
+        if (*e < '0' || *e > '9') return 0;
+        while (*e >= '0' && *e <= '9') e++;
+        q = e;
+    }
+    if ((size_t)(q - w->p) >= sizeof buf) return 0;
+    memcpy(buf, w->p, (size_t)(q - w->p));
+    buf[q - w->p] = 0;
+    *x = strtod(buf, NULL);
+    if (!isfinite(*x)) return 0;
+    w->p = q;
+    return 1;
+}
+
+/* '(' pos, pos, ... ')' */
+static int wkt_ring(wkt *w, pbuild *b, api_error *err)
+{
+    const char *at;
+    wkt_space(w);
+    at = w->p;
+    if (!wkt_char(w, '(')) return wkt_fail(w, err, "'(' opening a ring");
+    do {
+        double c[4];
+        int n = 0;
+        const char *pos;
+        wkt_space(w);
+        pos = w->p;
+        while (n < 4) {
+            wkt_space(w);
+            if (!((*w->p >= '0' && *w->p <= '9') || *w->p == '-' || *w->p == '+' || *w->p == '.'))
+                break;
+            if (!wkt_number(w, &c[n])) return wkt_fail(w, err, "a finite number");
+            n++;
+        }
+        if (n < 2 || (w->dims && n != w->dims)) {
+            w->p = pos;
+            return wkt_fail(w, err,
+                            w->dims == 3   ? "3 ordinates (the dimension is Z or M)"
+                            : w->dims == 4 ? "4 ordinates (the dimension is ZM)"
+                            : w->dims == 2 ? "2 ordinates, x y"
+                                           : "a position: x y");
+        }
+        w->dims = n;
+        int rc = add_point(b, c[0], c[1], err);
+        if (rc != API_OK) return rc;
+    } while (wkt_char(w, ','));
+    if (!wkt_char(w, ')')) return wkt_fail(w, err, "',' or ')' after a position");
+    {
+        char path[200];
+        snprintf(path, sizeof path, "%s: WKT ring at character %zu", w->path,
+                 (size_t)(at - w->s) + 1);
+        return end_ring(b, path, err);
+    }
+}
+
+/* EMPTY | '(' ring, ring, ... ')' */
+static int wkt_polygon(wkt *w, pbuild *b, api_error *err)
+{
+    if (wkt_word(w, "EMPTY")) return API_OK;
+    if (!wkt_char(w, '(')) return wkt_fail(w, err, "'(' or EMPTY");
+    do {
+        int rc = wkt_ring(w, b, err);
+        if (rc != API_OK) return rc;
+    } while (wkt_char(w, ','));
+    if (!wkt_char(w, ')')) return wkt_fail(w, err, "',' or ')' after a ring");
+    return API_OK;
+}
+
+static int wkt_read(const char *text, pbuild *b, const char *path, api_error *err)
+{
+    wkt w = {text, text, path, 0};
+    int multi;
+    if (wkt_word(&w, "SRID")) {
+        double srid;
+        if (!wkt_char(&w, '=') || !wkt_number(&w, &srid) || !wkt_char(&w, ';'))
+            return wkt_fail(&w, err, "SRID=n; before the geometry");
+    }
+    if (wkt_word(&w, "POLYGON"))
+        multi = 0;
+    else if (wkt_word(&w, "MULTIPOLYGON"))
+        multi = 1;
+    else
+        return wkt_fail(&w, err, "POLYGON or MULTIPOLYGON");
+    if (wkt_word(&w, "ZM"))
+        w.dims = 4;
+    else if (wkt_word(&w, "Z") || wkt_word(&w, "M"))
+        w.dims = 3;
+    int rc;
+    if (!multi) {
+        rc = wkt_polygon(&w, b, err);
+    } else if (wkt_word(&w, "EMPTY")) {
+        rc = API_OK;
+    } else if (!wkt_char(&w, '(')) {
+        rc = wkt_fail(&w, err, "'(' or EMPTY");
+    } else {
+        do rc = wkt_polygon(&w, b, err);
+        while (rc == API_OK && wkt_char(&w, ','));
+        if (rc == API_OK && !wkt_char(&w, ')'))
+            rc = wkt_fail(&w, err, "',' or ')' after a polygon");
+    }
+    if (rc != API_OK) return rc;
+    wkt_space(&w);
+    if (*w.p) return wkt_fail(&w, err, "the end of the geometry");
+    return API_OK;
+}
+
+/* One input polygon at path: native rings, a GeoJSON object or a WKT string. */
+static int read_polygon(const json_t *p, pbuild *b, const char *path, api_error *err)
+{
+    if (json_is_string(p)) return wkt_read(json_string_value(p), b, path, err);
+    if (json_is_object(p)) return geojson_polygon(p, b, path, err);
+    return json_rings(p, 0, b, path, err);
+}
+
+static int end_polygon(pbuild *b, size_t total, api_error *err)
+{
+    if (!b->poly_off) {
+        b->poly_off = malloc((total + 1) * sizeof *b->poly_off);
+        if (!b->poly_off) return api_fail(err, API_ENOMEM, "out of memory");
+        b->poly_off[0] = 0;
+    }
+    b->poly_off[++b->npoly] = (uint32_t)b->nrings;
+    return API_OK;
+}
+
+/* Reads "polygons": an array of polygons (each native, GeoJSON or WKT), or a GeoJSON
+ * FeatureCollection (one polygon per feature). */
 static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
 {
-    size_t i, nrings = 0, npts = 0;
-    json_t *p;
-    if (!ps) return api_fail(err, API_EINVALID, "polygons: required, an array of polygons");
-    if (!json_is_array(ps) || json_array_size(ps) == 0)
+    pbuild b = {0};
+    const json_t *list = ps;
+    const char *name = "polygons";
+    char path[64];
+    int rc = API_OK;
+    if (!ps)
         return api_fail(err, API_EINVALID,
-                        "polygons: expected a non-empty array of polygons [ring, hole, ...]");
-    if (json_array_size(ps) > BOOL2_MAX_INPUTS)
-        return api_fail(err, API_EINVALID, "polygons: %zu polygons, at most %u allowed",
-                        json_array_size(ps), (unsigned)BOOL2_MAX_INPUTS);
-    json_array_foreach(ps, i, p)
-    {
-        size_t j;
-        json_t *ring;
-        if (!json_is_array(p) || json_array_size(p) == 0)
+                        "polygons: required, an array of polygons or a GeoJSON "
+                        "FeatureCollection");
+    if (json_is_object(ps)) {
+        const char *type = json_string_value(json_object_get(ps, "type"));
+        if (!type || strcmp(type, "FeatureCollection"))
             return api_fail(err, API_EINVALID,
-                            "polygons[%zu]: expected a polygon: a non-empty array of rings "
-                            "[[x, y], ...], the outer boundary first",
-                            i);
-        json_array_foreach(p, j, ring)
-        {
-            size_t k;
-            json_t *pt;
-            if (!json_is_array(ring) || json_array_size(ring) < 3)
-                return api_fail(err, API_EINVALID,
-                                "polygons[%zu][%zu]: expected a ring of at least 3 points [x, y]",
-                                i, j);
-            json_array_foreach(ring, k, pt)
-            {
-                if (!json_is_array(pt) || json_array_size(pt) != 2)
-                    return api_fail(err, API_EINVALID, "polygons[%zu][%zu][%zu]: expected [x, y]",
-                                    i, j, k);
-                for (size_t c = 0; c < 2; c++) {
-                    const json_t *x = json_array_get(pt, c);
-                    if (!json_is_number(x) || !isfinite(json_number_value(x)))
-                        return api_fail(err, API_EINVALID,
-                                        "polygons[%zu][%zu][%zu][%zu]: expected a finite number", i,
-                                        j, k, c);
-                }
-            }
-            nrings++;
-            npts += json_array_size(ring);
-            if (npts > ARR2_MAX_SEGMENTS)
-                return api_fail(err, API_EINVALID,
-                                "polygons[%zu][%zu]: more than %u points in all, the limit", i, j,
-                                (unsigned)ARR2_MAX_SEGMENTS);
-        }
+                            "polygons: expected an array of polygons or a GeoJSON "
+                            "FeatureCollection (an object with \"type\": \"FeatureCollection\")");
+        list = json_object_get(ps, "features");
+        name = "polygons.features";
+        if (!json_is_array(list))
+            return api_fail(err, API_EINVALID, "polygons.features: expected an array of Features");
     }
-    r->npoly = json_array_size(ps);
-    r->poly_off = malloc((r->npoly + 1) * sizeof *r->poly_off);
-    r->ring_off = malloc((nrings + 1) * sizeof *r->ring_off);
-    r->xy = malloc((npts ? npts : 1) * 2 * sizeof *r->xy);
-    if (!r->poly_off || !r->ring_off || !r->xy)
-        return api_fail(err, API_ENOMEM, "out of memory for %zu points", npts);
-    nrings = npts = 0;
-    r->poly_off[0] = r->ring_off[0] = 0;
-    json_array_foreach(ps, i, p)
-    {
-        size_t j;
-        json_t *ring;
-        json_array_foreach(p, j, ring)
-        {
-            size_t k;
-            json_t *pt;
-            json_array_foreach(ring, k, pt)
-            {
-                r->xy[2 * npts] = json_number_value(json_array_get(pt, 0));
-                r->xy[2 * npts + 1] = json_number_value(json_array_get(pt, 1));
-                npts++;
-            }
-            r->ring_off[++nrings] = (uint32_t)npts;
-        }
-        r->poly_off[i + 1] = (uint32_t)nrings;
+    if (!json_is_array(list) || json_array_size(list) == 0)
+        return api_fail(err, API_EINVALID,
+                        "%s: expected a non-empty array of polygons [ring, hole, ...]", name);
+    if (json_array_size(list) > BOOL2_MAX_INPUTS)
+        return api_fail(err, API_EINVALID, "%s: %zu polygons, at most %u allowed", name,
+                        json_array_size(list), (unsigned)BOOL2_MAX_INPUTS);
+    for (size_t i = 0; i < json_array_size(list) && rc == API_OK; i++) {
+        const json_t *p = json_array_get(list, i);
+        snprintf(path, sizeof path, "%s[%zu]", name, i);
+        if (list != ps &&
+            !(json_is_object(p) &&
+              !strcmp(json_string_value(json_object_get(p, "type")) ?: "", "Feature")))
+            rc = api_fail(err, API_EINVALID, "%s: expected a GeoJSON Feature", path);
+        else
+            rc = read_polygon(p, &b, path, err);
+        if (rc == API_OK) rc = end_polygon(&b, json_array_size(list), err);
     }
+    if (rc == API_OK && !b.ring_off) {
+        b.ring_off = malloc(sizeof *b.ring_off);
+        if (!b.ring_off)
+            rc = api_fail(err, API_ENOMEM, "out of memory");
+        else
+            b.ring_off[0] = 0;
+    }
+    if (rc == API_OK && !b.xy) {
+        b.xy = malloc(2 * sizeof *b.xy);
+        if (!b.xy) rc = api_fail(err, API_ENOMEM, "out of memory");
+    }
+    if (rc != API_OK) {
+        pbuild_free(&b);
+        return rc;
+    }
+    r->npoly = b.npoly;
+    r->poly_off = b.poly_off;
+    r->ring_off = b.ring_off;
+    r->xy = b.xy;
     return API_OK;
 }
 

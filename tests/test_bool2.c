@@ -492,6 +492,144 @@ TEST(bool2_api_errors)
     }
 }
 
+/* The same polygons posted as native rings, GeoJSON geometries (Polygon, MultiPolygon,
+ * Feature), a FeatureCollection and WKT (with Z, SRID, EMPTY) give the same answer, byte for
+ * byte (rings closed by repeating their first point lose that point). */
+TEST(bool2_gis_inputs)
+{
+#define NATIVE_A "[[[0,0],[4,0],[4,4],[0,4]],[[1,1],[2,1],[2,2],[1,2]]]"
+#define NATIVE_B "[[[2,2],[6,2],[6,6],[2,6]]],"
+    static const char *const forms[][3] = {
+        {NATIVE_A, "[[[2,2],[6,2],[6,6],[2,6]]]", "[[[10,10],[11,10],[11,11]]]"},
+        {"{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[4,0],[4,4],[0,4],[0,0]],"
+         "[[1,1],[2,1],[2,2],[1,2],[1,1]]]}",
+         "{\"type\":\"Feature\",\"properties\":{\"name\":\"b\"},\"geometry\":{\"type\":"
+         "\"MultiPolygon\",\"coordinates\":[[[[2,2,9],[6,2,9],[6,6,9],[2,6,9],[2,2,9]]]]}}",
+         "{\"type\":\"Polygon\",\"coordinates\":[[[10,10],[11,10],[11,11],[10,10]]]}"},
+        {"\"POLYGON ((0 0, 4 0, 4 4, 0 4, 0 0), (1 1, 2 1, 2 2, 1 2, 1 1))\"",
+         "\"SRID=4326;multipolygon z (((2 2 1, 6 2 1, 6 6 1, 2 6 1, 2 2 1)), EMPTY)\"",
+         "\"POLYGON((10 10,11 10,11 11,10 10))\""},
+    };
+    static const char *const ops[] = {"\"union\"", "\"intersection\"", "[\"-\",0,1]", "\"xor\""};
+    for (size_t o = 0; o < 4; o++) {
+        json_t *want = NULL;
+        for (size_t f = 0; f < 4; f++) {
+            char body[1200];
+            char *out = NULL;
+            size_t len;
+            api_error err = {0};
+            if (f < 3)
+                snprintf(body, sizeof body,
+                         "{\"kind\":\"polygons\",\"polygons\":[%s,%s,%s],\"op\":%s}", forms[f][0],
+                         forms[f][1], forms[f][2], ops[o]);
+            else /* a FeatureCollection: one input per Feature */
+                snprintf(body, sizeof body,
+                         "{\"kind\":\"polygons\",\"polygons\":{\"type\":\"FeatureCollection\","
+                         "\"features\":[{\"type\":\"Feature\",\"geometry\":%s},"
+                         "{\"type\":\"Feature\",\"geometry\":{\"type\":\"Polygon\","
+                         "\"coordinates\":[[[2,2],[6,2],[6,6],[2,6],[2,2]]]}},"
+                         "{\"type\":\"Feature\",\"properties\":null,\"geometry\":%s}]},\"op\":%s}",
+                         forms[1][0], forms[1][2], ops[o]);
+            int rc = api_run_json(body, strlen(body), 1, &out, &len, &err);
+            CHECK(rc == API_OK, "op %s form %zu: %d %s", ops[o], f, rc, err.msg);
+            if (rc == API_OK) { /* all but the timings */
+                json_t *res = json_loads(out, 0, NULL);
+                json_object_del(res, "stats");
+                if (!want)
+                    want = res;
+                else
+                    CHECK(json_equal(res, want), "op %s: form %zu differs from the native form",
+                          ops[o], f);
+                if (res != want) json_decref(res);
+            }
+            free(out);
+        }
+        json_decref(want);
+    }
+    /* EMPTY and an unlocated feature are the empty set */
+    {
+        const char *body = "{\"kind\":\"polygons\",\"polygons\":[\"POLYGON EMPTY\","
+                           "{\"type\":\"Feature\",\"geometry\":null,\"properties\":{}},"
+                           "[[[0,0],[1,0],[1,1],[0,1]]]],\"op\":[\"+\",0,1]}";
+        char *out = NULL;
+        size_t len;
+        api_error err = {0};
+        REQUIRE(api_run_json(body, strlen(body), 1, &out, &len, &err) == API_OK, "%s", err.msg);
+        json_t *res = json_loads(out, 0, NULL);
+        CHECK(json_number_value(json_object_get(json_object_get(res, "result"), "area")) == 0,
+              "empty inputs: area %g",
+              json_number_value(json_object_get(json_object_get(res, "result"), "area")));
+        json_decref(res);
+        free(out);
+    }
+#undef NATIVE_A
+#undef NATIVE_B
+}
+
+/* GeoJSON and WKT errors name the JSON path, and for WKT the character position. */
+TEST(bool2_gis_errors)
+{
+    struct {
+        const char *polygons, *msg;
+    } cases[] = {
+        {"[{\"coordinates\":[]}]", "polygons[0].type: required"},
+        {"[{\"type\":\"LineString\",\"coordinates\":[[0,0],[1,1]]}]",
+         "polygons[0].type: \"LineString\" is not an area"},
+        {"[{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[1,1],[0,0]]]},"
+         "{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[\"x\",1],[0,0]]]}]",
+         "polygons[1].coordinates[0][2][0]: expected a finite number"},
+        {"[{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[0,0]]]}]",
+         "polygons[0].coordinates[0]: a ring needs at least 3 distinct points"},
+        {"[{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1],[1,1],[0,0]]]}]",
+         "polygons[0].coordinates[0][1]: expected [x, y]"},
+        {"[{\"type\":\"MultiPolygon\",\"coordinates\":[[[[0,0],[1,0],[1,1]]],7]}]",
+         "polygons[0].coordinates[1]: expected a polygon"},
+        {"[{\"type\":\"Feature\",\"geometry\":{\"type\":\"Feature\"}}]",
+         "polygons[0].geometry: expected a Polygon or MultiPolygon"},
+        {"[{\"type\":\"Feature\",\"geometry\":{\"type\":\"Point\",\"coordinates\":[0,0]}}]",
+         "polygons[0].geometry.type: \"Point\" is not an area"},
+        {"{\"type\":\"GeometryCollection\"}", "polygons: expected an array of polygons or"},
+        {"{\"type\":\"FeatureCollection\",\"features\":7}", "polygons.features: expected"},
+        {"{\"type\":\"FeatureCollection\",\"features\":[]}", "polygons.features: expected a non"},
+        {"{\"type\":\"FeatureCollection\",\"features\":[\"POLYGON EMPTY\"]}",
+         "polygons.features[0]: expected a GeoJSON Feature"},
+        {"[\"LINESTRING (0 0, 1 1)\"]",
+         "polygons[0]: WKT at character 1: expected POLYGON or MULTIPOLYGON"},
+        {"[\"POLYGON ((0 0, 1 0, 1 1, 0 0)\"]",
+         "polygons[0]: WKT at character 30: expected ',' or ')' after a ring, found the end"},
+        {"[\"POLYGON ((0 0, 1 0, 1 1, 0 0)) x\"]",
+         "polygons[0]: WKT at character 32: expected the end of the geometry"},
+        {"[\"POLYGON ((0 0, 1 0, 1 nan, 0 0))\"]",
+         "polygons[0]: WKT at character 21: expected 2 ordinates"},
+        {"[\"POLYGON ((0 0, 1 0, 1 1e999, 0 0))\"]",
+         "polygons[0]: WKT at character 23: expected a finite number"},
+        {"[\"POLYGON Z ((0 0 0, 1 0, 1 1 0, 0 0 0))\"]",
+         "polygons[0]: WKT at character 20: expected 3 ordinates"},
+        {"[\"POLYGON ((0 0, 1 0 0, 1 1, 0 0))\"]",
+         "polygons[0]: WKT at character 16: expected 2 ordinates"},
+        {"[\"POLYGON ((0 0, 1 0, 0 0))\"]",
+         "polygons[0]: WKT ring at character 10: a ring needs at least 3 distinct points"},
+        {"[\"MULTIPOLYGON (((0 0, 1 0, 1 1, 0 0)) ((2 2, 3 2, 3 3)))\"]",
+         "polygons[0]: WKT at character 38: expected ',' or ')' after a polygon"},
+        {"[\"SRID=x;POLYGON EMPTY\"]", "polygons[0]: WKT at character 6: expected SRID=n;"},
+        {"[\"\"]",
+         "polygons[0]: WKT at character 1: expected POLYGON or MULTIPOLYGON, found the end"},
+        {"[\"POLYGON ((0 0, 1 0, 1 1, 0 0), ())\"]", "polygons[0]: WKT at character 33:"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char body[600], *out = NULL;
+        size_t outlen;
+        api_error err = {0};
+        snprintf(body, sizeof body, "{\"kind\":\"polygons\",\"polygons\":%s,\"op\":\"union\"}",
+                 cases[i].polygons);
+        int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
+        CHECK(rc == API_EINVALID, "case %zu: status %d, want 422", i, rc);
+        CHECK(strncmp(err.msg, cases[i].msg, strlen(cases[i].msg)) == 0,
+              "case %zu: message \"%s\", want \"%s...\"", i, err.msg, cases[i].msg);
+        free(out);
+    }
+}
+
 TEST(bool2_api_result)
 {
     const char *body = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[2,0],[2,2],[0,2]]],"

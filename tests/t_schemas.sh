@@ -121,7 +121,9 @@ i=0
 for req in "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"union\"}" \
     "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"difference\",\"options\":{\"operators\":true,\"exterior_last\":true}}" \
     "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]]}" \
-    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[]}}"; do
+    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[]}}" \
+    "{\"kind\":\"polygons\",\"polygons\":[\"POLYGON Z ((0 0 1, 2 0 1, 2 2 1, 0 0 1))\",\"SRID=4326;MULTIPOLYGON (((1 0, 3 0, 3 1, 1 0)), EMPTY)\",{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[1,1],[0,0]]]}],\"op\":\"union\"}" \
+    "{\"kind\":\"polygons\",\"polygons\":{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":7},\"geometry\":{\"type\":\"MultiPolygon\",\"coordinates\":[[[[0,0],[2,0],[2,2],[0,0]]]]}},{\"type\":\"Feature\",\"geometry\":null}]},\"op\":\"intersection\"}"; do
     i=$((i + 1))
     printf '%s\n' "$req" >"$T/polygons/p$i.request.json"
     "$BIN" run "$T/polygons/p$i.request.json" >"$T/polygons/p$i.result.json" 2>"$T/err" ||

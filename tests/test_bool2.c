@@ -439,6 +439,161 @@ TEST(bool2_geos_random_rectangles)
     }
 }
 
+/* ---- overlay cases from real GIS polygons (tests/data/bool2-cases) ----------------------------
+ */
+
+/* The area of ring cyc (vertex indices into V), signed; about its first vertex, so that large
+ * coordinates do not cancel. */
+static double json_ring_area(const json_t *V, const json_t *cyc)
+{
+    double a = 0, x0, y0;
+    size_t n = json_array_size(cyc);
+    const json_t *o = json_array_get(V, (size_t)json_integer_value(json_array_get(cyc, 0)));
+    x0 = json_number_value(json_array_get(o, 0));
+    y0 = json_number_value(json_array_get(o, 1));
+    for (size_t i = 0; i < n; i++) {
+        const json_t *p = json_array_get(V, (size_t)json_integer_value(json_array_get(cyc, i)));
+        const json_t *q =
+            json_array_get(V, (size_t)json_integer_value(json_array_get(cyc, (i + 1) % n)));
+        a += (json_number_value(json_array_get(p, 0)) - x0) *
+                 (json_number_value(json_array_get(q, 1)) - y0) -
+             (json_number_value(json_array_get(q, 0)) - x0) *
+                 (json_number_value(json_array_get(p, 1)) - y0);
+    }
+    return a / 2;
+}
+
+static int cmp_dbl(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* GEOS's answers printed to `digits` significant digits: half a unit in the last digit. */
+static double printed(double v, double digits)
+{
+    return v == 0 ? 0 : 0.5 * pow(10, floor(log10(fabs(v))) - digits + 1);
+}
+
+TEST(bool2_overlay_cases)
+{
+    char path[512];
+    size_t len;
+    snprintf(path, sizeof path, "%s/bool2-cases/expected.json", test_data_dir());
+    char *text = test_read_file(path, &len);
+    REQUIRE(text, "cannot read %s", path);
+    json_t *exp = json_loads(text, 0, NULL);
+    free(text);
+    REQUIRE(exp, "%s does not parse", path);
+    const char *name;
+    json_t *want;
+    size_t ncases = 0;
+    json_object_foreach(json_object_get(exp, "cases"), name, want)
+    {
+        snprintf(path, sizeof path, "%s/bool2-cases/%s", test_data_dir(), name);
+        text = test_read_file(path, &len);
+        CHECK(text, "cannot read %s", path);
+        if (!text) continue;
+        ncases++;
+        /* every field (the files ask for V only): the stats give the grid step */
+        json_t *req = json_loads(text, 0, NULL);
+        free(text);
+        json_object_del(json_object_get(req, "options"), "fields");
+        char *body = json_dumps(req, 0), *out = NULL;
+        api_error err = {0};
+        int rc = api_run_json(body, strlen(body), 1, &out, &len, &err);
+        free(body);
+        CHECK(rc == API_OK, "%s: status %d: %s", name, rc, err.msg);
+        if (rc != API_OK) {
+            json_decref(req);
+            continue;
+        }
+        json_t *res = json_loads(out, 0, NULL), *result = json_object_get(res, "result");
+        free(out);
+        const json_t *V = json_object_get(res, "V"), *FV = json_object_get(result, "FV");
+        const json_t *holes = json_object_get(result, "holes");
+        double step =
+            json_number_value(json_object_get(json_object_get(res, "stats"), "precision"));
+        /* the snapping bound: every input ring's perimeter times the grid step */
+        double perim = 0;
+        size_t i, j, k;
+        json_t *poly, *ring;
+        json_array_foreach(json_object_get(req, "polygons"), i, poly)
+            json_array_foreach(poly, j, ring)
+        {
+            size_t n = json_array_size(ring);
+            for (k = 0; k < n; k++) {
+                const json_t *p = json_array_get(ring, k), *q = json_array_get(ring, (k + 1) % n);
+                perim += hypot(json_number_value(json_array_get(q, 0)) -
+                                   json_number_value(json_array_get(p, 0)),
+                               json_number_value(json_array_get(q, 1)) -
+                                   json_number_value(json_array_get(p, 1)));
+            }
+        }
+        double bound = perim * step;
+        double area = json_number_value(json_object_get(result, "area"));
+        double garea = json_number_value(json_object_get(want, "area"));
+        double tol =
+            bound + printed(garea, json_number_value(json_object_get(want, "area_digits")));
+        CHECK(fabs(area - garea) <= tol, "%s: area %.17g, GEOS %.10g (bound %.3g)", name, area,
+              garea, tol);
+        CHECK(json_array_size(FV) == (size_t)json_integer_value(json_object_get(want, "polygons")),
+              "%s: %zu polygons, GEOS %lld", name, json_array_size(FV),
+              (long long)json_integer_value(json_object_get(want, "polygons")));
+        /* the holes: their areas, sorted, against GEOS's; the rings add up to the area */
+        {
+            const json_t *wh = json_object_get(want, "holes");
+            double got[16], sum = 0;
+            size_t nh = 0;
+            const char *key;
+            json_t *hs;
+            for (size_t q = 0; q < json_array_size(FV); q++) {
+                double a = json_ring_area(V, json_array_get(FV, q));
+                CHECK(a > 0, "%s: polygon %zu shell not counter-clockwise (%g)", name, q, a);
+                sum += a;
+            }
+            json_object_foreach((json_t *)holes, key, hs) json_array_foreach(hs, k, ring)
+            {
+                double a = json_ring_area(V, ring);
+                CHECK(a < 0, "%s: hole of polygon %s not clockwise (%g)", name, key, a);
+                sum += a;
+                if (nh < 16) got[nh++] = -a;
+            }
+            /* V holds the input's own coordinates where input points snapped, the area is the
+             * grid's: they differ within the bound */
+            CHECK(fabs(sum - area) <= bound + 1e-12 * fmax(1, area),
+                  "%s: rings enclose %.17g, area %.17g (bound %.3g)", name, sum, area, bound);
+            CHECK(nh == json_array_size(wh), "%s: %zu holes, GEOS %zu", name, nh,
+                  json_array_size(wh));
+            qsort(got, nh, sizeof *got, cmp_dbl);
+            for (k = 0; k < nh && k < json_array_size(wh); k++) {
+                double g = json_number_value(json_array_get(wh, k));
+                double t =
+                    bound + printed(g, json_number_value(json_object_get(want, "hole_digits")));
+                CHECK(fabs(got[k] - g) <= t, "%s: hole %zu area %.17g, GEOS %.10g", name, k, got[k],
+                      g);
+            }
+        }
+        json_decref(res);
+        json_decref(req);
+    }
+    CHECK(ncases == 4, "%zu cases of 4", ncases);
+    json_decref(exp);
+    /* the near-collinear lines: a valid arrangement, no error (README.md there) */
+    snprintf(path, sizeof path, "%s/bool2-cases/near-collinear-overlap.json", test_data_dir());
+    text = test_read_file(path, &len);
+    REQUIRE(text, "cannot read %s", path);
+    {
+        char *out = NULL;
+        size_t outlen;
+        api_error err = {0};
+        CHECK(api_run_json(text, len, 1, &out, &outlen, &err) == API_OK, "near-collinear: %s",
+              err.msg);
+        free(out);
+    }
+    free(text);
+}
+
 /* ---- the request ----------------------------------------------------------------------------- */
 
 TEST(bool2_api_errors)

@@ -1259,10 +1259,8 @@ int render_svg(const char *result_json, size_t len, const render_opts *o, char *
 /* ---- GeoJSON ------------------------------------------------------------------------------- */
 
 /* Ring r as GeoJSON positions, closed: [[x,y],...,[x,y]]. */
-static void geojson_ring(api_buf *b, const rmodel *m, const vtext *vt, size_t r)
+static void geojson_cycle(api_buf *b, const vtext *vt, const uint32_t *v, size_t n)
 {
-    const uint32_t *v = ring_idx(m, r);
-    size_t n = ring_len(m, r);
     api_buf_putc(b, '[');
     for (size_t i = 0; i <= n; i++) {
         api_buf_puts(b, i ? ",[" : "[");
@@ -1272,17 +1270,113 @@ static void geojson_ring(api_buf *b, const rmodel *m, const vtext *vt, size_t r)
     api_buf_putc(b, ']');
 }
 
-/* Face f as a Polygon Feature; its properties follow "props" (",\"...\":..." or ""). */
-static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f)
+static void geojson_ring(api_buf *b, const rmodel *m, const vtext *vt, size_t r)
 {
-    int first_ring = 1;
+    geojson_cycle(b, vt, ring_idx(m, r), ring_len(m, r));
+}
+
+/* A face's cycles as OGC rings.  A boundary walk may pass a vertex twice: where a dangling tree
+ * hangs from it (kept with keep_dangling), where a block of the graph hangs from a cut vertex
+ * (a triangle touching the outer boundary at one vertex, two triangles meeting at one vertex
+ * inside a face).  A Polygon ring may not, so each walk is cut at its repeated vertices into
+ * simple cycles: those of fewer than 3 vertices are tree edges and enclose nothing (they become
+ * dangling LineStrings); of the outer walk's pieces the counter-clockwise one is the shell and
+ * the others (clockwise) are holes touching it; every piece of a hole walk is a hole. */
+typedef struct pieces {
+    int32_t *pos; /* nv: a vertex's place on the stack, -1 when not on it */
+    uint32_t *stack;
+    uint32_t *idx;  /* the pieces' vertices, back to back */
+    size_t *off;    /* piece k is idx[off[k] .. off[k+1]) */
+    uint8_t *outer; /* piece k comes from the outer walk */
+    size_t n, nidx;
+} pieces;
+
+static void pieces_free(pieces *p)
+{
+    free(p->pos);
+    free(p->stack);
+    free(p->idx);
+    free(p->off);
+    free(p->outer);
+}
+
+/* Room for any one face's pieces; API_ENOMEM. */
+static int pieces_init(pieces *p, const rmodel *m)
+{
+    size_t most = 0;
+    for (size_t f = 0; f < m->nf; f++) {
+        size_t n = m->ring_off[m->face_ring[f + 1]] - m->ring_off[m->face_ring[f]];
+        if (n > most) most = n;
+    }
+    *p = (pieces){0};
+    p->pos = malloc((m->nv + 1) * sizeof *p->pos);
+    p->stack = malloc((most + 1) * sizeof *p->stack);
+    p->idx = malloc((most + 1) * sizeof *p->idx);
+    p->off = malloc((most + 2) * sizeof *p->off);
+    p->outer = malloc(most + 1);
+    if (!p->pos || !p->stack || !p->idx || !p->off || !p->outer) return API_ENOMEM;
+    for (size_t v = 0; v < m->nv; v++) p->pos[v] = -1;
+    return API_OK;
+}
+
+/* Face f's walks cut into simple cycles (pieces of 3 or more vertices). */
+static void pieces_of_face(pieces *p, const rmodel *m, size_t f)
+{
+    p->n = p->nidx = 0;
+    p->off[0] = 0;
+    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
+        const uint32_t *v = ring_idx(m, r);
+        size_t n = ring_len(m, r), sp = 0;
+        for (size_t i = 0; i <= n && n > 0; i++) {
+            uint32_t x = v[i % n];
+            if (p->pos[x] >= 0) { /* a loop closes at x: stack[pos[x]] .. top */
+                size_t from = (size_t)p->pos[x];
+                if (sp - from >= 3) {
+                    memcpy(p->idx + p->nidx, p->stack + from, (sp - from) * sizeof *p->idx);
+                    p->nidx += sp - from;
+                    p->outer[p->n] = r == m->face_ring[f];
+                    p->off[++p->n] = p->nidx;
+                }
+                for (size_t k = from; k < sp; k++) p->pos[p->stack[k]] = -1;
+                sp = from;
+            }
+            if (i < n) {
+                p->pos[x] = (int32_t)sp;
+                p->stack[sp++] = x;
+            }
+        }
+        for (size_t k = 0; k < sp; k++) p->pos[p->stack[k]] = -1;
+    }
+}
+
+static double cycle_area2(const rmodel *m, const uint32_t *v, size_t n)
+{
+    const double *o = m->xy + 2 * (size_t)v[0];
+    long double s = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double *a = m->xy + 2 * (size_t)v[i], *c = m->xy + 2 * (size_t)v[(i + 1) % n];
+        s += ((long double)a[0] - o[0]) * ((long double)c[1] - o[1]) -
+             ((long double)c[0] - o[0]) * ((long double)a[1] - o[1]);
+    }
+    return (double)s;
+}
+
+/* Face f as a Polygon Feature (pieces: pieces_of_face(f) done). */
+static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f, const pieces *p)
+{
+    size_t shell = SIZE_MAX;
+    double best = 0;
+    for (size_t k = 0; k < p->n; k++) { /* the outer walk's largest counter-clockwise piece */
+        double a = p->outer[k] ? cycle_area2(m, p->idx + p->off[k], p->off[k + 1] - p->off[k]) : 0;
+        if (a > best) best = a, shell = k;
+    }
     api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"Polygon\","
                     "\"coordinates\":[");
-    for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
-        if (ring_len(m, r) < 3) continue; /* a dangling edge kept inside: encloses nothing */
-        if (!first_ring) api_buf_putc(b, ',');
-        first_ring = 0;
-        geojson_ring(b, m, vt, r);
+    for (size_t t = 0; t <= p->n && shell != SIZE_MAX; t++) {
+        size_t k = t == 0 ? shell : t - 1;
+        if (t > 0 && k == shell) continue;
+        if (t > 0) api_buf_putc(b, ',');
+        geojson_cycle(b, vt, p->idx + p->off[k], p->off[k + 1] - p->off[k]);
     }
     api_buf_puts(b, "]},\"properties\":{\"face\":");
     api_buf_u64(b, f);
@@ -1292,9 +1386,9 @@ static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f)
         api_buf_puts(b, m->selected[f] ? ",\"selected\":true" : ",\"selected\":false");
         if (m->member) {
             api_buf_puts(b, ",\"membership\":[");
-            for (size_t p = 0; p < m->ninputs; p++) {
-                if (p) api_buf_putc(b, ',');
-                api_buf_putc(b, m->member[f * m->ninputs + p] ? '1' : '0');
+            for (size_t q = 0; q < m->ninputs; q++) {
+                if (q) api_buf_putc(b, ',');
+                api_buf_putc(b, m->member[f * m->ninputs + q] ? '1' : '0');
             }
             api_buf_putc(b, ']');
         }
@@ -1309,6 +1403,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
     rmodel m;
     api_buf b = {0};
     vtext vt;
+    pieces pc;
     uint64_t *keys = NULL;
     size_t nkeys = 0;
     int rc, any = 0;
@@ -1320,6 +1415,11 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
     if (vtext_make(&m, 0, ',', &vt) != API_OK) {
         rmodel_free(&m);
         return api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+    }
+    keys = malloc((m.ring_off[m.nrings] + 1) * sizeof *keys);
+    if (pieces_init(&pc, &m) != API_OK || !keys) {
+        rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+        goto done;
     }
     if (m.has_result && o->cells && !m.member) {
         rc = api_fail(err, API_EINVALID,
@@ -1333,8 +1433,11 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
         for (size_t q = 0; q < m.npoly; q++) {
             api_buf_puts(&b, q ? ",[" : "[");
             for (size_t r = m.poly_ring[q]; r < m.poly_ring[q + 1]; r++) {
+                const uint32_t *v = ring_idx(&m, r);
+                size_t n = ring_len(&m, r);
                 if (r > m.poly_ring[q]) api_buf_putc(&b, ',');
                 geojson_ring(&b, &m, &vt, r);
+                for (size_t i = 0; i < n; i++) keys[nkeys++] = edge_key(v[i], v[(i + 1) % n]);
             }
             api_buf_putc(&b, ']');
         }
@@ -1343,18 +1446,20 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
         api_buf_puts(&b, "}}");
         any = 1;
     }
-    if (!m.has_result || o->cells)
-        for (size_t f = 0; f < m.nf; f++) {
-            if (any) api_buf_putc(&b, ',');
-            any = 1;
-            geojson_face(&b, &m, &vt, f);
+    for (size_t f = 0; f < m.nf; f++) {
+        pieces_of_face(&pc, &m, f);
+        for (size_t k = 0; k < pc.n; k++) {
+            const uint32_t *v = pc.idx + pc.off[k];
+            size_t n = pc.off[k + 1] - pc.off[k];
+            for (size_t i = 0; i < n; i++) keys[nkeys++] = edge_key(v[i], v[(i + 1) % n]);
         }
-    /* edges on no face: dangling, kept on request */
-    keys = face_edge_keys(&m, 3, &nkeys);
-    if (!keys && m.nf) {
-        rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
-        goto done;
+        if (m.has_result && !o->cells) continue;
+        if (any) api_buf_putc(&b, ',');
+        any = 1;
+        geojson_face(&b, &m, &vt, f, &pc);
     }
+    /* edges on no ring: dangling (kept on request), also those inside a face */
+    qsort(keys, nkeys, sizeof *keys, cmp_u64);
     for (size_t e = 0; e < m.ne; e++) {
         if (has_key(keys, nkeys, edge_key(m.ev[2 * e], m.ev[2 * e + 1]))) continue;
         if (any) api_buf_putc(&b, ',');
@@ -1371,6 +1476,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
     api_buf_puts(&b, "]}\n");
 done:
     free(keys);
+    pieces_free(&pc);
     vtext_free(&vt);
     rmodel_free(&m);
     return finish(&b, rc, out, outlen, err);

@@ -562,67 +562,21 @@ static void check_geojson(const char *name, const res *r)
     CHECK(!strcmp(json_string_value(json_object_get(g, "type")), "FeatureCollection"),
           "%s: not a FeatureCollection", name);
     feats = json_object_get(g, "features");
-    /* one Polygon per face, then one LineString per edge on no face (kept dangling): each an
-     * edge of EV whose ends are its vertices, marked dangling (also those inside a face, which
-     * no ring of 3 or more vertices walks) */
-    {
-        size_t nfeat = json_array_size(feats), ndang = 0;
-        const json_t *EV = json_object_get(r->root, "EV"), *V = json_object_get(r->root, "V");
-        CHECK(nfeat >= r->nf, "%s: %zu features, %zu faces", name, nfeat, r->nf);
-        for (size_t i = r->nf; i < nfeat; i++) {
-            const json_t *ft = json_array_get(feats, i), *geom = json_object_get(ft, "geometry");
-            const json_t *props = json_object_get(ft, "properties"), *c, *ev;
-            json_int_t e = json_integer_value(json_object_get(props, "edge"));
-            ndang++;
-            c = json_object_get(geom, "coordinates");
-            ev = json_array_get(EV, (size_t)e);
-            CHECK(!strcmp(json_string_value(json_object_get(geom, "type")), "LineString") &&
-                      json_is_true(json_object_get(props, "dangling")) && ev &&
-                      json_array_size(c) == 2 &&
-                      json_equal(json_array_get(c, 0),
-                                 json_array_get(V, json_integer_value(json_array_get(ev, 0)))) &&
-                      json_equal(json_array_get(c, 1),
-                                 json_array_get(V, json_integer_value(json_array_get(ev, 1)))),
-                  "%s: feature %zu is not a dangling edge of EV", name, i);
-        }
-        /* the edges on no face's ring: those of EV minus those of the faces' rings */
-        if (EV) {
-            size_t on = 0;
-            for (size_t e = 0; e < json_array_size(EV); e++) {
-                json_int_t a = json_integer_value(json_array_get(json_array_get(EV, e), 0));
-                json_int_t b = json_integer_value(json_array_get(json_array_get(EV, e), 1));
-                int found = 0;
-                for (size_t f = 0; f < r->nf && !found; f++) {
-                    const shape *s = &r->face[f];
-                    for (size_t rr = 0; rr < s->nr && !found; rr++) {
-                        size_t n = shape_len(s, rr);
-                        for (size_t i = 0; i < n && !found; i++) {
-                            const double *p = shape_pt(s, rr, i), *q = shape_pt(s, rr, (i + 1) % n);
-                            const json_t *va = json_array_get(V, (size_t)a);
-                            const json_t *vb = json_array_get(V, (size_t)b);
-                            double ax = json_number_value(json_array_get(va, 0));
-                            double ay = json_number_value(json_array_get(va, 1));
-                            double bx = json_number_value(json_array_get(vb, 0));
-                            double by = json_number_value(json_array_get(vb, 1));
-                            found =
-                                n >= 3 && ((p[0] == ax && p[1] == ay && q[0] == bx && q[1] == by) ||
-                                           (p[0] == bx && p[1] == by && q[0] == ax && q[1] == ay));
-                        }
-                    }
-                }
-                on += found;
-            }
-            CHECK(ndang == json_array_size(EV) - on,
-                  "%s: %zu dangling features, %zu edges on no face", name, ndang,
-                  json_array_size(EV) - on);
-        }
-    }
-    for (size_t f = 0; f < json_array_size(feats) && f < r->nf; f++) {
+    /* one Polygon per face, then one LineString per edge on no ring (kept dangling) */
+    size_t nfeat = json_array_size(feats), ndang = 0, nring_edges = 0, cap = 64;
+    const json_t *EV = json_object_get(r->root, "EV"), *V = json_object_get(r->root, "V");
+    double *ring_edges = malloc(cap * 4 * sizeof *ring_edges); /* x0 y0 x1 y1 of every ring edge */
+    CHECK(nfeat >= r->nf, "%s: %zu features, %zu faces", name, nfeat, r->nf);
+    /* Each face: its rings are simple cycles (no vertex twice), closed, the shell
+     * counter-clockwise and the holes clockwise, made of the directed edges of the face's own
+     * cycles, enclosing the face's area; every edge of its cycles that no ring has is walked
+     * both ways (a tree edge: dangling). */
+    for (size_t f = 0; f < nfeat && f < r->nf; f++) {
         const json_t *ft = json_array_get(feats, f), *geom = json_object_get(ft, "geometry");
         const json_t *props = json_object_get(ft, "properties");
         const json_t *rings = json_object_get(geom, "coordinates");
         const shape *s = &r->face[f];
-        size_t want = 0, ri = 0;
+        size_t nd = 0, used = 0;
         double area, a2 = 0;
         CHECK(!strcmp(json_string_value(json_object_get(ft, "type")), "Feature") &&
                   !strcmp(json_string_value(json_object_get(geom, "type")), "Polygon"),
@@ -630,40 +584,80 @@ static void check_geojson(const char *name, const res *r)
         CHECK(json_integer_value(json_object_get(props, "face")) == (json_int_t)f,
               "%s: feature %zu names face %lld", name, f,
               (long long)json_integer_value(json_object_get(props, "face")));
-        for (size_t rr = 0; rr < s->nr; rr++) want += shape_len(s, rr) >= 3;
-        CHECK(json_array_size(rings) == want, "%s: face %zu has %zu rings, want %zu", name, f,
-              json_array_size(rings), want);
-        for (size_t rr = 0; rr < s->nr && ri < json_array_size(rings); rr++) {
+        for (size_t rr = 0; rr < s->nr; rr++) nd += shape_len(s, rr);
+        uint8_t *hit = calloc(nd + 1, 1);
+        for (size_t ri = 0; ri < json_array_size(rings); ri++) {
             const json_t *ring = json_array_get(rings, ri);
-            size_t n = shape_len(s, rr), m = json_array_size(ring);
+            size_t m = json_array_size(ring), n = m ? m - 1 : 0;
             shape one = {0};
             double a;
-            if (n < 3) continue; /* a dangling edge inside: left out */
-            ri++;
-            CHECK(m == n + 1, "%s: face %zu ring %zu has %zu positions for %zu vertices", name, f,
-                  rr, m, n);
-            if (m != n + 1) continue;
-            CHECK(json_equal(json_array_get(ring, 0), json_array_get(ring, n)),
-                  "%s: face %zu ring %zu not closed", name, f, rr);
+            CHECK(m >= 4 && json_equal(json_array_get(ring, 0), json_array_get(ring, n)),
+                  "%s: face %zu ring %zu: %zu positions, or not closed", name, f, ri, m);
+            if (m < 4) continue;
             shape_ring(&one);
             for (size_t i = 0; i < n; i++) {
-                const json_t *pos = json_array_get(ring, i);
+                const json_t *pos = json_array_get(ring, i), *nx = json_array_get(ring, i + 1);
                 double x = json_number_value(json_array_get(pos, 0));
                 double y = json_number_value(json_array_get(pos, 1));
-                if (json_array_size(pos) != 2 || x != shape_pt(s, rr, i)[0] ||
-                    y != shape_pt(s, rr, i)[1])
-                    bad_pos++;
+                double x1 = json_number_value(json_array_get(nx, 0));
+                double y1 = json_number_value(json_array_get(nx, 1));
+                size_t k = 0, found = SIZE_MAX;
+                if (json_array_size(pos) != 2) bad_pos++;
+                for (size_t j = 0; j < i; j++)
+                    if (json_equal(json_array_get(ring, j), pos)) bad_pos++; /* not simple */
                 shape_point(&one, x, y);
+                for (size_t rr = 0; rr < s->nr && found == SIZE_MAX; rr++) {
+                    size_t ln = shape_len(s, rr);
+                    for (size_t t = 0; t < ln; t++, k++) {
+                        const double *p = shape_pt(s, rr, t), *q = shape_pt(s, rr, (t + 1) % ln);
+                        if (!hit[k] && p[0] == x && p[1] == y && q[0] == x1 && q[1] == y1) {
+                            found = k;
+                            break;
+                        }
+                    }
+                }
+                if (found == SIZE_MAX) {
+                    bad_pos++;
+                } else {
+                    hit[found] = 1;
+                    used++;
+                }
+                if (nring_edges == cap) {
+                    cap *= 2;
+                    ring_edges = realloc(ring_edges, cap * 4 * sizeof *ring_edges);
+                }
+                ring_edges[4 * nring_edges] = x, ring_edges[4 * nring_edges + 1] = y;
+                ring_edges[4 * nring_edges + 2] = x1, ring_edges[4 * nring_edges + 3] = y1;
+                nring_edges++;
             }
             a = ring_area2(&one, 0, NULL, NULL);
             a2 += a;
-            if (rr == 0)
-                CHECK(a > 0, "%s: face %zu outer ring not counter-clockwise (%g)", name, f, a);
+            if (ri == 0)
+                CHECK(a > 0, "%s: face %zu shell not counter-clockwise (%g)", name, f, a);
             else
-                CHECK(a < 0 || (a == 0 && n >= 3), "%s: face %zu hole %zu not clockwise (%g)", name,
-                      f, rr, a);
+                CHECK(a < 0, "%s: face %zu hole %zu not clockwise (%g)", name, f, ri, a);
             shape_free(&one);
         }
+        /* the cycles' edges no ring has: each has its reverse in the cycles too */
+        for (size_t rr = 0, k = 0; rr < s->nr; rr++) {
+            size_t ln = shape_len(s, rr);
+            for (size_t t = 0; t < ln; t++, k++) {
+                const double *p = shape_pt(s, rr, t), *q = shape_pt(s, rr, (t + 1) % ln);
+                int back = 0;
+                if (hit[k]) continue;
+                for (size_t r2 = 0; r2 < s->nr && !back; r2++) {
+                    size_t l2 = shape_len(s, r2);
+                    for (size_t u = 0; u < l2 && !back; u++) {
+                        const double *p2 = shape_pt(s, r2, u), *q2 = shape_pt(s, r2, (u + 1) % l2);
+                        back = p2[0] == q[0] && p2[1] == q[1] && q2[0] == p[0] && q2[1] == p[1];
+                    }
+                }
+                CHECK(back || ln < 2,
+                      "%s: face %zu: edge (%g %g)-(%g %g) of its cycles is on no ring", name, f,
+                      p[0], p[1], q[0], q[1]);
+            }
+        }
+        free(hit);
         area = shape_area(s); /* from V and the cycles of the result */
         CHECK(fabs(json_number_value(json_object_get(props, "area")) - area) <=
                   1e-9 * (fabs(area) + r->extent * r->extent * 1e-6),
@@ -674,6 +668,46 @@ static void check_geojson(const char *name, const res *r)
         CHECK(area > 0, "%s: face %zu has area %g", name, f, area);
         total += area;
     }
+    /* the dangling edges: LineStrings of EV's edges, exactly those on no ring */
+    for (size_t i = r->nf; i < nfeat; i++) {
+        const json_t *ft = json_array_get(feats, i), *geom = json_object_get(ft, "geometry");
+        const json_t *props = json_object_get(ft, "properties"), *c, *ev;
+        json_int_t e = json_integer_value(json_object_get(props, "edge"));
+        ndang++;
+        c = json_object_get(geom, "coordinates");
+        ev = json_array_get(EV, (size_t)e);
+        CHECK(!strcmp(json_string_value(json_object_get(geom, "type")), "LineString") &&
+                  json_is_true(json_object_get(props, "dangling")) && ev &&
+                  json_array_size(c) == 2 &&
+                  json_equal(json_array_get(c, 0),
+                             json_array_get(V, json_integer_value(json_array_get(ev, 0)))) &&
+                  json_equal(json_array_get(c, 1),
+                             json_array_get(V, json_integer_value(json_array_get(ev, 1)))),
+              "%s: feature %zu is not a dangling edge of EV", name, i);
+    }
+    if (EV) {
+        size_t on = 0;
+        for (size_t e = 0; e < json_array_size(EV); e++) {
+            const json_t *va =
+                json_array_get(V, json_integer_value(json_array_get(json_array_get(EV, e), 0)));
+            const json_t *vb =
+                json_array_get(V, json_integer_value(json_array_get(json_array_get(EV, e), 1)));
+            double ax = json_number_value(json_array_get(va, 0));
+            double ay = json_number_value(json_array_get(va, 1));
+            double bx = json_number_value(json_array_get(vb, 0));
+            double by = json_number_value(json_array_get(vb, 1));
+            int found = 0;
+            for (size_t k = 0; k < nring_edges && !found; k++) {
+                const double *q = ring_edges + 4 * k;
+                found = (q[0] == ax && q[1] == ay && q[2] == bx && q[3] == by) ||
+                        (q[0] == bx && q[1] == by && q[2] == ax && q[3] == ay);
+            }
+            on += found;
+        }
+        CHECK(ndang == json_array_size(EV) - on, "%s: %zu dangling features, %zu edges on no ring",
+              name, ndang, json_array_size(EV) - on);
+    }
+    free(ring_edges);
     CHECK(bad_pos == 0, "%s: %zu positions are not the vertices of the cycles", name, bad_pos);
     /* the faces' areas add up to the area enclosed by the exterior cycles */
     {
@@ -991,6 +1025,26 @@ TEST(render_boolean_result)
             res_free(&r);
         }
     }
+}
+
+/* Walks that pass a vertex twice: a triangle touching the square's side at a vertex, two
+ * triangles meeting at a vertex inside, a dangling tree inside and one hanging from the side.
+ * The GeoJSON rings must still be simple (check_geojson): the face is a shell with holes that
+ * touch it or each other at a point, and the tree edges are LineStrings. */
+TEST(render_rings_through_a_vertex_twice)
+{
+    check_request("cut vertices",
+                  "{\"kind\":\"lines\",\"lines\":[[[0,0],[8,0]],[[8,0],[8,8]],[[8,8],[0,8]],"
+                  "[[0,8],[0,0]],[[4,0],[6,4]],[[6,4],[2,4]],[[2,4],[4,0]],[[1,5],[2,7]],"
+                  "[[2,7],[3,5]],[[3,5],[1,5]],[[3,5],[4,7]],[[4,7],[5,5]],[[5,5],[3,5]],"
+                  "[[6,6],[7,6]],[[7,6],[7,7]],[[7,6],[7.5,5.5]],[[0,2],[1,2]],[[1,2],[1,3]]],"
+                  "\"options\":{\"keep_dangling\":true}}",
+                  -1, 1.5);
+    check_request("cut vertices without dangling edges",
+                  "{\"kind\":\"lines\",\"lines\":[[[0,0],[8,0]],[[8,0],[8,8]],[[8,8],[0,8]],"
+                  "[[0,8],[0,0]],[[4,0],[6,4]],[[6,4],[2,4]],[[2,4],[4,0]],[[1,5],[2,7]],"
+                  "[[2,7],[3,5]],[[3,5],[1,5]],[[3,5],[4,7]],[[4,7],[5,5]],[[5,5],[3,5]]]}",
+                  -1, 2);
 }
 
 TEST(render_empty_result)

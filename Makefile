@@ -22,7 +22,8 @@ TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
               libxml2-dev
-DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema sqlite3 \
+DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
+              python3-shapely sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 

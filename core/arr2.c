@@ -85,6 +85,9 @@ typedef struct ctx {
     uint32_t *sp_off, *sp_pix; /* pixels grouped by segment */
     vbuf edges[MAXW];          /* uint64: v0 << 32 | v1 */
     vbuf etags[MAXW];          /* uint32: with opts.tags, the tag of each edge in edges */
+    /* with input_coords: pixels near a segment not routed through them, and those segments */
+    vbuf nearp[MAXW], nears[MAXW]; /* uint32 */
+    uint8_t *pinned;               /* npix: the vertex keeps its grid coordinates */
     scratch scr[MAXW];
 } ctx;
 
@@ -223,9 +226,14 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
         if (n == 0 || ext == 0)
             p = 1;
         else {
-            int e;
+            int e, em;
+            double mag = fmax(fmax(fabs(minx), fabs(maxx)), fmax(fabs(miny), fabs(maxy)));
             frexp(ext, &e); /* ext <= 2^e */
             p = ldexp(1.0, e - ARR2_GRID_BITS);
+            /* no finer than the doubles where the drawing is: every grid point must be a
+             * double of its own, or distinct vertices would be written as one */
+            frexp(mag, &em); /* mag < 2^em */
+            if (p < ldexp(1.0, em - 52)) p = ldexp(1.0, em - 52);
         }
     } else if (ext / p > ldexp(1.0, ARR2_GRID_BITS)) {
         return seterr(err, el, ARR_ELIMIT,
@@ -577,6 +585,105 @@ fail:
     return -1;
 }
 
+/* ---- which vertices may keep their input coordinates ------------------------------------------
+ * With input_coords, a vertex that input points snapped to is written at the first such point,
+ * up to half a grid step (0.71 steps) from its grid point; crossings stay at theirs.  Moving
+ * vertices may not change the picture's topology (a thin spike's tip crossing the edge it
+ * nearly touches, a ring made invalid), so vertices near other geometry stay on the grid:
+ * every pixel within NEAR_R steps (a square) of a snapped segment that is not routed through
+ * it keeps its grid point, and so does every pixel on that segment's route.  Why that is
+ * enough: a snapped route lies within 0.71 steps of its segment, and every point of an edge
+ * moves at most 0.71 steps as its ends do; two edges can only come to touch (the first event
+ * of any change of topology) where an end of one comes within 1.42 steps of the other's grid
+ * position, within 2.13 steps of that one's segment, inside the square of half-width 3: both
+ * are then held on the grid. */
+#define NEAR_R 3
+
+static int seg_near_pixel(ipt a, ipt b, ipt p)
+{
+    int64_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x < b.x ? b.x : a.x;
+    int64_t y0 = a.y < b.y ? a.y : b.y, y1 = a.y < b.y ? b.y : a.y;
+    if (p.x < x0 - NEAR_R || p.x > x1 + NEAR_R || p.y < y0 - NEAR_R || p.y > y1 + NEAR_R) return 0;
+    /* the line meets the square iff |orient(a, b, p)| <= R (|dx| + |dy|) (its corners spread
+     * the orientation by that much); with the boxes meeting, so does the segment */
+    i128 o = orient2(a, b, p);
+    if (o < 0) o = -o;
+    return o <= (i128)NEAR_R * (llabs(b.x - a.x) + llabs(b.y - a.y));
+}
+
+/* The leaves whose regions meet the closed box q, appended to *out (uint32). */
+static int leaves_meeting(const box_tree *t, const double *q, vbuf *out, int32_t node)
+{
+    if (node < 0) {
+        if (vbuf_reserve(out, out->n + 1, sizeof(uint32_t))) return -1;
+        ((uint32_t *)out->p)[out->n++] = (uint32_t)~node;
+        return 0;
+    }
+    const box_node *nd = &t->nodes[node];
+    if (q[nd->axis] <= nd->t && leaves_meeting(t, q, out, nd->child[0])) return -1;
+    if (q[2 + nd->axis] > nd->t && leaves_meeting(t, q, out, nd->child[1])) return -1;
+    return 0;
+}
+
+static void near_chunk(void *vc, size_t chunk, int w)
+{
+    ctx *c = vc;
+    size_t p0 = chunk * 1024, p1 = p0 + 1024 < c->npix ? p0 + 1024 : c->npix;
+    vbuf leaves = {0};
+    if (worker_stop(c, chunk)) return;
+    for (size_t pid = p0; pid < p1; pid++) {
+        ipt p = c->pix[pid];
+        double q[4] = {(double)(p.x - NEAR_R), (double)(p.y - NEAR_R), (double)(p.x + NEAR_R),
+                       (double)(p.y + NEAR_R)};
+        leaves.n = 0;
+        if (c->tree.nnodes == 0) {
+            if (vbuf_reserve(&leaves, 1, sizeof(uint32_t))) goto nomem;
+            ((uint32_t *)leaves.p)[leaves.n++] = 0;
+        } else if (leaves_meeting(&c->tree, q, &leaves, 0)) {
+            goto nomem;
+        }
+        for (size_t k = 0; k < leaves.n; k++) {
+            uint32_t l = ((uint32_t *)leaves.p)[k];
+            for (uint32_t i = c->tree.leaf_off[l]; i < c->tree.leaf_off[l + 1]; i++) {
+                uint32_t si = c->tree.items[i];
+                const seg2 *sg = &c->seg[si];
+                const int64_t *b = c->box + 4 * (size_t)si;
+                int in_box = p.x >= b[0] && p.x <= b[2] && p.y >= b[1] && p.y <= b[3];
+                if (!seg_near_pixel(sg->a, sg->b, p)) continue;
+                if (in_box && seg_hits_pixel(sg->a, sg->b, p)) continue; /* routed through p */
+                if (vbuf_reserve(&c->nearp[w], c->nearp[w].n + 1, sizeof(uint32_t)) ||
+                    vbuf_reserve(&c->nears[w], c->nears[w].n + 1, sizeof(uint32_t)))
+                    goto nomem;
+                ((uint32_t *)c->nearp[w].p)[c->nearp[w].n++] = (uint32_t)pid;
+                ((uint32_t *)c->nears[w].p)[c->nears[w].n++] = si;
+            }
+        }
+    }
+    free(leaves.p);
+    return;
+nomem:
+    free(leaves.p);
+    atomic_store(&c->fail, ARR_ENOMEM);
+}
+
+/* c->pinned: the pixels that keep their grid coordinates (see above).  -1 out of memory. */
+static int pin_crowded(ctx *c)
+{
+    c->pinned = calloc(c->npix + 1, 1);
+    if (!c->pinned) return -1;
+    par_for(c->threads, (c->npix + 1023) / 1024, near_chunk, c);
+    if (atomic_load(&c->fail)) return -1;
+    for (int w = 0; w < c->threads; w++) {
+        const uint32_t *pp = c->nearp[w].p, *ss = c->nears[w].p;
+        for (size_t k = 0; k < c->nearp[w].n; k++) {
+            c->pinned[pp[k]] = 1;
+            for (uint32_t j = c->sp_off[ss[k]]; j < c->sp_off[ss[k] + 1]; j++)
+                c->pinned[c->sp_pix[j]] = 1;
+        }
+    }
+    return 0;
+}
+
 /* From the snapped segments to a sorted, duplicate-free edge list over the hot pixels. */
 static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_out,
                        uint32_t **toff_out, uint32_t **tags_out, char *err, size_t el)
@@ -650,6 +757,11 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     inc = gather(c->inc, c->threads, sizeof(uint64_t), &ninc);
     if (!inc) goto fail;
     if (group_by(inc, ninc, c->m, &c->sp_off, &c->sp_pix)) goto fail;
+    if (c->o->input_coords && pin_crowded(c)) {
+        if ((rc = atomic_load(&c->fail)) == ARR_ECANCELED) goto fail;
+        rc = ARR_ENOMEM;
+        goto fail;
+    }
     free(inc);
     inc = NULL;
     par_for(c->threads, (c->m + SEG_CHUNK - 1) / SEG_CHUNK, split_segments, c);
@@ -1391,7 +1503,12 @@ static void ctx_free(ctx *c)
     c->pix = NULL;
     c->box = NULL;
     c->pl_off = c->pl_pix = c->sp_off = c->sp_pix = NULL;
+    free(c->pinned);
+    c->pinned = NULL;
     for (int w = 0; w < MAXW; w++) {
+        free(c->nearp[w].p);
+        free(c->nears[w].p);
+        c->nearp[w] = c->nears[w] = (vbuf){0};
         free(c->cross[w].p);
         free(c->inc[w].p);
         free(c->edges[w].p);
@@ -1421,7 +1538,8 @@ static int vertex_sources(const ctx *c, const double *seg, size_t n, graph *g)
                 else
                     hi = mid;
             }
-            if (lo < g->nv && ipt_cmp(g->P[lo], p) == 0 && g->src[lo] == NONE)
+            if (lo < g->nv && ipt_cmp(g->P[lo], p) == 0 && g->src[lo] == NONE &&
+                !(c->pinned && c->pinned[lo]))
                 g->src[lo] = (uint32_t)(2 * i + (size_t)k);
         }
     return 0;

@@ -397,10 +397,8 @@ static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err
     int rc = ARR_ENOMEM;
     if (!gi || !ccw || !out->poly_outer || !out->ph_off || !out->ph_cyc) goto done;
     for (size_t f = 0; f <= nf; f++) gi[f] = NONE;
-    i128 total = 0;
     for (size_t k = 0; k < nr; k++) {
         i128 a = ring_area2(out, k);
-        total += a;
         ccw[k] = a > 0;
         if (a == 0) {
             rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
@@ -434,8 +432,22 @@ static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err
     for (size_t k = 0; k < nr; k++)
         if (!ccw[k]) out->ph_cyc[out->ph_off[gi[ring_grp[k]] + 1]++] = (uint32_t)k;
     out->npoly = np;
-    double s = out->c.stats.precision;
-    out->area = (double)total / 2 * s * s;
+    /* the area of the polygons as written: input points keep their coordinates (arr2's
+     * input_coords), so this is the input's own area where snapping changed nothing (a needle
+     * five grid steps high keeps its area) and within the snapping bound of the grid's, total,
+     * everywhere; each ring about its first vertex, so that far coordinates do not cancel */
+    long double area = 0;
+    for (size_t k = 0; k < nr; k++) {
+        const double *V = out->c.V;
+        uint32_t b = out->rc_off[k], n = out->rc_off[k + 1] - b;
+        double x0 = V[2 * out->rv[b]], y0 = V[2 * out->rv[b] + 1];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t u = out->rv[b + i], v = out->rv[b + (i + 1) % n];
+            area += ((long double)V[2 * u] - x0) * ((long double)V[2 * v + 1] - y0) -
+                    ((long double)V[2 * v] - x0) * ((long double)V[2 * u + 1] - y0);
+        }
+    }
+    out->area = area > 0 ? (double)(area / 2) : 0;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");

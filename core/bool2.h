@@ -46,7 +46,7 @@ typedef struct bool2_result {
     uint8_t *member; /* c.nf * ninputs: member[f*ninputs + p] = 1 when face f lies in p */
     size_t ncells;
     uint32_t *cells; /* ncells selected faces, ascending */
-    double area;     /* total area of the selected faces (input units) */
+    double area;     /* the area the result polygons enclose, from their written coordinates */
     /* The region's boundary cycles, CSR: cycle k has vertices rv[rc_off[k]..rc_off[k+1]) and
      * signed edges re[same range], re[i] = ±(e+1) the edge from rv[i] to the next vertex
      * (+ when that is EV's v0 -> v1).  The selected region is on the left of every cycle. */

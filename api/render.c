@@ -385,8 +385,8 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
     if (!V || !FV) {
         rc = api_fail(err, API_EINVALID,
                       "%s: required (the result was made with \"fields\" leaving it out: ask for "
-                      "\"V\" and \"FV\")",
-                      V ? "FV" : "V");
+                      "\"V\", \"FV\" and \"holes\")",
+                      !V ? "V" : "FV");
         goto fail;
     }
     if (!json_is_array(V)) {
@@ -483,6 +483,15 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
                 nring++;
             }
         }
+    }
+
+    /* every key is well formed; without "holes" the faces would be drawn without their holes */
+    if (!holes) {
+        rc = api_fail(err, API_EINVALID,
+                      "holes: required (the result was made with \"fields\" leaving it out: ask "
+                      "for \"V\", \"FV\" and \"holes\"; the faces cannot be drawn without their "
+                      "holes)");
+        goto fail;
     }
 
     /* a Boolean's result: its polygons' rings after the faces' */

@@ -2,10 +2,11 @@
  * GeoJSON out; and meshes of a 3D result: Wavefront OBJ (render_obj, see below).
  *
  * Both renderers read a result as api_run_json() writes it (DESIGN.md "LAR JSON"): "dim" must be
- * 2; "V" and "FV" are required; "holes" and "EV" are optional.  The bounded faces are the rows of
- * FV; with exterior_last the exterior cycles that follow them are recognised and left out (by
- * "stats".F when present, else by the rows equal to those of "exterior", else as the trailing
- * rows of area <= 0: a bounded face's outer cycle is counter-clockwise, so of area > 0).
+ * 2; "V", "FV" and "holes" are required (a result made with "fields" leaving one out is
+ * refused, 422 naming the key, never drawn without its holes); "EV" is optional.  The bounded faces
+ * are the rows of FV; with exterior_last the exterior cycles that follow them are recognised and
+ * left out (by "stats".F when present, else by the rows equal to those of "exterior", else as the
+ * trailing rows of area <= 0: a bounded face's outer cycle is counter-clockwise, so of area > 0).
  * A bad result is a value, never a crash: status API_EINVALID (422) and a message that names the
  * JSON path ("FV[3][2]: expected a vertex index < 11", "V: required ...", "dim: expected 2 ...",
  * "result: malformed JSON at line 1, column 7: ...").  Out of memory is API_ENOMEM (503).

@@ -853,7 +853,7 @@ TEST(render_keep_dangling_and_exterior_last)
     /* ... by the rows equal to "exterior" when there are no stats */
     check_request("exterior_last by exterior rows",
                   ORTHOGONAL ",\"options\":{\"exterior_last\":true,"
-                             "\"fields\":[\"V\",\"EV\",\"FV\",\"exterior\"]}}",
+                             "\"fields\":[\"V\",\"EV\",\"FV\",\"holes\",\"exterior\"]}}",
                   4, 1.5);
     /* ... by their area (<= 0) when there is neither */
     check_request("exterior_last by area",
@@ -1183,13 +1183,16 @@ TEST(render_damaged_results)
     res_free(&r);
 }
 
-/* A real result asked for without V or FV. */
+/* A real result asked for without V, FV or holes. */
 TEST(render_missing_fields_of_real_results)
 {
     static const struct {
         const char *fields;
         const char *key;
-    } cases[] = {{"[\"V\",\"EV\"]", "FV:"}, {"[\"FV\",\"EV\"]", "V:"}, {"[\"stats\"]", "V:"}};
+    } cases[] = {{"[\"V\",\"EV\"]", "FV:"},
+                 {"[\"FV\",\"EV\"]", "V:"},
+                 {"[\"stats\"]", "V:"},
+                 {"[\"V\",\"EV\",\"FV\"]", "holes:"}};
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         char body[512], *out = NULL;
         size_t len;

@@ -19,7 +19,7 @@
 #include <stdatomic.h>
 #include <stddef.h>
 
-#define API_VERSION "0.1.0"
+#define API_VERSION "0.2.0"
 
 /* Statuses: HTTP status codes, so the daemon can send them as they are. */
 enum {

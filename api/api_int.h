@@ -17,6 +17,7 @@
 #include "api/api.h"
 #include "core/arr2.h"
 #include "core/bool3.h"
+#include "core/member.h"
 #include "core/boolexpr.h"
 #include "core/arr3.h"
 
@@ -41,6 +42,12 @@ void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n);
  * row r holds indices/data[indptr[r] .. indptr[r+1]). */
 void api_buf_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
                  const uint32_t *indices, const int8_t *data);
+
+/* ,"membership":{"format":"csr","shape":[nrows,ninputs],"indptr":[...],"indices":[...]}: row r
+ * (a face or cell) lies in the inputs indices[indptr[r] .. indptr[r+1]), ascending; scipy:
+ * csr_matrix((ones, indices, indptr), shape). */
+void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
+                        const uint32_t *idx);
 
 static inline void api_buf_putc(api_buf *b, char c)
 {
@@ -177,10 +184,10 @@ typedef struct api_lar3_fmt {
     unsigned fields;             /* API_F3_* bits */
     const char *const *warnings; /* borrowed, nwarnings strings for stats.warnings (may be NULL) */
     size_t nwarnings;
-    /* a Boolean operation (may be NULL): "membership" (cells x solids, 0/1, c->nc rows of
-     * c->nsolids bytes) and "result" (the cells, the outward boundary faces, their cycles and
-     * signed edges, the volume), written whatever the fields */
-    const uint8_t *membership;
+    /* a Boolean operation (may be NULL): "membership" (the solids each bounded cell lies in,
+     * sparse rows, c->nc of them) and "result" (the cells, the outward boundary faces, their
+     * cycles and signed edges, the volume), written whatever the fields */
+    const member_rows *membership;
     const bool3_result *result;
 } api_lar3_fmt;
 

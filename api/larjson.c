@@ -284,6 +284,20 @@ void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n)
     api_buf_putc(b, ']');
 }
 
+void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
+                        const uint32_t *idx)
+{
+    api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
+    api_buf_u64(b, nrows);
+    api_buf_putc(b, ',');
+    api_buf_u64(b, ninputs);
+    api_buf_puts(b, "],\"indptr\":");
+    api_buf_u32_list(b, off, nrows + 1);
+    api_buf_puts(b, ",\"indices\":");
+    api_buf_u32_list(b, idx, off[nrows]);
+    api_buf_putc(b, '}');
+}
+
 void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
 {
     api_buf_putc(b, '[');

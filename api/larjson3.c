@@ -391,19 +391,8 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         rc = put_operators(b, c, err);
         if (rc != API_OK) return rc;
     }
-    if (fmt->membership) {
-        put_key(b, "membership");
-        api_buf_putc(b, '[');
-        for (size_t k = 0; k < c->nc; k++) {
-            api_buf_puts(b, k ? ",[" : "[");
-            for (size_t s = 0; s < c->nsolids; s++) {
-                if (s) api_buf_putc(b, ',');
-                api_buf_putc(b, fmt->membership[k * c->nsolids + s] ? '1' : '0');
-            }
-            api_buf_putc(b, ']');
-        }
-        api_buf_putc(b, ']');
-    }
+    if (fmt->membership)
+        api_put_membership(b, c->nc, c->nsolids, fmt->membership->off, fmt->membership->idx);
     if (fmt->result) put_result(b, c, fmt->result);
     if (fl & API_F3_STATS) {
         put_key(b, "stats");

@@ -9,7 +9,8 @@
  * "polygons" may also be a GeoJSON FeatureCollection, one input per feature.  The
  * options are those of "lines" (api_lar2_option()).  The answer is the LAR JSON of the
  * arrangement of all ring edges (api_lar2_write()) with two more members:
- *   "membership": one row per bounded face (FV's rows), one 0/1 per input polygon;
+ *   "membership": the polygons each bounded face (FV's rows) lies in, as compressed sparse
+ *                 rows {"format":"csr","shape":[F, N],"indptr":[...],"indices":[...]};
  *   "result": {"cells": [selected faces], "FV": [outer cycle of each result polygon, CCW],
  *              "FE": [signed edges of each result polygon, outer cycle then holes],
  *              "holes": {"q": [[hole cycle, CW], ...]}, "area": total area}.
@@ -490,16 +491,8 @@ fail:
 static void put_bool2(api_buf *b, const void *udata)
 {
     const bool2_result *r = udata;
-    api_buf_puts(b, ",\"membership\":[");
-    for (size_t f = 0; f < r->c.nf; f++) {
-        api_buf_puts(b, f ? ",[" : "[");
-        for (size_t p = 0; p < r->ninputs; p++) {
-            if (p) api_buf_putc(b, ',');
-            api_buf_putc(b, r->member[f * r->ninputs + p] ? '1' : '0');
-        }
-        api_buf_putc(b, ']');
-    }
-    api_buf_puts(b, "],\"result\":{\"cells\":");
+    api_put_membership(b, r->c.nf, r->ninputs, r->mem_off, r->mem);
+    api_buf_puts(b, ",\"result\":{\"cells\":");
     api_buf_u32_list(b, r->cells, r->ncells);
     api_buf_puts(b, ",\"FV\":[");
     for (size_t q = 0; q < r->npoly; q++) {

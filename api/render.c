@@ -234,8 +234,9 @@ typedef struct rmodel {
     size_t *poly_ring; /* owned, npoly + 1 */
     double res_area;
     uint8_t *selected; /* owned, nf: the face is a cell of the result */
-    size_t ninputs;    /* membership row length (0: no "membership") */
-    uint8_t *member;   /* owned, nf * ninputs */
+    size_t ninputs;    /* inputs (0: no "membership") */
+    size_t *mem_off;   /* owned, nf + 1 (NULL: no "membership"): face f lies in the inputs */
+    uint32_t *mem;     /* mem[mem_off[f] .. mem_off[f+1]) */
 } rmodel;
 
 static void rmodel_free(rmodel *m)
@@ -244,7 +245,8 @@ static void rmodel_free(rmodel *m)
     free(m->ev);
     free(m->poly_ring);
     free(m->selected);
-    free(m->member);
+    free(m->mem_off);
+    free(m->mem);
     free(m->face_ring);
     free(m->ring_off);
     free(m->idx);
@@ -594,21 +596,52 @@ static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
             }
             m->selected[json_integer_value(x)] = 1;
         }
+        /* the membership, compressed sparse rows: one row per face */
         const json_t *mem = json_object_get(root, "membership");
-        if (json_is_array(mem) && json_array_size(mem) == m->nf && m->nf > 0) {
-            m->ninputs = json_array_size(json_array_get(mem, 0));
-            m->member = malloc(m->nf * m->ninputs + 1);
-            if (!m->member) goto nomem;
-            for (size_t f = 0; f < m->nf; f++) {
-                const json_t *row = json_array_get(mem, f);
-                if (json_array_size(row) != m->ninputs) {
-                    rc = api_fail(err, API_EINVALID, "membership[%zu]: expected %zu entries", f,
+        if (mem) {
+            const json_t *shape = json_object_get(mem, "shape");
+            const json_t *ip = json_object_get(mem, "indptr"),
+                         *ix = json_object_get(mem, "indices");
+            size_t nnz = json_array_size(ix);
+            if (!json_is_object(mem) || !json_is_array(ip) || !json_is_array(ix) ||
+                json_array_size(shape) != 2 ||
+                (size_t)json_integer_value(json_array_get(shape, 0)) != m->nf ||
+                json_integer_value(json_array_get(shape, 1)) < 0 ||
+                json_array_size(ip) != m->nf + 1) {
+                rc = api_fail(err, API_EINVALID,
+                              "membership: expected {\"shape\": [%zu, inputs], \"indptr\": [%zu "
+                              "offsets], \"indices\": [...]}",
+                              m->nf, m->nf + 1);
+                goto fail;
+            }
+            m->ninputs = (size_t)json_integer_value(json_array_get(shape, 1));
+            m->mem_off = malloc((m->nf + 1) * sizeof *m->mem_off);
+            m->mem = malloc((nnz + 1) * sizeof *m->mem);
+            if (!m->mem_off || !m->mem) goto nomem;
+            for (size_t f = 0; f <= m->nf; f++) {
+                const json_t *x = json_array_get(ip, f);
+                json_int_t v = json_integer_value(x);
+                if (!json_is_integer(x) || v < 0 || (size_t)v > nnz ||
+                    (f > 0 && (size_t)v < m->mem_off[f - 1]) || (f == 0 && v != 0) ||
+                    (f == m->nf && (size_t)v != nnz)) {
+                    rc = api_fail(err, API_EINVALID,
+                                  "membership.indptr[%zu]: expected offsets from 0 to %zu, "
+                                  "non-decreasing",
+                                  f, nnz);
+                    goto fail;
+                }
+                m->mem_off[f] = (size_t)v;
+            }
+            for (size_t k = 0; k < nnz; k++) {
+                const json_t *x = json_array_get(ix, k);
+                json_int_t v = json_integer_value(x);
+                if (!json_is_integer(x) || v < 0 || (size_t)v >= m->ninputs) {
+                    rc = api_fail(err, API_EINVALID,
+                                  "membership.indices[%zu]: expected an input index < %zu", k,
                                   m->ninputs);
                     goto fail;
                 }
-                for (size_t p = 0; p < m->ninputs; p++)
-                    m->member[f * m->ninputs + p] = json_is_true(json_array_get(row, p)) ||
-                                                    json_integer_value(json_array_get(row, p)) != 0;
+                m->mem[k] = (uint32_t)v;
             }
         }
     }
@@ -1393,13 +1426,9 @@ static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f,
     api_buf_double(b, face_area(m, f));
     if (m->has_result) {
         api_buf_puts(b, m->selected[f] ? ",\"selected\":true" : ",\"selected\":false");
-        if (m->member) {
-            api_buf_puts(b, ",\"membership\":[");
-            for (size_t q = 0; q < m->ninputs; q++) {
-                if (q) api_buf_putc(b, ',');
-                api_buf_putc(b, m->member[f * m->ninputs + q] ? '1' : '0');
-            }
-            api_buf_putc(b, ']');
+        if (m->mem_off) {
+            api_buf_puts(b, ",\"membership\":");
+            api_buf_u32_list(b, m->mem + m->mem_off[f], m->mem_off[f + 1] - m->mem_off[f]);
         }
     }
     api_buf_puts(b, "}}");
@@ -1430,7 +1459,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
         rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
         goto done;
     }
-    if (m.has_result && o->cells && !m.member) {
+    if (m.has_result && o->cells && !m.mem_off) {
         rc = api_fail(err, API_EINVALID,
                       "membership: required for cells=all (the result has no \"membership\")");
         goto done;

@@ -39,15 +39,15 @@
  * counter-clockwise, then its holes clockwise; no polygon: "coordinates": []), properties
  * {"result": true, "area": a}; with o->cells, then one Feature per bounded face of the
  * arrangement (geometry a Polygon, properties {"face": f, "area": a, "selected": s,
- * "membership": [0/1 per input]}).  Of any other 2D result: one Feature per bounded face, in
- * face order, geometry a Polygon, properties {"face": f, "area": a}.  Rings are OGC rings: closed
- * by repeating their first position, simple.  A face's boundary walk that passes a vertex twice
- * (a block hanging from a cut vertex: a triangle touching the outer boundary at one vertex, two
- * triangles meeting at a vertex inside; a dangling tree kept inside the face) is cut there into
- * simple cycles: the outer walk's counter-clockwise piece is the shell, every other piece of 3 or
- * more vertices a clockwise hole (touching the shell or another hole at a point, as OGC allows),
- * and pieces of 2 (tree edges) enclose nothing.  Edges on no ring (kept with keep_dangling, also
- * those inside a face) come last, each a LineString Feature with properties
+ * "membership": [the inputs it lies in, ascending]}).  Of any other 2D result: one Feature per
+ * bounded face, in face order, geometry a Polygon, properties {"face": f, "area": a}.  Rings are
+ * OGC rings: closed by repeating their first position, simple.  A face's boundary walk that passes
+ * a vertex twice (a block hanging from a cut vertex: a triangle touching the outer boundary at one
+ * vertex, two triangles meeting at a vertex inside; a dangling tree kept inside the face) is cut
+ * there into simple cycles: the outer walk's counter-clockwise piece is the shell, every other
+ * piece of 3 or more vertices a clockwise hole (touching the shell or another hole at a point, as
+ * OGC allows), and pieces of 2 (tree edges) enclose nothing.  Edges on no ring (kept with
+ * keep_dangling, also those inside a face) come last, each a LineString Feature with properties
  * {"edge": e, "dangling": true}: never part of a ring.  The coordinates are the result's own plane
  * coordinates, not longitude and latitude: RFC 7946 allows that "by prior arrangement".  Numbers
  * are printed with api_format_double (exact doubles).

@@ -41,14 +41,13 @@
 #include "core/arr3.h"
 #include "core/solid.h"
 
-#define SOLIDS_MAX_SOLIDS     100000u        /* entries of "solids" */
-#define SOLIDS_MAX_VERTICES   10000000u      /* rows of V, all solids together */
-#define SOLIDS_MAX_FACES      ARR3_MAX_FACES /* rows of FV, all solids together */
-#define SOLIDS_MAX_CYCLE      1000000u       /* vertex indices in one cycle */
-#define SOLIDS_MAX_INDICES    100000000u     /* vertex indices in all cycles together */
-#define SOLIDS_MAX_MEMBERSHIP 200000000u     /* cells x solids of an op's membership matrix */
-#define SOLIDS_MAX_WARNINGS   64 /* stats.warnings: the last one counts those left out */
-#define WARN_LEN              200
+#define SOLIDS_MAX_SOLIDS   100000u        /* entries of "solids" */
+#define SOLIDS_MAX_VERTICES 10000000u      /* rows of V, all solids together */
+#define SOLIDS_MAX_FACES    ARR3_MAX_FACES /* rows of FV, all solids together */
+#define SOLIDS_MAX_CYCLE    1000000u       /* vertex indices in one cycle */
+#define SOLIDS_MAX_INDICES  100000000u     /* vertex indices in all cycles together */
+#define SOLIDS_MAX_WARNINGS 64             /* stats.warnings: the last one counts those left out */
+#define WARN_LEN            200
 
 typedef struct solids_req {
     solid *s; /* owned: ns solids; with soup, the face soup as s[0] (ns == 1) */
@@ -531,7 +530,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     warn_list *w = calloc(1, sizeof *w);
     lar3 c = {0};
     bool3_result res = {0};
-    uint8_t *mem = NULL;
+    member_rows mem = {0};
     char msg[API_ERRMAX] = "";
     int rc;
     if (!w) return api_fail(err, API_ENOMEM, "out of memory");
@@ -554,37 +553,27 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
-        if (c.nsolids && c.nc > SOLIDS_MAX_MEMBERSHIP / c.nsolids) {
-            rc = api_fail(err, API_EINVALID,
-                          "op: the membership matrix would have %zu cells x %zu solids, more than "
-                          "%u entries; combine fewer solids per request",
-                          c.nc, c.nsolids, SOLIDS_MAX_MEMBERSHIP);
+        uint32_t bad_face;
+        int m = bool3_membership(&c, &mem, &bad_face);
+        if (m) {
+            rc = m < 0 ? api_fail(err, API_ENOMEM, "out of memory")
+                       : api_fail(err, API_EINTERNAL,
+                                  "op: cells reached with two memberships across face %u (a "
+                                  "broken complex)",
+                                  bad_face);
             goto out;
         }
-        mem = malloc(c.nc * c.nsolids + 1);
-        if (!mem) {
+        if (bool3_select(&c, &mem, &r->op, &res)) {
             rc = api_fail(err, API_ENOMEM, "out of memory");
             goto out;
         }
-        long bad = bool3_membership(&c, mem);
-        if (bad) {
-            rc = bad < 0 ? api_fail(err, API_ENOMEM, "out of memory")
-                         : api_fail(err, API_EINTERNAL,
-                                    "op: %ld cells reached with two memberships (a broken complex)",
-                                    bad);
-            goto out;
-        }
-        if (bool3_select(&c, mem, &r->op, &res)) {
-            rc = api_fail(err, API_ENOMEM, "out of memory");
-            goto out;
-        }
-        fmt.membership = mem;
+        fmt.membership = &mem;
         fmt.result = &res;
     }
     rc = api_lar3_write(out, &c, &fmt, err);
 out:
     bool3_result_free(&res);
-    free(mem);
+    member_rows_free(&mem);
     lar3_free(&c);
     for (size_t i = 0; fixed && i < r->ns; i++) solid_free(&fixed[i]);
     free(fixed);

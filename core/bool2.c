@@ -7,11 +7,12 @@
  *               coordinates for the vertices that input points snapped to;
  *   sides       the face on each side of every edge, from the face cycles (every cycle has its
  *               face on its left; EXT stands for the unbounded face);
- *   membership  a walk over the faces from EXT, whose row is all 0: crossing edge e flips the
- *               polygons e lists.  Every face is reached; a face reached again must get the same
- *               row (a hash of the row is compared: rows are consistent by construction, since
- *               every ring is closed, so this only guards against a bug);
- *   select      the expression on each face's row;
+ *   membership  a walk over the faces from EXT, whose row is empty: crossing edge e toggles
+ *               the polygons e lists (core/member.h: sparse rows, the few polygons a face lies
+ *               in, never faces x polygons).  Every face is reached; a face reached again must
+ *               get the same row, compared exactly (a 422 otherwise, never a wrong answer);
+ *   select      the expression on each face's row (bool_tree: the ancestors of its members'
+ *               leaves only);
  *   groups      selected faces joined across edges with a selected face on both sides: each
  *               group is one result polygon (polygons of the result meet at most at vertices);
  *   boundary    the edges with a selected face on one side only, directed with it on the
@@ -31,6 +32,7 @@
  * Ownership: see bool2.h.
  */
 #include "core/bool2.h"
+#include "core/member.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -58,7 +60,8 @@ static int seterr(char *err, size_t el, int code, const char *fmt, ...)
 void bool2_free(bool2_result *r)
 {
     lar2_free(&r->c);
-    free(r->member);
+    free(r->mem_off);
+    free(r->mem);
     free(r->cells);
     free(r->rc_off);
     free(r->rv);
@@ -146,72 +149,48 @@ static int stage_sides(const lar2 *c, uint32_t *side, char *err, size_t el)
 
 /* ---- membership --------------------------------------------------------------------------- */
 
-static uint64_t mix64(uint64_t x)
+/* The rows of the nf + 1 faces (the last is EXT, empty) by member_walk() over the faces
+ * through the edges with two different faces beside them, each listing its polygons (etag). */
+static int stage_membership(bool2_result *out, const uint32_t *side, char *err, size_t el)
 {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-/* Rows of nf + 1 faces (the last is EXT, all 0) into member ((nf + 1) * ni bytes). */
-static int stage_membership(const lar2 *c, const uint32_t *side, size_t ni, uint8_t *member,
-                            char *err, size_t el)
-{
+    const lar2 *c = &out->c;
     size_t nf = c->nf, nn = nf + 1;
-    uint32_t *aoff = calloc(nn + 2, sizeof *aoff), *adj = malloc((2 * c->ne + 1) * sizeof *adj);
-    uint32_t *queue = malloc((nn + 1) * sizeof *queue);
-    uint64_t *hash = malloc((nn + 1) * sizeof *hash);
-    uint8_t *seen = calloc(nn + 1, 1);
+    uint32_t *aoff = calloc(nn + 2, sizeof *aoff), *nb = malloc((2 * c->ne + 1) * sizeof *nb);
+    uint32_t *ed = malloc((2 * c->ne + 1) * sizeof *ed), bad = UINT32_MAX;
+    member_rows rows;
     int rc = ARR_ENOMEM;
-    if (!aoff || !adj || !queue || !hash || !seen) goto done;
+    if (!aoff || !nb || !ed) goto done;
     for (size_t e = 0; e < c->ne; e++)
         if (side[2 * e] != side[2 * e + 1]) aoff[side[2 * e] + 2]++, aoff[side[2 * e + 1] + 2]++;
     for (size_t f = 0; f < nn; f++) aoff[f + 2] += aoff[f + 1];
     for (size_t e = 0; e < c->ne; e++)
         if (side[2 * e] != side[2 * e + 1]) {
-            adj[aoff[side[2 * e] + 1]++] = (uint32_t)e;
-            adj[aoff[side[2 * e + 1] + 1]++] = (uint32_t)e;
+            uint32_t a = side[2 * e], b = side[2 * e + 1];
+            nb[aoff[a + 1]] = b, ed[aoff[a + 1]++] = (uint32_t)e;
+            nb[aoff[b + 1]] = a, ed[aoff[b + 1]++] = (uint32_t)e;
         }
-    memset(member + nf * ni, 0, ni);
-    hash[nf] = 0;
-    seen[nf] = 1;
-    size_t qh = 0, qt = 0;
-    queue[qt++] = (uint32_t)nf;
-    while (qh < qt) {
-        uint32_t f = queue[qh++];
-        for (uint32_t i = aoff[f]; i < aoff[f + 1]; i++) {
-            uint32_t e = adj[i], g = side[2 * e] == f ? side[2 * e + 1] : side[2 * e];
-            uint64_t h = hash[f];
-            for (uint32_t t = c->etag_off[e]; t < c->etag_off[e + 1]; t++) h ^= mix64(c->etag[t]);
-            if (seen[g]) {
-                if (hash[g] != h) {
-                    const double *a = c->V + 2 * c->EV[2 * e], *b = c->V + 2 * c->EV[2 * e + 1];
-                    rc = seterr(err, el, ARR_EINTERNAL,
-                                "internal: the faces beside the edge (%.17g, %.17g)-(%.17g, %.17g) "
-                                "get two memberships",
-                                a[0], a[1], b[0], b[1]);
-                    goto done;
-                }
-                continue;
-            }
-            seen[g] = 1;
-            hash[g] = h;
-            memcpy(member + (size_t)g * ni, member + (size_t)f * ni, ni);
-            for (uint32_t t = c->etag_off[e]; t < c->etag_off[e + 1]; t++)
-                member[(size_t)g * ni + c->etag[t]] ^= 1;
-            queue[qt++] = g;
+    int w = member_walk(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad);
+    if (w < 0) goto done;
+    if (w > 0) {
+        if (bad == UINT32_MAX) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
+        } else {
+            const double *a = c->V + 2 * c->EV[2 * bad], *b = c->V + 2 * c->EV[2 * bad + 1];
+            rc = seterr(err, el, ARR_EINVAL,
+                        "polygons: the labels are inconsistent after snapping: the faces beside "
+                        "the edge (%.17g, %.17g)-(%.17g, %.17g) get two memberships",
+                        a[0], a[1], b[0], b[1]);
         }
+        goto done;
     }
-    rc = qt == nn ? ARR_OK
-                  : seterr(err, el, ARR_EINTERNAL, "internal: %zu faces out of reach", nn - qt);
+    out->mem_off = rows.off;
+    out->mem = rows.idx;
+    rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
     free(aoff);
-    free(adj);
-    free(queue);
-    free(hash);
-    free(seen);
+    free(nb);
+    free(ed);
     return rc;
 }
 
@@ -226,23 +205,26 @@ static uint32_t uf_find(uint32_t *p, uint32_t x)
     return x;
 }
 
-/* sel[f] for the nf + 1 faces (EXT never selected); out->cells. */
+/* sel[f] for the nf + 1 faces (EXT never selected); out->cells.  The expression is evaluated on
+ * each face's sparse row (bool_tree). */
 static int stage_select(bool2_result *out, const bool_expr *op, uint8_t *sel)
 {
-    size_t nf = out->c.nf, ni = out->ninputs;
-    uint8_t *stack = malloc(op->depth + 1);
+    size_t nf = out->c.nf;
+    bool_tree t;
+    if (bool_tree_build(op, out->ninputs, &t)) return -1;
     out->cells = malloc((nf + 1) * sizeof *out->cells);
-    if (!stack || !out->cells) {
-        free(stack);
+    if (!out->cells) {
+        bool_tree_free(&t);
         return -1;
     }
     out->ncells = 0;
     for (size_t f = 0; f < nf; f++) {
-        sel[f] = (uint8_t)(bool_expr_eval(op, out->member + f * ni, stack) != 0);
+        const uint32_t *row = out->mem + out->mem_off[f];
+        sel[f] = (uint8_t)bool_tree_eval(&t, row, out->mem_off[f + 1] - out->mem_off[f]);
         if (sel[f]) out->cells[out->ncells++] = (uint32_t)f;
     }
     sel[nf] = 0;
-    free(stack);
+    bool_tree_free(&t);
     return 0;
 }
 
@@ -483,21 +465,13 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     lar2 *c = &out->c;
     size_t ni = in->npoly, nf = c->nf;
     out->ninputs = ni;
-    if (ni && nf + 1 > BOOL2_MAX_MEMBERSHIP / ni) {
-        rc = seterr(err, errlen, ARR_ELIMIT,
-                    "polygons: %zu faces x %zu polygons is more than the membership table's "
-                    "limit of %u entries; combine fewer polygons per request",
-                    nf, ni, BOOL2_MAX_MEMBERSHIP);
-        goto fail;
-    }
     rc = ARR_ENOMEM;
     side = malloc((2 * c->ne + 1) * sizeof *side);
-    out->member = malloc((nf + 1) * (ni ? ni : 1));
     sel = malloc(nf + 1);
     grp = malloc((nf + 1) * sizeof *grp);
-    if (!side || !out->member || !sel || !grp) goto fail;
+    if (!side || !sel || !grp) goto fail;
     if ((rc = stage_sides(c, side, err, errlen)) != ARR_OK) goto fail;
-    if ((rc = stage_membership(c, side, ni, out->member, err, errlen)) != ARR_OK) goto fail;
+    if ((rc = stage_membership(out, side, err, errlen)) != ARR_OK) goto fail;
     rc = ARR_ENOMEM;
     if (stage_select(out, op, sel)) goto fail;
     stage_groups(c, side, sel, grp);

@@ -24,8 +24,7 @@
 #include "core/arr2.h"
 #include "core/boolexpr.h"
 
-#define BOOL2_MAX_INPUTS     100000u    /* input polygons */
-#define BOOL2_MAX_MEMBERSHIP 200000000u /* faces x polygons of the membership table */
+#define BOOL2_MAX_INPUTS 100000u /* input polygons */
 
 /* The input polygons, in CSR form (all borrowed):
  *   polygon p has rings poly_off[p] .. poly_off[p+1]) (first the outer boundary, then holes;
@@ -41,9 +40,11 @@ typedef struct bool2_input {
 
 /* The arrangement, its membership table and the selected region. */
 typedef struct bool2_result {
-    lar2 c;          /* the arrangement of all ring edges */
-    size_t ninputs;  /* polygons */
-    uint8_t *member; /* c.nf * ninputs: member[f*ninputs + p] = 1 when face f lies in p */
+    lar2 c;         /* the arrangement of all ring edges */
+    size_t ninputs; /* polygons */
+    /* face f lies in the polygons mem[mem_off[f] .. mem_off[f+1]), ascending (c.nf + 1 rows:
+     * the last, empty, is the unbounded face); compressed sparse rows, never faces x inputs */
+    uint32_t *mem_off, *mem;
     size_t ncells;
     uint32_t *cells; /* ncells selected faces, ascending */
     double area;     /* the area the result polygons enclose, from their written coordinates */

@@ -27,72 +27,82 @@ static int face_sides(const lar3 *c, uint32_t *minus, uint32_t *plus)
     return 0;
 }
 
-long bool3_membership(const lar3 *c, uint8_t *mem)
+static int cmp_u32(const void *a, const void *b)
 {
-    size_t ns = c->nsolids, nc = c->nc;
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
+{
+    size_t ns = c->nsolids, nc = c->nc, nn = nc + 1;
     uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
-    uint32_t *queue = malloc((nc + 2) * sizeof *queue);
-    uint8_t *seen = calloc(nc + 1, 1);
-    uint8_t *ext = calloc(ns + 1, 1); /* the exterior's row: all 0 */
-    uint8_t *row = malloc(ns + 1);
-    long bad = -1;
-    if (!minus || !plus || !queue || !seen || !ext || !row || face_sides(c, minus, plus)) goto done;
-    bad = 0;
-    memset(mem, 0, nc * ns);
-    size_t qh = 0, qt = 0;
-    queue[qt++] = (uint32_t)nc;
-    seen[nc] = 1;
-    while (qh < qt) {
-        uint32_t k = queue[qh++];
-        const uint8_t *mk = k == nc ? ext : mem + (size_t)k * ns;
-        const int32_t *r = k < nc ? c->cf + c->cf_off[k] : c->ext;
-        size_t n = k < nc ? c->cf_off[k + 1] - c->cf_off[k] : c->next;
-        for (size_t i = 0; i < n; i++) {
-            uint32_t f = (uint32_t)(r[i] > 0 ? r[i] : -r[i]) - 1;
-            uint32_t o = minus[f] == k ? plus[f] : minus[f];
-            if (o == NONE || o == k) continue;
-            memcpy(row, mk, ns);
-            for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
-                if (c->fsol[j] < ns) row[c->fsol[j]] ^= 1;
-            if (o == nc) {
-                bad += memcmp(row, ext, ns) != 0;
-                continue;
-            }
-            uint8_t *mo = mem + (size_t)o * ns;
-            if (seen[o]) {
-                bad += memcmp(row, mo, ns) != 0;
-                continue;
-            }
-            memcpy(mo, row, ns);
-            seen[o] = 1;
-            queue[qt++] = o;
+    uint32_t *toff = malloc((c->nf + 2) * sizeof *toff);
+    uint32_t *tags = malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
+    uint32_t *aoff = calloc(nn + 2, sizeof *aoff);
+    uint32_t *nb = malloc((2 * c->nf + 1) * sizeof *nb), *fc = malloc((2 * c->nf + 1) * sizeof *fc);
+    int rc = -1;
+    *bad_face = UINT32_MAX;
+    memset(rows, 0, sizeof *rows);
+    if (!minus || !plus || !toff || !tags || !aoff || !nb || !fc || face_sides(c, minus, plus))
+        goto done;
+    /* each face's solids, sorted, counted modulo 2 */
+    toff[0] = 0;
+    for (size_t f = 0; f < c->nf; f++) {
+        uint32_t w = toff[f], n = 0;
+        for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
+            if (c->fsol[j] < ns) tags[w + n++] = c->fsol[j];
+        qsort(tags + w, n, sizeof *tags, cmp_u32);
+        uint32_t k = 0;
+        for (uint32_t i = 0; i < n;) {
+            uint32_t j = i;
+            while (j < n && tags[w + j] == tags[w + i]) j++;
+            if ((j - i) & 1) tags[w + k++] = tags[w + i];
+            i = j;
         }
+        toff[f + 1] = w + k;
     }
+    /* the cells (the exterior is cell nc) through their faces */
+    for (size_t f = 0; f < c->nf; f++)
+        if (minus[f] != NONE && plus[f] != NONE && minus[f] != plus[f])
+            aoff[minus[f] + 2]++, aoff[plus[f] + 2]++;
+    for (size_t k = 0; k < nn; k++) aoff[k + 2] += aoff[k + 1];
+    for (size_t f = 0; f < c->nf; f++)
+        if (minus[f] != NONE && plus[f] != NONE && minus[f] != plus[f]) {
+            nb[aoff[minus[f] + 1]] = plus[f], fc[aoff[minus[f] + 1]++] = (uint32_t)f;
+            nb[aoff[plus[f] + 1]] = minus[f], fc[aoff[plus[f] + 1]++] = (uint32_t)f;
+        }
+    rc = member_walk(nn, (uint32_t)nc, aoff, nb, fc, toff, tags, rows, bad_face);
 done:
     free(minus);
     free(plus);
-    free(queue);
-    free(seen);
-    free(ext);
-    free(row);
-    return bad;
+    free(toff);
+    free(tags);
+    free(aoff);
+    free(nb);
+    free(fc);
+    return rc;
 }
 
-int bool3_select(const lar3 *c, const uint8_t *mem, const bool_expr *e, bool3_result *r)
+int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r)
 {
-    size_t ns = c->nsolids, nc = c->nc;
-    uint8_t *sel = calloc(nc + 1, 1), *stack = malloc(e->depth + 1);
+    size_t nc = c->nc;
+    uint8_t *sel = calloc(nc + 1, 1);
     uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
-    int rc = -1;
+    bool_tree t = {0};
+    int rc = -1, tree = 0;
     memset(r, 0, sizeof *r);
-    if (!sel || !stack || !minus || !plus || face_sides(c, minus, plus)) goto done;
+    if (!sel || !minus || !plus || face_sides(c, minus, plus)) goto done;
+    if (bool_tree_build(e, c->nsolids, &t)) goto done;
+    tree = 1;
     r->cells = malloc((nc + 1) * sizeof *r->cells);
     r->faces = malloc((c->nf + 1) * sizeof *r->faces);
     if (!r->cells || !r->faces) goto done;
     for (size_t k = 0; k < nc; k++) {
-        sel[k] = (uint8_t)bool_expr_eval(e, mem + k * ns, stack);
+        sel[k] =
+            (uint8_t)bool_tree_eval(&t, rows->idx + rows->off[k], rows->off[k + 1] - rows->off[k]);
         if (sel[k]) {
             r->cells[r->ncells++] = (uint32_t)k;
             r->volume += c->cvol[k];
@@ -106,8 +116,8 @@ int bool3_select(const lar3 *c, const uint8_t *mem, const bool_expr *e, bool3_re
     rc = 0;
 done:
     if (rc) bool3_result_free(r);
+    if (tree) bool_tree_free(&t);
     free(sel);
-    free(stack);
     free(minus);
     free(plus);
     return rc;

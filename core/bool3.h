@@ -24,11 +24,12 @@
 
 #include "core/arr3.h"
 #include "core/boolexpr.h"
+#include "core/member.h"
 
-/* Fills mem (c->nc rows of c->nsolids bytes, 0/1) with each bounded cell's membership.
- * Returns 0, -1 when out of memory, or the number of cells found with two memberships (> 0: the
- * complex is inconsistent; mem then holds the first one found). */
-long bool3_membership(const lar3 *c, uint8_t *mem);
+/* Each bounded cell's membership, as sparse rows (core/member.h; c->nc + 1 rows, the last the
+ * exterior's, empty).  Returns 0, -1 when out of memory, or 1 when a cell is reached with two
+ * memberships (*bad_face: a face where that happened; the complex is inconsistent). */
+int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face);
 
 typedef struct bool3_result {
     size_t ncells;
@@ -40,7 +41,7 @@ typedef struct bool3_result {
 
 /* The cells where e (checked for c->nsolids inputs) is 1, and their boundary.  0 or -1
  * (out of memory; *r then empty). */
-int bool3_select(const lar3 *c, const uint8_t *mem, const bool_expr *e, bool3_result *r);
+int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r);
 
 void bool3_result_free(bool3_result *r);
 

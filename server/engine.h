@@ -21,7 +21,7 @@
 
 /* Part of every request hash: bump it when an algorithm's output changes, so that an upgrade
  * never serves a stale complex from the cache. */
-#define CELLAR_ALGO_VERSION "cellar-algo-1"
+#define CELLAR_ALGO_VERSION "cellar-algo-2"
 
 typedef struct engine engine;
 typedef struct job job;

@@ -13,6 +13,7 @@
 
 #include "api/api.h"
 #include "core/bool2.h"
+#include "core/boolexpr.h"
 #include "tests/check.h"
 
 /* ---- building inputs ------------------------------------------------------------------------ */
@@ -130,10 +131,18 @@ TEST(bool2_two_squares)
         CHECK(r.npoly == want[t].polys, "%s: %zu polygons, want %zu", want[t].op, r.npoly,
               want[t].polys);
         check_result(want[t].op, &r);
-        /* membership: every face in at least one input, the middle one in both */
-        for (size_t f = 0; f < r.c.nf; f++)
-            CHECK(r.member[2 * f] || r.member[2 * f + 1], "%s: face %zu in no input", want[t].op,
-                  f);
+        /* membership: every face in one or both inputs, one face in both, rows ascending */
+        size_t both = 0;
+        for (size_t f = 0; f < r.c.nf; f++) {
+            uint32_t k = r.mem_off[f + 1] - r.mem_off[f];
+            const uint32_t *row = r.mem + r.mem_off[f];
+            CHECK(k == 1 || (k == 2 && row[0] == 0 && row[1] == 1), "%s: face %zu in %u inputs",
+                  want[t].op, f, k);
+            both += k == 2;
+        }
+        CHECK(both == 1, "%s: %zu faces in both inputs", want[t].op, both);
+        CHECK(r.mem_off[r.c.nf + 1] == r.mem_off[r.c.nf], "%s: the unbounded face in an input",
+              want[t].op);
         bool2_free(&r);
     }
 }
@@ -283,9 +292,13 @@ TEST(bool2_seeds_test03)
     CHECK(fabs(area - x.area) < 1e-9, "faces' expression area %.17g, rings' intersection %.17g",
           area, x.area);
     json_t *mem = json_object_get(res, "membership");
-    CHECK(json_array_size(mem) == json_array_size(json_object_get(res, "FV")),
-          "membership rows %zu", json_array_size(mem));
-    CHECK(json_array_size(json_array_get(mem, 0)) == 10, "membership columns");
+    json_t *shape = json_object_get(mem, "shape");
+    CHECK(json_integer_value(json_array_get(shape, 0)) ==
+                  (json_int_t)json_array_size(json_object_get(res, "FV")) &&
+              json_array_size(json_object_get(mem, "indptr")) ==
+                  json_array_size(json_object_get(res, "FV")) + 1,
+          "membership rows");
+    CHECK(json_integer_value(json_array_get(shape, 1)) == 10, "membership columns");
     json_decref(res);
     free(out);
     bool2_free(&u);
@@ -594,6 +607,68 @@ TEST(bool2_overlay_cases)
     free(text);
 }
 
+/* The sparse evaluator (bool_tree) against the dense one (bool_expr_eval) on random programs
+ * (operators mixed, inputs repeated, chains of one operator) and the named operations, on
+ * random membership lists, empty and full ones included. */
+TEST(bool2_sparse_expressions_equal_dense)
+{
+    uint64_t st = 77;
+    size_t bad = 0, runs = 0;
+    for (int round = 0; round < 400; round++) {
+        bool_expr e = {0};
+        size_t ni = 1 + (size_t)(test_rnd(&st) * 12);
+        if (round % 4 == 0) {
+            static const char *const names[] = {"union", "intersection", "difference", "xor"};
+            REQUIRE(bool_expr_named(names[(round / 4) % 4], ni, &e) == 0, "named");
+        } else {
+            /* a random postfix program: push while the stack is low, else combine */
+            size_t d = 0, len = 2 + (size_t)(test_rnd(&st) * 30);
+            for (size_t i = 0; i < len || d != 1; i++) {
+                if (d < 2 || (i < len && test_rnd(&st) < 0.5)) {
+                    bool_expr_push(&e, (int32_t)(test_rnd(&st) * ni));
+                    d++;
+                } else {
+                    int32_t op = -1 - (int32_t)(test_rnd(&st) * 4);
+                    if (test_rnd(&st) < 0.4) op = BOOL_OR; /* chains */
+                    bool_expr_push(&e, op);
+                    d--;
+                }
+            }
+            REQUIRE(bool_expr_check(&e, ni) == 0, "random program not well formed");
+        }
+        bool_tree t;
+        REQUIRE(bool_tree_build(&e, ni, &t) == 0, "bool_tree_build");
+        uint8_t row[16], stack[64];
+        uint32_t in[16];
+        for (int k = 0; k < 64; k++) {
+            size_t m = 0;
+            for (size_t i = 0; i < ni; i++) {
+                double p = k == 0 ? 0 : k == 1 ? 1 : test_rnd(&st);
+                row[i] = p > 0.5 || k == 1;
+                if (row[i]) in[m++] = (uint32_t)i;
+            }
+            /* any order */
+            for (size_t i = m; i > 1; i--) {
+                size_t j = (size_t)(test_rnd(&st) * i);
+                uint32_t tmp = in[i - 1];
+                in[i - 1] = in[j];
+                in[j] = tmp;
+            }
+            uint8_t *sk = e.depth <= sizeof stack ? stack : malloc(e.depth);
+            int want = bool_expr_eval(&e, row, sk) != 0;
+            if (sk != stack) free(sk);
+            int got = bool_tree_eval(&t, in, m);
+            runs++;
+            if (got != want && bad++ < 5)
+                CHECK(0, "round %d row %d: sparse %d, dense %d (%zu inputs, %zu code)", round, k,
+                      got, want, ni, e.n);
+        }
+        bool_tree_free(&t);
+        bool_expr_free(&e);
+    }
+    CHECK(bad == 0, "%zu of %zu evaluations differ", bad, runs);
+}
+
 /* ---- the request ----------------------------------------------------------------------------- */
 
 TEST(bool2_api_errors)
@@ -798,7 +873,15 @@ TEST(bool2_api_result)
     json_t *res = json_loads(out, 0, NULL);
     REQUIRE(res, "not JSON: %s", out);
     json_t *result = json_object_get(res, "result");
-    CHECK(json_array_size(json_object_get(res, "membership")) == 3, "membership rows");
+    /* membership as compressed sparse rows: the three faces lie in {0}, {0, 1}, {1} */
+    {
+        json_t *mem = json_object_get(res, "membership");
+        json_t *want = json_loads("{\"format\":\"csr\",\"shape\":[3,2],\"indptr\":[0,1,3,4],"
+                                  "\"indices\":[0,0,1,1]}",
+                                  0, NULL);
+        CHECK(json_equal(mem, want), "membership %s", json_dumps(mem, JSON_COMPACT));
+        json_decref(want);
+    }
     CHECK(json_array_size(json_object_get(result, "cells")) == 2, "xor: 2 cells");
     CHECK(json_array_size(json_object_get(result, "FV")) == 2, "xor: 2 polygons");
     CHECK(json_array_size(json_object_get(result, "FE")) == 2, "xor: 2 FE rows");

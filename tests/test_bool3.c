@@ -81,6 +81,20 @@ typedef struct want {
     double volume, area; /* area < 0: not checked */
 } want;
 
+/* The sparse membership rows of c (bool3_membership) and the same as a dense table (c->nc rows
+ * of c->nsolids bytes) for the checks; 0, or non-zero when the walk failed. */
+static long membership_dense(const lar3 *c, uint8_t *mem, member_rows *rows)
+{
+    uint32_t bad;
+    int rc = bool3_membership(c, rows, &bad);
+    if (rc) return rc;
+    memset(mem, 0, c->nc * c->nsolids);
+    for (size_t k = 0; k < c->nc; k++)
+        for (uint32_t j = rows->off[k]; j < rows->off[k + 1]; j++)
+            mem[k * c->nsolids + rows->idx[j]] = 1;
+    return 0;
+}
+
 static void run_ops(solid *s, size_t n, const want *w, size_t nw)
 {
     arr3_opts o = {0};
@@ -88,15 +102,16 @@ static void run_ops(solid *s, size_t n, const want *w, size_t nw)
     char err[256], msg[256];
     REQUIRE(!arr3_build(s, n, 0, &o, &c, err, sizeof err), "arr3_build: %s", err);
     CHECK(!lar3_check(&c, 1e-6, NULL, msg, sizeof msg), "lar3_check: %s", msg);
+    member_rows rows = {0};
     uint8_t *mem = malloc(c.nc * n + 1);
-    long bad = bool3_membership(&c, mem);
+    long bad = membership_dense(&c, mem, &rows);
     CHECK(bad == 0, "membership: %ld inconsistent cells", bad);
     /* every bounded cell lies in some solid, unless it is a void the solids enclose */
     for (size_t i = 0; i < nw; i++) {
         bool_expr e;
         REQUIRE(!bool_expr_named(w[i].op, n, &e), "%s", w[i].op);
         bool3_result r;
-        REQUIRE(!bool3_select(&c, mem, &e, &r), "select");
+        REQUIRE(!bool3_select(&c, &rows, &e, &r), "select");
         CHECK(r.nfaces == w[i].faces, "%s: %zu boundary faces, want %zu", w[i].op, r.nfaces,
               w[i].faces);
         CHECK(fabs(r.volume - w[i].volume) < 1e-9, "%s: volume %.17g, want %.17g", w[i].op,
@@ -109,6 +124,7 @@ static void run_ops(solid *s, size_t n, const want *w, size_t nw)
         bool_expr_free(&e);
     }
     free(mem);
+    member_rows_free(&rows);
     lar3_free(&c);
 }
 
@@ -151,20 +167,22 @@ TEST(expression_tree)
     lar3 c;
     char err[256];
     REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
+    member_rows rows = {0};
     uint8_t *mem = malloc(c.nc * 3 + 1);
-    CHECK(bool3_membership(&c, mem) == 0, "membership");
+    CHECK(membership_dense(&c, mem, &rows) == 0, "membership");
     bool_expr e = {0};
     int32_t prog[] = {0, 1, 2, BOOL_OR, BOOL_SUB};
     for (size_t i = 0; i < 5; i++) bool_expr_push(&e, prog[i]);
     REQUIRE(!bool_expr_check(&e, 3), "check");
     bool3_result r;
-    REQUIRE(!bool3_select(&c, mem, &e, &r), "select");
+    REQUIRE(!bool3_select(&c, &rows, &e, &r), "select");
     /* 8 - (1*1*1 inside of cube 1) - (1*1*1 inside of cube 2) */
     CHECK(fabs(r.volume - 6) < 1e-12, "volume %.17g", r.volume);
     check_boundary(&c, &r);
     bool3_result_free(&r);
     bool_expr_free(&e);
     free(mem);
+    member_rows_free(&rows);
     lar3_free(&c);
     for (int i = 0; i < 3; i++) solid_free(&s[i]);
 }
@@ -217,8 +235,9 @@ TEST(expression_identities)
         lar3 c;
         char err[256];
         REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
+        member_rows rows = {0};
         uint8_t *mem = malloc(c.nc * 3 + 1);
-        CHECK(bool3_membership(&c, mem) == 0, "membership");
+        CHECK(membership_dense(&c, mem, &rows) == 0, "membership");
         for (size_t i = 0; i < sizeof same / sizeof *same; i++) {
             uint8_t *a = select_json(&c, mem, same[i][0]), *b = select_json(&c, mem, same[i][1]);
             CHECK(!memcmp(a, b, c.nc), "seed %llu: %s and %s select different cells",
@@ -227,6 +246,7 @@ TEST(expression_identities)
             free(b);
         }
         free(mem);
+        member_rows_free(&rows);
         lar3_free(&c);
         for (int i = 0; i < 3; i++) solid_free(&s[i]);
     }

@@ -75,6 +75,20 @@ static void dump(const solid *in, size_t n, const char *what)
     fclose(f);
 }
 
+/* The sparse membership rows of c (bool3_membership) and the same as a dense table (c->nc rows
+ * of c->nsolids bytes) for the checks; 0, or non-zero when the walk failed. */
+static long membership_dense(const lar3 *c, uint8_t *mem, member_rows *rows)
+{
+    uint32_t bad;
+    int rc = bool3_membership(c, rows, &bad);
+    if (rc) return rc;
+    memset(mem, 0, c->nc * c->nsolids);
+    for (size_t k = 0; k < c->nc; k++)
+        for (uint32_t j = rows->off[k]; j < rows->off[k + 1]; j++)
+            mem[k * c->nsolids + rows->idx[j]] = 1;
+    return 0;
+}
+
 static int arrange(solid *in, size_t n, double precision, run *r, const char *what)
 {
     char err[300], msg[300];
@@ -108,10 +122,12 @@ static int arrange(solid *in, size_t n, double precision, run *r, const char *wh
         dump(in, n, what);
         goto out;
     }
+    member_rows rows = {0};
     uint8_t *mem = malloc(r->c.nc * n + 1);
-    if (bool3_membership(&r->c, mem) != 0) {
+    if (membership_dense(&r->c, mem, &rows) != 0) {
         test_fail(__FILE__, __func__, __LINE__, "%s: membership inconsistent", what);
         free(mem);
+        member_rows_free(&rows);
         goto out;
     }
     static const char *ops[3] = {"union", "intersection", "difference"};
@@ -119,7 +135,7 @@ static int arrange(solid *in, size_t n, double precision, run *r, const char *wh
         bool_expr e;
         bool3_result res;
         bool_expr_named(ops[k], n, &e);
-        bool3_select(&r->c, mem, &e, &res);
+        bool3_select(&r->c, &rows, &e, &res);
         r->vol[k] = res.volume;
         /* the result's boundary is closed: every edge's signed count is 0 */
         long *acc = calloc(r->c.ne + 1, sizeof *acc);
@@ -142,6 +158,7 @@ static int arrange(solid *in, size_t n, double precision, run *r, const char *wh
         bool_expr_free(&e);
     }
     free(mem);
+    member_rows_free(&rows);
     rc = 0;
 out:
     for (size_t i = 0; i < n; i++) solid_free(&fx[i]);
@@ -384,10 +401,12 @@ TEST(contacts_off_the_grid)
  * Booleans' boundaries are closed (done by arrange). */
 static void solid_volumes(const run *r, solid *s, size_t n, double tol, const char *what)
 {
+    member_rows rows = {0};
     uint8_t *mem = malloc(r->c.nc * n + 1);
-    if (bool3_membership(&r->c, mem) != 0) {
+    if (membership_dense(&r->c, mem, &rows) != 0) {
         test_fail(__FILE__, __func__, __LINE__, "%s: membership", what);
         free(mem);
+        member_rows_free(&rows);
         return;
     }
     for (size_t i = 0; i < n; i++) {
@@ -398,6 +417,7 @@ static void solid_volumes(const run *r, solid *s, size_t n, double tol, const ch
               what, i, v, want);
     }
     free(mem);
+    member_rows_free(&rows);
 }
 
 /* Two boxes whose faces z = 0 overlap on [1,2]^2, triangulated along crossing diagonals: one

@@ -1,0 +1,110 @@
+/* member.c — see member.h. */
+#include "core/member.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void member_rows_free(member_rows *r)
+{
+    free(r->off);
+    free(r->idx);
+    memset(r, 0, sizeof *r);
+}
+
+/* out = a xor b (sorted, each once); returns its length. */
+static size_t symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
+{
+    size_t i = 0, j = 0, k = 0;
+    while (i < na && j < nb) {
+        if (a[i] < b[j])
+            out[k++] = a[i++];
+        else if (b[j] < a[i])
+            out[k++] = b[j++];
+        else
+            i++, j++;
+    }
+    while (i < na) out[k++] = a[i++];
+    while (j < nb) out[k++] = b[j++];
+    return k;
+}
+
+int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                const uint32_t *el, const uint32_t *toff, const uint32_t *tags, member_rows *rows,
+                uint32_t *bad_el)
+{
+    /* rows in the order cells are reached, in one growing buffer */
+    size_t *start = malloc((n + 1) * sizeof *start);
+    uint32_t *len = malloc((n + 1) * sizeof *len), *queue = malloc((n + 1) * sizeof *queue);
+    uint8_t *seen = calloc(n + 1, 1);
+    uint32_t *buf = NULL, *tmp = NULL;
+    size_t cap = 1024, used = 0, tcap = 64;
+    int rc = -1;
+    memset(rows, 0, sizeof *rows);
+    *bad_el = UINT32_MAX;
+    buf = malloc(cap * sizeof *buf);
+    tmp = malloc(tcap * sizeof *tmp);
+    if (!start || !len || !queue || !seen || !buf || !tmp) goto done;
+    size_t qh = 0, qt = 0;
+    queue[qt++] = root;
+    seen[root] = 1;
+    start[root] = 0;
+    len[root] = 0;
+    while (qh < qt) {
+        uint32_t u = queue[qh++];
+        for (uint32_t i = aoff[u]; i < aoff[u + 1]; i++) {
+            uint32_t v = nb[i], x = el[i];
+            size_t nt = toff[x + 1] - toff[x], most = len[u] + nt;
+            if (most > tcap) {
+                while (tcap < most) tcap *= 2;
+                uint32_t *t = realloc(tmp, tcap * sizeof *t);
+                if (!t) goto done;
+                tmp = t;
+            }
+            size_t k = symdiff(buf + start[u], len[u], tags + toff[x], nt, tmp);
+            if (seen[v]) {
+                if (k != len[v] || memcmp(tmp, buf + start[v], k * sizeof *tmp)) {
+                    *bad_el = x;
+                    rc = 1;
+                    goto done;
+                }
+                continue;
+            }
+            if (used + k > UINT32_MAX) goto done; /* the rows' offsets are 32 bits */
+            if (used + k > cap) {
+                while (cap < used + k) cap *= 2;
+                uint32_t *b = realloc(buf, cap * sizeof *b);
+                if (!b) goto done;
+                buf = b;
+            }
+            memcpy(buf + used, tmp, k * sizeof *tmp);
+            start[v] = used;
+            len[v] = (uint32_t)k;
+            used += k;
+            seen[v] = 1;
+            queue[qt++] = v;
+        }
+    }
+    if (qt != n) {
+        rc = 1;
+        goto done;
+    }
+    /* compressed sparse rows in cell order */
+    rows->off = malloc((n + 1) * sizeof *rows->off);
+    rows->idx = malloc((used + 1) * sizeof *rows->idx);
+    if (!rows->off || !rows->idx) goto done;
+    rows->off[0] = 0;
+    for (size_t c = 0; c < n; c++) {
+        memcpy(rows->idx + rows->off[c], buf + start[c], len[c] * sizeof *buf);
+        rows->off[c + 1] = rows->off[c] + len[c];
+    }
+    rc = 0;
+done:
+    if (rc) member_rows_free(rows);
+    free(start);
+    free(len);
+    free(queue);
+    free(seen);
+    free(buf);
+    free(tmp);
+    return rc;
+}

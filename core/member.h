@@ -1,0 +1,36 @@
+/* member.h — sparse membership by a walk (issue "Booleans of many operands").
+ *
+ * The 2D and 3D Booleans share one rule: the unbounded cell lies in no input, and crossing a
+ * boundary element (an edge in 2D, a face in 3D) goes into or out of exactly the inputs that
+ * element lists.  So a walk over the cells from the unbounded one gives every cell's
+ * membership: the row of a cell is its neighbour's row with the element's inputs toggled (a
+ * symmetric difference of sorted lists).  Rows are sorted lists of inputs, stored as
+ * compressed sparse rows: the cost is the size of the arrangement times the few inputs a cell
+ * lies in, never cells x inputs.  A cell reached twice must get the same row, compared exactly.
+ *
+ * Threads: reentrant, no globals.  Ownership: inputs borrowed; the rows are malloc'd and freed
+ * with member_rows_free().
+ */
+#ifndef CELLAR_MEMBER_H
+#define CELLAR_MEMBER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct member_rows {
+    uint32_t *off; /* n + 1: the row of cell k is idx[off[k] .. off[k+1]), ascending */
+    uint32_t *idx;
+} member_rows;
+
+/* The walk over n cells from cell root (its row empty).  Cell u's neighbours are
+ * nb[aoff[u] .. aoff[u+1]) across the elements el[same range]; element x lists the inputs
+ * tags[toff[x] .. toff[x+1]), ascending and each once.  Returns 0 and fills *rows; -1 out of
+ * memory; 1 when a cell is reached with two different rows (*bad_el is then one element where
+ * that happened) or some cell is out of reach (*bad_el is UINT32_MAX). */
+int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                const uint32_t *el, const uint32_t *toff, const uint32_t *tags, member_rows *rows,
+                uint32_t *bad_el);
+
+void member_rows_free(member_rows *r);
+
+#endif

@@ -24,7 +24,7 @@
 #include "core/arr2.h"
 #include "core/boolexpr.h"
 
-#define BOOL2_MAX_INPUTS 100000u /* input polygons */
+#define BOOL2_MAX_INPUTS 500000u /* input polygons (the expression holds at most 10^6 codes) */
 
 /* The input polygons, in CSR form (all borrowed):
  *   polygon p has rings poly_off[p] .. poly_off[p+1]) (first the outer boundary, then holes;

@@ -669,6 +669,106 @@ TEST(bool2_sparse_expressions_equal_dense)
     CHECK(bad == 0, "%zu of %zu evaluations differ", bad, runs);
 }
 
+/* Many operands (issue "Booleans of many operands"): a 40 x 40 tiling of unit squares (every
+ * edge shared) — union area 1600 in one polygon, xor the same, intersection empty, every face in
+ * exactly one square — and the union of 2000 turned squares against GEOS's unary union within
+ * the snapping bound.  Membership is sparse: its size is the faces' few inputs, not faces x
+ * inputs. */
+TEST(bool2_many_operands)
+{
+    const size_t k = 40, n = k * k, most = 2000; /* the tiling, then 2000 squares */
+    uint32_t *poly_off = malloc((most + 1) * sizeof *poly_off);
+    uint32_t *ring_off = malloc((most + 1) * sizeof *ring_off);
+    double *xy = malloc(8 * most * sizeof *xy);
+    REQUIRE(poly_off && ring_off && xy, "memory");
+    poly_off[0] = ring_off[0] = 0;
+    for (size_t i = 0; i < k; i++)
+        for (size_t j = 0; j < k; j++) {
+            size_t q = i * k + j;
+            double r[8] = {(double)i,     (double)j,     (double)i + 1, (double)j,
+                           (double)i + 1, (double)j + 1, (double)i,     (double)j + 1};
+            memcpy(xy + 8 * q, r, sizeof r);
+            poly_off[q + 1] = (uint32_t)(q + 1);
+            ring_off[q + 1] = (uint32_t)(4 * (q + 1));
+        }
+    bool2_input in = {n, poly_off, ring_off, xy};
+    static const char *const ops[] = {"union", "xor", "intersection"};
+    static const double want[] = {1600, 1600, 0};
+    for (int t = 0; t < 3; t++) {
+        bool_expr e;
+        bool2_result r;
+        char err[256];
+        REQUIRE(bool_expr_named(ops[t], n, &e) == 0, "expr");
+        int rc = bool2_build(&in, &e, &(arr2_opts){.threads = 2}, &r, err, sizeof err);
+        CHECK(rc == ARR_OK, "tiling %s: %s", ops[t], err);
+        if (rc == ARR_OK) {
+            CHECK(r.area == want[t], "tiling %s: area %.17g, want %g", ops[t], r.area, want[t]);
+            CHECK(r.npoly == (t < 2 ? 1u : 0u) && (r.npoly == 0 || r.ph_off[r.npoly] == 0),
+                  "tiling %s: %zu polygons", ops[t], r.npoly);
+            CHECK(r.c.nf == n && r.mem_off[r.c.nf] == n, "tiling %s: %zu faces, %u memberships",
+                  ops[t], r.c.nf, r.mem_off[r.c.nf]);
+            check_result(ops[t], &r);
+            bool2_free(&r);
+        }
+        bool_expr_free(&e);
+    }
+    /* 2000 turned unit squares, centres uniform in a square of area 1000: union against GEOS */
+    {
+        const size_t m = 2000;
+        uint64_t st = 4242;
+        double side = sqrt(m / 2.0), perim = 0;
+        GEOSContextHandle_t h = GEOS_init_r();
+        GEOSGeometry **g = malloc(m * sizeof *g);
+        for (size_t q = 0; q < m; q++) {
+            double cx = test_rnd(&st) * side, cy = test_rnd(&st) * side;
+            poly_off[q + 1] = (uint32_t)(q + 1);
+            ring_off[q + 1] = (uint32_t)(4 * (q + 1));
+            double a = test_rnd(&st) * M_PI / 2, c = cos(a) / 2, s = sin(a) / 2;
+            double d[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+            GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, 5, 2);
+            for (int v = 0; v < 4; v++) {
+                xy[8 * q + 2 * v] = cx + d[v][0] * c - d[v][1] * s;
+                xy[8 * q + 2 * v + 1] = cy + d[v][0] * s + d[v][1] * c;
+            }
+            for (int v = 0; v <= 4; v++)
+                GEOSCoordSeq_setXY_r(h, cs, (unsigned)v, xy[8 * q + 2 * (v % 4)],
+                                     xy[8 * q + 2 * (v % 4) + 1]);
+            g[q] = GEOSGeom_createPolygon_r(h, GEOSGeom_createLinearRing_r(h, cs), NULL, 0);
+            perim += 4;
+        }
+        GEOSGeometry *coll =
+            GEOSGeom_createCollection_r(h, GEOS_GEOMETRYCOLLECTION, g, (unsigned)m);
+        GEOSGeometry *u = GEOSUnaryUnion_r(h, coll);
+        double ga = -1;
+        if (u) GEOSArea_r(h, u, &ga);
+        bool2_input in2 = {m, poly_off, ring_off, xy};
+        bool_expr e;
+        bool2_result r;
+        char err[256];
+        REQUIRE(bool_expr_named("union", m, &e) == 0, "expr");
+        int rc = bool2_build(&in2, &e, &(arr2_opts){.threads = 2}, &r, err, sizeof err);
+        CHECK(rc == ARR_OK, "2000 squares: %s", err);
+        if (rc == ARR_OK) {
+            double bound = perim * r.c.stats.precision;
+            CHECK(ga > 0 && fabs(r.area - ga) <= bound, "2000 squares: area %.17g, GEOS %.17g",
+                  r.area, ga);
+            /* sparse: about two inputs per face at this density, nowhere near faces x inputs */
+            CHECK(r.mem_off[r.c.nf] < 8 * r.c.nf, "2000 squares: %u memberships for %zu faces",
+                  r.mem_off[r.c.nf], r.c.nf);
+            check_result("2000 squares", &r);
+            bool2_free(&r);
+        }
+        bool_expr_free(&e);
+        GEOSGeom_destroy_r(h, u);
+        GEOSGeom_destroy_r(h, coll);
+        free(g);
+        GEOS_finish_r(h);
+    }
+    free(poly_off);
+    free(ring_off);
+    free(xy);
+}
+
 /* ---- the request ----------------------------------------------------------------------------- */
 
 TEST(bool2_api_errors)

@@ -159,6 +159,45 @@ TEST(touching_and_coplanar)
         solid_free(&a[i]), solid_free(&b[i]), solid_free(&d[i]), solid_free(&x[i]);
 }
 
+/* Many operands: the cubes (i, j, k) of a 6 x 6 x 6 grid with i + j + k even (108 unit cubes
+ * meeting only along edges and at vertices): the union's volume is 108 exactly, every cell lies
+ * in exactly one cube, intersection and difference as closed forms; the membership is sparse. */
+TEST(checkerboard_of_cubes)
+{
+    solid s[108];
+    size_t n = 0;
+    for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 6; j++)
+            for (int k = 0; k < 6; k++)
+                if ((i + j + k) % 2 == 0) s[n++] = box(i, j, k, i + 1, j + 1, k + 1);
+    arr3_opts o = {0};
+    lar3 c;
+    char err[256];
+    REQUIRE(n == 108, "%zu cubes", n);
+    REQUIRE(!arr3_build(s, n, 0, &o, &c, err, sizeof err), "arr3_build: %s", err);
+    member_rows rows;
+    uint32_t bad;
+    REQUIRE(bool3_membership(&c, &rows, &bad) == 0, "membership");
+    /* the 32 odd cubes inside are voids the even ones enclose: bounded cells in no cube */
+    CHECK(c.nc == 140 && rows.off[c.nc] == 108, "%zu cells, %u memberships", c.nc, rows.off[c.nc]);
+    static const char *const ops[] = {"union", "xor", "intersection", "difference"};
+    static const double want[] = {108, 108, 0, 1};
+    for (int t = 0; t < 4; t++) {
+        bool_expr e;
+        bool3_result r;
+        REQUIRE(!bool_expr_named(ops[t], n, &e), "%s", ops[t]);
+        REQUIRE(!bool3_select(&c, &rows, &e, &r), "select");
+        CHECK(fabs(r.volume - want[t]) < 1e-12, "%s: volume %.17g, want %g", ops[t], r.volume,
+              want[t]);
+        check_boundary(&c, &r);
+        bool3_result_free(&r);
+        bool_expr_free(&e);
+    }
+    member_rows_free(&rows);
+    lar3_free(&c);
+    for (size_t i = 0; i < n; i++) solid_free(&s[i]);
+}
+
 /* Three cubes and an expression tree: 0 - (1 + 2). */
 TEST(expression_tree)
 {

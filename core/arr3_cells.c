@@ -497,6 +497,118 @@ static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f
     return s;
 }
 
+/* ---- a grid over the faces' boxes in a probe's projection ----------------------------------
+ * Which faces may a ray along -k through (qi, qj) cross?  Those whose projected box holds the
+ * point: a uniform grid over the boxes (about two faces per cell) answers with the boxes of one
+ * cell plus the few big ones, instead of every face for every part (parts x faces grew faster
+ * than the arrangement on scenes of many solids).  Only a filter: the exact test follows. */
+typedef struct fgrid {
+    double x0, y0, cw, ch;
+    int nx, ny;
+    uint32_t *off, *items; /* cell c holds items[off[c] .. off[c+1]) */
+    uint32_t *big;         /* boxes over more than FGRID_BIG cells: checked for every query */
+    size_t nbig;
+} fgrid;
+#define FGRID_BIG 64
+
+static void fgrid_free(fgrid *g)
+{
+    free(g->off);
+    free(g->items);
+    free(g->big);
+    memset(g, 0, sizeof *g);
+}
+
+static void fgrid_span(const fgrid *g, const double *bx, int *c0, int *r0, int *c1, int *r1)
+{
+    double a = (bx[0] - g->x0) / g->cw, b = (bx[2] - g->x0) / g->cw;
+    double c = (bx[1] - g->y0) / g->ch, d = (bx[3] - g->y0) / g->ch;
+    *c0 = a < 0 ? 0 : a >= g->nx ? g->nx - 1 : (int)a;
+    *c1 = b < 0 ? 0 : b >= g->nx ? g->nx - 1 : (int)b;
+    *r0 = c < 0 ? 0 : c >= g->ny ? g->ny - 1 : (int)c;
+    *r1 = d < 0 ? 0 : d >= g->ny ? g->ny - 1 : (int)d;
+}
+
+static int fgrid_build(fgrid *g, const double *box, size_t n)
+{
+    double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
+    fgrid_free(g);
+    for (size_t f = 0; f < n; f++) {
+        const double *b = box + 4 * f;
+        if (b[0] < x0) x0 = b[0];
+        if (b[1] < y0) y0 = b[1];
+        if (b[2] > x1) x1 = b[2];
+        if (b[3] > y1) y1 = b[3];
+    }
+    int side = (int)sqrt((double)n / 2) + 1;
+    if (side > 4096) side = 4096;
+    g->nx = g->ny = side;
+    g->x0 = x0, g->y0 = y0;
+    g->cw = x1 > x0 ? (x1 - x0) / side : 1;
+    g->ch = y1 > y0 ? (y1 - y0) / side : 1;
+    if (!(g->cw > 0) || !isfinite(g->cw)) g->cw = 1;
+    if (!(g->ch > 0) || !isfinite(g->ch)) g->ch = 1;
+    size_t ncell = (size_t)side * (size_t)side, total = 0;
+    g->off = calloc(ncell + 2, sizeof *g->off);
+    g->big = malloc((n + 1) * sizeof *g->big);
+    if (!g->off || !g->big) return -1;
+    for (int pass = 0; pass < 2; pass++) {
+        g->nbig = 0;
+        for (size_t f = 0; f < n; f++) {
+            int c0, r0, c1, r1;
+            fgrid_span(g, box + 4 * f, &c0, &r0, &c1, &r1);
+            if ((size_t)(c1 - c0 + 1) * (size_t)(r1 - r0 + 1) > FGRID_BIG) {
+                g->big[g->nbig++] = (uint32_t)f;
+                continue;
+            }
+            for (int r = r0; r <= r1; r++)
+                for (int c = c0; c <= c1; c++) {
+                    size_t cell = (size_t)r * (size_t)side + (size_t)c;
+                    if (pass == 0)
+                        g->off[cell + 2]++;
+                    else
+                        g->items[g->off[cell + 1]++] = (uint32_t)f;
+                }
+        }
+        if (pass == 0) {
+            for (size_t c = 0; c < ncell; c++) g->off[c + 2] += g->off[c + 1];
+            total = g->off[ncell + 1];
+            if (total > UINT32_MAX) return -1;
+            g->items = malloc((total + 1) * sizeof *g->items);
+            if (!g->items) return -1;
+        }
+    }
+    return 0;
+}
+
+static int cmp_u32_asc(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The faces whose boxes may hold (qi, qj), ascending, into *out (grown as needed). */
+static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap,
+                       size_t *n)
+{
+    size_t k = 0, m = g->nbig;
+    double a = (qi - g->x0) / g->cw, b = (qj - g->y0) / g->ch;
+    int inside = a >= 0 && b >= 0 && a <= g->nx && b <= g->ny;
+    size_t cell = 0;
+    if (inside) {
+        int c = a >= g->nx ? g->nx - 1 : (int)a, r = b >= g->ny ? g->ny - 1 : (int)b;
+        cell = (size_t)r * (size_t)g->nx + (size_t)c;
+        m += g->off[cell + 1] - g->off[cell];
+    }
+    if (a3_grow(out, cap, m + 1, sizeof **out)) return -1;
+    for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
+    if (inside)
+        for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
+    qsort(*out, k, sizeof **out, cmp_u32_asc);
+    *n = k;
+    return 0;
+}
+
 int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
 {
     size_t nf = A->nf;
@@ -508,6 +620,10 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
     uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
     double *fbox = NULL, *dh = NULL, *dl = NULL;
+    fgrid fgk[3] = {{0}};
+    double *fboxk[3] = {NULL, NULL, NULL};
+    uint32_t *cand = NULL;
+    size_t capcand = 0;
     uint32_t *hits = NULL, *hoff = NULL, *stack = NULL;
     size_t caphits = 0, capstack = 0;
     probe *probes = NULL;
@@ -666,8 +782,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         A->st->components = nvc;
     }
     /* face boxes (approximate, for the probes' first filter) */
-    fbox = malloc((4 * nf + 1) * sizeof *fbox);
-    if (!fbox) goto done;
     cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
     if (!cu) goto done;
     for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
@@ -689,8 +803,11 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                      A->pc[cpiece[c]].face);
             goto done;
         }
-        if (boxk != pr->k) { /* boxes of the faces in this probe's projection */
+        if (!fgk[pr->k].off) { /* boxes of the faces in this probe's projection, and a grid:
+                                   once per axis (parts alternate between axes) */
             boxk = pr->k;
+            fbox = fboxk[boxk] = malloc((4 * nf + 1) * sizeof *fbox);
+            if (!fbox) goto done;
             for (size_t f = 0; f < nf; f++) {
                 double *bx = fbox + 4 * f;
                 bx[0] = bx[1] = DBL_MAX, bx[2] = bx[3] = -DBL_MAX;
@@ -702,15 +819,22 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                     if (u > bx[2]) bx[2] = u;
                     if (v > bx[3]) bx[3] = v;
                 }
+                /* widened by the margin the test below allows */
+                double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
+                bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
             }
+            if (fgrid_build(&fgk[boxk], fbox, nf)) goto done;
         }
+        fbox = fboxk[pr->k];
+        const fgrid *fg = &fgk[pr->k];
         double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
         uint32_t own = NONE;
-        size_t h0 = nhit;
-        for (size_t f = 0; f < nf; f++) {
+        size_t h0 = nhit, ncand;
+        if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
+        for (size_t ci = 0; ci < ncand; ci++) {
+            size_t f = cand[ci];
             const double *bx = fbox + 4 * f;
-            double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
-            if (qi < bx[0] - m || qi > bx[2] + m || qj < bx[1] - m || qj > bx[3] + m) continue;
+            if (qi < bx[0] || qi > bx[2] || qj < bx[1] || qj > bx[3]) continue;
             if (fcomp[f] != c && ncomp == 1) continue;
             if (!probe_hits(A, (uint32_t)f, pr)) continue;
             if (fcomp[f] == c) {
@@ -1037,7 +1161,11 @@ done:
     free(cvol);
     free(dh);
     free(dl);
-    free(fbox);
+    for (int k = 0; k < 3; k++) {
+        fgrid_free(&fgk[k]);
+        free(fboxk[k]);
+    }
+    free(cand);
     free(hits);
     free(hoff);
     free(stack);

@@ -471,12 +471,21 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     grp = malloc((nf + 1) * sizeof *grp);
     if (!side || !sel || !grp) goto fail;
     if ((rc = stage_sides(c, side, err, errlen)) != ARR_OK) goto fail;
+        /* progress after the arrangement's stages, as fractions of the whole job */
+#define BOOL2_PROGRESS(stage, f)                                                                   \
+    do {                                                                                           \
+        if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
+    } while (0)
     if ((rc = stage_membership(out, side, err, errlen)) != ARR_OK) goto fail;
+    BOOL2_PROGRESS("membership", 0.96);
     rc = ARR_ENOMEM;
     if (stage_select(out, op, sel)) goto fail;
     stage_groups(c, side, sel, grp);
+    BOOL2_PROGRESS("select", 0.97);
     if ((rc = stage_rings(out, side, sel, grp, &ring_grp, err, errlen)) != ARR_OK) goto fail;
     if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
+    BOOL2_PROGRESS("polygons", 0.98);
+#undef BOOL2_PROGRESS
     free(side);
     free(sel);
     free(grp);

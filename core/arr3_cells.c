@@ -588,8 +588,7 @@ static int cmp_u32_asc(const void *a, const void *b)
 }
 
 /* The faces whose boxes may hold (qi, qj), ascending, into *out (grown as needed). */
-static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap,
-                       size_t *n)
+static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap, size_t *n)
 {
     size_t k = 0, m = g->nbig;
     double a = (qi - g->x0) / g->cw, b = (qj - g->y0) / g->ch;

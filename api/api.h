@@ -18,6 +18,7 @@
 
 #include <stdatomic.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #define API_VERSION "0.2.0"
 
@@ -44,6 +45,10 @@ typedef struct api_run_opts {
     const atomic_int *cancel; /* borrowed, may be NULL: non-zero asks the core to stop */
     void (*progress)(void *udata, const char *stage, double fraction); /* may be NULL */
     void *udata;                                                       /* passed to progress */
+    /* may be NULL: the result is written to this stream as it is made (a megabyte at a time)
+     * instead of being returned: then *out is NULL and *outlen the bytes written.  A failure
+     * after some bytes were written leaves them written (the output is then incomplete). */
+    FILE *stream;
 } api_run_opts;
 
 /* Runs the request body[0..len) (borrowed; need not be NUL-terminated) with `threads` worker

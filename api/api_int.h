@@ -12,6 +12,7 @@
 
 #include <jansson.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdint.h>
 
 #include "api/api.h"
@@ -26,7 +27,17 @@ typedef struct api_buf {
     size_t len; /* bytes used */
     size_t cap; /* bytes allocated */
     int failed; /* an allocation failed: contents are incomplete */
+    /* streaming (api_run_opts.stream): when set, the bytes are written to sink whenever the
+     * buffer would grow beyond API_BUF_SINK, so a large result never sits whole in memory;
+     * sunk counts what was written.  Writers only append: nothing reads back what it wrote. */
+    FILE *sink;
+    size_t sunk;
+    int sink_errno; /* the errno of a failed write to sink (then failed is set too) */
 } api_buf;
+#define API_BUF_SINK (1u << 20)
+
+/* Writes what the buffer holds to its sink (no-op without one); failed on a write error. */
+void api_buf_flush(api_buf *b);
 
 /* Makes room for n more bytes (and a NUL); returns where they go, or NULL once failed. */
 char *api_buf_reserve(api_buf *b, size_t n);

@@ -23,6 +23,8 @@
  */
 #include "api/api_int.h"
 
+#include <errno.h>
+
 #include <assert.h>
 #include <math.h>
 #include <stdio.h>
@@ -34,9 +36,26 @@ const char *const api_field_names[API_NFIELDS] = {"V",     "EV",       "FV",    
 
 /* ---- the buffer ---------------------------------------------------------------------------- */
 
+void api_buf_flush(api_buf *b)
+{
+    if (!b->sink || b->failed || b->len == 0) return;
+    if (fwrite(b->p, 1, b->len, b->sink) != b->len) {
+        b->sink_errno = errno ? errno : EIO;
+        b->failed = 1;
+        return;
+    }
+    b->sunk += b->len;
+    b->len = 0;
+    b->p[0] = 0;
+}
+
 char *api_buf_reserve(api_buf *b, size_t n)
 {
     if (b->failed) return NULL;
+    if (b->sink && b->len > 0 && b->len + n + 1 > API_BUF_SINK) {
+        api_buf_flush(b);
+        if (b->failed) return NULL;
+    }
     if (n > SIZE_MAX / 2 - b->len) goto fail;
     if (b->len + n + 1 > b->cap) {
         size_t cap = b->cap ? b->cap : 4096;

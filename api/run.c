@@ -16,6 +16,8 @@
  */
 #include "api/api_int.h"
 
+#include <errno.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -248,19 +250,30 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     if (!ro) ro = &dflt;
     rc = parse(body, len, &kind, &req, NULL, err);
     if (rc != API_OK) goto fail;
+    b.sink = ro->stream;
     rc = kind->run(req, ro, &b, err);
     if (rc != API_OK) goto fail;
     kind->free(req);
     req = NULL;
     api_buf_putc(&b, '\n');
+    api_buf_flush(&b);
     if (b.failed) {
-        rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+        rc = b.sink_errno
+                 ? api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno))
+                 : api_fail(err, API_ENOMEM, "out of memory while writing the result");
         goto fail;
+    }
+    if (b.sink) {
+        *outlen = b.sunk;
+        api_buf_free(&b);
+        return API_OK;
     }
     *out = b.p;
     *outlen = b.len;
     return API_OK;
 fail:
+    if (b.sink_errno) /* the writers see only "failed": it was the stream, not memory */
+        rc = api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno));
     if (kind) kind->free(req);
     api_buf_free(&b);
     return rc;

@@ -427,6 +427,16 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
     return 0;
 }
 
+/* After a result was streamed to stdout: its last bytes out; returns the exit status. */
+static int write_streamed(void)
+{
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
 /* --format request: the request a command would run, a line of JSON, for curl. */
 static int write_request(const char *body, size_t len)
 {
@@ -448,13 +458,16 @@ static int run(char **pos, int npos, int threads, const out_format *of)
     if (npos != 2) return usage_error("%s", "run takes one REQUEST.json (or - for stdin)");
     body = read_all(pos[1], &len);
     if (!body) return 1;
-    rc = api_run_json(body, len, threads, &out, &outlen, &err);
+    /* JSON goes out as it is made (a large result never sits whole in memory); pictures and
+     * maps need the whole result */
+    api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+    rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
     free(body);
     if (rc != API_OK) {
         fprintf(stderr, "cellar: %s\n", err.msg);
         return 1;
     }
-    rc = write_result(out, outlen, of);
+    rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
     free(out);
     return rc;
 }
@@ -535,11 +548,12 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
         rc = write_request(body, strlen(body));
         goto out;
     }
-    if (api_run_json(body, strlen(body), threads, &out, &outlen, &err) != API_OK) {
+    api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+    if (api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err) != API_OK) {
         fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
     }
-    rc = write_result(out, outlen, of);
+    rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
 out:
     free(out);
     free(body);
@@ -679,12 +693,12 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
     if (!fl->faces && of->kind != 4) {
         /* the solids as read, straight to the run: the bytes of `cellar run` on the request
          * that --format request prints, without writing and parsing it */
-        api_run_opts ro = {.threads = threads};
+        api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
         int r = api_solids_run_direct(sv, n, 0, op, json_object_size(opts) ? opts : NULL, &ro, &out,
                                       &outlen, &err);
         sv = NULL; /* taken over, array and all */
         if (r != API_OK) goto failed;
-        rc = write_result(out, outlen, of);
+        rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
         goto out;
     }
     m = open_memstream(&body, &blen);
@@ -723,7 +737,8 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         rc = write_request(body, blen);
         goto out;
     }
-    if (api_run_json(body, blen, threads, &out, &outlen, &err) != API_OK) {
+    api_run_opts sro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+    if (api_run_json_ex(body, blen, &sro, &out, &outlen, &err) != API_OK) {
     failed:;
         size_t i;
         int k = -1;
@@ -735,7 +750,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
             fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
     }
-    rc = write_result(out, outlen, of);
+    rc = sro.stream ? write_streamed() : write_result(out, outlen, of);
 out:
     if (m) fclose(m);
     free(body);

@@ -113,5 +113,19 @@ check "... which run - computes as solids does" sh -c "'$BIN' run - <'$T/solreq'
 check "run --format request exits 2" status 2 "$BIN" run "$T/square.json" --format request
 check "... and says it is for svg and solids" grep -q -- '--format request is for the svg and solids' "$T/err"
 
+# A result of more than a megabyte (the unit of streaming) goes to stdout as it is made: whole,
+# valid, with the area the GeoJSON path (which needs the whole result in memory) gives; a write
+# error exits 1 and says why.
+python3 -c 'import json
+print(json.dumps({"kind": "polygons", "op": "union", "polygons":
+    [[[[i, j], [i + 1.5, j], [i + 1.5, j + 1.5], [i, j + 1.5]]] for i in range(60) for j in range(60)]}))' >"$T/many.json"
+check "a big result streams whole" sh -c "'$BIN' run '$T/many.json' >'$T/big.json' && test \$(wc -c <'$T/big.json') -gt 1100000"
+check "... valid JSON, area 3660.25" python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert abs(r['result']['area'] - 3660.25) < 1e-9, r['result']['area']" "$T/big.json"
+check "... which is the area the map gives" sh -c "'$BIN' run '$T/many.json' --format geojson | grep -q '\"area\":3660.25'"
+if [ -w /dev/full ]; then
+    check "a full disk exits 1" sh -c "! '$BIN' run '$T/many.json' >/dev/full 2>'$T/err'"
+    check "... and says why" grep -q 'No space left' "$T/err"
+fi
+
 echo "$P passed, $F failed"
 [ "$F" -eq 0 ]

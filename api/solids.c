@@ -556,6 +556,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
+        if (ro->progress) ro->progress(ro->udata, "membership", 0.97);
         int m = bool3_membership(&c, &mem, &bad_face);
         if (m) {
             rc = m < 0 ? api_fail(err, API_ENOMEM, "out of memory")
@@ -572,6 +573,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         fmt.membership = &mem;
         fmt.result = &res;
     }
+    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
     rc = api_lar3_write(out, &c, &fmt, err);
 out:
     bool3_result_free(&res);

@@ -196,6 +196,7 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
+    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
     rc = api_lar2_write(out, &c, &fmt, err);
 out:
     lar2_free(&c);

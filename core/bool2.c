@@ -151,7 +151,15 @@ static int stage_sides(const lar2 *c, uint32_t *side, char *err, size_t el)
 
 /* The rows of the nf + 1 faces (the last is EXT, empty) by member_walk() over the faces
  * through the edges with two different faces beside them, each listing its polygons (etag). */
-static int stage_membership(bool2_result *out, const uint32_t *side, char *err, size_t el)
+/* Progress inside the walk: "membership", from 0.95 to 0.96 of the whole job. */
+static void membership_tick(void *udata, double f)
+{
+    const arr2_opts *po = udata;
+    po->progress(po->udata, "membership", 0.95 + 0.01 * f);
+}
+
+static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_opts *po, char *err,
+                            size_t el)
 {
     const lar2 *c = &out->c;
     size_t nf = c->nf, nn = nf + 1;
@@ -169,7 +177,8 @@ static int stage_membership(bool2_result *out, const uint32_t *side, char *err, 
             nb[aoff[a + 1]] = b, ed[aoff[a + 1]++] = (uint32_t)e;
             nb[aoff[b + 1]] = a, ed[aoff[b + 1]++] = (uint32_t)e;
         }
-    int w = member_walk(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad);
+    int w = member_walk_ex(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad,
+                           po && po->progress ? membership_tick : NULL, (void *)po);
     if (w < 0) goto done;
     if (w > 0) {
         if (bad == UINT32_MAX) {
@@ -476,7 +485,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     do {                                                                                           \
         if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
     } while (0)
-    if ((rc = stage_membership(out, side, err, errlen)) != ARR_OK) goto fail;
+    if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("membership", 0.96);
     rc = ARR_ENOMEM;
     if (stage_select(out, op, sel)) goto fail;

@@ -31,6 +31,12 @@ int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
                 const uint32_t *el, const uint32_t *toff, const uint32_t *tags, member_rows *rows,
                 uint32_t *bad_el);
 
+/* The same, calling tick(udata, cells reached / n) every 65 536 cells when tick is not NULL. */
+int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                   const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
+                   member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
+                   void *udata);
+
 void member_rows_free(member_rows *r);
 
 #endif

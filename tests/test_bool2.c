@@ -769,6 +769,59 @@ TEST(bool2_many_operands)
     free(xy);
 }
 
+/* Progress of a large Boolean: the arrangement's stages, then membership (also inside the walk:
+ * 67 600 faces pass a tick), select, polygons and output, never going back. */
+typedef struct prog_log {
+    int n, back, membership_inside, select, polygons, output;
+    double last;
+} prog_log;
+
+static void prog_cb(void *udata, const char *stage, double f)
+{
+    prog_log *l = udata;
+    /* the arrangement reports fractions of its own stages; the rest of the job's whole */
+    int own = !strcmp(stage, "membership") || !strcmp(stage, "select") ||
+              !strcmp(stage, "polygons") || !strcmp(stage, "output");
+    l->n++;
+    if (!own) return;
+    if (f < l->last) l->back++;
+    l->last = f;
+    if (!strcmp(stage, "membership") && f > 0.95 && f < 0.96) l->membership_inside++;
+    l->select += !strcmp(stage, "select");
+    l->polygons += !strcmp(stage, "polygons");
+    l->output += !strcmp(stage, "output");
+}
+
+TEST(bool2_progress)
+{
+    const size_t k = 260;
+    size_t cap = 64 + k * k * 64, len = 0;
+    char *body = malloc(cap);
+    REQUIRE(body, "memory");
+    len += (size_t)snprintf(body + len, cap - len,
+                            "{\"kind\":\"polygons\",\"op\":\"union\","
+                            "\"options\":{\"fields\":[\"stats\"]},"
+                            "\"polygons\":[");
+    for (size_t i = 0; i < k; i++)
+        for (size_t j = 0; j < k; j++)
+            len += (size_t)snprintf(body + len, cap - len, "%s[[[%zu,%zu],[%zu,%zu],[%zu,%zu]]]",
+                                    i || j ? "," : "", i, j, i + 1, j, i, j + 1);
+    len += (size_t)snprintf(body + len, cap - len, "]}");
+    prog_log l = {0};
+    api_run_opts ro = {.threads = 2, .progress = prog_cb, .udata = &l};
+    char *out = NULL;
+    size_t outlen;
+    api_error err = {0};
+    int rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    CHECK(rc == API_OK, "%d %s", rc, err.msg);
+    CHECK(l.membership_inside >= 1 && l.select == 1 && l.polygons == 1 && l.output == 1 &&
+              l.back == 0,
+          "progress: %d calls, %d inside membership, select %d, polygons %d, output %d, %d back",
+          l.n, l.membership_inside, l.select, l.polygons, l.output, l.back);
+    free(out);
+    free(body);
+}
+
 /* ---- the request ----------------------------------------------------------------------------- */
 
 TEST(bool2_api_errors)

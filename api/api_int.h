@@ -39,6 +39,12 @@ typedef struct api_buf {
 /* Writes what the buffer holds to its sink (no-op without one); failed on a write error. */
 void api_buf_flush(api_buf *b);
 
+/* The end of a run that wrote its result into b, rc its status: on API_OK the final "\n" is
+ * added and the rest flushed, and *out / *outlen get the result (with a sink: NULL and the bytes
+ * written); a failed buffer becomes API_ENOMEM, or an error naming the stream's write error
+ * (the writers see only "failed").  b is freed or taken over either way; returns the status. */
+int api_buf_finish(api_buf *b, int rc, char **out, size_t *outlen, api_error *err);
+
 /* Makes room for n more bytes (and a NUL); returns where they go, or NULL once failed. */
 char *api_buf_reserve(api_buf *b, size_t n);
 void api_buf_put(api_buf *b, const char *s, size_t n);

@@ -49,6 +49,26 @@ void api_buf_flush(api_buf *b)
     b->p[0] = 0;
 }
 
+int api_buf_finish(api_buf *b, int rc, char **out, size_t *outlen, api_error *err)
+{
+    if (rc == API_OK) {
+        api_buf_putc(b, '\n');
+        api_buf_flush(b);
+        if (b->failed) rc = api_fail(err, API_ENOMEM, "out of memory while writing the result");
+    }
+    if (b->sink_errno)
+        rc = api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b->sink_errno));
+    if (rc == API_OK) {
+        *outlen = b->sink ? b->sunk : b->len;
+        if (!b->sink) {
+            *out = b->p;
+            b->p = NULL;
+        }
+    }
+    api_buf_free(b);
+    return rc;
+}
+
 char *api_buf_reserve(api_buf *b, size_t n)
 {
     if (b->failed) return NULL;

@@ -252,31 +252,9 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     if (rc != API_OK) goto fail;
     b.sink = ro->stream;
     rc = kind->run(req, ro, &b, err);
-    if (rc != API_OK) goto fail;
-    kind->free(req);
-    req = NULL;
-    api_buf_putc(&b, '\n');
-    api_buf_flush(&b);
-    if (b.failed) {
-        rc = b.sink_errno
-                 ? api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno))
-                 : api_fail(err, API_ENOMEM, "out of memory while writing the result");
-        goto fail;
-    }
-    if (b.sink) {
-        *outlen = b.sunk;
-        api_buf_free(&b);
-        return API_OK;
-    }
-    *out = b.p;
-    *outlen = b.len;
-    return API_OK;
 fail:
-    if (b.sink_errno) /* the writers see only "failed": it was the stream, not memory */
-        rc = api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno));
     if (kind) kind->free(req);
-    api_buf_free(&b);
-    return rc;
+    return api_buf_finish(&b, rc, out, outlen, err);
 }
 
 int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,

@@ -696,26 +696,8 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
     }
     b.sink = ro ? ro->stream : NULL;
     rc = api_solids_run(r, ro, &b, err);
-    if (rc != API_OK) goto out;
-    api_buf_putc(&b, '\n');
-    api_buf_flush(&b);
-    if (b.failed) {
-        rc = b.sink_errno
-                 ? api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno))
-                 : api_fail(err, API_ENOMEM, "out of memory while writing the result");
-        goto out;
-    }
-    if (b.sink) {
-        *outlen = b.sunk;
-    } else {
-        *out = b.p;
-        *outlen = b.len;
-        b.p = NULL;
-    }
 out:
-    if (b.sink_errno) /* the writers see only "failed": it was the stream, not memory */
-        rc = api_fail(err, API_EINTERNAL, "writing the result: %s", strerror(b.sink_errno));
-    api_buf_free(&b);
+    rc = api_buf_finish(&b, rc, out, outlen, err);
     api_solids_free(r);
     return rc;
 }

@@ -1,6 +1,8 @@
 /* lar_check.c — see lar_check.h. */
 #include "tests/lar_check.h"
 
+#include "core/bool3.h"
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -415,4 +417,16 @@ done:
     free(vacc);
     free(seen);
     return rc;
+}
+
+long lar3_membership_dense(const lar3 *c, uint8_t *mem, member_rows *rows)
+{
+    uint32_t bad;
+    int rc = bool3_membership(c, rows, &bad);
+    if (rc) return rc;
+    memset(mem, 0, c->nc * c->nsolids);
+    for (size_t k = 0; k < c->nc; k++)
+        for (uint32_t j = rows->off[k]; j < rows->off[k + 1]; j++)
+            mem[k * c->nsolids + rows->idx[j]] = 1;
+    return 0;
 }

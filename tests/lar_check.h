@@ -4,6 +4,7 @@
 #define CELLAR_LAR_CHECK_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/arr2.h"
 #include "core/arr3.h"
@@ -37,5 +38,10 @@ int lar3_check(const lar3 *c, double tol, long *euler, char *msg, size_t len);
 
 /* Volume of bounded cell k recomputed from its faces. */
 double lar3_cell_volume(const lar3 *c, size_t k);
+
+/* The sparse membership rows of c (bool3_membership) and the same as a dense table (c->nc rows
+ * of c->nsolids bytes, mem) for the checks; 0, or non-zero when the walk failed. */
+struct member_rows;
+long lar3_membership_dense(const lar3 *c, uint8_t *mem, struct member_rows *rows);
 
 #endif

@@ -81,20 +81,6 @@ typedef struct want {
     double volume, area; /* area < 0: not checked */
 } want;
 
-/* The sparse membership rows of c (bool3_membership) and the same as a dense table (c->nc rows
- * of c->nsolids bytes) for the checks; 0, or non-zero when the walk failed. */
-static long membership_dense(const lar3 *c, uint8_t *mem, member_rows *rows)
-{
-    uint32_t bad;
-    int rc = bool3_membership(c, rows, &bad);
-    if (rc) return rc;
-    memset(mem, 0, c->nc * c->nsolids);
-    for (size_t k = 0; k < c->nc; k++)
-        for (uint32_t j = rows->off[k]; j < rows->off[k + 1]; j++)
-            mem[k * c->nsolids + rows->idx[j]] = 1;
-    return 0;
-}
-
 static void run_ops(solid *s, size_t n, const want *w, size_t nw)
 {
     arr3_opts o = {0};
@@ -104,7 +90,7 @@ static void run_ops(solid *s, size_t n, const want *w, size_t nw)
     CHECK(!lar3_check(&c, 1e-6, NULL, msg, sizeof msg), "lar3_check: %s", msg);
     member_rows rows = {0};
     uint8_t *mem = malloc(c.nc * n + 1);
-    long bad = membership_dense(&c, mem, &rows);
+    long bad = lar3_membership_dense(&c, mem, &rows);
     CHECK(bad == 0, "membership: %ld inconsistent cells", bad);
     /* every bounded cell lies in some solid, unless it is a void the solids enclose */
     for (size_t i = 0; i < nw; i++) {
@@ -208,7 +194,7 @@ TEST(expression_tree)
     REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
     member_rows rows = {0};
     uint8_t *mem = malloc(c.nc * 3 + 1);
-    CHECK(membership_dense(&c, mem, &rows) == 0, "membership");
+    CHECK(lar3_membership_dense(&c, mem, &rows) == 0, "membership");
     bool_expr e = {0};
     int32_t prog[] = {0, 1, 2, BOOL_OR, BOOL_SUB};
     for (size_t i = 0; i < 5; i++) bool_expr_push(&e, prog[i]);
@@ -276,7 +262,7 @@ TEST(expression_identities)
         REQUIRE(!arr3_build(s, 3, 0, &o, &c, err, sizeof err), "%s", err);
         member_rows rows = {0};
         uint8_t *mem = malloc(c.nc * 3 + 1);
-        CHECK(membership_dense(&c, mem, &rows) == 0, "membership");
+        CHECK(lar3_membership_dense(&c, mem, &rows) == 0, "membership");
         for (size_t i = 0; i < sizeof same / sizeof *same; i++) {
             uint8_t *a = select_json(&c, mem, same[i][0]), *b = select_json(&c, mem, same[i][1]);
             CHECK(!memcmp(a, b, c.nc), "seed %llu: %s and %s select different cells",

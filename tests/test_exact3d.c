@@ -75,20 +75,6 @@ static void dump(const solid *in, size_t n, const char *what)
     fclose(f);
 }
 
-/* The sparse membership rows of c (bool3_membership) and the same as a dense table (c->nc rows
- * of c->nsolids bytes) for the checks; 0, or non-zero when the walk failed. */
-static long membership_dense(const lar3 *c, uint8_t *mem, member_rows *rows)
-{
-    uint32_t bad;
-    int rc = bool3_membership(c, rows, &bad);
-    if (rc) return rc;
-    memset(mem, 0, c->nc * c->nsolids);
-    for (size_t k = 0; k < c->nc; k++)
-        for (uint32_t j = rows->off[k]; j < rows->off[k + 1]; j++)
-            mem[k * c->nsolids + rows->idx[j]] = 1;
-    return 0;
-}
-
 static int arrange(solid *in, size_t n, double precision, run *r, const char *what)
 {
     char err[300], msg[300];
@@ -124,7 +110,7 @@ static int arrange(solid *in, size_t n, double precision, run *r, const char *wh
     }
     member_rows rows = {0};
     uint8_t *mem = malloc(r->c.nc * n + 1);
-    if (membership_dense(&r->c, mem, &rows) != 0) {
+    if (lar3_membership_dense(&r->c, mem, &rows) != 0) {
         test_fail(__FILE__, __func__, __LINE__, "%s: membership inconsistent", what);
         free(mem);
         member_rows_free(&rows);
@@ -403,7 +389,7 @@ static void solid_volumes(const run *r, solid *s, size_t n, double tol, const ch
 {
     member_rows rows = {0};
     uint8_t *mem = malloc(r->c.nc * n + 1);
-    if (membership_dense(&r->c, mem, &rows) != 0) {
+    if (lar3_membership_dense(&r->c, mem, &rows) != 0) {
         test_fail(__FILE__, __func__, __LINE__, "%s: membership", what);
         free(mem);
         member_rows_free(&rows);

@@ -1018,9 +1018,8 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
     return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
 }
 
-/* The sorted keys of the edges walked by the faces' rings of at least min_len vertices; NULL
- * when out of memory. */
-static uint64_t *face_edge_keys(const rmodel *m, size_t min_len, size_t *n)
+/* The sorted keys of the edges walked by the faces' rings; NULL when out of memory. */
+static uint64_t *face_edge_keys(const rmodel *m, size_t *n)
 {
     uint64_t *k = malloc(m->ring_off[m->nrings] * sizeof *k + 1);
     size_t w = 0;
@@ -1028,7 +1027,6 @@ static uint64_t *face_edge_keys(const rmodel *m, size_t min_len, size_t *n)
     for (size_t r = 0; r < m->nrings; r++) {
         const uint32_t *v = ring_idx(m, r);
         size_t len = ring_len(m, r);
-        if (len < min_len) continue;
         for (size_t i = 0; i < len; i++) k[w++] = edge_key(v[i], v[(i + 1) % len]);
     }
     qsort(k, w, sizeof *k, cmp_u64);
@@ -1087,7 +1085,7 @@ static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_part
                 svg_ring(c, &p->edges, m, &p->vt, r, p->off[2 * f], p->off[2 * f + 1]);
     if (!m->ev) return API_OK;
     if (k1 > 0) {
-        p->keys = face_edge_keys(m, 0, &nkeys);
+        p->keys = face_edge_keys(m, &nkeys);
         if (!p->keys) return API_ENOMEM;
     }
     for (size_t e = 0; e < m->ne; e++) {

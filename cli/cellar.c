@@ -400,6 +400,17 @@ typedef struct out_format {
     const char *cells;   /* --cells when given: for --format geojson */
 } out_format;
 
+/* The last bytes of stdout out (after a result was streamed there, or written); returns the
+ * exit status. */
+static int write_streamed(void)
+{
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
 /* Writes the result (or its rendering) to stdout; returns the exit status. */
 static int write_result(const char *out, size_t outlen, const out_format *of)
 {
@@ -420,21 +431,7 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
     }
     fwrite(pic ? pic : out, 1, pic ? piclen : outlen, stdout);
     free(pic);
-    if (fflush(stdout) != 0 || ferror(stdout)) {
-        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
-        return 1;
-    }
-    return 0;
-}
-
-/* After a result was streamed to stdout: its last bytes out; returns the exit status. */
-static int write_streamed(void)
-{
-    if (fflush(stdout) != 0 || ferror(stdout)) {
-        fprintf(stderr, "cellar: writing the output: %s\n", strerror(errno));
-        return 1;
-    }
-    return 0;
+    return write_streamed();
 }
 
 /* --format request: the request a command would run, a line of JSON, for curl. */

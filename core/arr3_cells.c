@@ -787,7 +787,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t EXT = (uint32_t)nsh;
     /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
      * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
-    int boxk = -1;
     probes = malloc((ncomp + 1) * sizeof *probes);
     hoff = calloc(ncomp + 2, sizeof *hoff);
     if (!probes || !hoff) goto done;
@@ -804,8 +803,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         }
         if (!fgk[pr->k].off) { /* boxes of the faces in this probe's projection, and a grid:
                                    once per axis (parts alternate between axes) */
-            boxk = pr->k;
-            fbox = fboxk[boxk] = malloc((4 * nf + 1) * sizeof *fbox);
+            fbox = fboxk[pr->k] = malloc((4 * nf + 1) * sizeof *fbox);
             if (!fbox) goto done;
             for (size_t f = 0; f < nf; f++) {
                 double *bx = fbox + 4 * f;
@@ -822,7 +820,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                 double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
                 bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
             }
-            if (fgrid_build(&fgk[boxk], fbox, nf)) goto done;
+            if (fgrid_build(&fgk[pr->k], fbox, nf)) goto done;
         }
         fbox = fboxk[pr->k];
         const fgrid *fg = &fgk[pr->k];

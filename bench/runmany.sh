@@ -47,25 +47,9 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 trap 'exit 130' INT TERM
 
-# timed OUT CMD...: T_S (wall s) and T_MIB (peak RSS MiB), or T_S=failed / timeout.
-timed() {
-    out=$1
-    shift
-    t0=$(date +%s%N)
-    "$TIME" -f '%M' -o "$out.time" timeout "$LIMIT" "$@" >"$out" 2>"$out.err"
-    rc=$?
-    t1=$(date +%s%N)
-    T_MIB=-
-    if [ "$rc" -eq 124 ]; then
-        T_S=timeout
-    elif [ "$rc" -ne 0 ]; then
-        T_S=failed
-        echo "runmany: $* failed (exit $rc): $(head -c 300 "$out.err")" >&2
-    else
-        T_S=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", (b - a) / 1e9 }')
-        T_MIB=$(tail -n 1 "$out.time" | awk '{ printf "%.0f", $1 / 1024 }')
-    fi
-}
+REPEAT=1 # runs of minutes: once
+BENCH_NAME=runmany
+. "$HERE/lib.sh"
 
 # The inputs: a polygons request (2D) or a directory of OFF files (3D), and the exact answer.
 gen() {
@@ -138,16 +122,16 @@ for c in $CASES; do
         ;;
     esac
     if [ -f "$d/req.json" ]; then
-        timed "$d/ours" "$OURS" run "$d/req.json"
+        timed "cellar ($c)" "$d/ours" "$OURS" run "$d/req.json"
         os=$T_S om=$T_MIB
-        timed "$d/peer" "$GEOS" "$d/req.json"
+        timed "geos_bool2 ($c)" "$d/peer" "$GEOS" "$d/req.json"
         ps=$T_S pm=$T_MIB
     else
-        timed "$d/ours" "$OURS" solids "$d"/off/*.off --op union --options '{"fields":["stats"]}'
+        timed "cellar ($c)" "$d/ours" "$OURS" solids "$d"/off/*.off --op union --options '{"fields":["stats"]}'
         os=$T_S om=$T_MIB
         ps=- pm=-
         if [ $have_mf -eq 1 ]; then
-            timed "$d/peer" node "$MF" --op union "$d"/off/*.off
+            timed "manifold ($c)" "$d/peer" node "$MF" --op union "$d"/off/*.off
             ps=$T_S pm=$T_MIB
         fi
     fi
@@ -186,7 +170,7 @@ EOF
 )
     [ -n "$verdict" ] || verdict="- - - -"
     set -- $verdict
-    xp=$(awk -v p="$ps" -v o="$os" 'BEGIN { if (p + 0 > 0 && o + 0 > 0) printf "%.2f", p / o; else print "-" }')
+    xp=$(speed "$ps" "$os")
     row "$c" "$n" "$os" "$om" "$ps" "$pm" "$xp" "$1" "$2" "$3" "$4"
     case "$os $3 $4" in *failed* | *timeout* | *NO*) status=1 ;; esac
 done

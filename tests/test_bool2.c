@@ -15,6 +15,7 @@
 #include "core/bool2.h"
 #include "core/boolexpr.h"
 #include "tests/check.h"
+#include "tests/ref/geos_ref.h"
 
 /* ---- building inputs ------------------------------------------------------------------------ */
 
@@ -307,24 +308,9 @@ TEST(bool2_seeds_test03)
 
 /* ---- GEOS ------------------------------------------------------------------------------------ */
 
-static GEOSGeometry *geos_ring(GEOSContextHandle_t h, const double *xy, size_t n)
-{
-    GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, (unsigned)n + 1, 2);
-    for (size_t i = 0; i <= n; i++)
-        GEOSCoordSeq_setXY_r(h, cs, (unsigned)i, xy[2 * (i % n)], xy[2 * (i % n) + 1]);
-    return GEOSGeom_createLinearRing_r(h, cs);
-}
-
 static GEOSGeometry *geos_poly(GEOSContextHandle_t h, const pb *b, size_t p)
 {
-    uint32_t r0 = b->poly_off[p], nr = b->poly_off[p + 1] - r0;
-    GEOSGeometry *holes[PB_MAXR];
-    for (uint32_t k = 1; k < nr; k++)
-        holes[k - 1] = geos_ring(h, b->xy + 2 * b->ring_off[r0 + k],
-                                 b->ring_off[r0 + k + 1] - b->ring_off[r0 + k]);
-    GEOSGeometry *shell =
-        geos_ring(h, b->xy + 2 * b->ring_off[r0], b->ring_off[r0 + 1] - b->ring_off[r0]);
-    return GEOSGeom_createPolygon_r(h, shell, holes, nr - 1);
+    return geos_ref_polygon(h, b->poly_off, b->ring_off, b->xy, p);
 }
 
 /* The area of the named operation over b's polygons by GEOS (difference: the first minus the
@@ -725,15 +711,11 @@ TEST(bool2_many_operands)
             ring_off[q + 1] = (uint32_t)(4 * (q + 1));
             double a = test_rnd(&st) * M_PI / 2, c = cos(a) / 2, s = sin(a) / 2;
             double d[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-            GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, 5, 2);
             for (int v = 0; v < 4; v++) {
                 xy[8 * q + 2 * v] = cx + d[v][0] * c - d[v][1] * s;
                 xy[8 * q + 2 * v + 1] = cy + d[v][0] * s + d[v][1] * c;
             }
-            for (int v = 0; v <= 4; v++)
-                GEOSCoordSeq_setXY_r(h, cs, (unsigned)v, xy[8 * q + 2 * (v % 4)],
-                                     xy[8 * q + 2 * (v % 4) + 1]);
-            g[q] = GEOSGeom_createPolygon_r(h, GEOSGeom_createLinearRing_r(h, cs), NULL, 0);
+            g[q] = geos_ref_polygon(h, poly_off, ring_off, xy, q);
             perim += 4;
         }
         GEOSGeometry *coll =

@@ -82,6 +82,7 @@
 #include "api/api.h"
 #include "core/bool2.h"
 #include "tests/check.h"
+#include "tests/ref/geos_ref.h"
 
 #define CASES_PER_SEED 200 /* cases of each family and frame per seed (a tenth when sanitized) */
 #define UNIT_STEP      (1.0 / 1048576) /* h: the grid step in the unit frame, 2^-20 */
@@ -827,24 +828,9 @@ static void geos_message(const char *msg, void *udata)
     (void)udata;
 }
 
-static GEOSGeometry *geos_ring(GEOSContextHandle_t h, const double *xy, size_t n)
-{
-    GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, (unsigned)n + 1, 2);
-    for (size_t i = 0; i <= n; i++)
-        GEOSCoordSeq_setXY_r(h, cs, (unsigned)i, xy[2 * (i % n)], xy[2 * (i % n) + 1]);
-    return GEOSGeom_createLinearRing_r(h, cs);
-}
-
 static GEOSGeometry *geos_poly(GEOSContextHandle_t h, const pb *b, size_t p)
 {
-    uint32_t r0 = b->poly_off[p], nr = b->poly_off[p + 1] - r0;
-    GEOSGeometry *holes[PB_MAXR];
-    for (uint32_t k = 1; k < nr; k++)
-        holes[k - 1] = geos_ring(h, b->xy + 2 * b->ring_off[r0 + k],
-                                 b->ring_off[r0 + k + 1] - b->ring_off[r0 + k]);
-    GEOSGeometry *shell =
-        geos_ring(h, b->xy + 2 * b->ring_off[r0], b->ring_off[r0 + 1] - b->ring_off[r0]);
-    return GEOSGeom_createPolygon_r(h, shell, holes, nr - 1);
+    return geos_ref_polygon(h, b->poly_off, b->ring_off, b->xy, p);
 }
 
 /* The union of polygons [p0, p1) of b by GEOSUnaryUnion_r; NULL when GEOS fails. */

@@ -255,3 +255,26 @@ int geos_ref_faces(const double *seg, size_t n, double **areas, size_t *nfaces, 
 {
     return geos_ref_faces_timed(seg, n, areas, nfaces, nholes, nnodes, nedges, NULL, NULL, 0);
 }
+
+/* Ring xy[0 .. 2n) closed by repeating its first point. */
+static GEOSGeometry *ring(GEOSContextHandle_t h, const double *xy, size_t n)
+{
+    GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, (unsigned)n + 1, 2);
+    for (size_t i = 0; i <= n; i++)
+        GEOSCoordSeq_setXY_r(h, cs, (unsigned)i, xy[2 * (i % n)], xy[2 * (i % n) + 1]);
+    return GEOSGeom_createLinearRing_r(h, cs);
+}
+
+GEOSGeometry *geos_ref_polygon(GEOSContextHandle_t h, const uint32_t *poly_off,
+                               const uint32_t *ring_off, const double *xy, size_t p)
+{
+    uint32_t r0 = poly_off[p], nr = poly_off[p + 1] - r0;
+    GEOSGeometry **holes = malloc((nr ? nr : 1) * sizeof *holes);
+    if (!holes) return NULL;
+    for (uint32_t k = 1; k < nr; k++)
+        holes[k - 1] = ring(h, xy + 2 * ring_off[r0 + k], ring_off[r0 + k + 1] - ring_off[r0 + k]);
+    GEOSGeometry *shell = ring(h, xy + 2 * ring_off[r0], ring_off[r0 + 1] - ring_off[r0]);
+    GEOSGeometry *g = GEOSGeom_createPolygon_r(h, shell, holes, nr - 1);
+    free(holes);
+    return g;
+}

@@ -11,7 +11,9 @@
 #ifndef CELLAR_GEOS_REF_H
 #define CELLAR_GEOS_REF_H
 
+#include <geos_c.h>
 #include <stddef.h>
+#include <stdint.h>
 
 /* The arrangement of n segments seg[4i..4i+3] = x1, y1, x2, y2 (borrowed) according to GEOS.
  * Zero-length segments are skipped.  The segments are noded with GEOSNode and then
@@ -34,5 +36,12 @@ int geos_ref_faces(const double *seg, size_t n, double **areas, size_t *nfaces, 
 int geos_ref_faces_timed(const double *seg, size_t n, double **areas, size_t *nfaces,
                          size_t *nholes, size_t *nnodes, size_t *nedges, double *ms, char *err,
                          size_t errlen);
+
+/* Polygon p of a polygon set in the form of bool2_input (core/bool2.h: polygon p's rings are
+ * ring_off[poly_off[p] .. poly_off[p+1]), ring r's points xy[2 ring_off[r] .. 2 ring_off[r+1]),
+ * closed implicitly, the first the shell) as a GEOS polygon made in context h; the caller
+ * destroys it.  Its rings are closed by repeating their first point. */
+GEOSGeometry *geos_ref_polygon(GEOSContextHandle_t h, const uint32_t *poly_off,
+                               const uint32_t *ring_off, const double *xy, size_t p);
 
 #endif

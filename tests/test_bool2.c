@@ -806,6 +806,19 @@ TEST(bool2_progress)
 
 /* ---- the request ----------------------------------------------------------------------------- */
 
+/* Request body must be refused with 422 and a message starting with msg (its JSON path). */
+static void check_refused(const char *body, const char *msg, size_t i)
+{
+    char *out = NULL;
+    size_t outlen;
+    api_error err = {0};
+    int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
+    CHECK(rc == API_EINVALID, "case %zu: status %d, want 422", i, rc);
+    CHECK(strncmp(err.msg, msg, strlen(msg)) == 0, "case %zu: message \"%s\", want \"%s...\"", i,
+          err.msg, msg);
+    free(out);
+}
+
 TEST(bool2_api_errors)
 {
     struct {
@@ -845,16 +858,8 @@ TEST(bool2_api_errors)
          "\"lines\":[]}",
          "lines: unknown key"},
     };
-    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        char *out = NULL;
-        size_t outlen;
-        api_error err = {0};
-        int rc = api_run_json(cases[i].body, strlen(cases[i].body), 1, &out, &outlen, &err);
-        CHECK(rc == API_EINVALID, "case %zu: status %d, want 422", i, rc);
-        CHECK(strncmp(err.msg, cases[i].msg, strlen(cases[i].msg)) == 0,
-              "case %zu: message \"%s\", want \"%s...\"", i, err.msg, cases[i].msg);
-        free(out);
-    }
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
+        check_refused(cases[i].body, cases[i].msg, i);
 }
 
 /* The same polygons posted as native rings, GeoJSON geometries (Polygon, MultiPolygon,
@@ -982,16 +987,10 @@ TEST(bool2_gis_errors)
         {"[\"POLYGON ((0 0, 1 0, 1 1, 0 0), ())\"]", "polygons[0]: WKT at character 33:"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        char body[600], *out = NULL;
-        size_t outlen;
-        api_error err = {0};
+        char body[600];
         snprintf(body, sizeof body, "{\"kind\":\"polygons\",\"polygons\":%s,\"op\":\"union\"}",
                  cases[i].polygons);
-        int rc = api_run_json(body, strlen(body), 1, &out, &outlen, &err);
-        CHECK(rc == API_EINVALID, "case %zu: status %d, want 422", i, rc);
-        CHECK(strncmp(err.msg, cases[i].msg, strlen(cases[i].msg)) == 0,
-              "case %zu: message \"%s\", want \"%s...\"", i, err.msg, cases[i].msg);
-        free(out);
+        check_refused(body, cases[i].msg, i);
     }
 }
 

@@ -60,6 +60,8 @@ import shutil
 import subprocess
 import sys
 import tempfile
+
+from tally import fail, ok, summary
 from fractions import Fraction as Fr
 
 B = sys.argv[1] if len(sys.argv) > 1 else "build"
@@ -67,7 +69,6 @@ CEL = os.path.join(B, "cellar")
 NEF = os.path.join(B, "tests/ref/cgal_nef")
 STRESS = int(os.environ.get("CELLAR_STRESS", "0") or 0)
 DUMP = os.environ.get("CELLAR_DUMP", "")
-P = F = 0
 WORST = [0.0, ""]  # worst |cellar - reference| / bound
 NEF_WORST = [0.0, ""]  # worst |Nef - closed form| / the inputs' volume sum
 
@@ -76,18 +77,6 @@ TRIG = 2.0 ** -10  # rotations are rounded to this in the dyadic scenes
 
 class Retry(Exception):
     """The random draw does not fit (a degenerate shape, a margin not kept): draw again."""
-
-
-def ok(name):
-    global P
-    P += 1
-    print("ok", name)
-
-
-def fail(name, why=""):
-    global F
-    F += 1
-    print("FAIL", name + (": " + why if why else ""))
 
 
 # ---- random values -------------------------------------------------------------------------
@@ -1079,8 +1068,7 @@ def main():
     for p in (CEL, NEF):
         if not os.access(p, os.X_OK):
             fail("%s is built" % p)
-            print("%d passed, %d failed" % (P, F))
-            return 1
+            return summary()
     seeds = STRESS if STRESS else 4
     with tempfile.TemporaryDirectory() as tmp:
         for kind, (_, shapes) in OUT.items():
@@ -1097,8 +1085,7 @@ def main():
               (NEF_WORST[0], NEF_WORST[1]))
     else:
         print("# Nef against the closed forms: equal on every volume")
-    print("%d passed, %d failed" % (P, F))
-    return 1 if F else 0
+    return summary()
 
 
 sys.exit(main())

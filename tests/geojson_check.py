@@ -27,20 +27,7 @@ import sys
 from shapely.geometry import shape
 from shapely.ops import unary_union
 from shapely.validation import explain_validity
-
-P = F = 0
-
-
-def ok(msg):
-    global P
-    P += 1
-    print("ok " + msg)
-
-
-def fail(msg):
-    global F
-    F += 1
-    print("FAIL " + msg)
+from tally import fail, ok, summary
 
 
 def run(binary, path, *extra):
@@ -221,8 +208,7 @@ def main():
                           True)
         except (RuntimeError, ValueError, subprocess.TimeoutExpired) as e:
             fail("%s: %s" % (name, e))
-    print("%d passed, %d failed" % (P, F))
-    return 1 if F else 0
+    return summary()
 
 
 if __name__ == "__main__":

@@ -37,6 +37,8 @@ import subprocess
 import sys
 import tempfile
 
+from tally import fail, ok, summary
+
 B = sys.argv[1]
 CEL = os.path.join(B, "cellar")
 CGAL = os.path.join(B, "tests/ref/cgal_bool")
@@ -44,20 +46,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REAL = os.path.join(HERE, "data/mesh/real")
 CASES = os.path.join(HERE, "data/solids-cases")
 STRESS = int(os.environ.get("CELLAR_STRESS", "0") or 0)
-P = F = 0
 WORST = [0.0, ""]  # worst |ours - reference| / bound
-
-
-def ok(name):
-    global P
-    P += 1
-    print("ok", name)
-
-
-def fail(name, why=""):
-    global F
-    F += 1
-    print("FAIL", name + (": " + why if why else ""))
 
 
 def read_off(path):
@@ -340,8 +329,7 @@ def main():
             slivers(tmp, s)
             near_coplanar(tmp, s)
     print("# worst: %.2f of the snapping bound (%s)" % (WORST[0], WORST[1]))
-    print("%d passed, %d failed" % (P, F))
-    return 1 if F else 0
+    return summary()
 
 
 sys.exit(main())

@@ -111,6 +111,22 @@ solid shape_tet(const double *a, const double *b, const double *c, const double 
     return shape_poly(V, 4, F);
 }
 
+/* The sides of a prism over n base vertices (bottom 0 .. n-1, top n .. 2n-1): quad i runs
+ * i, i+1, n+i+1, n+i (faces out for a counter-clockwise base); then the end of the face list.
+ * Appends to F from k; returns the new length. */
+static size_t side_quads(int *F, size_t k, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        F[k++] = (int)i;
+        F[k++] = (int)((i + 1) % n);
+        F[k++] = (int)(n + (i + 1) % n);
+        F[k++] = (int)(n + i);
+        F[k++] = -1;
+    }
+    F[k++] = -2;
+    return k;
+}
+
 solid shape_prism(const double (*base)[3], size_t n, const double *dir)
 {
     double *V = malloc(6 * n * sizeof *V);
@@ -125,14 +141,7 @@ solid shape_prism(const double (*base)[3], size_t n, const double *dir)
     F[k++] = -1;
     for (size_t i = 0; i < n; i++) F[k++] = (int)(n + i);
     F[k++] = -1;
-    for (size_t i = 0; i < n; i++) {
-        F[k++] = (int)i;
-        F[k++] = (int)((i + 1) % n);
-        F[k++] = (int)(n + (i + 1) % n);
-        F[k++] = (int)(n + i);
-        F[k++] = -1;
-    }
-    F[k++] = -2;
+    k = side_quads(F, k, n);
     solid s = shape_poly(V, 2 * n, F);
     free(V);
     free(F);
@@ -164,14 +173,7 @@ solid shape_fan_slab(size_t n, double len, double w, double bulge, double spread
         F[k++] = 0, F[k++] = (int)(i + 1), F[k++] = (int)i, F[k++] = -1;
         F[k++] = (int)n, F[k++] = (int)(n + i), F[k++] = (int)(n + i + 1), F[k++] = -1;
     }
-    for (size_t i = 0; i < n; i++) {
-        F[k++] = (int)i;
-        F[k++] = (int)((i + 1) % n);
-        F[k++] = (int)(n + (i + 1) % n);
-        F[k++] = (int)(n + i);
-        F[k++] = -1;
-    }
-    F[k++] = -2;
+    k = side_quads(F, k, n);
     solid s = shape_poly(V, 2 * n, F);
     free(b);
     free(V);

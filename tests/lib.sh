@@ -6,6 +6,7 @@
 #   status WANT CMD...          runs CMD (stdout to $T/out, stderr to $T/err); true when it
 #                               exits WANT, else prints what it got
 #   finish                      prints "N passed, N failed" and exits non-zero on a failure
+#   give_up WHY                 a test that cannot run: one failure, WHY, and exit
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT INT TERM
 P=0
@@ -29,4 +30,9 @@ finish() {
     echo "$P passed, $F failed"
     [ "$F" -eq 0 ]
     exit $?
+}
+give_up() {
+    echo "FAIL $1"
+    echo "0 passed, 1 failed"
+    exit 1
 }

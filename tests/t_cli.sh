@@ -10,11 +10,7 @@ stat() { sed -n "s/.*\"stats\":{.*\"$2\":\([0-9][0-9]*\)[,}].*/\1/p" "$1"; }
 has() { grep -q -- "$2" "$1"; }
 lines_of() { wc -l <"$1" | tr -d ' '; }
 
-if [ ! -x "$BIN" ]; then
-    echo "FAIL $BIN is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+[ -x "$BIN" ] || give_up "$BIN is not built"
 
 SQUARE='[[[0,0],[1,0]],[[1,0],[1,1]],[[1,1],[0,1]],[[0,1],[0,0]]]'
 printf '{"kind":"lines","lines":%s,"options":{"fields":["V","EV","FV","FE","holes","exterior"]}}\n' \

@@ -15,16 +15,9 @@ PY=${PYTHON:-python3}
 if ! $PY -c 'import shapely.geometry, shapely.ops, shapely.validation' 2>/dev/null; then
     PY=/usr/bin/python3
 fi
-if ! $PY -c 'import shapely.geometry, shapely.ops, shapely.validation' 2>/dev/null; then
-    echo "FAIL python3 with shapely is needed: apt-get install python3-shapely (make deps)"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
-if [ ! -x "$BIN" ]; then
-    echo "FAIL $BIN is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+$PY -c 'import shapely.geometry, shapely.ops, shapely.validation' 2>/dev/null ||
+    give_up "python3 with shapely is needed: apt-get install python3-shapely (make deps)"
+[ -x "$BIN" ] || give_up "$BIN is not built"
 # line drawings: dangling trees inside a face and hanging from its side, blocks at cut vertices
 cat >"$T/cut-vertices.json" <<'JSON'
 {"kind": "lines", "lines": [[[0, 0], [8, 0]], [[8, 0], [8, 8]], [[8, 8], [0, 8]], [[0, 8], [0, 0]],

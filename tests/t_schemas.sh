@@ -26,16 +26,9 @@ tally() {
     [ "$n" -gt 0 ] || fail "$1: validate.py printed no result ($(head -c 300 "$T/out"))"
 }
 
-if ! $PY -c 'import jsonschema; jsonschema.Draft202012Validator' 2>/dev/null; then
-    echo "FAIL python3 with jsonschema (Draft202012Validator) is needed: apt-get install python3-jsonschema"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
-if [ ! -x "$BIN" ]; then
-    echo "FAIL $BIN is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+$PY -c 'import jsonschema; jsonschema.Draft202012Validator' 2>/dev/null ||
+    give_up "python3 with jsonschema (Draft202012Validator) is needed: apt-get install python3-jsonschema"
+[ -x "$BIN" ] || give_up "$BIN is not built"
 
 # --- the schemas themselves and the OpenAPI document
 $V --check-all >"$T/out" 2>&1

@@ -19,11 +19,7 @@ json() { $PY -c "import json,sys; r=json.load(open('$T/out')); print($1)"; }
 errhas() { grep -q -- "$1" "$T/err"; }
 count() { grep -c "$1" "$2" | tr -d ' '; }
 
-if [ ! -x "$BIN" ]; then
-    echo "FAIL $BIN is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+[ -x "$BIN" ] || give_up "$BIN is not built"
 
 # a unit cube (OBJ, 1-based) and the same moved by (0.5, 0.5, 0.5) (OFF, 0-based)
 cat >"$T/cube.obj" <<'EOF'

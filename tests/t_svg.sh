@@ -14,11 +14,7 @@ PY=${PYTHON:-python3}
 json() { $PY -c "import json,sys; r=json.load(open('$T/out')); print($1)"; }
 errhas() { grep -q -- "$1" "$T/err"; }
 
-if [ ! -x "$BIN" ] || [ ! -d "$D" ]; then
-    echo "FAIL $BIN is not built or $D is missing"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+{ [ -x "$BIN" ] && [ -d "$D" ]; } || give_up "$BIN is not built or $D is missing"
 
 # --- help and usage
 check "--help names svg and its flags" sh -c "'$BIN' --help | grep -q 'cellar svg DRAWING.svg \[--normalize\]'"

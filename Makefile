@@ -80,11 +80,11 @@ tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool
 
 # The CGAL reference of the 3D tests (C++, header-only CGAL: about 1.5 min to compile).  Built
 # without sanitizers; make check copies it from $(BUILD) instead of compiling it again.
-$(BUILD)/tests/ref/cgal_bool: tests/ref/cgal_bool.cpp
+$(BUILD)/tests/ref/cgal_bool: tests/ref/cgal_bool.cpp tests/ref/cgal_soup.hpp
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr
 
-$(BUILD)/tests/ref/cgal_nef: tests/ref/cgal_nef.cpp
+$(BUILD)/tests/ref/cgal_nef: tests/ref/cgal_nef.cpp tests/ref/cgal_soup.hpp
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr
 
@@ -141,10 +141,12 @@ run:
 	@scripts/run.sh $(BUILD) $(ARGS)
 
 format:
-	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch]
+	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch] \
+	    tests/ref/*.cpp tests/ref/*.hpp
 
 format-check:
-	clang-format --dry-run -Werror core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch]
+	clang-format --dry-run -Werror core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] \
+	    tests/ref/*.[ch] tests/ref/*.cpp tests/ref/*.hpp
 
 clean:
 	rm -rf build

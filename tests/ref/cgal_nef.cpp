@@ -94,153 +94,11 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 typedef Kernel::Point_3 Point;
 typedef CGAL::Surface_mesh<Point> Mesh;
 typedef CGAL::Nef_polyhedron_3<Kernel> Nef;
-typedef CGAL::Epeck_ft Exact;        /* the exact rationals under Epeck's lazy numbers */
-typedef CGAL::Epick::Point_3 Dpoint; /* a point of doubles, as read */
-typedef std::vector<std::size_t> Polygon;
+typedef CGAL::Epeck_ft Exact; /* the exact rationals under Epeck's lazy numbers */
 
-/* One solid as read: doubles and index polygons, and where it came from. */
-struct Soup {
-    std::string label;
-    std::vector<Dpoint> points;
-    std::vector<Polygon> polygons;
-};
-
-static double now_ms()
-{
-    using namespace std::chrono;
-    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
-
-/* ---- reading (as cgal_bool reads) ---------------------------------------------------------- */
-
-static bool ends_with(const std::string &s, const char *suffix)
-{
-    size_t n = std::strlen(suffix);
-    if (s.size() < n) return false;
-    for (size_t i = 0; i < n; i++)
-        if (std::tolower((unsigned char)s[s.size() - n + i]) != suffix[i]) return false;
-    return true;
-}
-
-/* OFF through CGAL's reader, into Epick points: doubles, as cellar reads them (an Epeck point
- * read from a stream would take "0.1" as the exact rational 1/10). */
-static bool read_off(const std::string &path, Soup &s, std::string &why)
-{
-    std::ifstream in(path);
-    if (!in) {
-        why = "cannot open";
-        return false;
-    }
-    s.label = path;
-    if (!CGAL::IO::read_OFF(in, s.points, s.polygons, CGAL::parameters::verbose(false))) {
-        why = "not a readable OFF file";
-        return false;
-    }
-    return true;
-}
-
-/* OBJ: "v x y z", "f a b c ..." (a, a/t, a//n, a/t/n; negative = relative to the end), other
- * statements ignored: the whole file is one solid. */
-static bool read_obj(const std::string &path, Soup &s, std::string &why)
-{
-    std::ifstream in(path);
-    if (!in) {
-        why = "cannot open";
-        return false;
-    }
-    s.label = path;
-    std::string line;
-    for (size_t ln = 1; std::getline(in, line); ln++) {
-        const char *c = line.c_str();
-        while (*c == ' ' || *c == '\t') c++;
-        char *end;
-        if (c[0] == 'v' && (c[1] == ' ' || c[1] == '\t')) {
-            double p[3];
-            const char *q = c + 1;
-            for (int k = 0; k < 3; k++) {
-                p[k] = std::strtod(q, &end);
-                if (end == q || !std::isfinite(p[k])) {
-                    why = "line " + std::to_string(ln) + ": bad vertex";
-                    return false;
-                }
-                q = end;
-            }
-            s.points.emplace_back(p[0], p[1], p[2]);
-        } else if (c[0] == 'f' && (c[1] == ' ' || c[1] == '\t')) {
-            Polygon poly;
-            const char *q = c + 1;
-            for (;;) {
-                while (*q == ' ' || *q == '\t' || *q == '\r') q++;
-                if (!*q) break;
-                long i = std::strtol(q, &end, 10);
-                if (end == q) {
-                    why = "line " + std::to_string(ln) + ": bad face";
-                    return false;
-                }
-                q = end;
-                while (*q && *q != ' ' && *q != '\t' && *q != '\r') q++; /* /t/n */
-                long idx = i > 0 ? i - 1 : (long)s.points.size() + i;
-                if (i == 0 || idx < 0 || idx >= (long)s.points.size()) {
-                    why = "line " + std::to_string(ln) + ": vertex index out of range";
-                    return false;
-                }
-                poly.push_back((size_t)idx);
-            }
-            if (poly.size() < 3) {
-                why = "line " + std::to_string(ln) + ": face with fewer than 3 vertices";
-                return false;
-            }
-            s.polygons.push_back(std::move(poly));
-        }
-    }
-    if (s.polygons.empty()) {
-        why = "no faces";
-        return false;
-    }
-    return true;
-}
+#include "cgal_soup.hpp"
 
 /* ---- meshes and Nef polyhedra -------------------------------------------------------------- */
-
-/* A soup into a checked, triangulated, outward mesh; false with why (as cgal_bool). */
-static bool make_mesh(Soup &s, Mesh &m, std::string &why)
-{
-    PMP::repair_polygon_soup(s.points, s.polygons); /* merges equal points, drops unused ones */
-    if (s.polygons.empty()) {
-        why = "no faces left after removing degenerate ones";
-        return false;
-    }
-    if (!PMP::orient_polygon_soup(s.points, s.polygons)) {
-        why = "not an orientable 2-manifold (an edge on more than two faces, or a pinched vertex)";
-        return false;
-    }
-    std::vector<Point> pts;
-    pts.reserve(s.points.size());
-    for (const Dpoint &p : s.points) pts.emplace_back(p.x(), p.y(), p.z());
-    if (!PMP::is_polygon_soup_a_polygon_mesh(s.polygons)) {
-        why = "the faces do not make a polygon mesh";
-        return false;
-    }
-    PMP::polygon_soup_to_polygon_mesh(pts, s.polygons, m);
-    if (!PMP::triangulate_faces(m)) {
-        why = "a face could not be triangulated";
-        return false;
-    }
-    if (!CGAL::is_closed(m)) {
-        why = "not closed";
-        return false;
-    }
-    if (PMP::does_self_intersect(m)) {
-        why = "self-intersecting";
-        return false;
-    }
-    PMP::orient_to_bound_a_volume(m);
-    if (!PMP::does_bound_a_volume(m)) {
-        why = "does not bound a volume (components intersect)";
-        return false;
-    }
-    return true;
-}
 
 struct Cgal_failure : std::exception {
     std::string what_;
@@ -312,14 +170,6 @@ static void count(const Nef &n, size_t *nv, size_t *ne, size_t *nf)
     *nf /= 2;
 }
 
-static std::string num(double x)
-{
-    char b[32];
-    if (!std::isfinite(x)) return "null";
-    std::snprintf(b, sizeof b, "%.17g", x);
-    return b;
-}
-
 static int usage()
 {
     std::fprintf(stderr, "usage: cgal_nef [--op union|intersection|difference|contact|none] "
@@ -350,15 +200,15 @@ int main(int argc, char **argv)
     }
     if (files.empty()) return usage();
 
-    std::vector<Soup> soups(files.size());
+    std::vector<Soup> soups; /* one per file: an OBJ file is one solid here */
     for (size_t i = 0; i < files.size(); i++) {
         const std::string &f = files[i];
         std::string why;
         bool ok;
         if (ends_with(f, ".off"))
-            ok = read_off(f, soups[i], why);
+            ok = read_off(f, soups, why);
         else if (ends_with(f, ".obj"))
-            ok = read_obj(f, soups[i], why);
+            ok = read_obj(f, false, soups, why);
         else {
             ok = false;
             why = "expected a .off or .obj file";

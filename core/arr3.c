@@ -646,7 +646,7 @@ static int newell_axis(const a3 *A, const uint32_t *v, size_t n)
 
 static int add_contact(a3 *A, uint32_t plane, uint32_t p);
 
-static int cmp_u32(const void *pa, const void *pb)
+int a3_cmp_u32(const void *pa, const void *pb)
 {
     uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
     return (a > b) - (a < b);
@@ -675,7 +675,7 @@ static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
  * vertices of its left-out faces (sorted here).  Returns -1 out of memory. */
 static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
 {
-    qsort(drop, n, sizeof *drop, cmp_u32);
+    qsort(drop, n, sizeof *drop, a3_cmp_u32);
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         if (!m || drop[i] != drop[m - 1]) drop[m++] = drop[i];

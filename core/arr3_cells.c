@@ -581,12 +581,6 @@ static int fgrid_build(fgrid *g, const double *box, size_t n)
     return 0;
 }
 
-static int cmp_u32_asc(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* The faces whose boxes may hold (qi, qj), ascending, into *out (grown as needed). */
 static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap, size_t *n)
 {
@@ -603,7 +597,7 @@ static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, siz
     for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
     if (inside)
         for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
-    qsort(*out, k, sizeof **out, cmp_u32_asc);
+    qsort(*out, k, sizeof **out, a3_cmp_u32);
     *n = k;
     return 0;
 }

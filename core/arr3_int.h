@@ -130,6 +130,8 @@ typedef struct a3 {
 /* ---- shared tools (arr3.c) ------------------------------------------------------------- */
 
 int a3_grow(void *pp, size_t *cap, size_t need, size_t elem);
+/* qsort's comparison of uint32_t, ascending. */
+int a3_cmp_u32(const void *pa, const void *pb);
 #define A3_PUSH(arr, n, cap, val)                                                                  \
     (a3_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
 uint64_t a3_mix64(uint64_t x);

@@ -20,10 +20,18 @@
  * broken by the perturbation's derivatives).  The part's own first hit from -infinity shows its
  * outside shell; the nearest hit of another part below q shows the cell holding the part.
  *
+ * The probes find the faces they may hit through a grid over the input pieces' boxes (a face
+ * lies inside each piece covering it).
+ *
  * Volumes are sums of cones over the faces' cycles from the points' approximations (each within
  * 2^-50 of the exact point), so a cell's volume is exact up to rounding.
+ *
+ * Threads: the edges' fans, the points' approximations and the cells' volumes run on par_for()
+ * in fixed chunks, each writing only its own items; the rest runs on the calling thread.
  */
 #include "core/arr3_int.h"
+#include "core/par.h"
+#include "core/sort.h"
 
 #include <float.h>
 #include <math.h>
@@ -34,55 +42,6 @@
 #define U (DBL_EPSILON / 2)
 
 /* ---- small tools ------------------------------------------------------------------------ */
-
-typedef struct emap { /* (lo, hi) -> edge id, open addressing */
-    uint64_t *key;
-    uint32_t *val;
-    size_t cap, n;
-} emap;
-
-static int emap_rehash(emap *m, size_t ncap)
-{
-    uint64_t *k = malloc(ncap * sizeof *k);
-    uint32_t *v = malloc(ncap * sizeof *v);
-    if (!k || !v) {
-        free(k);
-        free(v);
-        return -1;
-    }
-    memset(k, 0xff, ncap * sizeof *k);
-    for (size_t i = 0; i < m->cap; i++) {
-        if (m->key[i] == UINT64_MAX) continue;
-        size_t h = a3_mix64(m->key[i]) & (ncap - 1);
-        while (k[h] != UINT64_MAX) h = (h + 1) & (ncap - 1);
-        k[h] = m->key[i];
-        v[h] = m->val[i];
-    }
-    free(m->key);
-    free(m->val);
-    m->key = k;
-    m->val = v;
-    m->cap = ncap;
-    return 0;
-}
-
-static uint32_t emap_put(emap *m, uint64_t key, uint32_t val, int *found)
-{
-    if (2 * (m->n + 1) > m->cap && emap_rehash(m, m->cap ? 2 * m->cap : 1024)) return NONE;
-    size_t h = a3_mix64(key) & (m->cap - 1);
-    while (m->key[h] != UINT64_MAX) {
-        if (m->key[h] == key) {
-            *found = 1;
-            return m->val[h];
-        }
-        h = (h + 1) & (m->cap - 1);
-    }
-    m->key[h] = key;
-    m->val[h] = val;
-    m->n++;
-    *found = 0;
-    return val;
-}
 
 static int cmpu32(const void *pa, const void *pb)
 {
@@ -222,6 +181,62 @@ bad : {
              A->step);
     return ARR_EINVAL;
 }
+}
+
+/* ---- the fans of all edges, in parallel ----------------------------------------------------- */
+
+#define FAN_CHUNK 8192
+typedef struct fanjob {
+    const a3 *A;
+    inc *I;
+    const uint32_t *ioff, *ev, *eside, *eplane;
+    const lar3 *out;
+    size_t ne;
+    size_t *bad; /* by chunk: 1 + its first edge that failed, or 0 */
+} fanjob;
+
+/* Edge e's incidences sorted around it (counter-clockwise seen along it), and for solids the
+ * windings checked (fan_check). */
+static int fan_sort(const fanjob *j, size_t e, char *err, size_t errlen)
+{
+    const a3 *A = j->A;
+    const uint32_t *ev = j->ev;
+    inc *F = j->I + j->ioff[e];
+    size_t n = j->ioff[e + 1] - j->ioff[e];
+    if (n >= 3) {
+        fanctx x = {A, {0, 0, 0}, NULL, 0};
+        const plane3 *P = &A->pl[j->eplane[e]];
+        plane3 tmp;
+        const plane3 *SP = a3_side(A, j->eplane[e], ev[2 * e], ev[2 * e + 1], j->eside[e], &tmp);
+        if (!SP) {
+            snprintf(err, errlen, "solids: an edge of %zu faces has no line (a bug)", n);
+            return ARR_EINTERNAL;
+        }
+        cross_ll(P->n, SP->n, x.d);
+        int ax = 0;
+        for (int a = 1; a < 3; a++)
+            if ((x.d[a] < 0 ? -x.d[a] : x.d[a]) > (x.d[ax] < 0 ? -x.d[ax] : x.d[ax])) ax = a;
+        int c = cmp_coord(&A->G, &A->pt[ev[2 * e + 1]], &A->pt[ev[2 * e]], ax);
+        if ((c > 0) != (x.d[ax] > 0))
+            for (int a = 0; a < 3; a++) x.d[a] = -x.d[a];
+        x.n0 = face_n(A, F[0].f);
+        x.s0 = F[0].s;
+        qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
+    }
+    return A->soup ? ARR_OK : fan_check(A, F, n, ev + 2 * e, j->out, err, errlen);
+}
+
+static void fans_sort(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const fanjob *j = ctx;
+    size_t e1 = (item + 1) * FAN_CHUNK < j->ne ? (item + 1) * FAN_CHUNK : j->ne;
+    char err[8];
+    for (size_t e = item * FAN_CHUNK; e < e1; e++)
+        if (fan_sort(j, e, err, sizeof err) != ARR_OK) {
+            j->bad[item] = e + 1;
+            return;
+        }
 }
 
 /* ---- probes --------------------------------------------------------------------------------- */
@@ -497,7 +512,67 @@ static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f
     return s;
 }
 
-/* ---- a grid over the faces' boxes in a probe's projection ----------------------------------
+/* ---- the parallel parts of the output ---------------------------------------------------- */
+
+#define DD_CHUNK 4096
+typedef struct ddjob {
+    const a3 *A;
+    double *dh, *dl;
+    const lar3 *out;
+    dd *cvol;
+    double h3;
+} ddjob;
+
+/* The wanted points (dh[3p] == 0) of one chunk to 2^-100. */
+static void points_dd(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const ddjob *j = ctx;
+    const a3 *A = j->A;
+    size_t p1 = (item + 1) * DD_CHUNK < A->npt ? (item + 1) * DD_CHUNK : A->npt;
+    for (size_t p = item * DD_CHUNK; p < p1; p++)
+        if (!isnan(j->dh[3 * p])) xpt_dd(&A->G, &A->pt[p], j->dh + 3 * p, j->dl + 3 * p);
+}
+
+/* The volumes of one chunk of cells: the sum of their faces' cones from a vertex of the cell. */
+static void cells_volume(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const ddjob *j = ctx;
+    const a3 *A = j->A;
+    const lar3 *out = j->out;
+    const double *dh = j->dh, *dl = j->dl;
+    dd *cvol = j->cvol;
+    double h3 = j->h3;
+    size_t k0 = item * DD_CHUNK, k1 = k0 + DD_CHUNK < out->nc ? k0 + DD_CHUNK : out->nc;
+    for (size_t k = k0; k < k1; k++) {
+        dd org[3] = {{0, 0}, {0, 0}, {0, 0}};
+        const int64_t *gorg = NULL; /* the origin's grid point, when it is one */
+        if (out->cf_off[k + 1] > out->cf_off[k]) {
+            /* a vertex of the cell's first face, on the grid when one is */
+            int32_t s0 = out->cf[out->cf_off[k]];
+            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
+            uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0, v0 = A->ent[o0];
+            for (uint32_t i = 0; i < n0; i++)
+                if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
+                    v0 = A->ent[o0 + i];
+                    gorg = A->g + 3 * (size_t)A->pt[v0].a;
+                    break;
+                }
+            for (int a = 0; a < 3; a++)
+                org[a].hi = dh[3 * (size_t)v0 + a], org[a].lo = dl[3 * (size_t)v0 + a];
+        }
+        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
+            int32_t sf = out->cf[i];
+            uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
+            dd c = face_cone6(A, dh, dl, f, org, gorg);
+            cvol[k] = dd_add(cvol[k], sf > 0 ? c : dd_neg(c));
+        }
+        out->cvol[k] = (cvol[k].hi + cvol[k].lo) * h3;
+    }
+}
+
+/* ---- a grid over the pieces' boxes in a probe's projection ----------------------------------
  * Which faces may a ray along -k through (qi, qj) cross?  Those whose projected box holds the
  * point: a uniform grid over the boxes (about two faces per cell) answers with the boxes of one
  * cell plus the few big ones, instead of every face for every part (parts x faces grew faster
@@ -606,103 +681,97 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
 {
     size_t nf = A->nf;
     int rc = ARR_ENOMEM;
-    emap em = {0};
     inc *I = NULL;
-    size_t ni = 0, capi = 0, ne = 0, cape = 0;
+    size_t ne = 0;
     uint32_t *ev = NULL, *eside = NULL, *eplane = NULL, *ioff = NULL;
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
     uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
     double *fbox = NULL, *dh = NULL, *dl = NULL;
     fgrid fgk[3] = {{0}};
     double *fboxk[3] = {NULL, NULL, NULL};
-    uint32_t *cand = NULL;
-    size_t capcand = 0;
+    uint32_t *cand = NULL, *pf_off = NULL, *pf = NULL, *ff = NULL;
+    size_t capcand = 0, capff = 0;
     uint32_t *hits = NULL, *hoff = NULL, *stack = NULL;
     size_t caphits = 0, capstack = 0;
     probe *probes = NULL;
     dd *cvol = NULL;
     uint64_t *ek = NULL;
-    inc *tmp = NULL;
-    size_t capeside = 0, capeplane = 0;
     uint32_t *ent_e = NULL; /* the edge of each cycle entry (to the next one) */
-    /* edges and incidences */
+    /* edges: the entries sorted by their (lower, higher) vertex pair (stable: by face within an
+     * edge); an edge per pair, its incidences the run of entries, its side and plane from the
+     * first */
     {
-        size_t cap = 1024;
-        while (cap < 2 * A->nent) cap *= 2;
+        uint32_t *ent_f = malloc((A->nent + 1) * sizeof *ent_f);
+        kv *ek2 = malloc((A->nent + 1) * sizeof *ek2);
         ent_e = malloc((A->nent + 1) * sizeof *ent_e);
-        if (!ent_e || emap_rehash(&em, cap) || a3_grow(&ev, &cape, A->nent + 2, sizeof *ev) ||
-            a3_grow(&eside, &capeside, A->nent / 2 + 1, sizeof *eside) ||
-            a3_grow(&eplane, &capeplane, A->nent / 2 + 1, sizeof *eplane) ||
-            a3_grow(&I, &capi, A->nent + 1, sizeof *I))
+        if (!ent_f || !ek2 || !ent_e) {
+            free(ent_f), free(ek2);
             goto done;
-    }
-    for (size_t f = 0; f < nf; f++)
-        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-            uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
-            if (n < 2) continue;
-            for (uint32_t t = 0; t < n; t++) {
-                uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n];
-                uint32_t lo = a < b ? a : b, hi = a ^ b ^ lo;
-                int found;
-                uint32_t e = emap_put(&em, (uint64_t)lo << 32 | hi, (uint32_t)ne, &found);
-                if (e == NONE) goto done;
-                if (!found) {
-                    if (a3_grow(&ev, &cape, 2 * ne + 2, sizeof *ev) ||
-                        a3_grow(&eside, &capeside, ne + 1, sizeof *eside) ||
-                        a3_grow(&eplane, &capeplane, ne + 1, sizeof *eplane))
-                        goto done;
-                    ev[2 * ne] = lo, ev[2 * ne + 1] = hi;
-                    eside[ne] = A->side[o + t];
-                    eplane[ne] = A->f_plane[f];
-                    ne++;
-                }
-                inc x = {e, (uint32_t)f, a == lo ? 1 : -1};
-                if (A3_PUSH(I, ni, capi, x)) goto done;
-                ent_e[o + t] = e;
-            }
         }
-    /* incidences by edge (counting sort keeps face order) */
-    ioff = calloc(ne + 2, sizeof *ioff);
-    tmp = malloc((ni + 1) * sizeof *tmp);
-    if (!ioff || !tmp) goto done;
-    for (size_t i = 0; i < ni; i++) ioff[I[i].e + 2]++;
-    for (size_t e = 0; e < ne; e++) ioff[e + 2] += ioff[e + 1];
-    for (size_t i = 0; i < ni; i++) tmp[ioff[I[i].e + 1]++] = I[i];
-    free(I);
-    I = tmp;
-    tmp = NULL;
+        size_t m = 0;
+        for (size_t f = 0; f < nf; f++)
+            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+                uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+                if (n < 2) continue;
+                for (uint32_t t = 0; t < n; t++) {
+                    uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n];
+                    uint32_t lo = a < b ? a : b, hi = a ^ b ^ lo;
+                    ek2[m++] = (kv){(uint64_t)lo << 32 | hi, o + t};
+                    ent_f[o + t] = (uint32_t)f;
+                }
+            }
+        if (sort_kv(ek2, m)) {
+            free(ent_f), free(ek2);
+            goto done;
+        }
+        for (size_t i = 0; i < m; i++) ne += i == 0 || ek2[i].k != ek2[i - 1].k;
+        ev = malloc((2 * ne + 2) * sizeof *ev);
+        eside = malloc((ne + 1) * sizeof *eside);
+        eplane = malloc((ne + 1) * sizeof *eplane);
+        ioff = malloc((ne + 2) * sizeof *ioff);
+        I = malloc((m + 1) * sizeof *I);
+        if (!ev || !eside || !eplane || !ioff || !I) {
+            free(ent_f), free(ek2);
+            goto done;
+        }
+        ne = 0;
+        for (size_t i = 0; i < m; i++) {
+            uint32_t x = ek2[i].v, lo = (uint32_t)(ek2[i].k >> 32);
+            if (i == 0 || ek2[i].k != ek2[i - 1].k) {
+                ev[2 * ne] = lo, ev[2 * ne + 1] = (uint32_t)ek2[i].k;
+                eside[ne] = A->side[x];
+                eplane[ne] = A->f_plane[ent_f[x]];
+                ioff[ne] = (uint32_t)i;
+                ne++;
+            }
+            I[i] = (inc){(uint32_t)ne - 1, ent_f[x], A->ent[x] == lo ? 1 : -1};
+            ent_e[x] = (uint32_t)ne - 1;
+        }
+        ioff[ne] = (uint32_t)m;
+        free(ent_f), free(ek2);
+    }
     /* fans: face sides 2f (+, the normal's side) and 2f+1 (-) */
     sp = malloc((2 * nf + 1) * sizeof *sp);
     fcomp = malloc((nf + 1) * sizeof *fcomp);
     if (!sp || !fcomp) goto done;
     for (size_t i = 0; i < 2 * nf; i++) sp[i] = (uint32_t)i;
     for (size_t i = 0; i < nf; i++) fcomp[i] = (uint32_t)i;
+    {
+        /* each edge's fan sorted and checked, in chunks on the threads; the first failing edge
+         * is checked again here for its message */
+        size_t nch = (ne + FAN_CHUNK - 1) / FAN_CHUNK;
+        fanjob j = {A, I, ioff, ev, eside, eplane, out, ne, calloc(nch + 1, sizeof *j.bad)};
+        if (!j.bad) goto done;
+        par_for(A->threads, nch, fans_sort, &j);
+        size_t bad = SIZE_MAX;
+        for (size_t ch = 0; ch < nch && bad == SIZE_MAX; ch++)
+            if (j.bad[ch]) bad = j.bad[ch] - 1;
+        free(j.bad);
+        if (bad != SIZE_MAX && (rc = fan_sort(&j, bad, err, errlen)) != ARR_OK) goto done;
+    }
     for (size_t e = 0; e < ne; e++) {
         inc *F = I + ioff[e];
         size_t n = ioff[e + 1] - ioff[e];
-        if (n >= 3) {
-            fanctx x = {A, {0, 0, 0}, NULL, 0};
-            const plane3 *P = &A->pl[eplane[e]];
-            plane3 tmp;
-            const plane3 *SP = a3_side(A, eplane[e], ev[2 * e], ev[2 * e + 1], eside[e], &tmp);
-            if (!SP) {
-                rc = ARR_EINTERNAL;
-                snprintf(err, errlen, "solids: an edge of %zu faces has no line (a bug)", n);
-                goto done;
-            }
-            cross_ll(P->n, SP->n, x.d);
-            int ax = 0;
-            for (int a = 1; a < 3; a++)
-                if ((x.d[a] < 0 ? -x.d[a] : x.d[a]) > (x.d[ax] < 0 ? -x.d[ax] : x.d[ax])) ax = a;
-            int c = cmp_coord(&A->G, &A->pt[ev[2 * e + 1]], &A->pt[ev[2 * e]], ax);
-            if ((c > 0) != (x.d[ax] > 0))
-                for (int a = 0; a < 3; a++) x.d[a] = -x.d[a];
-            x.n0 = face_n(A, F[0].f);
-            x.s0 = F[0].s;
-            qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
-        }
-        if (!A->soup && (rc = fan_check(A, F, n, ev + 2 * e, out, err, errlen)) != ARR_OK)
-            goto done;
         rc = ARR_ENOMEM;
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
@@ -774,13 +843,21 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         free(vu);
         A->st->components = nvc;
     }
-    /* face boxes (approximate, for the probes' first filter) */
+    /* the cells: union-find over the shells and the exterior */
     cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
     if (!cu) goto done;
     for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
     uint32_t EXT = (uint32_t)nsh;
     /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
      * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
+    /* faces by their first covering piece (a face lies inside each piece covering it, so
+     * inside that piece's box): the probes find faces through the pieces' boxes */
+    pf_off = calloc(A->npc + 2, sizeof *pf_off);
+    pf = malloc((nf + 1) * sizeof *pf);
+    if (!pf_off || !pf) goto done;
+    for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
+    for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
+    for (size_t f = 0; f < nf; f++) pf[pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
     probes = malloc((ncomp + 1) * sizeof *probes);
     hoff = calloc(ncomp + 2, sizeof *hoff);
     if (!probes || !hoff) goto done;
@@ -795,44 +872,49 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                      A->pc[cpiece[c]].face);
             goto done;
         }
-        if (!fgk[pr->k].off) { /* boxes of the faces in this probe's projection, and a grid:
+        if (!fgk[pr->k].off) { /* the pieces' boxes in this probe's projection, and a grid:
                                    once per axis (parts alternate between axes) */
-            fbox = fboxk[pr->k] = malloc((4 * nf + 1) * sizeof *fbox);
+            fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
             if (!fbox) goto done;
-            for (size_t f = 0; f < nf; f++) {
-                double *bx = fbox + 4 * f;
-                bx[0] = bx[1] = DBL_MAX, bx[2] = bx[3] = -DBL_MAX;
-                for (uint32_t e = A->cyc_off[A->f_cyc[f]]; e < A->cyc_off[A->f_cyc[f] + 1]; e++) {
-                    const double *x = A->pt[A->ent[e]].x;
-                    double u = x[pr->i], v = x[pr->j];
-                    if (u < bx[0]) bx[0] = u;
-                    if (v < bx[1]) bx[1] = v;
-                    if (u > bx[2]) bx[2] = u;
-                    if (v > bx[3]) bx[3] = v;
-                }
-                /* widened by the margin the test below allows */
+            for (size_t q = 0; q < A->npc; q++) {
+                const int64_t *b = A->pc[q].box;
+                double *bx = fbox + 4 * q;
+                bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
+                bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
+                /* widened by more than the rounding of the conversions */
                 double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
                 bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
             }
-            if (fgrid_build(&fgk[pr->k], fbox, nf)) goto done;
+            if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
         }
-        fbox = fboxk[pr->k];
         const fgrid *fg = &fgk[pr->k];
         double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
         uint32_t own = NONE;
-        size_t h0 = nhit, ncand;
+        size_t h0 = nhit, ncand, nff = 0;
         if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
+        /* the faces of the pieces whose boxes hold the point (exactly: Q / 3 in [lo, hi]) */
         for (size_t ci = 0; ci < ncand; ci++) {
-            size_t f = cand[ci];
-            const double *bx = fbox + 4 * f;
-            if (qi < bx[0] || qi > bx[2] || qj < bx[1] || qj > bx[3]) continue;
+            const int64_t *b = A->pc[cand[ci]].box;
+            if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
+                (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
+                (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
+                (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
+                continue;
+            uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
+            if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
+            memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
+            nff += n;
+        }
+        if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
+        for (size_t ci = 0; ci < nff; ci++) {
+            uint32_t f = ff[ci];
             if (fcomp[f] != c && ncomp == 1) continue;
-            if (!probe_hits(A, (uint32_t)f, pr)) continue;
+            if (!probe_hits(A, f, pr)) continue;
             if (fcomp[f] == c) {
-                if (own == NONE || probe_cmp(A, (uint32_t)f, own, pr) < 0) own = (uint32_t)f;
+                if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
             } else {
                 if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
-                hits[nhit++] = (uint32_t)f;
+                hits[nhit++] = f;
             }
         }
         if (own == NONE) {
@@ -907,11 +989,11 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     dl = malloc((3 * A->npt + 1) * sizeof *dl);
     cvol = calloc(nc + 1, sizeof *cvol);
     if (!dh || !dl || !cvol) goto done;
-    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN; /* not yet */
-    for (size_t i = 0; i < A->nent; i++) {
-        uint32_t p = A->ent[i];
-        if (isnan(dh[3 * (size_t)p]))
-            xpt_dd(&A->G, &A->pt[p], dh + 3 * (size_t)p, dl + 3 * (size_t)p);
+    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
+    for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
+    {
+        ddjob j = {A, dh, dl, NULL, NULL, 0};
+        par_for(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j);
     }
     out->nc = nc;
     out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
@@ -948,30 +1030,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             out->cf[out->cf_off[k] + fill[k]++] = sf;
         }
     }
-    for (size_t k = 0; k < nc; k++) {
-        dd org[3] = {{0, 0}, {0, 0}, {0, 0}};
-        const int64_t *gorg = NULL; /* the origin's grid point, when it is one */
-        if (out->cf_off[k + 1] > out->cf_off[k]) {
-            /* a vertex of the cell's first face, on the grid when one is */
-            int32_t s0 = out->cf[out->cf_off[k]];
-            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
-            uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0, v0 = A->ent[o0];
-            for (uint32_t i = 0; i < n0; i++)
-                if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
-                    v0 = A->ent[o0 + i];
-                    gorg = A->g + 3 * (size_t)A->pt[v0].a;
-                    break;
-                }
-            for (int a = 0; a < 3; a++)
-                org[a].hi = dh[3 * (size_t)v0 + a], org[a].lo = dl[3 * (size_t)v0 + a];
-        }
-        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
-            int32_t sf = out->cf[i];
-            uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
-            dd c = face_cone6(A, dh, dl, f, org, gorg);
-            cvol[k] = dd_add(cvol[k], sf > 0 ? c : dd_neg(c));
-        }
-        out->cvol[k] = (cvol[k].hi + cvol[k].lo) * h3;
+    {
+        ddjob j = {A, dh, dl, out, cvol, h3};
+        par_for(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j);
     }
     free(fill);
     /* ---- output: vertices sorted by position, edges sorted, faces */
@@ -1132,10 +1193,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(em.key);
-    free(em.val);
     free(I);
-    free(tmp);
     free(ev);
     free(eside);
     free(eplane);
@@ -1157,6 +1215,9 @@ done:
         free(fboxk[k]);
     }
     free(cand);
+    free(pf_off);
+    free(pf);
+    free(ff);
     free(hits);
     free(hoff);
     free(stack);

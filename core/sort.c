@@ -30,6 +30,8 @@
 RADIX_PASS(uint64_t, KEY_U64)
 #define KEY_IPT_X(e) ((uint64_t)(e).x ^ (UINT64_C(1) << 63))
 #define KEY_IPT_Y(e) ((uint64_t)(e).y ^ (UINT64_C(1) << 63))
+#define KEY_KV(e)    ((e).k)
+RADIX_PASS(kv, KEY_KV)
 typedef ipt ipt_x;
 typedef ipt ipt_y;
 RADIX_PASS(ipt_x, KEY_IPT_X)
@@ -103,6 +105,39 @@ int sort_ipt(ipt *a, size_t n)
     for (unsigned sh = 0; sh < 64; sh += RBITS) {
         if (pass_ipt_x(src, dst, n, sh, cnt)) {
             ipt *t = src;
+            src = dst;
+            dst = t;
+        }
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
+    free(tmp);
+    free(cnt);
+    return 0;
+}
+
+int sort_kv(kv *a, size_t n)
+{
+    if (n < 2) return 0;
+    if (n <= SMALL) {
+        for (size_t i = 1; i < n; i++) {
+            kv x = a[i];
+            size_t j = i;
+            for (; j > 0 && a[j - 1].k > x.k; j--) a[j] = a[j - 1];
+            a[j] = x;
+        }
+        return 0;
+    }
+    kv *tmp = malloc(n * sizeof *tmp);
+    size_t *cnt = malloc(RSIZE * sizeof *cnt);
+    if (!tmp || !cnt) {
+        free(tmp);
+        free(cnt);
+        return -1;
+    }
+    kv *src = a, *dst = tmp;
+    for (unsigned sh = 0; sh < 64; sh += RBITS) {
+        if (pass_kv(src, dst, n, sh, cnt)) {
+            kv *t = src;
             src = dst;
             dst = t;
         }

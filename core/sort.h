@@ -11,6 +11,13 @@
 #include "core/num.h"
 
 int sort_u64(uint64_t *a, size_t n);
+/* A key and the value it carries (an index), sorted by key; stable: equal keys keep their
+ * order. */
+typedef struct kv {
+    uint64_t k;
+    uint32_t v;
+} kv;
+int sort_kv(kv *a, size_t n);
 /* Lexicographic (x, then y); coordinates must satisfy |c| < 2^62. */
 int sort_ipt(ipt *a, size_t n);
 

@@ -36,6 +36,7 @@
 #include <time.h>
 
 #include "core/par.h"
+#include "core/sort.h"
 
 /* ------------------------------------------------------------------ shared tools */
 
@@ -1033,12 +1034,6 @@ static void kd_split(kdwork *w, uint32_t *ids, size_t n, int depth)
     free(r);
 }
 
-static int cmpu64(const void *pa, const void *pb)
-{
-    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
-    return (a > b) - (a < b);
-}
-
 static int piece_pairs(a3 *A, uint64_t **out, size_t *nout)
 {
     uint32_t *ids = malloc((A->npc + 1) * sizeof *ids);
@@ -1051,7 +1046,10 @@ static int piece_pairs(a3 *A, uint64_t **out, size_t *nout)
         free(w.pairs);
         return -1;
     }
-    if (w.np > 1) qsort(w.pairs, w.np, sizeof *w.pairs, cmpu64);
+    if (sort_u64(w.pairs, w.np)) {
+        free(w.pairs);
+        return -1;
+    }
     size_t m = 0;
     for (size_t i = 0; i < w.np; i++)
         if (!m || w.pairs[i] != w.pairs[m - 1]) w.pairs[m++] = w.pairs[i];
@@ -1062,25 +1060,72 @@ static int piece_pairs(a3 *A, uint64_t **out, size_t *nout)
 
 /* ------------------------------------------------------------------ cuts */
 
-/* LPIs are made once per (edge, plane): a hash on the triple. */
+/* The pairs run on par_for() in fixed chunks.  A chunk makes its LPIs as its own points (ids
+ * with CUT_LOCAL set, once per (edge, plane) in the chunk) and writes its own cuts and contacts;
+ * the chunks are then merged in order, each LPI that a cut or a contact uses becoming the global
+ * point of its (edge, plane) (made once: a hash on the triple; the others are dropped), so the
+ * result does not depend on the number of threads. */
+#define CUT_CHUNK 8192
+#define CUT_LOCAL 0x80000000u
+
+/* A hash from (a, b, c) to point ids, NONE empty. */
 typedef struct ltab {
-    uint32_t *id; /* point ids, NONE empty */
+    uint32_t *id;
     size_t cap, n;
 } ltab;
+
+/* An event of a polygon on the line: the closed stretch [lo, hi] of its boundary (one point for
+ * a crossing, the vertices of a run along the line otherwise), and whether the inside changes
+ * across it. */
+typedef struct ev {
+    uint32_t lo, hi;
+    int toggle;
+} ev;
+
+/* A worker's scratch. */
+typedef struct cutwork {
+    ev *e[2];
+    size_t ne[2], cap[2];
+    uint32_t *iv[2]; /* closed intervals: pairs of points */
+    size_t niv[2], capiv[2];
+    int8_t *sd;
+    size_t capsd;
+} cutwork;
+
+/* A chunk's output. */
+typedef struct cutout {
+    xpt *pt; /* its LPIs */
+    size_t npt, cappt;
+    ltab lt; /* over pt: local indices */
+    cseg *cs;
+    size_t ncs, capcs;
+    cpt *cp;
+    size_t ncp, capcp;
+    int rc; /* 0, -1 out of memory, -3 cancelled */
+} cutout;
+
+typedef struct cutjob {
+    const a3 *A;
+    const uint64_t *pairs;
+    size_t np;
+    cutwork *w; /* by worker */
+    cutout *o;  /* by chunk */
+    atomic_size_t done;
+} cutjob;
 
 static uint64_t lkey(uint32_t a, uint32_t b, uint32_t c)
 {
     return a3_mix64(((uint64_t)a << 32 | b) ^ a3_mix64(c + 0x9e3779b9ULL));
 }
 
-static int ltab_rehash(const a3 *A, ltab *t, size_t ncap)
+static int ltab_rehash(const xpt *pt, ltab *t, size_t ncap)
 {
     uint32_t *id = malloc(ncap * sizeof *id);
     if (!id) return -1;
     memset(id, 0xff, ncap * sizeof *id);
     for (size_t i = 0; i < t->cap; i++) {
         if (t->id[i] == NONE) continue;
-        const xpt *p = &A->pt[t->id[i]];
+        const xpt *p = &pt[t->id[i]];
         size_t h = lkey(p->a, p->b, p->c) & (ncap - 1);
         while (id[h] != NONE) h = (h + 1) & (ncap - 1);
         id[h] = t->id[i];
@@ -1091,64 +1136,62 @@ static int ltab_rehash(const a3 *A, ltab *t, size_t ncap)
     return 0;
 }
 
+/* The slot of (a, b, c) in t over points pt: the one holding it, or the empty one where it
+ * goes; SIZE_MAX when out of memory. */
+static size_t ltab_slot(const xpt *pt, ltab *t, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (2 * (t->n + 1) > t->cap && ltab_rehash(pt, t, t->cap ? 2 * t->cap : 1024)) return SIZE_MAX;
+    size_t h = lkey(a, b, c) & (t->cap - 1);
+    while (t->id[h] != NONE) {
+        const xpt *p = &pt[t->id[h]];
+        if (p->a == a && p->b == b && p->c == c) break;
+        h = (h + 1) & (t->cap - 1);
+    }
+    return h;
+}
+
 static uint32_t add_point(a3 *A, xpt p)
 {
-    if (A->npt >= 0xfffffff0u || A3_PUSH(A->pt, A->npt, A->cappt, p)) return NONE;
+    if (A->npt >= CUT_LOCAL - 1 || A3_PUSH(A->pt, A->npt, A->cappt, p)) return NONE;
     A->G.pl = A->pl;
     A->G.g = A->g;
     return (uint32_t)(A->npt - 1);
 }
 
-/* The LPI of edge (a, b) and plane c. */
-static uint32_t lpi_id(a3 *A, ltab *t, uint32_t a, uint32_t b, uint32_t c)
+static const xpt *cut_pt(const a3 *A, const cutout *o, uint32_t p)
+{
+    return p & CUT_LOCAL ? &o->pt[p & ~CUT_LOCAL] : &A->pt[p];
+}
+
+/* The chunk's LPI of edge (a, b) and plane c. */
+static uint32_t lpi_id(const a3 *A, cutout *o, uint32_t a, uint32_t b, uint32_t c)
 {
     if (a > b) {
         uint32_t s = a;
         a = b, b = s;
     }
-    if (2 * (t->n + 1) > t->cap && ltab_rehash(A, t, t->cap ? 2 * t->cap : 1024)) return NONE;
-    size_t h = lkey(a, b, c) & (t->cap - 1);
-    while (t->id[h] != NONE) {
-        const xpt *p = &A->pt[t->id[h]];
-        if (p->a == a && p->b == b && p->c == c) return t->id[h];
-        h = (h + 1) & (t->cap - 1);
-    }
-    uint32_t id = add_point(A, xpt_lpi(&A->G, a, b, c));
-    if (id == NONE) return NONE;
-    t->id[h] = id;
-    t->n++;
-    return id;
+    size_t h = ltab_slot(o->pt, &o->lt, a, b, c);
+    if (h == SIZE_MAX) return NONE;
+    if (o->lt.id[h] != NONE) return o->lt.id[h] | CUT_LOCAL;
+    if (o->npt >= CUT_LOCAL - 1 || A3_PUSH(o->pt, o->npt, o->cappt, xpt_lpi(&A->G, a, b, c)))
+        return NONE;
+    o->lt.id[h] = (uint32_t)(o->npt - 1);
+    o->lt.n++;
+    return (uint32_t)(o->npt - 1) | CUT_LOCAL;
 }
 
-/* An event of a polygon on the line: the closed stretch [lo, hi] of its boundary (one point for
- * a crossing, the vertices of a run along the line otherwise), and whether the inside changes
- * across it. */
-typedef struct ev {
-    uint32_t lo, hi;
-    int toggle;
-} ev;
-
-typedef struct cutwork {
-    ev *e[2];
-    size_t ne[2], cap[2];
-    uint32_t *iv[2]; /* closed intervals: pairs of points */
-    size_t niv[2], capiv[2];
-    int8_t *sd;
-    size_t capsd;
-} cutwork;
-
-static int cmp_on(const a3 *A, uint32_t p, uint32_t q, int ax)
+static int cmp_on(const a3 *A, const cutout *o, uint32_t p, uint32_t q, int ax)
 {
-    return p == q ? 0 : cmp_coord(&A->G, &A->pt[p], &A->pt[q], ax);
+    return p == q ? 0 : cmp_coord(&A->G, cut_pt(A, o, p), cut_pt(A, o, q), ax);
 }
 
 /* Sorts events by lo (insertion sort: a handful per polygon). */
-static void sort_events(const a3 *A, ev *e, size_t n, int ax)
+static void sort_events(const a3 *A, const cutout *o, ev *e, size_t n, int ax)
 {
     for (size_t i = 1; i < n; i++) {
         ev x = e[i];
         size_t j = i;
-        while (j > 0 && cmp_on(A, e[j - 1].lo, x.lo, ax) > 0) {
+        while (j > 0 && cmp_on(A, o, e[j - 1].lo, x.lo, ax) > 0) {
             e[j] = e[j - 1];
             j--;
         }
@@ -1158,15 +1201,15 @@ static void sort_events(const a3 *A, ev *e, size_t n, int ax)
 
 /* The closed intervals of piece `pi` on the line where its plane meets plane `q`, sorted along
  * axis ax.  Returns 0, -1 (out of memory) or -2 (the piece lies in q: no line). */
-static int piece_on_line(a3 *A, ltab *lt, cutwork *w, int s, uint32_t pi, uint32_t q, int ax)
+static int piece_on_line(const a3 *A, cutout *o, cutwork *w, int s, uint32_t pi, uint32_t q, int ax)
 {
     const piece *P = &A->pc[pi];
     const plane3 *Q = &A->pl[q];
     w->ne[s] = 0;
     w->niv[s] = 0;
     for (uint32_t cy = P->c0; cy < P->c0 + P->nc; cy++) {
-        uint32_t o = A->pc_off[cy], n = A->pc_off[cy + 1] - o;
-        const uint32_t *v = A->pcv + o;
+        uint32_t o0 = A->pc_off[cy], n = A->pc_off[cy + 1] - o0;
+        const uint32_t *v = A->pcv + o0;
         if (a3_grow(&w->sd, &w->capsd, n, 1)) return -1;
         uint32_t nz = 0, first = NONE;
         for (uint32_t i = 0; i < n; i++) {
@@ -1180,7 +1223,7 @@ static int piece_on_line(a3 *A, ltab *lt, cutwork *w, int s, uint32_t pi, uint32
         for (uint32_t t = 0; t < n; t++) {
             uint32_t i = (first + t) % n, j = (i + 1) % n;
             if (w->sd[i] && w->sd[j] && w->sd[i] != w->sd[j]) {
-                uint32_t x = lpi_id(A, lt, v[i], v[j], q);
+                uint32_t x = lpi_id(A, o, v[i], v[j], q);
                 if (x == NONE) return -1;
                 ev e = {x, x, 1};
                 if (A3_PUSH(w->e[s], w->ne[s], w->cap[s], e)) return -1;
@@ -1189,8 +1232,8 @@ static int piece_on_line(a3 *A, ltab *lt, cutwork *w, int s, uint32_t pi, uint32
                 uint32_t r = j, lo = v[j], hi = v[j];
                 while (!w->sd[(r + 1) % n]) {
                     r = (r + 1) % n;
-                    if (cmp_on(A, v[r], lo, ax) < 0) lo = v[r];
-                    if (cmp_on(A, v[r], hi, ax) > 0) hi = v[r];
+                    if (cmp_on(A, o, v[r], lo, ax) < 0) lo = v[r];
+                    if (cmp_on(A, o, v[r], hi, ax) > 0) hi = v[r];
                 }
                 int8_t after = w->sd[(r + 1) % n];
                 ev e = {lo, hi, after != w->sd[i]};
@@ -1200,14 +1243,14 @@ static int piece_on_line(a3 *A, ltab *lt, cutwork *w, int s, uint32_t pi, uint32
     }
     ev *E = w->e[s];
     size_t ne = w->ne[s];
-    sort_events(A, E, ne, ax);
+    sort_events(A, o, E, ne, ax);
     /* sweep: inside between events when the parity is odd; events themselves are boundary */
     int par = 0;
     for (size_t i = 0; i < ne; i++) {
         size_t m = w->niv[s];
         uint32_t *iv = w->iv[s];
-        if (m && (par || cmp_on(A, E[i].lo, iv[2 * m - 1], ax) <= 0)) {
-            if (cmp_on(A, E[i].hi, iv[2 * m - 1], ax) > 0) iv[2 * m - 1] = E[i].hi;
+        if (m && (par || cmp_on(A, o, E[i].lo, iv[2 * m - 1], ax) <= 0)) {
+            if (cmp_on(A, o, E[i].hi, iv[2 * m - 1], ax) > 0) iv[2 * m - 1] = E[i].hi;
         } else {
             if (a3_grow(&w->iv[s], &w->capiv[s], 2 * (m + 1), sizeof *w->iv[s])) return -1;
             w->iv[s][2 * m] = E[i].lo;
@@ -1219,10 +1262,10 @@ static int piece_on_line(a3 *A, ltab *lt, cutwork *w, int s, uint32_t pi, uint32
     return 0;
 }
 
-static int add_cut(a3 *A, uint32_t plane, uint32_t p0, uint32_t p1, uint32_t side)
+static int add_cut(cutout *o, uint32_t plane, uint32_t p0, uint32_t p1, uint32_t side)
 {
     cseg c = {plane, p0, p1, side};
-    return A3_PUSH(A->cs, A->ncs, A->capcs, c);
+    return A3_PUSH(o->cs, o->ncs, o->capcs, c);
 }
 
 static int add_contact(a3 *A, uint32_t plane, uint32_t p)
@@ -1231,57 +1274,141 @@ static int add_contact(a3 *A, uint32_t plane, uint32_t p)
     return A3_PUSH(A->cp, A->ncp, A->capcp, c);
 }
 
+static int chunk_contact(cutout *o, uint32_t plane, uint32_t p)
+{
+    cpt c = {plane, p};
+    return A3_PUSH(o->cp, o->ncp, o->capcp, c);
+}
+
+/* One pair of pieces: the stretches where both lie on the line of their planes are cuts of both
+ * planes (a single point: a contact). */
+static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
+{
+    uint32_t pa = A->pc[a].plane, pb = A->pc[b].plane;
+    i128 d[3];
+    cross_ll(A->pl[pa].n, A->pl[pb].n, d);
+    if (!d[0] && !d[1] && !d[2]) return 0; /* parallel planes */
+    int ax = 0;
+    for (int i = 1; i < 3; i++)
+        if ((d[i] < 0 ? -d[i] : d[i]) > (d[ax] < 0 ? -d[ax] : d[ax])) ax = i;
+    int r0 = piece_on_line(A, o, w, 0, a, pb, ax);
+    if (r0 == -1) return -1;
+    if (r0 == -2 || w->niv[0] == 0) return 0;
+    int r1 = piece_on_line(A, o, w, 1, b, pa, ax);
+    if (r1 == -1) return -1;
+    if (r1 == -2 || w->niv[1] == 0) return 0;
+    /* intersect the two sorted lists of closed intervals */
+    size_t i = 0, j = 0;
+    while (i < w->niv[0] && j < w->niv[1]) {
+        uint32_t a0 = w->iv[0][2 * i], a1 = w->iv[0][2 * i + 1];
+        uint32_t b0 = w->iv[1][2 * j], b1 = w->iv[1][2 * j + 1];
+        uint32_t lo = cmp_on(A, o, a0, b0, ax) >= 0 ? a0 : b0;
+        uint32_t hi = cmp_on(A, o, a1, b1, ax) <= 0 ? a1 : b1;
+        int c = cmp_on(A, o, lo, hi, ax);
+        if (c < 0) {
+            if (add_cut(o, pa, lo, hi, pb) || add_cut(o, pb, lo, hi, pa)) return -1;
+        } else if (c == 0) {
+            if (chunk_contact(o, pa, lo) || chunk_contact(o, pb, lo)) return -1;
+        }
+        if (cmp_on(A, o, a1, b1, ax) <= 0)
+            i++;
+        else
+            j++;
+    }
+    return 0;
+}
+
+static void cut_chunk(void *ctx, size_t item, int worker)
+{
+    cutjob *j = ctx;
+    cutout *o = &j->o[item];
+    size_t k1 = (item + 1) * CUT_CHUNK < j->np ? (item + 1) * CUT_CHUNK : j->np;
+    if (a3_cancelled(j->A)) {
+        o->rc = -3;
+        return;
+    }
+    for (size_t k = item * CUT_CHUNK; k < k1 && !o->rc; k++)
+        o->rc =
+            cut_pair(j->A, o, &j->w[worker], (uint32_t)(j->pairs[k] >> 32), (uint32_t)j->pairs[k]);
+    size_t done = atomic_fetch_add(&j->done, 1) + 1;
+    if (worker == 0) /* the calling thread */
+        a3_progress(j->A, "cuts", (double)done / (double)((j->np + CUT_CHUNK - 1) / CUT_CHUNK));
+}
+
+static void cutout_free(cutout *o)
+{
+    free(o->pt);
+    free(o->lt.id);
+    free(o->cs);
+    free(o->cp);
+    memset(o, 0, sizeof *o);
+}
+
+static uint32_t merged_id(const uint32_t *map, uint32_t p)
+{
+    return p & CUT_LOCAL ? map[p & ~CUT_LOCAL] : p;
+}
+
 static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
+    size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
+    cutjob j = {
+        A, pairs, np, calloc((size_t)A->threads, sizeof(cutwork)), calloc(nch + 1, sizeof(cutout)),
+        0};
     ltab lt = {0};
-    cutwork w = {0};
+    uint32_t *map = NULL;
+    size_t capmap = 0;
     int rc = -1;
-    for (size_t k = 0; k < np; k++) {
-        if ((k & 1023) == 0) {
-            if (a3_cancelled(A)) {
-                rc = -3;
-                goto done;
-            }
-            a3_progress(A, "cuts", (double)k / (double)np);
+    if (!j.w || !j.o) goto done;
+    par_for(A->threads, nch, cut_chunk, &j);
+    for (size_t ch = 0; ch < nch; ch++)
+        if (j.o[ch].rc) {
+            rc = j.o[ch].rc;
+            goto done;
         }
-        uint32_t a = (uint32_t)(pairs[k] >> 32), b = (uint32_t)pairs[k];
-        uint32_t pa = A->pc[a].plane, pb = A->pc[b].plane;
-        i128 d[3];
-        cross_ll(A->pl[pa].n, A->pl[pb].n, d);
-        if (!d[0] && !d[1] && !d[2]) continue; /* parallel planes */
-        int ax = 0;
-        for (int i = 1; i < 3; i++)
-            if ((d[i] < 0 ? -d[i] : d[i]) > (d[ax] < 0 ? -d[ax] : d[ax])) ax = i;
-        int r0 = piece_on_line(A, &lt, &w, 0, a, pb, ax);
-        if (r0 == -1) goto done;
-        if (r0 == -2 || w.niv[0] == 0) continue;
-        int r1 = piece_on_line(A, &lt, &w, 1, b, pa, ax);
-        if (r1 == -1) goto done;
-        if (r1 == -2 || w.niv[1] == 0) continue;
-        /* intersect the two sorted lists of closed intervals */
-        size_t i = 0, j = 0;
-        while (i < w.niv[0] && j < w.niv[1]) {
-            uint32_t a0 = w.iv[0][2 * i], a1 = w.iv[0][2 * i + 1];
-            uint32_t b0 = w.iv[1][2 * j], b1 = w.iv[1][2 * j + 1];
-            uint32_t lo = cmp_on(A, a0, b0, ax) >= 0 ? a0 : b0;
-            uint32_t hi = cmp_on(A, a1, b1, ax) <= 0 ? a1 : b1;
-            int c = cmp_on(A, lo, hi, ax);
-            if (c < 0) {
-                if (add_cut(A, pa, lo, hi, pb) || add_cut(A, pb, lo, hi, pa)) goto done;
-            } else if (c == 0) {
-                if (add_contact(A, pa, lo) || add_contact(A, pb, lo)) goto done;
-            }
-            if (cmp_on(A, a1, b1, ax) <= 0)
-                i++;
-            else
-                j++;
+    /* merge in chunk order: each LPI the global point of its triple */
+    for (size_t ch = 0; ch < nch; ch++) {
+        cutout *o = &j.o[ch];
+        if (a3_grow(&map, &capmap, o->npt + 1, sizeof *map)) goto done;
+        /* only the LPIs the cuts and contacts use (most pairs make none) */
+        for (size_t i = 0; i < o->npt; i++) map[i] = NONE;
+        for (size_t i = 0; i < o->ncs; i++) {
+            if (o->cs[i].p0 & CUT_LOCAL) map[o->cs[i].p0 & ~CUT_LOCAL] = 0;
+            if (o->cs[i].p1 & CUT_LOCAL) map[o->cs[i].p1 & ~CUT_LOCAL] = 0;
         }
+        for (size_t i = 0; i < o->ncp; i++)
+            if (o->cp[i].p & CUT_LOCAL) map[o->cp[i].p & ~CUT_LOCAL] = 0;
+        for (size_t i = 0; i < o->npt; i++) {
+            if (map[i] == NONE) continue;
+            const xpt *p = &o->pt[i];
+            size_t h = ltab_slot(A->pt, &lt, p->a, p->b, p->c);
+            if (h == SIZE_MAX) goto done;
+            if (lt.id[h] == NONE) {
+                if ((lt.id[h] = add_point(A, *p)) == NONE) goto done;
+                lt.n++;
+            }
+            map[i] = lt.id[h];
+        }
+        for (size_t i = 0; i < o->ncs; i++) {
+            cseg c = o->cs[i];
+            c.p0 = merged_id(map, c.p0), c.p1 = merged_id(map, c.p1);
+            if (A3_PUSH(A->cs, A->ncs, A->capcs, c)) goto done;
+        }
+        for (size_t i = 0; i < o->ncp; i++)
+            if (add_contact(A, o->cp[i].plane, merged_id(map, o->cp[i].p))) goto done;
+        cutout_free(o);
     }
     rc = 0;
 done:
     free(lt.id);
-    for (int s = 0; s < 2; s++) free(w.e[s]), free(w.iv[s]);
-    free(w.sd);
+    free(map);
+    for (size_t ch = 0; j.o && ch < nch; ch++) cutout_free(&j.o[ch]);
+    for (int t = 0; j.w && t < A->threads; t++) {
+        for (int s = 0; s < 2; s++) free(j.w[t].e[s]), free(j.w[t].iv[s]);
+        free(j.w[t].sd);
+    }
+    free(j.w);
+    free(j.o);
     return rc;
 }
 

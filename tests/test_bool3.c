@@ -15,6 +15,7 @@
 #include "core/solid.h"
 #include "tests/check.h"
 #include "tests/lar_check.h"
+#include "tests/shapes.h"
 
 static const uint32_t cube_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
                                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
@@ -182,6 +183,52 @@ TEST(checkerboard_of_cubes)
     member_rows_free(&rows);
     lar3_free(&c);
     for (size_t i = 0; i < n; i++) solid_free(&s[i]);
+}
+
+/* Threads change timings only: 400 turned cubes overlapping at random (pairs, edges and cells
+ * in several of the core's parallel chunks) give the same complex, in the same order, on 1 and
+ * on 3 threads. */
+TEST(threads_give_identical_complex)
+{
+    enum { N = 400 };
+    solid s[N];
+    uint64_t x = 99;
+    for (int i = 0; i < N; i++) {
+        double r[6], R[3][3];
+        for (int k = 0; k < 6; k++) {
+            x = x * 6364136223846793005u + 1442695040888963407u;
+            r[k] = (double)(x >> 11) * 0x1.0p-53;
+        }
+        double len = sqrt(r[3] * r[3] + r[4] * r[4] + 0.01),
+               u[3] = {r[3] / len, r[4] / len, 0.1 / len};
+        s[i] = box(-0.5, -0.5, -0.5, 0.5, 0.5, 0.5);
+        shape_rotation(u, 6.28 * r[5], R);
+        double t[3] = {6 * r[0], 6 * r[1], 6 * r[2]};
+        shape_transform(&s[i], R, t);
+    }
+    lar3 c[2];
+    char err[256];
+    for (int t = 0; t < 2; t++) {
+        arr3_opts o = {.threads = t ? 3 : 1};
+        REQUIRE(!arr3_build(s, N, 0, &o, &c[t], err, sizeof err), "arr3_build: %s", err);
+    }
+    CHECK(c[0].stats.pairs_tested > 2 * 8192 && c[0].ne > 2 * 8192 && c[0].nc > 2 * 4096,
+          "too small to span chunks: %zu pairs, %zu edges, %zu cells", c[0].stats.pairs_tested,
+          c[0].ne, c[0].nc);
+    int same = c[0].nv == c[1].nv && c[0].ne == c[1].ne && c[0].nf == c[1].nf &&
+               c[0].nc == c[1].nc && c[0].ncyc == c[1].ncyc;
+    if (same)
+        same = !memcmp(c[0].V, c[1].V, 3 * c[0].nv * sizeof *c[0].V) &&
+               !memcmp(c[0].EV, c[1].EV, 2 * c[0].ne * sizeof *c[0].EV) &&
+               !memcmp(c[0].fe_off, c[1].fe_off, (c[0].nf + 1) * sizeof *c[0].fe_off) &&
+               !memcmp(c[0].fe, c[1].fe, c[0].fe_off[c[0].nf] * sizeof *c[0].fe) &&
+               !memcmp(c[0].cf_off, c[1].cf_off, (c[0].nc + 1) * sizeof *c[0].cf_off) &&
+               !memcmp(c[0].cf, c[1].cf, c[0].cf_off[c[0].nc] * sizeof *c[0].cf) &&
+               !memcmp(c[0].cvol, c[1].cvol, c[0].nc * sizeof *c[0].cvol);
+    CHECK(same, "1 and 3 threads differ: %zu/%zu vertices, %zu/%zu edges, %zu/%zu cells", c[0].nv,
+          c[1].nv, c[0].ne, c[1].ne, c[0].nc, c[1].nc);
+    for (int t = 0; t < 2; t++) lar3_free(&c[t]);
+    for (int i = 0; i < N; i++) solid_free(&s[i]);
 }
 
 /* Three cubes and an expression tree: 0 - (1 + 2). */

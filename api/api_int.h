@@ -33,7 +33,16 @@ typedef struct api_buf {
     FILE *sink;
     size_t sunk;
     int sink_errno; /* the errno of a failed write to sink (then failed is set too) */
+    /* progress of the output (api_run_opts.progress): the writers call api_buf_section() as
+     * they start each top-level key, of about nsections */
+    void (*progress)(void *udata, const char *stage, double fraction);
+    void *udata;
+    unsigned nsections, sections;
 } api_buf;
+
+/* A top-level key of the result begins: "output" progress from 0.99 toward 1 by the share of
+ * the keys written. */
+void api_buf_section(api_buf *b);
 #define API_BUF_SINK (1u << 20)
 
 /* Writes what the buffer holds to its sink (no-op without one); failed on a write error. */

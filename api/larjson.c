@@ -36,6 +36,14 @@ const char *const api_field_names[API_NFIELDS] = {"V",     "EV",       "FV",    
 
 /* ---- the buffer ---------------------------------------------------------------------------- */
 
+void api_buf_section(api_buf *b)
+{
+    if (!b->progress) return;
+    unsigned n = b->nsections ? b->nsections : 1, k = b->sections < n ? b->sections : n;
+    b->sections++;
+    b->progress(b->udata, "output", 0.99 + 0.01 * (double)k / (double)(n + 1));
+}
+
 void api_buf_flush(api_buf *b)
 {
     if (!b->sink || b->failed || b->len == 0) return;
@@ -326,6 +334,7 @@ void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n)
 void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
                         const uint32_t *idx)
 {
+    api_buf_section(b);
     api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
     api_buf_u64(b, nrows);
     api_buf_putc(b, ',');
@@ -354,6 +363,13 @@ static void put_key(api_buf *b, int *first, const char *key)
     api_buf_putc(b, '"');
     api_buf_puts(b, key);
     api_buf_puts(b, "\":");
+}
+
+/* A top-level key: a section of the output's progress. */
+static void put_field(api_buf *b, int *first, const char *key)
+{
+    api_buf_section(b);
+    put_key(b, first, key);
 }
 
 static void put_stats(api_buf *b, const arr2_stats *s, const api_lar2_fmt *fmt)
@@ -503,9 +519,10 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         if (rc != API_OK) return rc;
         r.nrows += c->next;
     }
+    b->nsections = (unsigned)__builtin_popcount(fl) + 2;
     api_buf_puts(b, "{\"dim\":2");
     if (fl & API_F_V) {
-        put_key(b, &first, "V");
+        put_field(b, &first, "V");
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
             api_buf_puts(b, v ? ",[" : "[");
@@ -517,7 +534,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, ']');
     }
     if (fl & API_F_EV) {
-        put_key(b, &first, "EV");
+        put_field(b, &first, "EV");
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
             if (e) api_buf_putc(b, ',');
@@ -526,7 +543,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, ']');
     }
     if (fl & API_F_FV) {
-        put_key(b, &first, "FV");
+        put_field(b, &first, "FV");
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const uint32_t *v;
@@ -537,7 +554,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, ']');
     }
     if (fl & API_F_FE) {
-        put_key(b, &first, "FE");
+        put_field(b, &first, "FE");
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const int32_t *e;
@@ -553,7 +570,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
     }
     if (fl & API_F_HOLES) {
         int hfirst = 1;
-        put_key(b, &first, "holes");
+        put_field(b, &first, "holes");
         api_buf_putc(b, '{');
         for (size_t f = 0; f < c->nf; f++) {
             if (c->hole_off[f] == c->hole_off[f + 1]) continue;
@@ -573,7 +590,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '}');
     }
     if (fl & API_F_EXTERIOR) {
-        put_key(b, &first, "exterior");
+        put_field(b, &first, "exterior");
         api_buf_putc(b, '[');
         for (size_t x = 0; x < c->next; x++) {
             const uint32_t *v;
@@ -584,12 +601,12 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, ']');
     }
     if (fl & API_F_OPERATORS) {
-        put_key(b, &first, "operators");
+        put_field(b, &first, "operators");
         rc = put_operators(b, &r, err);
         if (rc != API_OK) goto out;
     }
     if (fl & API_F_STATS) {
-        put_key(b, &first, "stats");
+        put_field(b, &first, "stats");
         put_stats(b, &c->stats, fmt);
     }
     if (fmt->more) fmt->more(b, fmt->more_udata);

@@ -96,6 +96,7 @@ static int check_complex(const lar3 *c, api_error *err)
 
 static void put_key(api_buf *b, const char *key)
 {
+    api_buf_section(b);
     api_buf_puts(b, ",\"");
     api_buf_puts(b, key);
     api_buf_puts(b, "\":");
@@ -313,6 +314,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
     unsigned fl = fmt->fields;
     int rc = check_complex(c, err);
     if (rc != API_OK) return rc;
+    b->nsections = (unsigned)__builtin_popcount(fl) + 2;
     api_buf_puts(b, "{\"dim\":3");
     if (fl & API_F3_V) {
         put_key(b, "V");

@@ -492,6 +492,7 @@ static void put_bool2(api_buf *b, const void *udata)
 {
     const bool2_result *r = udata;
     api_put_membership(b, r->c.nf, r->ninputs, r->mem_off, r->mem);
+    api_buf_section(b);
     api_buf_puts(b, ",\"result\":{\"cells\":");
     api_buf_u32_list(b, r->cells, r->ncells);
     api_buf_puts(b, ",\"FV\":[");

@@ -251,6 +251,8 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     rc = parse(body, len, &kind, &req, NULL, err);
     if (rc != API_OK) goto fail;
     b.sink = ro->stream;
+    b.progress = ro->progress;
+    b.udata = ro->udata;
     rc = kind->run(req, ro, &b, err);
 fail:
     if (kind) kind->free(req);

@@ -519,6 +519,13 @@ int api_solids_check(const void *parsed, api_error *err)
     return validate(r, NULL, NULL, NULL, err);
 }
 
+/* Progress inside the membership walk: "membership", from 0.97 to 0.98 of the whole job. */
+static void membership_tick(void *udata, double f)
+{
+    const api_run_opts *ro = udata;
+    ro->progress(ro->udata, "membership", 0.97 + 0.01 * f);
+}
+
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
 {
     static const solid no_solid;
@@ -557,7 +564,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
         if (ro->progress) ro->progress(ro->udata, "membership", 0.97);
-        int m = bool3_membership(&c, &mem, &bad_face);
+        int m = bool3_membership_ex(&c, &mem, &bad_face, ro->progress ? membership_tick : NULL,
+                                    (void *)ro);
         if (m) {
             rc = m < 0 ? api_fail(err, API_ENOMEM, "out of memory")
                        : api_fail(err, API_EINTERNAL,

@@ -35,6 +35,12 @@ static int cmp_u32(const void *a, const void *b)
 
 int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
 {
+    return bool3_membership_ex(c, rows, bad_face, NULL, NULL);
+}
+
+int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
+                        void (*tick)(void *udata, double f), void *udata)
+{
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1;
     uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
@@ -73,7 +79,7 @@ int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
             nb[aoff[minus[f] + 1]] = plus[f], fc[aoff[minus[f] + 1]++] = (uint32_t)f;
             nb[aoff[plus[f] + 1]] = minus[f], fc[aoff[plus[f] + 1]++] = (uint32_t)f;
         }
-    rc = member_walk(nn, (uint32_t)nc, aoff, nb, fc, toff, tags, rows, bad_face);
+    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, fc, toff, tags, rows, bad_face, tick, udata);
 done:
     free(minus);
     free(plus);

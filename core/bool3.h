@@ -30,6 +30,9 @@
  * exterior's, empty).  Returns 0, -1 when out of memory, or 1 when a cell is reached with two
  * memberships (*bad_face: a face where that happened; the complex is inconsistent). */
 int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face);
+/* The same, calling tick(udata, cells reached / cells) during the walk (member_walk_ex). */
+int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
+                        void (*tick)(void *udata, double f), void *udata);
 
 typedef struct bool3_result {
     size_t ncells;

@@ -231,6 +231,46 @@ TEST(threads_give_identical_complex)
     for (int i = 0; i < N; i++) solid_free(&s[i]);
 }
 
+/* Progress of a 3D Boolean through the API: the arrangement's stages, then membership, then
+ * output moving as the result's keys are written; never back, never
+ * past 1. */
+typedef struct prog3 {
+    int membership, output, back;
+    double last;
+} prog3;
+
+static void prog3_cb(void *udata, const char *stage, double f)
+{
+    prog3 *l = udata;
+    int own = !strcmp(stage, "membership") || !strcmp(stage, "output");
+    if (!own) return;
+    l->membership += !strcmp(stage, "membership");
+    l->output += !strcmp(stage, "output");
+    if (f < l->last || f > 1) l->back++;
+    l->last = f;
+}
+
+TEST(progress_through_membership_and_output)
+{
+    static const char body[] =
+        "{\"kind\":\"solids\",\"op\":\"union\",\"solids\":["
+        "{\"V\":[[0,0,0],[1,0,0],[0,1,0],[1,1,0],[0,0,1],[1,0,1],[0,1,1],[1,1,1]],"
+        "\"FV\":[[0,4,6,2],[1,3,7,5],[0,1,5,4],[2,6,7,3],[0,2,3,1],[4,5,7,6]]},"
+        "{\"V\":[[0.5,0.5,0.5],[1.5,0.5,0.5],[0.5,1.5,0.5],[1.5,1.5,0.5],[0.5,0.5,1.5],"
+        "[1.5,0.5,1.5],[0.5,1.5,1.5],[1.5,1.5,1.5]],"
+        "\"FV\":[[0,4,6,2],[1,3,7,5],[0,1,5,4],[2,6,7,3],[0,2,3,1],[4,5,7,6]]}]}";
+    prog3 l = {0};
+    api_run_opts ro = {.threads = 2, .progress = prog3_cb, .udata = &l};
+    char *out = NULL;
+    size_t outlen;
+    api_error err = {0};
+    int rc = api_run_json_ex(body, sizeof body - 1, &ro, &out, &outlen, &err);
+    CHECK(rc == API_OK, "%d %s", rc, err.msg);
+    CHECK(l.membership >= 1 && l.output >= 4 && l.back == 0,
+          "progress: membership %d, output %d, %d back or past 1", l.membership, l.output, l.back);
+    free(out);
+}
+
 /* Three cubes and an expression tree: 0 - (1 + 2). */
 TEST(expression_tree)
 {

@@ -1765,6 +1765,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     if (piece_pairs(&A, &pairs, &np)) goto oom;
     out->stats.pairs_tested = np;
     out->stats.ms_pairs = now_ms() - t;
+    a3_progress(&A, "pairs", 1);
     t = now_ms();
     int r = stage_cuts(&A, pairs, np);
     if (r == -3) goto cancel;
@@ -1799,6 +1800,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     out->stats.points = A.npt - A.nv;
     (void)npt_before;
     out->stats.ms_faces = now_ms() - t;
+    a3_progress(&A, "planes", 1);
     if (a3_cancelled(&A)) goto cancel;
     t = now_ms();
     if ((rc = a3_cells(&A, out, err, errlen)) != ARR_OK) goto fail;

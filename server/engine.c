@@ -159,21 +159,29 @@ typedef struct progress_ctx {
     job *j;
 } progress_ctx;
 
-/* The 2D core reports the end of each stage; these are the shares of a job's time spent up to
- * the end of each (measured on random lines), so that `fraction` is of the whole job. */
-static const struct {
+/* The cores report the end of each stage (and some stages their own fraction); these are the
+ * shares of a job's time spent up to the end of each, so that `fraction` is of the whole job:
+ * the 2D core's measured on random lines, the 3D core's on 16 000 turned cubes.  The API's own
+ * stages (membership, select, polygons, output) report fractions of the whole job already. */
+typedef struct stage_share {
     const char *stage;
     double done;
-} stage_share[] = {{"snap", 0.02},  {"buckets", 0.08},     {"intersect", 0.30},
-                   {"split", 0.65}, {"biconnected", 0.75}, {"faces", 0.95}};
+} stage_share;
+static const stage_share shares2[] = {{"snap", 0.02},  {"buckets", 0.08},     {"intersect", 0.30},
+                                      {"split", 0.65}, {"biconnected", 0.75}, {"faces", 0.95}};
+static const stage_share shares3[] = {
+    {"pairs", 0.06}, {"cuts", 0.20}, {"planes", 0.45}, {"cells", 0.95}};
 
 static void progress_cb(void *udata, const char *stage, double fraction)
 {
     progress_ctx *p = udata; /* a few calls per job: the engine lock is fine */
-    for (size_t i = 0; i < sizeof stage_share / sizeof *stage_share; i++)
-        if (!strcmp(stage, stage_share[i].stage)) {
-            double before = i ? stage_share[i - 1].done : 0;
-            fraction = before + (stage_share[i].done - before) * fraction;
+    int solids = !strcmp(p->j->kind, "solids");
+    const stage_share *sh = solids ? shares3 : shares2;
+    size_t n = solids ? sizeof shares3 / sizeof *shares3 : sizeof shares2 / sizeof *shares2;
+    for (size_t i = 0; i < n; i++)
+        if (!strcmp(stage, sh[i].stage)) {
+            double before = i ? sh[i - 1].done : 0;
+            fraction = before + (sh[i].done - before) * fraction;
             break;
         }
     pthread_mutex_lock(&p->e->lock);

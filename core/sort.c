@@ -41,38 +41,43 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
  * 2^RBITS counts each): the 3D core sorts many tiny arrangements. */
 #define SMALL 48
 
-int sort_u64(uint64_t *a, size_t n)
-{
-    if (n < 2) return 0;
-    if (n <= SMALL) {
-        for (size_t i = 1; i < n; i++) {
-            uint64_t x = a[i];
-            size_t j = i;
-            for (; j > 0 && a[j - 1] > x; j--) a[j] = a[j - 1];
-            a[j] = x;
-        }
-        return 0;
+/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, else the passes. */
+#define RADIX_SORT(NAME, T, KEY)                                                                   \
+    int NAME(T *a, size_t n)                                                                       \
+    {                                                                                              \
+        if (n < 2) return 0;                                                                       \
+        if (n <= SMALL) {                                                                          \
+            for (size_t i = 1; i < n; i++) {                                                       \
+                T x = a[i];                                                                        \
+                size_t j = i;                                                                      \
+                for (; j > 0 && KEY(a[j - 1]) > KEY(x); j--) a[j] = a[j - 1];                      \
+                a[j] = x;                                                                          \
+            }                                                                                      \
+            return 0;                                                                              \
+        }                                                                                          \
+        T *tmp = malloc(n * sizeof *tmp);                                                          \
+        size_t *cnt = malloc(RSIZE * sizeof *cnt);                                                 \
+        if (!tmp || !cnt) {                                                                        \
+            free(tmp);                                                                             \
+            free(cnt);                                                                             \
+            return -1;                                                                             \
+        }                                                                                          \
+        T *src = a, *dst = tmp;                                                                    \
+        for (unsigned sh = 0; sh < 64; sh += RBITS) {                                              \
+            if (pass_##T(src, dst, n, sh, cnt)) {                                                  \
+                T *t = src;                                                                        \
+                src = dst;                                                                         \
+                dst = t;                                                                           \
+            }                                                                                      \
+        }                                                                                          \
+        if (src != a) memcpy(a, src, n * sizeof *a);                                               \
+        free(tmp);                                                                                 \
+        free(cnt);                                                                                 \
+        return 0;                                                                                  \
     }
-    uint64_t *tmp = malloc(n * sizeof *tmp);
-    size_t *cnt = malloc(RSIZE * sizeof *cnt);
-    if (!tmp || !cnt) {
-        free(tmp);
-        free(cnt);
-        return -1;
-    }
-    uint64_t *src = a, *dst = tmp;
-    for (unsigned sh = 0; sh < 64; sh += RBITS) {
-        if (pass_uint64_t(src, dst, n, sh, cnt)) {
-            uint64_t *t = src;
-            src = dst;
-            dst = t;
-        }
-    }
-    if (src != a) memcpy(a, src, n * sizeof *a);
-    free(tmp);
-    free(cnt);
-    return 0;
-}
+
+RADIX_SORT(sort_u64, uint64_t, KEY_U64)
+RADIX_SORT(sort_kv, kv, KEY_KV)
 
 int sort_ipt(ipt *a, size_t n)
 {
@@ -105,39 +110,6 @@ int sort_ipt(ipt *a, size_t n)
     for (unsigned sh = 0; sh < 64; sh += RBITS) {
         if (pass_ipt_x(src, dst, n, sh, cnt)) {
             ipt *t = src;
-            src = dst;
-            dst = t;
-        }
-    }
-    if (src != a) memcpy(a, src, n * sizeof *a);
-    free(tmp);
-    free(cnt);
-    return 0;
-}
-
-int sort_kv(kv *a, size_t n)
-{
-    if (n < 2) return 0;
-    if (n <= SMALL) {
-        for (size_t i = 1; i < n; i++) {
-            kv x = a[i];
-            size_t j = i;
-            for (; j > 0 && a[j - 1].k > x.k; j--) a[j] = a[j - 1];
-            a[j] = x;
-        }
-        return 0;
-    }
-    kv *tmp = malloc(n * sizeof *tmp);
-    size_t *cnt = malloc(RSIZE * sizeof *cnt);
-    if (!tmp || !cnt) {
-        free(tmp);
-        free(cnt);
-        return -1;
-    }
-    kv *src = a, *dst = tmp;
-    for (unsigned sh = 0; sh < 64; sh += RBITS) {
-        if (pass_kv(src, dst, n, sh, cnt)) {
-            kv *t = src;
             src = dst;
             dst = t;
         }

@@ -127,9 +127,9 @@ $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -ljansson -lgmp -lmpfr
 
-$(BUILD)/bench/geos_bool2: bench/geos_bool2.c
+$(BUILD)/bench/geos_bool2: bench/geos_bool2.c tests/ref/geos_ref.c tests/ref/geos_ref.h
 	@mkdir -p $(dir $@)
-	$(CC) -std=c17 -O2 -Wall -Wextra -Werror -I. -o $@ bench/geos_bool2.c -ljansson -lgeos_c -lm
+	$(CC) -std=c17 -O2 -Wall -Wextra -Werror -I. -o $@ bench/geos_bool2.c tests/ref/geos_ref.c -ljansson -lgeos_c -lm
 
 $(BUILD)/bench/geos_polygonize: bench/geos_polygonize.c tests/ref/geos_ref.c tests/ref/geos_ref.h
 	@mkdir -p $(dir $@)

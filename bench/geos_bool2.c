@@ -32,14 +32,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
+
+#include "tests/ref/geos_ref.h"
 
 #define MAX_DEPTH 64 /* expression nesting, as cellar's API_BOOL_MAX_DEPTH */
-
-typedef struct geos_err {
-    char msg[400]; /* the first GEOS error message */
-    int set;
-} geos_err;
 
 /* One node of the operation: a leaf (op 0) is input polygon `index`; an operator node combines
  * its n kids. */
@@ -50,21 +46,6 @@ typedef struct node {
     struct node *kid;
     GEOSGeometry *g; /* a leaf's geometry, owned until eval() hands it on */
 } node;
-
-static void on_error(const char *message, void *udata)
-{
-    geos_err *e = udata;
-    if (e->set) return;
-    snprintf(e->msg, sizeof e->msg, "%s", message ? message : "GEOS error");
-    e->set = 1;
-}
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
 
 /* ---- the request ----------------------------------------------------------------------------- */
 
@@ -315,9 +296,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s:%d:%d: %s\n", argv[1], jerr.line, jerr.column, jerr.text);
         return 1;
     }
-    geos_err ge = {.set = 0};
+    geos_ref_err ge = {.set = 0};
     GEOSContextHandle_t h = GEOS_init_r();
-    GEOSContext_setErrorMessageHandler_r(h, on_error, &ge);
+    GEOSContext_setErrorMessageHandler_r(h, geos_ref_on_error, &ge);
 
     char why[512] = "";
     int status = 1;
@@ -346,9 +327,9 @@ int main(int argc, char **argv)
     json_decref(req);
     req = NULL;
 
-    double t0 = now_ms();
+    double t0 = geos_ref_now_ms();
     GEOSGeometry *r = eval(h, &op);
-    double ms = now_ms() - t0;
+    double ms = geos_ref_now_ms() - t0;
     if (!r) {
         snprintf(why, sizeof why, "GEOS: %s", ge.set ? ge.msg : "the operation failed");
         status = 2;

@@ -320,27 +320,16 @@ static double geos_area(const pb *b, const char *op, size_t *npoly, size_t *nhol
     GEOSContextHandle_t h = GEOS_init_r();
     GEOSGeometry *acc = geos_poly(h, b, 0), *rest = NULL;
     for (size_t p = 1; p < b->np; p++) {
-        GEOSGeometry *g = geos_poly(h, b, p), *t;
+        GEOSGeometry *g = geos_poly(h, b, p);
         if (!strcmp(op, "difference")) {
             if (!rest) {
                 rest = g;
                 continue;
             }
-            t = GEOSUnion_r(h, rest, g);
-            GEOSGeom_destroy_r(h, rest);
-            GEOSGeom_destroy_r(h, g);
-            rest = t;
+            rest = geos_ref_fold(h, "union", rest, g);
             continue;
         }
-        if (!strcmp(op, "union"))
-            t = GEOSUnion_r(h, acc, g);
-        else if (!strcmp(op, "intersection"))
-            t = GEOSIntersection_r(h, acc, g);
-        else
-            t = GEOSSymDifference_r(h, acc, g);
-        GEOSGeom_destroy_r(h, acc);
-        GEOSGeom_destroy_r(h, g);
-        acc = t;
+        acc = geos_ref_fold(h, op, acc, g);
     }
     if (rest) {
         GEOSGeometry *t = GEOSDifference_r(h, acc, rest);

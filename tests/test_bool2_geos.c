@@ -861,16 +861,7 @@ static double geos_area(GEOSContextHandle_t h, const pb *b, const char *op)
     } else {
         acc = geos_poly(h, b, 0);
         for (size_t p = 1; p < b->np && acc; p++) {
-            GEOSGeometry *g = geos_poly(h, b, p), *t;
-            if (!strcmp(op, "union"))
-                t = GEOSUnion_r(h, acc, g);
-            else if (!strcmp(op, "intersection"))
-                t = GEOSIntersection_r(h, acc, g);
-            else
-                t = GEOSSymDifference_r(h, acc, g);
-            GEOSGeom_destroy_r(h, acc);
-            GEOSGeom_destroy_r(h, g);
-            acc = t;
+            acc = geos_ref_fold(h, op, acc, geos_poly(h, b, p));
         }
     }
     double a = -1;

@@ -21,11 +21,6 @@
 #include <string.h>
 #include <time.h>
 
-typedef struct ref_err {
-    char msg[256]; /* the first GEOS error message of the call */
-    int set;       /* non-zero once msg holds one */
-} ref_err;
-
 typedef struct ref_pt {
     double x, y;
 } ref_pt;
@@ -34,19 +29,33 @@ typedef struct ref_seg {
     ref_pt a, b; /* a < b lexicographically (x, then y) */
 } ref_seg;
 
-static void ref_on_error(const char *message, void *udata)
+void geos_ref_on_error(const char *message, void *udata)
 {
-    ref_err *e = udata;
+    geos_ref_err *e = udata;
     if (e->set) return;
     snprintf(e->msg, sizeof e->msg, "%s", message ? message : "GEOS error");
     e->set = 1;
 }
 
-static double ref_now_ms(void)
+double geos_ref_now_ms(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+GEOSGeometry *geos_ref_fold(GEOSContextHandle_t h, const char *op, GEOSGeometry *a, GEOSGeometry *b)
+{
+    GEOSGeometry *t;
+    if (!strcmp(op, "union"))
+        t = GEOSUnion_r(h, a, b);
+    else if (!strcmp(op, "intersection"))
+        t = GEOSIntersection_r(h, a, b);
+    else
+        t = GEOSSymDifference_r(h, a, b);
+    GEOSGeom_destroy_r(h, a);
+    GEOSGeom_destroy_r(h, b);
+    return t;
 }
 
 static int ref_pt_cmp(ref_pt p, ref_pt q)
@@ -159,7 +168,7 @@ int geos_ref_faces_timed(const double *seg, size_t n, double **areas, size_t *nf
     size_t nl = 0, nlines = 0, np = 0, holes = 0, nv = 0, ne = 0;
     double t0, t1;
     int ng;
-    ref_err e = {{0}, 0};
+    geos_ref_err e = {{0}, 0};
     int rc = -1;
 
     *areas = NULL;
@@ -174,7 +183,7 @@ int geos_ref_faces_timed(const double *seg, size_t n, double **areas, size_t *nf
 
     h = GEOS_init_r();
     if (!h) goto fail;
-    GEOSContext_setErrorMessageHandler_r(h, ref_on_error, &e);
+    GEOSContext_setErrorMessageHandler_r(h, geos_ref_on_error, &e);
 
     lines = malloc((n ? n : 1) * sizeof *lines);
     if (!lines) goto fail;
@@ -202,12 +211,12 @@ int geos_ref_faces_timed(const double *seg, size_t n, double **areas, size_t *nf
     mls = GEOSGeom_createCollection_r(h, GEOS_MULTILINESTRING, lines, (unsigned)nlines);
     if (!mls) goto fail;
 
-    t0 = ref_now_ms();
+    t0 = geos_ref_now_ms();
     noded = GEOSNode_r(h, mls);
     if (!noded) goto fail;
     polys = GEOSPolygonize_r(h, (const GEOSGeometry *const[]){noded}, 1);
     if (!polys) goto fail;
-    t1 = ref_now_ms();
+    t1 = geos_ref_now_ms();
 
     if (ref_count_graph(h, noded, &nv, &ne)) goto fail;
 

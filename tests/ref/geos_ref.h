@@ -1,7 +1,8 @@
 /* geos_ref.h — GEOS as a reference for the 2D pipeline: node a set of segments, polygonize the
  * noded linework, and report counts and face areas to compare with arr2_build().
  *
- * Used by the differential tests (tests/) and by the benchmark (bench/geos_polygonize.c).
+ * Used by the differential tests (tests/) and by the benchmarks (bench/geos_polygonize.c,
+ * bench/geos_bool2.c).
  * GEOS works in floating point without snap rounding, so on near-degenerate inputs it may
  * disagree with us or fail: callers compare on inputs where the reference is trustworthy.
  *
@@ -36,6 +37,22 @@ int geos_ref_faces(const double *seg, size_t n, double **areas, size_t *nfaces, 
 int geos_ref_faces_timed(const double *seg, size_t n, double **areas, size_t *nfaces,
                          size_t *nholes, size_t *nnodes, size_t *nedges, double *ms, char *err,
                          size_t errlen);
+
+/* The first GEOS error message of a context: install with
+ * GEOSContext_setErrorMessageHandler_r(h, geos_ref_on_error, &err). */
+typedef struct geos_ref_err {
+    char msg[400]; /* the first GEOS error message */
+    int set;       /* non-zero once msg holds one */
+} geos_ref_err;
+void geos_ref_on_error(const char *message, void *udata);
+
+/* Wall time in milliseconds (CLOCK_MONOTONIC). */
+double geos_ref_now_ms(void);
+
+/* a op b made in context h, for op "union" or "intersection" (any other: the symmetric
+ * difference); a and b are taken (destroyed).  NULL on a GEOS error. */
+GEOSGeometry *geos_ref_fold(GEOSContextHandle_t h, const char *op, GEOSGeometry *a,
+                            GEOSGeometry *b);
 
 /* Polygon p of a polygon set in the form of bool2_input (core/bool2.h: polygon p's rings are
  * ring_off[poly_off[p] .. poly_off[p+1]), ring r's points xy[2 ring_off[r] .. 2 ring_off[r+1]),

@@ -251,6 +251,15 @@ def cross2(o, a, b):
     return (Fr(a[0]) - Fr(o[0])) * (Fr(b[1]) - Fr(o[1])) - (Fr(a[1]) - Fr(o[1])) * (Fr(b[0]) - Fr(o[0]))
 
 
+def inner_point(g, pts):
+    """A random point of the convex polygon pts, on the grid: the weighted mean of its vertices
+    with weights in [0.2, 1]."""
+    w = [g.r.uniform(0.2, 1) for _ in pts]
+    sw = sum(w)
+    return (g.q(sum(wi * q[0] for wi, q in zip(w, pts)) / sw),
+            g.q(sum(wi * q[1] for wi, q in zip(w, pts)) / sw))
+
+
 def depth(poly, p):
     """The signed distance (approximate, exact sign) of p inside the convex polygon poly: > 0
     inside, < 0 outside."""
@@ -522,10 +531,7 @@ def out_vf(g, shape):
     A, fa = poly_solid(host, g, -1, (0.0, 0.0))
     # a point well inside the face
     for _ in range(50):
-        w = [g.r.uniform(0.2, 1) for _ in fa.pts]
-        sw = sum(w)
-        p = (g.q(sum(wi * q[0] for wi, q in zip(w, fa.pts)) / sw),
-             g.q(sum(wi * q[1] for wi, q in zip(w, fa.pts)) / sw))
+        p = inner_point(g, fa.pts)
         if depth(fa.pts, p) > 0.08:
             break
     else:
@@ -658,10 +664,7 @@ def out_ef(g, shape):
     A, fa = poly_solid(host, g, -1, (0.0, 0.0))
     partly = g.r.random() < 0.3
     for _ in range(100):
-        w = [g.r.uniform(0.2, 1) for _ in fa.pts]
-        sw = sum(w)
-        c = (g.q(sum(wi * q[0] for wi, q in zip(w, fa.pts)) / sw),
-             g.q(sum(wi * q[1] for wi, q in zip(w, fa.pts)) / sw))
+        c = inner_point(g, fa.pts)
         if depth(fa.pts, c) < 0.1:
             continue
         if up == "prism":
@@ -705,10 +708,7 @@ def out_ff(g, shape):
             lo, hi = [g.c(x0, xm), g.c(y0, ym), 0.0], [g.c(xm, x1), g.c(ym, y1), h]
         return [A, box(lo, hi)], "box face on box face (%s)" % how
     for _ in range(50):
-        w = [g.r.uniform(0.2, 1) for _ in fa.pts]
-        sw = sum(w)
-        c = (g.q(sum(wi * q[0] for wi, q in zip(w, fa.pts)) / sw),
-             g.q(sum(wi * q[1] for wi, q in zip(w, fa.pts)) / sw))
+        c = inner_point(g, fa.pts)
         if depth(fa.pts, c) > 0.1:
             break
     else:

@@ -399,17 +399,8 @@ int main(int argc, char **argv)
     soups.clear();
     step("meshes, checks, input volumes", now_ms() - t0);
 
-    std::string js =
-        "{\"op\": \"" + std::string(op_names[op]) +
-        "\", \"kernel\": \"" KERNEL_NAME "\", \"inputs\": " + std::to_string(meshes.size()) +
-        ", \"input_volumes\": [";
-    double vsum = 0;
-    for (size_t i = 0; i < vols.size(); i++) {
-        if (i) js += ", ";
-        js += num(vols[i]);
-        vsum += vols[i];
-    }
-    js += "]";
+    double vsum;
+    std::string js = result_head(op_names[op], KERNEL_NAME, meshes.size(), vols, &vsum);
     if (op == OP_NONE) {
         std::printf("%s, \"volume_sum\": %s}\n", js.c_str(), num(vsum).c_str());
         return 0;

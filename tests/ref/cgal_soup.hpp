@@ -179,4 +179,20 @@ static std::string num(double x)
     return b;
 }
 
+/* The start of a reference's JSON line, {"op": op, "kernel": kernel, "inputs": n,
+ * "input_volumes": [...] (left open for the rest); *vsum gets the volumes' sum. */
+static std::string result_head(const char *op, const char *kernel, size_t n,
+                               const std::vector<double> &vols, double *vsum)
+{
+    std::string js = "{\"op\": \"" + std::string(op) + "\", \"kernel\": \"" + kernel +
+                     "\", \"inputs\": " + std::to_string(n) + ", \"input_volumes\": [";
+    *vsum = 0;
+    for (size_t i = 0; i < vols.size(); i++) {
+        if (i) js += ", ";
+        js += num(vols[i]);
+        *vsum += vols[i];
+    }
+    return js + "]";
+}
+
 #endif

@@ -3,6 +3,16 @@
 #   BENCH_NAME  the prefix of their messages ("benchbool"), LIMIT (seconds a run may take),
 #   REPEAT (how many times a run under 2 s is repeated), TIME (GNU /usr/bin/time).
 
+# need PROG...: exits 1 naming the first PROG that is not an executable file.
+need() {
+    for p in "$@"; do
+        if [ ! -x "$p" ]; then
+            echo "$BENCH_NAME: $p is missing (make bench builds it)" >&2
+            exit 1
+        fi
+    done
+}
+
 # timed NAME OUT CMD...: runs CMD with stdout to OUT under /usr/bin/time and the time limit;
 # sets T_S (wall s, to the millisecond) and T_MIB (peak RSS, MiB), or T_S=failed / timeout and
 # T_MIB=-.  A run under 2 s is repeated (REPEAT times in all) and the

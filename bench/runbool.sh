@@ -51,12 +51,9 @@ MF=$HERE/manifold_bool.mjs
 GEN=$HERE/gen3d.py
 TIME=/usr/bin/time
 
-for p in "$OURS" "$CGAL" "$TIME"; do
-    if [ ! -x "$p" ]; then
-        echo "benchbool: $p is missing (make bench builds it)" >&2
-        exit 1
-    fi
-done
+BENCH_NAME=benchbool
+. "$HERE/lib.sh"
+need "$OURS" "$CGAL" "$TIME"
 
 # Manifold: node and the module (manifold_bool.mjs exits 2 when it cannot load manifold-3d,
 # 1 for the usage message it prints without files).
@@ -85,8 +82,6 @@ gen_args() {
     esac
 }
 
-BENCH_NAME=benchbool
-. "$HERE/lib.sh"
 
 # ourvol FILE: result.volume of cellar's output (the "volume" key after "result").
 ourvol() {

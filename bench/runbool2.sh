@@ -82,12 +82,9 @@ STARS="star10000.intersection star10000.difference star10000.xor"
 [ "$BIG" = 1 ] && STARS="$STARS star100000.intersection star100000.difference star100000.xor"
 CASES=${BENCHBOOL2_CASES:-"$SQUARES $STARS $PARCELS $(real_cases)"}
 
-for p in "$OURS" "$GEOS" "$TIME"; do
-    if [ ! -x "$p" ]; then
-        echo "benchbool2: $p is missing (make bench builds it)" >&2
-        exit 1
-    fi
-done
+BENCH_NAME=benchbool2
+. "$HERE/lib.sh"
+need "$OURS" "$GEOS" "$TIME"
 if ! command -v python3 >/dev/null 2>&1; then
     echo "benchbool2: python3 is missing" >&2
     exit 1
@@ -177,8 +174,6 @@ else:
     ours(sys.argv[2])
 EOF
 
-BENCH_NAME=benchbool2
-. "$HERE/lib.sh"
 
 # skip PROG CASE: true when PROG timed out on another operation of the same input (CASE up to
 # its first dot, e.g. star100000): the noding, which is most of the work, would be the same.

@@ -35,12 +35,9 @@ TIME=/usr/bin/time
 LIMIT=${BENCHMANY_TIMEOUT:-600}
 CASES=${BENCHMANY_CASES:-"squares1000 squares10000 squares100000 tiling32 tiling100 tiling316
 cubes250 cubes1000 cubes4000 cubes16000 checker13 checker20 checker32"}
-for p in "$OURS" "$GEOS" "$TIME"; do
-    if [ ! -x "$p" ]; then
-        echo "runmany: $p is missing (make bench builds it)" >&2
-        exit 1
-    fi
-done
+BENCH_NAME=runmany
+. "$HERE/lib.sh"
+need "$OURS" "$GEOS" "$TIME"
 have_mf=0
 command -v node >/dev/null 2>&1 && [ -d "$HERE/node_modules/manifold-3d" ] && have_mf=1
 tmp=$(mktemp -d)
@@ -48,8 +45,6 @@ trap 'rm -rf "$tmp"' EXIT
 trap 'exit 130' INT TERM
 
 REPEAT=1 # runs of minutes: once
-BENCH_NAME=runmany
-. "$HERE/lib.sh"
 
 # The inputs: a polygons request (2D) or a directory of OFF files (3D), and the exact answer.
 gen() {

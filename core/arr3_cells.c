@@ -519,7 +519,6 @@ typedef struct ddjob {
     const a3 *A;
     double *dh, *dl;
     const lar3 *out;
-    dd *cvol;
     double h3;
 } ddjob;
 
@@ -542,11 +541,10 @@ static void cells_volume(void *ctx, size_t item, int worker)
     const a3 *A = j->A;
     const lar3 *out = j->out;
     const double *dh = j->dh, *dl = j->dl;
-    dd *cvol = j->cvol;
     double h3 = j->h3;
     size_t k0 = item * DD_CHUNK, k1 = k0 + DD_CHUNK < out->nc ? k0 + DD_CHUNK : out->nc;
     for (size_t k = k0; k < k1; k++) {
-        dd org[3] = {{0, 0}, {0, 0}, {0, 0}};
+        dd org[3] = {{0, 0}, {0, 0}, {0, 0}}, vol = {0, 0};
         const int64_t *gorg = NULL; /* the origin's grid point, when it is one */
         if (out->cf_off[k + 1] > out->cf_off[k]) {
             /* a vertex of the cell's first face, on the grid when one is */
@@ -566,9 +564,9 @@ static void cells_volume(void *ctx, size_t item, int worker)
             int32_t sf = out->cf[i];
             uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
             dd c = face_cone6(A, dh, dl, f, org, gorg);
-            cvol[k] = dd_add(cvol[k], sf > 0 ? c : dd_neg(c));
+            vol = dd_add(vol, sf > 0 ? c : dd_neg(c));
         }
-        out->cvol[k] = (cvol[k].hi + cvol[k].lo) * h3;
+        out->cvol[k] = (vol.hi + vol.lo) * h3;
     }
 }
 
@@ -694,7 +692,6 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t *hits = NULL, *hoff = NULL, *stack = NULL;
     size_t caphits = 0, capstack = 0;
     probe *probes = NULL;
-    dd *cvol = NULL;
     uint64_t *ek = NULL;
     uint32_t *ent_e = NULL; /* the edge of each cycle entry (to the next one) */
     /* edges: the entries sorted by their (lower, higher) vertex pair (stable: by face within an
@@ -987,12 +984,11 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     /* the points to 2^-100 (volumes and the written coordinates come from these) */
     dh = malloc((3 * A->npt + 1) * sizeof *dh);
     dl = malloc((3 * A->npt + 1) * sizeof *dl);
-    cvol = calloc(nc + 1, sizeof *cvol);
-    if (!dh || !dl || !cvol) goto done;
+    if (!dh || !dl) goto done;
     for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
     for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
     {
-        ddjob j = {A, dh, dl, NULL, NULL, 0};
+        ddjob j = {A, dh, dl, NULL, 0};
         par_for(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j);
     }
     out->nc = nc;
@@ -1031,7 +1027,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         }
     }
     {
-        ddjob j = {A, dh, dl, out, cvol, h3};
+        ddjob j = {A, dh, dl, out, h3};
         par_for(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j);
     }
     free(fill);
@@ -1207,7 +1203,6 @@ done:
     free(cpiece);
     free(newid);
     free(used);
-    free(cvol);
     free(dh);
     free(dl);
     for (int k = 0; k < 3; k++) {

@@ -21,9 +21,9 @@
  *           cells, exact equality inside), keeping the simplest definition (a vertex before an
  *           LPI); each plane's new points are deduplicated again after the planes.
  *
- * Threads: the planes run on par_for(), and parts of the cells (arr3_cells.c); everything else
- * runs on the calling thread.  Results do not depend on the number of threads: each plane's
- * output is merged in plane order.
+ * Threads: the cuts (in chunks of pairs), the planes and parts of the cells (arr3_cells.c) run
+ * on par_for(); everything else runs on the calling thread.  Results do not depend on the
+ * number of threads: the chunks' and the planes' outputs are merged in their order.
  */
 #include "core/arr3_int.h"
 

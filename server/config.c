@@ -13,6 +13,8 @@ const char config_usage[] =
     "usage: cellard [options]\n"
     "  --listen HOST:PORT    CELLAR_LISTEN        default 127.0.0.1:8080 (PORT 0: any free)\n"
     "  --db PATH             CELLAR_DB            default ./cellar.db\n"
+    "  --spool DIR           CELLAR_SPOOL         results are written here as they are made\n"
+    "                                             (default: the directory of --db)\n"
     "  --workers N           CELLAR_WORKERS       jobs run at once (default: CPUs)\n"
     "  --job-threads N       CELLAR_JOB_THREADS   core threads per job (default: CPUs)\n"
     "  --queue N             CELLAR_QUEUE         waiting jobs at most (default 64)\n"
@@ -68,6 +70,9 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "db")) {
         if (!*v || strlen(v) >= sizeof c->db) return bad(err, errlen, "--db", v);
         strcpy(c->db, v);
+    } else if (!strcmp(name, "spool")) {
+        if (!*v || strlen(v) >= sizeof c->spool) return bad(err, errlen, "--spool", v);
+        strcpy(c->spool, v);
     } else if (!strcmp(name, "workers")) {
         if (parse_u64(v, 1, 256, &u)) return bad(err, errlen, "--workers (1..256)", v);
         c->workers = (int)u;
@@ -100,8 +105,9 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     return 0;
 }
 
-static const char *names[] = {"listen",   "db",       "workers",     "job-threads",   "queue",
-                              "max-body", "max-wait", "cache-bytes", "drain-timeout", "log-level"};
+static const char *names[] = {"listen",   "db",       "spool",    "workers",     "job-threads",
+                              "queue",    "max-body", "max-wait", "cache-bytes", "drain-timeout",
+                              "log-level"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {
@@ -159,6 +165,15 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
             v = argv[++i];
         }
         if (set(c, name, v, err, errlen)) return -1;
+    }
+    if (!c->spool[0]) { /* the directory of the database file */
+        const char *slash = strrchr(c->db, '/');
+        if (!slash)
+            strcpy(c->spool, ".");
+        else if (slash == c->db)
+            strcpy(c->spool, "/");
+        else
+            snprintf(c->spool, sizeof c->spool, "%.*s", (int)(slash - c->db), c->db);
     }
     return 0;
 }

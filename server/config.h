@@ -4,6 +4,8 @@
  *   flag            variable            default         meaning
  *   --listen        CELLAR_LISTEN       127.0.0.1:8080  HOST:PORT to listen on (PORT 0: any)
  *   --db            CELLAR_DB           ./cellar.db     the SQLite file (jobs and results)
+ *   --spool         CELLAR_SPOOL        --db's dir      where results are written as they are
+ *                                                       made, before they enter the store
  *   --workers       CELLAR_WORKERS      CPUs            jobs run at once
  *   --job-threads   CELLAR_JOB_THREADS  CPUs            core threads of one job
  *   --queue         CELLAR_QUEUE        64              jobs waiting at most (then 503)
@@ -23,6 +25,7 @@ typedef struct config {
     char host[256];
     unsigned port;
     char db[4096];
+    char spool[4096];
     int workers, job_threads;
     size_t queue;
     uint64_t max_body;

@@ -9,6 +9,7 @@
  */
 #include "server/engine.h"
 
+#include <errno.h>
 #include <openssl/evp.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -17,6 +18,7 @@
 #include <string.h>
 #include <sys/random.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "api/api.h"
 #include "server/log.h"
@@ -40,7 +42,8 @@ struct job {
     double fraction;   /* lock */
     int error_status;  /* set once by the worker, under lock */
     char *error;
-    char *result; /* DONE: the result JSON; immutable once set */
+    char *result; /* DONE: the result JSON when at most ENGINE_KEEP bytes (else NULL: it is in
+                     the store only); immutable once set */
     size_t result_len;
     int refs; /* lock */
     int live; /* lock: in e->live */
@@ -190,7 +193,60 @@ static void progress_cb(void *udata, const char *stage, double fraction)
     pthread_mutex_unlock(&p->e->lock);
 }
 
-/* Runs one job on this worker thread; returns with the job ended and off the live list. */
+/* A result of at most this many bytes stays in memory with its job for the clients that
+ * wait for it; a larger one is read from the store, a chunk at a time. */
+#define ENGINE_KEEP STORE_CHUNK
+
+/* A new spool file, already unlinked (it goes when closed, or with the process): in dir, or
+ * tmpfile() when dir is NULL.  NULL with a message in err. */
+static FILE *spool_open(const char *dir, char *err, size_t errlen)
+{
+    FILE *f = NULL;
+    if (!dir) {
+        f = tmpfile();
+        if (!f) snprintf(err, errlen, "cannot make a spool file: %s", strerror(errno));
+        return f;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/cellar-spool-XXXXXX", dir);
+    int fd = mkstemp(path);
+    if (fd < 0) {
+        snprintf(err, errlen, "cannot make a spool file in %.200s: %s", dir, strerror(errno));
+        return NULL;
+    }
+    unlink(path);
+    f = fdopen(fd, "w+");
+    if (!f) {
+        snprintf(err, errlen, "cannot open a spool file in %.200s: %s", dir, strerror(errno));
+        close(fd);
+    }
+    return f;
+}
+
+/* Moves the spooled result (len bytes) into the store, and into *keep when it is small. */
+static int spool_store(store *st, const char *hash, FILE *f, uint64_t len, char **keep, char *err,
+                       size_t errlen)
+{
+    if (fflush(f) || fseek(f, 0, SEEK_SET)) {
+        snprintf(err, errlen, "the spool file: %s", strerror(errno));
+        return STORE_ERR;
+    }
+    if (st->ops->result_put_file(st, hash, f, len, err, errlen)) return STORE_ERR;
+    *keep = NULL;
+    if (len > ENGINE_KEEP || fseek(f, 0, SEEK_SET)) return STORE_OK;
+    char *b = malloc((size_t)len + 1);
+    if (b && fread(b, 1, (size_t)len, f) == (size_t)len) {
+        b[len] = 0;
+        *keep = b;
+    } else {
+        free(b); /* stored all the same: the clients read it from the store */
+    }
+    return STORE_OK;
+}
+
+/* Runs one job on this worker thread; returns with the job ended and off the live list.  The
+ * result is written to a spool file as it is made, then copied into the store a chunk at a
+ * time: a large result never sits whole in memory. */
 static void run_job(engine *e, job *j)
 {
     char err[256] = "";
@@ -205,15 +261,24 @@ static void run_job(engine *e, job *j)
     progress_ctx pc = {e, j};
     api_run_opts ro = {
         .threads = e->cfg.job_threads, .cancel = &j->cancel, .progress = progress_cb, .udata = &pc};
-    int rc = api_run_json_ex(j->request, j->request_len, &ro, &out, &outlen, &ae);
+    int rc;
+    ro.stream = spool_open(e->cfg.spool_dir, err, sizeof err);
+    if (!ro.stream) {
+        log_kv(LOG_ERROR, "spool failed", "job", j->id, "error", err, NULL);
+        rc = API_ENOMEM;
+        snprintf(ae.msg, sizeof ae.msg, "the result could not be spooled: %.200s", err);
+    } else {
+        rc = api_run_json_ex(j->request, j->request_len, &ro, &out, &outlen, &ae);
+    }
     double t1 = engine_now();
     job_state final = rc == API_OK ? JOB_DONE : rc == API_ECANCELED ? JOB_CANCELED : JOB_FAILED;
-    if (rc == API_OK && st->ops->result_put(st, j->hash, out, outlen, err, sizeof err)) {
+    if (rc == API_OK && spool_store(st, j->hash, ro.stream, outlen, &out, err, sizeof err)) {
         log_kv(LOG_ERROR, "store: result_put failed", "job", j->id, "error", err, NULL);
         final = JOB_FAILED;
         rc = 503;
         snprintf(ae.msg, sizeof ae.msg, "the result could not be stored: %.200s", err);
     }
+    if (ro.stream) fclose(ro.stream);
     pthread_mutex_lock(&e->lock);
     int canceled_meanwhile = j->state == JOB_CANCELED;
     pthread_mutex_unlock(&e->lock);
@@ -374,6 +439,9 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
     pthread_cond_init(&e->work, NULL);
     pthread_cond_init(&e->idle, NULL);
     pthread_cond_init(&e->tick, NULL);
+    FILE *probe = spool_open(cfg->spool_dir, err, errlen); /* refuse to start without a spool */
+    if (!probe) goto fail;
+    fclose(probe);
     if (cfg->st->ops->jobs_unfinished(cfg->st, recover_one, e, err, errlen)) goto fail;
     e->threads = calloc((size_t)cfg->workers, sizeof *e->threads);
     if (!e->threads) {

@@ -32,6 +32,8 @@ typedef struct engine_cfg {
     int workers;     /* worker threads */
     int job_threads; /* core threads per job */
     size_t queue_max;
+    const char *spool_dir; /* borrowed: where results are written as they are made (NULL: the
+                              system's temporary directory) */
 } engine_cfg;
 
 enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_CACHED = 3, ENG_ERR = -1 };
@@ -69,7 +71,8 @@ void engine_release(engine *e, job *j);
 void engine_info(engine *e, job *j, job_info *out);
 /* The same for a job read from the store (not live). */
 void engine_info_from_store(const store_job *sj, job_info *out);
-/* The result of a job that ended DONE (borrowed while the reference is held), else NULL. */
+/* The result of a job that ended DONE (borrowed while the reference is held), else NULL; NULL
+ * too when the result was larger than a store chunk (then read it from the store). */
 const char *engine_result(engine *e, job *j, size_t *len);
 
 /* Cancels a live queued or running job: ENG_OK with *out its new state (canceled), 1 when the

@@ -98,16 +98,11 @@ typedef struct hdr {
     const char *name, *value;
 } hdr;
 
-/* Queues the response: body is malloc'd and taken (or, with `persistent`, static). */
-static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char *body, size_t len,
-                               int persistent, const hdr *hs, size_t nh)
+/* Queues r (destroyed here, NULL: out of memory) with its headers. */
+static enum MHD_Result queue(conn *c, unsigned status, const char *ctype, struct MHD_Response *r,
+                             const hdr *hs, size_t nh)
 {
-    struct MHD_Response *r = MHD_create_response_from_buffer(
-        len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
-    if (!r) {
-        if (!persistent) free(body);
-        return MHD_NO;
-    }
+    if (!r) return MHD_NO;
     if (ctype) MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
     for (size_t i = 0; i < nh; i++)
         if (hs[i].name && hs[i].value) MHD_add_response_header(r, hs[i].name, hs[i].value);
@@ -115,6 +110,16 @@ static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char
     enum MHD_Result ok = MHD_queue_response(c->mc, status, r);
     MHD_destroy_response(r);
     return ok;
+}
+
+/* Queues the response: body is malloc'd and taken (or, with `persistent`, static). */
+static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char *body, size_t len,
+                               int persistent, const hdr *hs, size_t nh)
+{
+    struct MHD_Response *r = MHD_create_response_from_buffer(
+        len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
+    if (!r && !persistent) free(body);
+    return queue(c, status, ctype, r, hs, nh);
 }
 
 static enum MHD_Result respond_json(conn *c, unsigned status, json_t *o, const hdr *hs, size_t nh)
@@ -221,23 +226,50 @@ static json_t *job_json(const job_info *ji)
  * times the result's size in memory and ~0.2 s per MB). */
 #define RENDER_MAX_BYTES (16u << 20)
 
+/* Sends r, a result's representation, with its cache headers. */
+static enum MHD_Result send_result(conn *c, const char *hash, struct MHD_Response *r,
+                                   const char *ctype, const char *job_id, const char *cache)
+{
+    char etag[120], loc[100], applied[40];
+    snprintf(etag, sizeof etag, "\"%s%s\"", hash, c->rep);
+    snprintf(loc, sizeof loc, "/v1/results/%s", hash);
+    snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
+    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
+                {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
+                {MHD_HTTP_HEADER_VARY, c->route == ROUTE_JOBS ? NULL : "Accept"},
+                {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
+                {"X-Cellar-Job", job_id},
+                {"X-Cellar-Cache", cache},
+                {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
+    return queue(c, 200, ctype, r, hs, sizeof hs / sizeof *hs);
+}
+
+/* 422 for a picture or map of a result too large to draw here. */
+static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
+{
+    char msg[200];
+    snprintf(msg, sizeof msg,
+             "the result is %llu bytes: pictures and maps are made of results up to %u bytes; "
+             "ask for application/json",
+             (unsigned long long)len, RENDER_MAX_BYTES);
+    return problem(c, 422, msg, NULL, NULL);
+}
+
 /* A result body (taken) with its cache headers, as JSON or rendered (c->fmt). */
 static enum MHD_Result respond_result(conn *c, const char *hash, char *body, size_t len,
                                       const char *job_id, const char *cache)
 {
-    char etag[120], loc[100], applied[40];
     const char *ctype = "application/json";
     if (c->fmt) {
         char *pic = NULL;
         size_t piclen = 0;
         api_error ae;
         int rc = API_EINVALID;
-        if (len > RENDER_MAX_BYTES)
-            snprintf(ae.msg, sizeof ae.msg,
-                     "the result is %zu bytes: pictures and maps are made of results up to %u "
-                     "bytes; ask for application/json",
-                     len, RENDER_MAX_BYTES);
-        else if (c->fmt == 1)
+        if (len > RENDER_MAX_BYTES) {
+            free(body);
+            return too_large_to_draw(c, len);
+        }
+        if (c->fmt == 1)
             rc = render_svg(body, len, &c->ro, &pic, &piclen, &ae);
         else if (c->fmt == 2)
             rc = render_geojson(body, len, &c->ro, &pic, &piclen, &ae);
@@ -249,17 +281,97 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
         len = piclen;
         ctype = c->fmt == 1 ? "image/svg+xml" : c->fmt == 2 ? "application/geo+json" : "model/obj";
     }
-    snprintf(etag, sizeof etag, "\"%s%s\"", hash, c->rep);
-    snprintf(loc, sizeof loc, "/v1/results/%s", hash);
-    snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
-    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
-                {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
-                {MHD_HTTP_HEADER_VARY, c->route == ROUTE_JOBS ? NULL : "Accept"},
-                {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
-                {"X-Cellar-Job", job_id},
-                {"X-Cellar-Cache", cache},
-                {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
-    return respond(c, 200, ctype, body, len, 0, hs, sizeof hs / sizeof *hs);
+    struct MHD_Response *r = MHD_create_response_from_buffer(len, body, MHD_RESPMEM_MUST_FREE);
+    if (!r) {
+        free(body);
+        return MHD_NO;
+    }
+    return send_result(c, hash, r, ctype, job_id, cache);
+}
+
+/* A stored result sent as it is read, a chunk at a time: its reader. */
+typedef struct result_reader {
+    store *st;
+    char hash[65];
+    uint64_t size;
+    char *chunk; /* the chunk read last: bytes [start, start + len) of the result */
+    size_t len;
+    uint64_t start;
+} result_reader;
+
+static ssize_t result_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+    result_reader *rr = cls;
+    char err[256];
+    if (pos >= rr->size) return MHD_CONTENT_READER_END_OF_STREAM;
+    if (!rr->chunk || pos < rr->start || pos - rr->start >= rr->len) {
+        free(rr->chunk);
+        rr->chunk = NULL;
+        int rc = rr->st->ops->result_chunk(rr->st, rr->hash, pos, &rr->chunk, &rr->len, &rr->start,
+                                           err, sizeof err);
+        if (rc == STORE_OK && rr->start + rr->len > rr->size) {
+            rc = STORE_ERR;
+            snprintf(err, sizeof err, "a chunk ends past the result's %llu bytes",
+                     (unsigned long long)rr->size);
+        }
+        if (rc != STORE_OK) {
+            char at[32];
+            log_kv(LOG_WARN, "a result stopped while it was sent", "hash", rr->hash, "byte",
+                   log_num(at, (double)pos), "error",
+                   rc == STORE_NOTFOUND ? "evicted meanwhile" : err, NULL);
+            return MHD_CONTENT_READER_END_WITH_ERROR;
+        }
+    }
+    size_t n = rr->len - (size_t)(pos - rr->start);
+    if (n > max) n = max;
+    memcpy(buf, rr->chunk + (pos - rr->start), n);
+    return (ssize_t)n;
+}
+
+static void result_reader_free(void *cls)
+{
+    result_reader *rr = cls;
+    free(rr->chunk);
+    free(rr);
+}
+
+/* A stored result, as JSON (streamed when larger than a chunk) or rendered.  post: the
+ * request was a POST whose result was found in the cache (a result evicted since is then
+ * "try again", not "not found"). */
+static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id, const char *cache,
+                                  int post)
+{
+    char err[256];
+    char *body = NULL;
+    size_t len = 0;
+    uint64_t size = 0;
+    store *st = c->h->st;
+    int rc = st->ops->result_size(st, hash, &size, err, sizeof err);
+    if (rc == STORE_OK && c->fmt && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
+    if (rc == STORE_OK && !c->fmt && size > STORE_CHUNK) {
+        result_reader *rr = calloc(1, sizeof *rr);
+        if (!rr) return problem(c, 503, "out of memory", "5", NULL);
+        rr->st = st;
+        snprintf(rr->hash, sizeof rr->hash, "%s", hash);
+        rr->size = size;
+        struct MHD_Response *r = MHD_create_response_from_callback(size, 256 * 1024, result_read,
+                                                                   rr, result_reader_free);
+        if (!r) {
+            free(rr);
+            return MHD_NO;
+        }
+        return send_result(c, hash, r, "application/json", job_id, cache);
+    }
+    if (rc == STORE_OK) rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
+    if (rc == STORE_NOTFOUND && post)
+        return problem(c, 503, "the result was evicted as it was read: try again", "1", NULL);
+    if (rc == STORE_NOTFOUND)
+        return problem(c, 404,
+                       job_id ? "the result was evicted from the cache: post the request again"
+                              : "no result with this hash",
+                       NULL, NULL);
+    if (rc) return problem(c, 503, err, "5", NULL);
+    return respond_result(c, hash, body, len, job_id, cache);
 }
 
 /* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, 3 OBJ, -1 none we
@@ -372,7 +484,8 @@ static enum MHD_Result answer_job(conn *c, job *j)
     if (ji.state == JOB_DONE) {
         size_t n;
         const char *r = engine_result(c->h->e, j, &n);
-        char *b = r ? malloc(n + 1) : NULL;
+        if (!r) return get_result(c, ji.hash, ji.id, "miss", 0); /* a large one */
+        char *b = malloc(n + 1);
         if (!b) return problem(c, 503, "out of memory", "5", NULL);
         memcpy(b, r, n + 1);
         return respond_result(c, ji.hash, b, n, ji.id, "miss");
@@ -445,22 +558,6 @@ static const char index_html[] =
     "($('num').checked?'&numbers=1':''),{headers:{Accept:'image/svg+xml'}});if(p.ok)$('pic')"
     ".innerHTML=await p.text()}}catch(e){$('st').textContent=String(e)}};\n</script>\n";
 
-static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id)
-{
-    char err[256];
-    char *body = NULL;
-    size_t len = 0;
-    store *st = c->h->st;
-    int rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
-    if (rc == STORE_NOTFOUND)
-        return problem(c, 404,
-                       job_id ? "the result was evicted from the cache: post the request again"
-                              : "no result with this hash",
-                       NULL, NULL);
-    if (rc) return problem(c, 503, err, "5", NULL);
-    return respond_result(c, hash, body, len, job_id, "hit");
-}
-
 static enum MHD_Result route_result(conn *c)
 {
     char etag[120];
@@ -476,7 +573,7 @@ static enum MHD_Result route_result(conn *c)
             return respond(c, 304, NULL, NULL, 0, 1, hs, 3);
         }
     }
-    return get_result(c, c->id, NULL);
+    return get_result(c, c->id, NULL, "hit", 0);
 }
 
 static enum MHD_Result route_job(conn *c, int want_result)
@@ -504,7 +601,7 @@ static enum MHD_Result route_job(conn *c, int want_result)
     if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);
     switch (ji.state) {
     case JOB_DONE:
-        return get_result(c, ji.hash, ji.id);
+        return get_result(c, ji.hash, ji.id, "hit", 0);
     case JOB_FAILED:
         return problem(c, (unsigned)ji.error_status, ji.error, NULL, NULL);
     case JOB_CANCELED:
@@ -590,23 +687,18 @@ static enum MHD_Result route_submit(conn *c)
     engine_hash(canon, clen, hash);
 
     /* a cached result costs one lookup */
-    char *body = NULL;
-    size_t len = 0;
-    int hit = h->st->ops->result_get(h->st, hash, &body, &len, err, sizeof err);
+    int hit = h->st->ops->result_exists(h->st, hash, err, sizeof err);
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
-        return respond_result(c, hash, body, len, NULL, "hit");
+        return get_result(c, hash, NULL, "hit", 1);
     }
     job *j = NULL;
     int coalesced = 0;
     rc = engine_submit(h->e, canon, clen, kind, hash, &j, &coalesced, err, sizeof err);
     free(canon);
-    if (rc == ENG_CACHED) { /* an identical job ended between our two looks */
-        hit = h->st->ops->result_get(h->st, hash, &body, &len, err, sizeof err);
-        if (hit == STORE_OK) return respond_result(c, hash, body, len, NULL, "hit");
-        return problem(c, 503, "the result was evicted as it was made: try again", "1", NULL);
-    }
+    if (rc == ENG_CACHED) /* an identical job ended between our two looks */
+        return get_result(c, hash, NULL, "hit", 1);
     if (rc == ENG_FULL) return problem(c, 503, "the job queue is full: try again later", "5", NULL);
     if (rc == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);

@@ -51,7 +51,8 @@ int main(int argc, char **argv)
                      .m = m,
                      .workers = cfg.workers,
                      .job_threads = cfg.job_threads,
-                     .queue_max = cfg.queue};
+                     .queue_max = cfg.queue,
+                     .spool_dir = cfg.spool};
     engine *e = engine_start(&ec, err, sizeof err);
     if (!e) {
         log_kv(LOG_ERROR, "cannot start the engine", "error", err, NULL);

@@ -5,7 +5,9 @@
  * Jobs: one row per accepted job, written when it is accepted, updated when it starts and
  * when it ends, so that a restart can resume every job that was queued or running.
  * Results: content-addressed by the request hash (64 hex digits of SHA-256), the result JSON
- * as bytes, with a total size budget enforced by least-recently-used eviction.
+ * as bytes, with a total size budget enforced by least-recently-used eviction.  A result is
+ * kept in chunks of at most STORE_CHUNK bytes, so that neither writing one (result_put_file,
+ * from a spool file) nor reading one (result_size, then result_chunk) needs it whole in memory.
  *
  * Threads: every function may be called from any thread at any time; the backend takes care
  * of its own connections and locks (SQLite: one connection per thread).
@@ -18,8 +20,12 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 enum { STORE_OK = 0, STORE_NOTFOUND = 1, STORE_ERR = -1 };
+
+/* The largest chunk a result is written in (the last may be shorter). */
+#define STORE_CHUNK ((size_t)1 << 20)
 
 typedef enum job_state {
     JOB_QUEUED = 0,
@@ -68,9 +74,25 @@ typedef struct store_ops {
      * results until the total is within the budget (the new one is never evicted). */
     int (*result_put)(store *s, const char *hash, const char *body, size_t len, char *err,
                       size_t errlen);
-    /* Reads a result and marks it used now. */
+    /* The same with the body read from f: its next len bytes (a shorter file is an error,
+     * and nothing is stored).  The result appears whole or not at all: readers do not see
+     * it until every chunk is written, yet the writer does not hold the database's write
+     * lock for the whole copy. */
+    int (*result_put_file)(store *s, const char *hash, FILE *f, uint64_t len, char *err,
+                           size_t errlen);
+    /* Reads a result whole and marks it used now.  A result whose chunks do not add up to
+     * its size is reported damaged (STORE_ERR), never returned short. */
     int (*result_get)(store *s, const char *hash, char **body, size_t *len, char *err,
                       size_t errlen);
+    /* A result's size in bytes, marking it used now (as result_get); its body is then read
+     * with result_chunk from position 0 to the size. */
+    int (*result_size)(store *s, const char *hash, uint64_t *bytes, char *err, size_t errlen);
+    /* The chunk of a result that holds byte pos: *data (malloc'd, NUL-terminated past its
+     * length) of *len bytes starting at byte *start <= pos.  STORE_NOTFOUND when the result
+     * or that chunk is gone (evicted since result_size: a reader then stops with an error;
+     * the bytes it had were right, since a hash fixes its content). */
+    int (*result_chunk)(store *s, const char *hash, uint64_t pos, char **data, size_t *len,
+                        uint64_t *start, char *err, size_t errlen);
     /* Whether a result exists, without reading it or marking it. */
     int (*result_exists)(store *s, const char *hash, char *err, size_t errlen);
     /* Number of results and their total bytes. */

@@ -5,7 +5,7 @@
  *   jobs(id TEXT PRIMARY KEY, hash, kind, state, created, started, finished, error_status,
  *        error, request BLOB)                                   index jobs_state(state)
  *   results(hash TEXT PRIMARY KEY, bytes, created, last_used)   index results_last_used
- *   result_bodies(hash TEXT PRIMARY KEY, body BLOB)             one per results row
+ *   result_chunks(hash, off, body BLOB, PRIMARY KEY(hash, off)) a result's bytes from off on
  *   result_totals(id = 0, count, bytes)                         one row
  * Times are Unix seconds as REAL, NULL for "not yet" (0 in a store_job); error_status and
  * error are NULL unless the job failed.
@@ -17,6 +17,17 @@
  * body is read outside any write transaction.  A put costs one more upsert (1 KiB results:
  * ~110 us a put with its eviction, against ~70 us in one table).
  *
+ * Why in chunks (schema version 2; version 1 had one body row per result, which the migration
+ * turns into one chunk): a result of 500 MB (16 000 cubes with every field) was held whole by
+ * the worker, by the put, and by every GET.  Now the worker spools it to a file, result_put_file
+ * copies it a chunk at a time, and a GET sends it a chunk at a time (result_size,
+ * result_chunk).  A large put writes its chunks in transactions of SQ_BATCH bytes, so that
+ * the write lock is never held for the whole copy (other writers wait at most SQ_BUSY_MS);
+ * the results row comes last, in the transaction that checks the chunks and evicts, so a
+ * result is visible whole or not at all.  Chunks with no results row are those of a put under
+ * way, or left by one that failed or crashed: a failed put deletes its own, and opening the
+ * store deletes any (one daemon per file: see "Threads").
+ *
  * Invariants:
  *   - result_totals equals COUNT(*), SUM(bytes) of results at every commit: three triggers
  *     (after insert, after delete, after update of bytes) keep it, in the same transaction as
@@ -24,9 +35,9 @@
  *     costs ~400 us over 5000 results (and grows with them; with the bodies inline it walked
  *     their overflow pages: 2-37 ms).  Rows are written with upserts, never INSERT OR REPLACE,
  *     whose implicit delete fires no trigger.
- *   - A result_bodies row exists for every results row and no other (a trigger deletes the
- *     body with its row; result_put writes both in one transaction).  check() verifies this
- *     and the totals.
+ *   - The chunks of every results row tile [0, bytes): each starts where the one before ends
+ *     (a trigger deletes them with their row).  check() verifies this and the totals, and
+ *     result_get refuses a body that does not add up.
  *   - After a committed result_put with a budget, SUM(bytes) <= budget, or the new result is
  *     the only one left (a result larger than the budget is still stored, alone).
  *   - last_used stamps handed out by one store strictly increase (sq_stamp: the clock, or a
@@ -44,6 +55,7 @@
  * after having used it (the daemon closes the store after joining its workers and stopping
  * the HTTP server).  The ops never hold mu while talking to SQLite.  A callback of
  * jobs_unfinished() runs with no statement active, so it may call any op of the same store.
+ * One daemon uses a file at a time (opening deletes the chunks of puts under way elsewhere).
  *
  * Ownership: strings passed in are borrowed; error, request and body handed out are malloc'd
  * copies, NUL-terminated one byte past their length, which the caller frees.
@@ -59,6 +71,7 @@
 #include <time.h>
 
 #define SQ_BUSY_MS 5000 /* how long a connection waits for a lock before SQLITE_BUSY */
+#define SQ_BATCH   ((uint64_t)32 * STORE_CHUNK) /* bytes of chunks a put writes per transaction */
 
 /* The schema, one script per version: sq_migrations[v] takes a database from version v to
  * v + 1.  Append, never edit: a database in the field has run the scripts it has run. */
@@ -83,6 +96,15 @@ static const char *const sq_migrations[] = {
     " UPDATE result_totals SET count = count - 1, bytes = bytes - OLD.bytes; END;"
     "CREATE TRIGGER results_total_update AFTER UPDATE OF bytes ON results BEGIN"
     " UPDATE result_totals SET bytes = bytes - OLD.bytes + NEW.bytes; END;",
+    /* 1 -> 2: bodies in chunks */
+    "CREATE TABLE result_chunks(hash TEXT NOT NULL, off INTEGER NOT NULL, body BLOB NOT NULL,"
+    " PRIMARY KEY(hash, off));"
+    "INSERT INTO result_chunks(hash, off, body)"
+    " SELECT hash, 0, body FROM result_bodies WHERE length(body) > 0;"
+    "DROP TRIGGER results_body_delete;"
+    "DROP TABLE result_bodies;"
+    "CREATE TRIGGER results_chunks_delete AFTER DELETE ON results BEGIN"
+    " DELETE FROM result_chunks WHERE hash = OLD.hash; END;",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -96,11 +118,17 @@ enum sq_sql {
     SQ_JOB_GET,
     SQ_JOBS_UNFINISHED,
     SQ_JOBS_PRUNE,
+    SQ_BEGIN_READ,
     SQ_RESULT_UPSERT,
-    SQ_BODY_UPSERT,
+    SQ_RESULT_DELETE,
+    SQ_CHUNKS_DELETE,
+    SQ_CHUNK_PUT,
+    SQ_CHUNKS_SUM,
     SQ_RESULT_TOTALS,
     SQ_RESULT_EVICT_ONE,
-    SQ_BODY_GET,
+    SQ_RESULT_HEAD,
+    SQ_CHUNKS_ALL,
+    SQ_CHUNK_AT,
     SQ_RESULT_TOUCH,
     SQ_RESULT_EXISTS,
     SQ_INTEGRITY,
@@ -127,24 +155,37 @@ static const char *const sq_sql_text[SQ_NSQL] = {
                          " VALUES(?1, ?2, ?3, ?3) ON CONFLICT(hash) DO UPDATE SET"
                          " bytes = excluded.bytes, created = excluded.created,"
                          " last_used = excluded.last_used",
-    [SQ_BODY_UPSERT] = "INSERT INTO result_bodies(hash, body) VALUES(?1, ?2)"
-                       " ON CONFLICT(hash) DO UPDATE SET body = excluded.body",
+    [SQ_BEGIN_READ] = "BEGIN",
+    [SQ_RESULT_DELETE] = "DELETE FROM results WHERE hash = ?1",
+    /* the chunks of a put that has no results row (yet, or any more) */
+    [SQ_CHUNKS_DELETE] = "DELETE FROM result_chunks WHERE hash = ?1"
+                         " AND NOT EXISTS (SELECT 1 FROM results WHERE hash = ?1)",
+    [SQ_CHUNK_PUT] = "INSERT INTO result_chunks(hash, off, body) VALUES(?1, ?2, ?3)"
+                     " ON CONFLICT(hash, off) DO UPDATE SET body = excluded.body",
+    [SQ_CHUNKS_SUM] =
+        "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks WHERE hash = ?1",
     [SQ_RESULT_TOTALS] = "SELECT count, bytes FROM result_totals WHERE id = 0",
     /* the least recently used result but ?1 (the one just stored), through the index */
     [SQ_RESULT_EVICT_ONE] = "DELETE FROM results WHERE rowid = (SELECT rowid FROM results"
                             " WHERE hash <> ?1 ORDER BY last_used LIMIT 1)",
-    [SQ_BODY_GET] = "SELECT b.body, r.last_used FROM result_bodies b JOIN results r"
-                    " ON r.hash = b.hash WHERE b.hash = ?1",
+    [SQ_RESULT_HEAD] = "SELECT bytes, last_used FROM results WHERE hash = ?1",
+    [SQ_CHUNKS_ALL] = "SELECT off, body FROM result_chunks WHERE hash = ?1 ORDER BY off",
+    [SQ_CHUNK_AT] = "SELECT off, body FROM result_chunks WHERE hash = ?1 AND off <= ?2"
+                    " ORDER BY off DESC LIMIT 1",
     [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
     [SQ_RESULT_EXISTS] = "SELECT 1 FROM results WHERE hash = ?1",
     [SQ_INTEGRITY] = "PRAGMA integrity_check",
-    /* the totals row, the table's count and sum, the bodies, the bodies of the right size */
-    [SQ_TOTALS_RECOUNT] = "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
-                          " (SELECT coalesce(sum(bytes), 0) FROM results),"
-                          " (SELECT count(*) FROM result_bodies),"
-                          " (SELECT count(*) FROM results r JOIN result_bodies b"
-                          "  ON b.hash = r.hash AND length(b.body) = r.bytes)"
-                          " FROM result_totals t WHERE t.id = 0",
+    /* the totals row, the table's count and sum, the results whose chunks do not add up to
+     * their size, the chunks that do not start where the one before ends */
+    [SQ_TOTALS_RECOUNT] =
+        "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
+        " (SELECT coalesce(sum(bytes), 0) FROM results),"
+        " (SELECT count(*) FROM results r WHERE r.bytes <> (SELECT coalesce(sum(length(c.body)), 0)"
+        "  FROM result_chunks c WHERE c.hash = r.hash)),"
+        " (SELECT count(*) FROM (SELECT off, sum(length(body)) OVER (PARTITION BY hash ORDER BY off"
+        "  ROWS UNBOUNDED PRECEDING) - length(body) AS start FROM result_chunks"
+        "  WHERE hash IN (SELECT hash FROM results)) WHERE off <> start)"
+        " FROM result_totals t WHERE t.id = 0",
 };
 
 typedef struct sq_store sq_store;
@@ -674,50 +715,221 @@ static int sq_evict(sq_conn *c, uint64_t budget, const char *keep, char *err, si
     }
 }
 
-/* Runs one of the two upserts of result_put, its hash in ?1. */
-static int sq_upsert(sq_conn *c, enum sq_sql id, const char *hash, const char *body, size_t len,
-                     double stamp, char *err, size_t errlen)
+/* Runs a statement whose ?1 is a hash and that returns no row. */
+static int sq_run_hash(sq_conn *c, enum sq_sql id, const char *hash, const char *where, char *err,
+                       size_t errlen)
 {
-    sqlite3_stmt *st = sq_stmt(c, id, "result_put", err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
     int rc;
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    if (id == SQ_BODY_UPSERT) {
-        sqlite3_bind_blob64(st, 2, body ? body : "", len, SQLITE_STATIC);
-    } else {
-        sqlite3_bind_int64(st, 2, (sqlite3_int64)len);
-        sqlite3_bind_double(st, 3, stamp);
-    }
     rc = sqlite3_step(st);
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put", c->db);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
     sq_done(st);
     return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
 }
 
-static int sq_result_put(store *base, const char *hash, const char *body, size_t len, char *err,
+/* Where a put's bytes come from: a buffer, or a file read a chunk at a time into buf. */
+typedef struct sq_source {
+    const char *mem;
+    FILE *f;
+    char *buf; /* STORE_CHUNK bytes, for f */
+} sq_source;
+
+/* The next n bytes of the source (pos: how many were taken before). */
+static const char *sq_source_take(sq_source *src, uint64_t pos, size_t n, uint64_t len, char *err,
+                                  size_t errlen)
+{
+    if (src->mem) return src->mem + pos;
+    size_t got = fread(src->buf, 1, n, src->f);
+    if (got == n) return src->buf;
+    if (ferror(src->f))
+        sq_errf(err, errlen, "sqlite result_put: reading the result at byte %llu failed",
+                (unsigned long long)(pos + got));
+    else
+        sq_errf(err, errlen, "sqlite result_put: the file ended after %llu of %llu bytes",
+                (unsigned long long)(pos + got), (unsigned long long)len);
+    return NULL;
+}
+
+static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const char *data, size_t n,
+                        char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_CHUNK_PUT, "result_put: chunk", err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, (sqlite3_int64)off);
+    sqlite3_bind_blob64(st, 3, data, n, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put: chunk", c->db);
+    sq_done(st);
+    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
+}
+
+/* The chunks now stored under hash: how many and their total bytes. */
+static int sq_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t *bytes, char *err,
                          size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
+    sqlite3_stmt *st = sq_stmt(c, SQ_CHUNKS_SUM, "result_put: sum", err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        *count = (uint64_t)sqlite3_column_int64(st, 0);
+        *bytes = (uint64_t)sqlite3_column_int64(st, 1);
+    } else {
+        sq_dberr(err, errlen, "result_put: sum", c->db);
+    }
+    sq_done(st);
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+}
+
+/* A put: the old result of this hash goes, the chunks are written SQ_BATCH bytes per
+ * transaction, and the last transaction checks that they are all there (another put of the
+ * same hash, or an eviction of it, could have touched them in between), writes the results
+ * row and evicts.  A small result is one transaction, as before chunks. */
+static int sq_put(sq_store *s, const char *hash, uint64_t len, sq_source *src, char *err,
+                  size_t errlen)
+{
     sq_conn *c = sq_conn_get(s, err, errlen);
+    uint64_t pos = 0, nchunks = 0;
+    int first = 1;
     if (!c) return STORE_ERR;
-    if (!body && len) {
-        sq_errf(err, errlen, "sqlite result_put: %zu bytes with no body", len);
+    if (len > (uint64_t)INT64_MAX / 2) {
+        sq_errf(err, errlen, "sqlite result_put: %llu bytes is too large", (unsigned long long)len);
         return STORE_ERR;
     }
-    if (sq_run(c, SQ_BEGIN, "result_put: begin", err, errlen)) return STORE_ERR;
-    /* the stamp is taken under the write lock: stamps of puts follow the commit order */
-    if (sq_upsert(c, SQ_RESULT_UPSERT, hash, NULL, len, sq_stamp(s), err, errlen) ||
-        sq_upsert(c, SQ_BODY_UPSERT, hash, body, len, 0, err, errlen))
+    for (;;) {
+        if (sq_run(c, SQ_BEGIN, "result_put: begin", err, errlen)) goto fail_nolock;
+        if (first && (sq_run_hash(c, SQ_RESULT_DELETE, hash, "result_put: replace", err, errlen) ||
+                      sq_run_hash(c, SQ_CHUNKS_DELETE, hash, "result_put: replace", err, errlen)))
+            goto fail;
+        first = 0;
+        uint64_t batch_end = pos + SQ_BATCH;
+        while (pos < len && pos < batch_end) {
+            size_t n = len - pos < STORE_CHUNK ? (size_t)(len - pos) : STORE_CHUNK;
+            const char *data = sq_source_take(src, pos, n, len, err, errlen);
+            if (!data || sq_chunk_put(c, hash, pos, data, n, err, errlen)) goto fail;
+            pos += n;
+            nchunks++;
+        }
+        if (pos == len) break;
+        if (sq_run(c, SQ_COMMIT, "result_put: commit", err, errlen)) goto fail;
+    }
+    uint64_t have_n, have_bytes;
+    if (sq_chunks_sum(c, hash, &have_n, &have_bytes, err, errlen)) goto fail;
+    if (have_n != nchunks || have_bytes != len) {
+        sq_errf(err, errlen,
+                "sqlite result_put: %llu chunks of %llu bytes written, %llu of %llu found "
+                "(another put of the same result meanwhile?)",
+                (unsigned long long)nchunks, (unsigned long long)len, (unsigned long long)have_n,
+                (unsigned long long)have_bytes);
         goto fail;
+    }
+    /* the stamp is taken under the write lock: stamps of puts follow the commit order */
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_UPSERT, "result_put", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, (sqlite3_int64)len);
+    sqlite3_bind_double(st, 3, sq_stamp(s));
+    int rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put", c->db);
+    sq_done(st);
+    if (rc != SQLITE_DONE) goto fail;
     if (s->budget && sq_evict(c, s->budget, hash, err, errlen)) goto fail;
     if (sq_run(c, SQ_COMMIT, "result_put: commit", err, errlen)) goto fail;
     return STORE_OK;
 fail:
     sq_rollback(c);
+fail_nolock:
+    /* chunks committed by earlier batches: gone with the put (best effort; opening the store
+     * again deletes any left) */
+    if (pos > 0 && !sq_run(c, SQ_BEGIN, "result_put: clean up", NULL, 0)) {
+        if (sq_run_hash(c, SQ_CHUNKS_DELETE, hash, "result_put: clean up", NULL, 0) ||
+            sq_run(c, SQ_COMMIT, "result_put: clean up", NULL, 0))
+            sq_rollback(c);
+    }
     return STORE_ERR;
 }
 
-/* The body is read outside any transaction (readers run in parallel under WAL), then the
+static int sq_result_put(store *base, const char *hash, const char *body, size_t len, char *err,
+                         size_t errlen)
+{
+    if (!body && len) {
+        sq_errf(err, errlen, "sqlite result_put: %zu bytes with no body", len);
+        return STORE_ERR;
+    }
+    sq_source src = {.mem = body ? body : ""};
+    return sq_put((sq_store *)base, hash, len, &src, err, errlen);
+}
+
+static int sq_result_put_file(store *base, const char *hash, FILE *f, uint64_t len, char *err,
+                              size_t errlen)
+{
+    if (!f) {
+        sq_errf(err, errlen, "sqlite result_put: no file");
+        return STORE_ERR;
+    }
+    sq_source src = {.f = f, .buf = malloc(STORE_CHUNK)};
+    if (!src.buf) {
+        sq_errf(err, errlen, "sqlite result_put: out of memory");
+        return STORE_ERR;
+    }
+    int rc = sq_put((sq_store *)base, hash, len, &src, err, errlen);
+    free(src.buf);
+    return rc;
+}
+
+/* A result's size and mark (no transaction of its own: the caller's, or one snapshot). */
+static int sq_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, const char *where,
+                   char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_HEAD, where, err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        *bytes = (uint64_t)sqlite3_column_int64(st, 0);
+        *used = sq_column_time(st, 1);
+    } else if (rc != SQLITE_DONE) {
+        sq_dberr(err, errlen, where, c->db);
+    }
+    sq_done(st);
+    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
+}
+
+/* Marks a result used now, unless its mark is younger than touch_seconds: a hot result then
+ * costs one write per interval instead of one per read (every write takes the database's
+ * write lock, and readers queued behind it showed up as a tail of hundreds of ms under load).
+ * The LRU order is exact to that resolution.  A result evicted since it was read is left. */
+static int sq_touch(sq_store *s, sq_conn *c, const char *hash, double used, const char *where,
+                    char *err, size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    if (sq_now() - used < s->touch_seconds) return STORE_OK;
+    if (sq_run(c, SQ_BEGIN, where, err, errlen)) return STORE_ERR;
+    st = sq_stmt(c, SQ_RESULT_TOUCH, where, err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 2, sq_stamp(s));
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, where, c->db);
+        goto fail;
+    }
+    sq_done(st);
+    st = NULL;
+    if (sq_run(c, SQ_COMMIT, where, err, errlen)) goto fail;
+    return STORE_OK;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* The body is read in one read transaction (readers run in parallel under WAL), then the
  * small results row is marked in a write transaction of its own.  A result evicted in between
  * is still returned: it was there when read, and its content is fixed by its hash. */
 static int sq_result_get(store *base, const char *hash, char **body, size_t *len, char *err,
@@ -726,60 +938,116 @@ static int sq_result_get(store *base, const char *hash, char **body, size_t *len
     sq_store *s = (sq_store *)base;
     sqlite3_stmt *st = NULL;
     char *copy = NULL;
-    size_t n = 0;
+    uint64_t bytes = 0, pos = 0;
+    double used = 0;
     int rc;
     sq_conn *c = sq_conn_get(s, err, errlen);
     *body = NULL;
     if (len) *len = 0;
     if (!c) return STORE_ERR;
-    st = sq_stmt(c, SQ_BODY_GET, "result_get", err, errlen);
+    if (sq_run(c, SQ_BEGIN_READ, "result_get: begin", err, errlen)) return STORE_ERR;
+    rc = sq_head(c, hash, &bytes, &used, "result_get", err, errlen);
+    if (rc) goto out;
+    rc = STORE_ERR;
+    if (bytes >= SIZE_MAX || !(copy = malloc((size_t)bytes + 1))) {
+        sq_errf(err, errlen, "sqlite result_get: out of memory for %llu bytes",
+                (unsigned long long)bytes);
+        goto out;
+    }
+    if (!(st = sq_stmt(c, SQ_CHUNKS_ALL, "result_get", err, errlen))) goto out;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    int step;
+    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
+        uint64_t off = (uint64_t)sqlite3_column_int64(st, 0);
+        const void *p = sqlite3_column_blob(st, 1);
+        uint64_t n = (uint64_t)sqlite3_column_bytes(st, 1);
+        if (!p && n) {
+            sq_errf(err, errlen, "sqlite result_get: out of memory");
+            goto out;
+        }
+        if (off != pos || n > bytes - pos) {
+            sq_errf(err, errlen,
+                    "sqlite result_get: result %.16s... is damaged: a chunk of %llu bytes at "
+                    "byte %llu, where %llu of %llu bytes were read",
+                    hash, (unsigned long long)n, (unsigned long long)off, (unsigned long long)pos,
+                    (unsigned long long)bytes);
+            goto out;
+        }
+        if (n) memcpy(copy + pos, p, (size_t)n);
+        pos += n;
+    }
+    if (step != SQLITE_DONE) {
+        sq_dberr(err, errlen, "result_get", c->db);
+        goto out;
+    }
+    if (pos != bytes) {
+        sq_errf(err, errlen,
+                "sqlite result_get: result %.16s... is damaged: its chunks hold %llu of its "
+                "%llu bytes",
+                hash, (unsigned long long)pos, (unsigned long long)bytes);
+        goto out;
+    }
+    rc = STORE_OK;
+out:
+    sq_done(st);
+    sq_run(c, SQ_COMMIT, "result_get: end", NULL, 0);
+    if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_get: mark used", err, errlen);
+    if (rc != STORE_OK) {
+        free(copy);
+        return rc;
+    }
+    copy[bytes] = 0;
+    *body = copy;
+    if (len) *len = (size_t)bytes;
+    return STORE_OK;
+}
+
+static int sq_result_size(store *base, const char *hash, uint64_t *bytes, char *err, size_t errlen)
+{
+    sq_store *s = (sq_store *)base;
+    double used = 0;
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    *bytes = 0;
+    if (!c) return STORE_ERR;
+    int rc = sq_head(c, hash, bytes, &used, "result_size", err, errlen);
+    if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_size: mark used", err, errlen);
+    return rc;
+}
+
+static int sq_result_chunk(store *base, const char *hash, uint64_t pos, char **data, size_t *len,
+                           uint64_t *start, char *err, size_t errlen)
+{
+    sqlite3_stmt *st;
+    int rc;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    *data = NULL;
+    *len = 0;
+    *start = 0;
+    if (!c) return STORE_ERR;
+    if (pos > (uint64_t)INT64_MAX) return STORE_NOTFOUND;
+    st = sq_stmt(c, SQ_CHUNK_AT, "result_chunk", err, errlen);
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, (sqlite3_int64)pos);
     rc = sqlite3_step(st);
-    if (rc == SQLITE_DONE) {
-        sq_done(st);
-        return STORE_NOTFOUND;
-    }
-    if (rc != SQLITE_ROW) {
-        sq_dberr(err, errlen, "result_get", c->db);
-        goto fail;
-    }
-    if (sq_column_dup(st, 0, 0, &copy, &n)) {
-        sq_errf(err, errlen, "sqlite result_get: out of memory");
-        goto fail;
-    }
-    double used = sqlite3_column_double(st, 1);
-    sq_done(st);
-    st = NULL;
-    /* A result read again within touch_seconds keeps its mark: a hot result then costs one
-     * write per interval instead of one per read (every write takes the database's write
-     * lock, and readers queued behind it showed up as a tail of hundreds of ms under load).
-     * The LRU order is exact to that resolution. */
-    if (sq_now() - used < s->touch_seconds) {
-        *body = copy;
-        if (len) *len = n;
-        return STORE_OK;
-    }
-    if (sq_run(c, SQ_BEGIN, "result_get: begin", err, errlen)) goto fail;
-    st = sq_stmt(c, SQ_RESULT_TOUCH, "result_get: mark used", err, errlen);
-    if (!st) goto fail;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 2, sq_stamp(s));
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "result_get: mark used", c->db);
-        goto fail;
+    if (rc == SQLITE_ROW) {
+        uint64_t off = (uint64_t)sqlite3_column_int64(st, 0);
+        uint64_t n = (uint64_t)sqlite3_column_bytes(st, 1);
+        if (pos - off >= n) { /* the chunk that held pos is gone */
+            sq_done(st);
+            return STORE_NOTFOUND;
+        }
+        if (sq_column_dup(st, 1, 0, data, len)) {
+            sq_errf(err, errlen, "sqlite result_chunk: out of memory");
+            sq_done(st);
+            return STORE_ERR;
+        }
+        *start = off;
+    } else if (rc != SQLITE_DONE) {
+        sq_dberr(err, errlen, "result_chunk", c->db);
     }
     sq_done(st);
-    st = NULL;
-    if (sq_run(c, SQ_COMMIT, "result_get: commit", err, errlen)) goto fail;
-    *body = copy;
-    if (len) *len = n;
-    return STORE_OK;
-fail:
-    sq_done(st);
-    sq_rollback(c);
-    free(copy);
-    return STORE_ERR;
+    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
 }
 
 static int sq_result_exists(store *base, const char *hash, char *err, size_t errlen)
@@ -837,17 +1105,18 @@ static int sq_check(store *base, char *err, size_t errlen)
     if (rc == SQLITE_ROW) {
         sqlite3_int64 n0 = sqlite3_column_int64(st, 0), b0 = sqlite3_column_int64(st, 1);
         sqlite3_int64 n1 = sqlite3_column_int64(st, 2), b1 = sqlite3_column_int64(st, 3);
-        sqlite3_int64 nb = sqlite3_column_int64(st, 4), nok = sqlite3_column_int64(st, 5);
+        sqlite3_int64 nsize = sqlite3_column_int64(st, 4), noff = sqlite3_column_int64(st, 5);
         if (n0 != n1 || b0 != b1) {
             sq_errf(err, errlen,
                     "sqlite check: result_totals says %lld results of %lld bytes, the table "
                     "holds %lld of %lld",
                     (long long)n0, (long long)b0, (long long)n1, (long long)b1);
             bad = 1;
-        } else if (nb != n1 || nok != n1) {
+        } else if (nsize || noff) {
             sq_errf(err, errlen,
-                    "sqlite check: %lld results, %lld bodies, %lld of them of the recorded size",
-                    (long long)n1, (long long)nb, (long long)nok);
+                    "sqlite check: of %lld results, %lld have chunks that do not add up to their "
+                    "size; %lld chunks do not start where the one before ends",
+                    (long long)n1, (long long)nsize, (long long)noff);
             bad = 1;
         }
     } else if (rc == SQLITE_DONE) {
@@ -890,7 +1159,10 @@ static const store_ops sq_ops = {
     .jobs_unfinished = sq_jobs_unfinished,
     .jobs_prune = sq_jobs_prune,
     .result_put = sq_result_put,
+    .result_put_file = sq_result_put_file,
     .result_get = sq_result_get,
+    .result_size = sq_result_size,
+    .result_chunk = sq_result_chunk,
     .result_exists = sq_result_exists,
     .result_stats = sq_result_stats,
     .check = sq_check,
@@ -1029,7 +1301,9 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
     /* the version first: refuse a newer database (or a file that is no database) before
      * changing anything in it */
     if (sq_user_version(c, path, &v, err, errlen) || sq_wal(c, path, err, errlen) ||
-        sq_migrate(c, path, err, errlen) || sq_load_stamp(c, s, err, errlen))
+        sq_migrate(c, path, err, errlen) || sq_load_stamp(c, s, err, errlen) ||
+        sq_exec(c, "DELETE FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results)",
+                "open: deleting the chunks of unfinished puts", err, errlen))
         goto fail;
     if (pthread_setspecific(s->key, c) != 0) {
         sq_errf(err, errlen, "sqlite open %s: pthread_setspecific failed", path);

@@ -16,9 +16,11 @@
  * under the sanitizers (CELLAR_SANITIZED).  On a failure the daemon's log tail is printed and
  * its directory is kept. */
 #include "tests/check.h"
+#include "server/store.h"
 
 #include <arpa/inet.h>
 #include <curl/curl.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
@@ -2372,4 +2374,135 @@ SERVER_TEST(results_as_pictures_and_maps, "--workers 1 --job-threads 1")
     CHECK(r.status == 422 && strstr(r.body.p ? r.body.p : "", "explode"), "explode=0.5: %ld",
           r.status);
     hresp_free(&r);
+}
+
+/* ---- large results: streamed through a spool file and the store's chunks --------------- */
+
+/* The lines of an n x n grid of unit squares, moved by `shift` (a distinct job per shift), with
+ * no stats: a result of about 85 n^2 bytes, the same bytes every run. */
+static char *grid_body(int n, int shift, size_t *len)
+{
+    buf b = {0};
+    buf_printf(&b, "{\"kind\":\"lines\",\"lines\":[");
+    for (int i = 0; i <= n; i++)
+        buf_printf(&b, "%s[[%d,%d],[%d,%d]],[[%d,%d],[%d,%d]]", i ? "," : "", shift, i, shift + n,
+                   i, shift + i, 0, shift + i, n);
+    buf_printf(&b, "],\"options\":" NO_STATS "}");
+    *len = b.n;
+    return b.p;
+}
+
+SERVER_TEST(large_results_stream, "--workers 1 --job-threads 1 --cache-bytes 40000000")
+{
+    size_t len, elen;
+    hresp r;
+    char v[256], want[256], path[200];
+    /* 180 x 180: about 2.8 MB, two store chunks and a piece */
+    char *body = grid_body(180, 0, &len);
+    const char *exp = expect(body, len, &elen);
+    REQUIRE(exp && elen > 2 * STORE_CHUNK, "expected result of %zu bytes", elen);
+    http_post(d, body, len, "wait=30", &r);
+    REQUIRE(r.status == 200, "POST: %ld %s", r.status, r.err);
+    CHECK(r.body.n == elen && !memcmp(r.body.p, exp, elen),
+          "the streamed answer differs from `cellar run` (%zu vs %zu bytes)", r.body.n, elen);
+    snprintf(want, sizeof want, "%zu", elen);
+    CHECK(has_header(&r, "Content-Length", want), "Content-Length, want %s", want);
+    CHECK(has_header(&r, "X-Cellar-Cache", "miss"), "not a miss");
+    char job[40] = "", etag[100] = "";
+    CHECK(hget(&r, "X-Cellar-Job", job, sizeof job) && hget(&r, "ETag", etag, sizeof etag),
+          "no job or ETag");
+    hresp_free(&r);
+    /* by hash, by job, and posted again (a hit): the same bytes */
+    snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && r.body.n == elen && !memcmp(r.body.p, exp, elen),
+          "GET by hash: %ld, %zu bytes", r.status, r.body.n);
+    hresp_free(&r);
+    snprintf(v, sizeof v, "/v1/jobs/%s/result", job);
+    http_get(d, v, &r);
+    CHECK(r.status == 200 && r.body.n == elen && !memcmp(r.body.p, exp, elen),
+          "GET by job: %ld, %zu bytes", r.status, r.body.n);
+    hresp_free(&r);
+    http_post(d, body, len, NULL, &r);
+    CHECK(r.status == 200 && has_header(&r, "X-Cellar-Cache", "hit") && r.body.n == elen &&
+              !memcmp(r.body.p, exp, elen),
+          "POST again: %ld, %zu bytes", r.status, r.body.n);
+    hresp_free(&r);
+    http_method(d, "HEAD", path, &r);
+    CHECK(r.status == 200 && r.body.n == 0 && has_header(&r, "Content-Length", want), "HEAD: %ld",
+          r.status);
+    hresp_free(&r);
+    /* a picture is drawn from the whole result (under the drawing limit) */
+    hreq q = {.path = path, .h = {"Accept: image/svg+xml"}};
+    http_do(d, &q, &r);
+    CHECK(r.status == 200 && has_header(&r, "Content-Type", "image/svg+xml"), "svg: %ld", r.status);
+    hresp_free(&r);
+    free(body);
+    /* nothing spooled is left behind */
+    DIR *dir = opendir(d->dir);
+    int spooled = 0;
+    for (struct dirent *e; dir && (e = readdir(dir));)
+        spooled += !strncmp(e->d_name, "cellar-spool-", 13);
+    if (dir) closedir(dir);
+    CHECK(spooled == 0, "%d spool files left in %s", spooled, d->dir);
+
+    /* a result evicted while a slow client reads it: the response stops short (never other
+     * bytes), the daemon says why and goes on.  500 x 500: about 20 MB, far more than the
+     * socket buffers hold while the client does not read. */
+    char *big = grid_body(500, 0, &len);
+    http_post(d, big, len, "wait=60", &r);
+    REQUIRE(r.status == 200 && hget(&r, "ETag", etag, sizeof etag), "big POST: %ld", r.status);
+    size_t bigsize = r.body.n;
+    char *bigbytes = r.body.p; /* kept: the prefix the slow client gets must be these bytes */
+    r.body.p = NULL;
+    hresp_free(&r);
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    int small = 4096;
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)d->port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    struct timeval tv = {10, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    REQUIRE(connect(fd, (struct sockaddr *)&a, sizeof a) == 0, "connect");
+    char get[200];
+    int gl = snprintf(get, sizeof get,
+                      "GET /v1/results/%.64s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: "
+                      "close\r\n\r\n",
+                      etag + 1);
+    raw_send(fd, get, (size_t)gl);
+    char *got = malloc(bigsize + 65536);
+    REQUIRE(got, "no memory");
+    size_t n = 0;
+    while (n < 65536) {
+        ssize_t k = recv(fd, got + n, 65536 - n, 0);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    /* another large result pushes the first out of the 40 MB cache */
+    char *other = grid_body(500, 1000, &len);
+    http_post(d, other, len, "wait=60", &r);
+    CHECK(r.status == 200, "second big POST: %ld", r.status);
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+    http_get(d, path, &r);
+    CHECK(r.status == 404, "the first big result was not evicted: %ld", r.status);
+    hresp_free(&r);
+    for (;;) {
+        ssize_t k = recv(fd, got + n, bigsize + 65536 - n, 0);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    close(fd);
+    const char *hend = memmem(got, n, "\r\n\r\n", 4);
+    REQUIRE(hend && !strncmp(got, "HTTP/1.1 200", 12), "slow client: %.100s", got);
+    size_t bodyn = n - (size_t)(hend + 4 - got);
+    CHECK(bodyn < bigsize, "the slow client got all %zu bytes of an evicted result", bodyn);
+    CHECK(!memcmp(hend + 4, bigbytes, bodyn), "the slow client got other bytes");
+    CHECK(log_contains(d, "a result stopped while it was sent"), "nothing in the log");
+    free(got);
+    free(bigbytes);
+    free(big);
+    free(other);
+    check_sane(d, "an evicted stream", 4);
+    srv_term(d);
 }

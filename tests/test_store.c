@@ -228,13 +228,13 @@ TEST(store_open_creates_schema)
     store *s = f.s;
     struct stat sb;
     CHECK(stat(f.path, &sb) == 0 && S_ISREG(sb.st_mode), "no database file at %s", f.path);
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 1, "user_version %lld, want 1",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 2, "user_version %lld, want 2",
           sql_int(f.path, "PRAGMA user_version"));
     sql_text(f.path, "PRAGMA journal_mode", mode, sizeof mode);
     CHECK(!strcmp(mode, "wal"), "journal_mode %s, want wal", mode);
     CHECK(sql_int(f.path,
                   "SELECT count(*) FROM sqlite_master WHERE name IN ('jobs', 'results',"
-                  " 'result_bodies', 'jobs_state', 'results_last_used', 'result_totals')") == 6,
+                  " 'result_chunks', 'jobs_state', 'results_last_used', 'result_totals')") == 6,
           "tables and indexes missing");
     size_t n = 99;
     uint64_t bytes = 99;
@@ -726,7 +726,7 @@ TEST(store_schema_versions)
             "making a version-0 database");
     CHECK(sql_int(f.path, "PRAGMA user_version") == 0, "not version 0");
     REQUIRE(fx_open(&f, 0) == 0, "open of a version-0 database: %s", f.err);
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 1, "user_version %lld after migration",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 2, "user_version %lld after migration",
           sql_int(f.path, "PRAGMA user_version"));
     char t[16];
     sql_text(f.path, "SELECT t FROM notes", t, sizeof t);
@@ -914,10 +914,15 @@ TEST(store_concurrent_threads)
     CHECK((long long)bytes == sql_int(f.path, "SELECT sum(bytes) FROM results") &&
               (long long)n == sql_int(f.path, "SELECT count(*) FROM results"),
           "stats %zu %llu disagree with the table", n, (unsigned long long)bytes);
-    CHECK(sql_int(f.path, "SELECT count(*) = (SELECT count(*) FROM results)"
-                          " FROM results r JOIN result_bodies b"
-                          " ON b.hash = r.hash AND length(b.body) = r.bytes") == 1,
-          "a row's bytes is not its body's length");
+    CHECK(sql_int(f.path,
+                  "SELECT count(*) FROM results r WHERE r.bytes <>"
+                  " (SELECT sum(length(body)) FROM result_chunks c WHERE c.hash = r.hash)") == 0,
+          "a row's bytes is not its chunks' length");
+    CHECK(sql_int(
+              f.path,
+              "SELECT count(*) FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results)") ==
+              0,
+          "chunks left with no result");
     long long jobs = sql_int(f.path, "SELECT count(*) FROM jobs WHERE state = 2");
     CHECK(jobs == NTHREADS * NITER / 4, "%lld done jobs, want %d", jobs, NTHREADS * NITER / 4);
     seen v = {0};
@@ -1009,4 +1014,244 @@ TEST(store_touch_interval)
               evicted[t]);
         fx_done(&f);
     }
+}
+
+/* ---- results in chunks ---- */
+
+/* A file holding `skip` bytes of something else, then body_make(k, n); positioned at the body. */
+static FILE *file_with_body(unsigned k, size_t n, size_t skip)
+{
+    FILE *f = tmpfile();
+    char *b = body_make(k, n);
+    if (f && b) {
+        for (size_t i = 0; i < skip; i++) fputc('#', f);
+        fwrite(b, 1, n, f);
+        fflush(f);
+        fseek(f, (long)skip, SEEK_SET);
+    }
+    free(b);
+    return f;
+}
+
+/* Reads result k back through result_size and result_chunk, as a GET does: 1 when every
+ * byte is body_make(k, n) and the chunks are as the store says they are. */
+static int chunks_are(store *s, unsigned k, size_t n)
+{
+    char h[65], err[256];
+    uint64_t size = 0, pos = 0;
+    hash_of(h, k);
+    if (s->ops->result_size(s, h, &size, err, sizeof err) != STORE_OK || size != n) return 0;
+    char *want = body_make(k, n);
+    int ok = want != NULL;
+    while (ok && pos < size) {
+        char *d = NULL;
+        size_t len = 0;
+        uint64_t start = 99;
+        /* ask from the middle of a chunk too: the chunk holding pos comes back */
+        uint64_t ask = pos + (pos / STORE_CHUNK) % 3;
+        if (ask >= size) ask = pos;
+        if (s->ops->result_chunk(s, h, ask, &d, &len, &start, err, sizeof err) != STORE_OK ||
+            start != pos || len == 0 || len > STORE_CHUNK || start + len > size || d[len] != 0 ||
+            memcmp(d, want + start, len))
+            ok = 0;
+        pos += len;
+        free(d);
+    }
+    char *d = (char *)1;
+    size_t len = 5;
+    uint64_t start = 5;
+    if (s->ops->result_chunk(s, h, size, &d, &len, &start, err, sizeof err) != STORE_NOTFOUND ||
+        d || len)
+        ok = 0; /* past the end */
+    free(want);
+    return ok;
+}
+
+TEST(store_large_results_in_chunks)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    store *s = f.s;
+    char h[65];
+    /* from a file, read from where it stands: 3 chunks and a piece */
+    size_t n1 = 3 * STORE_CHUNK + 17;
+    FILE *in = file_with_body(1, n1, 1000);
+    REQUIRE(in, "tmpfile");
+    hash_of(h, 1);
+    CHECK(s->ops->result_put_file(s, h, in, n1, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    fclose(in);
+    CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 4, "%lld chunks, want 4",
+          sql_int(f.path, "SELECT count(*) FROM result_chunks"));
+    CHECK(chunks_are(s, 1, n1) == 1, "chunks of result 1 wrong");
+    CHECK(get_is(s, 1, n1) == 1, "result_get of result 1 wrong");
+    /* one past a chunk boundary, and exactly one chunk */
+    CHECK(put(s, 2, STORE_CHUNK + 1) == 0 && chunks_are(s, 2, STORE_CHUNK + 1) == 1, "result 2");
+    CHECK(put(s, 3, STORE_CHUNK) == 0 && chunks_are(s, 3, STORE_CHUNK) == 1, "result 3");
+    /* more than one transaction's worth (SQ_BATCH: 32 chunks) */
+    size_t n4 = 33 * STORE_CHUNK + 5;
+    in = file_with_body(4, n4, 0);
+    hash_of(h, 4);
+    CHECK(s->ops->result_put_file(s, h, in, n4, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    fclose(in);
+    CHECK(chunks_are(s, 4, n4) == 1 && get_is(s, 4, n4) == 1, "result 4 wrong");
+    /* a replacement by a smaller body leaves no chunk of the old one */
+    CHECK(put(s, 4, 100) == 0 && get_is(s, 4, 100) == 1, "replacement");
+    hash_of(h, 4);
+    CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks WHERE hash = '"
+                          "0000000000000000000000000000000000000000000000000000000000000004'") == 1,
+          "old chunks left after a replacement");
+    /* a file shorter than announced, past the first transaction: nothing stored, nothing left */
+    in = file_with_body(5, 34 * STORE_CHUNK, 0);
+    hash_of(h, 5);
+    CHECK(s->ops->result_put_file(s, h, in, 40 * STORE_CHUNK, f.err, sizeof f.err) == STORE_ERR,
+          "a short file was stored");
+    CHECK(strstr(f.err, "ended after 35651584 of 41943040 bytes") != NULL, "message: %s", f.err);
+    fclose(in);
+    CHECK(!exists(s, 5), "the short result exists");
+    CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks WHERE hash NOT IN"
+                          " (SELECT hash FROM results)") == 0,
+          "chunks of the failed put left");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_OK, "check: %s", f.err);
+    size_t cnt = 0;
+    uint64_t bytes = 0;
+    CHECK(s->ops->result_stats(s, &cnt, &bytes, f.err, sizeof f.err) == STORE_OK && cnt == 4 &&
+              bytes == n1 + 2 * STORE_CHUNK + 1 + 100,
+          "stats %zu %llu", cnt, (unsigned long long)bytes);
+    fx_done(&f);
+}
+
+TEST(store_damaged_result_refused)
+{
+    fx f;
+    char h[65], *b = NULL;
+    size_t len = 0;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    store *s = f.s;
+    REQUIRE(put(s, 1, 3 * STORE_CHUNK) == 0 && put(s, 2, 10) == 0, "puts");
+    hash_of(h, 1);
+    /* a chunk lost behind the store's back */
+    REQUIRE(sql_exec(f.path, "DELETE FROM result_chunks WHERE off = 1048576") == SQLITE_OK,
+            "delete");
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_ERR && !b,
+          "a damaged result was returned");
+    CHECK(strstr(f.err, "is damaged") && strstr(f.err, "at byte 2097152, where 1048576"),
+          "message: %s", f.err);
+    uint64_t start;
+    CHECK(s->ops->result_chunk(s, h, STORE_CHUNK + 5, &b, &len, &start, f.err, sizeof f.err) ==
+                  STORE_NOTFOUND &&
+              !b,
+          "result_chunk in the hole");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR, "check passed a lost chunk");
+    CHECK(strstr(f.err, "1 have chunks that do not add up"), "message: %s", f.err);
+    /* the last chunk cut short */
+    REQUIRE(sql_exec(f.path, "DELETE FROM results WHERE hash = '"
+                             "0000000000000000000000000000000000000000000000000000000000000001';"
+                             "UPDATE result_chunks SET body = substr(body, 1, 5)") == SQLITE_OK,
+            "truncate");
+    hash_of(h, 2);
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_ERR && !b,
+          "a short result was returned");
+    CHECK(strstr(f.err, "hold 5 of its 10 bytes"), "message: %s", f.err);
+    /* a chunk that does not start where the one before ends (and sizes that add up) */
+    REQUIRE(sql_exec(f.path, "UPDATE result_chunks SET body = zeroblob(10), off = 3") == SQLITE_OK,
+            "move");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR, "check passed a moved chunk");
+    CHECK(strstr(f.err, "1 chunks do not start where"), "message: %s", f.err);
+    fx_done(&f);
+}
+
+TEST(store_migrates_version_1)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    /* a database as the first cellard left it: bodies whole, one row each */
+    REQUIRE(sql_exec(f.path,
+                     "PRAGMA journal_mode=WAL;"
+                     "CREATE TABLE jobs(id TEXT PRIMARY KEY, hash TEXT NOT NULL, kind TEXT NOT "
+                     "NULL, state INTEGER NOT NULL, created REAL, started REAL, finished REAL,"
+                     " error_status INTEGER, error TEXT, request BLOB NOT NULL);"
+                     "CREATE INDEX jobs_state ON jobs(state);"
+                     "CREATE TABLE results(hash TEXT PRIMARY KEY, bytes INTEGER NOT NULL, "
+                     "created REAL, last_used REAL);"
+                     "CREATE INDEX results_last_used ON results(last_used);"
+                     "CREATE TABLE result_bodies(hash TEXT PRIMARY KEY, body BLOB NOT NULL);"
+                     "CREATE TRIGGER results_body_delete AFTER DELETE ON results BEGIN"
+                     " DELETE FROM result_bodies WHERE hash = OLD.hash; END;"
+                     "CREATE TABLE result_totals(id INTEGER PRIMARY KEY CHECK (id = 0),"
+                     " count INTEGER NOT NULL, bytes INTEGER NOT NULL);"
+                     "INSERT INTO result_totals VALUES(0, 0, 0);"
+                     "CREATE TRIGGER results_total_insert AFTER INSERT ON results BEGIN"
+                     " UPDATE result_totals SET count = count + 1, bytes = bytes + NEW.bytes; END;"
+                     "CREATE TRIGGER results_total_delete AFTER DELETE ON results BEGIN"
+                     " UPDATE result_totals SET count = count - 1, bytes = bytes - OLD.bytes; END;"
+                     "CREATE TRIGGER results_total_update AFTER UPDATE OF bytes ON results BEGIN"
+                     " UPDATE result_totals SET bytes = bytes - OLD.bytes + NEW.bytes; END;"
+                     "INSERT INTO results VALUES('" /* */
+                     "0000000000000000000000000000000000000000000000000000000000000001', 10, 1, "
+                     "1);"
+                     "INSERT INTO result_bodies VALUES('"
+                     "0000000000000000000000000000000000000000000000000000000000000001',"
+                     " CAST('0123456789' AS BLOB));"
+                     "INSERT INTO results VALUES('"
+                     "0000000000000000000000000000000000000000000000000000000000000002', 2097152,"
+                     " 2, 2);"
+                     "INSERT INTO result_bodies VALUES('"
+                     "0000000000000000000000000000000000000000000000000000000000000002',"
+                     " zeroblob(2097152));"
+                     "PRAGMA user_version = 1;") == SQLITE_OK,
+            "making a version-1 database");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    store *s = f.s;
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 2, "user_version %lld",
+          sql_int(f.path, "PRAGMA user_version"));
+    CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name = 'result_bodies'") == 0,
+          "result_bodies left");
+    char h[65], *b = NULL;
+    size_t len = 0;
+    hash_of(h, 1);
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_OK && len == 10 &&
+              !memcmp(b, "0123456789", 11),
+          "result 1 after migration: %s", f.err);
+    free(b);
+    b = NULL;
+    /* a body of two chunks' size became one chunk: read whole, and through result_chunk */
+    hash_of(h, 2);
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_OK &&
+              len == 2 * STORE_CHUNK,
+          "result 2 after migration: %s", f.err);
+    free(b);
+    uint64_t start = 9;
+    CHECK(s->ops->result_chunk(s, h, STORE_CHUNK + 3, &b, &len, &start, f.err, sizeof f.err) ==
+                  STORE_OK &&
+              start == 0 && len == 2 * STORE_CHUNK,
+          "result_chunk of a migrated body");
+    free(b);
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_OK, "check: %s", f.err);
+    /* deleting a result deletes its chunks */
+    REQUIRE(put(s, 3, 2000) == 0, "put");
+    fx_close(&f);
+    REQUIRE(sql_exec(f.path, "DELETE FROM results") == SQLITE_OK, "delete");
+    CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 0, "chunks left");
+    fx_done(&f);
+}
+
+TEST(store_open_deletes_unfinished_puts)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    REQUIRE(put(f.s, 1, 3000) == 0, "put");
+    fx_close(&f);
+    /* chunks of a put that never wrote its results row (the process died) */
+    REQUIRE(sql_exec(f.path, "INSERT INTO result_chunks VALUES('"
+                             "0000000000000000000000000000000000000000000000000000000000000009',"
+                             " 0, zeroblob(100))") == SQLITE_OK,
+            "insert");
+    REQUIRE(fx_open(&f, 0) == 0, "reopen: %s", f.err);
+    CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 1, "%lld chunks, want 1",
+          sql_int(f.path, "SELECT count(*) FROM result_chunks"));
+    CHECK(get_is(f.s, 1, 3000) == 1, "the finished result is gone");
+    fx_done(&f);
 }

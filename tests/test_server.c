@@ -2506,3 +2506,40 @@ SERVER_TEST(large_results_stream, "--workers 1 --job-threads 1 --cache-bytes 400
     check_sane(d, "an evicted stream", 4);
     srv_term(d);
 }
+
+/* Runs cellard with args until it exits (it must not start): its exit status and output. */
+static int cellard_fails(const char *args, char *out, size_t max)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "'%s/cellard' --listen 127.0.0.1:0 %s 2>&1", build_dir(), args);
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    size_t n = fread(out, 1, max - 1, p);
+    out[n] = 0;
+    int st = pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+TEST(cellard_refuses_to_start)
+{
+    char out[4096], dir[64] = "/tmp/cellar-test-start-XXXXXX", args[400];
+    REQUIRE(mkdtemp(dir), "mkdtemp");
+    /* a spool directory that is not there: no job could store its result */
+    snprintf(args, sizeof args, "--db %s/c.db --spool %s/missing", dir, dir);
+    int st = cellard_fails(args, out, sizeof out);
+    CHECK(st == 1 && strstr(out, "cannot start the engine") &&
+              strstr(out, "cannot make a spool file in") && strstr(out, "/missing") &&
+              strstr(out, "No such file or directory"),
+          "missing spool: exit %d: %s", st, out);
+    snprintf(args, sizeof args, "--db %s/c.db --spool ''", dir);
+    st = cellard_fails(args, out, sizeof out);
+    CHECK(st == 2 && strstr(out, "--spool: invalid value"), "empty spool: exit %d: %s", st, out);
+    snprintf(args, sizeof args, "--db %s/c.db --workers 0", dir);
+    st = cellard_fails(args, out, sizeof out);
+    CHECK(st == 2 && strstr(out, "--workers (1..256): invalid value \"0\""),
+          "workers 0: exit %d: %s", st, out);
+    snprintf(args, sizeof args, "--db %s/c.db --bogus 1", dir);
+    st = cellard_fails(args, out, sizeof out);
+    CHECK(st == 2 && strstr(out, "unknown option --bogus"), "--bogus: exit %d: %s", st, out);
+    rm_rf(dir);
+}

@@ -336,8 +336,8 @@ static void result_reader_free(void *cls)
 }
 
 /* A stored result, as JSON (streamed when larger than a chunk) or rendered.  post: the
- * request was a POST whose result was found in the cache (a result evicted since is then
- * "try again", not "not found"). */
+ * answer to a POST (a result evicted since it was found or made is then "try again", not
+ * "not found"). */
 static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id, const char *cache,
                                   int post)
 {
@@ -484,7 +484,8 @@ static enum MHD_Result answer_job(conn *c, job *j)
     if (ji.state == JOB_DONE) {
         size_t n;
         const char *r = engine_result(c->h->e, j, &n);
-        if (!r) return get_result(c, ji.hash, ji.id, "miss", 0); /* a large one */
+        if (!r) /* a large one: from the store */
+            return get_result(c, ji.hash, ji.id, "miss", c->route == ROUTE_JOBS);
         char *b = malloc(n + 1);
         if (!b) return problem(c, 503, "out of memory", "5", NULL);
         memcpy(b, r, n + 1);

@@ -222,19 +222,27 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     double p = c->o->precision;
     if (p != 0 && !(isfinite(p) && p > 0))
         return seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
+    /* The finest grid the doubles where the drawing lies can write: twice their spacing at its
+     * largest coordinate (mag < 2^em, where doubles are 2^(em-53) apart).  Grid points k * p
+     * with p at least that are then distinct doubles, in the order of k, after rounding. */
+    int em = 0;
+    double mag = n ? fmax(fmax(fabs(minx), fabs(maxx)), fmax(fabs(miny), fabs(maxy))) : 0;
+    frexp(mag, &em);
+    double finest = ldexp(1.0, em - 52);
     if (p == 0) {
         if (n == 0 || ext == 0)
             p = 1;
         else {
-            int e, em;
-            double mag = fmax(fmax(fabs(minx), fabs(maxx)), fmax(fabs(miny), fabs(maxy)));
+            int e;
             frexp(ext, &e); /* ext <= 2^e */
             p = ldexp(1.0, e - ARR2_GRID_BITS);
-            /* no finer than the doubles where the drawing is: every grid point must be a
-             * double of its own, or distinct vertices would be written as one */
-            frexp(mag, &em); /* mag < 2^em */
-            if (p < ldexp(1.0, em - 52)) p = ldexp(1.0, em - 52);
+            if (p < finest) p = finest;
         }
+    } else if (n && ext > 0 && p < finest) {
+        return seterr(err, el, ARR_ELIMIT,
+                      "options.precision: %g is finer than the doubles near %g (the drawing's "
+                      "largest coordinate) can write distinct points; use precision >= %g",
+                      p, mag, finest);
     } else if (ext / p > ldexp(1.0, ARR2_GRID_BITS)) {
         return seterr(err, el, ARR_ELIMIT,
                       "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
@@ -1281,6 +1289,19 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         out->VG[2 * v + 1] = g->P[v].y;
         instack[v] = NONE;
     }
+    /* Distinct vertices must be written as distinct doubles.  Each written point snaps back to
+     * its vertex's grid point, and snapping is a function, so two vertices could share a
+     * double point only by sharing a grid point.  That holds because the grid is never finer
+     * than twice the doubles' spacing (stage_snap); checked, as a bug would break it. */
+    for (size_t v = 0; v < g->nv; v++)
+        if (snap_coord(c, 0, out->V[2 * v]) != g->P[v].x ||
+            snap_coord(c, 1, out->V[2 * v + 1]) != g->P[v].y) {
+            rc = seterr(err, el, ARR_EINTERNAL,
+                        "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
+                        "point",
+                        v, out->V[2 * v], out->V[2 * v + 1]);
+            goto out;
+        }
     memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
     if (g->toff) {
         out->etag_off = g->toff;

@@ -72,7 +72,7 @@ typedef struct arr2_stats {
  * through a cut vertex). */
 typedef struct lar2 {
     size_t nv;
-    double *V; /* 2*nv: x, y; sorted by x then y */
+    double *V; /* 2*nv: x, y; in the order of their grid points VG (x, then y); distinct */
     size_t ne;
     uint32_t *EV;         /* 2*ne: v0 < v1; sorted */
     size_t nf;            /* bounded faces */

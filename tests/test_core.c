@@ -534,3 +534,73 @@ TEST(planar_arrangement_jl_oracles)
     CHECK(c.nv == 0 && c.ne == 0 && c.stats.blocks == 0, "%zu V %zu E", c.nv, c.ne);
     lar2_free(&c);
 }
+
+static int cmp_pt(const void *a, const void *b)
+{
+    const double *p = a, *q = b;
+    return p[0] < q[0] ? -1 : p[0] > q[0] ? 1 : p[1] < q[1] ? -1 : p[1] > q[1];
+}
+
+/* Twice the signed area of a cycle, in differences from its first vertex (exact there by
+ * Sterbenz: the drawing is small beside its coordinates). */
+static double cycle_area2(const lar2 *c, uint32_t cy)
+{
+    const uint32_t *v = c->cyc + c->cyc_off[cy];
+    size_t n = c->cyc_off[cy + 1] - c->cyc_off[cy];
+    double x0 = c->V[2 * v[0]], y0 = c->V[2 * v[0] + 1], a = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t p = v[i], q = v[(i + 1) % n];
+        a += (c->V[2 * p] - x0) * (c->V[2 * q + 1] - y0) -
+             (c->V[2 * q] - x0) * (c->V[2 * p + 1] - y0);
+    }
+    return a;
+}
+
+TEST(far_from_origin_small_drawings)
+{
+    /* small random drawings at 1e6 .. 3e15: the automatic grid follows the doubles there, so
+     * vertices stay distinct doubles, in grid order, and every face keeps a positive area */
+    const double offs[] = {1e6, -1e9, 1e12, 7.3e13, -1e15, 3e15};
+    uint64_t seed = 17;
+    for (size_t t = 0; t < sizeof offs / sizeof *offs; t++)
+        for (int rep = 0; rep < 5; rep++) {
+            double s[60][4];
+            for (int i = 0; i < 60; i++)
+                for (int k = 0; k < 4; k++) s[i][k] = offs[t] + 20 * test_rnd(&seed);
+            lar2 c;
+            REQUIRE(run(&s[0][0], 60, NULL, &c) == ARR_OK, "offset %g failed", offs[t]);
+            CHECK(c.nf > 10, "offset %g: only %zu faces", offs[t], c.nf);
+            double *pts = malloc((2 * c.nv + 1) * sizeof *pts);
+            REQUIRE(pts, "no memory");
+            memcpy(pts, c.V, 2 * c.nv * sizeof *pts);
+            qsort(pts, c.nv, 2 * sizeof *pts, cmp_pt);
+            size_t same = 0, order = 0, flat = 0;
+            for (size_t v = 1; v < c.nv; v++) {
+                same += pts[2 * v] == pts[2 * v - 2] && pts[2 * v + 1] == pts[2 * v - 1];
+                order += !(c.VG[2 * v - 2] < c.VG[2 * v] ||
+                           (c.VG[2 * v - 2] == c.VG[2 * v] && c.VG[2 * v - 1] < c.VG[2 * v + 1]));
+            }
+            for (size_t f = 0; f < c.nf; f++) flat += !(cycle_area2(&c, c.face_cycle[f]) > 0);
+            CHECK(same == 0 && order == 0 && flat == 0,
+                  "offset %g: %zu vertices written as another's point, %zu out of grid order, "
+                  "%zu faces without a positive area (of %zu V, %zu F; grid step %g)",
+                  offs[t], same, order, flat, c.nv, c.nf, c.stats.precision);
+            free(pts);
+            lar2_free(&c);
+        }
+    /* a precision finer than the doubles there is refused, with the bound */
+    double sq[4][4] = {{1e15, 1e15, 1e15 + 5, 1e15},
+                       {1e15 + 5, 1e15, 1e15 + 5, 1e15 + 5},
+                       {1e15 + 5, 1e15 + 5, 1e15, 1e15 + 5},
+                       {1e15, 1e15 + 5, 1e15, 1e15}};
+    arr2_opts o = {.precision = 0.01};
+    lar2 c;
+    char err[256];
+    CHECK(arr2_build(&sq[0][0], 4, &o, &c, err, sizeof err) == ARR_ELIMIT, "0.01 at 1e15 accepted");
+    CHECK(strstr(err, "options.precision: 0.01 is finer than the doubles near 1e+15") &&
+              strstr(err, "use precision >= 0.25"),
+          "message '%s'", err);
+    o.precision = 0.25;
+    CHECK(run(&sq[0][0], 4, &o, &c) == ARR_OK && c.nf == 1, "0.25 at 1e15: %zu faces", c.nf);
+    lar2_free(&c);
+}

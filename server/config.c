@@ -23,6 +23,8 @@ const char config_usage[] =
     "  --cache-bytes BYTES   CELLAR_CACHE_BYTES   result cache budget, 0 = none (default 1 GiB)\n"
     "  --drain-timeout SECS  CELLAR_DRAIN_TIMEOUT SIGTERM waits this long for running jobs\n"
     "  --log-level LEVEL     CELLAR_LOG_LEVEL     debug, info, warn, error (default info)\n"
+    "  --init                make a store in an empty --db file, or add its tables to another\n"
+    "                        program's SQLite database (both are refused without it)\n"
     "  --help\n";
 
 static int bad(char *err, size_t errlen, const char *what, const char *v)
@@ -145,6 +147,10 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             fputs(config_usage, stdout);
             return 1;
+        }
+        if (!strcmp(a, "--init")) {
+            c->init = 1;
+            continue;
         }
         if (strncmp(a, "--", 2) != 0) {
             snprintf(err, errlen, "unexpected argument \"%s\" (cellard --help)", a);

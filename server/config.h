@@ -14,6 +14,8 @@
  *   --cache-bytes   CELLAR_CACHE_BYTES  1073741824      result cache budget (0: unlimited)
  *   --drain-timeout CELLAR_DRAIN_TIMEOUT 30             seconds SIGTERM waits for running jobs
  *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
+ *   --init          (flag only)                         make a store in an empty or foreign
+ *                                                       --db file instead of refusing it
  */
 #ifndef CELLAR_CONFIG_H
 #define CELLAR_CONFIG_H
@@ -33,6 +35,7 @@ typedef struct config {
     uint64_t cache_bytes;
     double drain_timeout;
     int log_level;
+    int init; /* --init */
 } config;
 
 /* Fills *c from the environment and argv.  Returns 0; 1 after printing help (exit 0); -1 with

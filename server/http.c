@@ -17,6 +17,7 @@
 #include <jansson.h>
 #include <microhttpd.h>
 #include <netdb.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,7 +40,11 @@ struct http_server {
     metrics *m;
     struct MHD_Daemon *d;
     atomic_int draining;
-    atomic_int parked; /* connections suspended for a wait and not yet answered */
+    atomic_int parked;        /* connections suspended for a wait and not yet answered */
+    pthread_mutex_t ready_mu; /* guards the readiness probe's last answer */
+    double ready_at;          /* when the store was last probed for writes (0: never) */
+    int ready_ok;
+    char ready_err[256];
 };
 
 typedef struct conn {
@@ -316,8 +321,8 @@ static ssize_t result_read(void *cls, uint64_t pos, char *buf, size_t max)
         }
         if (rc != STORE_OK) {
             char at[32];
-            log_kv(LOG_WARN, "a result stopped while it was sent", "hash", rr->hash, "byte",
-                   log_num(at, (double)pos), "error",
+            log_kv(rc == STORE_DAMAGED ? LOG_ERROR : LOG_WARN, "a result stopped while it was sent",
+                   "hash", rr->hash, "byte", log_num(at, (double)pos), "error",
                    rc == STORE_NOTFOUND ? "evicted meanwhile" : err, NULL);
             return MHD_CONTENT_READER_END_WITH_ERROR;
         }
@@ -363,6 +368,13 @@ static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id,
         return send_result(c, hash, r, "application/json", job_id, cache);
     }
     if (rc == STORE_OK) rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
+    if (rc == STORE_DAMAGED) {
+        log_kv(LOG_ERROR, "a stored result was damaged: dropped", "hash", hash, "error", err, NULL);
+        return problem(c, 500,
+                       "the stored result was damaged (it no longer matches its digest) and has "
+                       "been dropped: post the request again",
+                       NULL, NULL);
+    }
     if (rc == STORE_NOTFOUND && post)
         return problem(c, 503, "the result was evicted as it was read: try again", "1", NULL);
     if (rc == STORE_NOTFOUND)
@@ -736,11 +748,37 @@ static enum MHD_Result route_metrics(conn *c)
     return respond(c, 200, "text/plain; version=0.0.4; charset=utf-8", s, len, 0, NULL, 0);
 }
 
-static enum MHD_Result status_json(conn *c, unsigned status, const char *value)
+static enum MHD_Result status_json(conn *c, unsigned status, const char *value, const char *error)
 {
     json_t *o = json_object();
     json_object_set_new(o, "status", json_string(value));
+    if (error) json_object_set_new(o, "error", json_string(error));
     return respond_json(c, status, o, NULL, 0);
+}
+
+/* Ready: not draining, and the store takes writes (every POST writes its job first).  The
+ * store is probed with a small write at most once a second. */
+static enum MHD_Result route_readyz(conn *c)
+{
+    http_server *h = c->h;
+    char err[256] = "";
+    if (atomic_load(&h->draining)) return status_json(c, 503, "draining", NULL);
+    double now = engine_now();
+    pthread_mutex_lock(&h->ready_mu);
+    int fresh = h->ready_at > 0 && now - h->ready_at < 1.0, ok = h->ready_ok;
+    snprintf(err, sizeof err, "%s", h->ready_err);
+    pthread_mutex_unlock(&h->ready_mu);
+    if (!fresh) {
+        err[0] = 0;
+        ok = h->st->ops->writable(h->st, err, sizeof err) == STORE_OK;
+        if (!ok) log_kv(LOG_WARN, "the store cannot be written", "error", err, NULL);
+        pthread_mutex_lock(&h->ready_mu);
+        h->ready_at = now;
+        h->ready_ok = ok;
+        snprintf(h->ready_err, sizeof h->ready_err, "%s", ok ? "" : err);
+        pthread_mutex_unlock(&h->ready_mu);
+    }
+    return ok ? status_json(c, 200, "ready", NULL) : status_json(c, 503, "store not writable", err);
 }
 
 static enum MHD_Result dispatch(conn *c)
@@ -754,11 +792,10 @@ static enum MHD_Result dispatch(conn *c)
                        sizeof index_html - 1, 1, NULL, 0);
     case ROUTE_HEALTHZ:
         if (!get) break;
-        return status_json(c, 200, "ok");
+        return status_json(c, 200, "ok", NULL);
     case ROUTE_READYZ:
         if (!get) break;
-        return atomic_load(&c->h->draining) ? status_json(c, 503, "draining")
-                                            : status_json(c, 200, "ready");
+        return route_readyz(c);
     case ROUTE_METRICS:
         if (!get) break;
         return route_metrics(c);
@@ -915,6 +952,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     h->m = m;
     atomic_init(&h->draining, 0);
     atomic_init(&h->parked, 0);
+    pthread_mutex_init(&h->ready_mu, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
     h->d = MHD_start_daemon(
@@ -926,6 +964,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     if (!h->d) {
         snprintf(err, errlen, "cannot listen on %s:%u (in use, or not an address of this host)",
                  cfg->host, cfg->port);
+        pthread_mutex_destroy(&h->ready_mu);
         free(h);
         return NULL;
     }
@@ -951,5 +990,6 @@ void http_stop(http_server *h)
     for (int i = 0; i < 500 && atomic_load(&h->parked) > 0; i++)
         nanosleep(&(struct timespec){0, 10000000}, NULL);
     MHD_stop_daemon(h->d);
+    pthread_mutex_destroy(&h->ready_mu);
     free(h);
 }

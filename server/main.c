@@ -40,7 +40,9 @@ int main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
 
     metrics *m = metrics_new();
-    store *st = m ? store_sqlite_open(cfg.db, cfg.cache_bytes, 10, err, sizeof err) : NULL;
+    store *st = m ? store_sqlite_open(cfg.db, cfg.cache_bytes, 10, cfg.init ? STORE_OPEN_INIT : 0,
+                                      err, sizeof err)
+                  : NULL;
     if (!st) {
         log_kv(LOG_ERROR, "cannot open the store", "db", cfg.db, "error", m ? err : "no memory",
                NULL);

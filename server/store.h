@@ -12,8 +12,9 @@
  * Threads: every function may be called from any thread at any time; the backend takes care
  * of its own connections and locks (SQLite: one connection per thread).
  * Errors: 0 on success, STORE_NOTFOUND when the row is absent, STORE_ERR on failure with a
- * message in err (errlen bytes).  Strings passed in are borrowed; strings and buffers
- * returned are malloc'd and the caller frees them (store_job_clear for a store_job).
+ * message in err (errlen bytes), STORE_DAMAGED for a result that failed its check on reading.
+ * Strings passed in are borrowed; strings and buffers returned are malloc'd and the caller frees
+ * them (store_job_clear for a store_job).
  */
 #ifndef CELLAR_STORE_H
 #define CELLAR_STORE_H
@@ -22,7 +23,9 @@
 #include <stdint.h>
 #include <stdio.h>
 
-enum { STORE_OK = 0, STORE_NOTFOUND = 1, STORE_ERR = -1 };
+/* STORE_DAMAGED: a result read back does not match what was stored (a chunk's digest, or
+ * chunks that do not add up to its size); the store has dropped it, so it can be made again. */
+enum { STORE_OK = 0, STORE_NOTFOUND = 1, STORE_ERR = -1, STORE_DAMAGED = -2 };
 
 /* The largest chunk a result is written in (the last may be shorter). */
 #define STORE_CHUNK ((size_t)1 << 20)
@@ -80,8 +83,9 @@ typedef struct store_ops {
      * lock for the whole copy. */
     int (*result_put_file)(store *s, const char *hash, FILE *f, uint64_t len, char *err,
                            size_t errlen);
-    /* Reads a result whole and marks it used now.  A result whose chunks do not add up to
-     * its size is reported damaged (STORE_ERR), never returned short. */
+    /* Reads a result whole and marks it used now.  Every chunk is checked against the digest
+     * stored with it: a result that does not match, or whose chunks do not add up to its size,
+     * is dropped and reported STORE_DAMAGED, never returned. */
     int (*result_get)(store *s, const char *hash, char **body, size_t *len, char *err,
                       size_t errlen);
     /* A result's size in bytes, marking it used now (as result_get); its body is then read
@@ -90,15 +94,20 @@ typedef struct store_ops {
     /* The chunk of a result that holds byte pos: *data (malloc'd, NUL-terminated past its
      * length) of *len bytes starting at byte *start <= pos.  STORE_NOTFOUND when the result
      * or that chunk is gone (evicted since result_size: a reader then stops with an error;
-     * the bytes it had were right, since a hash fixes its content). */
+     * the bytes it had were right, since a hash fixes its content).  The chunk is checked
+     * against its digest: STORE_DAMAGED (and the result dropped) when it does not match. */
     int (*result_chunk)(store *s, const char *hash, uint64_t pos, char **data, size_t *len,
                         uint64_t *start, char *err, size_t errlen);
     /* Whether a result exists, without reading it or marking it. */
     int (*result_exists)(store *s, const char *hash, char *err, size_t errlen);
     /* Number of results and their total bytes. */
     int (*result_stats)(store *s, size_t *count, uint64_t *bytes, char *err, size_t errlen);
-    /* A consistency check of the backend (SQLite: PRAGMA integrity_check). */
+    /* A consistency check of the backend (SQLite: PRAGMA integrity_check, the totals, the
+     * chunks' tiling and digests).  Reads everything: for tests and tools, not for serving. */
     int (*check)(store *s, char *err, size_t errlen);
+    /* Whether the store takes writes now (a small write, rolled into the database): the
+     * readiness probe's question. */
+    int (*writable)(store *s, char *err, size_t errlen);
     /* Closes every connection and frees s. */
     void (*close)(store *s);
 } store_ops;
@@ -107,11 +116,18 @@ struct store {
     const store_ops *ops;
 };
 
+/* store_sqlite_open flags: STORE_OPEN_INIT makes a store in an empty file or adds the store's
+ * tables to a SQLite database of something else (without it both are refused: a file
+ * truncated to nothing, or the wrong --db, must not quietly become an empty store). */
+#define STORE_OPEN_INIT 1
+
 /* Opens (creating or migrating) the SQLite store at path with a result budget in bytes
- * (0: unlimited).  touch_seconds: result_get marks a result used only when its mark is older
- * than this (0: on every read; the daemon uses 10, so a hot result does not take the write
- * lock on every read).  Returns NULL with a message in err on failure. */
-store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, char *err,
-                         size_t errlen);
+ * (0: unlimited).  A file that does not exist is made; the file is checked at open (SQLite's
+ * quick_check), and a damaged one is refused with a message saying what to do.
+ * touch_seconds: result_get marks a result used only when its mark is older than this (0: on
+ * every read; the daemon uses 10, so a hot result does not take the write lock on every
+ * read).  flags: STORE_OPEN_INIT or 0.  Returns NULL with a message in err on failure. */
+store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, int flags,
+                         char *err, size_t errlen);
 
 #endif

@@ -62,16 +62,22 @@
  */
 #include "server/store.h"
 
+#include <openssl/evp.h>
 #include <pthread.h>
 #include <sqlite3.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
-#define SQ_BUSY_MS 5000 /* how long a connection waits for a lock before SQLITE_BUSY */
-#define SQ_BATCH   ((uint64_t)32 * STORE_CHUNK) /* bytes of chunks a put writes per transaction */
+#define SQ_BUSY_MS       5000 /* how long a connection waits for a lock before SQLITE_BUSY */
+#define SQ_PROBE_BUSY_MS 1000 /* the same for the readiness probe (writable) */
+#define SQ_BATCH         ((uint64_t)32 * STORE_CHUNK) /* bytes of chunks a put writes per transaction */
+/* PRAGMA application_id of a cellar store: "cell" */
+#define SQ_APP_ID      0x63656c6c
+#define SQ_APP_ID_TEXT "1667591276"
 
 /* The schema, one script per version: sq_migrations[v] takes a database from version v to
  * v + 1.  Append, never edit: a database in the field has run the scripts it has run. */
@@ -98,8 +104,8 @@ static const char *const sq_migrations[] = {
     " UPDATE result_totals SET bytes = bytes - OLD.bytes + NEW.bytes; END;",
     /* 1 -> 2: bodies in chunks */
     "CREATE TABLE result_chunks(hash TEXT NOT NULL, off INTEGER NOT NULL, body BLOB NOT NULL,"
-    " PRIMARY KEY(hash, off));"
-    "INSERT INTO result_chunks(hash, off, body)"
+    " sha BLOB, PRIMARY KEY(hash, off));"
+    "INSERT INTO result_chunks(hash, off, body)" /* sha: filled in at open (sq_fill_digests) */
     " SELECT hash, 0, body FROM result_bodies WHERE length(body) > 0;"
     "DROP TRIGGER results_body_delete;"
     "DROP TABLE result_bodies;"
@@ -133,6 +139,8 @@ enum sq_sql {
     SQ_RESULT_EXISTS,
     SQ_INTEGRITY,
     SQ_TOTALS_RECOUNT,
+    SQ_PROBE,
+    SQ_CHUNKS_EVERY,
     SQ_NSQL
 };
 
@@ -160,8 +168,9 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     /* the chunks of a put that has no results row (yet, or any more) */
     [SQ_CHUNKS_DELETE] = "DELETE FROM result_chunks WHERE hash = ?1"
                          " AND NOT EXISTS (SELECT 1 FROM results WHERE hash = ?1)",
-    [SQ_CHUNK_PUT] = "INSERT INTO result_chunks(hash, off, body) VALUES(?1, ?2, ?3)"
-                     " ON CONFLICT(hash, off) DO UPDATE SET body = excluded.body",
+    [SQ_CHUNK_PUT] =
+        "INSERT INTO result_chunks(hash, off, body, sha) VALUES(?1, ?2, ?3, ?4)"
+        " ON CONFLICT(hash, off) DO UPDATE SET body = excluded.body, sha = excluded.sha",
     [SQ_CHUNKS_SUM] =
         "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks WHERE hash = ?1",
     [SQ_RESULT_TOTALS] = "SELECT count, bytes FROM result_totals WHERE id = 0",
@@ -169,9 +178,12 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     [SQ_RESULT_EVICT_ONE] = "DELETE FROM results WHERE rowid = (SELECT rowid FROM results"
                             " WHERE hash <> ?1 ORDER BY last_used LIMIT 1)",
     [SQ_RESULT_HEAD] = "SELECT bytes, last_used FROM results WHERE hash = ?1",
-    [SQ_CHUNKS_ALL] = "SELECT off, body FROM result_chunks WHERE hash = ?1 ORDER BY off",
-    [SQ_CHUNK_AT] = "SELECT off, body FROM result_chunks WHERE hash = ?1 AND off <= ?2"
+    [SQ_CHUNKS_ALL] = "SELECT off, body, sha FROM result_chunks WHERE hash = ?1 ORDER BY off",
+    [SQ_CHUNK_AT] = "SELECT off, body, sha FROM result_chunks WHERE hash = ?1 AND off <= ?2"
                     " ORDER BY off DESC LIMIT 1",
+    [SQ_PROBE] = "UPDATE result_totals SET count = count WHERE id = 0",
+    [SQ_CHUNKS_EVERY] =
+        "SELECT body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
     [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
     [SQ_RESULT_EXISTS] = "SELECT 1 FROM results WHERE hash = ?1",
     [SQ_INTEGRITY] = "PRAGMA integrity_check",
@@ -729,6 +741,33 @@ static int sq_run_hash(sq_conn *c, enum sq_sql id, const char *hash, const char 
     return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
 }
 
+/* The SHA-256 of a chunk, stored beside it and checked whenever the chunk is read. */
+static void sq_digest(const void *data, size_t n, unsigned char out[32])
+{
+    unsigned int len = 0;
+    if (!EVP_Digest(data, n, out, &len, EVP_sha256(), NULL) || len != 32)
+        memset(out, 0, 32); /* cannot happen with OpenSSL's sha256; a wrong digest then shows */
+}
+
+/* Whether column col of st is the digest of data[0..n). */
+static int sq_digest_ok(sqlite3_stmt *st, int col, const void *data, size_t n)
+{
+    unsigned char md[32];
+    if (sqlite3_column_type(st, col) != SQLITE_BLOB || sqlite3_column_bytes(st, col) != 32)
+        return 0;
+    sq_digest(data ? data : "", n, md);
+    return memcmp(md, sqlite3_column_blob(st, col), 32) == 0;
+}
+
+/* Drops a damaged result (its row, and with it its chunks), best effort: it can be made again. */
+static void sq_drop(sq_conn *c, const char *hash)
+{
+    if (sq_run(c, SQ_BEGIN, "drop", NULL, 0)) return;
+    if (sq_run_hash(c, SQ_RESULT_DELETE, hash, "drop", NULL, 0) ||
+        sq_run(c, SQ_COMMIT, "drop", NULL, 0))
+        sq_rollback(c);
+}
+
 /* Where a put's bytes come from: a buffer, or a file read a chunk at a time into buf. */
 typedef struct sq_source {
     const char *mem;
@@ -756,11 +795,14 @@ static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const char *
                         char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_CHUNK_PUT, "result_put: chunk", err, errlen);
+    unsigned char md[32];
     int rc;
     if (!st) return STORE_ERR;
+    sq_digest(data, n, md);
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
     sqlite3_bind_int64(st, 2, (sqlite3_int64)off);
     sqlite3_bind_blob64(st, 3, data, n, SQLITE_STATIC);
+    sqlite3_bind_blob(st, 4, md, 32, SQLITE_STATIC);
     rc = sqlite3_step(st);
     if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put: chunk", c->db);
     sq_done(st);
@@ -971,6 +1013,15 @@ static int sq_result_get(store *base, const char *hash, char **body, size_t *len
                     "byte %llu, where %llu of %llu bytes were read",
                     hash, (unsigned long long)n, (unsigned long long)off, (unsigned long long)pos,
                     (unsigned long long)bytes);
+            rc = STORE_DAMAGED;
+            goto out;
+        }
+        if (!sq_digest_ok(st, 2, p, (size_t)n)) {
+            sq_errf(err, errlen,
+                    "sqlite result_get: result %.16s... is damaged: its chunk at byte %llu does "
+                    "not match its digest",
+                    hash, (unsigned long long)off);
+            rc = STORE_DAMAGED;
             goto out;
         }
         if (n) memcpy(copy + pos, p, (size_t)n);
@@ -985,12 +1036,14 @@ static int sq_result_get(store *base, const char *hash, char **body, size_t *len
                 "sqlite result_get: result %.16s... is damaged: its chunks hold %llu of its "
                 "%llu bytes",
                 hash, (unsigned long long)pos, (unsigned long long)bytes);
+        rc = STORE_DAMAGED;
         goto out;
     }
     rc = STORE_OK;
 out:
     sq_done(st);
     sq_run(c, SQ_COMMIT, "result_get: end", NULL, 0);
+    if (rc == STORE_DAMAGED) sq_drop(c, hash);
     if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_get: mark used", err, errlen);
     if (rc != STORE_OK) {
         free(copy);
@@ -1041,6 +1094,18 @@ static int sq_result_chunk(store *base, const char *hash, uint64_t pos, char **d
             sq_errf(err, errlen, "sqlite result_chunk: out of memory");
             sq_done(st);
             return STORE_ERR;
+        }
+        if (!sq_digest_ok(st, 2, *data, *len)) {
+            sq_errf(err, errlen,
+                    "sqlite result_chunk: result %.16s... is damaged: its chunk at byte %llu does "
+                    "not match its digest",
+                    hash, (unsigned long long)off);
+            sq_done(st);
+            free(*data);
+            *data = NULL;
+            *len = 0;
+            sq_drop(c, hash);
+            return STORE_DAMAGED;
         }
         *start = off;
     } else if (rc != SQLITE_DONE) {
@@ -1126,7 +1191,43 @@ static int sq_check(store *base, char *err, size_t errlen)
         sq_dberr(err, errlen, "check: totals", c->db);
     }
     sq_done(st);
-    return rc != SQLITE_ROW || bad ? STORE_ERR : STORE_OK;
+    if (rc != SQLITE_ROW || bad) return STORE_ERR;
+    /* every chunk of every result against its digest */
+    long long nbad = 0, nall = 0;
+    st = sq_stmt(c, SQ_CHUNKS_EVERY, "check: digests", err, errlen);
+    if (!st) return STORE_ERR;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        nall++;
+        nbad +=
+            !sq_digest_ok(st, 1, sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0));
+    }
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "check: digests", c->db);
+    sq_done(st);
+    if (rc == SQLITE_DONE && nbad)
+        sq_errf(err, errlen, "sqlite check: %lld of %lld chunks do not match their digest", nbad,
+                nall);
+    return rc != SQLITE_DONE || nbad ? STORE_ERR : STORE_OK;
+}
+
+/* A small write (the totals row rewritten as it is), rolled into the database like any other:
+ * it fails when the file is read-only, the disk refuses, or the lock cannot be had. */
+static int sq_writable(store *base, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    int rc = STORE_ERR;
+    if (!c) return STORE_ERR;
+    /* a probe waits a second for the lock, not the writers' five: a lock held that long
+     * (a put holds it for a batch of chunks: ~0.1 s) means the store is stuck for writers */
+    sqlite3_busy_timeout(c->db, SQ_PROBE_BUSY_MS);
+    if (!sq_run(c, SQ_BEGIN, "writable: begin", err, errlen)) {
+        if (sq_run(c, SQ_PROBE, "writable", err, errlen) ||
+            sq_run(c, SQ_COMMIT, "writable: commit", err, errlen))
+            sq_rollback(c);
+        else
+            rc = STORE_OK;
+    }
+    sqlite3_busy_timeout(c->db, SQ_BUSY_MS);
+    return rc;
 }
 
 /* Finalizes and closes every connection of the store, on whichever thread opened it (see the
@@ -1166,6 +1267,7 @@ static const store_ops sq_ops = {
     .result_exists = sq_result_exists,
     .result_stats = sq_result_stats,
     .check = sq_check,
+    .writable = sq_writable,
     .close = sq_close,
 };
 
@@ -1207,14 +1309,140 @@ static int sq_exec(sq_conn *c, const char *sql, const char *where, char *err, si
     return STORE_ERR;
 }
 
+/* The first column of the one row of sql, an integer. */
+static int sq_int(sq_conn *c, const char *sql, long long *out, const char *path, char *err,
+                  size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    int rc = sqlite3_prepare_v2(c->db, sql, -1, &st, NULL);
+    if (rc == SQLITE_OK) rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW)
+        *out = sqlite3_column_int64(st, 0);
+    else
+        sq_open_err(err, errlen, path, c->db, rc);
+    sqlite3_finalize(st);
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+}
+
+/* Whether the file is a store of ours (or, flags STORE_OPEN_INIT, may become one): made by
+ * cellard (its application_id), or by a cellard from before the id (schema version 1 or more
+ * and our tables), or new (existed: 0).  An empty file that was there, or a database of
+ * something else, is refused: a truncated file or a wrong --db must not quietly become an
+ * empty cache, losing the queued jobs. */
+static int sq_identify(sq_conn *c, const char *path, int v, int existed, off_t size, int flags,
+                       char *err, size_t errlen)
+{
+    long long app = 0, ntab = 0, ours = 0;
+    if (!existed || (flags & STORE_OPEN_INIT)) return STORE_OK;
+    if (size == 0) {
+        sq_errf(err, errlen,
+                "sqlite open %s: the file is empty, not a cellar store (truncated?): restore it, "
+                "or start with --init to make a new store in it",
+                path);
+        return STORE_ERR;
+    }
+    if (sq_int(c, "PRAGMA application_id", &app, path, err, errlen) ||
+        sq_int(c, "SELECT count(*) FROM sqlite_master WHERE type = 'table'", &ntab, path, err,
+               errlen) ||
+        sq_int(c,
+               "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('jobs',"
+               " 'results', 'result_totals')",
+               &ours, path, err, errlen))
+        return STORE_ERR;
+    if (app == SQ_APP_ID || (app == 0 && v >= 1 && ours == 3)) return STORE_OK;
+    sq_errf(err, errlen,
+            "sqlite open %s: a SQLite database of something else (application_id %lld, schema "
+            "version %d, %lld tables), not a cellar store: check --db, or start with --init to "
+            "add cellar's tables to it",
+            path, app, v, ntab);
+    return STORE_ERR;
+}
+
+/* PRAGMA quick_check: a damaged file is refused rather than served from. */
+static int sq_quick_check(sq_conn *c, const char *path, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = NULL;
+    char first[200] = "";
+    int rc = sqlite3_prepare_v2(c->db, "PRAGMA quick_check", -1, &st, NULL), bad = 0;
+    while (rc == SQLITE_OK && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+        const char *line = (const char *)sqlite3_column_text(st, 0);
+        if (line && !strcmp(line, "ok")) continue;
+        if (!bad++) snprintf(first, sizeof first, "%s", line ? line : "(null)");
+    }
+    if (rc == SQLITE_ROW) rc = SQLITE_DONE;
+    if (rc != SQLITE_DONE && rc != SQLITE_OK && !bad)
+        snprintf(first, sizeof first, "%s", sqlite3_errmsg(c->db));
+    sqlite3_finalize(st);
+    if (!bad && (rc == SQLITE_DONE || rc == SQLITE_OK)) return STORE_OK;
+    sq_errf(err, errlen,
+            "sqlite open %s: the database is damaged (quick_check: %s%s): restore it from a "
+            "backup, or move it away to start with an empty store (the cached results and the "
+            "queued jobs in it would be lost)",
+            path, first, bad > 1 ? "; and more" : "");
+    return STORE_ERR;
+}
+
+/* Chunks without a digest (moved from schema version 1) get theirs, once. */
+static int sq_fill_digests(sq_conn *c, const char *path, char *err, size_t errlen)
+{
+    long long n = 0;
+    if (sq_int(c, "SELECT count(*) FROM result_chunks WHERE sha IS NULL", &n, path, err, errlen))
+        return STORE_ERR;
+    if (n == 0) return STORE_OK;
+    sqlite3_int64 *ids = malloc((size_t)n * sizeof *ids);
+    sqlite3_stmt *sel = NULL, *one = NULL, *upd = NULL;
+    long long k = 0;
+    int rc = ids ? SQLITE_OK : SQLITE_NOMEM;
+    if (rc == SQLITE_OK)
+        rc = sqlite3_prepare_v2(c->db, "SELECT rowid FROM result_chunks WHERE sha IS NULL", -1,
+                                &sel, NULL);
+    while (rc == SQLITE_OK && k < n && sqlite3_step(sel) == SQLITE_ROW)
+        ids[k++] = sqlite3_column_int64(sel, 0);
+    if (rc == SQLITE_OK)
+        rc = sqlite3_prepare_v2(c->db, "SELECT body FROM result_chunks WHERE rowid = ?1", -1, &one,
+                                NULL);
+    if (rc == SQLITE_OK)
+        rc = sqlite3_prepare_v2(c->db, "UPDATE result_chunks SET sha = ?2 WHERE rowid = ?1", -1,
+                                &upd, NULL);
+    if (rc == SQLITE_OK) rc = sqlite3_exec(c->db, "BEGIN IMMEDIATE", NULL, NULL, NULL);
+    for (long long i = 0; rc == SQLITE_OK && i < k; i++) {
+        unsigned char md[32];
+        sqlite3_bind_int64(one, 1, ids[i]);
+        if (sqlite3_step(one) != SQLITE_ROW) {
+            rc = SQLITE_ERROR;
+            break;
+        }
+        sq_digest(sqlite3_column_blob(one, 0), (size_t)sqlite3_column_bytes(one, 0), md);
+        sqlite3_reset(one);
+        sqlite3_bind_int64(upd, 1, ids[i]);
+        sqlite3_bind_blob(upd, 2, md, 32, SQLITE_TRANSIENT);
+        if (sqlite3_step(upd) != SQLITE_DONE) rc = SQLITE_ERROR;
+        sqlite3_reset(upd);
+    }
+    if (rc == SQLITE_OK) rc = sqlite3_exec(c->db, "COMMIT", NULL, NULL, NULL);
+    if (rc != SQLITE_OK) {
+        sq_errf(err, errlen, "sqlite open %s: digests of the moved results: %s", path,
+                ids ? sqlite3_errmsg(c->db) : "out of memory");
+        if (!sqlite3_get_autocommit(c->db)) sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL);
+    }
+    sqlite3_finalize(sel);
+    sqlite3_finalize(one);
+    sqlite3_finalize(upd);
+    free(ids);
+    return rc == SQLITE_OK ? STORE_OK : STORE_ERR;
+}
+
 /* Brings the schema to SQ_VERSION, all migrations in one transaction.  The version is read
  * again under the write lock: another process may have migrated in between. */
 static int sq_migrate(sq_conn *c, const char *path, char *err, size_t errlen)
 {
     char sql[64], where[64];
     int v;
-    if (sq_user_version(c, path, &v, err, errlen)) return STORE_ERR;
-    if (v == SQ_VERSION) return STORE_OK;
+    long long app = 0;
+    if (sq_user_version(c, path, &v, err, errlen) ||
+        sq_int(c, "PRAGMA application_id", &app, path, err, errlen))
+        return STORE_ERR;
+    if (v == SQ_VERSION && app == SQ_APP_ID) return STORE_OK;
     if (sq_exec(c, "BEGIN IMMEDIATE", "open: begin", err, errlen)) return STORE_ERR;
     if (sq_user_version(c, path, &v, err, errlen)) goto fail;
     for (; v < SQ_VERSION; v++) {
@@ -1223,6 +1451,8 @@ static int sq_migrate(sq_conn *c, const char *path, char *err, size_t errlen)
     }
     snprintf(sql, sizeof sql, "PRAGMA user_version = %d", SQ_VERSION);
     if (sq_exec(c, sql, "open: user_version", err, errlen) ||
+        sq_exec(c, "PRAGMA application_id = " SQ_APP_ID_TEXT, "open: application_id", err,
+                errlen) ||
         sq_exec(c, "COMMIT", "open: commit", err, errlen))
         goto fail;
     return STORE_OK;
@@ -1265,12 +1495,13 @@ static int sq_load_stamp(sq_conn *c, sq_store *s, char *err, size_t errlen)
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, char *err,
-                         size_t errlen)
+store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, int flags,
+                         char *err, size_t errlen)
 {
     sq_store *s = NULL;
     sq_conn *c = NULL;
     int mu_made = 0, v;
+    struct stat sb;
     if (!path || !*path) {
         sq_errf(err, errlen, "sqlite open: no path");
         return NULL;
@@ -1297,11 +1528,15 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
         goto fail;
     }
     s->key_made = 1;
+    int existed = stat(path, &sb) == 0;
     if (sq_conn_open(s, 1, &c, err, errlen)) goto fail;
-    /* the version first: refuse a newer database (or a file that is no database) before
-     * changing anything in it */
-    if (sq_user_version(c, path, &v, err, errlen) || sq_wal(c, path, err, errlen) ||
-        sq_migrate(c, path, err, errlen) || sq_load_stamp(c, s, err, errlen) ||
+    /* the version, what the file is and whether it is sound first: refuse a newer database,
+     * a file that is no database, someone else's or a damaged one before changing anything */
+    if (sq_user_version(c, path, &v, err, errlen) ||
+        sq_identify(c, path, v, existed, existed ? sb.st_size : 0, flags, err, errlen) ||
+        sq_quick_check(c, path, err, errlen) || sq_wal(c, path, err, errlen) ||
+        sq_migrate(c, path, err, errlen) || sq_fill_digests(c, path, err, errlen) ||
+        sq_load_stamp(c, s, err, errlen) ||
         sq_exec(c, "DELETE FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results)",
                 "open: deleting the chunks of unfinished puts", err, errlen))
         goto fail;

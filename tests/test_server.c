@@ -2541,5 +2541,101 @@ TEST(cellard_refuses_to_start)
     snprintf(args, sizeof args, "--db %s/c.db --bogus 1", dir);
     st = cellard_fails(args, out, sizeof out);
     CHECK(st == 2 && strstr(out, "unknown option --bogus"), "--bogus: exit %d: %s", st, out);
+    /* a database file truncated to nothing: refused, unless --init */
+    char empty[128];
+    snprintf(empty, sizeof empty, "%s/empty.db", dir);
+    FILE *fp = fopen(empty, "w");
+    REQUIRE(fp, "create %s", empty);
+    fclose(fp);
+    snprintf(args, sizeof args, "--db %s", empty);
+    st = cellard_fails(args, out, sizeof out);
+    CHECK(st == 1 && strstr(out, "cannot open the store") && strstr(out, "the file is empty") &&
+              strstr(out, "--init"),
+          "empty db: exit %d: %s", st, out);
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd,
+             "timeout -s TERM 3 '%s/cellard' --listen 127.0.0.1:0 --db %s --init 2>&1", build_dir(),
+             empty);
+    FILE *p = popen(cmd, "r");
+    REQUIRE(p, "popen");
+    size_t n = fread(out, 1, sizeof out - 1, p);
+    out[n] = 0;
+    pclose(p);
+    CHECK(strstr(out, "\"listening\"") && strstr(out, "\"stopped\""), "--init: %s", out);
+    struct stat sb;
+    CHECK(stat(empty, &sb) == 0 && sb.st_size > 0, "--init wrote nothing");
     rm_rf(dir);
+}
+
+/* ---- a damaged result, a store that cannot be written ------------------------------------ */
+
+SERVER_TEST(damaged_result_dropped, "--workers 1 --job-threads 1")
+{
+    size_t len, elen;
+    hresp r;
+    char etag[100], path[120], sql[300];
+    char *body = small_body(7, 0, &len);
+    const char *exp = expect(body, len, &elen);
+    REQUIRE(exp, "no expected result");
+    http_post(d, body, len, "wait=20", &r);
+    REQUIRE(r.status == 200 && hget(&r, "ETag", etag, sizeof etag), "POST: %ld", r.status);
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+    /* one byte of the stored result changes behind the daemon's back */
+    sqlite3 *db = NULL;
+    snprintf(
+        sql, sizeof sql,
+        "UPDATE result_chunks SET body = CAST(substr(body, 1, 9) || 'X' || substr(body, 11) AS "
+        "BLOB) WHERE hash = '%.64s'",
+        etag + 1);
+    REQUIRE(sqlite3_open(d->db, &db) == SQLITE_OK &&
+                sqlite3_exec(db, sql, NULL, NULL, NULL) == SQLITE_OK && sqlite3_changes(db) == 1,
+            "changing the stored bytes: %s", db ? sqlite3_errmsg(db) : "");
+    sqlite3_close(db);
+    http_get(d, path, &r);
+    check_problem(d, &r, 500, path, "damaged");
+    CHECK(!r.body.p || !strstr(r.body.p, "\"V\""), "a damaged result was served");
+    hresp_free(&r);
+    CHECK(log_contains(d, "a stored result was damaged: dropped"), "not in the log");
+    http_get(d, path, &r);
+    CHECK(r.status == 404, "after the drop: %ld", r.status);
+    hresp_free(&r);
+    /* posted again, it runs again and the right bytes come back */
+    http_post(d, body, len, "wait=20", &r);
+    CHECK(r.status == 200 && has_header(&r, "X-Cellar-Cache", "miss") &&
+              same_result(r.body.p, r.body.n, exp, elen) == 1,
+          "POST again: %ld", r.status);
+    hresp_free(&r);
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && same_result(r.body.p, r.body.n, exp, elen) == 1, "GET again: %ld",
+          r.status);
+    hresp_free(&r);
+    free(body);
+
+    /* the store cannot be written (another process holds its write lock): not ready */
+    REQUIRE(sqlite3_open(d->db, &db) == SQLITE_OK &&
+                sqlite3_exec(db, "BEGIN IMMEDIATE", NULL, NULL, NULL) == SQLITE_OK,
+            "locking the store");
+    sleep_s(1.1); /* past the probe's last answer */
+    http_get(d, "/readyz", &r);
+    json_t *o = jbody(&r);
+    CHECK(r.status == 503 && !strcmp(jstr(o, "status"), "store not writable") &&
+              strstr(jstr(o, "error"), "locked"),
+          "/readyz with the store locked: %ld %s", r.status, r.body.p ? r.body.p : "");
+    json_decref(o);
+    hresp_free(&r);
+    http_get(d, "/healthz", &r);
+    CHECK(r.status == 200, "/healthz with the store locked: %ld", r.status);
+    hresp_free(&r);
+    sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+    sqlite3_close(db);
+    long st = 0;
+    for (int i = 0; i < 40 && st != 200; i++) {
+        sleep_s(0.1);
+        http_get(d, "/readyz", &r);
+        st = r.status;
+        hresp_free(&r);
+    }
+    CHECK(st == 200, "/readyz after the lock went: %ld", st);
+    srv_term(d);
 }

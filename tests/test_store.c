@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "server/store.h"
@@ -40,7 +41,7 @@ static int fx_init(fx *f)
 static int fx_open(fx *f, uint64_t budget)
 {
     f->err[0] = 0;
-    f->s = store_sqlite_open(f->path, budget, 0, f->err, sizeof f->err);
+    f->s = store_sqlite_open(f->path, budget, 0, 0, f->err, sizeof f->err);
     return f->s ? 0 : -1;
 }
 
@@ -725,7 +726,15 @@ TEST(store_schema_versions)
                 SQLITE_OK,
             "making a version-0 database");
     CHECK(sql_int(f.path, "PRAGMA user_version") == 0, "not version 0");
-    REQUIRE(fx_open(&f, 0) == 0, "open of a version-0 database: %s", f.err);
+    /* refused as it is: someone else's database is no store unless --init says so */
+    CHECK(fx_open(&f, 0) != 0 && strstr(f.err, "a SQLite database of something else") &&
+              strstr(f.err, "--init"),
+          "a foreign database was opened: %s", f.err);
+    CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master") == 1, "the refusal changed it");
+    f.s = store_sqlite_open(f.path, 0, 0, STORE_OPEN_INIT, f.err, sizeof f.err);
+    REQUIRE(f.s, "open of a version-0 database with --init: %s", f.err);
+    CHECK(sql_int(f.path, "PRAGMA application_id") == 0x63656c6c, "application_id %lld",
+          sql_int(f.path, "PRAGMA application_id"));
     CHECK(sql_int(f.path, "PRAGMA user_version") == 2, "user_version %lld after migration",
           sql_int(f.path, "PRAGMA user_version"));
     char t[16];
@@ -778,11 +787,11 @@ TEST(store_open_refuses_garbage)
     /* a file in a directory that does not exist */
     snprintf(dirpath, sizeof dirpath, "%s/no/such/dir/store.db", f.dir);
     f.err[0] = 0;
-    store *s = store_sqlite_open(dirpath, 0, 0, f.err, sizeof f.err);
+    store *s = store_sqlite_open(dirpath, 0, 0, 0, f.err, sizeof f.err);
     CHECK(!s && strstr(f.err, "unable to open") && strstr(f.err, dirpath), "message: %s", f.err);
     if (s) s->ops->close(s);
     f.err[0] = 0;
-    CHECK(!store_sqlite_open("", 0, 0, f.err, sizeof f.err) && f.err[0], "empty path");
+    CHECK(!store_sqlite_open("", 0, 0, 0, f.err, sizeof f.err) && f.err[0], "empty path");
     fx_done(&f);
 }
 
@@ -991,7 +1000,7 @@ TEST(store_touch_interval)
     for (int t = 0; t < 2; t++) {
         fx f;
         REQUIRE(fx_init(&f) == 0, "mkdtemp");
-        f.s = store_sqlite_open(f.path, 250, intervals[t], f.err, sizeof f.err);
+        f.s = store_sqlite_open(f.path, 250, intervals[t], 0, f.err, sizeof f.err);
         REQUIRE(f.s, "open: %s", f.err);
         char ha[65], hb[65], hc[65];
         memset(ha, 'a', 64);
@@ -1121,42 +1130,91 @@ TEST(store_large_results_in_chunks)
     fx_done(&f);
 }
 
+/* The hash of result k in SQL quotes, for tests that edit the file. */
+static const char *qhash(unsigned k)
+{
+    static char q[80];
+    snprintf(q, sizeof q, "'%064x'", k);
+    return q;
+}
+
 TEST(store_damaged_result_refused)
 {
     fx f;
-    char h[65], *b = NULL;
+    char h[65], *b = NULL, sql[300];
     size_t len = 0;
+    uint64_t start;
     REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
     REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
     store *s = f.s;
-    REQUIRE(put(s, 1, 3 * STORE_CHUNK) == 0 && put(s, 2, 10) == 0, "puts");
-    hash_of(h, 1);
-    /* a chunk lost behind the store's back */
-    REQUIRE(sql_exec(f.path, "DELETE FROM result_chunks WHERE off = 1048576") == SQLITE_OK,
-            "delete");
-    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_ERR && !b,
-          "a damaged result was returned");
-    CHECK(strstr(f.err, "is damaged") && strstr(f.err, "at byte 2097152, where 1048576"),
-          "message: %s", f.err);
-    uint64_t start;
-    CHECK(s->ops->result_chunk(s, h, STORE_CHUNK + 5, &b, &len, &start, f.err, sizeof f.err) ==
-                  STORE_NOTFOUND &&
-              !b,
-          "result_chunk in the hole");
+    REQUIRE(put(s, 1, 3 * STORE_CHUNK) == 0 && put(s, 2, 10) == 0 &&
+                put(s, 3, 2 * STORE_CHUNK) == 0 && put(s, 4, STORE_CHUNK + 3000) == 0,
+            "puts");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_OK, "check: %s", f.err);
+
+    /* a chunk lost behind the store's back: check() sees it, a read drops the result */
+    snprintf(sql, sizeof sql, "DELETE FROM result_chunks WHERE hash = %s AND off = 1048576",
+             qhash(1));
+    REQUIRE(sql_exec(f.path, sql) == SQLITE_OK, "delete");
     CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR, "check passed a lost chunk");
     CHECK(strstr(f.err, "1 have chunks that do not add up"), "message: %s", f.err);
-    /* the last chunk cut short */
-    REQUIRE(sql_exec(f.path, "DELETE FROM results WHERE hash = '"
-                             "0000000000000000000000000000000000000000000000000000000000000001';"
-                             "UPDATE result_chunks SET body = substr(body, 1, 5)") == SQLITE_OK,
-            "truncate");
+    hash_of(h, 1);
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_DAMAGED && !b,
+          "a result with a lost chunk was returned");
+    CHECK(strstr(f.err, "is damaged") && strstr(f.err, "at byte 2097152, where 1048576"),
+          "message: %s", f.err);
+    CHECK(!exists(s, 1), "the damaged result was kept");
+    CHECK(sql_int(f.path,
+                  "SELECT count(*) FROM result_chunks WHERE hash = "
+                  "'0000000000000000000000000000000000000000000000000000000000000001'") == 0,
+          "its chunks were kept");
+
+    /* one byte changed in a chunk: its digest says so, whole or chunk by chunk */
+    snprintf(sql, sizeof sql,
+             "UPDATE result_chunks SET body = CAST(substr(body, 1, 4) || X'00' || substr(body, 6)"
+             " AS BLOB)"
+             " WHERE hash = %s",
+             qhash(2));
+    REQUIRE(sql_exec(f.path, sql) == SQLITE_OK, "update");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR &&
+              strstr(f.err, "1 of 5 chunks do not match their digest"),
+          "check: %s", f.err);
     hash_of(h, 2);
-    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_ERR && !b,
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_DAMAGED && !b,
+          "changed bytes were returned");
+    CHECK(strstr(f.err, "chunk at byte 0 does not match its digest"), "message: %s", f.err);
+    CHECK(!exists(s, 2), "the changed result was kept");
+    snprintf(sql, sizeof sql,
+             "UPDATE result_chunks SET body = zeroblob(1048576) WHERE hash = %s AND off = 1048576",
+             qhash(3));
+    REQUIRE(sql_exec(f.path, sql) == SQLITE_OK, "update");
+    hash_of(h, 3);
+    CHECK(s->ops->result_chunk(s, h, 0, &b, &len, &start, f.err, sizeof f.err) == STORE_OK &&
+              len == STORE_CHUNK,
+          "the sound first chunk: %s", f.err);
+    free(b);
+    b = NULL;
+    CHECK(s->ops->result_chunk(s, h, STORE_CHUNK + 7, &b, &len, &start, f.err, sizeof f.err) ==
+                  STORE_DAMAGED &&
+              !b,
+          "a changed chunk was returned");
+    CHECK(!exists(s, 3), "the result with a changed chunk was kept");
+
+    /* the last chunk lost: sizes no longer add up */
+    snprintf(sql, sizeof sql, "DELETE FROM result_chunks WHERE hash = %s AND off = 1048576",
+             qhash(4));
+    REQUIRE(sql_exec(f.path, sql) == SQLITE_OK, "truncate");
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR, "check passed a short chunk");
+    hash_of(h, 4);
+    CHECK(s->ops->result_get(s, h, &b, &len, f.err, sizeof f.err) == STORE_DAMAGED && !b,
           "a short result was returned");
-    CHECK(strstr(f.err, "hold 5 of its 10 bytes"), "message: %s", f.err);
+    CHECK(strstr(f.err, "hold 1048576 of its 1051576 bytes"), "message: %s", f.err);
+    CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_OK, "check after the drops: %s", f.err);
+
     /* a chunk that does not start where the one before ends (and sizes that add up) */
-    REQUIRE(sql_exec(f.path, "UPDATE result_chunks SET body = zeroblob(10), off = 3") == SQLITE_OK,
-            "move");
+    REQUIRE(put(s, 5, 10) == 0, "put");
+    snprintf(sql, sizeof sql, "UPDATE result_chunks SET off = 3 WHERE hash = %s", qhash(5));
+    REQUIRE(sql_exec(f.path, sql) == SQLITE_OK, "move");
     CHECK(s->ops->check(s, f.err, sizeof f.err) == STORE_ERR, "check passed a moved chunk");
     CHECK(strstr(f.err, "1 chunks do not start where"), "message: %s", f.err);
     fx_done(&f);
@@ -1247,11 +1305,110 @@ TEST(store_open_deletes_unfinished_puts)
     /* chunks of a put that never wrote its results row (the process died) */
     REQUIRE(sql_exec(f.path, "INSERT INTO result_chunks VALUES('"
                              "0000000000000000000000000000000000000000000000000000000000000009',"
-                             " 0, zeroblob(100))") == SQLITE_OK,
+                             " 0, zeroblob(100), NULL)") == SQLITE_OK,
             "insert");
     REQUIRE(fx_open(&f, 0) == 0, "reopen: %s", f.err);
     CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 1, "%lld chunks, want 1",
           sql_int(f.path, "SELECT count(*) FROM result_chunks"));
     CHECK(get_is(f.s, 1, 3000) == 1, "the finished result is gone");
+    fx_done(&f);
+}
+
+TEST(store_refuses_empty_and_damaged_files)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    /* a file truncated to nothing is no empty store, unless asked for */
+    FILE *fp = fopen(f.path, "wb");
+    REQUIRE(fp, "create");
+    fclose(fp);
+    CHECK(fx_open(&f, 0) != 0 && strstr(f.err, "the file is empty") && strstr(f.err, "--init"),
+          "an empty file was opened: %s", f.err);
+    struct stat sb;
+    CHECK(stat(f.path, &sb) == 0 && sb.st_size == 0, "the refusal wrote to the file");
+    f.s = store_sqlite_open(f.path, 0, 0, STORE_OPEN_INIT, f.err, sizeof f.err);
+    REQUIRE(f.s, "--init on an empty file: %s", f.err);
+    for (unsigned k = 1; k <= 40; k++) REQUIRE(put(f.s, k, 60000 + k) == 0, "put %u", k);
+    fx_close(&f);
+    /* reopened without --init: it is ours now */
+    REQUIRE(fx_open(&f, 0) == 0, "reopen: %s", f.err);
+    CHECK(get_is(f.s, 7, 60007) == 1, "result 7");
+    fx_close(&f);
+
+    /* 4 KiB of garbage over the second page (a b-tree page): refused at open, not served */
+    char junk[4096];
+    uint64_t seed = 5;
+    for (size_t i = 0; i < sizeof junk; i++) junk[i] = (char)(test_rnd(&seed) * 256);
+    fp = fopen(f.path, "r+b");
+    REQUIRE(fp, "open for writing");
+    fseek(fp, 4096, SEEK_SET);
+    fwrite(junk, 1, sizeof junk, fp);
+    fclose(fp);
+    CHECK(fx_open(&f, 0) != 0 && strstr(f.err, "the database is damaged") &&
+              strstr(f.err, "quick_check") && strstr(f.err, "restore it from a backup"),
+          "a damaged file was opened: %s", f.err);
+    fx_done(&f);
+
+    /* 4 KiB of garbage in the middle, where the results' bytes lie: whatever it hits, no
+     * changed byte is served */
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    for (unsigned k = 1; k <= 40; k++) REQUIRE(put(f.s, k, 60000 + k) == 0, "put %u", k);
+    fx_close(&f);
+    REQUIRE(stat(f.path, &sb) == 0, "stat");
+    fp = fopen(f.path, "r+b");
+    REQUIRE(fp, "open for writing");
+    fseek(fp, (long)(sb.st_size / 2 / 4096 * 4096 + 1000), SEEK_SET);
+    fwrite(junk, 1, sizeof junk, fp);
+    fclose(fp);
+    if (fx_open(&f, 0) == 0) {
+        int good = 0, damaged = 0, other = 0;
+        for (unsigned k = 1; k <= 40; k++) {
+            char h[65], *b = NULL;
+            size_t len = 0;
+            hash_of(h, k);
+            int rc = f.s->ops->result_get(f.s, h, &b, &len, f.err, sizeof f.err);
+            if (rc == STORE_OK && body_is(b, len, k, 60000 + k))
+                good++;
+            else if (rc == STORE_DAMAGED || rc == STORE_ERR)
+                damaged++;
+            else
+                other++;
+            free(b);
+        }
+        CHECK(other == 0 && damaged >= 1 && good + damaged == 40,
+              "%d good, %d damaged, %d served wrong or lost", good, damaged, other);
+    } else {
+        CHECK(strstr(f.err, "damaged") != NULL, "refused, but: %s", f.err);
+    }
+    fx_done(&f);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+TEST(store_writable_probe)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    CHECK(f.s->ops->writable(f.s, f.err, sizeof f.err) == STORE_OK, "writable: %s", f.err);
+    /* another process holds the write lock: the probe gives up after a second */
+    sqlite3 *db = NULL;
+    REQUIRE(sqlite3_open(f.path, &db) == SQLITE_OK &&
+                sqlite3_exec(db, "BEGIN IMMEDIATE", NULL, NULL, NULL) == SQLITE_OK,
+            "lock");
+    double t0 = now_s();
+    CHECK(f.s->ops->writable(f.s, f.err, sizeof f.err) == STORE_ERR && strstr(f.err, "locked"),
+          "writable under another's lock: %s", f.err);
+    double dt = now_s() - t0;
+    CHECK(dt > 0.5 && dt < 4, "the probe waited %.2f s", dt);
+    sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+    sqlite3_close(db);
+    CHECK(f.s->ops->writable(f.s, f.err, sizeof f.err) == STORE_OK, "writable again: %s", f.err);
     fx_done(&f);
 }

@@ -67,7 +67,15 @@ typedef struct conn {
     render_opts ro;  /* the picture's options (query parameters) */
     char rep[48];    /* the ETag suffix of the representation: "" for JSON */
     char job_id[33]; /* for the log */
+    int close;       /* answer with Connection: close (the rest of the stream cannot be trusted) */
 } conn;
+
+/* Per TCP connection (MHD's socket context): what the URL unescaper saw in the request line
+ * being read.  Requests on one connection are read one after the other, so the handler's
+ * first call for a request reads and clears it. */
+typedef struct sock_ctx {
+    int bad_escape; /* a %00, or a % not followed by two hex digits */
+} sock_ctx;
 
 static const char *status_title(unsigned s)
 {
@@ -179,8 +187,10 @@ static enum MHD_Result problem(conn *c, unsigned status, const char *detail, con
     char *s = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
     json_decref(o);
     if (!s) return MHD_NO;
-    hdr hs[] = {{MHD_HTTP_HEADER_RETRY_AFTER, retry}, {MHD_HTTP_HEADER_ALLOW, allow}};
-    return respond(c, status, "application/problem+json", s, strlen(s), 0, hs, 2);
+    hdr hs[] = {{MHD_HTTP_HEADER_RETRY_AFTER, retry},
+                {MHD_HTTP_HEADER_ALLOW, allow},
+                {c->close ? MHD_HTTP_HEADER_CONNECTION : NULL, "close"}};
+    return respond(c, status, "application/problem+json", s, strlen(s), 0, hs, 3);
 }
 
 static void iso_time(double t, char *out, size_t n)
@@ -653,9 +663,19 @@ static double prefer_wait(struct MHD_Connection *mc)
                 q++;
                 while (*q == ' ') q++;
                 if (*q == '"') q++;
-                char *end;
-                double w = strtod(q, &end);
-                if (end != q && w >= 0 && w < 1e9) return w;
+                /* decimal only (RFC 7240's delta-seconds, a fraction allowed): no sign, no
+                 * hex, no exponent, no inf or nan, as strtod would take */
+                const char *e = q;
+                while (isdigit((unsigned char)*e)) e++;
+                if (e > q && *e == '.' && isdigit((unsigned char)e[1])) {
+                    e++;
+                    while (isdigit((unsigned char)*e)) e++;
+                }
+                int end_ok = !*e || *e == '"' || *e == ',' || *e == ';' || *e == ' ' || *e == '\t';
+                if (e > q && end_ok && e - q < 16) {
+                    double w = strtod(q, NULL);
+                    if (w < 1e9) return w;
+                }
             }
         }
         p = strchr(p, ',');
@@ -845,6 +865,32 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         snprintf(c->method, sizeof c->method, "%s", method);
         snprintf(c->path, sizeof c->path, "%s", url);
         c->route = classify(url, c->id);
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+        sock_ctx *sc = ci ? ci->socket_context : NULL;
+        int bad_escape = sc && sc->bad_escape;
+        if (sc) sc->bad_escape = 0;
+        if (bad_escape)
+            return problem(c, 400,
+                           "the URL has a bad percent-escape (%00, or % not followed by two hex "
+                           "digits)",
+                           NULL, NULL);
+        /* a body is framed by Content-Length or by chunks, never both (RFC 9112 6.1: a request
+         * with both is an attack on whoever reads it next), and chunked is the only coding
+         * understood: past such a request the stream cannot be trusted, so it is closed */
+        const char *te =
+            MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_TRANSFER_ENCODING);
+        if (te) {
+            c->close = 1;
+            if (MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH))
+                return problem(c, 400, "Content-Length and Transfer-Encoding together", NULL, NULL);
+            while (*te == ' ' || *te == '\t') te++;
+            size_t n = strlen(te);
+            while (n && (te[n - 1] == ' ' || te[n - 1] == '\t')) n--;
+            if (n != 7 || strncasecmp(te, "chunked", 7))
+                return problem(c, 400, "Transfer-Encoding: only chunked is understood", NULL, NULL);
+            c->close = 0;
+        }
         if (c->route == ROUTE_JOBS && !strcmp(method, "POST")) {
             if (atomic_load(&h->draining))
                 return problem(c, 503, "the service is shutting down", "5", NULL);
@@ -926,6 +972,59 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
     log_kv(LOG_DEBUG, "libmicrohttpd", "detail", msg, NULL);
 }
 
+/* MHD_OPTION_NOTIFY_CONNECTION: a sock_ctx for each TCP connection. */
+static void notify_connection(void *cls, struct MHD_Connection *mc, void **socket_context,
+                              enum MHD_ConnectionNotificationCode toe)
+{
+    (void)cls;
+    (void)mc;
+    if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+        *socket_context = calloc(1, sizeof(sock_ctx)); /* NULL: escapes go unchecked */
+    } else if (toe == MHD_CONNECTION_NOTIFY_CLOSED) {
+        free(*socket_context);
+        *socket_context = NULL;
+    }
+}
+
+static int hexval(char ch)
+{
+    return ch >= '0' && ch <= '9'   ? ch - '0'
+           : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10
+           : ch >= 'A' && ch <= 'F' ? ch - 'A' + 10
+                                    : -1;
+}
+
+/* MHD_OPTION_UNESCAPE_CALLBACK: decodes %XX in place (the path and the query's keys and
+ * values), as MHD's own does, but notes what MHD lets through: %00, which would cut the
+ * string short (/healthz%00x was /healthz), and a % without two hex digits.  The handler
+ * then answers 400. */
+static size_t unescape(void *cls, struct MHD_Connection *mc, char *s)
+{
+    (void)cls;
+    char *w = s;
+    int bad = 0;
+    for (const char *r = s; *r;) {
+        int hi, lo;
+        if (*r != '%') {
+            *w++ = *r++;
+        } else if ((hi = hexval(r[1])) >= 0 && (lo = hexval(r[2])) >= 0 && (hi || lo)) {
+            *w++ = (char)(hi * 16 + lo);
+            r += 3;
+        } else {
+            bad = 1;
+            *w++ = *r++; /* left as it is */
+        }
+    }
+    *w = 0;
+    if (bad) {
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+        sock_ctx *sc = ci ? ci->socket_context : NULL;
+        if (sc) sc->bad_escape = 1;
+    }
+    return (size_t)(w - s);
+}
+
 http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, char *err,
                         size_t errlen)
 {
@@ -959,7 +1058,9 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
         flags, (uint16_t)cfg->port, NULL, NULL, handle, h, MHD_OPTION_SOCK_ADDR, ai->ai_addr,
         MHD_OPTION_THREAD_POOL_SIZE, (unsigned)4, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)1000, MHD_OPTION_NOTIFY_COMPLETED, completed, h,
-        MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, MHD_OPTION_END);
+        MHD_OPTION_NOTIFY_CONNECTION, notify_connection, NULL, MHD_OPTION_UNESCAPE_CALLBACK,
+        unescape, NULL, MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_EXTERNAL_LOGGER, mhd_log,
+        NULL, MHD_OPTION_END);
     freeaddrinfo(ai);
     if (!h->d) {
         snprintf(err, errlen, "cannot listen on %s:%u (in use, or not an address of this host)",

@@ -1320,6 +1320,20 @@ SERVER_TEST(prefer_wait, "--workers 1 --job-threads 1 --max-wait 2")
     REQUIRE(submit(d, huge, hlen, &h) == 0, "huge job");
     CHECK(wait_state(d, h.id, "running", 30 * slowdown(), NULL), "the huge job never ran");
 
+    /* a wait that is not a decimal number of seconds is no wait (strtod would read 0x10 as
+     * 16 s, 1e1 as 10): answered at once, 202, nothing applied */
+    const char *notdec[] = {"wait=0x10", "wait=1e1", "wait=-1", "wait=inf", "wait=1.", "wait=.5"};
+    for (int i = 0; i < 6; i++) {
+        size_t ln;
+        char *b = small_body(10 + i, 0, &ln);
+        http_post(d, b, ln, notdec[i], &r);
+        CHECK(r.status == 202 && r.secs < 0.8 && !hget(&r, "Preference-Applied", v, sizeof v),
+              "Prefer: %s: %ld after %.2f s, applied %s", notdec[i], r.status, r.secs,
+              hget(&r, "Preference-Applied", v, sizeof v) ? v : "(none)");
+        hresp_free(&r);
+        free(b);
+    }
+
     pthread_t t[2];
     size_t l3, l4;
     char *f3 = small_body(3, 0, &l3), *f4 = small_body(4, 0, &l4);
@@ -2099,8 +2113,54 @@ SERVER_TEST(garbage_on_the_socket, "--workers 2 --job-threads 1")
     CHECK(st >= 400 && st < 500, "BREW: status %d: %.200s", st, out);
     const char nohost[] = "GET /healthz HTTP/1.1\r\nConnection: close\r\n\r\n";
     st = raw_exchange(d, nohost, sizeof nohost - 1, out, sizeof out);
-    CHECK(st == 200 || st == 400, "HTTP/1.1 without Host: status %d", st);
+    CHECK(st == 400, "HTTP/1.1 without Host: status %d", st);
+    const char old10[] = "GET /healthz HTTP/1.0\r\n\r\n"; /* 1.0 needs no Host */
+    st = raw_exchange(d, old10, sizeof old10 - 1, out, sizeof out);
+    CHECK(st == 200, "HTTP/1.0 without Host: status %d", st);
     check_sane(d, "BREW", 1);
+
+    /* strict framing and escapes: each answered at once (no shutdown from our side, so a
+     * server that waits for more would show here as a timeout), the bad ones closed */
+    static const struct {
+        const char *req;
+        int status;
+        const char *what;
+    } strict[] = {
+        {"GET /healthz%00x HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n", 400,
+         "bad percent-escape"},
+        {"GET /healthz%zz HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n", 400,
+         "bad percent-escape"},
+        {"GET /healthz%4 HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n", 400,
+         "bad percent-escape"},
+        {"GET /v1/results/00?explode=%00 HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n", 400,
+         "bad percent-escape"},
+        {"GET /heal%74hz HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n", 200, "\"ok\""},
+        {"POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
+         "Transfer-Encoding: gzip, chunked\r\n\r\n5\r\nhello\r\n0\r\n\r\n",
+         400, "only chunked"},
+        {"POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
+         "Content-Length: 5\r\nTransfer-Encoding: chunked\r\n\r\n5\r\nhello\r\n0\r\n\r\n",
+         400, "Content-Length and Transfer-Encoding together"},
+        {"GARBAGE\r\n\r\n", 0, ""},
+        {"GET\r\n\r\n", 0, ""},
+    };
+    for (size_t i = 0; i < sizeof strict / sizeof *strict; i++) {
+        int fd = raw_connect(d);
+        REQUIRE(fd >= 0, "connect");
+        double t0 = now_s();
+        raw_send(fd, strict[i].req, strlen(strict[i].req));
+        size_t n = raw_read(fd, out, sizeof out, 3);
+        double dt = now_s() - t0;
+        close(fd);
+        st = n > 12 && !strncmp(out, "HTTP/1.", 7) ? atoi(out + 9) : 0;
+        CHECK(st == strict[i].status && strstr(out, strict[i].what) && dt < 2,
+              "%.40s...: status %d after %.2f s (want %d at once): %.200s", strict[i].req, st, dt,
+              strict[i].status, out);
+        if (st == 400 && strict[i].what[0] != 'b')
+            CHECK(strstr(out, "Connection: close"), "%.40s: not closed: %.200s", strict[i].req,
+                  out);
+    }
+    check_sane(d, "strict framing", 5);
 
     /* 10 MB of random bytes */
     size_t n = 10u << 20;

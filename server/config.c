@@ -22,6 +22,9 @@ const char config_usage[] =
     "  --max-wait SECONDS    CELLAR_MAX_WAIT      longest Prefer: wait (default 55)\n"
     "  --cache-bytes BYTES   CELLAR_CACHE_BYTES   result cache budget, 0 = none (default 1 GiB)\n"
     "  --drain-timeout SECS  CELLAR_DRAIN_TIMEOUT SIGTERM waits this long for running jobs\n"
+    "  --job-ttl SECONDS     CELLAR_JOB_TTL       a finished job is kept this long (default 7 "
+    "days)\n"
+    "  --max-jobs N          CELLAR_MAX_JOBS      finished jobs kept at most (default 100000)\n"
     "  --log-level LEVEL     CELLAR_LOG_LEVEL     debug, info, warn, error (default info)\n"
     "  --init                make a store in an empty --db file, or add its tables to another\n"
     "                        program's SQLite database (both are refused without it)\n"
@@ -97,6 +100,13 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "drain-timeout")) {
         if (parse_secs(v, 0, 86400, &c->drain_timeout))
             return bad(err, errlen, "--drain-timeout (0..86400)", v);
+    } else if (!strcmp(name, "job-ttl")) {
+        if (parse_secs(v, 1, 3.2e9, &c->job_ttl))
+            return bad(err, errlen, "--job-ttl (1..3200000000)", v);
+    } else if (!strcmp(name, "max-jobs")) {
+        if (parse_u64(v, 1, 1000000000, &u))
+            return bad(err, errlen, "--max-jobs (1..1000000000)", v);
+        c->max_jobs = (size_t)u;
     } else if (!strcmp(name, "log-level")) {
         if ((c->log_level = log_level_parse(v)) < 0)
             return bad(err, errlen, "--log-level (debug, info, warn, error)", v);
@@ -107,9 +117,9 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     return 0;
 }
 
-static const char *names[] = {"listen",   "db",       "spool",    "workers",     "job-threads",
-                              "queue",    "max-body", "max-wait", "cache-bytes", "drain-timeout",
-                              "log-level"};
+static const char *names[] = {"listen",  "db",       "spool",    "workers",     "job-threads",
+                              "queue",   "max-body", "max-wait", "cache-bytes", "drain-timeout",
+                              "job-ttl", "max-jobs", "log-level"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {
@@ -127,6 +137,8 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
     c->max_wait = 55;
     c->cache_bytes = 1u << 30;
     c->drain_timeout = 30;
+    c->job_ttl = 7 * 86400;
+    c->max_jobs = 100000;
     c->log_level = LOG_INFO;
     for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
         char var[64] = "CELLAR_";

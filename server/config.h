@@ -13,6 +13,8 @@
  *   --max-wait      CELLAR_MAX_WAIT     55              seconds a Prefer: wait may hold
  *   --cache-bytes   CELLAR_CACHE_BYTES  1073741824      result cache budget (0: unlimited)
  *   --drain-timeout CELLAR_DRAIN_TIMEOUT 30             seconds SIGTERM waits for running jobs
+ *   --job-ttl       CELLAR_JOB_TTL      604800          seconds a finished job is kept
+ *   --max-jobs      CELLAR_MAX_JOBS     100000          finished jobs kept at most
  *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
  *   --init          (flag only)                         make a store in an empty or foreign
  *                                                       --db file instead of refusing it
@@ -34,6 +36,8 @@ typedef struct config {
     double max_wait;
     uint64_t cache_bytes;
     double drain_timeout;
+    double job_ttl;
+    size_t max_jobs;
     int log_level;
     int init; /* --init */
 } config;

@@ -344,7 +344,7 @@ static void *worker_main(void *arg)
 static void *timer_main(void *arg)
 {
     engine *e = arg;
-    double next_prune = engine_now() + 60;
+    double next_prune = engine_now() + 5;
     pthread_mutex_lock(&e->lock);
     while (!e->stopping) {
         double now = engine_now(), soonest = now + 1;
@@ -359,12 +359,13 @@ static void *timer_main(void *arg)
         waiter *w = take_waiters_locked(e, NULL, now);
         pthread_mutex_unlock(&e->lock);
         wake_all(w);
-        if (now > next_prune) { /* finished jobs are kept a week */
+        if (now > next_prune) { /* finished jobs: kept job_ttl seconds, max_jobs at most */
             size_t n = 0;
             char err[256];
-            if (e->cfg.st->ops->jobs_prune(e->cfg.st, now - 7 * 86400, &n, err, sizeof err))
+            if (e->cfg.st->ops->jobs_prune(e->cfg.st, now - e->cfg.job_ttl, e->cfg.max_jobs, &n,
+                                           err, sizeof err))
                 log_kv(LOG_WARN, "store: jobs_prune failed", "error", err, NULL);
-            next_prune = now + 3600;
+            next_prune = now + 5;
         }
         pthread_mutex_lock(&e->lock);
     }

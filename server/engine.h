@@ -34,6 +34,8 @@ typedef struct engine_cfg {
     size_t queue_max;
     const char *spool_dir; /* borrowed: where results are written as they are made (NULL: the
                               system's temporary directory) */
+    double job_ttl;        /* seconds a finished job is kept */
+    size_t max_jobs;       /* finished jobs kept at most (0: no limit); pruned every 5 s */
 } engine_cfg;
 
 enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_CACHED = 3, ENG_ERR = -1 };

@@ -54,7 +54,9 @@ int main(int argc, char **argv)
                      .workers = cfg.workers,
                      .job_threads = cfg.job_threads,
                      .queue_max = cfg.queue,
-                     .spool_dir = cfg.spool};
+                     .spool_dir = cfg.spool,
+                     .job_ttl = cfg.job_ttl,
+                     .max_jobs = cfg.max_jobs};
     engine *e = engine_start(&ec, err, sizeof err);
     if (!e) {
         log_kv(LOG_ERROR, "cannot start the engine", "error", err, NULL);

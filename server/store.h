@@ -61,7 +61,8 @@ typedef struct store_ops {
     /* Inserts a new job (state, times and request as given). */
     int (*job_insert)(store *s, const store_job *j, char *err, size_t errlen);
     /* Sets state and the matching time (started for RUNNING, finished for the end states);
-     * error_status/error only for JOB_FAILED (error may be NULL otherwise). */
+     * error_status/error only for JOB_FAILED (error may be NULL otherwise).  A job set to an
+     * end state (DONE, FAILED, CANCELED) loses its request: it is never run again. */
     int (*job_set_state)(store *s, const char *id, job_state st, double when, int error_status,
                          const char *error, char *err, size_t errlen);
     /* Reads one job (request included). */
@@ -70,9 +71,11 @@ typedef struct store_ops {
      * the job is cleared after fn returns).  fn returns non-zero to stop early. */
     int (*jobs_unfinished)(store *s, int (*fn)(void *ctx, store_job *j), void *ctx, char *err,
                            size_t errlen);
-    /* Deletes finished jobs (DONE, FAILED, CANCELED) that ended before `before`; returns
-     * how many in *n. */
-    int (*jobs_prune)(store *s, double before, size_t *n, char *err, size_t errlen);
+    /* Deletes finished jobs (DONE, FAILED, CANCELED) that ended before `before`, and those
+     * past the `keep` most recently finished (0: no limit); returns how many in *n.  (A job
+     * that ends keeps no request: job_set_state drops it, so the jobs on disk are bounded by
+     * the queued and running ones' bodies plus `keep` small rows.) */
+    int (*jobs_prune)(store *s, double before, size_t keep, size_t *n, char *err, size_t errlen);
     /* Stores a result (replacing one with the same hash), then evicts least recently used
      * results until the total is within the budget (the new one is never evicted). */
     int (*result_put)(store *s, const char *hash, const char *body, size_t len, char *err,

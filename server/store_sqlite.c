@@ -111,6 +111,9 @@ static const char *const sq_migrations[] = {
     "DROP TABLE result_bodies;"
     "CREATE TRIGGER results_chunks_delete AFTER DELETE ON results BEGIN"
     " DELETE FROM result_chunks WHERE hash = OLD.hash; END;",
+    /* 2 -> 3: finished jobs keep no request, and are pruned by count through this index */
+    "UPDATE jobs SET request = zeroblob(0) WHERE state IN (2, 3, 4);"
+    "CREATE INDEX jobs_finished ON jobs(finished) WHERE state IN (2, 3, 4);",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -152,13 +155,20 @@ static const char *const sq_sql_text[SQ_NSQL] = {
         "INSERT INTO jobs(id, hash, kind, state, created, started, finished,"
         " error_status, error, request) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
     /* ?3 started, ?4 finished: NULL keeps the old value */
+    /* a job that ends drops its request: only a queued or running job needs it (to run
+     * again after a restart), and bodies are most of the table */
     [SQ_JOB_SET_STATE] = "UPDATE jobs SET state = ?2, started = coalesce(?3, started),"
-                         " finished = coalesce(?4, finished), error_status = ?5, error = ?6"
+                         " finished = coalesce(?4, finished), error_status = ?5, error = ?6,"
+                         " request = CASE WHEN ?2 IN (2, 3, 4) THEN zeroblob(0) ELSE request END"
                          " WHERE id = ?1",
     [SQ_JOB_GET] = "SELECT id, hash, kind, state, created, started, finished, error_status, error,"
                    " request FROM jobs WHERE id = ?1",
     [SQ_JOBS_UNFINISHED] = "SELECT id FROM jobs WHERE state IN (?1, ?2) ORDER BY created, rowid",
-    [SQ_JOBS_PRUNE] = "DELETE FROM jobs WHERE state IN (?1, ?2, ?3) AND finished < ?4",
+    /* finished jobs that ended before ?1, and those past the ?2 newest (?2 < 0: no limit),
+     * both through the partial index jobs_finished (its states written out for it) */
+    [SQ_JOBS_PRUNE] = "DELETE FROM jobs WHERE state IN (2, 3, 4) AND (finished < ?1 OR rowid IN"
+                      " (SELECT rowid FROM jobs WHERE state IN (2, 3, 4) ORDER BY finished DESC"
+                      " LIMIT -1 OFFSET ?2))",
     [SQ_RESULT_UPSERT] = "INSERT INTO results(hash, bytes, created, last_used)"
                          " VALUES(?1, ?2, ?3, ?3) ON CONFLICT(hash) DO UPDATE SET"
                          " bytes = excluded.bytes, created = excluded.created,"
@@ -332,7 +342,8 @@ static int sq_conn_open(sq_store *s, int create, sq_conn **out, char *err, size_
     sqlite3_busy_timeout(c->db, SQ_BUSY_MS);
     /* synchronous=NORMAL: in WAL mode a commit survives a crash of the process, and the last
      * ones may be lost only with the machine (fsync at checkpoints, not at every commit). */
-    rc = sqlite3_exec(c->db, "PRAGMA synchronous=NORMAL", NULL, NULL, NULL);
+    rc = sqlite3_exec(c->db, "PRAGMA synchronous=NORMAL; PRAGMA journal_size_limit=67108864", NULL,
+                      NULL, NULL);
     if (rc != SQLITE_OK) {
         sq_open_err(err, errlen, s->path, c->db, rc);
         goto fail;
@@ -652,7 +663,8 @@ fail:
     return STORE_ERR;
 }
 
-static int sq_jobs_prune(store *base, double before, size_t *n, char *err, size_t errlen)
+static int sq_jobs_prune(store *base, double before, size_t keep, size_t *n, char *err,
+                         size_t errlen)
 {
     sq_store *s = (sq_store *)base;
     sqlite3_stmt *st = NULL;
@@ -663,10 +675,11 @@ static int sq_jobs_prune(store *base, double before, size_t *n, char *err, size_
     if (sq_run(c, SQ_BEGIN, "jobs_prune: begin", err, errlen)) return STORE_ERR;
     st = sq_stmt(c, SQ_JOBS_PRUNE, "jobs_prune", err, errlen);
     if (!st) goto fail;
-    sqlite3_bind_int(st, 1, JOB_DONE);
-    sqlite3_bind_int(st, 2, JOB_FAILED);
-    sqlite3_bind_int(st, 3, JOB_CANCELED);
-    sqlite3_bind_double(st, 4, before);
+    sqlite3_bind_double(st, 1, before);
+    if (keep && keep < (size_t)INT64_MAX)
+        sqlite3_bind_int64(st, 2, (sqlite3_int64)keep);
+    else
+        sqlite3_bind_int64(st, 2, INT64_MAX); /* past every row: no limit */
     if (sqlite3_step(st) != SQLITE_DONE) {
         sq_dberr(err, errlen, "jobs_prune", c->db);
         goto fail;

@@ -19,6 +19,8 @@ const char config_usage[] =
     "  --job-threads N       CELLAR_JOB_THREADS   core threads per job (default: CPUs)\n"
     "  --queue N             CELLAR_QUEUE         waiting jobs at most (default 64)\n"
     "  --max-body BYTES      CELLAR_MAX_BODY      request body limit (default 67108864)\n"
+    "  --max-inflight-bytes BYTES  CELLAR_MAX_INFLIGHT_BYTES  request body bytes held by all\n"
+    "                        connections at once, then 503 (default 268435456)\n"
     "  --max-wait SECONDS    CELLAR_MAX_WAIT      longest Prefer: wait (default 55)\n"
     "  --cache-bytes BYTES   CELLAR_CACHE_BYTES   result cache budget, 0 = none (default 1 GiB)\n"
     "  --drain-timeout SECS  CELLAR_DRAIN_TIMEOUT SIGTERM waits this long for running jobs\n"
@@ -91,6 +93,10 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
         if (parse_u64(v, 1024, (uint64_t)1 << 32, &u))
             return bad(err, errlen, "--max-body (1024..4294967296)", v);
         c->max_body = u;
+    } else if (!strcmp(name, "max-inflight-bytes")) {
+        if (parse_u64(v, 1024, (uint64_t)1 << 40, &u))
+            return bad(err, errlen, "--max-inflight-bytes (1024..2^40)", v);
+        c->max_inflight = u;
     } else if (!strcmp(name, "max-wait")) {
         if (parse_secs(v, 0, 3600, &c->max_wait))
             return bad(err, errlen, "--max-wait (0..3600)", v);
@@ -117,9 +123,20 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     return 0;
 }
 
-static const char *names[] = {"listen",  "db",       "spool",    "workers",     "job-threads",
-                              "queue",   "max-body", "max-wait", "cache-bytes", "drain-timeout",
-                              "job-ttl", "max-jobs", "log-level"};
+static const char *names[] = {"listen",
+                              "db",
+                              "spool",
+                              "workers",
+                              "job-threads",
+                              "queue",
+                              "max-body",
+                              "max-wait",
+                              "cache-bytes",
+                              "drain-timeout",
+                              "job-ttl",
+                              "max-jobs",
+                              "max-inflight-bytes",
+                              "log-level"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {
@@ -134,6 +151,7 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
     c->job_threads = (int)ncpu;
     c->queue = 64;
     c->max_body = 64u << 20;
+    c->max_inflight = 256u << 20;
     c->max_wait = 55;
     c->cache_bytes = 1u << 30;
     c->drain_timeout = 30;
@@ -183,6 +201,13 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
             v = argv[++i];
         }
         if (set(c, name, v, err, errlen)) return -1;
+    }
+    if (c->max_inflight <= c->max_body) {
+        snprintf(err, errlen,
+                 "--max-inflight-bytes (%llu) must be more than --max-body (%llu): else a body "
+                 "of the largest size could never be read",
+                 (unsigned long long)c->max_inflight, (unsigned long long)c->max_body);
+        return -1;
     }
     if (!c->spool[0]) { /* the directory of the database file */
         const char *slash = strrchr(c->db, '/');

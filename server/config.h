@@ -10,6 +10,8 @@
  *   --job-threads   CELLAR_JOB_THREADS  CPUs            core threads of one job
  *   --queue         CELLAR_QUEUE        64              jobs waiting at most (then 503)
  *   --max-body      CELLAR_MAX_BODY     67108864        request body bytes at most (then 413)
+ *   --max-inflight-bytes CELLAR_MAX_INFLIGHT_BYTES 268435456  request body bytes held at once
+ *                                                       by all connections (then 503)
  *   --max-wait      CELLAR_MAX_WAIT     55              seconds a Prefer: wait may hold
  *   --cache-bytes   CELLAR_CACHE_BYTES  1073741824      result cache budget (0: unlimited)
  *   --drain-timeout CELLAR_DRAIN_TIMEOUT 30             seconds SIGTERM waits for running jobs
@@ -33,6 +35,7 @@ typedef struct config {
     int workers, job_threads;
     size_t queue;
     uint64_t max_body;
+    uint64_t max_inflight;
     double max_wait;
     uint64_t cache_bytes;
     double drain_timeout;

@@ -347,7 +347,7 @@ static void *timer_main(void *arg)
     double next_prune = engine_now() + 5;
     pthread_mutex_lock(&e->lock);
     while (!e->stopping) {
-        double now = engine_now(), soonest = now + 1;
+        double now = engine_now(), soonest = next_prune < now + 1 ? next_prune : now + 1;
         for (waiter *w = e->waiters; w; w = w->next)
             if (w->deadline < soonest) soonest = w->deadline;
         if (soonest > now) {
@@ -359,7 +359,7 @@ static void *timer_main(void *arg)
         waiter *w = take_waiters_locked(e, NULL, now);
         pthread_mutex_unlock(&e->lock);
         wake_all(w);
-        if (now > next_prune) { /* finished jobs: kept job_ttl seconds, max_jobs at most */
+        if (now >= next_prune) { /* finished jobs: kept job_ttl seconds, max_jobs at most */
             size_t n = 0;
             char err[256];
             if (e->cfg.st->ops->jobs_prune(e->cfg.st, now - e->cfg.job_ttl, e->cfg.max_jobs, &n,

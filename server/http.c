@@ -24,6 +24,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <time.h>
 
 #include "api/api.h"
@@ -40,9 +41,10 @@ struct http_server {
     metrics *m;
     struct MHD_Daemon *d;
     atomic_int draining;
-    atomic_int parked;        /* connections suspended for a wait and not yet answered */
-    pthread_mutex_t ready_mu; /* guards the readiness probe's last answer */
-    double ready_at;          /* when the store was last probed for writes (0: never) */
+    atomic_int parked;         /* connections suspended for a wait and not yet answered */
+    _Atomic uint64_t inflight; /* bytes reserved by request bodies being read (max_inflight) */
+    pthread_mutex_t ready_mu;  /* guards the readiness probe's last answer */
+    double ready_at;           /* when the store was last probed for writes (0: never) */
     int ready_ok;
     char ready_err[256];
 };
@@ -68,7 +70,39 @@ typedef struct conn {
     char rep[48];    /* the ETag suffix of the representation: "" for JSON */
     char job_id[33]; /* for the log */
     int close;       /* answer with Connection: close (the rest of the stream cannot be trusted) */
+    uint64_t reserved; /* bytes of h->inflight this request's body holds */
 } conn;
+
+/* Reserves n more bytes of the in-flight budget for c's body: 0, or -1 when over it. */
+static int body_reserve(conn *c, uint64_t n)
+{
+    http_server *h = c->h;
+    uint64_t old = atomic_fetch_add(&h->inflight, n);
+    if (old + n > h->cfg->max_inflight) {
+        atomic_fetch_sub(&h->inflight, n);
+        return -1;
+    }
+    c->reserved += n;
+    return 0;
+}
+
+static void inflight_msg(const http_server *h, char *msg, size_t n)
+{
+    snprintf(msg, n,
+             "the service is reading its limit of request bodies (%llu bytes, "
+             "--max-inflight-bytes): try again shortly",
+             (unsigned long long)h->cfg->max_inflight);
+}
+
+/* Frees c's body and gives its bytes back to the budget. */
+static void body_release(conn *c)
+{
+    free(c->body);
+    c->body = NULL;
+    c->len = c->cap = 0;
+    if (c->reserved) atomic_fetch_sub(&c->h->inflight, c->reserved);
+    c->reserved = 0;
+}
 
 /* Per TCP connection (MHD's socket context): what the URL unescaper saw in the request line
  * being read.  Requests on one connection are read one after the other, so the handler's
@@ -714,8 +748,7 @@ static enum MHD_Result route_submit(conn *c)
         return problem(c, 413, msg, NULL, NULL);
     }
     int rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
-    free(c->body);
-    c->body = NULL;
+    body_release(c);
     if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL, NULL);
     engine_hash(canon, clen, hash);
 
@@ -848,6 +881,34 @@ static enum MHD_Result dispatch(conn *c)
     return problem(c, 405, "use GET", NULL, "GET, HEAD");
 }
 
+/* An answer in the middle of a body, where MHD cannot queue one (it would read the body to
+ * its end first: 1 GB of chunks before a 413): the problem is written to the socket here,
+ * its sending side shut, and MHD told to close the connection.  A client that stops sending
+ * to read gets the answer; one that keeps sending gets a reset. */
+static enum MHD_Result refuse_mid_body(conn *c, unsigned status, const char *detail)
+{
+    c->status = status;
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(c->mc, MHD_CONNECTION_INFO_CONNECTION_FD);
+    json_t *o = problem_json(status, detail, c->path);
+    char *body = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
+    json_decref(o);
+    if (ci && body) {
+        char head[256];
+        size_t blen = strlen(body);
+        int n = snprintf(head, sizeof head,
+                         "HTTP/1.1 %u %s\r\nContent-Type: application/problem+json\r\n"
+                         "Content-Length: %zu\r\nConnection: close\r\n\r\n",
+                         status, status_title(status), blen + 1);
+        struct iovec iov[3] = {{head, (size_t)n}, {body, blen}, {"\n", 1}};
+        struct msghdr mh = {.msg_iov = iov, .msg_iovlen = 3};
+        (void)sendmsg(ci->connect_fd, &mh, MSG_NOSIGNAL | MSG_DONTWAIT);
+        shutdown(ci->connect_fd, SHUT_WR);
+    }
+    free(body);
+    return MHD_NO;
+}
+
 static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *url,
                               const char *method, const char *version, const char *upload,
                               size_t *upload_size, void **con_cls)
@@ -896,7 +957,9 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
                 return problem(c, 503, "the service is shutting down", "5", NULL);
             const char *cl =
                 MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-            if (cl && strtoull(cl, NULL, 10) > h->cfg->max_body) {
+            c->close = 1; /* an early answer: the body that follows is not read */
+            unsigned long long clv = cl ? strtoull(cl, NULL, 10) : 0;
+            if (cl && clv > h->cfg->max_body) {
                 char msg[128];
                 snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
                          (unsigned long long)h->cfg->max_body);
@@ -904,6 +967,15 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
             }
             if (!json_content_type(mc))
                 return problem(c, 415, "the body must be application/json", NULL, NULL);
+            /* the body's bytes are reserved before any is read (all of them when the length
+             * is known, else as they come), against one budget for every connection */
+            if (cl && (body_reserve(c, clv + 1) || !(c->body = malloc(clv + 1)))) {
+                char msg[200];
+                inflight_msg(h, msg, sizeof msg);
+                return problem(c, 503, msg, "1", NULL);
+            }
+            if (cl) c->cap = clv + 1;
+            c->close = 0;
         }
         return MHD_YES;
     }
@@ -914,14 +986,23 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         if (c->route != ROUTE_JOBS) return MHD_YES;    /* bodies of other routes are ignored */
         if (c->len + n > h->cfg->max_body) {
             c->too_large = 1;
-            free(c->body);
-            c->body = NULL;
-            c->len = c->cap = 0;
-            return MHD_YES;
+            body_release(c);
+            /* no Content-Length said so (chunked): the rest is never read */
+            char msg[128];
+            snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
+                     (unsigned long long)h->cfg->max_body);
+            return refuse_mid_body(c, 413, msg);
         }
-        if (c->len + n + 1 > c->cap) {
+        if (c->len + n + 1 > c->cap) { /* chunked: no length was reserved */
             size_t cap = c->cap ? c->cap : 4096;
             while (cap < c->len + n + 1) cap *= 2;
+            if (cap > h->cfg->max_body + 1) cap = h->cfg->max_body + 1;
+            if (body_reserve(c, cap - c->cap)) {
+                char msg[200];
+                inflight_msg(h, msg, sizeof msg);
+                body_release(c);
+                return refuse_mid_body(c, 503, msg);
+            }
             char *b = realloc(c->body, cap);
             if (!b) return MHD_NO;
             c->body = b;
@@ -957,7 +1038,7 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
     if (c->j) engine_release(h->e, c->j);
     if (c->parked) atomic_fetch_sub(&h->parked, 1);
-    free(c->body);
+    body_release(c);
     free(c);
     *con_cls = NULL;
 }
@@ -1051,6 +1132,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     h->m = m;
     atomic_init(&h->draining, 0);
     atomic_init(&h->parked, 0);
+    atomic_init(&h->inflight, 0);
     pthread_mutex_init(&h->ready_mu, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);

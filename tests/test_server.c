@@ -1085,6 +1085,64 @@ static void check_sane_(srv *d, const char *after, int k, const char *func, int 
 }
 #define check_sane(d, after, k) check_sane_(d, after, k, __func__, __LINE__)
 
+/* ---- raw sockets ------------------------------------------------------------------------ */
+
+static int raw_connect(const srv *d)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return -1;
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)d->port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    struct timeval tv = {5, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+    if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+/* Sends everything it can (the server may close first); returns the bytes sent. */
+static size_t raw_send(int fd, const void *data, size_t len)
+{
+    size_t off = 0;
+    while (off < len) {
+        ssize_t k = send(fd, (const char *)data + off, len - off, MSG_NOSIGNAL);
+        if (k <= 0) break;
+        off += (size_t)k;
+    }
+    return off;
+}
+
+/* Reads until the server closes, the timeout passes or max bytes; NUL-terminated. */
+static size_t raw_read(int fd, char *out, size_t max, double timeout)
+{
+    size_t n = 0;
+    double deadline = now_s() + timeout;
+    while (n + 1 < max && now_s() < deadline) {
+        ssize_t k = recv(fd, out + n, max - 1 - n, 0);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    out[n] = 0;
+    return n;
+}
+
+/* One raw exchange: the status of the answer (0: none). */
+static int raw_exchange(const srv *d, const void *data, size_t len, char *out, size_t max)
+{
+    int fd = raw_connect(d);
+    if (fd < 0) return -1;
+    raw_send(fd, data, len);
+    shutdown(fd, SHUT_WR);
+    size_t n = raw_read(fd, out, max, 10 * slowdown());
+    close(fd);
+    int status = 0;
+    if (n > 12 && !strncmp(out, "HTTP/1.", 7)) status = atoi(out + 9);
+    return status;
+}
+
 /* ---- 1. post, poll, fetch ---------------------------------------------------------------- */
 
 SERVER_TEST(post_poll_fetch, "--workers 2 --job-threads 1")
@@ -1722,6 +1780,29 @@ SERVER_TEST(error_statuses, "--workers 2 --job-threads 1 --max-body 4096")
     http_do(d, &qc, &r);
     check_problem(d, &r, 413, "/v1/jobs", "10000 bytes chunked");
     hresp_free(&r);
+    /* a chunked body that goes on and on is cut off at the limit, not read to its end */
+    {
+        int fd = raw_connect(d);
+        REQUIRE(fd >= 0, "connect");
+        const char head[] = "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: "
+                            "application/json\r\nTransfer-Encoding: chunked\r\n\r\n";
+        raw_send(fd, head, sizeof head - 1);
+        char chunk[1030];
+        memcpy(chunk, "400\r\n", 5);
+        memset(chunk + 5, ' ', 1024);
+        memcpy(chunk + 1029, "\r", 1);
+        size_t sent = 0;
+        double t0 = now_s();
+        while (sent < (64u << 20) && now_s() < t0 + 20) {
+            ssize_t k = send(fd, chunk, sizeof chunk, MSG_NOSIGNAL);
+            if (k <= 0) break;
+            sent += (size_t)k;
+            if (send(fd, "\n", 1, MSG_NOSIGNAL) <= 0) break;
+        }
+        close(fd);
+        CHECK(sent < (16u << 20), "a chunked body of %zu bytes was read past a 4096-byte limit",
+              sent);
+    }
     /* a valid request padded with spaces to exactly 4096 bytes passes, 4097 does not */
     char *sb = small_body(8, 0, &len);
     REQUIRE(len < 4000, "small body too big");
@@ -2009,62 +2090,6 @@ SERVER_TEST(sigterm_drains, "--workers 1 --job-threads 1")
 }
 
 /* ---- 9. garbage on the socket ------------------------------------------------------------ */
-
-static int raw_connect(const srv *d)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    if (fd < 0) return -1;
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)d->port)};
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    struct timeval tv = {5, 0};
-    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-    setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-    if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
-        close(fd);
-        return -1;
-    }
-    return fd;
-}
-
-/* Sends everything it can (the server may close first); returns the bytes sent. */
-static size_t raw_send(int fd, const void *data, size_t len)
-{
-    size_t off = 0;
-    while (off < len) {
-        ssize_t k = send(fd, (const char *)data + off, len - off, MSG_NOSIGNAL);
-        if (k <= 0) break;
-        off += (size_t)k;
-    }
-    return off;
-}
-
-/* Reads until the server closes, the timeout passes or max bytes; NUL-terminated. */
-static size_t raw_read(int fd, char *out, size_t max, double timeout)
-{
-    size_t n = 0;
-    double deadline = now_s() + timeout;
-    while (n + 1 < max && now_s() < deadline) {
-        ssize_t k = recv(fd, out + n, max - 1 - n, 0);
-        if (k <= 0) break;
-        n += (size_t)k;
-    }
-    out[n] = 0;
-    return n;
-}
-
-/* One raw exchange: the status of the answer (0: none). */
-static int raw_exchange(const srv *d, const void *data, size_t len, char *out, size_t max)
-{
-    int fd = raw_connect(d);
-    if (fd < 0) return -1;
-    raw_send(fd, data, len);
-    shutdown(fd, SHUT_WR);
-    size_t n = raw_read(fd, out, max, 10 * slowdown());
-    close(fd);
-    int status = 0;
-    if (n > 12 && !strncmp(out, "HTTP/1.", 7)) status = atoi(out + 9);
-    return status;
-}
 
 typedef struct slowclient {
     const srv *d;
@@ -2698,4 +2723,142 @@ SERVER_TEST(damaged_result_dropped, "--workers 1 --job-threads 1")
     }
     CHECK(st == 200, "/readyz after the lock went: %ld", st);
     srv_term(d);
+}
+
+/* ---- bounded memory and disk --------------------------------------------------------------- */
+
+static long rss_kb(pid_t pid)
+{
+    char path[64], line[256];
+    long kb = -1;
+    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+    FILE *f = fopen(path, "r");
+    while (f && fgets(line, sizeof line, f))
+        if (!strncmp(line, "VmRSS:", 6)) kb = atol(line + 6);
+    if (f) fclose(f);
+    return kb;
+}
+
+/* 30 clients each announce a 15 MiB body and send half of it: the bodies the daemon holds
+ * stay within --max-inflight-bytes (the others get 503 before any byte is read), and
+ * /healthz answers meanwhile. */
+SERVER_TEST(half_bodies_bounded,
+            "--workers 1 --job-threads 1 --max-body 16777216 --max-inflight-bytes 67108864")
+{
+    enum { NCLIENT = 30 };
+    const size_t announce = 15u << 20, half = announce / 2;
+    char *junk = malloc(half);
+    REQUIRE(junk, "no memory");
+    memset(junk, ' ', half);
+    long before = rss_kb(d->pid);
+    int fds[NCLIENT], n503 = 0, held = 0;
+    char head[256], out[2048];
+    for (int i = 0; i < NCLIENT; i++) {
+        fds[i] = raw_connect(d);
+        REQUIRE(fds[i] >= 0, "connect %d", i);
+        int hl = snprintf(head, sizeof head,
+                          "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
+                          "Content-Length: %zu\r\n\r\n",
+                          announce);
+        raw_send(fds[i], head, (size_t)hl);
+        /* a refused one is answered at once: look before sending the half */
+        struct timeval tv = {0, 300000};
+        setsockopt(fds[i], SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+        ssize_t k = recv(fds[i], out, sizeof out - 1, 0);
+        if (k > 12 && !strncmp(out, "HTTP/1.1 503", 12)) {
+            out[k] = 0;
+            CHECK(strstr(out, "--max-inflight-bytes") && strstr(out, "Retry-After"),
+                  "503 without its reason: %.300s", out);
+            n503++;
+            close(fds[i]);
+            fds[i] = -1;
+            continue;
+        }
+        raw_send(fds[i], junk, half);
+        held++;
+    }
+    sleep_s(0.5);
+    long during = rss_kb(d->pid);
+    hresp r;
+    http_get(d, "/healthz", &r);
+    CHECK(r.status == 200 && r.secs < 1, "/healthz while bodies are held: %ld in %.2f s", r.status,
+          r.secs);
+    hresp_free(&r);
+    /* 64 MiB hold at most four 15 MiB bodies */
+    CHECK(held == 4 && n503 == NCLIENT - 4, "%d bodies held, %d refused", held, n503);
+    CHECK(before > 0 && during - before < 100 * 1024,
+          "RSS grew by %ld MiB while %d clients sent half bodies", (during - before) / 1024,
+          NCLIENT);
+    printf("  (half bodies: RSS %ld MiB before, %ld MiB with %d held and %d refused)\n",
+           before / 1024, during / 1024, held, n503);
+    for (int i = 0; i < NCLIENT; i++)
+        if (fds[i] >= 0) close(fds[i]);
+    free(junk);
+    /* the budget comes back when they go */
+    sleep_s(0.5);
+    check_sane(d, "half bodies", 6);
+    size_t ln;
+    char *b = small_body(9, 0, &ln);
+    http_post(d, b, ln, "wait=10", &r);
+    CHECK(r.status == 200, "a POST after the half bodies went: %ld", r.status);
+    hresp_free(&r);
+    free(b);
+    srv_term(d);
+}
+
+/* 60 distinct requests of about 100 KB each, their results pushed out of a 1 MB cache: the
+ * database stays small (ended jobs keep no body; at most --max-jobs of them are kept). */
+SERVER_TEST(disk_bounded, "--workers 2 --job-threads 1 --cache-bytes 1000000 --max-jobs 20")
+{
+    hresp r;
+    for (int i = 0; i < 60; i++) {
+        buf b = {0};
+        /* a small grid, moved by i, and 3000 copies of one short segment (they merge) */
+        buf_printf(&b, "{\"kind\":\"lines\",\"lines\":[");
+        for (int k = 0; k <= 12; k++)
+            buf_printf(&b, "%s[[%d,%d],[%d,%d]],[[%d,%d],[%d,%d]]", k ? "," : "", 100 * i, k,
+                       100 * i + 12, k, 100 * i + k, 0, 100 * i + k, 12);
+        for (int k = 0; k < 3000; k++) buf_printf(&b, ",[[%d,20],[%d,21]]", 100 * i, 100 * i);
+        buf_printf(&b, "]}");
+        http_post(d, b.p, b.n, "wait=30", &r);
+        CHECK(r.status == 200, "POST %d: %ld", i, r.status);
+        hresp_free(&r);
+        free(b.p);
+    }
+    long jobs = -1;
+    for (int t = 0; t < 80 && jobs != 20; t++) { /* pruned every 5 s */
+        sleep_s(0.1);
+        sqlite3 *db = NULL;
+        sqlite3_stmt *st = NULL;
+        if (sqlite3_open_v2(d->db, &db, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
+            sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs", -1, &st, NULL) == SQLITE_OK &&
+            sqlite3_step(st) == SQLITE_ROW)
+            jobs = sqlite3_column_int64(st, 0);
+        sqlite3_finalize(st);
+        sqlite3_close(db);
+    }
+    CHECK(jobs == 20, "%ld jobs kept, want 20", jobs);
+    long long body_bytes = -1, cache = -1;
+    sqlite3 *db = NULL;
+    sqlite3_stmt *st = NULL;
+    if (sqlite3_open_v2(d->db, &db, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
+        sqlite3_prepare_v2(db,
+                           "SELECT (SELECT coalesce(sum(length(request)), 0) FROM jobs),"
+                           " (SELECT bytes FROM result_totals)",
+                           -1, &st, NULL) == SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW) {
+        body_bytes = sqlite3_column_int64(st, 0);
+        cache = sqlite3_column_int64(st, 1);
+    }
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+    CHECK(body_bytes == 0, "ended jobs keep %lld bytes of requests", body_bytes);
+    CHECK(cache >= 0 && cache <= 1000000, "the cache holds %lld bytes", cache);
+    srv_term(d); /* the WAL goes into the file */
+    struct stat sb;
+    CHECK(stat(d->db, &sb) == 0 && sb.st_size < (3 << 20),
+          "the database is %lld bytes after 60 requests of 100 KB (6 MB of bodies)",
+          (long long)sb.st_size);
+    printf("  (disk: %lld bytes of database after 60 requests of about 100 KB)\n",
+           (long long)sb.st_size);
 }

@@ -11,7 +11,8 @@ command -v wrk >/dev/null || { echo "bench/http.sh: wrk is not installed (apt-ge
 tmp=$(mktemp -d)
 trap 'kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; rm -rf "$tmp"' EXIT
 port=$(( 20000 + $$ % 20000 ))
-"$B/cellard" --listen 127.0.0.1:$port --db "$tmp/cellar.db" --log-level warn 2>"$tmp/log" &
+"$B/cellard" --listen 127.0.0.1:$port --db "$tmp/cellar.db" --log-level warn --max-per-ip 0 \
+    2>"$tmp/log" &
 pid=$!
 for i in $(seq 50); do curl -fs "http://127.0.0.1:$port/healthz" >/dev/null 2>&1 && break; sleep 0.1; done
 url=http://127.0.0.1:$port

@@ -21,6 +21,11 @@ const char config_usage[] =
     "  --max-body BYTES      CELLAR_MAX_BODY      request body limit (default 67108864)\n"
     "  --max-inflight-bytes BYTES  CELLAR_MAX_INFLIGHT_BYTES  request body bytes held by all\n"
     "                        connections at once, then 503 (default 268435456)\n"
+    "  --max-connections N   CELLAR_MAX_CONNECTIONS  open connections at most (default 1000)\n"
+    "  --max-per-ip N        CELLAR_MAX_PER_IP    from one address at most, 0 = any (default 64)\n"
+    "  --header-timeout SECS CELLAR_HEADER_TIMEOUT  a request's headers must be in (default 10)\n"
+    "  --body-timeout SECS   CELLAR_BODY_TIMEOUT  a request's body must be in (default 120)\n"
+    "  --idle-timeout SECS   CELLAR_IDLE_TIMEOUT  a silent connection is closed (default 120)\n"
     "  --max-wait SECONDS    CELLAR_MAX_WAIT      longest Prefer: wait (default 55)\n"
     "  --cache-bytes BYTES   CELLAR_CACHE_BYTES   result cache budget, 0 = none (default 1 GiB)\n"
     "  --drain-timeout SECS  CELLAR_DRAIN_TIMEOUT SIGTERM waits this long for running jobs\n"
@@ -97,6 +102,22 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
         if (parse_u64(v, 1024, (uint64_t)1 << 40, &u))
             return bad(err, errlen, "--max-inflight-bytes (1024..2^40)", v);
         c->max_inflight = u;
+    } else if (!strcmp(name, "max-connections")) {
+        if (parse_u64(v, 1, 100000, &u))
+            return bad(err, errlen, "--max-connections (1..100000)", v);
+        c->max_connections = (unsigned)u;
+    } else if (!strcmp(name, "max-per-ip")) {
+        if (parse_u64(v, 0, 100000, &u)) return bad(err, errlen, "--max-per-ip (0..100000)", v);
+        c->max_per_ip = (unsigned)u;
+    } else if (!strcmp(name, "header-timeout")) {
+        if (parse_secs(v, 0.1, 3600, &c->header_timeout))
+            return bad(err, errlen, "--header-timeout (0.1..3600)", v);
+    } else if (!strcmp(name, "body-timeout")) {
+        if (parse_secs(v, 0.1, 86400, &c->body_timeout))
+            return bad(err, errlen, "--body-timeout (0.1..86400)", v);
+    } else if (!strcmp(name, "idle-timeout")) {
+        if (parse_u64(v, 1, 86400, &u)) return bad(err, errlen, "--idle-timeout (1..86400)", v);
+        c->idle_timeout = (unsigned)u;
     } else if (!strcmp(name, "max-wait")) {
         if (parse_secs(v, 0, 3600, &c->max_wait))
             return bad(err, errlen, "--max-wait (0..3600)", v);
@@ -136,6 +157,11 @@ static const char *names[] = {"listen",
                               "job-ttl",
                               "max-jobs",
                               "max-inflight-bytes",
+                              "max-connections",
+                              "max-per-ip",
+                              "header-timeout",
+                              "body-timeout",
+                              "idle-timeout",
                               "log-level"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
@@ -153,6 +179,11 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
     c->max_body = 64u << 20;
     c->max_inflight = 256u << 20;
     c->max_wait = 55;
+    c->max_connections = 1000;
+    c->max_per_ip = 64;
+    c->header_timeout = 10;
+    c->body_timeout = 120;
+    c->idle_timeout = 120;
     c->cache_bytes = 1u << 30;
     c->drain_timeout = 30;
     c->job_ttl = 7 * 86400;

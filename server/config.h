@@ -12,6 +12,11 @@
  *   --max-body      CELLAR_MAX_BODY     67108864        request body bytes at most (then 413)
  *   --max-inflight-bytes CELLAR_MAX_INFLIGHT_BYTES 268435456  request body bytes held at once
  *                                                       by all connections (then 503)
+ *   --max-connections CELLAR_MAX_CONNECTIONS 1000       open connections at most
+ *   --max-per-ip    CELLAR_MAX_PER_IP   64              open connections from one address (0: any)
+ *   --header-timeout CELLAR_HEADER_TIMEOUT 10           seconds to send a request's headers
+ *   --body-timeout  CELLAR_BODY_TIMEOUT 120             seconds to send a request's body
+ *   --idle-timeout  CELLAR_IDLE_TIMEOUT 120             seconds a connection may stay silent
  *   --max-wait      CELLAR_MAX_WAIT     55              seconds a Prefer: wait may hold
  *   --cache-bytes   CELLAR_CACHE_BYTES  1073741824      result cache budget (0: unlimited)
  *   --drain-timeout CELLAR_DRAIN_TIMEOUT 30             seconds SIGTERM waits for running jobs
@@ -37,6 +42,9 @@ typedef struct config {
     uint64_t max_body;
     uint64_t max_inflight;
     double max_wait;
+    unsigned max_connections, max_per_ip;
+    double header_timeout, body_timeout;
+    unsigned idle_timeout;
     uint64_t cache_bytes;
     double drain_timeout;
     double job_ttl;

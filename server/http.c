@@ -44,7 +44,12 @@ struct http_server {
     atomic_int parked;         /* connections suspended for a wait and not yet answered */
     _Atomic uint64_t inflight; /* bytes reserved by request bodies being read (max_inflight) */
     pthread_mutex_t ready_mu;  /* guards the readiness probe's last answer */
-    double ready_at;           /* when the store was last probed for writes (0: never) */
+    pthread_mutex_t conns_mu;  /* guards conns and every sock_ctx's deadline */
+    struct sock_ctx *conns;    /* every open connection */
+    pthread_t reaper;          /* shuts connections past their deadline */
+    pthread_cond_t reaper_cv;
+    int reaper_started, reaper_stop;
+    double ready_at; /* when the store was last probed for writes (0: never) */
     int ready_ok;
     char ready_err[256];
 };
@@ -105,11 +110,39 @@ static void body_release(conn *c)
 }
 
 /* Per TCP connection (MHD's socket context): what the URL unescaper saw in the request line
- * being read.  Requests on one connection are read one after the other, so the handler's
- * first call for a request reads and clears it. */
+ * being read (requests on one connection are read one after the other, so the handler's
+ * first call for a request reads and clears it), and the connection's deadline.
+ *
+ * Deadlines: MHD's own timeout is for idleness only, so a client that sends its headers a
+ * byte at a time, each in time, holds a connection for ever.  Each connection here has a
+ * deadline for what it is reading: its headers (--header-timeout, from the connection's start
+ * or the end of its previous request plus the idle timeout), then its body
+ * (--body-timeout).  While its request is handled or answered it has none (a wait is bounded
+ * by --max-wait, an answer by MHD's idle timeout).  The reaper thread shuts down the socket
+ * of a connection past its deadline; MHD then sees it closed and cleans it up.  MHD calls the
+ * CLOSED notification, which unlinks the context under h->conns_mu, before it closes the
+ * socket, so the reaper never shuts a socket number that has been reused. */
 typedef struct sock_ctx {
-    int bad_escape; /* a %00, or a % not followed by two hex digits */
+    int bad_escape;               /* a %00, or a % not followed by two hex digits */
+    int fd;                       /* the connection's socket */
+    double deadline;              /* guarded by h->conns_mu; 0: none */
+    const char *reading;          /* what the deadline is for: "headers" or "body" */
+    struct sock_ctx *prev, *next; /* h->conns, guarded by h->conns_mu */
 } sock_ctx;
+
+/* Sets the deadline of mc's connection: `secs` from now for `reading`, or none (secs 0). */
+static void set_deadline(http_server *h, struct MHD_Connection *mc, double secs,
+                         const char *reading)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    sock_ctx *sc = ci ? ci->socket_context : NULL;
+    if (!sc) return;
+    pthread_mutex_lock(&h->conns_mu);
+    sc->deadline = secs > 0 ? engine_now() + secs : 0;
+    sc->reading = reading;
+    pthread_mutex_unlock(&h->conns_mu);
+}
 
 static const char *status_title(unsigned s)
 {
@@ -920,6 +953,8 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         c = calloc(1, sizeof *c);
         if (!c) return MHD_NO;
         *con_cls = c;
+        /* the headers are in: the body (if any) has --body-timeout from now */
+        set_deadline(h, mc, h->cfg->body_timeout, "body");
         c->h = h;
         c->mc = mc;
         c->t0 = engine_now();
@@ -1012,6 +1047,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         c->len += n;
         return MHD_YES;
     }
+    set_deadline(h, mc, 0, NULL);  /* the request is in: handled and answered, no deadline */
     if (c->status) return MHD_YES; /* answered before the body (413, 415, 503) */
     if (c->waiting) {              /* resumed: the job ended or the wait is over */
         c->waiting = 0;
@@ -1026,7 +1062,6 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
 static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
                       enum MHD_RequestTerminationCode toe)
 {
-    (void)mc;
     http_server *h = cls;
     conn *c = *con_cls;
     if (!c) return;
@@ -1038,6 +1073,8 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
     if (c->j) engine_release(h->e, c->j);
     if (c->parked) atomic_fetch_sub(&h->parked, 1);
+    /* kept alive: the next request's headers are due within the idle time and the header time */
+    set_deadline(h, mc, h->cfg->idle_timeout + h->cfg->header_timeout, "headers");
     body_release(c);
     free(c);
     *con_cls = NULL;
@@ -1053,18 +1090,72 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
     log_kv(LOG_DEBUG, "libmicrohttpd", "detail", msg, NULL);
 }
 
+static void http_free(http_server *h)
+{
+    pthread_mutex_destroy(&h->ready_mu);
+    pthread_mutex_destroy(&h->conns_mu);
+    pthread_cond_destroy(&h->reaper_cv);
+    free(h);
+}
+
 /* MHD_OPTION_NOTIFY_CONNECTION: a sock_ctx for each TCP connection. */
 static void notify_connection(void *cls, struct MHD_Connection *mc, void **socket_context,
                               enum MHD_ConnectionNotificationCode toe)
 {
-    (void)cls;
-    (void)mc;
+    http_server *h = cls;
     if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
-        *socket_context = calloc(1, sizeof(sock_ctx)); /* NULL: escapes go unchecked */
+        /* NULL (out of memory): no escape check and no deadline for this one */
+        sock_ctx *sc = calloc(1, sizeof *sc);
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_CONNECTION_FD);
+        if (sc && ci) {
+            sc->fd = ci->connect_fd;
+            sc->reading = "headers";
+            pthread_mutex_lock(&h->conns_mu);
+            sc->deadline = engine_now() + h->cfg->header_timeout;
+            sc->next = h->conns;
+            if (h->conns) h->conns->prev = sc;
+            h->conns = sc;
+            pthread_mutex_unlock(&h->conns_mu);
+        }
+        *socket_context = sc && ci ? sc : NULL;
+        if (sc && !ci) free(sc);
     } else if (toe == MHD_CONNECTION_NOTIFY_CLOSED) {
-        free(*socket_context);
+        sock_ctx *sc = *socket_context;
+        if (sc) {
+            pthread_mutex_lock(&h->conns_mu);
+            if (sc->prev)
+                sc->prev->next = sc->next;
+            else
+                h->conns = sc->next;
+            if (sc->next) sc->next->prev = sc->prev;
+            pthread_mutex_unlock(&h->conns_mu);
+            free(sc);
+        }
         *socket_context = NULL;
     }
+}
+
+/* Shuts the sockets of connections past their deadline, four times a second. */
+static void *reaper_main(void *arg)
+{
+    http_server *h = arg;
+    pthread_mutex_lock(&h->conns_mu);
+    while (!h->reaper_stop) {
+        double now = engine_now(), t = now + 0.25;
+        struct timespec ts = {.tv_sec = (time_t)t,
+                              .tv_nsec = (long)((t - (double)(time_t)t) * 1e9)};
+        pthread_cond_timedwait(&h->reaper_cv, &h->conns_mu, &ts);
+        now = engine_now();
+        for (sock_ctx *sc = h->conns; sc; sc = sc->next)
+            if (sc->deadline > 0 && now > sc->deadline) {
+                sc->deadline = 0;
+                shutdown(sc->fd, SHUT_RDWR);
+                log_kv(LOG_INFO, "connection closed: too slow", "reading", sc->reading, NULL);
+            }
+    }
+    pthread_mutex_unlock(&h->conns_mu);
+    return NULL;
 }
 
 static int hexval(char ch)
@@ -1134,23 +1225,32 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     atomic_init(&h->parked, 0);
     atomic_init(&h->inflight, 0);
     pthread_mutex_init(&h->ready_mu, NULL);
+    pthread_mutex_init(&h->conns_mu, NULL);
+    pthread_cond_init(&h->reaper_cv, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
     h->d = MHD_start_daemon(
         flags, (uint16_t)cfg->port, NULL, NULL, handle, h, MHD_OPTION_SOCK_ADDR, ai->ai_addr,
-        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)4, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
-        MHD_OPTION_CONNECTION_LIMIT, (unsigned)1000, MHD_OPTION_NOTIFY_COMPLETED, completed, h,
-        MHD_OPTION_NOTIFY_CONNECTION, notify_connection, NULL, MHD_OPTION_UNESCAPE_CALLBACK,
-        unescape, NULL, MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_EXTERNAL_LOGGER, mhd_log,
-        NULL, MHD_OPTION_END);
+        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)4, MHD_OPTION_CONNECTION_TIMEOUT,
+        (unsigned)cfg->idle_timeout, MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->max_connections,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)cfg->max_per_ip, MHD_OPTION_NOTIFY_COMPLETED,
+        completed, h, MHD_OPTION_NOTIFY_CONNECTION, notify_connection, h,
+        MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL, MHD_OPTION_STRICT_FOR_CLIENT, (int)1,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, MHD_OPTION_END);
     freeaddrinfo(ai);
     if (!h->d) {
         snprintf(err, errlen, "cannot listen on %s:%u (in use, or not an address of this host)",
                  cfg->host, cfg->port);
-        pthread_mutex_destroy(&h->ready_mu);
-        free(h);
+        http_free(h);
         return NULL;
     }
+    if (pthread_create(&h->reaper, NULL, reaper_main, h) != 0) {
+        snprintf(err, errlen, "cannot start the connection reaper thread");
+        MHD_stop_daemon(h->d);
+        http_free(h);
+        return NULL;
+    }
+    h->reaper_started = 1;
     return h;
 }
 
@@ -1172,7 +1272,13 @@ void http_stop(http_server *h)
      * at most: a client that does not read its answer cannot hold the exit) */
     for (int i = 0; i < 500 && atomic_load(&h->parked) > 0; i++)
         nanosleep(&(struct timespec){0, 10000000}, NULL);
+    if (h->reaper_started) {
+        pthread_mutex_lock(&h->conns_mu);
+        h->reaper_stop = 1;
+        pthread_cond_signal(&h->reaper_cv);
+        pthread_mutex_unlock(&h->conns_mu);
+        pthread_join(h->reaper, NULL);
+    }
     MHD_stop_daemon(h->d);
-    pthread_mutex_destroy(&h->ready_mu);
-    free(h);
+    http_free(h);
 }

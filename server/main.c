@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "api/api.h"
 #include "server/config.h"
@@ -38,6 +39,13 @@ int main(int argc, char **argv)
     sigaddset(&set, SIGINT);
     pthread_sigmask(SIG_BLOCK, &set, NULL);
     signal(SIGPIPE, SIG_IGN);
+    /* --max-connections sockets, the database's files and the spool: raise the soft limit on
+     * open files to the hard one (often 1024 by default, below what 1000 connections need) */
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max) {
+        rl.rlim_cur = rl.rlim_max;
+        setrlimit(RLIMIT_NOFILE, &rl);
+    }
 
     metrics *m = metrics_new();
     store *st = m ? store_sqlite_open(cfg.db, cfg.cache_bytes, 10, cfg.init ? STORE_OPEN_INIT : 0,

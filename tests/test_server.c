@@ -35,6 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/types.h>
@@ -2250,10 +2251,10 @@ SERVER_TEST(garbage_on_the_socket, "--workers 2 --job-threads 1")
     free(b.p);
     check_sane(d, "bad chunks and a long header", 6);
 
-    /* a slow client (a byte every 50 ms for 2 s) and 100 idle connections while others are
-     * served normally */
-    int idle[100], nidle = 0;
-    for (int i = 0; i < 100; i++)
+    /* a slow client (a byte every 50 ms for 2 s) and 50 idle connections (under --max-per-ip,
+     * 64: they share 127.0.0.1 with the others) while others are served normally */
+    int idle[50], nidle = 0;
+    for (int i = 0; i < 50; i++)
         if ((idle[nidle] = raw_connect(d)) >= 0) {
             if (i % 2) raw_send(idle[nidle], "GET /heal", 9);
             nidle++;
@@ -2861,4 +2862,124 @@ SERVER_TEST(disk_bounded, "--workers 2 --job-threads 1 --cache-bytes 1000000 --m
           (long long)sb.st_size);
     printf("  (disk: %lld bytes of database after 60 requests of about 100 KB)\n",
            (long long)sb.st_size);
+}
+
+/* ---- slow clients ------------------------------------------------------------------------ */
+
+/* A socket to the daemon from the source address src (a loopback address other than
+ * 127.0.0.1: another client, as far as per-address limits go). */
+static int connect_from(const srv *d, const char *src)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return -1;
+    struct sockaddr_in me = {.sin_family = AF_INET};
+    inet_pton(AF_INET, src, &me.sin_addr);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)d->port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    struct timeval tv = {5, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    if (bind(fd, (struct sockaddr *)&me, sizeof me) ||
+        connect(fd, (struct sockaddr *)&a, sizeof a)) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+/* Whether the daemon has closed fd (EOF or reset), waiting up to `secs`. */
+static int closed_by_peer(int fd, double secs)
+{
+    struct timeval tv = {(time_t)secs, (suseconds_t)((secs - (double)(time_t)secs) * 1e6)};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    char b[256];
+    ssize_t k = recv(fd, b, sizeof b, 0);
+    return k == 0 || (k < 0 && errno == ECONNRESET);
+}
+
+/* 1000 connections that send half a header line and stop: one address gets --max-per-ip of
+ * them, held only until --header-timeout; /healthz from another address answers within
+ * 100 ms all along.  A body sent a byte at a time is cut at --body-timeout. */
+SERVER_TEST(slow_clients, "--workers 1 --job-threads 1 --header-timeout 2 --body-timeout 2 "
+                          "--max-per-ip 64")
+{
+    enum { NSLOW = 1000 };
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max) {
+        rl.rlim_cur = rl.rlim_max;
+        setrlimit(RLIMIT_NOFILE, &rl);
+    }
+    REQUIRE(getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur >= NSLOW + 100,
+            "open files limited to %llu", (unsigned long long)rl.rlim_cur);
+    int *fds = malloc(NSLOW * sizeof *fds);
+    REQUIRE(fds, "no memory");
+    const char half[] = "GET /healthz HTTP/1.1\r\nHo";
+    int opened = 0;
+    double t0 = now_s();
+    for (int i = 0; i < NSLOW; i++) {
+        fds[i] = raw_connect(d);
+        if (fds[i] >= 0) {
+            opened++;
+            raw_send(fds[i], half, sizeof half - 1);
+        }
+    }
+    CHECK(opened == NSLOW, "%d of %d connections opened", opened, NSLOW);
+    /* meanwhile, another client is served at once */
+    double worst = 0;
+    int answered = 0;
+    const char get[] = "GET /healthz HTTP/1.1\r\nHost: a\r\nConnection: close\r\n\r\n";
+    for (int k = 0; k < 5; k++) {
+        double t = now_s();
+        int fd = connect_from(d, "127.0.0.2");
+        if (fd < 0) continue;
+        char out[1024];
+        raw_send(fd, get, sizeof get - 1);
+        size_t n = raw_read(fd, out, sizeof out, 2);
+        close(fd);
+        double dt = now_s() - t;
+        if (n > 12 && !strncmp(out, "HTTP/1.1 200", 12)) answered++;
+        if (dt > worst) worst = dt;
+        sleep_s(0.1);
+    }
+    CHECK(answered == 5 && worst < 0.1 * slowdown(),
+          "/healthz beside %d slow connections: %d of 5 answered, the slowest in %.3f s", opened,
+          answered, worst);
+    printf("  (slow clients: /healthz in %.1f ms at worst beside %d half-sent requests)\n",
+           worst * 1e3, opened);
+    /* the address's share is cut off at once, the rest at the header deadline */
+    int early = 0, late = 0;
+    for (int i = 0; i < NSLOW; i++)
+        if (fds[i] >= 0 && closed_by_peer(fds[i], 0.001)) early++;
+    double left = t0 + 2 + 1.5 * slowdown() - now_s();
+    sleep_s(left > 0 ? left : 0);
+    for (int i = 0; i < NSLOW; i++)
+        if (fds[i] >= 0) {
+            late += closed_by_peer(fds[i], 0.001);
+            close(fds[i]);
+        }
+    CHECK(early >= NSLOW - 64 && late == NSLOW,
+          "%d closed at once (want at least %d), %d closed by the header deadline (want %d)", early,
+          NSLOW - 64, late, NSLOW);
+    CHECK(log_contains(d, "connection closed: too slow"), "no reaping in the log");
+    free(fds);
+
+    /* a body a byte at a time: cut at the body deadline, whatever its pace */
+    int fd = raw_connect(d);
+    REQUIRE(fd >= 0, "connect");
+    const char post[] = "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
+                        "Content-Length: 1000\r\n\r\n";
+    raw_send(fd, post, sizeof post - 1);
+    double tb = now_s();
+    int cut = 0;
+    while (now_s() < tb + 6 * slowdown()) {
+        if (send(fd, " ", 1, MSG_NOSIGNAL) <= 0 || closed_by_peer(fd, 0.2)) {
+            cut = 1;
+            break;
+        }
+    }
+    double tcut = now_s() - tb;
+    close(fd);
+    CHECK(cut && tcut > 1.5 && tcut < 2 + 2 * slowdown(), "a trickled body: cut %d after %.2f s",
+          cut, tcut);
+    check_sane(d, "slow clients", 7);
+    srv_term(d);
 }

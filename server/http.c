@@ -64,10 +64,9 @@ typedef struct conn {
     double t0;
     char *body;
     size_t len, cap;
-    int too_large; /* the body passed max_body: the rest is discarded, then 413 */
-    job *j;        /* the job a POST waits on (referenced) */
-    int waiting;   /* suspended, waiting for j */
-    int parked;    /* counted in h->parked until completed */
+    job *j;      /* the job a POST waits on (referenced) */
+    int waiting; /* suspended, waiting for j */
+    int parked;  /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
     int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON, 3 OBJ (from Accept) */
@@ -97,6 +96,11 @@ static void inflight_msg(const http_server *h, char *msg, size_t n)
              "the service is reading its limit of request bodies (%llu bytes, "
              "--max-inflight-bytes): try again shortly",
              (unsigned long long)h->cfg->max_inflight);
+}
+
+static void too_large_msg(const http_server *h, char *msg, size_t n)
+{
+    snprintf(msg, n, "the body is larger than %llu bytes", (unsigned long long)h->cfg->max_body);
 }
 
 /* Frees c's body and gives its bytes back to the budget. */
@@ -130,13 +134,19 @@ typedef struct sock_ctx {
     struct sock_ctx *prev, *next; /* h->conns, guarded by h->conns_mu */
 } sock_ctx;
 
+/* mc's socket context, or NULL (none could be made for it) */
+static sock_ctx *sock_of(struct MHD_Connection *mc)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    return ci ? ci->socket_context : NULL;
+}
+
 /* Sets the deadline of mc's connection: `secs` from now for `reading`, or none (secs 0). */
 static void set_deadline(http_server *h, struct MHD_Connection *mc, double secs,
                          const char *reading)
 {
-    const union MHD_ConnectionInfo *ci =
-        MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
-    sock_ctx *sc = ci ? ci->socket_context : NULL;
+    sock_ctx *sc = sock_of(mc);
     if (!sc) return;
     pthread_mutex_lock(&h->conns_mu);
     sc->deadline = secs > 0 ? engine_now() + secs : 0;
@@ -417,34 +427,12 @@ static void result_reader_free(void *cls)
     free(rr);
 }
 
-/* A stored result, as JSON (streamed when larger than a chunk) or rendered.  post: the
- * answer to a POST (a result evicted since it was found or made is then "try again", not
+/* The answer to a store error rc (not STORE_OK, err its message) about result `hash`.  post:
+ * the answer to a POST (a result evicted since it was found or made is then "try again", not
  * "not found"). */
-static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id, const char *cache,
-                                  int post)
+static enum MHD_Result store_problem(conn *c, int rc, const char *err, const char *hash,
+                                     const char *job_id, int post)
 {
-    char err[256];
-    char *body = NULL;
-    size_t len = 0;
-    uint64_t size = 0;
-    store *st = c->h->st;
-    int rc = st->ops->result_size(st, hash, &size, err, sizeof err);
-    if (rc == STORE_OK && c->fmt && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
-    if (rc == STORE_OK && !c->fmt && size > STORE_CHUNK) {
-        result_reader *rr = calloc(1, sizeof *rr);
-        if (!rr) return problem(c, 503, "out of memory", "5", NULL);
-        rr->st = st;
-        snprintf(rr->hash, sizeof rr->hash, "%s", hash);
-        rr->size = size;
-        struct MHD_Response *r = MHD_create_response_from_callback(size, 256 * 1024, result_read,
-                                                                   rr, result_reader_free);
-        if (!r) {
-            free(rr);
-            return MHD_NO;
-        }
-        return send_result(c, hash, r, "application/json", job_id, cache);
-    }
-    if (rc == STORE_OK) rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
     if (rc == STORE_DAMAGED) {
         log_kv(LOG_ERROR, "a stored result was damaged: dropped", "hash", hash, "error", err, NULL);
         return problem(c, 500,
@@ -459,8 +447,47 @@ static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id,
                        job_id ? "the result was evicted from the cache: post the request again"
                               : "no result with this hash",
                        NULL, NULL);
-    if (rc) return problem(c, 503, err, "5", NULL);
+    return problem(c, 503, err, "5", NULL);
+}
+
+/* A stored result of `size` bytes (from result_size), as JSON (streamed when larger than a
+ * chunk) or rendered; post as for store_problem. */
+static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, const char *job_id,
+                                    const char *cache, int post)
+{
+    char err[256];
+    char *body = NULL;
+    size_t len = 0;
+    store *st = c->h->st;
+    if (c->fmt && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
+    if (!c->fmt && size > STORE_CHUNK) {
+        result_reader *rr = calloc(1, sizeof *rr);
+        if (!rr) return problem(c, 503, "out of memory", "5", NULL);
+        rr->st = st;
+        snprintf(rr->hash, sizeof rr->hash, "%s", hash);
+        rr->size = size;
+        struct MHD_Response *r = MHD_create_response_from_callback(size, 256 * 1024, result_read,
+                                                                   rr, result_reader_free);
+        if (!r) {
+            free(rr);
+            return MHD_NO;
+        }
+        return send_result(c, hash, r, "application/json", job_id, cache);
+    }
+    int rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
+    if (rc != STORE_OK) return store_problem(c, rc, err, hash, job_id, post);
     return respond_result(c, hash, body, len, job_id, cache);
+}
+
+/* A stored result by its hash (see serve_stored). */
+static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id, const char *cache,
+                                  int post)
+{
+    char err[256];
+    uint64_t size = 0;
+    int rc = c->h->st->ops->result_size(c->h->st, hash, &size, err, sizeof err);
+    if (rc != STORE_OK) return store_problem(c, rc, err, hash, job_id, post);
+    return serve_stored(c, hash, size, job_id, cache, post);
 }
 
 /* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, 3 OBJ, -1 none we
@@ -774,23 +801,18 @@ static enum MHD_Result route_submit(conn *c)
     const char *kind = NULL;
     http_server *h = c->h;
 
-    if (c->too_large) {
-        char msg[128];
-        snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
-                 (unsigned long long)h->cfg->max_body);
-        return problem(c, 413, msg, NULL, NULL);
-    }
     int rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
     body_release(c);
     if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL, NULL);
     engine_hash(canon, clen, hash);
 
-    /* a cached result costs one lookup */
-    int hit = h->st->ops->result_exists(h->st, hash, err, sizeof err);
+    /* a cached result costs one lookup (its size, then it is served) */
+    uint64_t size = 0;
+    int hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
-        return get_result(c, hash, NULL, "hit", 1);
+        return serve_stored(c, hash, size, NULL, "hit", 1);
     }
     job *j = NULL;
     int coalesced = 0;
@@ -961,9 +983,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         snprintf(c->method, sizeof c->method, "%s", method);
         snprintf(c->path, sizeof c->path, "%s", url);
         c->route = classify(url, c->id);
-        const union MHD_ConnectionInfo *ci =
-            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
-        sock_ctx *sc = ci ? ci->socket_context : NULL;
+        sock_ctx *sc = sock_of(mc);
         int bad_escape = sc && sc->bad_escape;
         if (sc) sc->bad_escape = 0;
         if (bad_escape)
@@ -996,8 +1016,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
             unsigned long long clv = cl ? strtoull(cl, NULL, 10) : 0;
             if (cl && clv > h->cfg->max_body) {
                 char msg[128];
-                snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
-                         (unsigned long long)h->cfg->max_body);
+                too_large_msg(h, msg, sizeof msg);
                 return problem(c, 413, msg, NULL, NULL);
             }
             if (!json_content_type(mc))
@@ -1017,15 +1036,13 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
     if (*upload_size) { /* a piece of the body */
         size_t n = *upload_size;
         *upload_size = 0;
-        if (c->status || c->too_large) return MHD_YES; /* answered already, or discarding */
-        if (c->route != ROUTE_JOBS) return MHD_YES;    /* bodies of other routes are ignored */
+        if (c->status) return MHD_YES;              /* answered already */
+        if (c->route != ROUTE_JOBS) return MHD_YES; /* bodies of other routes are ignored */
         if (c->len + n > h->cfg->max_body) {
-            c->too_large = 1;
-            body_release(c);
             /* no Content-Length said so (chunked): the rest is never read */
             char msg[128];
-            snprintf(msg, sizeof msg, "the body is larger than %llu bytes",
-                     (unsigned long long)h->cfg->max_body);
+            body_release(c);
+            too_large_msg(h, msg, sizeof msg);
             return refuse_mid_body(c, 413, msg);
         }
         if (c->len + n + 1 > c->cap) { /* chunked: no length was reserved */
@@ -1188,12 +1205,8 @@ static size_t unescape(void *cls, struct MHD_Connection *mc, char *s)
         }
     }
     *w = 0;
-    if (bad) {
-        const union MHD_ConnectionInfo *ci =
-            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
-        sock_ctx *sc = ci ? ci->socket_context : NULL;
-        if (sc) sc->bad_escape = 1;
-    }
+    sock_ctx *sc = bad ? sock_of(mc) : NULL;
+    if (sc) sc->bad_escape = 1;
     return (size_t)(w - s);
 }
 

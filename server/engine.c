@@ -45,8 +45,9 @@ struct job {
     char *result; /* DONE: the result JSON when at most ENGINE_KEEP bytes (else NULL: it is in
                      the store only); immutable once set */
     size_t result_len;
-    int refs; /* lock */
-    int live; /* lock: in e->live */
+    int refs;   /* lock */
+    int live;   /* lock: in e->live */
+    int active; /* lock: submissions not canceled (the job is canceled when none is left) */
     job *next_live, *next_queue;
 };
 
@@ -415,6 +416,14 @@ static int recover_one(void *ctx, store_job *sj)
     j->state = JOB_QUEUED;
     j->refs = 1;
     j->live = 1;
+    j->active = sj->active_subs;
+    if (j->active == 0) { /* every submission was canceled before the job could be */
+        if (e->cfg.st->ops->job_set_state(e->cfg.st, sj->id, JOB_CANCELED, engine_now(), 0, NULL,
+                                          err, sizeof err))
+            log_kv(LOG_WARN, "store: cancel failed", "job", sj->id, "error", err, NULL);
+        job_free(j);
+        return 0;
+    }
     if (sj->state == JOB_RUNNING &&
         e->cfg.st->ops->job_set_state(e->cfg.st, sj->id, JOB_QUEUED, 0, 0, NULL, err, sizeof err))
         log_kv(LOG_WARN, "store: requeue failed", "job", sj->id, "error", err, NULL);
@@ -468,21 +477,101 @@ fail:
     return NULL;
 }
 
-/* lock held: the queued or running job with this hash, referenced, or NULL */
+static int job_active(const job *j)
+{
+    return j->state == JOB_QUEUED || j->state == JOB_RUNNING;
+}
+
+/* lock held: the queued or running job with this hash, referenced and with one more active
+ * submission (the caller's), or NULL */
 static job *join_locked(engine *e, const char *hash)
 {
     for (job *j = e->live; j; j = j->next_live)
-        if ((j->state == JOB_QUEUED || j->state == JOB_RUNNING) && strcmp(j->hash, hash) == 0) {
+        if (job_active(j) && strcmp(j->hash, hash) == 0) {
             j->refs++;
+            j->active++;
             return j;
         }
     return NULL;
 }
 
+/* Cancels j, queued or running, whose last submission has just been canceled: takes it off
+ * the queue or tells it to stop, wakes its waiters and tells the store.  Called with the lock
+ * held and a reference of the caller's; returns with the lock released. */
+static void cancel_job_unlock(engine *e, job *j)
+{
+    char err[256];
+    double now = engine_now();
+    int was_queued = j->state == JOB_QUEUED;
+    if (was_queued) { /* off the queue and the live list */
+        for (job **p = &e->qhead; *p; p = &(*p)->next_queue)
+            if (*p == j) {
+                *p = j->next_queue;
+                break;
+            }
+        e->qtail = NULL;
+        for (job *q = e->qhead; q; q = q->next_queue) e->qtail = q;
+        e->nqueued--;
+        unlive_locked(e, j);
+        j->refs--; /* the list's; the caller's is still held */
+    } else {
+        atomic_store(&j->cancel, 1); /* the worker takes it off the live list */
+    }
+    j->state = JOB_CANCELED;
+    j->finished = now;
+    waiter *w = take_waiters_locked(e, j, 0);
+    pthread_mutex_unlock(&e->lock);
+    wake_all(w);
+    if (e->cfg.st->ops->job_set_state(e->cfg.st, j->id, JOB_CANCELED, now, 0, NULL, err,
+                                      sizeof err))
+        log_kv(LOG_ERROR, "store: cancel failed", "job", j->id, "error", err, NULL);
+    if (was_queued) metrics_job_end(e->cfg.m, "canceled", 0); /* else the worker counts it */
+}
+
+/* j was joined (join_locked) by a submission that could not be recorded: takes it back, and
+ * cancels j when that leaves it no submission. */
+static void unjoin(engine *e, job *j)
+{
+    pthread_mutex_lock(&e->lock);
+    if (--j->active == 0 && job_active(j))
+        cancel_job_unlock(e, j);
+    else
+        pthread_mutex_unlock(&e->lock);
+    engine_release(e, j);
+}
+
+/* Records a new submission of j (joined) under a new id, written to sub. */
+static int add_sub(engine *e, job *j, char *sub, char *err, size_t errlen)
+{
+    store_sub s = {.created = engine_now()};
+    memcpy(s.job, j->id, sizeof s.job);
+    if (new_id(s.id)) {
+        snprintf(err, errlen, "no random bytes for an id");
+        return ENG_ERR;
+    }
+    if (e->cfg.st->ops->sub_insert(e->cfg.st, &s, err, errlen)) return ENG_ERR;
+    memcpy(sub, s.id, sizeof s.id);
+    return ENG_OK;
+}
+
+/* An identical job in flight joined by this submission: counted, then recorded. */
+static int joined(engine *e, job *j, job **out, char *sub, int *coalesced, char *err, size_t errlen)
+{
+    if (add_sub(e, j, sub, err, errlen) != ENG_OK) {
+        unjoin(e, j);
+        return ENG_ERR;
+    }
+    *out = j;
+    *coalesced = 1;
+    metrics_coalesced(e->cfg.m);
+    return ENG_OK;
+}
+
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
-                  job **out, int *coalesced, char *err, size_t errlen)
+                  job **out, char *sub, int *coalesced, char *err, size_t errlen)
 {
     char id[33];
+    job *jn;
     *out = NULL;
     *coalesced = 0;
     pthread_mutex_lock(&e->lock);
@@ -490,11 +579,9 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
         pthread_mutex_unlock(&e->lock);
         return ENG_DRAINING;
     }
-    if ((*out = join_locked(e, hash))) {
+    if ((jn = join_locked(e, hash))) {
         pthread_mutex_unlock(&e->lock);
-        *coalesced = 1;
-        metrics_coalesced(e->cfg.m);
-        return ENG_OK;
+        return joined(e, jn, out, sub, coalesced, err, errlen);
     }
     /* No identical job in flight.  One may have just ended: a worker stores its result before
      * it leaves the live list, so the cache now has it (the caller looked before the scan). */
@@ -505,11 +592,9 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
         pthread_mutex_unlock(&e->lock);
         return ENG_CACHED;
     }
-    if ((*out = join_locked(e, hash))) { /* created by another request meanwhile */
+    if ((jn = join_locked(e, hash))) { /* created by another request meanwhile */
         pthread_mutex_unlock(&e->lock);
-        *coalesced = 1;
-        metrics_coalesced(e->cfg.m);
-        return ENG_OK;
+        return joined(e, jn, out, sub, coalesced, err, errlen);
     }
     if (e->nqueued >= e->cfg.queue_max) {
         pthread_mutex_unlock(&e->lock);
@@ -526,6 +611,7 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
     j->state = JOB_QUEUED;
     j->refs = 2; /* the live list's and the caller's */
     j->live = 1;
+    j->active = 1;
     j->next_live = e->live;
     e->live = j;
     e->nqueued++; /* counted now so that the queue limit holds while the store writes */
@@ -557,6 +643,7 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
     enqueue_locked(e, j);
     pthread_mutex_unlock(&e->lock);
     metrics_job_accepted(e->cfg.m);
+    memcpy(sub, j->id, sizeof j->id); /* the first submission has the job's id */
     *out = j;
     return ENG_OK;
 }
@@ -600,7 +687,8 @@ static void info_locked(const job *j, job_info *out)
               j->fraction, j->error_status, j->error);
 }
 
-void engine_info_from_store(const store_job *sj, job_info *out)
+/* The same for a job read from the store (not live). */
+static void engine_info_from_store(const store_job *sj, job_info *out)
 {
     info_fill(out, sj->id, sj->hash, sj->kind, sj->state, sj->created, sj->started, sj->finished,
               "running", 0, sj->error_status, sj->error);
@@ -622,43 +710,70 @@ const char *engine_result(engine *e, job *j, size_t *len)
     return r;
 }
 
-int engine_cancel(engine *e, const char *id, job_info *out)
+/* What a submission sees of its job: its own id and creation, and canceled when it was. */
+static void sub_overlay(job_info *out, const store_sub *s)
 {
-    char err[256];
-    job *j = engine_find(e, id);
-    if (!j) return 1;
-    pthread_mutex_lock(&e->lock);
-    if (j->state != JOB_QUEUED && j->state != JOB_RUNNING) {
-        info_locked(j, out);
-        unref_locked(j);
-        pthread_mutex_unlock(&e->lock);
-        return 2;
+    snprintf(out->id, sizeof out->id, "%s", s->id);
+    out->created = s->created;
+    if (s->canceled > 0 && out->state != JOB_CANCELED) {
+        out->state = JOB_CANCELED;
+        out->finished = s->canceled;
+        snprintf(out->stage, sizeof out->stage, "done");
+        out->fraction = 0;
+        out->error_status = 0;
+        out->error[0] = 0;
+    }
+}
+
+int engine_lookup(engine *e, const char *id, job_info *out, job **live, char *err, size_t errlen)
+{
+    store_sub s;
+    store *st = e->cfg.st;
+    *live = NULL;
+    int rc = st->ops->sub_get(st, id, &s, err, errlen);
+    if (rc == STORE_NOTFOUND) return ENG_NOTFOUND;
+    if (rc != STORE_OK) return ENG_ERR;
+    job *j = engine_find(e, s.job);
+    if (j) {
+        engine_info(e, j, out);
+        *live = j;
+    } else { /* not live: it has ended (or it is queued after a restart of this engine) */
+        store_job sj;
+        rc = st->ops->job_get(st, s.job, &sj, err, errlen);
+        if (rc == STORE_NOTFOUND) return ENG_NOTFOUND; /* pruned since */
+        if (rc != STORE_OK) return ENG_ERR;
+        engine_info_from_store(&sj, out);
+        store_job_clear(&sj);
+    }
+    sub_overlay(out, &s);
+    return ENG_OK;
+}
+
+int engine_cancel(engine *e, const char *id, job_info *out, char *err, size_t errlen)
+{
+    job *j = NULL;
+    int rc = engine_lookup(e, id, out, &j, err, errlen);
+    if (rc != ENG_OK) return rc;
+    if (!j || (out->state != JOB_QUEUED && out->state != JOB_RUNNING)) {
+        engine_release(e, j);
+        return ENG_ENDED;
     }
     double now = engine_now();
-    int was_queued = j->state == JOB_QUEUED;
-    if (was_queued) { /* off the queue and the live list */
-        for (job **p = &e->qhead; *p; p = &(*p)->next_queue)
-            if (*p == j) {
-                *p = j->next_queue;
-                break;
-            }
-        e->qtail = NULL;
-        for (job *q = e->qhead; q; q = q->next_queue) e->qtail = q;
-        e->nqueued--;
-        unlive_locked(e, j);
-        j->refs--; /* the list's; engine_find's is still held */
-    } else {
-        atomic_store(&j->cancel, 1); /* the worker takes it off the live list */
+    int changed = 0;
+    rc = e->cfg.st->ops->sub_cancel(e->cfg.st, id, now, &changed, err, errlen);
+    if (rc != STORE_OK || !changed) { /* failed, or canceled by another DELETE meanwhile */
+        engine_release(e, j);
+        return rc == STORE_OK ? ENG_ENDED : rc == STORE_NOTFOUND ? ENG_NOTFOUND : ENG_ERR;
     }
-    j->state = JOB_CANCELED;
-    j->finished = now;
-    waiter *w = take_waiters_locked(e, j, 0);
-    info_locked(j, out);
-    pthread_mutex_unlock(&e->lock);
-    wake_all(w);
-    if (e->cfg.st->ops->job_set_state(e->cfg.st, id, JOB_CANCELED, now, 0, NULL, err, sizeof err))
-        log_kv(LOG_ERROR, "store: cancel failed", "job", id, "error", err, NULL);
-    if (was_queued) metrics_job_end(e->cfg.m, "canceled", 0); /* else the worker counts it */
+    pthread_mutex_lock(&e->lock);
+    if (--j->active == 0 && job_active(j))
+        cancel_job_unlock(e, j);
+    else
+        pthread_mutex_unlock(&e->lock);
+    store_sub s = {.created = out->created, .canceled = now};
+    memcpy(s.id, out->id, sizeof s.id);
+    engine_info(e, j, out);
+    sub_overlay(out, &s);
     engine_release(e, j);
     return ENG_OK;
 }

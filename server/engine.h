@@ -38,7 +38,15 @@ typedef struct engine_cfg {
     size_t max_jobs;       /* finished jobs kept at most (0: no limit); pruned every 5 s */
 } engine_cfg;
 
-enum { ENG_OK = 0, ENG_FULL = 1, ENG_DRAINING = 2, ENG_CACHED = 3, ENG_ERR = -1 };
+enum {
+    ENG_OK = 0,
+    ENG_FULL = 1,
+    ENG_DRAINING = 2,
+    ENG_CACHED = 3,
+    ENG_NOTFOUND = 4,
+    ENG_ENDED = 5,
+    ENG_ERR = -1
+};
 
 /* A snapshot of a job, for responses. */
 typedef struct job_info {
@@ -59,27 +67,35 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen);
 
 /* Accepts a request (canon: its canonical JSON, borrowed; kind: its kind; hash: engine_hash of
  * canon).  ENG_OK: *out is a referenced job (new, or an identical one in flight: *coalesced
- * = 1); ENG_CACHED: an identical job ended while we looked, its result is in the store;
- * ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err).  Identical requests run
- * once: the caller looks in the cache first, this looks for a job in flight, then in the
- * cache again (a worker stores its result before its job leaves the live list). */
+ * = 1), and sub (33 bytes) the id of this submission, the client's to poll and cancel with
+ * (a new job's own id; a new one for a submission that joins a job); ENG_CACHED: an identical job
+ * ended while we looked, its result is in the store; ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the
+ * store failed (err).  Identical requests run once: the caller looks in the cache first, this looks
+ * for a job in flight, then in the cache again (a worker stores its result before its job leaves
+ * the live list). */
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
-                  job **out, int *coalesced, char *err, size_t errlen);
+                  job **out, char *sub, int *coalesced, char *err, size_t errlen);
 
-/* The live job with this id, referenced, or NULL (then look in the store). */
+/* The live job with this job id, referenced, or NULL (then look in the store). */
 job *engine_find(engine *e, const char *id);
 /* Drops a reference taken by engine_submit or engine_find. */
 void engine_release(engine *e, job *j);
 void engine_info(engine *e, job *j, job_info *out);
-/* The same for a job read from the store (not live). */
-void engine_info_from_store(const store_job *sj, job_info *out);
 /* The result of a job that ended DONE (borrowed while the reference is held), else NULL; NULL
  * too when the result was larger than a store chunk (then read it from the store). */
 const char *engine_result(engine *e, job *j, size_t *len);
 
-/* Cancels a live queued or running job: ENG_OK with *out its new state (canceled), 1 when the
- * job is not live (look in the store), 2 when it has already ended. */
-int engine_cancel(engine *e, const char *id, job_info *out);
+/* The submission with this id: *out is its job as the submission sees it (the submission's
+ * id and creation time; canceled when the submission was, whatever its job does), and *live
+ * the job, referenced, when it is live (else NULL).  ENG_OK, ENG_NOTFOUND (no such
+ * submission), or ENG_ERR (the store failed: err). */
+int engine_lookup(engine *e, const char *id, job_info *out, job **live, char *err, size_t errlen);
+
+/* Cancels a submission; its job is canceled when no other submission of it is left (it stops
+ * within about a second if running).  ENG_OK with *out the submission's new state (canceled);
+ * ENG_ENDED when the job has ended or the submission was canceled already (*out as it is);
+ * ENG_NOTFOUND; ENG_ERR (err). */
+int engine_cancel(engine *e, const char *id, job_info *out, char *err, size_t errlen);
 
 /* Calls wake(ctx) once, when j ends or at `deadline` (Unix seconds), whichever is first.
  * Returns 0 when registered, 1 when j has already ended (wake is then not called). */

@@ -591,12 +591,13 @@ static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
     return respond_json(c, 202, job_json(ji), hs, sizeof hs / sizeof *hs);
 }
 
-/* The answer to a POST once its job is known (and any wait is over). */
+/* The answer about job j to the submission c->job_id (a POST once its wait is over, or a GET
+ * of a live job's result). */
 static enum MHD_Result answer_job(conn *c, job *j)
 {
     job_info ji;
     engine_info(c->h->e, j, &ji);
-    snprintf(c->job_id, sizeof c->job_id, "%s", ji.id);
+    snprintf(ji.id, sizeof ji.id, "%s", c->job_id);
     if (ji.state == JOB_DONE) {
         size_t n;
         const char *r = engine_result(c->h->e, j, &n);
@@ -697,24 +698,17 @@ static enum MHD_Result route_job(conn *c, int want_result)
 {
     char err[256];
     job_info ji;
-    job *j = engine_find(c->h->e, c->id);
+    job *j = NULL;
     snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
-    if (j) {
-        engine_info(c->h->e, j, &ji);
-        if (want_result && ji.state == JOB_DONE) {
-            enum MHD_Result r = answer_job(c, j);
-            engine_release(c->h->e, j);
-            return r;
-        }
+    int rc = engine_lookup(c->h->e, c->id, &ji, &j, err, sizeof err);
+    if (rc == ENG_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
+    if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
+    if (j && want_result && ji.state == JOB_DONE) {
+        enum MHD_Result r = answer_job(c, j);
         engine_release(c->h->e, j);
-    } else {
-        store_job sj = {0};
-        int rc = c->h->st->ops->job_get(c->h->st, c->id, &sj, err, sizeof err);
-        if (rc == STORE_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
-        if (rc) return problem(c, 503, err, "5", NULL);
-        engine_info_from_store(&sj, &ji);
-        store_job_clear(&sj);
+        return r;
     }
+    engine_release(c->h->e, j);
     if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);
     switch (ji.state) {
     case JOB_DONE:
@@ -733,15 +727,15 @@ static enum MHD_Result route_cancel(conn *c)
     char err[256];
     job_info ji;
     snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
-    int rc = engine_cancel(c->h->e, c->id, &ji);
+    int rc = engine_cancel(c->h->e, c->id, &ji, err, sizeof err);
     if (rc == ENG_OK) return respond_json(c, 200, job_json(&ji), NULL, 0);
-    if (rc == 2) return problem(c, 409, "the job has already ended", NULL, NULL);
-    store_job sj = {0};
-    rc = c->h->st->ops->job_get(c->h->st, c->id, &sj, err, sizeof err);
-    if (rc == STORE_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
-    if (rc) return problem(c, 503, err, "5", NULL);
-    store_job_clear(&sj);
-    return problem(c, 409, "the job has already ended", NULL, NULL);
+    if (rc == ENG_ENDED)
+        return problem(c, 409,
+                       ji.state == JOB_CANCELED ? "the job was canceled already"
+                                                : "the job has already ended",
+                       NULL, NULL);
+    if (rc == ENG_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
+    return problem(c, 503, err, "5", NULL);
 }
 
 /* Prefer: wait=N (RFC 7240): the seconds asked for, or -1. */
@@ -816,7 +810,7 @@ static enum MHD_Result route_submit(conn *c)
     }
     job *j = NULL;
     int coalesced = 0;
-    rc = engine_submit(h->e, canon, clen, kind, hash, &j, &coalesced, err, sizeof err);
+    rc = engine_submit(h->e, canon, clen, kind, hash, &j, c->job_id, &coalesced, err, sizeof err);
     free(canon);
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */
         return get_result(c, hash, NULL, "hit", 1);

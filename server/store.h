@@ -51,31 +51,51 @@ typedef struct store_job {
     char *error;                       /* message of a failed job, or NULL */
     char *request; /* the canonical request JSON (needed to resume after a restart) */
     size_t request_len;
+    int active_subs; /* read back: its submissions not canceled (job_insert ignores it) */
 } store_job;
+
+/* A submission: one client's POST.  Identical requests share one job (the computation), but
+ * each submission has its own id to poll and to cancel with; a job is canceled only when every
+ * submission that joined it has been.  The first submission of a job has the job's id (and
+ * job_insert makes it); a request that joins a job in flight adds one with sub_insert. */
+typedef struct store_sub {
+    char id[33], job[33];
+    double created, canceled; /* Unix seconds; canceled 0 when not */
+} store_sub;
 
 void store_job_clear(store_job *j); /* frees error and request, zeroes the struct */
 
 typedef struct store store;
 
 typedef struct store_ops {
-    /* Inserts a new job (state, times and request as given). */
+    /* Inserts a new job (state, times and request as given) and its first submission (the
+     * job's id, created when the job is, canceled when the job is inserted canceled). */
     int (*job_insert)(store *s, const store_job *j, char *err, size_t errlen);
     /* Sets state and the matching time (started for RUNNING, finished for the end states);
      * error_status/error only for JOB_FAILED (error may be NULL otherwise).  A job set to an
      * end state (DONE, FAILED, CANCELED) loses its request: it is never run again. */
     int (*job_set_state)(store *s, const char *id, job_state st, double when, int error_status,
                          const char *error, char *err, size_t errlen);
-    /* Reads one job (request included). */
+    /* Reads one job (request included, and active_subs). */
     int (*job_get)(store *s, const char *id, store_job *out, char *err, size_t errlen);
     /* Calls fn for every job in state QUEUED or RUNNING, oldest first (request included;
      * the job is cleared after fn returns).  fn returns non-zero to stop early. */
     int (*jobs_unfinished)(store *s, int (*fn)(void *ctx, store_job *j), void *ctx, char *err,
                            size_t errlen);
     /* Deletes finished jobs (DONE, FAILED, CANCELED) that ended before `before`, and those
-     * past the `keep` most recently finished (0: no limit); returns how many in *n.  (A job
+     * past the `keep` most recently finished (0: no limit), with their submissions; returns
+     * how many jobs in *n.  (A job
      * that ends keeps no request: job_set_state drops it, so the jobs on disk are bounded by
      * the queued and running ones' bodies plus `keep` small rows.) */
     int (*jobs_prune)(store *s, double before, size_t keep, size_t *n, char *err, size_t errlen);
+    /* Adds a submission to job sub->job, which must exist (else STORE_NOTFOUND). */
+    int (*sub_insert)(store *s, const store_sub *sub, char *err, size_t errlen);
+    /* Reads one submission. */
+    int (*sub_get)(store *s, const char *id, store_sub *out, char *err, size_t errlen);
+    /* Marks a submission canceled at `when`: *changed = 1 when this call canceled it, 0 when
+     * it was canceled already (its time stays); STORE_NOTFOUND when there is no such one. */
+    int (*sub_cancel)(store *s, const char *id, double when, int *changed, char *err,
+                      size_t errlen);
     /* Stores a result (replacing one with the same hash), then evicts least recently used
      * results until the total is within the budget (the new one is never evicted). */
     int (*result_put)(store *s, const char *hash, const char *body, size_t len, char *err,

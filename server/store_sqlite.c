@@ -7,6 +7,9 @@
  *   results(hash TEXT PRIMARY KEY, bytes, created, last_used)   index results_last_used
  *   result_chunks(hash, off, body BLOB, PRIMARY KEY(hash, off)) a result's bytes from off on
  *   result_totals(id = 0, count, bytes)                         one row
+ *   subs(id TEXT PRIMARY KEY, job, created, canceled)           index subs_job(job)
+ * A job's submissions go with it (a trigger deletes them when it is pruned); the first has
+ * the job's own id.
  * Times are Unix seconds as REAL, NULL for "not yet" (0 in a store_job); error_status and
  * error are NULL unless the job failed.
  *
@@ -114,6 +117,13 @@ static const char *const sq_migrations[] = {
     /* 2 -> 3: finished jobs keep no request, and are pruned by count through this index */
     "UPDATE jobs SET request = zeroblob(0) WHERE state IN (2, 3, 4);"
     "CREATE INDEX jobs_finished ON jobs(finished) WHERE state IN (2, 3, 4);",
+    /* 3 -> 4: submissions, each with its own id to poll and cancel with (every job so far
+     * had one, its own id) */
+    "CREATE TABLE subs(id TEXT PRIMARY KEY, job TEXT NOT NULL, created REAL, canceled REAL);"
+    "CREATE INDEX subs_job ON subs(job);"
+    "INSERT INTO subs SELECT id, id, created, CASE WHEN state = 4 THEN finished END FROM jobs;"
+    "CREATE TRIGGER jobs_subs_delete AFTER DELETE ON jobs BEGIN"
+    " DELETE FROM subs WHERE job = OLD.id; END;",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -127,6 +137,9 @@ enum sq_sql {
     SQ_JOB_GET,
     SQ_JOBS_UNFINISHED,
     SQ_JOBS_PRUNE,
+    SQ_SUB_INSERT,
+    SQ_SUB_GET,
+    SQ_SUB_CANCEL,
     SQ_BEGIN_READ,
     SQ_RESULT_UPSERT,
     SQ_RESULT_DELETE,
@@ -162,7 +175,13 @@ static const char *const sq_sql_text[SQ_NSQL] = {
                          " request = CASE WHEN ?2 IN (2, 3, 4) THEN zeroblob(0) ELSE request END"
                          " WHERE id = ?1",
     [SQ_JOB_GET] = "SELECT id, hash, kind, state, created, started, finished, error_status, error,"
-                   " request FROM jobs WHERE id = ?1",
+                   " request, (SELECT count(*) FROM subs WHERE job = ?1 AND canceled IS NULL)"
+                   " FROM jobs WHERE id = ?1",
+    /* a submission of a job that exists */
+    [SQ_SUB_INSERT] = "INSERT INTO subs(id, job, created, canceled) SELECT ?1, ?2, ?3, ?4"
+                      " WHERE EXISTS (SELECT 1 FROM jobs WHERE id = ?2)",
+    [SQ_SUB_GET] = "SELECT id, job, created, canceled FROM subs WHERE id = ?1",
+    [SQ_SUB_CANCEL] = "UPDATE subs SET canceled = ?2 WHERE id = ?1 AND canceled IS NULL",
     [SQ_JOBS_UNFINISHED] = "SELECT id FROM jobs WHERE state IN (?1, ?2) ORDER BY created, rowid",
     /* finished jobs that ended before ?1, and those past the ?2 newest (?2 < 0: no limit),
      * both through the partial index jobs_finished (its states written out for it) */
@@ -461,6 +480,30 @@ static int sq_state_valid(int st)
 
 /* ---- jobs ---- */
 
+/* Inserts sub (inside the caller's transaction): STORE_NOTFOUND when its job is not there. */
+static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, char *err,
+                        size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_INSERT, where, err, errlen);
+    if (!st) return STORE_ERR;
+    if (sq_bind_field(st, 1, sub->id, sizeof sub->id, "id", err, errlen) ||
+        sq_bind_field(st, 2, sub->job, sizeof sub->job, "job", err, errlen)) {
+        sq_done(st);
+        return STORE_ERR;
+    }
+    sq_bind_time(st, 3, sub->created);
+    sq_bind_time(st, 4, sub->canceled);
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, where, c->db);
+        sq_done(st);
+        return STORE_ERR;
+    }
+    int rc = sqlite3_changes(c->db) ? STORE_OK : STORE_NOTFOUND;
+    sq_done(st);
+    if (rc == STORE_NOTFOUND) sq_errf(err, errlen, "sqlite %s: no job %s", where, sub->job);
+    return rc;
+}
+
 static int sq_job_insert(store *base, const store_job *j, char *err, size_t errlen)
 {
     sq_store *s = (sq_store *)base;
@@ -496,6 +539,11 @@ static int sq_job_insert(store *base, const store_job *j, char *err, size_t errl
     }
     sq_done(st);
     st = NULL;
+    store_sub first = {.created = j->created,
+                       .canceled = j->state == JOB_CANCELED ? j->finished : 0};
+    memcpy(first.id, j->id, sizeof first.id);
+    memcpy(first.job, j->id, sizeof first.job);
+    if (sq_sub_write(c, &first, "job_insert: its submission", err, errlen) != STORE_OK) goto fail;
     if (sq_run(c, SQ_COMMIT, "job_insert: commit", err, errlen)) goto fail;
     return STORE_OK;
 fail:
@@ -583,6 +631,7 @@ static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, si
         sq_errf(err, errlen, "sqlite job_get %s: out of memory", id);
         goto fail;
     }
+    out->active_subs = sqlite3_column_int(st, 10);
     sq_done(st);
     return STORE_OK;
 fail:
@@ -690,6 +739,85 @@ static int sq_jobs_prune(store *base, double before, size_t keep, size_t *n, cha
     if (sq_run(c, SQ_COMMIT, "jobs_prune: commit", err, errlen)) goto fail;
     if (n) *n = (size_t)changed;
     return STORE_OK;
+fail:
+    sq_done(st);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* ---- submissions ---- */
+
+static int sq_sub_insert(store *base, const store_sub *sub, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, "sub_insert: begin", err, errlen)) return STORE_ERR;
+    int rc = sq_sub_write(c, sub, "sub_insert", err, errlen);
+    if (rc == STORE_OK && sq_run(c, SQ_COMMIT, "sub_insert: commit", err, errlen)) rc = STORE_ERR;
+    if (rc != STORE_OK) sq_rollback(c);
+    return rc;
+}
+
+static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_GET, "sub_get", err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    int rc = sqlite3_step(st), out_rc = STORE_OK;
+    if (rc == SQLITE_DONE) {
+        out_rc = STORE_NOTFOUND;
+    } else if (rc != SQLITE_ROW) {
+        sq_dberr(err, errlen, "sub_get", c->db);
+        out_rc = STORE_ERR;
+    } else if (sq_column_fixed(st, 0, out->id, sizeof out->id) ||
+               sq_column_fixed(st, 1, out->job, sizeof out->job)) {
+        sq_errf(err, errlen, "sqlite sub_get %s: an id too long in the database", id);
+        out_rc = STORE_ERR;
+    } else {
+        out->created = sq_column_time(st, 2);
+        out->canceled = sq_column_time(st, 3);
+    }
+    sq_done(st);
+    return out_rc;
+}
+
+static int sq_sub_cancel(store *base, const char *id, double when, int *changed, char *err,
+                         size_t errlen)
+{
+    *changed = 0;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, "sub_cancel: begin", err, errlen)) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_CANCEL, "sub_cancel", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sq_bind_time(st, 2, when);
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "sub_cancel", c->db);
+        goto fail;
+    }
+    *changed = sqlite3_changes(c->db) > 0;
+    sq_done(st);
+    st = NULL;
+    int rc = STORE_OK;
+    if (!*changed) { /* canceled already, or no such submission */
+        st = sq_stmt(c, SQ_SUB_GET, "sub_cancel", err, errlen);
+        if (!st) goto fail;
+        sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+        int step = sqlite3_step(st);
+        if (step != SQLITE_ROW && step != SQLITE_DONE) {
+            sq_dberr(err, errlen, "sub_cancel", c->db);
+            goto fail;
+        }
+        if (step == SQLITE_DONE) rc = STORE_NOTFOUND;
+        sq_done(st);
+        st = NULL;
+    }
+    if (sq_run(c, SQ_COMMIT, "sub_cancel: commit", err, errlen)) goto fail;
+    return rc;
 fail:
     sq_done(st);
     sq_rollback(c);
@@ -1272,6 +1400,9 @@ static const store_ops sq_ops = {
     .job_get = sq_job_get,
     .jobs_unfinished = sq_jobs_unfinished,
     .jobs_prune = sq_jobs_prune,
+    .sub_insert = sq_sub_insert,
+    .sub_get = sq_sub_get,
+    .sub_cancel = sq_sub_cancel,
     .result_put = sq_result_put,
     .result_put_file = sq_result_put_file,
     .result_get = sq_result_get,

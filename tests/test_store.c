@@ -229,13 +229,13 @@ TEST(store_open_creates_schema)
     store *s = f.s;
     struct stat sb;
     CHECK(stat(f.path, &sb) == 0 && S_ISREG(sb.st_mode), "no database file at %s", f.path);
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 3, "user_version %lld, want 3",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 4, "user_version %lld, want 4",
           sql_int(f.path, "PRAGMA user_version"));
     sql_text(f.path, "PRAGMA journal_mode", mode, sizeof mode);
     CHECK(!strcmp(mode, "wal"), "journal_mode %s, want wal", mode);
-    CHECK(sql_int(f.path,
-                  "SELECT count(*) FROM sqlite_master WHERE name IN ('jobs', 'results',"
-                  " 'result_chunks', 'jobs_state', 'results_last_used', 'result_totals')") == 6,
+    CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name IN ('jobs', 'results',"
+                          " 'result_chunks', 'jobs_state', 'results_last_used', 'result_totals',"
+                          " 'subs', 'subs_job')") == 8,
           "tables and indexes missing");
     size_t n = 99;
     uint64_t bytes = 99;
@@ -402,6 +402,7 @@ TEST(store_job_state_transitions)
 typedef struct seen {
     char ids[16][33];
     char req[16][16];
+    int active[16]; /* active_subs */
     int n, stop_after;
     store *s; /* when set, the callback also calls the store */
     int inner_rc;
@@ -413,6 +414,7 @@ static int collect(void *ctx, store_job *j)
     if (v->n < 16) {
         snprintf(v->ids[v->n], 33, "%s", j->id);
         snprintf(v->req[v->n], 16, "%.*s", (int)j->request_len, j->request);
+        v->active[v->n] = j->active_subs;
     }
     v->n++;
     if (v->s) {
@@ -543,6 +545,85 @@ TEST(store_jobs_prune)
     CHECK(n == 1, "pruning all finished removed %zu, want 1", n);
     CHECK(sql_int(f.path, "SELECT count(*) FROM jobs") == 2, "left %lld jobs, want 2",
           sql_int(f.path, "SELECT count(*) FROM jobs"));
+    fx_done(&f);
+}
+
+TEST(store_submissions)
+{
+    fx f;
+    REQUIRE(fx_init(&f) == 0, "mkdtemp failed");
+    REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
+    store *s = f.s;
+    store_job a = job_make(1, "lines", JOB_QUEUED, 10, "{}", 2), out;
+    REQUIRE(s->ops->job_insert(s, &a, f.err, sizeof f.err) == STORE_OK, "insert: %s", f.err);
+    /* a job's first submission is made with it, with its id */
+    store_sub sub;
+    CHECK(s->ops->sub_get(s, a.id, &sub, f.err, sizeof f.err) == STORE_OK &&
+              !strcmp(sub.id, a.id) && !strcmp(sub.job, a.id) && sub.created == 10 &&
+              sub.canceled == 0,
+          "the first submission: %s", f.err);
+    REQUIRE(s->ops->job_get(s, a.id, &out, f.err, sizeof f.err) == STORE_OK, "get: %s", f.err);
+    CHECK(out.active_subs == 1, "active submissions %d, want 1", out.active_subs);
+    store_job_clear(&out);
+
+    /* a second one joins; one of a job that does not exist is refused */
+    store_sub b = {.created = 11}, ghost = {.created = 11};
+    id_of(b.id, 101);
+    memcpy(b.job, a.id, sizeof b.job);
+    id_of(ghost.id, 102);
+    id_of(ghost.job, 999);
+    CHECK(s->ops->sub_insert(s, &b, f.err, sizeof f.err) == STORE_OK, "sub_insert: %s", f.err);
+    CHECK(s->ops->sub_insert(s, &ghost, f.err, sizeof f.err) == STORE_NOTFOUND,
+          "a submission of no job was taken");
+    CHECK(s->ops->sub_get(s, ghost.id, &sub, f.err, sizeof f.err) == STORE_NOTFOUND,
+          "the refused submission is there");
+    f.err[0] = 0;
+    CHECK(s->ops->sub_insert(s, &b, f.err, sizeof f.err) == STORE_ERR && f.err[0],
+          "the same submission id twice");
+    REQUIRE(s->ops->job_get(s, a.id, &out, f.err, sizeof f.err) == STORE_OK, "get: %s", f.err);
+    CHECK(out.active_subs == 2, "active submissions %d, want 2", out.active_subs);
+    store_job_clear(&out);
+
+    /* cancel: once; the second call changes nothing; an unknown one is not found */
+    int changed = 9;
+    CHECK(s->ops->sub_cancel(s, b.id, 12, &changed, f.err, sizeof f.err) == STORE_OK &&
+              changed == 1,
+          "sub_cancel: %s (changed %d)", f.err, changed);
+    CHECK(s->ops->sub_cancel(s, b.id, 13, &changed, f.err, sizeof f.err) == STORE_OK &&
+              changed == 0,
+          "sub_cancel again: changed %d", changed);
+    CHECK(s->ops->sub_get(s, b.id, &sub, f.err, sizeof f.err) == STORE_OK && sub.canceled == 12 &&
+              sub.created == 11 && !strcmp(sub.job, a.id),
+          "the canceled submission: canceled %g", sub.canceled);
+    CHECK(s->ops->sub_cancel(s, ghost.id, 13, &changed, f.err, sizeof f.err) == STORE_NOTFOUND &&
+              changed == 0,
+          "sub_cancel of no submission");
+    REQUIRE(s->ops->job_get(s, a.id, &out, f.err, sizeof f.err) == STORE_OK, "get: %s", f.err);
+    CHECK(out.active_subs == 1, "active submissions %d after a cancel, want 1", out.active_subs);
+    CHECK(out.state == JOB_QUEUED, "canceling a submission changed its job: %d", (int)out.state);
+    store_job_clear(&out);
+
+    /* the restart walk sees how many are active */
+    seen v = {0};
+    REQUIRE(s->ops->jobs_unfinished(s, collect, &v, f.err, sizeof f.err) == STORE_OK, "%s", f.err);
+    CHECK(v.n == 1 && v.active[0] == 1, "the walk: %d jobs, %d active", v.n,
+          v.n ? v.active[0] : -1);
+
+    /* a job inserted canceled has its first submission canceled */
+    store_job c = job_make(2, "lines", JOB_CANCELED, 20, "{}", 2);
+    c.finished = 21;
+    REQUIRE(s->ops->job_insert(s, &c, f.err, sizeof f.err) == STORE_OK, "insert: %s", f.err);
+    CHECK(s->ops->sub_get(s, c.id, &sub, f.err, sizeof f.err) == STORE_OK && sub.canceled == 21,
+          "a canceled job's submission: canceled %g", sub.canceled);
+
+    /* submissions go with their job when it is pruned */
+    REQUIRE(s->ops->job_set_state(s, a.id, JOB_DONE, 30, 0, NULL, f.err, sizeof f.err) == STORE_OK,
+            "done: %s", f.err);
+    size_t n = 0;
+    REQUIRE(s->ops->jobs_prune(s, 100, 0, &n, f.err, sizeof f.err) == STORE_OK, "prune: %s", f.err);
+    CHECK(n == 2, "pruned %zu jobs, want 2", n);
+    CHECK(sql_int(f.path, "SELECT count(*) FROM subs") == 0, "%lld submissions left",
+          sql_int(f.path, "SELECT count(*) FROM subs"));
     fx_done(&f);
 }
 
@@ -741,7 +822,7 @@ TEST(store_schema_versions)
     REQUIRE(f.s, "open of a version-0 database with --init: %s", f.err);
     CHECK(sql_int(f.path, "PRAGMA application_id") == 0x63656c6c, "application_id %lld",
           sql_int(f.path, "PRAGMA application_id"));
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 3, "user_version %lld after migration",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 4, "user_version %lld after migration",
           sql_int(f.path, "PRAGMA user_version"));
     char t[16];
     sql_text(f.path, "SELECT t FROM notes", t, sizeof t);
@@ -1264,14 +1345,34 @@ TEST(store_migrates_version_1)
                      "INSERT INTO result_bodies VALUES('"
                      "0000000000000000000000000000000000000000000000000000000000000002',"
                      " zeroblob(2097152));"
+                     "INSERT INTO jobs VALUES('00000000000000000000000000000001', 'h', 'lines',"
+                     " 0, 3, NULL, NULL, NULL, NULL, CAST('{}' AS BLOB));"
+                     "INSERT INTO jobs VALUES('00000000000000000000000000000002', 'h', 'lines',"
+                     " 4, 4, NULL, 5, NULL, NULL, CAST('{}' AS BLOB));"
                      "PRAGMA user_version = 1;") == SQLITE_OK,
             "making a version-1 database");
     REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
     store *s = f.s;
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 3, "user_version %lld",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 4, "user_version %lld",
           sql_int(f.path, "PRAGMA user_version"));
     CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name = 'result_bodies'") == 0,
           "result_bodies left");
+    /* every job became its own first submission, canceled with it */
+    store_sub sub;
+    char jid[33];
+    id_of(jid, 1);
+    CHECK(s->ops->sub_get(s, jid, &sub, f.err, sizeof f.err) == STORE_OK && !strcmp(sub.job, jid) &&
+              sub.created == 3 && sub.canceled == 0,
+          "the queued job's submission after migration: %s", f.err);
+    id_of(jid, 2);
+    CHECK(s->ops->sub_get(s, jid, &sub, f.err, sizeof f.err) == STORE_OK && !strcmp(sub.job, jid) &&
+              sub.canceled == 5,
+          "the canceled job's submission after migration: %s", f.err);
+    store_job mj;
+    id_of(jid, 1);
+    CHECK(s->ops->job_get(s, jid, &mj, f.err, sizeof f.err) == STORE_OK && mj.active_subs == 1,
+          "active submissions of the migrated queued job: %d", mj.active_subs);
+    store_job_clear(&mj);
     char h[65], *b = NULL;
     size_t len = 0;
     hash_of(h, 1);

@@ -648,6 +648,25 @@ int engine_submit(engine *e, const char *canon, size_t len, const char *kind, co
     return ENG_OK;
 }
 
+int engine_join(engine *e, const char *hash, job **out, char *sub, char *err, size_t errlen)
+{
+    int coalesced = 0;
+    *out = NULL;
+    pthread_mutex_lock(&e->lock);
+    job *j = e->draining ? NULL : join_locked(e, hash);
+    pthread_mutex_unlock(&e->lock);
+    if (!j) return ENG_NOTFOUND;
+    return joined(e, j, out, sub, &coalesced, err, errlen);
+}
+
+int engine_full(engine *e)
+{
+    pthread_mutex_lock(&e->lock);
+    int full = e->draining ? ENG_DRAINING : e->nqueued >= e->cfg.queue_max ? ENG_FULL : ENG_OK;
+    pthread_mutex_unlock(&e->lock);
+    return full;
+}
+
 job *engine_find(engine *e, const char *id)
 {
     pthread_mutex_lock(&e->lock);

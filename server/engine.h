@@ -76,6 +76,15 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen);
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
                   job **out, char *sub, int *coalesced, char *err, size_t errlen);
 
+/* Joins the queued or running job with this request hash, as engine_submit does for an
+ * identical request (a new submission, its id in sub): ENG_OK with *out referenced, or
+ * ENG_NOTFOUND when none is in flight (or the engine drains); ENG_ERR (err). */
+int engine_join(engine *e, const char *hash, job **out, char *sub, char *err, size_t errlen);
+
+/* Whether a new job would be refused now: ENG_FULL (the queue is full), ENG_DRAINING, or
+ * ENG_OK. */
+int engine_full(engine *e);
+
 /* The live job with this job id, referenced, or NULL (then look in the store). */
 job *engine_find(engine *e, const char *id);
 /* Drops a reference taken by engine_submit or engine_find. */

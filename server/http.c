@@ -17,6 +17,7 @@
 #include <jansson.h>
 #include <microhttpd.h>
 #include <netdb.h>
+#include <openssl/evp.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -52,7 +53,47 @@ struct http_server {
     double ready_at; /* when the store was last probed for writes (0: never) */
     int ready_ok;
     char ready_err[256];
+    pthread_mutex_t memo_mu; /* guards memo */
+    struct memo_slot *memo;  /* MEMO_SLOTS: request bodies seen lately */
 };
+
+/* Request bodies seen lately, by the SHA-256 of their bytes, with the hash of their canonical
+ * form.  While no new job can be taken (the queue is full, or the daemon drains), a POST is
+ * answered without parsing its body: a refusal costs a digest, not a parse and a validation
+ * (an SVG body is read and flattened to validate it).  A body seen before still finds its
+ * cached result, or joins its job in flight. */
+#define MEMO_SLOTS 4096
+typedef struct memo_slot {
+    unsigned char raw[32];
+    char hash[65]; /* "" when the slot is empty */
+} memo_slot;
+
+static size_t memo_index(const unsigned char raw[32])
+{
+    return ((size_t)raw[0] | (size_t)raw[1] << 8) % MEMO_SLOTS;
+}
+
+static void memo_put(http_server *h, const unsigned char raw[32], const char *hash)
+{
+    if (!h->memo) return;
+    pthread_mutex_lock(&h->memo_mu);
+    memo_slot *m = &h->memo[memo_index(raw)];
+    memcpy(m->raw, raw, 32);
+    snprintf(m->hash, sizeof m->hash, "%s", hash);
+    pthread_mutex_unlock(&h->memo_mu);
+}
+
+/* The canonical hash of the body whose digest is raw, when it was seen lately (1), else 0. */
+static int memo_get(http_server *h, const unsigned char raw[32], char *hash)
+{
+    if (!h->memo) return 0;
+    pthread_mutex_lock(&h->memo_mu);
+    const memo_slot *m = &h->memo[memo_index(raw)];
+    int found = m->hash[0] && !memcmp(m->raw, raw, 32);
+    if (found) memcpy(hash, m->hash, sizeof m->hash);
+    pthread_mutex_unlock(&h->memo_mu);
+    return found;
+}
 
 typedef struct conn {
     http_server *h;
@@ -786,6 +827,15 @@ static int json_content_type(struct MHD_Connection *mc)
     return t[16] == 0 || t[16] == ';' || t[16] == ' ';
 }
 
+/* The answer to a POST that no new job can be made for: ENG_FULL or ENG_DRAINING. */
+static enum MHD_Result refused(conn *c, int why)
+{
+    if (why == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
+    return problem(c, 503, "the job queue is full: try again later", "5", NULL);
+}
+
+static enum MHD_Result submitted(conn *c, job *j);
+
 static enum MHD_Result route_submit(conn *c)
 {
     char err[256], hash[65];
@@ -794,30 +844,54 @@ static enum MHD_Result route_submit(conn *c)
     size_t clen = 0;
     const char *kind = NULL;
     http_server *h = c->h;
+    unsigned char raw[32];
+    uint64_t size = 0;
+    job *j = NULL;
+    int rc, hit;
 
-    int rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
+    if (!EVP_Digest(c->body ? c->body : "", c->len, raw, NULL, EVP_sha256(), NULL))
+        memset(raw, 0, sizeof raw); /* cannot happen with OpenSSL's sha256: never found */
+    int full = engine_full(h->e);
+    if (full != ENG_OK) { /* no new job: answer without parsing (see memo_slot) */
+        body_release(c);
+        if (!memo_get(h, raw, hash)) return refused(c, full);
+        hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
+        metrics_cache(h->m, hit == STORE_OK);
+        if (hit == STORE_OK) return serve_stored(c, hash, size, NULL, "hit", 1);
+        rc = engine_join(h->e, hash, &j, c->job_id, err, sizeof err);
+        if (rc == ENG_NOTFOUND) return refused(c, full);
+        if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
+        return submitted(c, j);
+    }
+
+    rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
     body_release(c);
     if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL, NULL);
     engine_hash(canon, clen, hash);
+    memo_put(h, raw, hash);
 
     /* a cached result costs one lookup (its size, then it is served) */
-    uint64_t size = 0;
-    int hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
+    hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
         return serve_stored(c, hash, size, NULL, "hit", 1);
     }
-    job *j = NULL;
     int coalesced = 0;
     rc = engine_submit(h->e, canon, clen, kind, hash, &j, c->job_id, &coalesced, err, sizeof err);
     free(canon);
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */
         return get_result(c, hash, NULL, "hit", 1);
-    if (rc == ENG_FULL) return problem(c, 503, "the job queue is full: try again later", "5", NULL);
-    if (rc == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
+    if (rc == ENG_FULL || rc == ENG_DRAINING) return refused(c, rc);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
+    return submitted(c, j);
+}
 
+/* A POST whose submission of job j (referenced: taken over) is made: answered now, or
+ * suspended until j ends or the client's wait runs out. */
+static enum MHD_Result submitted(conn *c, job *j)
+{
+    http_server *h = c->h;
     double wait = prefer_wait(c->mc);
     if (wait > h->cfg->max_wait) wait = h->cfg->max_wait;
     if (wait <= 0) {
@@ -1105,7 +1179,9 @@ static void http_free(http_server *h)
 {
     pthread_mutex_destroy(&h->ready_mu);
     pthread_mutex_destroy(&h->conns_mu);
+    pthread_mutex_destroy(&h->memo_mu);
     pthread_cond_destroy(&h->reaper_cv);
+    free(h->memo);
     free(h);
 }
 
@@ -1233,6 +1309,8 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     atomic_init(&h->inflight, 0);
     pthread_mutex_init(&h->ready_mu, NULL);
     pthread_mutex_init(&h->conns_mu, NULL);
+    pthread_mutex_init(&h->memo_mu, NULL);
+    h->memo = calloc(MEMO_SLOTS, sizeof *h->memo); /* NULL: a full queue refuses every POST */
     pthread_cond_init(&h->reaper_cv, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);

@@ -1822,6 +1822,15 @@ static void queue_full(void)
                   !strcmp(j.hash, q1.hash) && !strcmp(j.state, "queued"),
               "identical to the queued job: %ld %s", r.status, r.body.p);
         CHECK(metric(d, COALESCE) == 1, "coalesced %g, want 1", metric(d, COALESCE));
+        /* a refusal costs no parse: an invalid body (its error at its very end) is 503 while
+         * the queue is full, not 422; and a body whose result is cached is still a hit */
+        static const char invalid[] =
+            "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]],[[0,1],[1,\"x\"]]]}";
+        http_post(d, invalid, strlen(invalid), NULL, &r);
+        check_problem(d, &r, 503, "/v1/jobs", "an invalid body with the queue full");
+        hresp_free(&r);
+        char *cached = small_body(8, 0, &len);
+        size_t cached_len = len;
         hresp_free(&r);
         char *m = metrics_text(d);
         CHECK(m && mval(m, "cellar_queue_depth") == 1 &&
@@ -1836,6 +1845,30 @@ static void queue_full(void)
         CHECK(r.status == 200, "DELETE: %ld", r.status);
         hresp_free(&r);
         CHECK(wait_state(d, q1.id, "done", 30 * slowdown(), &j), "queued job: %s", j.state);
+        http_post(d, invalid, strlen(invalid), NULL, &r);
+        check_problem(d, &r, 422, "/v1/jobs", "the invalid body once the queue has room");
+        hresp_free(&r);
+        /* fill the queue again behind a slow job, then ask for a cached result */
+        http_post(d, cached, cached_len, "wait=30", &r);
+        CHECK(r.status == 200, "the small job: %ld", r.status);
+        hresp_free(&r);
+        jobv s2, q2;
+        const char *slow2 = slow_body(2, &slen);
+        if (slow2 && submit(d, slow2, slen, &s2) == 0 &&
+            wait_state(d, s2.id, "running", 30 * slowdown(), &j)) {
+            char *b3 = small_body(9, 0, &len);
+            if (b3 && submit(d, b3, len, &q2) == 0) {
+                http_post(d, cached, cached_len, NULL, &r);
+                CHECK(r.status == 200 && has_header(&r, "X-Cellar-Cache", "hit"),
+                      "a cached result with the queue full: %ld", r.status);
+                hresp_free(&r);
+                http_post(d, invalid, strlen(invalid), NULL, &r);
+                check_problem(d, &r, 503, "/v1/jobs", "an invalid body, queue full again");
+                hresp_free(&r);
+            }
+            free(b3);
+        }
+        free(cached);
     }
     free(b1);
     check_no_500(d);

@@ -10,6 +10,7 @@
 #include "server/engine.h"
 
 #include <errno.h>
+#include <malloc.h>
 #include <openssl/evp.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -339,6 +340,9 @@ static void *worker_main(void *arg)
         pthread_mutex_unlock(&e->lock);
         run_job(e, j);
         engine_release(e, j);
+        /* a large job leaves most of its peak free but kept by the allocator (16 000 cubes:
+         * 0.7 GB resident after a 1.7 GB peak): hand it back to the system */
+        malloc_trim(0);
     }
 }
 

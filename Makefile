@@ -24,7 +24,7 @@ DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev
               libxml2-dev
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely sqlite3 \
-              g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+              g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)
@@ -38,7 +38,7 @@ TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
             $(BUILD)/tests/ref/geos_ref.o
 
-.PHONY: all deps test check stress bench run clean format format-check tests
+.PHONY: all deps test check stress bench run clean format format-check tests fuzz
 # the tests' shared objects are not intermediates (two makes at once must find them)
 .SECONDARY: $(TEST_LIB)
 all: $(BUILD)/cellar $(BUILD)/cellard
@@ -102,14 +102,15 @@ check: deps
 	    CELLAR_SANITIZED=1 tests/run.sh build/san
 
 # The random 3D families at STRESS seeds each (contacts, slivers, near-coplanar faces, lattice
-# scenes, real meshes), every invariant and every volume checked, and the 2D Boolean families
+# scenes, real meshes), every invariant and every volume checked, the 2D torture families
+# (STRESS x 3600 degenerate scenes, lar_check on each), and the 2D Boolean families
 # against GEOS at BOOL2_STRESS batches of 200 cases each (20: 60 000 cases, 600 000 runs):
 # tens of minutes, not in CI.
 STRESS ?= 1000
 BOOL2_STRESS ?= 20
 stress: deps
 	@$(MAKE) --no-print-directory tests
-	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d
+	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d test_torture
 	@CELLAR_STRESS=$(BOOL2_STRESS) tests/run.sh $(BUILD) test_bool2_geos
 
 bench: deps
@@ -142,11 +143,13 @@ run:
 
 format:
 	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch] \
-	    tests/ref/*.cpp tests/ref/*.hpp
+	    tests/ref/*.cpp tests/ref/*.hpp tests/fuzz/*.[ch]
 
 format-check:
 	clang-format --dry-run -Werror core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] \
-	    tests/ref/*.[ch] tests/ref/*.cpp tests/ref/*.hpp
+	    tests/ref/*.[ch] tests/ref/*.cpp tests/ref/*.hpp tests/fuzz/*.[ch]
 
 clean:
 	rm -rf build
+
+include tests/fuzz/fuzz.mk

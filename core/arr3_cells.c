@@ -934,7 +934,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
      * the part lies in the exterior. */
     for (size_t c = 0; c < ncomp; c++) {
         probe *pr = &probes[c];
-        uint32_t *H = hits + hoff[c], nh = hoff[c + 1] - hoff[c], host = EXT;
+        uint32_t *H = hits ? hits + hoff[c] : NULL, nh = hoff[c + 1] - hoff[c], host = EXT;
         size_t depth = 0;
         if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
         for (uint32_t h = 0; h < nh && host == EXT; h++) {

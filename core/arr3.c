@@ -35,6 +35,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "core/facecheck.h"
 #include "core/par.h"
 #include "core/sort.h"
 
@@ -383,9 +384,184 @@ typedef struct ring {
     size_t n, cap;
 } ring;
 
+/* Where direction d lies, turning counter-clockwise from direction f (projected along k):
+ * a class (0: along f, 1: left of it, 2: opposite, 3: right of it), then within a class the
+ * order of two directions by their cross product. */
+static int turn_class(const int64_t *f, const int64_t *d)
+{
+    i128 c = (i128)f[0] * d[1] - (i128)f[1] * d[0];
+    i128 t = (i128)f[0] * d[0] + (i128)f[1] * d[1];
+    return c > 0 ? 1 : c < 0 ? 3 : t > 0 ? 0 : 2;
+}
+
+/* Turning counter-clockwise from f, is d1 met before d2 (-1), after (1), or together (0)? */
+static int turn_cmp(const int64_t *f, const int64_t *d1, const int64_t *d2)
+{
+    int c1 = turn_class(f, d1), c2 = turn_class(f, d2);
+    if (c1 != c2) return c1 < c2 ? -1 : 1;
+    if (c1 == 0 || c1 == 2) return 0;
+    i128 x = (i128)d1[0] * d2[1] - (i128)d1[1] * d2[0];
+    return x > 0 ? -1 : x < 0 ? 1 : 0;
+}
+
+/* Two passages of a counter-clockwise loop through vertex v, from a1 to b1 and from a2 to b2:
+ * are their inner wedges (from the way out, counter-clockwise to the way in) apart, sharing at
+ * most a side?  (A bridge's two passages are; a hole spliced in at one vertex and touching the
+ * loop again at another is not, at that other vertex, until the loop is split there.) */
+static int wedges_apart(const a3 *A, int k, uint32_t v, uint32_t a1, uint32_t b1, uint32_t a2,
+                        uint32_t b2)
+{
+    int64_t pv[2], p[4][2], d[4][2];
+    uint32_t w[4] = {a1, b1, a2, b2};
+    proj2(A, v, k, pv);
+    for (int i = 0; i < 4; i++) {
+        proj2(A, w[i], k, p[i]);
+        d[i][0] = p[i][0] - pv[0], d[i][1] = p[i][1] - pv[1];
+    }
+    /* counter-clockwise from a1's direction: b2 (the second way out), a2, then b1 */
+    return turn_cmp(d[0], d[3], d[2]) <= 0 && turn_cmp(d[0], d[2], d[1]) <= 0 &&
+           turn_class(d[0], d[1]) != 0;
+}
+
+/* Ear clipping of one loop L (counter-clockwise, a vertex possibly passed twice the right way,
+ * as at a bridge); appends triangles.  0, -1 out of memory, -2 no ear left. */
+static int clip_loop(const a3 *A, int k, ring *L, uint32_t **tri, size_t *ntri, size_t *captri)
+{
+    while (L->n > 3) {
+        int cut = 0;
+        for (size_t i = 0; i < L->n && !cut; i++) {
+            uint32_t a = L->v[(i + L->n - 1) % L->n], b = L->v[i], c = L->v[(i + 1) % L->n];
+            if (orient2v(A, k, a, b, c) <= 0) continue;
+            int ear = 1;
+            for (size_t j = 0; j < L->n && ear; j++) {
+                uint32_t x = L->v[j];
+                if (x == a || x == b || x == c) continue;
+                if (in_tri(A, k, a, b, c, x)) ear = 0;
+            }
+            if (!ear) continue;
+            if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
+            (*tri)[3 * *ntri] = a, (*tri)[3 * *ntri + 1] = b, (*tri)[3 * *ntri + 2] = c;
+            (*ntri)++;
+            memmove(L->v + i, L->v + i + 1, (L->n - i - 1) * sizeof *L->v);
+            L->n--;
+            cut = 1;
+            /* where the loop passes a vertex twice (a bridge), clipping a whole side leaves it
+             * passing one vertex twice in a row, or going out and back along one edge: both
+             * bound nothing and are dropped */
+            for (size_t j = 0; L->n > 2 && j < L->n;) {
+                size_t j1 = (j + 1) % L->n, j0 = (j + L->n - 1) % L->n;
+                if (L->v[j] == L->v[j1]) {
+                    memmove(L->v + j1, L->v + j1 + 1, (L->n - j1 - 1) * sizeof *L->v);
+                    L->n--;
+                    j = 0;
+                } else if (L->v[j0] == L->v[j1]) { /* drop L->v[j] and L->v[j1] */
+                    if (j1 == 0) {
+                        memmove(L->v, L->v + 1, (L->n - 1) * sizeof *L->v);
+                    } else {
+                        memmove(L->v + j, L->v + j + 2, (L->n - j - 2) * sizeof *L->v);
+                    }
+                    L->n -= 2;
+                    j = 0;
+                } else {
+                    j++;
+                }
+            }
+        }
+        if (!cut) return -2;
+    }
+    if (L->n == 3 && orient2v(A, k, L->v[0], L->v[1], L->v[2]) > 0) {
+        if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
+        memcpy(*tri + 3 * *ntri, L->v, 3 * sizeof *L->v);
+        (*ntri)++;
+    }
+    return 0;
+}
+
+typedef struct vpos {
+    uint32_t v, i;
+} vpos;
+
+static int vpos_cmp(const void *pa, const void *pb)
+{
+    const vpos *a = pa, *b = pb;
+    if (a->v != b->v) return a->v < b->v ? -1 : 1;
+    return (a->i > b->i) - (a->i < b->i);
+}
+
+/* The loop (holes bridged or spliced in) is split where it passes a vertex twice with wedges
+ * that overlap (a hole touching it at more than one vertex, holes touching each other and it:
+ * a face whose inside is in several parts): then each part is one loop, whose wedges at every
+ * vertex it passes twice are apart.  Each part is then ear-clipped.  Takes L's array. */
+static int split_and_clip(const a3 *A, int k, ring *L, uint32_t **tri, size_t *ntri, size_t *captri)
+{
+    ring *st = NULL;
+    size_t nst = 0, capst = 0;
+    vpos *vp = NULL;
+    size_t capvp = 0;
+    int rc = -1;
+    if (A3_PUSH(st, nst, capst, *L)) goto done;
+    memset(L, 0, sizeof *L);
+    while (nst) {
+        ring S = st[--nst];
+        if (S.n < 3) {
+            free(S.v);
+            continue;
+        }
+        if (a3_grow(&vp, &capvp, S.n, sizeof *vp)) {
+            free(S.v);
+            goto done;
+        }
+        for (size_t i = 0; i < S.n; i++) vp[i] = (vpos){S.v[i], (uint32_t)i};
+        qsort(vp, S.n, sizeof *vp, vpos_cmp);
+        size_t sp = SIZE_MAX, sq = 0;
+        for (size_t i = 0, j; i < S.n && sp == SIZE_MAX; i = j) {
+            for (j = i + 1; j < S.n && vp[j].v == vp[i].v; j++) continue;
+            for (size_t x = i; x < j && sp == SIZE_MAX; x++)
+                for (size_t y = x + 1; y < j; y++) {
+                    size_t p = vp[x].i, q = vp[y].i;
+                    if (wedges_apart(A, k, S.v[p], S.v[(p + S.n - 1) % S.n], S.v[(p + 1) % S.n],
+                                     S.v[(q + S.n - 1) % S.n], S.v[(q + 1) % S.n]))
+                        continue;
+                    sp = p, sq = q;
+                    break;
+                }
+        }
+        if (sp == SIZE_MAX) {
+            int r = clip_loop(A, k, &S, tri, ntri, captri);
+            free(S.v);
+            if (r) {
+                rc = r;
+                goto done;
+            }
+            continue;
+        }
+        /* S = [.. sp: v, X .., sq: v, Y ..]: the parts [v, X ..] and [v, Y ..] */
+        ring P = {0}, Q = {0};
+        int bad = 0;
+        for (size_t i = sp; i < sq && !bad; i++) bad = A3_PUSH(P.v, P.n, P.cap, S.v[i]);
+        for (size_t i = sq; i < sp + S.n && !bad; i++) bad = A3_PUSH(Q.v, Q.n, Q.cap, S.v[i % S.n]);
+        free(S.v);
+        if (bad || a3_grow(&st, &capst, nst + 2, sizeof *st)) {
+            free(P.v), free(Q.v);
+            goto done;
+        }
+        st[nst++] = P;
+        st[nst++] = Q;
+    }
+    rc = 0;
+done:
+    for (size_t i = 0; i < nst; i++) free(st[i].v);
+    free(st);
+    free(vp);
+    return rc;
+}
+
 /* a3_triangulate (arr3_int.h): holes are bridged into the outer loop (each from its vertex of
- * largest u to the nearest loop vertex it sees: no edge met, inside both wedges), then ears are
- * cut; every test is an exact orientation on the projected grid coordinates. */
+ * largest u to the nearest loop vertex it sees: no edge met, inside both wedges), or spliced in
+ * at a vertex they share with it; the loop is split where it then passes a vertex twice the
+ * wrong way (split_and_clip), and ears are cut; every test is an exact orientation on the
+ * projected grid coordinates.  Takes polygons with holes whose cycles touch at shared vertices
+ * (core/facecheck.h's), also where that cuts the inside in parts. */
 int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t nc, uint32_t **tri,
                    size_t *ntri, size_t *captri)
 {
@@ -418,6 +594,27 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
         used[best] = 1;
         int flip = area2(A, k, cyc[best], len[best]) > 0;
         size_t hn = len[best];
+        /* a hole touching the loop at a vertex they share is spliced in there (the loop then
+         * passes that vertex twice, the hole in between), at the passage of the loop whose
+         * inner wedge holds the hole's edges; no bridge is needed, and none might be found */
+        size_t sp = SIZE_MAX, sb = 0;
+        for (size_t t = 0; t < hn && sp == SIZE_MAX; t++)
+            for (size_t i = 0; i < L.n; i++) {
+                uint32_t hx = cyc[best][flip ? (t + hn - 1) % hn : (t + 1) % hn];
+                if (L.v[i] == cyc[best][t] &&
+                    in_wedge(A, k, L.v[(i + L.n - 1) % L.n], L.v[i], L.v[(i + 1) % L.n], hx)) {
+                    sp = i, sb = t;
+                    break;
+                }
+            }
+        if (sp != SIZE_MAX) {
+            if (a3_grow(&L.v, &L.cap, L.n + hn, sizeof *L.v)) goto done;
+            memmove(L.v + sp + 1 + hn, L.v + sp + 1, (L.n - sp - 1) * sizeof *L.v);
+            for (size_t i = 1; i <= hn; i++)
+                L.v[sp + i] = cyc[best][flip ? (sb + hn - i % hn) % hn : (sb + i) % hn];
+            L.n += hn;
+            continue;
+        }
         uint32_t m = cyc[best][bi];
         /* candidates on the loop, nearest first */
         double bd = DBL_MAX;
@@ -466,37 +663,9 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
         L.v[bp + 1 + hn + 1] = L.v[bp];
         L.n += ins;
     }
-    /* ear clipping on the loop (a vertex may appear twice after bridging) */
-    while (L.n > 3) {
-        int cut = 0;
-        for (size_t i = 0; i < L.n && !cut; i++) {
-            uint32_t a = L.v[(i + L.n - 1) % L.n], b = L.v[i], c = L.v[(i + 1) % L.n];
-            if (orient2v(A, k, a, b, c) <= 0) continue;
-            int ear = 1;
-            for (size_t j = 0; j < L.n && ear; j++) {
-                uint32_t x = L.v[j];
-                if (x == a || x == b || x == c) continue;
-                if (in_tri(A, k, a, b, c, x)) ear = 0;
-            }
-            if (!ear) continue;
-            if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) goto done;
-            (*tri)[3 * *ntri] = a, (*tri)[3 * *ntri + 1] = b, (*tri)[3 * *ntri + 2] = c;
-            (*ntri)++;
-            memmove(L.v + i, L.v + i + 1, (L.n - i - 1) * sizeof *L.v);
-            L.n--;
-            cut = 1;
-        }
-        if (!cut) {
-            rc = -2;
-            goto done;
-        }
-    }
-    if (L.n == 3 && orient2v(A, k, L.v[0], L.v[1], L.v[2]) > 0) {
-        if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) goto done;
-        memcpy(*tri + 3 * *ntri, L.v, 3 * sizeof *L.v);
-        (*ntri)++;
-    }
-    rc = 0;
+    /* the loop into parts where it passes a vertex twice the wrong way, then each part's ears */
+    rc = split_and_clip(A, k, &L, tri, ntri, captri);
+    goto done;
 done:
     free(L.v);
     free(order);
@@ -628,22 +797,6 @@ static i128 tri_dot(const a3 *A, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
         n[t][2] = u[0] * v[1] - u[1] * v[0];
     }
     return n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2];
-}
-
-/* Newell's normal of a cycle (for the projection of a face that is not planar). */
-static int newell_axis(const a3 *A, const uint32_t *v, size_t n)
-{
-    double N[3] = {0, 0, 0};
-    for (size_t i = 0; i < n; i++) {
-        const int64_t *p = A->g + 3 * (size_t)v[i], *q = A->g + 3 * (size_t)v[(i + 1) % n];
-        N[0] += (double)(p[1] - q[1]) * (double)(p[2] + q[2]);
-        N[1] += (double)(p[2] - q[2]) * (double)(p[0] + q[0]);
-        N[2] += (double)(p[0] - q[0]) * (double)(p[1] + q[1]);
-    }
-    int k = 0;
-    for (int a = 1; a < 3; a++)
-        if (fabs(N[a]) > fabs(N[k])) k = a;
-    return k;
 }
 
 static int add_contact(a3 *A, uint32_t plane, uint32_t p);
@@ -824,12 +977,16 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 continue;
             }
             /* not planar on the grid: triangles, each with its own exact plane */
-            int k = newell_axis(A, cyc[0], len[0]);
+            int k = face_newell_axis(A->g, cyc[0], len[0]); /* as solid_check's */
             ntri = 0;
             int r;
-            if (nc == 1 && len[0] == 4) {
+            int quad = nc == 1 && len[0] == 4;
+            if (quad) {
                 /* a quad: the diagonal whose two triangles' normals agree best (the larger dot
-                 * product of their normals), as CGAL's triangulate_faces chooses */
+                 * product of their normals), as CGAL's triangulate_faces chooses.  Both keep the
+                 * quad's order, whatever its projection looks like: two triangles in different
+                 * planes (no three of the four points are on one line) that share the diagonal,
+                 * walked once each way */
                 if (a3_grow(&tri, &captri, 6, sizeof *tri)) goto oom;
                 const uint32_t *q = cyc[0];
                 i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
@@ -838,12 +995,6 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
                 memcpy(tri, t, sizeof t);
                 ntri = 2;
-                /* a3_triangulate's convention: counter-clockwise in the projection */
-                for (int h = 0; h < 2; h++)
-                    if (orient2v(A, k, tri[3 * h], tri[3 * h + 1], tri[3 * h + 2]) < 0) {
-                        uint32_t x = tri[3 * h + 1];
-                        tri[3 * h + 1] = tri[3 * h + 2], tri[3 * h + 2] = x;
-                    }
                 r = 0;
             } else {
                 r = a3_triangulate(A, k, cyc, len, nc, &tri, &ntri, &captri);
@@ -857,7 +1008,9 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 goto fail;
             }
             A->split_faces++;
-            int ccw = area2(A, k, cyc[0], len[0]) > 0; /* the triangles come counter-clockwise */
+            /* a3_triangulate's triangles come counter-clockwise in the projection: turned as
+             * the face's outer cycle turns there */
+            int ccw = quad || area2(A, k, cyc[0], len[0]) > 0;
             for (size_t t = 0; t < ntri; t++) {
                 uint32_t *tc = tri + 3 * t;
                 if (!ccw) {

@@ -351,14 +351,17 @@ static int probe_desc(const void *pa, const void *pb, void *vx)
     return probe_cmp(x->A, *(const uint32_t *)pb, *(const uint32_t *)pa, x->pr);
 }
 
-/* The probe of piece pi: the centroid of a triangle of it, on a line along its normal's axis. */
-static int piece_probe(const a3 *A, uint32_t pi, probe *pr)
+/* The triangles of piece pi (a3_triangulate along its normal's axis *k, into *tri): 0, -1 out
+ * of memory, -2 none (not a polygon). */
+static int piece_tris(const a3 *A, uint32_t pi, uint32_t **tri, size_t *ntri, size_t *captri,
+                      int *k)
 {
     const piece *pc = &A->pc[pi];
-    int k = plane_axis(&A->pl[pc->plane]);
-    uint32_t *cyc[64], **cp = cyc, *tri = NULL;
-    size_t len[64], *lp = len, ntri = 0, captri = 0;
+    uint32_t *cyc[64], **cp = cyc;
+    size_t len[64], *lp = len;
     int rc = -1;
+    *k = plane_axis(&A->pl[pc->plane]);
+    *ntri = 0;
     if (pc->nc > 64) {
         cp = malloc(pc->nc * sizeof *cp);
         lp = malloc(pc->nc * sizeof *lp);
@@ -369,24 +372,23 @@ static int piece_probe(const a3 *A, uint32_t pi, probe *pr)
         cp[c] = A->pcv + o;
         lp[c] = A->pc_off[pc->c0 + c + 1] - o;
     }
-    int r = a3_triangulate(A, k, cp, lp, pc->nc, &tri, &ntri, &captri);
-    if (r == -1) goto done;
-    if (r || !ntri) {
-        rc = -2;
-        goto done;
-    }
+    int r = a3_triangulate(A, *k, cp, lp, pc->nc, tri, ntri, captri);
+    rc = r == -1 ? -1 : r || !*ntri ? -2 : 0;
+done:
+    if (cp != cyc) free(cp);
+    if (lp != len) free(lp);
+    return rc;
+}
+
+/* The probe through the centroid of triangle tri[0..3), on a line along axis k. */
+static void tri_probe(const a3 *A, const uint32_t *tri, int k, probe *pr)
+{
     for (int a = 0; a < 3; a++)
         pr->Q[a] = A->g[3 * (size_t)tri[0] + a] + A->g[3 * (size_t)tri[1] + a] +
                    A->g[3 * (size_t)tri[2] + a];
     pr->k = k;
     pr->i = (k + 1) % 3;
     pr->j = (k + 2) % 3;
-    rc = 0;
-done:
-    if (cp != cyc) free(cp);
-    if (lp != len) free(lp);
-    free(tri);
-    return rc;
 }
 
 /* ---- cells and output ------------------------------------------------------------------ */
@@ -683,7 +685,8 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     size_t ne = 0;
     uint32_t *ev = NULL, *eside = NULL, *eplane = NULL, *ioff = NULL;
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
-    uint32_t *cpiece = NULL, *newid = NULL, *used = NULL;
+    uint32_t *cpiece = NULL, *newid = NULL, *used = NULL, *ptri = NULL;
+    size_t nptri = 0, capptri = 0;
     double *fbox = NULL, *dh = NULL, *dl = NULL;
     fgrid fgk[3] = {{0}};
     double *fboxk[3] = {NULL, NULL, NULL};
@@ -861,7 +864,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     size_t nhit = 0;
     for (size_t c = 0; c < ncomp; c++) {
         probe *pr = &probes[c];
-        int r = piece_probe(A, cpiece[c], pr);
+        int pk, r = piece_tris(A, cpiece[c], &ptri, &nptri, &capptri, &pk);
         if (r == -1) goto done;
         if (r) {
             rc = ARR_EINTERNAL;
@@ -869,49 +872,58 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                      A->pc[cpiece[c]].face);
             goto done;
         }
-        if (!fgk[pr->k].off) { /* the pieces' boxes in this probe's projection, and a grid:
-                                   once per axis (parts alternate between axes) */
-            fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
-            if (!fbox) goto done;
-            for (size_t q = 0; q < A->npc; q++) {
-                const int64_t *b = A->pc[q].box;
-                double *bx = fbox + 4 * q;
-                bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
-                bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
-                /* widened by more than the rounding of the conversions */
-                double m = (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
-                bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
-            }
-            if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
-        }
-        const fgrid *fg = &fgk[pr->k];
-        double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
+        /* the centroid of the piece's first triangle, or of the next one while the line misses
+         * every face of the part: a piece whose inside is in two parts (holes touching each
+         * other and the outer cycle across it) may lie in two parts of the complex */
         uint32_t own = NONE;
-        size_t h0 = nhit, ncand, nff = 0;
-        if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
-        /* the faces of the pieces whose boxes hold the point (exactly: Q / 3 in [lo, hi]) */
-        for (size_t ci = 0; ci < ncand; ci++) {
-            const int64_t *b = A->pc[cand[ci]].box;
-            if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
-                (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
-                (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
-                (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
-                continue;
-            uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
-            if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
-            memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
-            nff += n;
-        }
-        if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
-        for (size_t ci = 0; ci < nff; ci++) {
-            uint32_t f = ff[ci];
-            if (fcomp[f] != c && ncomp == 1) continue;
-            if (!probe_hits(A, f, pr)) continue;
-            if (fcomp[f] == c) {
-                if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
-            } else {
-                if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
-                hits[nhit++] = f;
+        size_t h0 = nhit;
+        for (size_t t = 0; t < nptri && own == NONE; t++) {
+            tri_probe(A, ptri + 3 * t, pk, pr);
+            nhit = h0;
+            if (!fgk[pr->k].off) { /* the pieces' boxes in this probe's projection, and a grid:
+                                       once per axis (parts alternate between axes) */
+                fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
+                if (!fbox) goto done;
+                for (size_t q = 0; q < A->npc; q++) {
+                    const int64_t *b = A->pc[q].box;
+                    double *bx = fbox + 4 * q;
+                    bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
+                    bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
+                    /* widened by more than the rounding of the conversions */
+                    double m =
+                        (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
+                    bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
+                }
+                if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
+            }
+            const fgrid *fg = &fgk[pr->k];
+            double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
+            size_t ncand, nff = 0;
+            if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
+            /* the faces of the pieces whose boxes hold the point (exactly: Q / 3 in [lo, hi]) */
+            for (size_t ci = 0; ci < ncand; ci++) {
+                const int64_t *b = A->pc[cand[ci]].box;
+                if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
+                    (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
+                    (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
+                    (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
+                    continue;
+                uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
+                if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
+                memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
+                nff += n;
+            }
+            if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
+            for (size_t ci = 0; ci < nff; ci++) {
+                uint32_t f = ff[ci];
+                if (fcomp[f] != c && ncomp == 1) continue;
+                if (!probe_hits(A, f, pr)) continue;
+                if (fcomp[f] == c) {
+                    if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
+                } else {
+                    if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
+                    hits[nhit++] = f;
+                }
             }
         }
         if (own == NONE) {
@@ -1201,6 +1213,7 @@ done:
     free(cell);
     free(outer);
     free(cpiece);
+    free(ptri);
     free(newid);
     free(used);
     free(dh);

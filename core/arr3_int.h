@@ -159,8 +159,9 @@ uint32_t pset_find(const pset *s, const geo *G, const xpt *p, pset_get get, cons
 int pset_add(pset *s, const xpt *p, uint32_t id);
 
 /* Triangulates the polygon with cycles cyc[0..nc) (vertex ids, lengths len[]; the first the
- * outer one) projected along axis k; appends 3 vertex ids per triangle to *tri.  Returns 0, -1
- * (out of memory) or -2 (not a simple polygon with holes in that projection). */
+ * outer one) projected along axis k; appends 3 vertex ids per triangle to *tri.  Cycles may
+ * touch at vertices they share (the inside then maybe in parts).  Returns 0, -1 (out of memory)
+ * or -2 (not a polygon with holes in that projection). */
 int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t nc, uint32_t **tri,
                    size_t *ntri, size_t *captri);
 

@@ -24,6 +24,10 @@
  *             3D pipeline splits every face that is not exactly planar on the grid (see
  *             core/arr3.h), and says so here only where the input is not planar within the
  *             precision, which a user would want to know.
+ *             Then each face as the 3D pipeline will take it (merged vertices, no step
+ *             between equal ones) is checked exactly on the grid by face_check
+ *             (core/facecheck.h): a polygon with holes in its plane, or in the projection a
+ *             face that is not planar on the grid is triangulated in; a triangle is one.
  *   edges     the half-edges, keyed by their undirected merged vertex pair, are sorted (qsort,
  *             n log n): a key used once is an open edge, more than twice a non-manifold one.
  *   orient    faces paired across each manifold edge must walk it in opposite directions.  A
@@ -63,12 +67,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/facecheck.h"
+
 #define SOLID_MAX_VERTICES 10000000u /* a reader's limits, see above */
 #define SOLID_MAX_FACES    10000000u
 #define SOLID_MAX_FACE_LEN 1000000u
 #define GRID_LIMIT         4611686018427387904.0 /* 2^62: |coordinate / precision| below this */
 #define NUMBER_MAX         128                   /* longest number token a reader takes */
 #define NONE               UINT32_MAX
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem);
 
 void solid_free(solid *s)
 {
@@ -94,7 +102,9 @@ typedef struct ck {
     double p; /* precision */
     solid_report *rep;
     const char *label;
+    int faces_only;   /* a face soup: no closedness, any orientation */
     uint32_t *merged; /* nv: the merged vertex of each input vertex */
+    int64_t *g;       /* 3 * nv: the grid point of each input vertex */
     double *area;     /* nf: area of the outer cycle */
     half *he;         /* half-edges, sorted by key */
     size_t nhe;
@@ -118,7 +128,8 @@ __attribute__((format(printf, 6, 7))) static void note_at(ck *c, int error, int 
         r->errors++;
     else
         r->warnings++;
-    if (r->nmsg >= SOLID_MAX_MESSAGES) return;
+    /* the last place is kept for the first error, so that warnings never hide it */
+    if (r->nmsg + (!error && r->errors == 0) >= SOLID_MAX_MESSAGES) return;
     solid_msg_info *in = &r->info[r->nmsg];
     char *m = r->msg[r->nmsg++];
     size_t cap = sizeof r->msg[0];
@@ -231,6 +242,7 @@ static int merge_vertices(ck *c)
     int64_t *g = malloc((nv ? 3 * nv : 1) * sizeof *g);
     uint32_t *tab = malloc(cap * sizeof *tab);
     c->merged = malloc((nv ? nv : 1) * sizeof *c->merged);
+    c->g = g;
     if (!g || !tab || !c->merged) goto fail;
     memset(tab, 0xff, cap * sizeof *tab);
     for (size_t v = 0; v < nv; v++) {
@@ -243,11 +255,9 @@ static int merge_vertices(ck *c)
         if (tab[h] == NONE) tab[h] = (uint32_t)v;
         c->merged[v] = tab[h];
     }
-    free(g);
     free(tab);
     return 0;
 fail:
-    free(g);
     free(tab);
     return -1;
 }
@@ -313,15 +323,163 @@ static int collinear_on_grid(const ck *c, size_t k)
     return 1;
 }
 
+/* ---- check: a face on the grid (core/facecheck.h) ----------------------------------------- */
+
+/* The cycles of one face as the 3D pipeline sees them: merged vertices, without a step between
+ * equal ones; inp keeps an input index of each entry for the messages. */
+typedef struct gface {
+    uint32_t *ids, *inp, **cyc;
+    size_t *len;
+    size_t capids, capinp, capcyc, caplen;
+    face_work w;
+} gface;
+
+static void gface_free(gface *q)
+{
+    free(q->ids);
+    free(q->inp);
+    free(q->cyc);
+    free(q->len);
+    face_work_free(&q->w);
+}
+
+static const char AXIS[3] = {'x', 'y', 'z'};
+
+/* The input indices of edge i of cycle k: "a-b". */
+static void edge_name(const gface *q, size_t k, size_t i, char *buf, size_t cap)
+{
+    size_t off = (size_t)(q->cyc[k] - q->ids);
+    snprintf(buf, cap, "%u-%u", q->inp[off + i], q->inp[off + (i + 1) % q->len[k]]);
+}
+
+static uint32_t entry_inp(const gface *q, size_t k, size_t i)
+{
+    return q->inp[(size_t)(q->cyc[k] - q->ids) + i];
+}
+
+/* Reports what face_check found wrong with face f: an error at the face, or at the hole the
+ * problem is about (a hole crossing the outer cycle or another hole: the first such hole). */
+static void face_problem(ck *c, size_t f, const gface *q, const face_verdict *v)
+{
+    char d[256], e1[24], e2[24], pre[64] = "";
+    size_t c1 = v->c1, c2 = v->c2;
+    uint32_t x1 = entry_inp(q, v->c1, v->i1), x2 = entry_inp(q, v->c2, v->i2);
+    edge_name(q, v->c1, v->i1, e1, sizeof e1);
+    edge_name(q, v->c2, v->i2, e2, sizeof e2);
+    if (c2 < c1) { /* the outer cycle, or the first hole, first */
+        size_t t = c1;
+        c1 = c2, c2 = t;
+    }
+    /* the cycle the message is about: c1, or for two cycles the hole among them */
+    size_t about = v->what == FACE_HOLE_IN ? v->c1 : c1 == c2 || c1 > 0 ? c1 : c2;
+    const char *who = about ? "" : "its outer cycle "; /* the subject, unless the location */
+    const char *other = c1 == 0 ? "the outer cycle" : "another hole";
+    if (!v->planar) snprintf(pre, sizeof pre, "not planar, and seen along %c ", AXIS[v->axis]);
+    switch (v->what) {
+    case FACE_FLAT:
+        snprintf(d, sizeof d, "zero area (a face with holes whose vertices lie on one line)");
+        break;
+    case FACE_PROJ_POINT:
+        snprintf(d, sizeof d, "vertices %u and %u fall on one point", x1, x2);
+        break;
+    case FACE_CROSS:
+        if (c1 == c2)
+            snprintf(d, sizeof d, "%scrosses itself (edges %s and %s)", who, e1, e2);
+        else
+            snprintf(d, sizeof d, "crosses %s (edges %s and %s)", other, e1, e2);
+        break;
+    case FACE_OVERLAP:
+        if (c1 == c2)
+            snprintf(d, sizeof d, "%sruns back along itself (edges %s and %s overlap)", who, e1,
+                     e2);
+        else
+            snprintf(d, sizeof d, "runs along %s (edges %s and %s overlap)", other, e1, e2);
+        break;
+    case FACE_PINCH:
+        if (x1 == x2)
+            snprintf(d, sizeof d, "%spasses twice through vertex %u (a pinch)", who, x1);
+        else
+            snprintf(d, sizeof d, "%spasses twice through one point (vertices %u and %u)", who, x1,
+                     x2);
+        break;
+    case FACE_ON_EDGE:
+        if (c1 == c2)
+            snprintf(d, sizeof d, "%stouches itself: vertex %u lies inside its edge %s", who, x1,
+                     e2);
+        else
+            snprintf(d, sizeof d,
+                     "vertex %u of one cycle lies inside edge %s of another (a T-junction)", x1,
+                     e2);
+        break;
+    case FACE_CROSS_AT:
+        snprintf(d, sizeof d, "crosses %s at vertex %u", other, x1);
+        break;
+    case FACE_HOLE_OUT:
+        snprintf(d, sizeof d, "lies outside the outer cycle");
+        break;
+    case FACE_HOLE_IN:
+        snprintf(d, sizeof d, "lies inside another hole (the one through vertex %u)", x2);
+        break;
+    case FACE_HOLE_TURN:
+        snprintf(d, sizeof d, "turns the same way as the outer cycle (holes turn the other way)");
+        break;
+    default:
+        snprintf(d, sizeof d, "not a polygon");
+    }
+    note_at(c, 1, about ? SOLID_AT_HOLE : SOLID_AT_FACE, f, about ? about - 1 : 0,
+            "%s%s on the grid of step %g", pre, d, c->p);
+}
+
+/* Face f on the grid: its cycles as the pipeline takes them, checked by face_check.  Returns -1
+ * out of memory (else 0; a problem is reported). */
+static int check_face_grid(ck *c, size_t f, gface *q)
+{
+    const solid *s = c->s;
+    size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
+    size_t total = s->cyc_off[k1] - s->cyc_off[k0], nc = k1 - k0;
+    /* a triangle (not flat: checked before) is a polygon; so is any face of a single cycle of
+     * three distinct points */
+    if (nc == 1 && total == 3) return 0;
+    if (grow((void **)&q->ids, &q->capids, total + 1, sizeof *q->ids) ||
+        grow((void **)&q->inp, &q->capinp, total + 1, sizeof *q->inp) ||
+        grow((void **)&q->cyc, &q->capcyc, nc, sizeof *q->cyc) ||
+        grow((void **)&q->len, &q->caplen, nc, sizeof *q->len))
+        return -1;
+    size_t n = 0;
+    for (size_t k = k0; k < k1; k++) {
+        size_t st = n;
+        for (uint32_t i = s->cyc_off[k]; i < s->cyc_off[k + 1]; i++) {
+            uint32_t m = c->merged[s->cyc[i]];
+            if (n > st && q->ids[n - 1] == m) continue;
+            q->ids[n] = m;
+            q->inp[n++] = s->cyc[i];
+        }
+        while (n - st > 1 && q->ids[n - 1] == q->ids[st]) n--;
+        if (n - st < 3) return 0; /* reported (fewer than 3 distinct) */
+        q->len[k - k0] = n - st;
+    }
+    for (size_t k = 0, off = 0; k < nc; off += q->len[k], k++) q->cyc[k] = q->ids + off;
+    if (nc == 1 && q->len[0] == 3) return 0;
+    face_cycles fcy = {c->g, nc, (const uint32_t *const *)q->cyc, q->len};
+    face_verdict v;
+    if (face_check(&fcy, c->faces_only ? 0 : FACE_SOLID, &q->w, &v)) return -1;
+    if (v.what == FACE_OK || v.what == FACE_UNCHECKED) return 0;
+    if (v.what == FACE_FLAT && nc == 1) return 0; /* left out (warned) */
+    face_problem(c, f, q, &v);
+    return 0;
+}
+
 /* Degenerate cycles, zero area, planarity; fills c->area.  Appends nothing to the topology:
  * a bad face still has its edges, so what it does to its neighbours is reported too. */
 static int check_faces(ck *c)
 {
     const solid *s = c->s;
     const uint32_t *cy = s->cyc;
+    gface q = {0};
+    int rc = 0;
     c->area = malloc(s->nf * sizeof *c->area);
     if (!c->area) return -1;
-    for (size_t f = 0; f < s->nf; f++) {
+    for (size_t f = 0; f < s->nf && rc == 0; f++) {
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
         c->area[f] = 0;
         int degenerate = 0;
@@ -367,7 +525,7 @@ static int check_faces(ck *c)
                            (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
                            (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
         c->area[f] = len / 2;
-        if (!(len > 0)) {
+        if (!(len > 0) && k1 - k0 > 1) {
             /* a face with holes whose outer cycle is flat in doubles (the grid test above
              * only takes faces without holes) */
             note(c, 1, SOLID_AT_FACE, f, "zero area (a face with holes, at precision %g)", c->p);
@@ -398,8 +556,10 @@ static int check_faces(ck *c)
                  wv, worst, c->p);
             c->rep->split_faces++;
         }
+        rc = check_face_grid(c, f, &q);
     }
-    return 0;
+    gface_free(&q);
+    return rc;
 }
 
 /* ---- check: edges --------------------------------------------------------------------- */
@@ -699,7 +859,11 @@ static int check(const solid *s, double precision, const char *label, solid_repo
                  solid *fixed, int faces_only)
 {
     solid_report local;
-    ck c = {.s = s, .p = precision, .rep = rep ? rep : &local, .label = label ? label : "solid"};
+    ck c = {.s = s,
+            .p = precision,
+            .rep = rep ? rep : &local,
+            .label = label ? label : "solid",
+            .faces_only = faces_only};
     memset(c.rep, 0, sizeof *c.rep);
     if (fixed) memset(fixed, 0, sizeof *fixed);
     int bad = 0;
@@ -724,6 +888,7 @@ oom:
     note(&c, 1, SOLID_AT_SOLID, 0, "out of memory");
 done:
     free(c.merged);
+    free(c.g);
     free(c.area);
     free(c.he);
     free(c.pair);

@@ -14,12 +14,20 @@
  *   - a face farther than the precision from planar (a vertex that far from the plane through
  *     the mean of its vertices): a warning, since the 3D pipeline splits such a face into
  *     triangles, each exactly planar (counted in split_faces);
+ *   - a face that is not a polygon with holes on the grid, in its plane or (not planar on the
+ *     grid) in the projection the pipeline triangulates it in, decided exactly on the grid
+ *     points (core/facecheck.h): a cycle crossing itself, running back along itself, passing a
+ *     point twice or touching its own edge; a hole crossing the outer cycle or another hole,
+ *     outside the outer cycle, inside another hole, or (solids) turning the same way as the
+ *     outer cycle; (solids) a vertex of one cycle inside an edge of another.  Cycles touching
+ *     at a shared vertex are taken;
  *   - an open surface (an edge used once), a non-manifold one (an edge used more than twice);
  *   - inconsistent orientation (an edge walked twice in the same direction): reported; when the
  *     faces can be made consistent by flipping some of them (the surface is orientable), they are
  *     flipped in the fixed copy and a warning says so;
  *   - an inward-oriented solid (negative signed volume): flipped in the fixed copy, warning.
- * Errors make the solid unusable; warnings describe what the fixed copy changed.
+ * Errors make the solid unusable; warnings describe what the fixed copy changed.  Messages are
+ * kept up to SOLID_MAX_MESSAGES, the last place for the first error (warnings never hide it).
  *
  * Threads: reentrant, no globals.  Ownership: inputs are borrowed; a solid made by the readers
  * or by solid_check's fixed copy is freed with solid_free().

@@ -584,8 +584,12 @@ TEST(orientation_no_flip_can_fix)
     solid fx;
     CHECK(solid_check(&s, 1e-6, "twisted", &r, &fx) == -1, "accepted");
     print_report("hole walked the wrong way", &r);
-    CHECK(r.errors == 1 && has_msg(&r, "cannot be oriented consistently"), "%zu errors: %s",
-          r.errors, r.msg[0]);
+    /* the hole turns as its outer cycle does on the grid (exact), and so its walls cannot
+     * agree with both faces */
+    CHECK(r.errors == 2 &&
+              has_msg(&r, "twisted: face 0: hole 1: turns the same way as the outer cycle") &&
+              has_msg(&r, "cannot be oriented consistently"),
+          "%zu errors: %s", r.errors, r.msg[0]);
     CHECK(fx.nf == 0 && fx.V == NULL, "fixed copy of an unusable solid");
     solid_free(&s);
 
@@ -673,6 +677,331 @@ TEST(large_box_is_checked_in_n_log_n)
            nq, ms, ms2, nq / 3);
     solid_free(&fx);
     solid_free(&s);
+}
+
+/* ---- faces on the grid: crossings, touches, holes (core/facecheck.c) ---------------------- */
+
+#define END NAN /* ends a cycle in a face's points; two end the face */
+
+/* The prism of height h over the face (x, y points, cycles ended by END, the last by two):
+ * every cycle point gets its own bottom and top vertex (2i at z = 0, 2i + 1 at z = h, or
+ * h + lift for the first point), so cycles that touch share positions, not indices.  Face 0 is
+ * the top, its cycles as given (outer counter-clockwise seen from above, holes clockwise, unless
+ * a case wants otherwise), face 1 the bottom, then a wall per edge. */
+static solid prism(const double *pts, double h, double lift)
+{
+    size_t np = 0, ncyc = 0, k = 0;
+    for (; !(isnan(pts[k]) && isnan(pts[k + 1])); k++)
+        if (isnan(pts[k]))
+            ncyc++;
+        else
+            np++, k++;
+    ncyc++;
+    np = np;
+    double *V = malloc(6 * np * sizeof *V);
+    size_t *start = malloc((ncyc + 1) * sizeof *start), c = 0, i = 0;
+    start[0] = 0;
+    for (k = 0; c < ncyc; k++) {
+        if (isnan(pts[k])) {
+            start[++c] = i;
+            continue;
+        }
+        double z = h + (i == 0 ? lift : 0);
+        double row[6] = {pts[k], pts[k + 1], 0, pts[k], pts[k + 1], z};
+        memcpy(V + 6 * i, row, sizeof row);
+        i++, k++;
+    }
+    int *F = malloc((2 * (np + ncyc) + 6 * np + 8) * sizeof *F);
+    size_t n = 0;
+    for (int top = 1; top >= 0; top--) {
+        for (c = 0; c < ncyc; c++) {
+            size_t len = start[c + 1] - start[c];
+            for (size_t j = 0; j < len; j++)
+                F[n++] = (int)(2 * (start[c] + (top ? j : len - 1 - j)) + (size_t)top);
+            F[n++] = -1;
+        }
+        F[n - 1] = -2;
+    }
+    for (c = 0; c < ncyc; c++) {
+        size_t len = start[c + 1] - start[c];
+        for (size_t j = 0; j < len; j++) {
+            int a = (int)(2 * (start[c] + j)), b = (int)(2 * (start[c] + (j + 1) % len));
+            F[n++] = a, F[n++] = b, F[n++] = b + 1, F[n++] = a + 1, F[n++] = -2;
+        }
+    }
+    solid s = make(V, 2 * np, F, n);
+    free(V);
+    free(start);
+    free(F);
+    return s;
+}
+
+typedef struct face_case {
+    const char *name;
+    double precision, h, lift;
+    const double *pts;
+    double volume;    /* > 0: usable, with this volume */
+    const char *want; /* else: its first error holds this */
+} face_case;
+
+/* the face 0..8 square, counter-clockwise, and the same with more points on its sides */
+#define SQ        0, 0, 8, 0, 8, 8, 0, 8, END
+#define SQ_4      0, 0, 4, 0, 8, 0, 8, 8, 0, 8, END
+#define SQ_46     0, 0, 4, 0, 6, 0, 8, 0, 8, 8, 0, 8, END
+#define SQ_4_4    0, 0, 4, 0, 8, 0, 8, 8, 4, 8, 0, 8, END
+#define FACE(...) ((const double[]){__VA_ARGS__, END, END})
+#define P64       (1.0 / 64)
+
+static const face_case face_cases[] = {
+    /* usable: a hole; holes touching the outer cycle or each other at a point they share */
+    {"hole", P64, 4, 0, FACE(SQ, 2, 2, 2, 4, 4, 4, 4, 2), 240, NULL},
+    {"hole touching the outer cycle", P64, 4, 0, FACE(SQ_4, 4, 0, 3, 2, 5, 2), 248, NULL},
+    {"holes touching each other", P64, 4, 0, FACE(SQ, 2, 2, 3, 4, 4, 2, END, 4, 2, 5, 4, 6, 2), 240,
+     NULL},
+    /* a chain outer - hole - hole - outer: the face's inside is in two parts */
+    {"holes across the face", P64, 4, 0,
+     FACE(SQ_4_4, 4, 0, 3, 2, 4, 4, 5, 2, END, 4, 4, 3, 6, 4, 8, 5, 6), 224, NULL},
+    /* four holes at one point, each in its own quarter */
+    {"four holes at one point", P64, 4, 0,
+     FACE(SQ, 4, 4, 6, 5, 6, 3, END, 4, 4, 2, 3, 2, 5, END, 4, 4, 3, 6, 5, 6, END, 4, 4, 5, 2, 3,
+          2),
+     224, NULL},
+    /* valid at a fine grid; at step 1 the tip (2, 2.25) snaps to (2, 2), below the snapped edge
+     * (0, 2)-(4, 3): the outer cycle crosses itself there */
+    {"fine grid", P64, 4, 0, FACE(0, 1.625, 4, 2.625, 4, 6, 2, 2.25, 0, 6), 32, NULL},
+    {"coarse grid", 1, 4, 0, FACE(0, 1.625, 4, 2.625, 4, 6, 2, 2.25, 0, 6), 0,
+     "prism: face 0: its outer cycle crosses itself (edges 1-3 and 5-7) on the grid of step 1"},
+    /* a hole near the outer cycle: at step 1 its tip snaps onto the outer cycle's edge */
+    {"hole, fine grid", P64, 4, 0, FACE(SQ, 3, 1, 5, 1, 4, 0.25), 253, NULL},
+    {"hole, coarse grid", 1, 4, 0, FACE(SQ, 3, 1, 5, 1, 4, 0.25), 0,
+     "prism: face 0: hole 1: vertex 13 of one cycle lies inside edge 1-3 of another (a "
+     "T-junction)"},
+    /* refused */
+    {"bowtie", P64, 4, 0, FACE(0, 0, 8, 8, 8, 0, 0, 8), 0,
+     "prism: face 0: its outer cycle crosses itself (edges 1-3 and 5-7) on the grid of step "
+     "0.015625"},
+    {"hole crossing the outer cycle", P64, 4, 0, FACE(SQ, 6, 2, 6, 4, 10, 4, 10, 2), 0,
+     "prism: face 0: hole 1: crosses the outer cycle (edges 3-5 and 11-13)"},
+    {"holes crossing", P64, 4, 0, FACE(SQ, 2, 2, 2, 5, 5, 5, 5, 2, END, 4, 4, 4, 6, 6, 6, 6, 4), 0,
+     "prism: face 0: hole 1: crosses another hole (edges 11-13 and 17-19)"},
+    {"hole crossing the outer cycle at two vertices", P64, 4, 0,
+     FACE(SQ_46, 4, 0, 5, 1, 6, 0, 5, -1), 0,
+     "prism: face 0: hole 1: crosses the outer cycle at vertex 3"},
+    {"holes crossing at two vertices", P64, 4, 0,
+     FACE(SQ, 2, 4, 4, 6, 6, 4, 4, 2, END, 4, 6, 7, 7, 6, 4, 4.5, 4.5), 0,
+     "prism: face 0: hole 1: crosses another hole at vertex"},
+    {"pinch", P64, 4, 0, FACE(0, 0, 8, 0, 4, 4, 8, 8, 0, 8, 4, 4), 0,
+     "prism: face 0: its outer cycle passes twice through one point (vertices 5 and 11)"},
+    {"hole outside", P64, 4, 0, FACE(SQ, 10, 2, 10, 4, 12, 4, 12, 2), 0,
+     "prism: face 0: hole 1: lies outside the outer cycle"},
+    {"hole inside a hole", P64, 4, 0, FACE(SQ, 1, 1, 1, 7, 7, 7, 7, 1, END, 3, 3, 3, 5, 5, 5, 5, 3),
+     0, "prism: face 0: hole 2: lies inside another hole (the one through vertex 9)"},
+    {"hole turning the same way", P64, 4, 0, FACE(SQ, 2, 2, 4, 2, 4, 4, 2, 4), 0,
+     "prism: face 0: hole 1: turns the same way as the outer cycle"},
+    {"T-junction", P64, 4, 0, FACE(SQ, 4, 0, 3, 2, 5, 2), 0,
+     "prism: face 0: hole 1: vertex 9 of one cycle lies inside edge 1-3 of another (a "
+     "T-junction)"},
+    {"running back", P64, 4, 0, FACE(0, 0, 8, 0, 8, 8, 3, 8, 6, 8, 0, 8), 0,
+     "prism: face 0: its outer cycle runs back along itself (edges 5-7 and 7-9 overlap)"},
+    {"touching itself", P64, 4, 0, FACE(0, 0, 8, 0, 8, 8, 6, 8, 4, 0, 2, 8, 0, 8), 0,
+     "prism: face 0: its outer cycle touches itself: vertex 9 lies inside its edge 1-3"},
+    /* not planar (the first top vertex raised): split into triangles of its projection, which
+     * must be a polygon */
+    {"not planar", P64, 4, 1, FACE(SQ, 2, 2, 2, 4, 4, 4, 4, 2), -1, NULL},
+    {"not planar, crossing", P64, 4, 1, FACE(0, 0, 8, 0, 8, 8, 0, 8, 4, -2), 0,
+     "prism: face 0: not planar, and seen along z its outer cycle crosses itself (edges"},
+};
+
+TEST(faces_on_the_grid)
+{
+    for (size_t i = 0; i < sizeof face_cases / sizeof *face_cases; i++) {
+        const face_case *fc = &face_cases[i];
+        solid s = prism(fc->pts, fc->h, fc->lift), fx;
+        solid_report r;
+        int rc = solid_check(&s, fc->precision, "prism", &r, &fx);
+        if (fc->volume != 0) {
+            CHECK(rc == 0 && r.errors == 0, "%s: refused: %s", fc->name, r.msg[0]);
+            CHECK(fc->volume < 0 || r.volume == fc->volume, "%s: volume %.17g, want %g", fc->name,
+                  r.volume, fc->volume);
+            solid_free(&fx);
+        } else {
+            size_t first = 0;
+            while (first < r.nmsg && r.info[first].warning) first++;
+            CHECK(rc == -1 && first < r.nmsg && strstr(r.msg[first], fc->want),
+                  "%s: rc %d, first error \"%s\", want \"%s\"", fc->name, rc,
+                  first < r.nmsg ? r.msg[first] : "(none)", fc->want);
+        }
+        solid_free(&s);
+    }
+}
+
+/* The two inputs fuzzing found (tests/fuzz/corpus), at the grid step the API takes for them. */
+TEST(fuzz_faces_refused)
+{
+    static const struct {
+        const char *path, *want;
+    } fz[] = {
+        /* a pyramid whose base is a bowtie */
+        {"tests/fuzz/corpus/obj/bowtie-face-refused.obj",
+         "s: face 0: its outer cycle crosses itself (edges 3-2 and 1-0) on the grid of step "
+         "5.96046e-08"},
+        /* the grid of a coordinate near 1e13 (step 16384) collapses face 14 onto two lines */
+        {"tests/fuzz/corpus/off/grid-collapses-face-refused.off",
+         "s: face 14: its outer cycle runs back along itself (edges 15-16 and 6-5 overlap) on "
+         "the grid of step 16384"},
+    };
+    for (size_t i = 0; i < sizeof fz / sizeof *fz; i++) {
+        size_t len;
+        char *text = test_read_file(fz[i].path, &len), err[200];
+        REQUIRE(text, "%s: cannot read", fz[i].path);
+        solid s;
+        int off = strstr(fz[i].path, ".off") != NULL;
+        int rc = off ? solid_read_off(text, len, &s, err, sizeof err)
+                     : solid_read_obj(text, len, &s, err, sizeof err);
+        free(text);
+        REQUIRE(rc == 0, "%s: %s", fz[i].path, err);
+        /* the API's step: the power of two just above extent * 2^-30 */
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t v = 0; v < s.nv; v++)
+            for (int a = 0; a < 3; a++) {
+                lo[a] = fmin(lo[a], s.V[3 * v + a]);
+                hi[a] = fmax(hi[a], s.V[3 * v + a]);
+            }
+        double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+        double step = exp2(ceil(log2(ext * 0x1p-30)));
+        solid_report r;
+        rc = solid_check(&s, step, "s", &r, NULL);
+        size_t first = 0;
+        while (first < r.nmsg && r.info[first].warning) first++;
+        CHECK(rc == -1 && first < r.nmsg && strstr(r.msg[first], fz[i].want),
+              "%s: rc %d, first error \"%s\"", fz[i].path, rc,
+              first < r.nmsg ? r.msg[first] : "(none)");
+        solid_free(&s);
+    }
+}
+
+/* The holes' places in a face of more edges than the all-pairs check takes (the rays then go
+ * through the box tree): inside, touching the outer cycle, outside, inside another hole. */
+TEST(holes_in_a_large_face)
+{
+    static const struct {
+        double hole[2][8]; /* two square holes, clockwise; the second may be absent (NAN) */
+        const char *want;  /* NULL: usable */
+    } cases[] = {
+        {{{-10, -10, -10, 10, 10, 10, 10, -10}, {100, 100, 100, 200, 200, 200, 200, 100}}, NULL},
+        /* touching the outer cycle at its point (1000, 0) */
+        {{{1000, 0, 900, -50, 900, 50, NAN}, {-10, -10, -10, 10, 10, 10, 10, -10}}, NULL},
+        {{{-10, -10, -10, 10, 10, 10, 10, -10}, {2000, 0, 2000, 10, 2010, 10, 2010, 0}},
+         "big: face 0: hole 2: lies outside the outer cycle"},
+        {{{-100, -100, -100, 100, 100, 100, 100, -100}, {-10, -10, -10, 10, 10, 10, 10, -10}},
+         "big: face 0: hole 2: lies inside another hole (the one through vertex 257)"},
+        {{{-10, -10, -10, 10, 10, 10, 10, -10}, {-100, -100, -100, 100, 100, 100, 100, -100}},
+         "big: face 0: hole 1: lies inside another hole (the one through vertex 265)"},
+    };
+    size_t n = 128;
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        double pts[2 * 128 + 2 * 10 + 8], area = 0;
+        size_t m = 0;
+        for (size_t i = 0; i < n; i++) { /* a regular polygon of radius 1000, (1000, 0) first */
+            double a = 2 * M_PI * (double)i / (double)n;
+            pts[m++] = i ? round(1000 * cos(a)) : 1000, pts[m++] = i ? round(1000 * sin(a)) : 0;
+        }
+        for (size_t i = 0; i < n; i++)
+            area += (pts[2 * i] * pts[2 * ((i + 1) % n) + 1] -
+                     pts[2 * ((i + 1) % n)] * pts[2 * i + 1]) /
+                    2;
+        for (int h = 0; h < 2; h++) {
+            const double *q = cases[c].hole[h];
+            size_t k = isnan(q[6]) ? 3 : 4;
+            pts[m++] = END;
+            for (size_t i = 0; i < 2 * k; i++) pts[m++] = q[i];
+            for (size_t i = 0; i < k; i++) /* clockwise: subtracts */
+                area +=
+                    (q[2 * i] * q[2 * ((i + 1) % k) + 1] - q[2 * ((i + 1) % k)] * q[2 * i + 1]) / 2;
+        }
+        pts[m++] = END, pts[m++] = END;
+        solid s = prism(pts, 100, 0), fx;
+        solid_report r;
+        int rc = solid_check(&s, 1, "big", &r, &fx);
+        if (!cases[c].want) {
+            CHECK(rc == 0 && r.volume == 100 * area, "case %zu: %s, volume %.17g, want %.17g", c,
+                  r.msg[0], r.volume, 100 * area);
+            solid_free(&fx);
+        } else {
+            CHECK(rc == -1 && has_msg(&r, cases[c].want), "case %zu: %d %s", c, rc, r.msg[0]);
+        }
+        solid_free(&s);
+    }
+}
+
+/* Faces of 200 000 points and of 20 000 holes touching each other at their corners (a
+ * checkerboard), checked in about n log n; and the big one with two points swapped (a crossing
+ * among 200 000 edges) refused. */
+TEST(large_faces_are_checked_near_linearly)
+{
+    size_t n = 200000;
+    double *pts = malloc((2 * n + 4) * sizeof *pts);
+    for (size_t i = 0; i < n; i++) {
+        double a = 2 * M_PI * (double)i / (double)n;
+        pts[2 * i] = round(1e7 * cos(a)), pts[2 * i + 1] = round(1e7 * sin(a));
+    }
+    pts[2 * n] = pts[2 * n + 1] = END;
+    for (int swap = 0; swap < 2; swap++) {
+        if (swap) { /* points 1000 and 1001 swapped */
+            double t[2] = {pts[2000], pts[2001]};
+            pts[2000] = pts[2002], pts[2001] = pts[2003], pts[2002] = t[0], pts[2003] = t[1];
+        }
+        solid s = prism(pts, 1e6, 0);
+        solid_report r;
+        double t0 = now_ms();
+        int rc = solid_check(&s, 1, "circle", &r, NULL);
+        double ms = now_ms() - t0;
+        if (!swap)
+            CHECK(rc == 0 && fabs(r.volume - M_PI * 1e20) < 1e-6 * M_PI * 1e20,
+                  "circle: %d %s, volume %g", rc, r.msg[0], r.volume);
+        else
+            CHECK(rc == -1 && has_msg(&r, "circle: face 0: its outer cycle "), "swapped: %d %s", rc,
+                  r.msg[0]);
+        CHECK(ms < 20000, "%.0f ms", ms);
+        printf("  a face of %zu points%s: %.0f ms (the solid: %zu faces)\n", n,
+               swap ? ", two swapped" : "", ms, s.nf);
+        solid_free(&s);
+    }
+    free(pts);
+    /* a 200 x 200 checkerboard of unit holes in a square of side 202 */
+    int N = 200;
+    size_t m = 0;
+    pts = malloc((10 + 10 * (size_t)N * (size_t)N / 2 + 10) * sizeof *pts);
+    double sq[] = {-1, -1, N + 1, -1, N + 1, N + 1, -1, N + 1};
+    memcpy(pts, sq, sizeof sq);
+    m = 8;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++) {
+            if ((i + j) % 2) continue;
+            double h[] = {END, i, j, i, j + 1, i + 1, j + 1, i + 1, j}; /* clockwise */
+            memcpy(pts + m, h, sizeof h);
+            m += 9;
+        }
+    pts[m++] = END, pts[m++] = END;
+    solid s = prism(pts, 4, 0);
+    solid_report r;
+    double t0 = now_ms();
+    int rc = solid_check(&s, 0.125, "board", &r, NULL);
+    double ms = now_ms() - t0;
+    double area = (double)(N + 2) * (N + 2) - (double)N * N / 2;
+    CHECK(rc == 0 && r.volume == 4 * area, "board: %d, volume %g", rc, r.volume);
+    CHECK(ms < 20000, "%.0f ms", ms);
+    printf("  a face of %d holes touching at %d points: %.0f ms\n", N * N / 2,
+           (N - 1) * (N - 1) / 2 * 2, ms);
+    /* at step 1 it is thinner than the grid: the error comes after 39 601 warnings (an edge on
+     * four faces at each point where holes touch), and is kept */
+    rc = solid_check(&s, 1, "board", &r, NULL);
+    CHECK(rc == -1 && r.errors == 1 && r.nmsg == SOLID_MAX_MESSAGES &&
+              strstr(r.msg[SOLID_MAX_MESSAGES - 1], "board: degenerate: volume"),
+          "board at step 1: %d, %zu errors, %zu warnings, last kept: %s", rc, r.errors, r.warnings,
+          r.msg[r.nmsg - 1]);
+    solid_free(&s);
+    free(pts);
 }
 
 /* ---- OBJ ---------------------------------------------------------------------------------- */

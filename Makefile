@@ -13,15 +13,15 @@ CXX     ?= g++
 OPT     ?= -O2
 SAN     ?=
 CFLAGS  += -std=c17 $(OPT) -g -Wall -Wextra -Werror -pthread -D_GNU_SOURCE $(SAN)
-CPPFLAGS += -I. -I/usr/include/libxml2
+CPPFLAGS += -I. -I/usr/include/libxml2 -I/usr/include/postgresql
 LDLIBS  += -lm -pthread
 JANSSON_LIBS := -ljansson -lxml2
 GEOS_LIBS    := -lgeos_c
-SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lcrypto
+SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lpq -lcrypto
 TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
-              libxml2-dev
+              libxml2-dev libpq-dev
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev
@@ -36,7 +36,7 @@ SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o) $(BUILD)/gen/openapi.o
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
-            $(BUILD)/tests/ref/geos_ref.o
+            $(BUILD)/tests/ref/geos_ref.o $(BUILD)/tests/daemon.o $(BUILD)/tests/pg.o
 
 .PHONY: all deps test check stress bench run clean format format-check tests fuzz
 # the tests' shared objects are not intermediates (two makes at once must find them)

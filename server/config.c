@@ -12,10 +12,21 @@
 const char config_usage[] =
     "usage: cellard [options]\n"
     "  --listen HOST:PORT    CELLAR_LISTEN        default 127.0.0.1:8080 (PORT 0: any free)\n"
-    "  --db PATH             CELLAR_DB            default ./cellar.db\n"
+    "  --db PATH|URI         CELLAR_DB            a SQLite file (one daemon), or a PostgreSQL\n"
+    "                                             postgresql://... URI that several daemons\n"
+    "                                             share (default ./cellar.db)\n"
     "  --spool DIR           CELLAR_SPOOL         results are written here as they are made\n"
-    "                                             (default: the directory of --db)\n"
-    "  --workers N           CELLAR_WORKERS       jobs run at once (default: CPUs)\n"
+    "                                             (default: the directory of a --db file, else\n"
+    "                                             the system's temporary directory)\n"
+    "  --name NAME           CELLAR_NAME          this daemon in the jobs it runs (default:\n"
+    "                                             HOSTNAME-PID)\n"
+    "  --lease-seconds SECS  CELLAR_LEASE_SECONDS a job's claim lasts this long unless renewed\n"
+    "                                             (every second while it runs); a daemon's\n"
+    "                                             jobs are requeued this long after it dies\n"
+    "                                             (default 30)\n"
+    "  --workers N           CELLAR_WORKERS       jobs run at once (default: CPUs; 0: this\n"
+    "                                             daemon only answers, others sharing its\n"
+    "                                             --db run the jobs)\n"
     "  --job-threads N       CELLAR_JOB_THREADS   core threads per job (default: CPUs)\n"
     "  --queue N             CELLAR_QUEUE         waiting jobs at most (default 64)\n"
     "  --max-body BYTES      CELLAR_MAX_BODY      request body limit (default 67108864)\n"
@@ -82,11 +93,17 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "db")) {
         if (!*v || strlen(v) >= sizeof c->db) return bad(err, errlen, "--db", v);
         strcpy(c->db, v);
+    } else if (!strcmp(name, "name")) {
+        if (!*v || strlen(v) >= sizeof c->name) return bad(err, errlen, "--name (1..63 bytes)", v);
+        strcpy(c->name, v);
+    } else if (!strcmp(name, "lease-seconds")) {
+        if (parse_secs(v, 2, 3600, &c->lease))
+            return bad(err, errlen, "--lease-seconds (2..3600)", v);
     } else if (!strcmp(name, "spool")) {
         if (!*v || strlen(v) >= sizeof c->spool) return bad(err, errlen, "--spool", v);
         strcpy(c->spool, v);
     } else if (!strcmp(name, "workers")) {
-        if (parse_u64(v, 1, 256, &u)) return bad(err, errlen, "--workers (1..256)", v);
+        if (parse_u64(v, 0, 256, &u)) return bad(err, errlen, "--workers (0..256)", v);
         c->workers = (int)u;
     } else if (!strcmp(name, "job-threads")) {
         if (parse_u64(v, 1, 64, &u)) return bad(err, errlen, "--job-threads (1..64)", v);
@@ -162,7 +179,9 @@ static const char *names[] = {"listen",
                               "header-timeout",
                               "body-timeout",
                               "idle-timeout",
-                              "log-level"};
+                              "log-level",
+                              "name",
+                              "lease-seconds"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {
@@ -189,6 +208,11 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
     c->job_ttl = 7 * 86400;
     c->max_jobs = 100000;
     c->log_level = LOG_INFO;
+    c->lease = 30;
+    char host[48] = "cellard";
+    gethostname(host, sizeof host - 1);
+    host[sizeof host - 1] = 0;
+    snprintf(c->name, sizeof c->name, "%s-%ld", host, (long)getpid());
     for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
         char var[64] = "CELLAR_";
         size_t k = 7;
@@ -240,7 +264,8 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
                  (unsigned long long)c->max_inflight, (unsigned long long)c->max_body);
         return -1;
     }
-    if (!c->spool[0]) { /* the directory of the database file */
+    int uri = !strncmp(c->db, "postgresql://", 13) || !strncmp(c->db, "postgres://", 11);
+    if (!c->spool[0] && !uri) { /* the directory of the database file */
         const char *slash = strrchr(c->db, '/');
         if (!slash)
             strcpy(c->spool, ".");

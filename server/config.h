@@ -3,8 +3,11 @@
  *
  *   flag            variable            default         meaning
  *   --listen        CELLAR_LISTEN       127.0.0.1:8080  HOST:PORT to listen on (PORT 0: any)
- *   --db            CELLAR_DB           ./cellar.db     the SQLite file (jobs and results)
- *   --spool         CELLAR_SPOOL        --db's dir      where results are written as they are
+ *   --db            CELLAR_DB           ./cellar.db     the SQLite file (jobs and results), or
+ *                                                       a postgresql:// URI (shared)
+ *   --name          CELLAR_NAME         HOSTNAME-PID    this daemon, as the jobs' owner
+ *   --lease-seconds CELLAR_LEASE_SECONDS 30             a claim's lease (renewed every second)
+ *   --spool         CELLAR_SPOOL        --db's dir/tmp  where results are written as they are
  *                                                       made, before they enter the store
  *   --workers       CELLAR_WORKERS      CPUs            jobs run at once
  *   --job-threads   CELLAR_JOB_THREADS  CPUs            core threads of one job
@@ -36,7 +39,9 @@ typedef struct config {
     char host[256];
     unsigned port;
     char db[4096];
-    char spool[4096];
+    char spool[4096]; /* "": the system's temporary directory */
+    char name[64];
+    double lease;
     int workers, job_threads;
     size_t queue;
     uint64_t max_body;

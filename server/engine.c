@@ -1,11 +1,14 @@
 /* engine.c — see engine.h.
  *
- * One mutex (lock) guards the live list, the queue, every job's state/progress/refs and the
- * waiter list; the condition `work` wakes workers, `idle` wakes a drain waiting for running jobs
- * to end, `tick` wakes the timer thread.  Store I/O and the geometry run outside the lock.
+ * One mutex (lock) guards the list of jobs running here, the waiters, the workers' wake-up
+ * count and the flags; the condition `work` wakes workers, `idle` wakes a drain waiting for
+ * running jobs to end, `tick` wakes the timer thread.  Store I/O and the geometry run outside
+ * the lock.
  *
- * A job's references: one for the live list (dropped when it ends), one per holder
- * (submit/find callers, the worker running it).  It is freed when the count reaches 0.
+ * A job running here is a `run`: the job as claimed (its request), the flag the core reads to
+ * stop, its progress, and whether its lease was lost (then it is another daemon's: nothing it
+ * makes is written as the job's end) or it is to be given back (a drain that stops it).  It
+ * belongs to its worker; the list lets the timer renew its lease and a cancel reach it.
  */
 #include "server/engine.h"
 
@@ -25,53 +28,60 @@
 #include "server/log.h"
 
 typedef struct waiter {
-    job *j;
+    char job[33];
     double deadline;
     void (*wake)(void *);
     void *ctx;
     struct waiter *next;
 } waiter;
 
-struct job {
-    char id[33], hash[65], kind[16];
-    job_state state; /* lock */
-    double created, started, finished;
-    char *request; /* canonical request; immutable */
-    size_t request_len;
+typedef struct run {
+    store_job sj;      /* as claimed: id, hash, kind, request; immutable */
     atomic_int cancel; /* read by the core */
     char stage[32];    /* lock */
     double fraction;   /* lock */
-    int error_status;  /* set once by the worker, under lock */
-    char *error;
-    char *result; /* DONE: the result JSON when at most ENGINE_KEEP bytes (else NULL: it is in
-                     the store only); immutable once set */
-    size_t result_len;
-    int refs;   /* lock */
-    int live;   /* lock: in e->live */
-    int active; /* lock: submissions not canceled (the job is canceled when none is left) */
-    job *next_live, *next_queue;
-};
+    int lost;          /* lock: the lease is no longer ours */
+    int give_back;     /* lock: a drain stops it: back to the queue, not canceled */
+    struct run *next;  /* lock: e->running */
+} run;
 
 struct engine {
     engine_cfg cfg;
+    char owner[STORE_OWNER_MAX];
     pthread_mutex_t lock;
     pthread_cond_t work, idle, tick;
-    job *live;          /* queued and running jobs */
-    job *qhead, *qtail; /* FIFO of queued jobs */
-    size_t nqueued, nrunning;
+    run *running; /* the jobs running here */
+    size_t nrunning;
+    int pending; /* claims worth trying now (a job was queued, here or elsewhere) */
+    int poll;    /* the timer should look at the waiters' jobs in the store */
     waiter *waiters;
     int draining, stopping;
     pthread_t *threads; /* workers */
     int nthreads;
-    pthread_t timer;
-    int timer_started;
+    pthread_t timer, listener;
+    int timer_started, listener_started;
 };
+
+/* How long an idle worker waits before it looks at the queue again (a job queued by another
+ * daemon whose event was lost, a lease that ran out); a store no other daemon uses has no
+ * jobs but those submitted here, which wake a worker themselves. */
+#define POLL_SHARED 1.0
+#define POLL_ALONE  5.0
+/* A job's result or end that cannot be written (the store is away) is tried again every
+ * second, this many times; then the job is left to its lease, and requeued when it runs out. */
+#define STORE_TRIES 30
 
 double engine_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec / 1e9;
+}
+
+static struct timespec abs_time(double t)
+{
+    struct timespec ts = {.tv_sec = (time_t)t, .tv_nsec = (long)((t - (double)(time_t)t) * 1e9)};
+    return ts;
 }
 
 void engine_hash(const char *canon, size_t len, char *out)
@@ -96,48 +106,16 @@ static int new_id(char *out)
     return 0;
 }
 
-static void job_free(job *j)
-{
-    free(j->request);
-    free(j->error);
-    free(j->result);
-    free(j);
-}
+/* ---- waiters ---- */
 
-/* lock held */
-static void unref_locked(job *j)
-{
-    if (--j->refs == 0) job_free(j);
-}
-
-void engine_release(engine *e, job *j)
-{
-    if (!j) return;
-    pthread_mutex_lock(&e->lock);
-    unref_locked(j);
-    pthread_mutex_unlock(&e->lock);
-}
-
-/* lock held: takes j off the live list.  The list's reference is the caller's to drop, and
- * every caller holds another one, so j stays valid (refs-- rather than a free). */
-static void unlive_locked(engine *e, job *j)
-{
-    for (job **p = &e->live; *p; p = &(*p)->next_live)
-        if (*p == j) {
-            *p = j->next_live;
-            j->live = 0;
-            return;
-        }
-}
-
-/* lock held: moves every waiter of j (or every waiter, when j is NULL; or those past `now`
- * when j is NULL and now > 0) to the returned list, to be woken outside the lock */
-static waiter *take_waiters_locked(engine *e, const job *j, double now)
+/* lock held: moves the waiters of job (every waiter when job is NULL and now <= 0; those past
+ * `now` when job is NULL and now > 0) to the returned list, to be woken outside the lock */
+static waiter *take_waiters_locked(engine *e, const char *job, double now)
 {
     waiter *out = NULL;
     for (waiter **p = &e->waiters; *p;) {
         waiter *w = *p;
-        int take = j ? w->j == j : (now <= 0 || w->deadline <= now);
+        int take = job ? !strcmp(w->job, job) : (now <= 0 || w->deadline <= now);
         if (take) {
             *p = w->next;
             w->next = out;
@@ -159,9 +137,32 @@ static void wake_all(waiter *w)
     }
 }
 
+static void wake_job(engine *e, const char *job)
+{
+    pthread_mutex_lock(&e->lock);
+    waiter *w = take_waiters_locked(e, job, 0);
+    pthread_mutex_unlock(&e->lock);
+    wake_all(w);
+}
+
+/* Wakes n workers (a job was queued): they try a claim at once. */
+static void hint_workers(engine *e, int n)
+{
+    pthread_mutex_lock(&e->lock);
+    e->pending += n;
+    if (e->pending > e->nthreads) e->pending = e->nthreads;
+    if (n > 1)
+        pthread_cond_broadcast(&e->work);
+    else
+        pthread_cond_signal(&e->work);
+    pthread_mutex_unlock(&e->lock);
+}
+
+/* ---- running a job ---- */
+
 typedef struct progress_ctx {
     engine *e;
-    job *j;
+    run *r;
 } progress_ctx;
 
 /* The cores report the end of each stage (and some stages their own fraction); these are the
@@ -180,7 +181,7 @@ static const stage_share shares3[] = {
 static void progress_cb(void *udata, const char *stage, double fraction)
 {
     progress_ctx *p = udata; /* a few calls per job: the engine lock is fine */
-    int solids = !strcmp(p->j->kind, "solids");
+    int solids = !strcmp(p->r->sj.kind, "solids");
     const stage_share *sh = solids ? shares3 : shares2;
     size_t n = solids ? sizeof shares3 / sizeof *shares3 : sizeof shares2 / sizeof *shares2;
     for (size_t i = 0; i < n; i++)
@@ -190,14 +191,10 @@ static void progress_cb(void *udata, const char *stage, double fraction)
             break;
         }
     pthread_mutex_lock(&p->e->lock);
-    snprintf(p->j->stage, sizeof p->j->stage, "%s", stage);
-    if (fraction > p->j->fraction) p->j->fraction = fraction;
+    snprintf(p->r->stage, sizeof p->r->stage, "%s", stage);
+    if (fraction > p->r->fraction) p->r->fraction = fraction;
     pthread_mutex_unlock(&p->e->lock);
 }
-
-/* A result of at most this many bytes stays in memory with its job for the clients that
- * wait for it; a larger one is read from the store, a chunk at a time. */
-#define ENGINE_KEEP STORE_CHUNK
 
 /* A new spool file, already unlinked (it goes when closed, or with the process): in dir, or
  * tmpfile() when dir is NULL.  NULL with a message in err. */
@@ -225,148 +222,300 @@ static FILE *spool_open(const char *dir, char *err, size_t errlen)
     return f;
 }
 
-/* Moves the spooled result (len bytes) into the store, and into *keep when it is small. */
-static int spool_store(store *st, const char *hash, FILE *f, uint64_t len, char **keep, char *err,
-                       size_t errlen)
+static int run_lost(engine *e, run *r)
 {
-    if (fflush(f) || fseek(f, 0, SEEK_SET)) {
-        snprintf(err, errlen, "the spool file: %s", strerror(errno));
-        return STORE_ERR;
-    }
-    if (st->ops->result_put_file(st, hash, f, len, err, errlen)) return STORE_ERR;
-    *keep = NULL;
-    if (len > ENGINE_KEEP || fseek(f, 0, SEEK_SET)) return STORE_OK;
-    char *b = malloc((size_t)len + 1);
-    if (b && fread(b, 1, (size_t)len, f) == (size_t)len) {
-        b[len] = 0;
-        *keep = b;
-    } else {
-        free(b); /* stored all the same: the clients read it from the store */
-    }
-    return STORE_OK;
+    pthread_mutex_lock(&e->lock);
+    int lost = r->lost;
+    pthread_mutex_unlock(&e->lock);
+    return lost;
 }
 
-/* Runs one job on this worker thread; returns with the job ended and off the live list.  The
- * result is written to a spool file as it is made, then copied into the store a chunk at a
- * time: a large result never sits whole in memory. */
-static void run_job(engine *e, job *j)
+static void pause_s(double s)
+{
+    struct timespec ts = {.tv_sec = (time_t)s, .tv_nsec = (long)((s - (double)(time_t)s) * 1e9)};
+    nanosleep(&ts, NULL);
+}
+
+/* Moves the spooled result (len bytes) into the store, tried again while the store is away
+ * (STORE_TRIES) and the job is still ours. */
+static int spool_store(engine *e, run *r, FILE *f, uint64_t len, char *err, size_t errlen)
+{
+    store *st = e->cfg.st;
+    for (int t = 0;; t++) {
+        if (fflush(f) || fseek(f, 0, SEEK_SET)) {
+            snprintf(err, errlen, "the spool file: %s", strerror(errno));
+            return STORE_ERR;
+        }
+        if (st->ops->result_put_file(st, r->sj.hash, f, len, err, errlen) == STORE_OK)
+            return STORE_OK;
+        if (t + 1 >= STORE_TRIES || run_lost(e, r)) return STORE_ERR;
+        log_kv(LOG_WARN, "store: result_put failed, trying again", "job", r->sj.id, "error", err,
+               NULL);
+        pause_s(1);
+    }
+}
+
+/* Writes the end of job r, tried again while the store is away.  0 written; 1 the job is no
+ * longer ours; -1 not written (the lease will run out, and the job be requeued). */
+static int finish(engine *e, run *r, job_state st, double when, int status, const char *msg)
+{
+    char err[256];
+    store *s = e->cfg.st;
+    for (int t = 0;; t++) {
+        int rc = s->ops->job_finish(s, r->sj.id, e->owner, st, when, status, msg, err, sizeof err);
+        if (rc == STORE_OK) return 0;
+        if (rc == STORE_NOTFOUND) return 1;
+        if (t + 1 >= STORE_TRIES || run_lost(e, r)) {
+            log_kv(LOG_ERROR, "store: job_finish failed: the job is left to its lease", "job",
+                   r->sj.id, "error", err, NULL);
+            return -1;
+        }
+        pause_s(1);
+    }
+}
+
+/* Runs the claimed job r on this worker thread.  The result is written to a spool file as it
+ * is made, then copied into the store a chunk at a time: a large result never sits whole in
+ * memory. */
+static void run_job(engine *e, run *r)
 {
     char err[256] = "";
     api_error ae = {0};
     char *out = NULL;
     size_t outlen = 0;
     double t0 = engine_now();
-    store *st = e->cfg.st;
-
-    if (st->ops->job_set_state(st, j->id, JOB_RUNNING, j->started, 0, NULL, err, sizeof err))
-        log_kv(LOG_WARN, "store: job_set_state failed", "job", j->id, "error", err, NULL);
-    progress_ctx pc = {e, j};
+    progress_ctx pc = {e, r};
     api_run_opts ro = {
-        .threads = e->cfg.job_threads, .cancel = &j->cancel, .progress = progress_cb, .udata = &pc};
+        .threads = e->cfg.job_threads, .cancel = &r->cancel, .progress = progress_cb, .udata = &pc};
     int rc;
     ro.stream = spool_open(e->cfg.spool_dir, err, sizeof err);
     if (!ro.stream) {
-        log_kv(LOG_ERROR, "spool failed", "job", j->id, "error", err, NULL);
+        log_kv(LOG_ERROR, "spool failed", "job", r->sj.id, "error", err, NULL);
         rc = API_ENOMEM;
         snprintf(ae.msg, sizeof ae.msg, "the result could not be spooled: %.200s", err);
     } else {
-        rc = api_run_json_ex(j->request, j->request_len, &ro, &out, &outlen, &ae);
+        rc = api_run_json_ex(r->sj.request, r->sj.request_len, &ro, &out, &outlen, &ae);
     }
-    double t1 = engine_now();
+    free(out); /* streamed: nothing is returned */
     job_state final = rc == API_OK ? JOB_DONE : rc == API_ECANCELED ? JOB_CANCELED : JOB_FAILED;
-    if (rc == API_OK && spool_store(st, j->hash, ro.stream, outlen, &out, err, sizeof err)) {
-        log_kv(LOG_ERROR, "store: result_put failed", "job", j->id, "error", err, NULL);
+    if (rc == API_OK && spool_store(e, r, ro.stream, outlen, err, sizeof err)) {
+        log_kv(LOG_ERROR, "store: result_put failed", "job", r->sj.id, "error", err, NULL);
         final = JOB_FAILED;
         rc = 503;
         snprintf(ae.msg, sizeof ae.msg, "the result could not be stored: %.200s", err);
     }
     if (ro.stream) fclose(ro.stream);
-    pthread_mutex_lock(&e->lock);
-    int canceled_meanwhile = j->state == JOB_CANCELED;
-    pthread_mutex_unlock(&e->lock);
-    if (!canceled_meanwhile &&
-        st->ops->job_set_state(st, j->id, final, t1, final == JOB_FAILED ? rc : 0,
-                               final == JOB_FAILED ? ae.msg : NULL, err, sizeof err))
-        log_kv(LOG_ERROR, "store: job_set_state failed", "job", j->id, "error", err, NULL);
+    double t1 = engine_now();
 
     pthread_mutex_lock(&e->lock);
-    if (!canceled_meanwhile) {
-        j->state = final;
-        j->finished = t1;
-        if (final == JOB_FAILED) {
-            j->error_status = rc;
-            j->error = strdup(ae.msg);
+    int lost = r->lost, give_back = r->give_back && final == JOB_CANCELED;
+    pthread_mutex_unlock(&e->lock);
+    const char *what = job_state_name(final);
+    if (lost) {
+        what = "lost"; /* another daemon has it now: its end is theirs to write */
+    } else if (give_back) {
+        if (e->cfg.st->ops->job_release(e->cfg.st, r->sj.id, e->owner, err, sizeof err) ==
+            STORE_ERR)
+            log_kv(LOG_ERROR, "store: job_release failed: the job is left to its lease", "job",
+                   r->sj.id, "error", err, NULL);
+        what = "given back";
+    } else if (finish(e, r, final, t1, final == JOB_FAILED ? rc : 0,
+                      final == JOB_FAILED ? ae.msg : NULL) == 1) {
+        what = "lost";
+    }
+    pthread_mutex_lock(&e->lock);
+    for (run **p = &e->running; *p; p = &(*p)->next)
+        if (*p == r) {
+            *p = r->next;
+            break;
         }
-    }
-    if (final == JOB_DONE) {
-        j->result = out;
-        j->result_len = outlen;
-        out = NULL;
-    }
     e->nrunning--;
-    unlive_locked(e, j);
-    j->refs--; /* the list's; the worker still holds its own */
-    waiter *w = take_waiters_locked(e, j, 0);
+    waiter *w = take_waiters_locked(e, r->sj.id, 0);
     pthread_cond_broadcast(&e->idle);
     pthread_mutex_unlock(&e->lock);
     wake_all(w);
-    free(out);
+    if (!lost && !give_back) metrics_job_end(e->cfg.m, job_state_name(final), t1 - t0);
     char ms[32];
-    metrics_job_end(e->cfg.m, job_state_name(canceled_meanwhile ? JOB_CANCELED : final), t1 - t0);
-    log_kv(LOG_INFO, "job ended", "job", j->id, "kind", j->kind, "state",
-           job_state_name(canceled_meanwhile ? JOB_CANCELED : final), "ms",
+    log_kv(LOG_INFO, "job ended", "job", r->sj.id, "kind", r->sj.kind, "state", what, "ms",
            log_num(ms, (t1 - t0) * 1e3), NULL);
 }
 
 static void *worker_main(void *arg)
 {
     engine *e = arg;
+    int try_now = 1; /* at start: jobs may be queued already */
+    double poll = e->cfg.st->shared ? POLL_SHARED : POLL_ALONE;
     for (;;) {
         pthread_mutex_lock(&e->lock);
-        while (!e->stopping && !e->draining && !e->qhead) pthread_cond_wait(&e->work, &e->lock);
+        if (!try_now && !e->pending && !e->stopping && !e->draining) {
+            struct timespec ts = abs_time(engine_now() + poll);
+            pthread_cond_timedwait(&e->work, &e->lock, &ts);
+        }
         if (e->stopping || e->draining) {
             pthread_mutex_unlock(&e->lock);
             return NULL;
         }
-        job *j = e->qhead;
-        e->qhead = j->next_queue;
-        if (!e->qhead) e->qtail = NULL;
-        e->nqueued--;
-        e->nrunning++;
-        j->state = JOB_RUNNING;
-        j->started = engine_now();
-        snprintf(j->stage, sizeof j->stage, "started");
-        j->refs++; /* the worker's */
+        if (e->pending > 0) e->pending--;
         pthread_mutex_unlock(&e->lock);
-        run_job(e, j);
-        engine_release(e, j);
+
+        char err[256];
+        run *r = calloc(1, sizeof *r);
+        if (!r) {
+            pause_s(1);
+            continue;
+        }
+        int rc = e->cfg.st->ops->job_claim(e->cfg.st, e->owner, engine_now(), e->cfg.lease, &r->sj,
+                                           err, sizeof err);
+        if (rc != STORE_OK) {
+            if (rc == STORE_ERR) log_kv(LOG_WARN, "store: job_claim failed", "error", err, NULL);
+            free(r);
+            try_now = 0;
+            continue;
+        }
+        atomic_init(&r->cancel, 0);
+        snprintf(r->stage, sizeof r->stage, "started");
+        if (r->sj.active_subs == 0) { /* every submission canceled (a store written by hand) */
+            if (finish(e, r, JOB_CANCELED, engine_now(), 0, NULL) == 0)
+                metrics_job_end(e->cfg.m, "canceled", 0);
+            wake_job(e, r->sj.id);
+            store_job_clear(&r->sj);
+            free(r);
+            continue; /* try_now stays set: the queue may hold more */
+        }
+        pthread_mutex_lock(&e->lock);
+        r->next = e->running;
+        e->running = r;
+        e->nrunning++;
+        pthread_mutex_unlock(&e->lock);
+        metrics_job_started(e->cfg.m);
+        if (r->sj.attempts > 1) {
+            char a[32];
+            log_kv(LOG_INFO, "job resumed", "job", r->sj.id, "kind", r->sj.kind, "attempt",
+                   log_num(a, r->sj.attempts), NULL);
+        }
+        run_job(e, r);
+        store_job_clear(&r->sj);
+        free(r);
+        try_now = 1; /* the queue may hold more */
         /* a large job leaves most of its peak free but kept by the allocator (16 000 cubes:
          * 0.7 GB resident after a 1.7 GB peak): hand it back to the system */
         malloc_trim(0);
     }
 }
 
+/* ---- the timer: deadlines, leases, requeues, the prune ---- */
+
+typedef struct renewal {
+    char id[33], stage[32];
+    double fraction;
+    run *r;
+} renewal;
+
+/* Renews the lease of every job running here and writes its progress; a job asked to stop is
+ * told, one no longer ours is marked lost and stopped. */
+static void renew_all(engine *e)
+{
+    char err[256];
+    pthread_mutex_lock(&e->lock);
+    size_t n = e->nrunning, k = 0;
+    renewal *rs = n ? calloc(n, sizeof *rs) : NULL;
+    for (run *r = e->running; r && k < n && rs; r = r->next, k++) {
+        memcpy(rs[k].id, r->sj.id, sizeof rs[k].id);
+        memcpy(rs[k].stage, r->stage, sizeof rs[k].stage);
+        rs[k].fraction = r->fraction;
+        rs[k].r = r;
+    }
+    pthread_mutex_unlock(&e->lock);
+    for (size_t i = 0; i < k; i++) {
+        int cancel = 0;
+        int rc =
+            e->cfg.st->ops->job_renew(e->cfg.st, rs[i].id, e->owner, engine_now(), e->cfg.lease,
+                                      rs[i].stage, rs[i].fraction, &cancel, err, sizeof err);
+        if (rc == STORE_ERR) {
+            log_kv(LOG_WARN, "store: job_renew failed", "job", rs[i].id, "error", err, NULL);
+            continue;
+        }
+        pthread_mutex_lock(&e->lock);
+        for (run *r = e->running; r; r = r->next) /* still running (rs[i].r may be gone) */
+            if (r == rs[i].r && !strcmp(r->sj.id, rs[i].id)) {
+                if (rc == STORE_NOTFOUND) r->lost = 1;
+                if (rc == STORE_NOTFOUND || cancel) atomic_store(&r->cancel, 1);
+                break;
+            }
+        pthread_mutex_unlock(&e->lock);
+        if (rc == STORE_NOTFOUND)
+            log_kv(LOG_WARN, "lease lost: the job runs elsewhere now", "job", rs[i].id, NULL);
+    }
+    free(rs);
+}
+
+/* With a shared store: wakes the waiters whose job ended elsewhere (an event may have been
+ * lost; this runs every second). */
+static void poll_waiters(engine *e)
+{
+    char err[256];
+    pthread_mutex_lock(&e->lock);
+    size_t n = 0;
+    for (waiter *w = e->waiters; w; w = w->next) n++;
+    char(*ids)[33] = n ? malloc(n * sizeof *ids) : NULL;
+    size_t k = 0;
+    for (waiter *w = e->waiters; w && ids; w = w->next) {
+        size_t i = 0;
+        while (i < k && strcmp(ids[i], w->job)) i++;
+        if (i == k) memcpy(ids[k++], w->job, 33);
+    }
+    pthread_mutex_unlock(&e->lock);
+    for (size_t i = 0; i < k; i++) {
+        store_job sj;
+        if (e->cfg.st->ops->job_get(e->cfg.st, ids[i], &sj, err, sizeof err) != STORE_OK) continue;
+        int ended = sj.state != JOB_QUEUED && sj.state != JOB_RUNNING;
+        store_job_clear(&sj);
+        if (ended) wake_job(e, ids[i]);
+    }
+    free(ids);
+}
+
 static void *timer_main(void *arg)
 {
     engine *e = arg;
-    double next_prune = engine_now() + 5;
+    double now = engine_now(), next_prune = now + 5, next_tick = now + 1,
+           next_requeue = now + (e->cfg.lease / 3 < 5 ? e->cfg.lease / 3 : 5);
     pthread_mutex_lock(&e->lock);
     while (!e->stopping) {
-        double now = engine_now(), soonest = next_prune < now + 1 ? next_prune : now + 1;
+        now = engine_now();
+        double soonest = next_tick;
         for (waiter *w = e->waiters; w; w = w->next)
             if (w->deadline < soonest) soonest = w->deadline;
         if (soonest > now) {
-            struct timespec ts = {.tv_sec = (time_t)soonest,
-                                  .tv_nsec = (long)((soonest - (double)(time_t)soonest) * 1e9)};
+            struct timespec ts = abs_time(soonest);
             pthread_cond_timedwait(&e->tick, &e->lock, &ts);
             continue;
         }
         waiter *w = take_waiters_locked(e, NULL, now);
+        int poll = e->poll || e->cfg.st->shared;
+        e->poll = 0;
         pthread_mutex_unlock(&e->lock);
         wake_all(w);
+        if (now >= next_tick) {
+            next_tick = now + 1;
+            renew_all(e);
+            if (poll) poll_waiters(e);
+        }
+        char err[256];
+        if (now >= next_requeue) { /* other daemons' jobs whose leases ran out */
+            size_t n = 0;
+            next_requeue = now + (e->cfg.lease / 3 < 5 ? e->cfg.lease / 3 : 5);
+            if (e->cfg.st->ops->jobs_requeue(e->cfg.st, now, 0, &n, err, sizeof err))
+                log_kv(LOG_WARN, "store: jobs_requeue failed", "error", err, NULL);
+            if (n) {
+                char c[32];
+                log_kv(LOG_INFO, "leases ran out: jobs requeued", "jobs", log_num(c, (double)n),
+                       NULL);
+                hint_workers(e, (int)n);
+            }
+        }
         if (now >= next_prune) { /* finished jobs: kept job_ttl seconds, max_jobs at most */
             size_t n = 0;
-            char err[256];
             if (e->cfg.st->ops->jobs_prune(e->cfg.st, now - e->cfg.job_ttl, e->cfg.max_jobs, &n,
                                            err, sizeof err))
                 log_kv(LOG_WARN, "store: jobs_prune failed", "error", err, NULL);
@@ -378,68 +527,49 @@ static void *timer_main(void *arg)
     return NULL;
 }
 
-static job *job_new(const char *id, const char *hash, const char *kind, const char *req, size_t len)
+/* ---- the listener: other daemons' events (a shared store only) ---- */
+
+static void *listener_main(void *arg)
 {
-    job *j = calloc(1, sizeof *j);
-    if (!j) return NULL;
-    j->request = malloc(len + 1);
-    if (!j->request) {
-        free(j);
-        return NULL;
+    engine *e = arg;
+    char err[256], id[33];
+    for (;;) {
+        pthread_mutex_lock(&e->lock);
+        int stop = e->stopping;
+        pthread_mutex_unlock(&e->lock);
+        if (stop) return NULL;
+        store_ev ev = STORE_EV_NONE;
+        if (e->cfg.st->ops->wait_event(e->cfg.st, 0.5, &ev, id, err, sizeof err)) {
+            log_kv(LOG_WARN, "store: wait_event failed", "error", err, NULL);
+            pause_s(0.5);
+            ev = STORE_EV_RESET;
+        }
+        switch (ev) {
+        case STORE_EV_QUEUED:
+            hint_workers(e, e->nthreads);
+            break;
+        case STORE_EV_ENDED:
+            wake_job(e, id);
+            break;
+        case STORE_EV_CANCEL:
+            pthread_mutex_lock(&e->lock);
+            for (run *r = e->running; r; r = r->next)
+                if (!strcmp(r->sj.id, id)) atomic_store(&r->cancel, 1);
+            pthread_mutex_unlock(&e->lock);
+            break;
+        case STORE_EV_RESET: /* events may have been lost: look again */
+            hint_workers(e, e->nthreads);
+            pthread_mutex_lock(&e->lock);
+            e->poll = 1;
+            pthread_mutex_unlock(&e->lock);
+            break;
+        case STORE_EV_NONE:
+            break;
+        }
     }
-    memcpy(j->request, req, len);
-    j->request[len] = 0;
-    j->request_len = len;
-    snprintf(j->id, sizeof j->id, "%s", id);
-    snprintf(j->hash, sizeof j->hash, "%s", hash);
-    snprintf(j->kind, sizeof j->kind, "%s", kind);
-    snprintf(j->stage, sizeof j->stage, "queued");
-    atomic_init(&j->cancel, 0);
-    return j;
 }
 
-/* lock held */
-static void enqueue_locked(engine *e, job *j)
-{
-    j->next_queue = NULL;
-    if (e->qtail)
-        e->qtail->next_queue = j;
-    else
-        e->qhead = j;
-    e->qtail = j;
-    pthread_cond_signal(&e->work);
-}
-
-static int recover_one(void *ctx, store_job *sj)
-{
-    engine *e = ctx;
-    char err[256];
-    job *j = job_new(sj->id, sj->hash, sj->kind, sj->request, sj->request_len);
-    if (!j) return 1;
-    j->created = sj->created;
-    j->state = JOB_QUEUED;
-    j->refs = 1;
-    j->live = 1;
-    j->active = sj->active_subs;
-    if (j->active == 0) { /* every submission was canceled before the job could be */
-        if (e->cfg.st->ops->job_set_state(e->cfg.st, sj->id, JOB_CANCELED, engine_now(), 0, NULL,
-                                          err, sizeof err))
-            log_kv(LOG_WARN, "store: cancel failed", "job", sj->id, "error", err, NULL);
-        job_free(j);
-        return 0;
-    }
-    if (sj->state == JOB_RUNNING &&
-        e->cfg.st->ops->job_set_state(e->cfg.st, sj->id, JOB_QUEUED, 0, 0, NULL, err, sizeof err))
-        log_kv(LOG_WARN, "store: requeue failed", "job", sj->id, "error", err, NULL);
-    pthread_mutex_lock(&e->lock);
-    j->next_live = e->live;
-    e->live = j;
-    e->nqueued++;
-    enqueue_locked(e, j);
-    pthread_mutex_unlock(&e->lock);
-    log_kv(LOG_INFO, "job resumed", "job", j->id, "kind", j->kind, NULL);
-    return 0;
-}
+/* ---- start and stop ---- */
 
 engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
 {
@@ -449,6 +579,8 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
         return NULL;
     }
     e->cfg = *cfg;
+    if (e->cfg.lease <= 0) e->cfg.lease = 30;
+    snprintf(e->owner, sizeof e->owner, "%s", cfg->name && *cfg->name ? cfg->name : "cellard");
     pthread_mutex_init(&e->lock, NULL);
     pthread_cond_init(&e->work, NULL);
     pthread_cond_init(&e->idle, NULL);
@@ -456,7 +588,15 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
     FILE *probe = spool_open(cfg->spool_dir, err, errlen); /* refuse to start without a spool */
     if (!probe) goto fail;
     fclose(probe);
-    if (cfg->st->ops->jobs_unfinished(cfg->st, recover_one, e, err, errlen)) goto fail;
+    /* jobs left running: in a store only this daemon uses, all of them (their daemon was this
+     * one, before a restart); in a shared one, those whose lease ran out */
+    size_t n = 0;
+    if (cfg->st->ops->jobs_requeue(cfg->st, engine_now(), !cfg->st->shared, &n, err, errlen))
+        goto fail;
+    if (n) {
+        char c[32];
+        log_kv(LOG_INFO, "jobs requeued at start", "jobs", log_num(c, (double)n), NULL);
+    }
     e->threads = calloc((size_t)cfg->workers, sizeof *e->threads);
     if (!e->threads) {
         snprintf(err, errlen, "out of memory");
@@ -474,353 +614,18 @@ engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen)
         goto fail;
     }
     e->timer_started = 1;
+    if (cfg->st->ops->wait_event) {
+        if (pthread_create(&e->listener, NULL, listener_main, e) != 0) {
+            snprintf(err, errlen, "cannot start the listener thread");
+            goto fail;
+        }
+        e->listener_started = 1;
+    }
     return e;
 fail:
     engine_drain(e, 0);
     engine_stop(e);
     return NULL;
-}
-
-static int job_active(const job *j)
-{
-    return j->state == JOB_QUEUED || j->state == JOB_RUNNING;
-}
-
-/* lock held: the queued or running job with this hash, referenced and with one more active
- * submission (the caller's), or NULL */
-static job *join_locked(engine *e, const char *hash)
-{
-    for (job *j = e->live; j; j = j->next_live)
-        if (job_active(j) && strcmp(j->hash, hash) == 0) {
-            j->refs++;
-            j->active++;
-            return j;
-        }
-    return NULL;
-}
-
-/* Cancels j, queued or running, whose last submission has just been canceled: takes it off
- * the queue or tells it to stop, wakes its waiters and tells the store.  Called with the lock
- * held and a reference of the caller's; returns with the lock released. */
-static void cancel_job_unlock(engine *e, job *j)
-{
-    char err[256];
-    double now = engine_now();
-    int was_queued = j->state == JOB_QUEUED;
-    if (was_queued) { /* off the queue and the live list */
-        for (job **p = &e->qhead; *p; p = &(*p)->next_queue)
-            if (*p == j) {
-                *p = j->next_queue;
-                break;
-            }
-        e->qtail = NULL;
-        for (job *q = e->qhead; q; q = q->next_queue) e->qtail = q;
-        e->nqueued--;
-        unlive_locked(e, j);
-        j->refs--; /* the list's; the caller's is still held */
-    } else {
-        atomic_store(&j->cancel, 1); /* the worker takes it off the live list */
-    }
-    j->state = JOB_CANCELED;
-    j->finished = now;
-    waiter *w = take_waiters_locked(e, j, 0);
-    pthread_mutex_unlock(&e->lock);
-    wake_all(w);
-    if (e->cfg.st->ops->job_set_state(e->cfg.st, j->id, JOB_CANCELED, now, 0, NULL, err,
-                                      sizeof err))
-        log_kv(LOG_ERROR, "store: cancel failed", "job", j->id, "error", err, NULL);
-    if (was_queued) metrics_job_end(e->cfg.m, "canceled", 0); /* else the worker counts it */
-}
-
-/* j was joined (join_locked) by a submission that could not be recorded: takes it back, and
- * cancels j when that leaves it no submission. */
-static void unjoin(engine *e, job *j)
-{
-    pthread_mutex_lock(&e->lock);
-    if (--j->active == 0 && job_active(j))
-        cancel_job_unlock(e, j);
-    else
-        pthread_mutex_unlock(&e->lock);
-    engine_release(e, j);
-}
-
-/* Records a new submission of j (joined) under a new id, written to sub. */
-static int add_sub(engine *e, job *j, char *sub, char *err, size_t errlen)
-{
-    store_sub s = {.created = engine_now()};
-    memcpy(s.job, j->id, sizeof s.job);
-    if (new_id(s.id)) {
-        snprintf(err, errlen, "no random bytes for an id");
-        return ENG_ERR;
-    }
-    if (e->cfg.st->ops->sub_insert(e->cfg.st, &s, err, errlen)) return ENG_ERR;
-    memcpy(sub, s.id, sizeof s.id);
-    return ENG_OK;
-}
-
-/* An identical job in flight joined by this submission: counted, then recorded. */
-static int joined(engine *e, job *j, job **out, char *sub, int *coalesced, char *err, size_t errlen)
-{
-    if (add_sub(e, j, sub, err, errlen) != ENG_OK) {
-        unjoin(e, j);
-        return ENG_ERR;
-    }
-    *out = j;
-    *coalesced = 1;
-    metrics_coalesced(e->cfg.m);
-    return ENG_OK;
-}
-
-int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
-                  job **out, char *sub, int *coalesced, char *err, size_t errlen)
-{
-    char id[33];
-    job *jn;
-    *out = NULL;
-    *coalesced = 0;
-    pthread_mutex_lock(&e->lock);
-    if (e->draining) {
-        pthread_mutex_unlock(&e->lock);
-        return ENG_DRAINING;
-    }
-    if ((jn = join_locked(e, hash))) {
-        pthread_mutex_unlock(&e->lock);
-        return joined(e, jn, out, sub, coalesced, err, errlen);
-    }
-    /* No identical job in flight.  One may have just ended: a worker stores its result before
-     * it leaves the live list, so the cache now has it (the caller looked before the scan). */
-    pthread_mutex_unlock(&e->lock);
-    int cached = e->cfg.st->ops->result_exists(e->cfg.st, hash, err, errlen) == STORE_OK;
-    pthread_mutex_lock(&e->lock);
-    if (cached) {
-        pthread_mutex_unlock(&e->lock);
-        return ENG_CACHED;
-    }
-    if ((jn = join_locked(e, hash))) { /* created by another request meanwhile */
-        pthread_mutex_unlock(&e->lock);
-        return joined(e, jn, out, sub, coalesced, err, errlen);
-    }
-    if (e->nqueued >= e->cfg.queue_max) {
-        pthread_mutex_unlock(&e->lock);
-        return ENG_FULL;
-    }
-    job *j = NULL;
-    if (new_id(id) == 0) j = job_new(id, hash, kind, canon, len);
-    if (!j) {
-        pthread_mutex_unlock(&e->lock);
-        snprintf(err, errlen, "out of memory");
-        return ENG_ERR;
-    }
-    j->created = engine_now();
-    j->state = JOB_QUEUED;
-    j->refs = 2; /* the live list's and the caller's */
-    j->live = 1;
-    j->active = 1;
-    j->next_live = e->live;
-    e->live = j;
-    e->nqueued++; /* counted now so that the queue limit holds while the store writes */
-    pthread_mutex_unlock(&e->lock);
-
-    store_job sj = {
-        .state = JOB_QUEUED, .created = j->created, .request = j->request, .request_len = len};
-    memcpy(sj.id, j->id, sizeof sj.id);
-    memcpy(sj.hash, j->hash, sizeof sj.hash);
-    memcpy(sj.kind, j->kind, sizeof sj.kind);
-    int rc = e->cfg.st->ops->job_insert(e->cfg.st, &sj, err, errlen);
-    pthread_mutex_lock(&e->lock);
-    if (rc) {
-        /* an identical request may have joined it meanwhile: fail it for them too */
-        e->nqueued--;
-        unlive_locked(e, j);
-        j->state = JOB_FAILED;
-        j->finished = engine_now();
-        j->error_status = 503;
-        j->error = strdup(err);
-        waiter *w = take_waiters_locked(e, j, 0);
-        j->refs -= 2; /* the list's and ours */
-        int dead = j->refs == 0;
-        pthread_mutex_unlock(&e->lock);
-        wake_all(w);
-        if (dead) job_free(j);
-        return ENG_ERR;
-    }
-    enqueue_locked(e, j);
-    pthread_mutex_unlock(&e->lock);
-    metrics_job_accepted(e->cfg.m);
-    memcpy(sub, j->id, sizeof j->id); /* the first submission has the job's id */
-    *out = j;
-    return ENG_OK;
-}
-
-int engine_join(engine *e, const char *hash, job **out, char *sub, char *err, size_t errlen)
-{
-    int coalesced = 0;
-    *out = NULL;
-    pthread_mutex_lock(&e->lock);
-    job *j = e->draining ? NULL : join_locked(e, hash);
-    pthread_mutex_unlock(&e->lock);
-    if (!j) return ENG_NOTFOUND;
-    return joined(e, j, out, sub, &coalesced, err, errlen);
-}
-
-int engine_full(engine *e)
-{
-    pthread_mutex_lock(&e->lock);
-    int full = e->draining ? ENG_DRAINING : e->nqueued >= e->cfg.queue_max ? ENG_FULL : ENG_OK;
-    pthread_mutex_unlock(&e->lock);
-    return full;
-}
-
-job *engine_find(engine *e, const char *id)
-{
-    pthread_mutex_lock(&e->lock);
-    job *j = e->live;
-    while (j && strcmp(j->id, id) != 0) j = j->next_live;
-    if (j) j->refs++;
-    pthread_mutex_unlock(&e->lock);
-    return j;
-}
-
-/* Fills a job_info; `running_stage` is what a running job shows as its stage. */
-static void info_fill(job_info *out, const char *id, const char *hash, const char *kind,
-                      job_state st, double created, double started, double finished,
-                      const char *running_stage, double running_fraction, int error_status,
-                      const char *error)
-{
-    memset(out, 0, sizeof *out);
-    snprintf(out->id, sizeof out->id, "%s", id);
-    snprintf(out->hash, sizeof out->hash, "%s", hash);
-    snprintf(out->kind, sizeof out->kind, "%s", kind);
-    out->state = st;
-    out->created = created;
-    out->started = started;
-    out->finished = finished;
-    snprintf(out->stage, sizeof out->stage, "%s",
-             st == JOB_QUEUED    ? "queued"
-             : st == JOB_RUNNING ? running_stage
-                                 : "done");
-    out->fraction = st == JOB_DONE ? 1 : st == JOB_RUNNING ? running_fraction : 0;
-    out->error_status = error_status;
-    if (error) snprintf(out->error, sizeof out->error, "%s", error);
-}
-
-static void info_locked(const job *j, job_info *out)
-{
-    info_fill(out, j->id, j->hash, j->kind, j->state, j->created, j->started, j->finished, j->stage,
-              j->fraction, j->error_status, j->error);
-}
-
-/* The same for a job read from the store (not live). */
-static void engine_info_from_store(const store_job *sj, job_info *out)
-{
-    info_fill(out, sj->id, sj->hash, sj->kind, sj->state, sj->created, sj->started, sj->finished,
-              "running", 0, sj->error_status, sj->error);
-}
-
-void engine_info(engine *e, job *j, job_info *out)
-{
-    pthread_mutex_lock(&e->lock);
-    info_locked(j, out);
-    pthread_mutex_unlock(&e->lock);
-}
-
-const char *engine_result(engine *e, job *j, size_t *len)
-{
-    pthread_mutex_lock(&e->lock);
-    const char *r = j->state == JOB_DONE ? j->result : NULL;
-    if (r) *len = j->result_len;
-    pthread_mutex_unlock(&e->lock);
-    return r;
-}
-
-/* What a submission sees of its job: its own id and creation, and canceled when it was. */
-static void sub_overlay(job_info *out, const store_sub *s)
-{
-    snprintf(out->id, sizeof out->id, "%s", s->id);
-    out->created = s->created;
-    if (s->canceled > 0 && out->state != JOB_CANCELED) {
-        out->state = JOB_CANCELED;
-        out->finished = s->canceled;
-        snprintf(out->stage, sizeof out->stage, "done");
-        out->fraction = 0;
-        out->error_status = 0;
-        out->error[0] = 0;
-    }
-}
-
-int engine_lookup(engine *e, const char *id, job_info *out, job **live, char *err, size_t errlen)
-{
-    store_sub s;
-    store *st = e->cfg.st;
-    *live = NULL;
-    int rc = st->ops->sub_get(st, id, &s, err, errlen);
-    if (rc == STORE_NOTFOUND) return ENG_NOTFOUND;
-    if (rc != STORE_OK) return ENG_ERR;
-    job *j = engine_find(e, s.job);
-    if (j) {
-        engine_info(e, j, out);
-        *live = j;
-    } else { /* not live: it has ended (or it is queued after a restart of this engine) */
-        store_job sj;
-        rc = st->ops->job_get(st, s.job, &sj, err, errlen);
-        if (rc == STORE_NOTFOUND) return ENG_NOTFOUND; /* pruned since */
-        if (rc != STORE_OK) return ENG_ERR;
-        engine_info_from_store(&sj, out);
-        store_job_clear(&sj);
-    }
-    sub_overlay(out, &s);
-    return ENG_OK;
-}
-
-int engine_cancel(engine *e, const char *id, job_info *out, char *err, size_t errlen)
-{
-    job *j = NULL;
-    int rc = engine_lookup(e, id, out, &j, err, errlen);
-    if (rc != ENG_OK) return rc;
-    if (!j || (out->state != JOB_QUEUED && out->state != JOB_RUNNING)) {
-        engine_release(e, j);
-        return ENG_ENDED;
-    }
-    double now = engine_now();
-    int changed = 0;
-    rc = e->cfg.st->ops->sub_cancel(e->cfg.st, id, now, &changed, err, errlen);
-    if (rc != STORE_OK || !changed) { /* failed, or canceled by another DELETE meanwhile */
-        engine_release(e, j);
-        return rc == STORE_OK ? ENG_ENDED : rc == STORE_NOTFOUND ? ENG_NOTFOUND : ENG_ERR;
-    }
-    pthread_mutex_lock(&e->lock);
-    if (--j->active == 0 && job_active(j))
-        cancel_job_unlock(e, j);
-    else
-        pthread_mutex_unlock(&e->lock);
-    store_sub s = {.created = out->created, .canceled = now};
-    memcpy(s.id, out->id, sizeof s.id);
-    engine_info(e, j, out);
-    sub_overlay(out, &s);
-    engine_release(e, j);
-    return ENG_OK;
-}
-
-int engine_wait(engine *e, job *j, double deadline, void (*wake)(void *), void *ctx)
-{
-    waiter *w = malloc(sizeof *w);
-    pthread_mutex_lock(&e->lock);
-    if ((j->state != JOB_QUEUED && j->state != JOB_RUNNING) || e->draining) {
-        /* ended, or the drain has already woken every waiter: answer now */
-        pthread_mutex_unlock(&e->lock);
-        free(w);
-        return 1;
-    }
-    if (!w) { /* no memory for a waiter: answer at once, as if the deadline had passed */
-        pthread_mutex_unlock(&e->lock);
-        wake(ctx);
-        return 0;
-    }
-    *w = (waiter){.j = j, .deadline = deadline, .wake = wake, .ctx = ctx, .next = e->waiters};
-    e->waiters = w;
-    pthread_cond_signal(&e->tick);
-    pthread_mutex_unlock(&e->lock);
-    return 0;
 }
 
 void engine_drain(engine *e, double timeout)
@@ -830,12 +635,23 @@ void engine_drain(engine *e, double timeout)
     pthread_cond_broadcast(&e->work);
     double until = engine_now() + timeout;
     while (e->nrunning > 0 && engine_now() < until) {
-        struct timespec ts = {.tv_sec = (time_t)until,
-                              .tv_nsec = (long)((until - (double)(time_t)until) * 1e9)};
+        struct timespec ts = abs_time(until);
         pthread_cond_timedwait(&e->idle, &e->lock, &ts);
     }
-    if (e->nrunning > 0)
-        log_kv(LOG_WARN, "drain timeout: jobs still running are resumed at the next start", NULL);
+    if (e->nrunning > 0) {
+        /* stop them and give them back to the queue: another daemon, or the next start,
+         * runs them; the core stops within about a second */
+        log_kv(LOG_WARN, "drain timeout: the jobs still running go back to the queue", NULL);
+        for (run *r = e->running; r; r = r->next) {
+            r->give_back = 1;
+            atomic_store(&r->cancel, 1);
+        }
+        until = engine_now() + 5;
+        while (e->nrunning > 0 && engine_now() < until) {
+            struct timespec ts = abs_time(until);
+            pthread_cond_timedwait(&e->idle, &e->lock, &ts);
+        }
+    }
     waiter *w = take_waiters_locked(e, NULL, 0);
     pthread_mutex_unlock(&e->lock);
     wake_all(w);
@@ -850,19 +666,16 @@ void engine_stop(engine *e)
     pthread_cond_broadcast(&e->tick);
     pthread_mutex_unlock(&e->lock);
     if (e->timer_started) pthread_join(e->timer, NULL);
+    if (e->listener_started) pthread_join(e->listener, NULL);
     if (busy) {
-        /* a worker is still inside a job after the drain timeout: it must not touch a freed
-         * engine; the process is about to exit, so the engine is left allocated */
+        /* a worker is still inside a job after the drain: it must not touch a freed engine;
+         * the process is about to exit, so the engine is left allocated (the job's lease runs
+         * out, and it is requeued) */
         for (int i = 0; i < e->nthreads; i++) pthread_detach(e->threads[i]);
         return;
     }
     for (int i = 0; i < e->nthreads; i++) pthread_join(e->threads[i], NULL);
     free(e->threads);
-    while (e->live) { /* queued jobs: they stay queued in the store */
-        job *j = e->live;
-        e->live = j->next_live;
-        unref_locked(j);
-    }
     pthread_mutex_destroy(&e->lock);
     pthread_cond_destroy(&e->work);
     pthread_cond_destroy(&e->idle);
@@ -870,12 +683,216 @@ void engine_stop(engine *e)
     free(e);
 }
 
-void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *queue_max, int *draining)
+/* ---- submissions ---- */
+
+static int draining(engine *e)
 {
     pthread_mutex_lock(&e->lock);
-    *queued = e->nqueued;
-    *running = e->nrunning;
+    int d = e->draining;
+    pthread_mutex_unlock(&e->lock);
+    return d;
+}
+
+int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
+                  char *sub, char *job, int *coalesced, char *err, size_t errlen)
+{
+    *coalesced = 0;
+    if (draining(e)) return ENG_DRAINING;
+    store_job j = {.created = engine_now(), .request = (char *)canon, .request_len = len};
+    if (new_id(j.id)) {
+        snprintf(err, errlen, "no random bytes for an id");
+        return ENG_ERR;
+    }
+    snprintf(j.hash, sizeof j.hash, "%s", hash);
+    snprintf(j.kind, sizeof j.kind, "%s", kind);
+    int rc =
+        e->cfg.st->ops->job_submit(e->cfg.st, &j, e->cfg.queue_max, 0, job, coalesced, err, errlen);
+    if (rc == STORE_CACHED) return ENG_CACHED;
+    if (rc == STORE_FULL) return ENG_FULL;
+    if (rc != STORE_OK) return ENG_ERR;
+    memcpy(sub, j.id, sizeof j.id);
+    if (*coalesced) {
+        metrics_coalesced(e->cfg.m);
+    } else {
+        metrics_job_accepted(e->cfg.m);
+        hint_workers(e, 1);
+    }
+    return ENG_OK;
+}
+
+int engine_join(engine *e, const char *hash, char *sub, char *job, char *err, size_t errlen)
+{
+    int joined = 0;
+    if (draining(e)) return ENG_NOTFOUND;
+    store_job j = {.created = engine_now(), .request = ""};
+    if (new_id(j.id)) {
+        snprintf(err, errlen, "no random bytes for an id");
+        return ENG_ERR;
+    }
+    snprintf(j.hash, sizeof j.hash, "%s", hash);
+    int rc = e->cfg.st->ops->job_submit(e->cfg.st, &j, 0, 1, job, &joined, err, errlen);
+    if (rc == STORE_OK && joined) {
+        memcpy(sub, j.id, sizeof j.id);
+        metrics_coalesced(e->cfg.m);
+        return ENG_OK;
+    }
+    return rc == STORE_ERR ? ENG_ERR : ENG_NOTFOUND;
+}
+
+int engine_full(engine *e, char *err, size_t errlen)
+{
+    size_t queued = 0, running = 0;
+    if (draining(e)) return ENG_DRAINING;
+    if (e->cfg.st->ops->job_counts(e->cfg.st, &queued, &running, err, errlen)) return ENG_ERR;
+    return e->cfg.queue_max && queued >= e->cfg.queue_max ? ENG_FULL : ENG_OK;
+}
+
+/* The job as one submission sees it (s: the submission), with the progress of a job running
+ * here taken from memory (the store's is at most a second old). */
+static void info_fill(engine *e, const store_job *sj, const store_sub *s, job_info *out)
+{
+    memset(out, 0, sizeof *out);
+    snprintf(out->id, sizeof out->id, "%s", s->id);
+    snprintf(out->job, sizeof out->job, "%s", sj->id);
+    snprintf(out->hash, sizeof out->hash, "%s", sj->hash);
+    snprintf(out->kind, sizeof out->kind, "%s", sj->kind);
+    snprintf(out->owner, sizeof out->owner, "%s", sj->owner);
+    out->attempts = sj->attempts;
+    out->state = sj->state;
+    out->created = s->created;
+    out->started = sj->started;
+    out->finished = sj->finished;
+    out->error_status = sj->error_status;
+    if (sj->error) snprintf(out->error, sizeof out->error, "%s", sj->error);
+    if (sj->state == JOB_RUNNING) {
+        snprintf(out->stage, sizeof out->stage, "%s", sj->stage[0] ? sj->stage : "started");
+        out->fraction = sj->fraction;
+        pthread_mutex_lock(&e->lock);
+        for (run *r = e->running; r; r = r->next)
+            if (!strcmp(r->sj.id, sj->id)) {
+                snprintf(out->stage, sizeof out->stage, "%s", r->stage);
+                out->fraction = r->fraction;
+            }
+        pthread_mutex_unlock(&e->lock);
+    } else {
+        snprintf(out->stage, sizeof out->stage, "%s", sj->state == JOB_QUEUED ? "queued" : "done");
+        out->fraction = sj->state == JOB_DONE ? 1 : 0;
+    }
+    if (s->canceled > 0 && sj->state != JOB_CANCELED) { /* the submission's own cancel */
+        out->state = JOB_CANCELED;
+        out->finished = s->canceled;
+        snprintf(out->stage, sizeof out->stage, "done");
+        out->fraction = 0;
+        out->error_status = 0;
+        out->error[0] = 0;
+    }
+}
+
+/* The submission id and its job from the store. */
+static int lookup(engine *e, const char *id, store_sub *s, store_job *sj, char *err, size_t errlen)
+{
+    store *st = e->cfg.st;
+    memset(sj, 0, sizeof *sj);
+    int rc = st->ops->sub_get(st, id, s, err, errlen);
+    if (rc == STORE_NOTFOUND) return ENG_NOTFOUND;
+    if (rc != STORE_OK) return ENG_ERR;
+    rc = st->ops->job_get(st, s->job, sj, err, errlen);
+    if (rc == STORE_NOTFOUND) return ENG_NOTFOUND; /* pruned since */
+    return rc == STORE_OK ? ENG_OK : ENG_ERR;
+}
+
+int engine_lookup(engine *e, const char *id, job_info *out, char *err, size_t errlen)
+{
+    store_sub s;
+    store_job sj;
+    int rc = lookup(e, id, &s, &sj, err, errlen);
+    if (rc == ENG_OK) info_fill(e, &sj, &s, out);
+    store_job_clear(&sj);
+    return rc;
+}
+
+int engine_cancel(engine *e, const char *id, job_info *out, char *err, size_t errlen)
+{
+    store_sub s;
+    store_job sj;
+    int rc = lookup(e, id, &s, &sj, err, errlen);
+    if (rc == ENG_OK) info_fill(e, &sj, &s, out);
+    store_job_clear(&sj);
+    if (rc != ENG_OK) return rc;
+    if (out->state != JOB_QUEUED && out->state != JOB_RUNNING) return ENG_ENDED;
+    double now = engine_now();
+    int changed = 0, what = STORE_JOB_KEPT;
+    rc = e->cfg.st->ops->sub_cancel(e->cfg.st, id, now, &changed, &what, err, errlen);
+    if (rc != STORE_OK) return rc == STORE_NOTFOUND ? ENG_NOTFOUND : ENG_ERR;
+    if (!changed) return ENG_ENDED;   /* canceled by another DELETE meanwhile */
+    if (what == STORE_JOB_CANCELED) { /* it was queued: ended now */
+        metrics_job_end(e->cfg.m, "canceled", 0);
+        wake_job(e, s.job);
+    } else if (what == STORE_JOB_STOPPING) { /* running: here, stopped now; elsewhere, told */
+        pthread_mutex_lock(&e->lock);
+        for (run *r = e->running; r; r = r->next)
+            if (!strcmp(r->sj.id, s.job)) atomic_store(&r->cancel, 1);
+        pthread_mutex_unlock(&e->lock);
+    }
+    s.canceled = now;
+    if (lookup(e, id, &s, &sj, err, errlen) == ENG_OK) info_fill(e, &sj, &s, out);
+    store_job_clear(&sj);
+    out->state = JOB_CANCELED;
+    out->finished = now;
+    return ENG_OK;
+}
+
+int engine_wait(engine *e, const char *job, double deadline, void (*wake)(void *), void *ctx)
+{
+    char err[256];
+    waiter *w = malloc(sizeof *w);
+    if (!w) { /* no memory for a waiter: answer at once, as if the deadline had passed */
+        wake(ctx);
+        return 0;
+    }
+    *w = (waiter){.deadline = deadline, .wake = wake, .ctx = ctx};
+    snprintf(w->job, sizeof w->job, "%s", job);
+    pthread_mutex_lock(&e->lock);
+    if (e->draining) { /* the drain has woken every waiter already: answer now */
+        pthread_mutex_unlock(&e->lock);
+        free(w);
+        return 1;
+    }
+    w->next = e->waiters;
+    e->waiters = w;
+    pthread_cond_signal(&e->tick);
+    pthread_mutex_unlock(&e->lock);
+    /* registered first, then looked at: a job that ends meanwhile either finds the waiter (and
+     * wakes it) or is seen ended here */
+    store_job sj;
+    int ended = 0;
+    if (e->cfg.st->ops->job_get(e->cfg.st, job, &sj, err, sizeof err) == STORE_OK) {
+        ended = sj.state != JOB_QUEUED && sj.state != JOB_RUNNING;
+        store_job_clear(&sj);
+    }
+    if (!ended) return 0;
+    pthread_mutex_lock(&e->lock);
+    for (waiter **p = &e->waiters; *p; p = &(*p)->next)
+        if (*p == w) { /* still ours to take: answer now */
+            *p = w->next;
+            pthread_mutex_unlock(&e->lock);
+            free(w);
+            return 1;
+        }
+    pthread_mutex_unlock(&e->lock); /* taken by a waker, which calls wake */
+    return 0;
+}
+
+void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *running_here,
+                   size_t *queue_max, int *draining_out)
+{
+    char err[256];
+    *queued = *running = 0;
+    if (e->cfg.st->ops->job_counts(e->cfg.st, queued, running, err, sizeof err))
+        log_kv(LOG_WARN, "store: job_counts failed", "error", err, NULL);
+    pthread_mutex_lock(&e->lock);
+    *running_here = e->nrunning;
     *queue_max = e->cfg.queue_max;
-    *draining = e->draining;
+    *draining_out = e->draining;
     pthread_mutex_unlock(&e->lock);
 }

@@ -105,9 +105,9 @@ typedef struct conn {
     double t0;
     char *body;
     size_t len, cap;
-    job *j;      /* the job a POST waits on (referenced) */
-    int waiting; /* suspended, waiting for j */
-    int parked;  /* counted in h->parked until completed */
+    char job[33]; /* the job a POST waits on */
+    int waiting;  /* suspended, waiting for job */
+    int parked;   /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
     int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON, 3 OBJ (from Accept) */
@@ -344,6 +344,8 @@ static json_t *job_json(const job_info *ji)
     json_object_set_new(p, "stage", json_string(ji->stage));
     json_object_set_new(p, "fraction", json_real(ji->fraction));
     json_object_set_new(o, "progress", p);
+    json_object_set_new(o, "attempts", json_integer(ji->attempts));
+    json_object_set_new(o, "daemon", ji->owner[0] ? json_string(ji->owner) : json_null());
     if (ji->state == JOB_FAILED) {
         snprintf(url, sizeof url, "/v1/jobs/%s", ji->id);
         json_object_set_new(o, "error", problem_json((unsigned)ji->error_status, ji->error, url));
@@ -632,23 +634,15 @@ static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
     return respond_json(c, 202, job_json(ji), hs, sizeof hs / sizeof *hs);
 }
 
-/* The answer about job j to the submission c->job_id (a POST once its wait is over, or a GET
- * of a live job's result). */
-static enum MHD_Result answer_job(conn *c, job *j)
+/* The answer to a POST about its submission c->job_id, once its wait is over. */
+static enum MHD_Result answer_job(conn *c)
 {
+    char err[256];
     job_info ji;
-    engine_info(c->h->e, j, &ji);
-    snprintf(ji.id, sizeof ji.id, "%s", c->job_id);
-    if (ji.state == JOB_DONE) {
-        size_t n;
-        const char *r = engine_result(c->h->e, j, &n);
-        if (!r) /* a large one: from the store */
-            return get_result(c, ji.hash, ji.id, "miss", c->route == ROUTE_JOBS);
-        char *b = malloc(n + 1);
-        if (!b) return problem(c, 503, "out of memory", "5", NULL);
-        memcpy(b, r, n + 1);
-        return respond_result(c, ji.hash, b, n, ji.id, "miss");
-    }
+    int rc = engine_lookup(c->h->e, c->job_id, &ji, err, sizeof err);
+    if (rc == ENG_NOTFOUND) return problem(c, 503, "the job is gone: try again", "1", NULL);
+    if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
+    if (ji.state == JOB_DONE) return get_result(c, ji.hash, ji.id, "miss", 1);
     if (ji.state == JOB_FAILED) return problem(c, (unsigned)ji.error_status, ji.error, NULL, NULL);
     if (ji.state == JOB_CANCELED) return problem(c, 409, "the job was canceled", NULL, NULL);
     return respond_accepted(c, &ji);
@@ -739,17 +733,10 @@ static enum MHD_Result route_job(conn *c, int want_result)
 {
     char err[256];
     job_info ji;
-    job *j = NULL;
     snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
-    int rc = engine_lookup(c->h->e, c->id, &ji, &j, err, sizeof err);
+    int rc = engine_lookup(c->h->e, c->id, &ji, err, sizeof err);
     if (rc == ENG_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-    if (j && want_result && ji.state == JOB_DONE) {
-        enum MHD_Result r = answer_job(c, j);
-        engine_release(c->h->e, j);
-        return r;
-    }
-    engine_release(c->h->e, j);
     if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);
     switch (ji.state) {
     case JOB_DONE:
@@ -834,7 +821,7 @@ static enum MHD_Result refused(conn *c, int why)
     return problem(c, 503, "the job queue is full: try again later", "5", NULL);
 }
 
-static enum MHD_Result submitted(conn *c, job *j);
+static enum MHD_Result submitted(conn *c);
 
 static enum MHD_Result route_submit(conn *c)
 {
@@ -846,22 +833,25 @@ static enum MHD_Result route_submit(conn *c)
     http_server *h = c->h;
     unsigned char raw[32];
     uint64_t size = 0;
-    job *j = NULL;
     int rc, hit;
 
     if (!EVP_Digest(c->body ? c->body : "", c->len, raw, NULL, EVP_sha256(), NULL))
         memset(raw, 0, sizeof raw); /* cannot happen with OpenSSL's sha256: never found */
-    int full = engine_full(h->e);
+    int full = engine_full(h->e, err, sizeof err);
+    if (full == ENG_ERR) {
+        body_release(c);
+        return problem(c, 503, err, "5", NULL);
+    }
     if (full != ENG_OK) { /* no new job: answer without parsing (see memo_slot) */
         body_release(c);
         if (!memo_get(h, raw, hash)) return refused(c, full);
         hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
         metrics_cache(h->m, hit == STORE_OK);
         if (hit == STORE_OK) return serve_stored(c, hash, size, NULL, "hit", 1);
-        rc = engine_join(h->e, hash, &j, c->job_id, err, sizeof err);
+        rc = engine_join(h->e, hash, c->job_id, c->job, err, sizeof err);
         if (rc == ENG_NOTFOUND) return refused(c, full);
         if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-        return submitted(c, j);
+        return submitted(c);
     }
 
     rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
@@ -878,34 +868,30 @@ static enum MHD_Result route_submit(conn *c)
         return serve_stored(c, hash, size, NULL, "hit", 1);
     }
     int coalesced = 0;
-    rc = engine_submit(h->e, canon, clen, kind, hash, &j, c->job_id, &coalesced, err, sizeof err);
+    rc = engine_submit(h->e, canon, clen, kind, hash, c->job_id, c->job, &coalesced, err,
+                       sizeof err);
     free(canon);
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */
         return get_result(c, hash, NULL, "hit", 1);
     if (rc == ENG_FULL || rc == ENG_DRAINING) return refused(c, rc);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-    return submitted(c, j);
+    return submitted(c);
 }
 
-/* A POST whose submission of job j (referenced: taken over) is made: answered now, or
- * suspended until j ends or the client's wait runs out. */
-static enum MHD_Result submitted(conn *c, job *j)
+/* A POST whose submission (c->job_id, of job c->job) is made: answered now, or suspended until
+ * the job ends or the client's wait runs out. */
+static enum MHD_Result submitted(conn *c)
 {
     http_server *h = c->h;
     double wait = prefer_wait(c->mc);
     if (wait > h->cfg->max_wait) wait = h->cfg->max_wait;
-    if (wait <= 0) {
-        enum MHD_Result r = answer_job(c, j);
-        engine_release(h->e, j);
-        return r;
-    }
+    if (wait <= 0) return answer_job(c);
     c->wait_applied = wait;
-    c->j = j;
     c->waiting = 1;
     c->parked = 1;
     atomic_fetch_add(&h->parked, 1);
     MHD_suspend_connection(c->mc);
-    if (engine_wait(h->e, j, engine_now() + wait, wake_conn, c) == 1)
+    if (engine_wait(h->e, c->job, engine_now() + wait, wake_conn, c) == 1)
         MHD_resume_connection(c->mc); /* ended meanwhile: answer at once */
     return MHD_YES;
 }
@@ -914,7 +900,7 @@ static enum MHD_Result route_metrics(conn *c)
 {
     metrics_gauges g = {0};
     char err[256];
-    engine_gauges(c->h->e, &g.queued, &g.running, &g.queue_capacity, &g.draining);
+    engine_gauges(c->h->e, &g.queued, &g.running, &g.running_here, &g.queue_capacity, &g.draining);
     if (c->h->st->ops->result_stats(c->h->st, &g.cache_results, &g.cache_bytes, err, sizeof err))
         log_kv(LOG_WARN, "store: result_stats failed", "error", err, NULL);
     g.cache_budget = c->h->cfg->cache_bytes;
@@ -1136,10 +1122,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
     if (c->status) return MHD_YES; /* answered before the body (413, 415, 503) */
     if (c->waiting) {              /* resumed: the job ended or the wait is over */
         c->waiting = 0;
-        enum MHD_Result r = answer_job(c, c->j);
-        engine_release(h->e, c->j);
-        c->j = NULL;
-        return r;
+        return answer_job(c);
     }
     return dispatch(c);
 }
@@ -1156,7 +1139,6 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            "status", log_num(st, c->status), "ms", log_num(ms, (engine_now() - c->t0) * 1e3), "job",
            c->job_id[0] ? c->job_id : NULL, "closed",
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
-    if (c->j) engine_release(h->e, c->j);
     if (c->parked) atomic_fetch_sub(&h->parked, 1);
     /* kept alive: the next request's headers are due within the idle time and the header time */
     set_deadline(h, mc, h->cfg->idle_timeout + h->cfg->header_timeout, "headers");

@@ -21,6 +21,17 @@
 #include "server/metrics.h"
 #include "server/store.h"
 
+/* --db for the log: a URI's password is not written (postgresql://user:***@host/db). */
+static const char *log_db(const char *db)
+{
+    static char out[4200];
+    const char *scheme = strstr(db, "://"), *at = strchr(db, '@');
+    const char *colon = scheme ? strchr(scheme + 3, ':') : NULL;
+    if (!scheme || !at || !colon || colon > at) return db;
+    snprintf(out, sizeof out, "%.*s:***%s", (int)(colon - db), db, at);
+    return out;
+}
+
 int main(int argc, char **argv)
 {
     config cfg;
@@ -48,12 +59,12 @@ int main(int argc, char **argv)
     }
 
     metrics *m = metrics_new();
-    store *st = m ? store_sqlite_open(cfg.db, cfg.cache_bytes, 10, cfg.init ? STORE_OPEN_INIT : 0,
-                                      err, sizeof err)
-                  : NULL;
+    store *st =
+        m ? store_open(cfg.db, cfg.cache_bytes, 10, cfg.init ? STORE_OPEN_INIT : 0, err, sizeof err)
+          : NULL;
     if (!st) {
-        log_kv(LOG_ERROR, "cannot open the store", "db", cfg.db, "error", m ? err : "no memory",
-               NULL);
+        log_kv(LOG_ERROR, "cannot open the store", "db", log_db(cfg.db), "error",
+               m ? err : "no memory", NULL);
         metrics_free(m);
         return 1;
     }
@@ -62,7 +73,9 @@ int main(int argc, char **argv)
                      .workers = cfg.workers,
                      .job_threads = cfg.job_threads,
                      .queue_max = cfg.queue,
-                     .spool_dir = cfg.spool,
+                     .spool_dir = cfg.spool[0] ? cfg.spool : NULL,
+                     .lease = cfg.lease,
+                     .name = cfg.name,
                      .job_ttl = cfg.job_ttl,
                      .max_jobs = cfg.max_jobs};
     engine *e = engine_start(&ec, err, sizeof err);
@@ -84,8 +97,9 @@ int main(int argc, char **argv)
     char port[32], workers[32];
     log_num(port, http_port(h));
     log_num(workers, cfg.workers);
-    log_kv(LOG_INFO, "listening", "host", cfg.host, "port", port, "db", cfg.db, "workers", workers,
-           "version", API_VERSION, "algorithm", CELLAR_ALGO_VERSION, NULL);
+    log_kv(LOG_INFO, "listening", "host", cfg.host, "port", port, "db", log_db(cfg.db), "name",
+           cfg.name, "workers", workers, "version", API_VERSION, "algorithm", CELLAR_ALGO_VERSION,
+           NULL);
 
     int sig = 0;
     sigwait(&set, &sig);

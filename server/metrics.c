@@ -18,7 +18,7 @@ struct metrics {
     atomic_uint_fast64_t job_count;
     atomic_uint_fast64_t job_sum_us; /* microseconds */
     atomic_uint_fast64_t jobs_end[NSTATES];
-    atomic_uint_fast64_t accepted, coalesced, hits, misses;
+    atomic_uint_fast64_t accepted, started, coalesced, hits, misses;
 };
 
 static const char *route_names[ROUTE_COUNT] = {"other",      "index",   "healthz", "readyz",
@@ -62,6 +62,10 @@ void metrics_job_accepted(metrics *m)
 {
     atomic_fetch_add(&m->accepted, 1);
 }
+void metrics_job_started(metrics *m)
+{
+    atomic_fetch_add(&m->started, 1);
+}
 void metrics_coalesced(metrics *m)
 {
     atomic_fetch_add(&m->coalesced, 1);
@@ -101,10 +105,14 @@ char *metrics_render(metrics *m, const metrics_gauges *g, size_t *len)
     fprintf(f, "cellar_job_duration_seconds_sum %.6f\n", (double)atomic_load(&m->job_sum_us) / 1e6);
     fprintf(f, "cellar_job_duration_seconds_count %llu\n",
             (unsigned long long)atomic_load(&m->job_count));
-    fprintf(f, "# HELP cellar_jobs_total Jobs accepted, and jobs ended by final state.\n"
+    fprintf(f, "# HELP cellar_jobs_total Jobs accepted here, jobs started here (claimed from the "
+               "queue, which every daemon sharing the store takes from), and jobs ended here by "
+               "final state.\n"
                "# TYPE cellar_jobs_total counter\n");
     fprintf(f, "cellar_jobs_total{state=\"accepted\"} %llu\n",
             (unsigned long long)atomic_load(&m->accepted));
+    fprintf(f, "cellar_jobs_total{state=\"started\"} %llu\n",
+            (unsigned long long)atomic_load(&m->started));
     for (int s = 0; s < NSTATES; s++)
         fprintf(f, "cellar_jobs_total{state=\"%s\"} %llu\n", end_states[s],
                 (unsigned long long)atomic_load(&m->jobs_end[s]));
@@ -123,9 +131,12 @@ char *metrics_render(metrics *m, const metrics_gauges *g, size_t *len)
             (unsigned long long)atomic_load(&m->misses));
     if (g) {
         fprintf(f,
-                "# HELP cellar_jobs Live jobs by state.\n# TYPE cellar_jobs gauge\n"
-                "cellar_jobs{state=\"queued\"} %zu\ncellar_jobs{state=\"running\"} %zu\n",
-                g->queued, g->running);
+                "# HELP cellar_jobs Jobs in the store by state (every daemon's).\n"
+                "# TYPE cellar_jobs gauge\n"
+                "cellar_jobs{state=\"queued\"} %zu\ncellar_jobs{state=\"running\"} %zu\n"
+                "# HELP cellar_jobs_running_here Jobs this daemon runs now.\n"
+                "# TYPE cellar_jobs_running_here gauge\ncellar_jobs_running_here %zu\n",
+                g->queued, g->running, g->running_here);
         fprintf(f,
                 "# HELP cellar_queue_depth Jobs waiting for a worker.\n"
                 "# TYPE cellar_queue_depth gauge\ncellar_queue_depth %zu\n"

@@ -1,7 +1,8 @@
 /* metrics.h — the daemon's counters, exported in the Prometheus text format (GET /metrics):
  *   cellar_http_requests_total{route,status}   requests answered
  *   cellar_job_duration_seconds                histogram of job run times (by kind)
- *   cellar_jobs_total{state}                   jobs ended, by final state; and accepted
+ *   cellar_jobs_total{state}                   jobs ended here, by final state; accepted and
+ *                                              started here
  *   cellar_jobs_coalesced_total                requests that joined an identical job in flight
  *   cellar_cache_hits_total / _misses_total    result cache lookups on POST
  * plus gauges the caller supplies at scrape time (queue depth, jobs by state, cache bytes).
@@ -36,11 +37,13 @@ void metrics_free(metrics *m);
 void metrics_request(metrics *m, metrics_route r, unsigned status);
 void metrics_job_end(metrics *m, const char *state, double seconds); /* done/failed/canceled */
 void metrics_job_accepted(metrics *m);
+void metrics_job_started(metrics *m); /* claimed from the queue and run here */
 void metrics_coalesced(metrics *m);
 void metrics_cache(metrics *m, int hit);
 
 typedef struct metrics_gauges {
-    size_t queued, running; /* live jobs */
+    size_t queued, running; /* in the store (every daemon's) */
+    size_t running_here;
     size_t queue_capacity;
     size_t cache_results;
     uint64_t cache_bytes, cache_budget;

@@ -72,8 +72,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #define SQ_BUSY_MS       5000 /* how long a connection waits for a lock before SQLITE_BUSY */
 #define SQ_PROBE_BUSY_MS 1000 /* the same for the readiness probe (writable) */
@@ -124,6 +128,20 @@ static const char *const sq_migrations[] = {
     "INSERT INTO subs SELECT id, id, created, CASE WHEN state = 4 THEN finished END FROM jobs;"
     "CREATE TRIGGER jobs_subs_delete AFTER DELETE ON jobs BEGIN"
     " DELETE FROM subs WHERE job = OLD.id; END;",
+    /* 4 -> 5: the queue lives in the store: leases, attempts, the cancel flag, progress; at
+     * most one queued or running job per request hash (older duplicates, which no cellard
+     * made, are canceled) */
+    "ALTER TABLE jobs ADD COLUMN owner TEXT;"
+    "ALTER TABLE jobs ADD COLUMN lease_until REAL;"
+    "ALTER TABLE jobs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0;"
+    "ALTER TABLE jobs ADD COLUMN cancel INTEGER NOT NULL DEFAULT 0;"
+    "ALTER TABLE jobs ADD COLUMN stage TEXT;"
+    "ALTER TABLE jobs ADD COLUMN fraction REAL;"
+    "UPDATE jobs SET state = 4, finished = coalesce(finished, created), request = zeroblob(0)"
+    " WHERE state IN (0, 1) AND rowid NOT IN"
+    " (SELECT min(rowid) FROM jobs WHERE state IN (0, 1) GROUP BY hash);"
+    "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1);"
+    "CREATE INDEX jobs_queue ON jobs(created) WHERE state = 0;",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -133,13 +151,21 @@ enum sq_sql {
     SQ_COMMIT,
     SQ_ROLLBACK,
     SQ_JOB_INSERT,
-    SQ_JOB_SET_STATE,
     SQ_JOB_GET,
-    SQ_JOBS_UNFINISHED,
+    SQ_JOB_ACTIVE,
+    SQ_JOB_COUNTS,
+    SQ_JOB_CLAIM,
+    SQ_JOB_RENEW,
+    SQ_JOB_FINISH,
+    SQ_JOB_RELEASE,
+    SQ_JOBS_REQUEUE,
     SQ_JOBS_PRUNE,
     SQ_SUB_INSERT,
     SQ_SUB_GET,
     SQ_SUB_CANCEL,
+    SQ_SUB_ACTIVE,
+    SQ_JOB_CANCEL_QUEUED,
+    SQ_JOB_STOP_RUNNING,
     SQ_BEGIN_READ,
     SQ_RESULT_UPSERT,
     SQ_RESULT_DELETE,
@@ -167,22 +193,47 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     [SQ_JOB_INSERT] =
         "INSERT INTO jobs(id, hash, kind, state, created, started, finished,"
         " error_status, error, request) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
-    /* ?3 started, ?4 finished: NULL keeps the old value */
-    /* a job that ends drops its request: only a queued or running job needs it (to run
-     * again after a restart), and bodies are most of the table */
-    [SQ_JOB_SET_STATE] = "UPDATE jobs SET state = ?2, started = coalesce(?3, started),"
-                         " finished = coalesce(?4, finished), error_status = ?5, error = ?6,"
-                         " request = CASE WHEN ?2 IN (2, 3, 4) THEN zeroblob(0) ELSE request END"
-                         " WHERE id = ?1",
     [SQ_JOB_GET] = "SELECT id, hash, kind, state, created, started, finished, error_status, error,"
-                   " request, (SELECT count(*) FROM subs WHERE job = ?1 AND canceled IS NULL)"
-                   " FROM jobs WHERE id = ?1",
+                   " request, (SELECT count(*) FROM subs WHERE job = ?1 AND canceled IS NULL),"
+                   " owner, lease_until, attempts, cancel, stage, fraction FROM jobs WHERE id = ?1",
+    /* the queued or running job of a request (through the unique index jobs_active_hash) */
+    [SQ_JOB_ACTIVE] = "SELECT id FROM jobs WHERE hash = ?1 AND state IN (0, 1)",
+    [SQ_JOB_COUNTS] = "SELECT (SELECT count(*) FROM jobs WHERE state = 0),"
+                      " (SELECT count(*) FROM jobs WHERE state = 1)",
+    /* the oldest queued job (through jobs_queue), for ?1 until ?3 */
+    [SQ_JOB_CLAIM] = "UPDATE jobs SET state = 1, owner = ?1, started = ?2, lease_until = ?3,"
+                     " attempts = attempts + 1, cancel = 0, stage = 'started', fraction = 0"
+                     " WHERE rowid = (SELECT rowid FROM jobs WHERE state = 0"
+                     " ORDER BY created, rowid LIMIT 1) RETURNING id",
+    [SQ_JOB_RENEW] = "UPDATE jobs SET lease_until = ?3, stage = ?4, fraction = ?5"
+                     " WHERE id = ?1 AND owner = ?2 AND state = 1 RETURNING cancel",
+    /* a job that ends drops its request: only a queued or running job needs it, and bodies
+     * are most of the table */
+    [SQ_JOB_FINISH] = "UPDATE jobs SET state = ?3, finished = ?4, error_status = ?5, error = ?6,"
+                      " request = zeroblob(0), lease_until = NULL"
+                      " WHERE id = ?1 AND owner = ?2 AND state = 1",
+    [SQ_JOB_RELEASE] = "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
+                       " finished = CASE WHEN cancel THEN ?3 END,"
+                       " request = CASE WHEN cancel THEN zeroblob(0) ELSE request END,"
+                       " lease_until = NULL WHERE id = ?1 AND owner = ?2 AND state = 1",
+    /* running jobs whose lease ended before ?1 (all of them when ?2): asked to stop, canceled;
+     * started ?3 times already, failed; else queued again */
+    [SQ_JOBS_REQUEUE] =
+        "UPDATE jobs SET state = CASE WHEN cancel THEN 4 WHEN attempts >= ?3 THEN 3 ELSE 0 END,"
+        " finished = CASE WHEN cancel OR attempts >= ?3 THEN ?1 END,"
+        " error_status = CASE WHEN NOT cancel AND attempts >= ?3 THEN 500 END,"
+        " error = CASE WHEN NOT cancel AND attempts >= ?3 THEN ?4 END,"
+        " request = CASE WHEN cancel OR attempts >= ?3 THEN zeroblob(0) ELSE request END,"
+        " lease_until = NULL WHERE state = 1 AND (?2 OR lease_until < ?1)",
     /* a submission of a job that exists */
     [SQ_SUB_INSERT] = "INSERT INTO subs(id, job, created, canceled) SELECT ?1, ?2, ?3, ?4"
                       " WHERE EXISTS (SELECT 1 FROM jobs WHERE id = ?2)",
     [SQ_SUB_GET] = "SELECT id, job, created, canceled FROM subs WHERE id = ?1",
     [SQ_SUB_CANCEL] = "UPDATE subs SET canceled = ?2 WHERE id = ?1 AND canceled IS NULL",
-    [SQ_JOBS_UNFINISHED] = "SELECT id FROM jobs WHERE state IN (?1, ?2) ORDER BY created, rowid",
+    [SQ_SUB_ACTIVE] = "SELECT count(*) FROM subs WHERE job = ?1 AND canceled IS NULL",
+    [SQ_JOB_CANCEL_QUEUED] = "UPDATE jobs SET state = 4, finished = ?2, request = zeroblob(0)"
+                             " WHERE id = ?1 AND state = 0",
+    [SQ_JOB_STOP_RUNNING] = "UPDATE jobs SET cancel = 1 WHERE id = ?1 AND state = 1",
     /* finished jobs that ended before ?1, and those past the ?2 newest (?2 < 0: no limit),
      * both through the partial index jobs_finished (its states written out for it) */
     [SQ_JOBS_PRUNE] = "DELETE FROM jobs WHERE state IN (2, 3, 4) AND (finished < ?1 OR rowid IN"
@@ -248,6 +299,7 @@ struct sq_store {
     double last_stamp;    /* the latest last_used handed out (or found at open) */
     double touch_seconds; /* result_get leaves marks younger than this (immutable) */
     int key_made;         /* key is valid (for the cleanup path of open) */
+    int lock_fd;          /* path + "-lock", flock'd: one daemon per file (-1: none) */
 };
 
 static void sq_errf(char *err, size_t errlen, const char *fmt, ...)
@@ -504,27 +556,25 @@ static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, cha
     return rc;
 }
 
-static int sq_job_insert(store *base, const store_job *j, char *err, size_t errlen)
+/* Inserts job j and its first submission (inside the caller's transaction). */
+static int sq_job_write(sq_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
-    sqlite3_stmt *st = NULL;
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
     if (!sq_state_valid((int)j->state)) {
-        sq_errf(err, errlen, "sqlite job_insert: unknown state %d", (int)j->state);
+        sq_errf(err, errlen, "sqlite %s: unknown state %d", where, (int)j->state);
         return STORE_ERR;
     }
     if (!j->request && j->request_len) {
-        sq_errf(err, errlen, "sqlite job_insert: request_len %zu with no request", j->request_len);
+        sq_errf(err, errlen, "sqlite %s: request_len %zu with no request", where, j->request_len);
         return STORE_ERR;
     }
-    if (sq_run(c, SQ_BEGIN, "job_insert: begin", err, errlen)) return STORE_ERR;
-    st = sq_stmt(c, SQ_JOB_INSERT, "job_insert", err, errlen);
-    if (!st) goto fail;
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_INSERT, where, err, errlen);
+    if (!st) return STORE_ERR;
     if (sq_bind_field(st, 1, j->id, sizeof j->id, "id", err, errlen) ||
         sq_bind_field(st, 2, j->hash, sizeof j->hash, "hash", err, errlen) ||
-        sq_bind_field(st, 3, j->kind, sizeof j->kind, "kind", err, errlen))
-        goto fail;
+        sq_bind_field(st, 3, j->kind, sizeof j->kind, "kind", err, errlen)) {
+        sq_done(st);
+        return STORE_ERR;
+    }
     sqlite3_bind_int(st, 4, (int)j->state);
     sq_bind_time(st, 5, j->created);
     sq_bind_time(st, 6, j->started);
@@ -533,61 +583,101 @@ static int sq_job_insert(store *base, const store_job *j, char *err, size_t errl
     if (j->error) sqlite3_bind_text(st, 9, j->error, -1, SQLITE_STATIC);
     /* a non-NULL pointer even for 0 bytes: a NULL one would bind SQL NULL */
     sqlite3_bind_blob64(st, 10, j->request ? j->request : "", j->request_len, SQLITE_STATIC);
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "job_insert", c->db);
-        goto fail;
-    }
+    int rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
     sq_done(st);
-    st = NULL;
+    if (rc != SQLITE_DONE) return STORE_ERR;
     store_sub first = {.created = j->created,
                        .canceled = j->state == JOB_CANCELED ? j->finished : 0};
     memcpy(first.id, j->id, sizeof first.id);
     memcpy(first.job, j->id, sizeof first.job);
-    if (sq_sub_write(c, &first, "job_insert: its submission", err, errlen) != STORE_OK) goto fail;
-    if (sq_run(c, SQ_COMMIT, "job_insert: commit", err, errlen)) goto fail;
-    return STORE_OK;
-fail:
-    sq_done(st);
-    sq_rollback(c);
-    return STORE_ERR;
+    return sq_sub_write(c, &first, where, err, errlen) == STORE_OK ? STORE_OK : STORE_ERR;
 }
 
-static int sq_job_set_state(store *base, const char *id, job_state state, double when,
-                            int error_status, const char *error, char *err, size_t errlen)
+/* Runs statement `id` with the text `key` bound to ?1 and reads the first column of its one
+ * row as an integer (*out) or as an id (idout, 33 bytes); STORE_NOTFOUND when it gives no row. */
+static int sq_lookup(sq_conn *c, enum sq_sql id, const char *key, long long *out, char *idout,
+                     const char *where, char *err, size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
-    sqlite3_stmt *st = NULL;
-    int rc = STORE_ERR;
-    sq_conn *c = sq_conn_get(s, err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
+    if (!st) return STORE_ERR;
+    if (key) sqlite3_bind_text(st, 1, key, -1, SQLITE_STATIC);
+    int rc = sqlite3_step(st), out_rc = STORE_OK;
+    if (rc == SQLITE_DONE) {
+        out_rc = STORE_NOTFOUND;
+    } else if (rc != SQLITE_ROW) {
+        sq_dberr(err, errlen, where, c->db);
+        out_rc = STORE_ERR;
+    } else {
+        if (out) *out = sqlite3_column_int64(st, 0);
+        if (idout && sq_column_fixed(st, 0, idout, 33)) {
+            sq_errf(err, errlen, "sqlite %s: an id too long in the database", where);
+            out_rc = STORE_ERR;
+        }
+    }
+    sq_done(st);
+    return out_rc;
+}
+
+static int sq_job_insert(store *base, const store_job *j, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
     if (!c) return STORE_ERR;
-    if (!sq_state_valid((int)state)) {
-        sq_errf(err, errlen, "sqlite job_set_state: unknown state %d", (int)state);
+    if (sq_run(c, SQ_BEGIN, "job_insert: begin", err, errlen)) return STORE_ERR;
+    if (sq_job_write(c, j, "job_insert", err, errlen) ||
+        sq_run(c, SQ_COMMIT, "job_insert: commit", err, errlen)) {
+        sq_rollback(c);
         return STORE_ERR;
     }
-    if (sq_run(c, SQ_BEGIN, "job_set_state: begin", err, errlen)) return STORE_ERR;
-    st = sq_stmt(c, SQ_JOB_SET_STATE, "job_set_state", err, errlen);
-    if (!st) goto fail;
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_int(st, 2, (int)state);
-    if (state == JOB_RUNNING)
-        sq_bind_time(st, 3, when);
-    else if (state != JOB_QUEUED)
-        sq_bind_time(st, 4, when);
-    if (state == JOB_FAILED) {
-        if (error_status) sqlite3_bind_int(st, 5, error_status);
-        if (error) sqlite3_bind_text(st, 6, error, -1, SQLITE_STATIC);
+    return STORE_OK;
+}
+
+static int sq_job_submit(store *base, const store_job *j, size_t queue_max, int join_only,
+                         char *job_id, int *joined, char *err, size_t errlen)
+{
+    long long queued = 0;
+    *joined = 0;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, "job_submit: begin", err, errlen)) return STORE_ERR;
+    int rc = sq_lookup(c, SQ_RESULT_EXISTS, j->hash, NULL, NULL, "job_submit", err, errlen);
+    if (rc == STORE_OK) {
+        rc = STORE_CACHED;
+        goto done;
     }
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "job_set_state", c->db);
-        goto fail;
+    if (rc != STORE_NOTFOUND) goto fail;
+    rc = sq_lookup(c, SQ_JOB_ACTIVE, j->hash, NULL, job_id, "job_submit", err, errlen);
+    if (rc == STORE_OK) { /* joined: a submission of its own */
+        store_sub sub = {.created = j->created};
+        memcpy(sub.id, j->id, sizeof sub.id);
+        memcpy(sub.job, job_id, sizeof sub.job);
+        if (sq_sub_write(c, &sub, "job_submit: join", err, errlen)) goto fail;
+        *joined = 1;
+        goto done;
     }
-    rc = sqlite3_changes(c->db) ? STORE_OK : STORE_NOTFOUND;
-    sq_done(st);
-    st = NULL;
-    if (sq_run(c, SQ_COMMIT, "job_set_state: commit", err, errlen)) goto fail;
+    if (rc != STORE_NOTFOUND) goto fail;
+    if (join_only) goto done; /* STORE_NOTFOUND */
+    if (queue_max) {
+        if (sq_lookup(c, SQ_JOB_COUNTS, NULL, &queued, NULL, "job_submit", err, errlen) != STORE_OK)
+            goto fail;
+        if ((unsigned long long)queued >= queue_max) {
+            rc = STORE_FULL;
+            goto done;
+        }
+    }
+    store_job q = *j;
+    q.state = JOB_QUEUED;
+    q.started = q.finished = 0;
+    q.error_status = 0;
+    q.error = NULL;
+    if (sq_job_write(c, &q, "job_submit", err, errlen)) goto fail;
+    memcpy(job_id, j->id, 33);
+    rc = STORE_OK;
+done:
+    if (sq_run(c, SQ_COMMIT, "job_submit: commit", err, errlen)) goto fail;
     return rc;
 fail:
-    sq_done(st);
+    *joined = 0;
     sq_rollback(c);
     return STORE_ERR;
 }
@@ -612,8 +702,10 @@ static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, si
     }
     if (sq_column_fixed(st, 0, out->id, sizeof out->id) ||
         sq_column_fixed(st, 1, out->hash, sizeof out->hash) ||
-        sq_column_fixed(st, 2, out->kind, sizeof out->kind)) {
-        sq_errf(err, errlen, "sqlite job_get %s: id, hash or kind too long in the database", id);
+        sq_column_fixed(st, 2, out->kind, sizeof out->kind) ||
+        sq_column_fixed(st, 11, out->owner, sizeof out->owner) ||
+        sq_column_fixed(st, 15, out->stage, sizeof out->stage)) {
+        sq_errf(err, errlen, "sqlite job_get %s: a text field too long in the database", id);
         goto fail;
     }
     out->state = (job_state)sqlite3_column_int(st, 3);
@@ -632,6 +724,10 @@ static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, si
         goto fail;
     }
     out->active_subs = sqlite3_column_int(st, 10);
+    out->lease_until = sq_column_time(st, 12);
+    out->attempts = sqlite3_column_int(st, 13);
+    out->cancel = sqlite3_column_int(st, 14);
+    out->fraction = sqlite3_column_double(st, 16);
     sq_done(st);
     return STORE_OK;
 fail:
@@ -650,66 +746,192 @@ static int sq_job_get(store *base, const char *id, store_job *out, char *err, si
     return sq_job_read(c, id, out, err, errlen);
 }
 
-/* Two passes: the ids in order first, then one job_get per id, so that no statement is active
- * while fn runs (fn may call the store) and a job that ended or went away in between is
- * skipped.  The ids of a restart's backlog are small: 33 bytes a job. */
-static int sq_jobs_unfinished(store *base, int (*fn)(void *ctx, store_job *j), void *ctx, char *err,
-                              size_t errlen)
+static int sq_job_claim(store *base, const char *owner, double now, double lease, store_job *out,
+                        char *err, size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
-    sqlite3_stmt *st = NULL;
-    char(*ids)[33] = NULL;
-    size_t n = 0, cap = 0;
-    store_job j = {0};
-    int rc;
-    sq_conn *c = sq_conn_get(s, err, errlen);
+    char id[33];
+    memset(out, 0, sizeof *out);
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
     if (!c) return STORE_ERR;
-    st = sq_stmt(c, SQ_JOBS_UNFINISHED, "jobs_unfinished", err, errlen);
+    if (sq_run(c, SQ_BEGIN, "job_claim: begin", err, errlen)) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_CLAIM, "job_claim", err, errlen);
     if (!st) goto fail;
-    sqlite3_bind_int(st, 1, JOB_QUEUED);
-    sqlite3_bind_int(st, 2, JOB_RUNNING);
-    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
-        if (n == cap) {
-            size_t ncap = cap ? 2 * cap : 64;
-            void *p = realloc(ids, ncap * sizeof *ids);
-            if (!p) {
-                sq_errf(err, errlen, "sqlite jobs_unfinished: out of memory");
-                goto fail;
-            }
-            ids = p;
-            cap = ncap;
-        }
-        if (sq_column_fixed(st, 0, ids[n], sizeof ids[n])) {
-            sq_errf(err, errlen, "sqlite jobs_unfinished: an id too long in the database");
-            goto fail;
-        }
-        n++;
-    }
+    sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 2, now);
+    sqlite3_bind_double(st, 3, now + lease);
+    int rc = sqlite3_step(st), found = rc == SQLITE_ROW;
+    if (found && sq_column_fixed(st, 0, id, sizeof id)) rc = SQLITE_MISMATCH;
+    if (found && rc == SQLITE_ROW) rc = sqlite3_step(st); /* to its end: the update is done */
     if (rc != SQLITE_DONE) {
-        sq_dberr(err, errlen, "jobs_unfinished", c->db);
+        if (rc == SQLITE_MISMATCH)
+            sq_errf(err, errlen, "sqlite job_claim: an id too long in the database");
+        else
+            sq_dberr(err, errlen, "job_claim", c->db);
+        sq_done(st);
         goto fail;
     }
     sq_done(st);
-    st = NULL;
-    for (size_t i = 0; i < n; i++) {
-        int stop;
-        rc = sq_job_read(c, ids[i], &j, err, errlen);
-        if (rc == STORE_NOTFOUND) continue;
-        if (rc != STORE_OK) goto fail;
-        if (j.state != JOB_QUEUED && j.state != JOB_RUNNING) {
-            store_job_clear(&j);
-            continue;
-        }
-        stop = fn(ctx, &j);
-        store_job_clear(&j);
-        if (stop) break;
+    if (found && sq_job_read(c, id, out, err, errlen) != STORE_OK) goto fail;
+    if (sq_run(c, SQ_COMMIT, "job_claim: commit", err, errlen)) goto fail;
+    return found ? STORE_OK : STORE_NOTFOUND;
+fail:
+    store_job_clear(out);
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+/* One write in a transaction of its own: statement `id`, its parameters bound by bind(st,
+ * args); with RETURNING, *col0 (may be NULL) gets the first column of its row.  STORE_NOTFOUND
+ * when it changed no row. */
+typedef void (*sq_binder)(sqlite3_stmt *st, const void *args);
+
+static int sq_write1(sq_store *s, enum sq_sql id, sq_binder bind, const void *args, int *col0,
+                     const char *where, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get(s, err, errlen);
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, where, err, errlen)) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
+    if (!st) goto fail;
+    bind(st, args);
+    int rc = sqlite3_step(st), changed;
+    if (rc == SQLITE_ROW) { /* RETURNING: the first column, then to the end */
+        if (col0) *col0 = sqlite3_column_int(st, 0);
+        changed = 1;
+        rc = sqlite3_step(st);
+    } else {
+        changed = sqlite3_changes(c->db) > 0;
     }
-    free(ids);
+    if (rc != SQLITE_DONE) {
+        sq_dberr(err, errlen, where, c->db);
+        sq_done(st);
+        goto fail;
+    }
+    sq_done(st);
+    if (sq_run(c, SQ_COMMIT, where, err, errlen)) goto fail;
+    return changed ? STORE_OK : STORE_NOTFOUND;
+fail:
+    sq_rollback(c);
+    return STORE_ERR;
+}
+
+typedef struct sq_renew_args {
+    const char *id, *owner, *stage;
+    double until, fraction;
+} sq_renew_args;
+
+static void sq_bind_renew(sqlite3_stmt *st, const void *p)
+{
+    const sq_renew_args *a = p;
+    sqlite3_bind_text(st, 1, a->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, a->owner, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 3, a->until);
+    if (a->stage) sqlite3_bind_text(st, 4, a->stage, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 5, a->fraction);
+}
+
+static int sq_job_renew(store *base, const char *id, const char *owner, double now, double lease,
+                        const char *stage, double fraction, int *cancel, char *err, size_t errlen)
+{
+    sq_renew_args a = {id, owner, stage, now + lease, fraction};
+    *cancel = 0;
+    return sq_write1((sq_store *)base, SQ_JOB_RENEW, sq_bind_renew, &a, cancel, "job_renew", err,
+                     errlen);
+}
+
+typedef struct sq_finish_args {
+    const char *id, *owner, *error;
+    int state, error_status;
+    double when;
+} sq_finish_args;
+
+static void sq_bind_finish(sqlite3_stmt *st, const void *p)
+{
+    const sq_finish_args *a = p;
+    sqlite3_bind_text(st, 1, a->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, a->owner, -1, SQLITE_STATIC);
+    sqlite3_bind_int(st, 3, a->state);
+    sq_bind_time(st, 4, a->when);
+    if (a->state == JOB_FAILED && a->error_status) sqlite3_bind_int(st, 5, a->error_status);
+    if (a->state == JOB_FAILED && a->error) sqlite3_bind_text(st, 6, a->error, -1, SQLITE_STATIC);
+}
+
+static int sq_job_finish(store *base, const char *id, const char *owner, job_state state,
+                         double when, int error_status, const char *error, char *err, size_t errlen)
+{
+    if (state != JOB_DONE && state != JOB_FAILED && state != JOB_CANCELED) {
+        sq_errf(err, errlen, "sqlite job_finish: %d is not an end state", (int)state);
+        return STORE_ERR;
+    }
+    sq_finish_args a = {id, owner, error, (int)state, error_status, when};
+    return sq_write1((sq_store *)base, SQ_JOB_FINISH, sq_bind_finish, &a, NULL, "job_finish", err,
+                     errlen);
+}
+
+static void sq_bind_release(sqlite3_stmt *st, const void *p)
+{
+    const char *const *a = p;
+    sqlite3_bind_text(st, 1, a[0], -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, a[1], -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 3, sq_now());
+}
+
+static int sq_job_release(store *base, const char *id, const char *owner, char *err, size_t errlen)
+{
+    const char *a[2] = {id, owner};
+    return sq_write1((sq_store *)base, SQ_JOB_RELEASE, sq_bind_release, a, NULL, "job_release", err,
+                     errlen);
+}
+
+#define SQ_REQUEUE_MSG                                                                             \
+    "the job was started " SQ_STR(STORE_MAX_ATTEMPTS) " times, and each time the daemon running "  \
+                                                      "it stopped before it ended"
+#define SQ_STR_(x) #x
+#define SQ_STR(x)  SQ_STR_(x)
+
+static int sq_jobs_requeue(store *base, double now, int all, size_t *n, char *err, size_t errlen)
+{
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    *n = 0;
+    if (!c) return STORE_ERR;
+    if (sq_run(c, SQ_BEGIN, "jobs_requeue: begin", err, errlen)) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOBS_REQUEUE, "jobs_requeue", err, errlen);
+    if (!st) goto fail;
+    sqlite3_bind_double(st, 1, now);
+    sqlite3_bind_int(st, 2, all != 0);
+    sqlite3_bind_int(st, 3, STORE_MAX_ATTEMPTS);
+    sqlite3_bind_text(st, 4, SQ_REQUEUE_MSG, -1, SQLITE_STATIC);
+    if (sqlite3_step(st) != SQLITE_DONE) {
+        sq_dberr(err, errlen, "jobs_requeue", c->db);
+        sq_done(st);
+        goto fail;
+    }
+    *n = (size_t)sqlite3_changes64(c->db);
+    sq_done(st);
+    if (sq_run(c, SQ_COMMIT, "jobs_requeue: commit", err, errlen)) goto fail;
     return STORE_OK;
 fail:
-    sq_done(st);
-    free(ids);
+    *n = 0;
+    sq_rollback(c);
     return STORE_ERR;
+}
+
+static int sq_job_counts(store *base, size_t *queued, size_t *running, char *err, size_t errlen)
+{
+    *queued = *running = 0;
+    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    if (!c) return STORE_ERR;
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_COUNTS, "job_counts", err, errlen);
+    if (!st) return STORE_ERR;
+    int rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        *queued = (size_t)sqlite3_column_int64(st, 0);
+        *running = (size_t)sqlite3_column_int64(st, 1);
+    } else {
+        sq_dberr(err, errlen, "job_counts", c->db);
+    }
+    sq_done(st);
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
 static int sq_jobs_prune(store *base, double before, size_t keep, size_t *n, char *err,
@@ -747,17 +969,6 @@ fail:
 
 /* ---- submissions ---- */
 
-static int sq_sub_insert(store *base, const store_sub *sub, char *err, size_t errlen)
-{
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "sub_insert: begin", err, errlen)) return STORE_ERR;
-    int rc = sq_sub_write(c, sub, "sub_insert", err, errlen);
-    if (rc == STORE_OK && sq_run(c, SQ_COMMIT, "sub_insert: commit", err, errlen)) rc = STORE_ERR;
-    if (rc != STORE_OK) sq_rollback(c);
-    return rc;
-}
-
 static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
@@ -784,42 +995,54 @@ static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, si
     return out_rc;
 }
 
-static int sq_sub_cancel(store *base, const char *id, double when, int *changed, char *err,
-                         size_t errlen)
+/* Runs statement `id` on job `job` at `when` (?1, ?2): whether it changed a row (-1: error). */
+static int sq_job_step(sq_conn *c, enum sq_sql id, const char *job, double when, const char *where,
+                       char *err, size_t errlen)
 {
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
+    if (!st) return -1;
+    sqlite3_bind_text(st, 1, job, -1, SQLITE_STATIC);
+    if (sqlite3_bind_parameter_count(st) >= 2) sqlite3_bind_double(st, 2, when);
+    int rc = sqlite3_step(st);
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
+    sq_done(st);
+    return rc != SQLITE_DONE ? -1 : sqlite3_changes(c->db) > 0;
+}
+
+static int sq_sub_cancel(store *base, const char *id, double when, int *changed, int *job,
+                         char *err, size_t errlen)
+{
+    store_sub sub;
+    long long active = 0;
     *changed = 0;
+    *job = STORE_JOB_KEPT;
     sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
     if (!c) return STORE_ERR;
     if (sq_run(c, SQ_BEGIN, "sub_cancel: begin", err, errlen)) return STORE_ERR;
-    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_CANCEL, "sub_cancel", err, errlen);
-    if (!st) goto fail;
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sq_bind_time(st, 2, when);
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "sub_cancel", c->db);
-        goto fail;
-    }
-    *changed = sqlite3_changes(c->db) > 0;
-    sq_done(st);
-    st = NULL;
-    int rc = STORE_OK;
-    if (!*changed) { /* canceled already, or no such submission */
-        st = sq_stmt(c, SQ_SUB_GET, "sub_cancel", err, errlen);
-        if (!st) goto fail;
-        sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-        int step = sqlite3_step(st);
-        if (step != SQLITE_ROW && step != SQLITE_DONE) {
-            sq_dberr(err, errlen, "sub_cancel", c->db);
+    int rc = sq_sub_get(base, id, &sub, err, errlen);
+    if (rc == STORE_NOTFOUND) goto done;
+    if (rc != STORE_OK) goto fail;
+    int ch = sq_job_step(c, SQ_SUB_CANCEL, id, when, "sub_cancel", err, errlen);
+    if (ch < 0) goto fail;
+    *changed = ch;
+    if (ch) { /* the last one of its job? */
+        if (sq_lookup(c, SQ_SUB_ACTIVE, sub.job, &active, NULL, "sub_cancel", err, errlen))
             goto fail;
+        if (active == 0) {
+            int q = sq_job_step(c, SQ_JOB_CANCEL_QUEUED, sub.job, when, "sub_cancel", err, errlen);
+            int r =
+                q ? q
+                  : sq_job_step(c, SQ_JOB_STOP_RUNNING, sub.job, when, "sub_cancel", err, errlen);
+            if (q < 0 || r < 0) goto fail;
+            *job = q ? STORE_JOB_CANCELED : r ? STORE_JOB_STOPPING : STORE_JOB_KEPT;
         }
-        if (step == SQLITE_DONE) rc = STORE_NOTFOUND;
-        sq_done(st);
-        st = NULL;
     }
+done:
     if (sq_run(c, SQ_COMMIT, "sub_cancel: commit", err, errlen)) goto fail;
     return rc;
 fail:
-    sq_done(st);
+    *changed = 0;
+    *job = STORE_JOB_KEPT;
     sq_rollback(c);
     return STORE_ERR;
 }
@@ -1390,19 +1613,25 @@ static void sq_close(store *base)
         c = next;
     }
     pthread_mutex_destroy(&s->mu);
+    if (s->lock_fd >= 0) close(s->lock_fd);
     free(s->path);
     free(s);
 }
 
 static const store_ops sq_ops = {
+    .job_submit = sq_job_submit,
+    .job_claim = sq_job_claim,
+    .job_renew = sq_job_renew,
+    .job_finish = sq_job_finish,
+    .job_release = sq_job_release,
+    .jobs_requeue = sq_jobs_requeue,
     .job_insert = sq_job_insert,
-    .job_set_state = sq_job_set_state,
     .job_get = sq_job_get,
-    .jobs_unfinished = sq_jobs_unfinished,
+    .job_counts = sq_job_counts,
     .jobs_prune = sq_jobs_prune,
-    .sub_insert = sq_sub_insert,
     .sub_get = sq_sub_get,
     .sub_cancel = sq_sub_cancel,
+    .wait_event = NULL, /* one daemon per file: nobody else makes events */
     .result_put = sq_result_put,
     .result_put_file = sq_result_put_file,
     .result_get = sq_result_get,
@@ -1639,6 +1868,32 @@ static int sq_load_stamp(sq_conn *c, sq_store *s, char *err, size_t errlen)
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
+/* One daemon per file: the queue's leases need every daemon to see the others, and a store
+ * that opens deletes the chunks of puts under way and requeues every running job.  An
+ * exclusive flock on path + "-lock" (kept while the store is open; the kernel drops it with
+ * the process, however it ends) makes a second daemon on the same file stop with a message. */
+static int sq_lock(sq_store *s, char *err, size_t errlen)
+{
+    char lp[4200];
+    snprintf(lp, sizeof lp, "%s-lock", s->path);
+    s->lock_fd = open(lp, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (s->lock_fd < 0) {
+        sq_errf(err, errlen, "sqlite open %s: cannot open its lock file %s: %s", s->path, lp,
+                strerror(errno));
+        return STORE_ERR;
+    }
+    if (flock(s->lock_fd, LOCK_EX | LOCK_NB) == 0) return STORE_OK;
+    if (errno == EWOULDBLOCK)
+        sq_errf(err, errlen,
+                "sqlite open %s: another cellard is using this database (one daemon per SQLite "
+                "file; to run several daemons, give them one PostgreSQL database: --db "
+                "postgresql://...)",
+                s->path);
+    else
+        sq_errf(err, errlen, "sqlite open %s: cannot lock %s: %s", s->path, lp, strerror(errno));
+    return STORE_ERR;
+}
+
 store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_seconds, int flags,
                          char *err, size_t errlen)
 {
@@ -1660,6 +1915,7 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
         goto fail;
     }
     s->base.ops = &sq_ops;
+    s->lock_fd = -1;
     s->budget = budget_bytes;
     s->touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
     if (pthread_mutex_init(&s->mu, NULL) != 0) {
@@ -1672,6 +1928,7 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
         goto fail;
     }
     s->key_made = 1;
+    if (sq_lock(s, err, errlen)) goto fail;
     int existed = stat(path, &sb) == 0;
     if (sq_conn_open(s, 1, &c, err, errlen)) goto fail;
     /* the version, what the file is and whether it is sound first: refuse a newer database,
@@ -1695,6 +1952,7 @@ fail:
     if (s) {
         if (s->key_made) pthread_key_delete(s->key);
         if (mu_made) pthread_mutex_destroy(&s->mu);
+        if (s->lock_fd >= 0) close(s->lock_fd);
         free(s->path);
         free(s);
     }

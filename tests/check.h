@@ -17,6 +17,9 @@ void test_register(const char *name, test_fn fn);
 void test_fail(const char *file, const char *func, int line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 int test_failed_now(void); /* non-zero once the running test has a failure */
+/* Marks the running test skipped (counted apart, "N skipped"), when nothing failed in it; only
+ * where a variable asks for the skip (CELLAR_SKIP_*), never silently. */
+void test_skip(const char *why);
 
 #define TEST(name)                                                                                 \
     static void name(void);                                                                        \

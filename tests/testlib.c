@@ -13,6 +13,7 @@ static struct {
 } tests[MAX_TESTS];
 static int ntests;
 static int cur_failures;
+static const char *cur_skip; /* why the running test was skipped, or NULL */
 
 void test_register(const char *name, test_fn fn)
 {
@@ -33,6 +34,11 @@ void test_fail(const char *file, const char *func, int line, const char *fmt, ..
     vfprintf(stdout, fmt, ap);
     va_end(ap);
     fputc('\n', stdout);
+}
+
+void test_skip(const char *why)
+{
+    cur_skip = why;
 }
 
 int test_failed_now(void)
@@ -93,7 +99,7 @@ double *test_random_lines(size_t n, double scaling, uint64_t seed)
 
 int main(int argc, char **argv)
 {
-    int passed = 0, failed = 0;
+    int passed = 0, failed = 0, skipped = 0;
     for (int i = 0; i < ntests; i++) {
         if (argc > 1) {
             int want = 0;
@@ -101,8 +107,12 @@ int main(int argc, char **argv)
             if (!want) continue;
         }
         cur_failures = 0;
+        cur_skip = NULL;
         tests[i].fn();
-        if (cur_failures) {
+        if (cur_skip && !cur_failures) {
+            printf("skip %s: %s\n", tests[i].name, cur_skip);
+            skipped++;
+        } else if (cur_failures) {
             printf("FAIL %s (%d failed checks)\n", tests[i].name, cur_failures);
             failed++;
         } else {
@@ -111,6 +121,9 @@ int main(int argc, char **argv)
         }
         fflush(stdout);
     }
-    printf("%d passed, %d failed\n", passed, failed);
+    if (skipped)
+        printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
+    else
+        printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

@@ -1,0 +1,443 @@
+/* test_cluster.c — several cellard on one PostgreSQL database (tests/pg.h starts a private
+ * server): the queue, the cache and the submissions are the database's, so that
+ *   - distinct jobs posted round-robin through three daemons each run exactly once (counted in
+ *     the database and in the daemons' metrics), with results equal to the command-line tool's;
+ *   - identical requests posted through different daemons at once run once;
+ *   - a DELETE through one daemon stops a job running on another;
+ *   - a client waiting on one daemon is answered when another finishes its job;
+ *   - the jobs of a daemon killed with SIGKILL are finished by another once their lease runs
+ *     out, and not before;
+ *   - PostgreSQL stopped and started again under load: the daemons answer 503 meanwhile,
+ *     recover by themselves, and every job they accepted ends done;
+ * and one SQLite file is refused to a second daemon.  CELLAR_SKIP_PG=1 skips the PostgreSQL
+ * tests (reported as skipped). */
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "tests/daemon.h"
+#include "tests/pg.h"
+
+#define STARTED "cellar_jobs_total{state=\"started\"}"
+
+/* A database for the test (0), or skipped / failed (-1). */
+static int cluster_db(char *uri, size_t cap)
+{
+    int a = pg_available();
+    if (a == 0) {
+        test_skip("CELLAR_SKIP_PG=1");
+        return -1;
+    }
+    if (a < 0 || pg_new_db(uri, cap)) {
+        test_fail(__FILE__, __func__, __LINE__, "no PostgreSQL database for the test");
+        return -1;
+    }
+    return 0;
+}
+
+/* The first column of the first row of sql on the test's database, or -1. */
+static long long pg_ll(const char *uri, const char *sql)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "psql -Atq '%s' -c \"%s\" 2>/dev/null", uri, sql);
+    size_t n = 0;
+    char *out = run_capture(cmd, &n);
+    long long v = out && n ? strtoll(out, NULL, 10) : -1;
+    free(out);
+    return v;
+}
+
+static double sum_metric(srv *d, int n, const char *series)
+{
+    double s = 0;
+    for (int i = 0; i < n; i++) s += metric(&d[i], series);
+    return s;
+}
+
+static void finish_all(srv *d, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (d[i].pid) srv_term(&d[i]);
+        srv_finish(&d[i]);
+    }
+}
+
+/* POSTs body through d without waiting: 202, or 200 when another daemon took and ended the
+ * job at once; the submission's id in id (33 bytes).  0, or -1. */
+static int post_job(srv *d, const char *body, size_t len, char *id)
+{
+    hresp r;
+    http_post(d, body, len, NULL, &r);
+    char v[64] = "";
+    int ok = (r.status == 202 || r.status == 200) && hget(&r, "X-Cellar-Job", v, sizeof v) &&
+             is_hex(v, 32);
+    if (ok) snprintf(id, 33, "%.32s", v);
+    hresp_free(&r);
+    return ok ? 0 : -1;
+}
+
+/* ---- 200 distinct jobs, round-robin, each run once ---- */
+
+#define NJOBS 200
+
+TEST(cluster_round_robin_runs_once)
+{
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    srv d[3];
+    int up = 0;
+    for (int i = 0; i < 3; i++) {
+        char flags[128];
+        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name d%d --queue 1000", i);
+        up += srv_open_db(&d[i], db, flags) == 0;
+    }
+    if (up < 3) {
+        finish_all(d, 3);
+        REQUIRE(0, "3 daemons on PostgreSQL: %d started", up);
+    }
+    static jobv j[NJOBS];
+    char *bodies[NJOBS];
+    size_t lens[NJOBS];
+    int posted = 0;
+    for (int i = 0; i < NJOBS; i++) {
+        bodies[i] = small_body(1000 + i, 0, &lens[i]);
+        if (bodies[i] && post_job(&d[i % 3], bodies[i], lens[i], j[i].id) == 0) posted++;
+    }
+    CHECK(posted == NJOBS, "%d of %d posted", posted, NJOBS);
+    int done = 0, same = 0;
+    for (int i = 0; i < NJOBS; i++) {
+        jobv t;
+        if (!j[i].id[0]) continue;
+        /* polled through another daemon than the one it was posted to */
+        if (wait_state(&d[(i + 1) % 3], j[i].id, "done", 60 * slowdown(), &t)) {
+            done++;
+            char path[128];
+            snprintf(path, sizeof path, "/v1/jobs/%.32s/result", j[i].id);
+            hresp r;
+            http_get(&d[(i + 2) % 3], path, &r);
+            size_t elen;
+            const char *exp = expect(bodies[i], lens[i], &elen);
+            if (r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) == 1) same++;
+            hresp_free(&r);
+        }
+    }
+    CHECK(done == NJOBS && same == NJOBS, "%d done, %d equal to cellar run, of %d", done, same,
+          NJOBS);
+    CHECK(pg_ll(db, "SELECT count(*) FROM jobs") == NJOBS &&
+              pg_ll(db, "SELECT count(*) FROM jobs WHERE attempts = 1 AND state = 2") == NJOBS,
+          "in the database: %lld jobs, %lld done once", pg_ll(db, "SELECT count(*) FROM jobs"),
+          pg_ll(db, "SELECT count(*) FROM jobs WHERE attempts = 1 AND state = 2"));
+    double started = sum_metric(d, 3, STARTED), accepted = sum_metric(d, 3, ACCEPTED),
+           ended = sum_metric(d, 3, DONE);
+    CHECK(started == NJOBS && accepted == NJOBS && ended == NJOBS,
+          "metrics over the 3 daemons: started %g accepted %g done %g, want %d", started, accepted,
+          ended, NJOBS);
+    int ran[3];
+    for (int i = 0; i < 3; i++) ran[i] = (int)metric(&d[i], STARTED);
+    printf("  (jobs run by the three daemons: %d, %d, %d)\n", ran[0], ran[1], ran[2]);
+    CHECK(ran[0] > 0 && ran[1] > 0 && ran[2] > 0, "a daemon ran no job: %d %d %d", ran[0], ran[1],
+          ran[2]);
+    for (int i = 0; i < NJOBS; i++) free(bodies[i]);
+    finish_all(d, 3);
+}
+
+/* ---- 50 clients, one request, three daemons: one run ---- */
+
+TEST(cluster_single_flight)
+{
+    enum { N = 50 };
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    srv d[3];
+    int up = 0;
+    for (int i = 0; i < 3; i++) {
+        char flags[128];
+        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name s%d", i);
+        up += srv_open_db(&d[i], db, flags) == 0;
+    }
+    size_t len;
+    const char *body = slow_body(5, &len);
+    if (up < 3 || !body) {
+        finish_all(d, 3);
+        REQUIRE(0, "3 daemons and a slow request: %d started", up);
+    }
+    static poster p[N];
+    pthread_t t[N];
+    int started[N];
+    pthread_barrier_t bar;
+    pthread_barrier_init(&bar, NULL, N);
+    for (int i = 0; i < N; i++) {
+        p[i] = (poster){.d = &d[i % 3], .body = body, .len = len, .prefer = "wait=60", .bar = &bar};
+        started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        if (!started[i]) {
+            p[i].bar = NULL;
+            started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+        }
+    }
+    int ok = 0, ids = 0;
+    char first[64] = "";
+    for (int i = 0; i < N; i++) {
+        if (started[i]) pthread_join(t[i], NULL);
+        char id[64];
+        if (p[i].r.status == 200 && hget(&p[i].r, "X-Cellar-Job", id, sizeof id)) {
+            ok++;
+            ids += strcmp(id, first) != 0;
+            snprintf(first, sizeof first, "%s", id);
+        }
+        hresp_free(&p[i].r);
+    }
+    pthread_barrier_destroy(&bar);
+    CHECK(ok == N, "%d of %d clients got the result", ok, N);
+    CHECK(pg_ll(db, "SELECT count(*) FROM jobs") == 1 && sum_metric(d, 3, STARTED) == 1,
+          "one request from 50 clients: %lld jobs, %g starts",
+          pg_ll(db, "SELECT count(*) FROM jobs"), sum_metric(d, 3, STARTED));
+    CHECK(pg_ll(db, "SELECT count(*) FROM subs") == N, "%lld submissions, want %d",
+          pg_ll(db, "SELECT count(*) FROM subs"), N);
+    CHECK(ids > 1, "every client got the same submission id");
+    finish_all(d, 3);
+}
+
+/* ---- a DELETE through one daemon, a wait on another ---- */
+
+TEST(cluster_cancel_and_wait_across)
+{
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    /* A only answers (no workers): every job runs on B */
+    srv a, b;
+    int up = srv_open_db(&a, db, "--workers 0 --name A") == 0;
+    up += srv_open_db(&b, db, "--workers 1 --job-threads 1 --name B") == 0;
+    size_t hlen, slen;
+    const char *huge = huge_body(&hlen), *slow1 = slow_body(6, &slen);
+    if (up < 2 || !huge || !slow1) {
+        srv_finish(&a);
+        srv_finish(&b);
+        REQUIRE(0, "2 daemons and the slow requests");
+    }
+    jobv h, t;
+    REQUIRE(submit(&a, huge, hlen, &h) == 0, "post the huge job to A");
+    CHECK(wait_state(&a, h.id, "running", 30 * slowdown(), &t) && !strcmp(t.daemon, "B"),
+          "the huge job: %s on %s", t.state, t.daemon);
+    /* canceled through A: B stops it within about a second */
+    char path[128];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    double t0 = now_s();
+    hresp r;
+    http_method(&a, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE through A: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    long long st = -1;
+    char sql[128];
+    snprintf(sql, sizeof sql, "SELECT state FROM jobs WHERE id = '%.32s'", h.id);
+    while (now_s() < t0 + 10 * slowdown() && (st = pg_ll(db, sql)) != 4) sleep_s(0.02);
+    double stopped = now_s() - t0;
+    CHECK(st == 4 && stopped < 2 * slowdown(),
+          "B stopped the job %.2f s after the DELETE (state %lld)", stopped, st);
+    printf("  (a DELETE through A stopped the job on B in %.2f s)\n", stopped);
+    /* a client waiting on A is answered when B finishes its job */
+    t0 = now_s();
+    http_post(&a, slow1, slen, "wait=60", &r);
+    size_t elen;
+    const char *exp = expect(slow1, slen, &elen);
+    char id[64] = "";
+    hget(&r, "X-Cellar-Job", id, sizeof id);
+    CHECK(r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) > 0,
+          "Prefer: wait on A for a job run by B: %ld after %.2f s", r.status, now_s() - t0);
+    hresp_free(&r);
+    CHECK(wait_state(&a, id, "done", 1, &t) && !strcmp(t.daemon, "B"), "run by %s", t.daemon);
+    CHECK(metric(&a, STARTED) == 0 && metric(&b, STARTED) == 2, "starts: A %g, B %g",
+          metric(&a, STARTED), metric(&b, STARTED));
+    srv_term(&a);
+    srv_term(&b);
+    srv_finish(&a);
+    srv_finish(&b);
+}
+
+/* ---- SIGKILL: the lease runs out, another daemon finishes the jobs ---- */
+
+TEST(cluster_sigkill_lease)
+{
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    const double lease = 3;
+    srv a, b;
+    /* B takes the jobs first (A has no workers yet), then dies */
+    int up = srv_open_db(&b, db, "--workers 2 --job-threads 1 --name B --lease-seconds 3") == 0;
+    size_t l1, l2;
+    const char *s1 = slow_body(7, &l1), *s2 = slow_body(8, &l2);
+    if (!up || !s1 || !s2) {
+        srv_finish(&b);
+        REQUIRE(0, "a daemon and the slow requests");
+    }
+    jobv j1, j2, t;
+    REQUIRE(submit(&b, s1, l1, &j1) == 0 && submit(&b, s2, l2, &j2) == 0, "two jobs");
+    CHECK(wait_state(&b, j1.id, "running", 30 * slowdown(), &t) &&
+              wait_state(&b, j2.id, "running", 30 * slowdown(), &t),
+          "both running on B: %s", t.state);
+    up = srv_open_db(&a, db, "--workers 2 --job-threads 1 --name A --lease-seconds 3") == 0;
+    REQUIRE(up, "daemon A");
+    double killed = now_s();
+    srv_kill(&b);
+    /* not taken while the lease is live; taken once it ran out */
+    sleep_s(lease * 0.5);
+    CHECK(wait_state(&a, j1.id, "running", 1, &t) && !strcmp(t.daemon, "B") && t.attempts == 1,
+          "within the lease: %s on %s, attempt %d", t.state, t.daemon, t.attempts);
+    jobv t1, t2;
+    int ok1 = wait_state(&a, j1.id, "done", (60 + lease) * slowdown(), &t1);
+    int ok2 = wait_state(&a, j2.id, "done", (60 + lease) * slowdown(), &t2);
+    double elapsed = now_s() - killed;
+    CHECK(ok1 && ok2 && !strcmp(t1.daemon, "A") && !strcmp(t2.daemon, "A") && t1.attempts == 2 &&
+              t2.attempts == 2,
+          "after the kill: %s on %s (attempt %d), %s on %s (attempt %d)", t1.state, t1.daemon,
+          t1.attempts, t2.state, t2.daemon, t2.attempts);
+    printf("  (SIGKILL of the daemon running two jobs: both done by the other %.1f s later, "
+           "lease %.0f s)\n",
+           elapsed, lease);
+    CHECK(elapsed > lease, "the jobs were finished %.1f s after the kill, within the lease",
+          elapsed);
+    hresp r;
+    char path[128];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s/result", j1.id);
+    http_get(&a, path, &r);
+    size_t elen;
+    const char *exp = expect(s1, l1, &elen);
+    CHECK(r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) > 0,
+          "the result: %ld", r.status);
+    hresp_free(&r);
+    srv_term(&a);
+    srv_finish(&a);
+    srv_finish(&b);
+}
+
+/* ---- PostgreSQL stopped and started under load ---- */
+
+typedef struct loader {
+    srv *d;
+    int nd;
+    atomic_int stop;
+    atomic_int accepted, refused, other;
+    char ids[400][33];
+    atomic_int nids;
+} loader;
+
+static void *load_thread(void *arg)
+{
+    loader *l = arg;
+    for (int i = 0; !atomic_load(&l->stop) && i < 400; i++) {
+        size_t len;
+        char *b = small_body(5000 + i, 0, &len);
+        hresp r;
+        http_post(&l->d[i % l->nd], b, len, NULL, &r);
+        jobv j;
+        if ((r.status == 202 || r.status == 200) && hget(&r, "X-Cellar-Job", j.id, sizeof j.id)) {
+            int k = atomic_fetch_add(&l->nids, 1);
+            if (k < 400) snprintf(l->ids[k], 33, "%.32s", j.id);
+            atomic_fetch_add(&l->accepted, 1);
+        } else if (r.status == 503) {
+            atomic_fetch_add(&l->refused, 1);
+        } else {
+            atomic_fetch_add(&l->other, 1);
+        }
+        hresp_free(&r);
+        free(b);
+        sleep_s(0.01);
+    }
+    return NULL;
+}
+
+TEST(cluster_database_restart)
+{
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    srv d[2];
+    int up = 0;
+    for (int i = 0; i < 2; i++) {
+        char flags[128];
+        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name r%d --queue 1000", i);
+        up += srv_open_db(&d[i], db, flags) == 0;
+    }
+    if (up < 2) {
+        finish_all(d, 2);
+        REQUIRE(0, "2 daemons");
+    }
+    static loader l;
+    memset(&l, 0, sizeof l);
+    l.d = d;
+    l.nd = 2;
+    pthread_t t;
+    REQUIRE(pthread_create(&t, NULL, load_thread, &l) == 0, "load thread");
+    sleep_s(1);
+    REQUIRE(pg_stop() == 0, "pg_ctl stop");
+    /* meanwhile: not ready, and POSTs refused with 503 */
+    sleep_s(0.5);
+    hresp r;
+    http_get(&d[0], "/readyz", &r);
+    CHECK(r.status == 503, "readyz with the database down: %ld", r.status);
+    hresp_free(&r);
+    http_get(&d[1], "/healthz", &r);
+    CHECK(r.status == 200, "healthz with the database down: %ld", r.status);
+    hresp_free(&r);
+    sleep_s(1.5);
+    int refused_down = atomic_load(&l.refused);
+    REQUIRE(pg_start() == 0, "pg_ctl start");
+    /* recovered by themselves */
+    double t0 = now_s();
+    int ready = 0;
+    while (now_s() < t0 + 20 * slowdown() && ready < 2) {
+        ready = 0;
+        for (int i = 0; i < 2; i++) {
+            http_get(&d[i], "/readyz", &r);
+            ready += r.status == 200;
+            hresp_free(&r);
+        }
+        if (ready < 2) sleep_s(0.1);
+    }
+    printf("  (database down 2 s: %d POSTs refused with 503; ready again %.2f s after it "
+           "restarted)\n",
+           refused_down, now_s() - t0);
+    CHECK(ready == 2, "the daemons are not ready 20 s after the database restarted");
+    CHECK(refused_down > 0, "no POST was refused while the database was down");
+    sleep_s(1);
+    atomic_store(&l.stop, 1);
+    pthread_join(t, NULL);
+    CHECK(l.other == 0, "%d answers other than 200, 202, 503", (int)l.other);
+    int n = atomic_load(&l.nids), done = 0;
+    if (n > 400) n = 400;
+    for (int i = 0; i < n; i++) {
+        jobv j;
+        done += wait_state(&d[i % 2], l.ids[i], "done", 60 * slowdown(), &j);
+    }
+    CHECK(n > 0 && done == n, "%d of %d accepted jobs done after the restart", done, n);
+    CHECK(sum_metric(d, 2, STARTED) >= n, "started %g < accepted %d", sum_metric(d, 2, STARTED), n);
+    finish_all(d, 2);
+}
+
+/* ---- one SQLite file, one daemon ---- */
+
+TEST(cluster_sqlite_refuses_a_second_daemon)
+{
+    srv a;
+    REQUIRE(srv_open(&a, "--workers 1") == 0, "the first daemon");
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "'%s/cellard' --listen 127.0.0.1:0 --db '%s' 2>&1", build_dir(),
+             a.db);
+    FILE *p = popen(cmd, "r");
+    char out[2048] = "";
+    size_t n = p ? fread(out, 1, sizeof out - 1, p) : 0;
+    out[n] = 0;
+    int st = p ? pclose(p) : -1;
+    CHECK(WIFEXITED(st) && WEXITSTATUS(st) != 0 &&
+              strstr(out, "another cellard is using this database") && strstr(out, "postgresql://"),
+          "a second daemon on the same SQLite file: status 0x%x: %s", st, out);
+    hresp r;
+    http_get(&a, "/readyz", &r);
+    CHECK(r.status == 200, "the first daemon after the refusal: %ld", r.status);
+    hresp_free(&r);
+    srv_term(&a);
+    srv_finish(&a);
+}

@@ -29,6 +29,8 @@ const char config_usage[] =
     "                                             --db run the jobs)\n"
     "  --job-threads N       CELLAR_JOB_THREADS   core threads per job (default: CPUs)\n"
     "  --queue N             CELLAR_QUEUE         waiting jobs at most (default 64)\n"
+    "  --intake-threads N    CELLAR_INTAKE_THREADS  threads that parse and validate POST bodies\n"
+    "                                             (default: CPUs)\n"
     "  --max-body BYTES      CELLAR_MAX_BODY      request body limit (default 67108864)\n"
     "  --max-inflight-bytes BYTES  CELLAR_MAX_INFLIGHT_BYTES  request body bytes held by all\n"
     "                        connections at once, then 503 (default 268435456)\n"
@@ -108,6 +110,9 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "job-threads")) {
         if (parse_u64(v, 1, 64, &u)) return bad(err, errlen, "--job-threads (1..64)", v);
         c->job_threads = (int)u;
+    } else if (!strcmp(name, "intake-threads")) {
+        if (parse_u64(v, 1, 64, &u)) return bad(err, errlen, "--intake-threads (1..64)", v);
+        c->intake_threads = (int)u;
     } else if (!strcmp(name, "queue")) {
         if (parse_u64(v, 1, 1000000, &u)) return bad(err, errlen, "--queue (1..1000000)", v);
         c->queue = (size_t)u;
@@ -181,7 +186,8 @@ static const char *names[] = {"listen",
                               "idle-timeout",
                               "log-level",
                               "name",
-                              "lease-seconds"};
+                              "lease-seconds",
+                              "intake-threads"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {
@@ -194,6 +200,7 @@ int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
     strcpy(c->db, "./cellar.db");
     c->workers = (int)ncpu;
     c->job_threads = (int)ncpu;
+    c->intake_threads = (int)ncpu;
     c->queue = 64;
     c->max_body = 64u << 20;
     c->max_inflight = 256u << 20;

@@ -12,6 +12,7 @@
  *   --workers       CELLAR_WORKERS      CPUs            jobs run at once
  *   --job-threads   CELLAR_JOB_THREADS  CPUs            core threads of one job
  *   --queue         CELLAR_QUEUE        64              jobs waiting at most (then 503)
+ *   --intake-threads CELLAR_INTAKE_THREADS CPUs         threads that parse and validate POSTs
  *   --max-body      CELLAR_MAX_BODY     67108864        request body bytes at most (then 413)
  *   --max-inflight-bytes CELLAR_MAX_INFLIGHT_BYTES 268435456  request body bytes held at once
  *                                                       by all connections (then 503)
@@ -42,7 +43,7 @@ typedef struct config {
     char spool[4096]; /* "": the system's temporary directory */
     char name[64];
     double lease;
-    int workers, job_threads;
+    int workers, job_threads, intake_threads;
     size_t queue;
     uint64_t max_body;
     uint64_t max_inflight;

@@ -55,7 +55,18 @@ struct http_server {
     char ready_err[256];
     pthread_mutex_t memo_mu; /* guards memo */
     struct memo_slot *memo;  /* MEMO_SLOTS: request bodies seen lately */
+    /* the intake pool: POST bodies parsed, validated and submitted off the HTTP threads */
+    pthread_mutex_t in_mu;
+    pthread_cond_t in_cv;
+    struct conn *in_head, *in_tail; /* FIFO, guarded by in_mu */
+    size_t in_n;
+    int in_stop;
+    pthread_t *in_threads;
+    int in_nthreads;
 };
+
+/* POSTs waiting for an intake thread at most (then 503 at once). */
+#define INTAKE_MAX 1024
 
 /* Request bodies seen lately, by the SHA-256 of their bytes, with the hash of their canonical
  * form.  While no new job can be taken (the queue is full, or the daemon drains), a POST is
@@ -95,6 +106,17 @@ static int memo_get(http_server *h, const unsigned char raw[32], char *hash)
     return found;
 }
 
+/* What a POST's intake decided (intake_work), answered once its connection is resumed. */
+typedef enum { PLAN_PROBLEM = 0, PLAN_STORED, PLAN_RESULT, PLAN_SUBMITTED } plan_kind;
+typedef struct plan {
+    plan_kind kind;
+    unsigned status;   /* PLAN_PROBLEM */
+    char msg[320];     /* PLAN_PROBLEM */
+    const char *retry; /* PLAN_PROBLEM: Retry-After, static */
+    char hash[65];     /* PLAN_STORED, PLAN_RESULT */
+    uint64_t size;     /* PLAN_STORED */
+} plan;
+
 typedef struct conn {
     http_server *h;
     struct MHD_Connection *mc;
@@ -107,7 +129,10 @@ typedef struct conn {
     size_t len, cap;
     char job[33]; /* the job a POST waits on */
     int waiting;  /* suspended, waiting for job */
-    int parked;   /* counted in h->parked until completed */
+    int intake;   /* suspended, its body with the intake pool (2: done, plan made) */
+    plan plan;
+    struct conn *next_intake; /* h->in's queue */
+    int parked;               /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
     int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON, 3 OBJ (from Accept) */
@@ -142,6 +167,23 @@ static void inflight_msg(const http_server *h, char *msg, size_t n)
 static void too_large_msg(const http_server *h, char *msg, size_t n)
 {
     snprintf(msg, n, "the body is larger than %llu bytes", (unsigned long long)h->cfg->max_body);
+}
+
+/* c is suspended and not yet answered (h->parked counts those: http_stop waits for them). */
+static void park(conn *c)
+{
+    if (!c->parked) {
+        c->parked = 1;
+        atomic_fetch_add(&c->h->parked, 1);
+    }
+}
+
+static void unpark(conn *c)
+{
+    if (c->parked) {
+        c->parked = 0;
+        atomic_fetch_sub(&c->h->parked, 1);
+    }
 }
 
 /* Frees c's body and gives its bytes back to the budget. */
@@ -814,16 +856,37 @@ static int json_content_type(struct MHD_Connection *mc)
     return t[16] == 0 || t[16] == ';' || t[16] == ' ';
 }
 
-/* The answer to a POST that no new job can be made for: ENG_FULL or ENG_DRAINING. */
-static enum MHD_Result refused(conn *c, int why)
+static void plan_problem(plan *pl, unsigned status, const char *msg, const char *retry)
 {
-    if (why == ENG_DRAINING) return problem(c, 503, "the service is shutting down", "5", NULL);
-    return problem(c, 503, "the job queue is full: try again later", "5", NULL);
+    pl->kind = PLAN_PROBLEM;
+    pl->status = status;
+    snprintf(pl->msg, sizeof pl->msg, "%s", msg);
+    pl->retry = retry;
+}
+
+/* A POST that no new job can be made for: ENG_FULL or ENG_DRAINING. */
+static void plan_refused(plan *pl, int why)
+{
+    plan_problem(pl, 503,
+                 why == ENG_DRAINING ? "the service is shutting down"
+                                     : "the job queue is full: try again later",
+                 "5");
+}
+
+static void plan_result(plan *pl, plan_kind kind, const char *hash, uint64_t size)
+{
+    pl->kind = kind;
+    snprintf(pl->hash, sizeof pl->hash, "%s", hash);
+    pl->size = size;
 }
 
 static enum MHD_Result submitted(conn *c);
 
-static enum MHD_Result route_submit(conn *c)
+/* The intake of a POST (on an intake thread, never on an HTTP thread: parsing and validating a
+ * body can cost seconds, an SVG's curves flattened, a solid's surface checked): what the
+ * answer will be, in c->plan, made into a response by answer_plan() once the connection is
+ * resumed.  No MHD call here. */
+static void intake_work(conn *c)
 {
     char err[256], hash[65];
     api_error ae = {0};
@@ -834,29 +897,31 @@ static enum MHD_Result route_submit(conn *c)
     unsigned char raw[32];
     uint64_t size = 0;
     int rc, hit;
+    plan *pl = &c->plan;
 
     if (!EVP_Digest(c->body ? c->body : "", c->len, raw, NULL, EVP_sha256(), NULL))
         memset(raw, 0, sizeof raw); /* cannot happen with OpenSSL's sha256: never found */
     int full = engine_full(h->e, err, sizeof err);
     if (full == ENG_ERR) {
         body_release(c);
-        return problem(c, 503, err, "5", NULL);
+        return plan_problem(pl, 503, err, "5");
     }
     if (full != ENG_OK) { /* no new job: answer without parsing (see memo_slot) */
         body_release(c);
-        if (!memo_get(h, raw, hash)) return refused(c, full);
+        if (!memo_get(h, raw, hash)) return plan_refused(pl, full);
         hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
         metrics_cache(h->m, hit == STORE_OK);
-        if (hit == STORE_OK) return serve_stored(c, hash, size, NULL, "hit", 1);
+        if (hit == STORE_OK) return plan_result(pl, PLAN_STORED, hash, size);
         rc = engine_join(h->e, hash, c->job_id, c->job, err, sizeof err);
-        if (rc == ENG_NOTFOUND) return refused(c, full);
-        if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-        return submitted(c);
+        if (rc == ENG_NOTFOUND) return plan_refused(pl, full);
+        if (rc != ENG_OK) return plan_problem(pl, 503, err, "5");
+        pl->kind = PLAN_SUBMITTED;
+        return;
     }
 
     rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
     body_release(c);
-    if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL, NULL);
+    if (rc != API_OK) return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
     engine_hash(canon, clen, hash);
     memo_put(h, raw, hash);
 
@@ -865,17 +930,33 @@ static enum MHD_Result route_submit(conn *c)
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
-        return serve_stored(c, hash, size, NULL, "hit", 1);
+        return plan_result(pl, PLAN_STORED, hash, size);
     }
     int coalesced = 0;
     rc = engine_submit(h->e, canon, clen, kind, hash, c->job_id, c->job, &coalesced, err,
                        sizeof err);
     free(canon);
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */
-        return get_result(c, hash, NULL, "hit", 1);
-    if (rc == ENG_FULL || rc == ENG_DRAINING) return refused(c, rc);
-    if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-    return submitted(c);
+        return plan_result(pl, PLAN_RESULT, hash, 0);
+    if (rc == ENG_FULL || rc == ENG_DRAINING) return plan_refused(pl, rc);
+    if (rc != ENG_OK) return plan_problem(pl, 503, err, "5");
+    pl->kind = PLAN_SUBMITTED;
+}
+
+/* The answer to a POST whose intake is done (on the HTTP thread). */
+static enum MHD_Result answer_plan(conn *c)
+{
+    plan *pl = &c->plan;
+    switch (pl->kind) {
+    case PLAN_STORED:
+        return serve_stored(c, pl->hash, pl->size, NULL, "hit", 1);
+    case PLAN_RESULT:
+        return get_result(c, pl->hash, NULL, "hit", 1);
+    case PLAN_SUBMITTED:
+        return submitted(c);
+    default:
+        return problem(c, pl->status, pl->msg, pl->retry, NULL);
+    }
 }
 
 /* A POST whose submission (c->job_id, of job c->job) is made: answered now, or suspended until
@@ -888,8 +969,7 @@ static enum MHD_Result submitted(conn *c)
     if (wait <= 0) return answer_job(c);
     c->wait_applied = wait;
     c->waiting = 1;
-    c->parked = 1;
-    atomic_fetch_add(&h->parked, 1);
+    park(c);
     MHD_suspend_connection(c->mc);
     if (engine_wait(h->e, c->job, engine_now() + wait, wake_conn, c) == 1)
         MHD_resume_connection(c->mc); /* ended meanwhile: answer at once */
@@ -943,6 +1023,54 @@ static enum MHD_Result route_readyz(conn *c)
     return ok ? status_json(c, 200, "ready", NULL) : status_json(c, 503, "store not writable", err);
 }
 
+/* Hands a POST to the intake pool: the connection is suspended until an intake thread has
+ * decided its answer (c->plan) and resumes it.  Suspended before it is queued, so that no
+ * thread can resume it before it is suspended. */
+static enum MHD_Result intake_push(conn *c)
+{
+    http_server *h = c->h;
+    pthread_mutex_lock(&h->in_mu);
+    if (h->in_n >= INTAKE_MAX || h->in_stop) {
+        pthread_mutex_unlock(&h->in_mu);
+        body_release(c);
+        return problem(c, 503, "too many requests are being read: try again", "1", NULL);
+    }
+    c->intake = 1;
+    park(c);
+    MHD_suspend_connection(c->mc);
+    c->next_intake = NULL;
+    if (h->in_tail)
+        h->in_tail->next_intake = c;
+    else
+        h->in_head = c;
+    h->in_tail = c;
+    h->in_n++;
+    pthread_cond_signal(&h->in_cv);
+    pthread_mutex_unlock(&h->in_mu);
+    return MHD_YES;
+}
+
+static void *intake_main(void *arg)
+{
+    http_server *h = arg;
+    pthread_mutex_lock(&h->in_mu);
+    for (;;) {
+        while (!h->in_head && !h->in_stop) pthread_cond_wait(&h->in_cv, &h->in_mu);
+        conn *c = h->in_head;
+        if (!c) break; /* stopping, and nothing left */
+        h->in_head = c->next_intake;
+        if (!h->in_head) h->in_tail = NULL;
+        h->in_n--;
+        pthread_mutex_unlock(&h->in_mu);
+        intake_work(c);
+        c->intake = 2;
+        MHD_resume_connection(c->mc);
+        pthread_mutex_lock(&h->in_mu);
+    }
+    pthread_mutex_unlock(&h->in_mu);
+    return NULL;
+}
+
 static enum MHD_Result dispatch(conn *c)
 {
     const char *m = c->method;
@@ -967,7 +1095,7 @@ static enum MHD_Result dispatch(conn *c)
                        NULL, 0);
     case ROUTE_JOBS:
         if (strcmp(m, "POST")) return problem(c, 405, "use POST", NULL, "POST");
-        return route_submit(c);
+        return intake_push(c);
     case ROUTE_JOB:
         if (get) return route_job(c, 0);
         if (!strcmp(m, "DELETE")) return route_cancel(c);
@@ -1120,7 +1248,12 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
     }
     set_deadline(h, mc, 0, NULL);  /* the request is in: handled and answered, no deadline */
     if (c->status) return MHD_YES; /* answered before the body (413, 415, 503) */
-    if (c->waiting) {              /* resumed: the job ended or the wait is over */
+    if (c->intake == 2) {          /* resumed: the intake has decided */
+        c->intake = 0;
+        unpark(c);
+        return answer_plan(c);
+    }
+    if (c->waiting) { /* resumed: the job ended or the wait is over */
         c->waiting = 0;
         return answer_job(c);
     }
@@ -1139,7 +1272,7 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            "status", log_num(st, c->status), "ms", log_num(ms, (engine_now() - c->t0) * 1e3), "job",
            c->job_id[0] ? c->job_id : NULL, "closed",
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
-    if (c->parked) atomic_fetch_sub(&h->parked, 1);
+    unpark(c);
     /* kept alive: the next request's headers are due within the idle time and the header time */
     set_deadline(h, mc, h->cfg->idle_timeout + h->cfg->header_timeout, "headers");
     body_release(c);
@@ -1162,7 +1295,10 @@ static void http_free(http_server *h)
     pthread_mutex_destroy(&h->ready_mu);
     pthread_mutex_destroy(&h->conns_mu);
     pthread_mutex_destroy(&h->memo_mu);
+    pthread_mutex_destroy(&h->in_mu);
+    pthread_cond_destroy(&h->in_cv);
     pthread_cond_destroy(&h->reaper_cv);
+    free(h->in_threads);
     free(h->memo);
     free(h);
 }
@@ -1293,6 +1429,8 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     pthread_mutex_init(&h->conns_mu, NULL);
     pthread_mutex_init(&h->memo_mu, NULL);
     h->memo = calloc(MEMO_SLOTS, sizeof *h->memo); /* NULL: a full queue refuses every POST */
+    pthread_mutex_init(&h->in_mu, NULL);
+    pthread_cond_init(&h->in_cv, NULL);
     pthread_cond_init(&h->reaper_cv, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
@@ -1318,6 +1456,17 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
         return NULL;
     }
     h->reaper_started = 1;
+    int nin = cfg->intake_threads > 0 ? cfg->intake_threads : 1;
+    h->in_threads = calloc((size_t)nin, sizeof *h->in_threads);
+    for (int i = 0; h->in_threads && i < nin; i++) {
+        if (pthread_create(&h->in_threads[i], NULL, intake_main, h) != 0) break;
+        h->in_nthreads++;
+    }
+    if (h->in_nthreads == 0) {
+        snprintf(err, errlen, "cannot start the intake threads");
+        http_stop(h);
+        return NULL;
+    }
     return h;
 }
 
@@ -1337,6 +1486,13 @@ void http_stop(http_server *h)
     if (!h) return;
     /* the waits that the drain woke are answered before every connection is closed (for 5 s
      * at most: a client that does not read its answer cannot hold the exit) */
+    /* the intake finishes what it holds (the engine drains: new jobs are refused) */
+    pthread_mutex_lock(&h->in_mu);
+    h->in_stop = 1;
+    pthread_cond_broadcast(&h->in_cv);
+    pthread_mutex_unlock(&h->in_mu);
+    for (int i = 0; i < h->in_nthreads; i++) pthread_join(h->in_threads[i], NULL);
+    h->in_nthreads = 0;
     for (int i = 0; i < 500 && atomic_load(&h->parked) > 0; i++)
         nanosleep(&(struct timespec){0, 10000000}, NULL);
     if (h->reaper_started) {

@@ -1999,3 +1999,135 @@ SERVER_TEST(slow_clients, "--workers 1 --job-threads 1 --header-timeout 2 --body
     check_sane(d, "slow clients", 7);
     srv_term(d);
 }
+
+/* ---- the intake pool ------------------------------------------------------------------- */
+
+/* Bodies are parsed and validated on the intake threads: while POSTs whose validation takes
+ * seconds (SVG drawings of many curves) keep every intake thread busy, /healthz and GETs are
+ * answered at once, and each of those POSTs gets its answer. */
+SERVER_TEST(validation_off_the_http_threads, "--workers 1 --job-threads 1 --intake-threads 1")
+{
+    /* one SVG path of 150 000 cubic curves, flattened when the body is validated */
+    buf svg = {0};
+    buf_printf(&svg, "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'><path "
+                     "d='M0 0");
+    for (int i = 0; i < 150000; i++)
+        buf_printf(&svg, " C%d %d %d %d %d %d", i % 97, i % 89 + 1, i % 83 + 2, i % 79 + 3,
+                   i % 73 + 4, i % 71 + 5);
+    buf_printf(&svg, "'/></svg>\",\"options\":{\"fields\":[\"stats\"]}}");
+    REQUIRE(svg.p, "no body");
+    enum { N = 6 };
+    static poster p[N];
+    pthread_t t[N];
+    int started[N];
+    double t0 = now_s();
+    for (int i = 0; i < N; i++) {
+        p[i] = (poster){.d = d, .body = svg.p, .len = svg.n, .prefer = NULL};
+        started[i] = pthread_create(&t[i], NULL, post_thread, &p[i]) == 0;
+    }
+    double worst = 0;
+    int polls = 0;
+    sleep_s(0.2);
+    while (now_s() < t0 + 60 * slowdown()) {
+        int busy = 0;
+        for (int i = 0; i < N; i++) busy += started[i] && p[i].r.status == 0;
+        if (!busy) break;
+        hresp r;
+        double q = now_s();
+        http_get(d, "/healthz", &r);
+        double dt = now_s() - q;
+        CHECK(r.status == 200, "/healthz while bodies are validated: %ld", r.status);
+        hresp_free(&r);
+        if (dt > worst) worst = dt;
+        polls++;
+        sleep_s(0.02);
+    }
+    double took = now_s() - t0;
+    for (int i = 0; i < N; i++)
+        if (started[i]) pthread_join(t[i], NULL);
+    int answered = 0;
+    for (int i = 0; i < N; i++) {
+        answered += p[i].r.status == 202 || p[i].r.status == 200 || p[i].r.status == 422;
+        hresp_free(&p[i].r);
+    }
+    printf("  (%d SVG bodies of %zu KB validated in %.1f s on one intake thread; /healthz %d "
+           "times meanwhile, %.1f ms at worst)\n",
+           N, svg.n >> 10, took, polls, worst * 1e3);
+    CHECK(answered == N, "%d of %d POSTs answered", answered, N);
+    CHECK(polls >= 5 && worst < 0.1 * slowdown(),
+          "/healthz took %.1f ms at worst (%d polls) while the intake was busy", worst * 1e3,
+          polls);
+    free(svg.p);
+    srv_term(d);
+}
+
+/* Thousands of requests through the intake, each suspended and resumed from another thread
+ * (and again for its wait): every one gets a whole answer, none an empty reply. */
+typedef struct hammer {
+    srv *d;
+    int t, n;
+    int ok, empty, bad;
+    char first[400];
+} hammer;
+
+static void *hammer_run(void *arg)
+{
+    hammer *h = arg;
+    for (int i = 0; i < h->n; i++) {
+        size_t len;
+        char *b = NULL;
+        const char *body;
+        const char *bad_body = "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,\"x\"]]]}";
+        int kind = i % 4;
+        if (kind == 3) {
+            body = bad_body;
+            len = strlen(bad_body);
+        } else { /* new jobs, and repeats of the thread's earlier ones (hits and joins) */
+            b = small_body(100000 + h->t * 1000 + (kind == 2 ? i % 7 : i), 0, &len);
+            body = b;
+        }
+        hresp r;
+        http_post(h->d, body, len, kind == 1 ? "wait=5" : NULL, &r);
+        long want = kind == 3 ? 422 : 0;
+        if (r.status == 0 || !r.body.n) {
+            if (!h->empty++)
+                snprintf(h->first, sizeof h->first, "request %d: status %ld, %zu bytes: %.200s", i,
+                         r.status, r.body.n, r.err);
+        } else if (want ? r.status == want : r.status == 200 || r.status == 202) {
+            h->ok++;
+        } else if (!h->bad++ && !h->empty) {
+            snprintf(h->first, sizeof h->first, "request %d: status %ld", i, r.status);
+        }
+        hresp_free(&r);
+        free(b);
+    }
+    return NULL;
+}
+
+SERVER_TEST(intake_thousands_of_requests,
+            "--workers 2 --job-threads 1 --intake-threads 2 --queue 100000 --max-per-ip 0")
+{
+    enum { T = 16, EACH = 250 };
+    static hammer hs[T];
+    pthread_t t[T];
+    double t0 = now_s();
+    for (int i = 0; i < T; i++) {
+        hs[i] = (hammer){.d = d, .t = i, .n = EACH};
+        REQUIRE(pthread_create(&t[i], NULL, hammer_run, &hs[i]) == 0, "thread");
+    }
+    int ok = 0, empty = 0, bad = 0;
+    for (int i = 0; i < T; i++) {
+        pthread_join(t[i], NULL);
+        ok += hs[i].ok;
+        empty += hs[i].empty;
+        bad += hs[i].bad;
+        if (hs[i].empty || hs[i].bad) CHECK(0, "thread %d: %s", i, hs[i].first);
+    }
+    printf("  (%d requests from %d clients in %.1f s: %d answered as expected, %d empty "
+           "replies)\n",
+           T * EACH, T, now_s() - t0, ok, empty);
+    CHECK(ok == T * EACH && empty == 0 && bad == 0, "%d of %d as expected, %d empty, %d other", ok,
+          T * EACH, empty, bad);
+    check_no_500(d);
+    srv_term(d);
+}

@@ -4,6 +4,7 @@
 FROM debian:12 AS build
 RUN apt-get update && apt-get install -y --no-install-recommends \
         gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev libxml2-dev \
+        libpq-dev \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY . .
@@ -11,7 +12,7 @@ RUN make build/cellard build/cellar
 
 FROM debian:12-slim
 RUN apt-get update && apt-get install -y --no-install-recommends \
-        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 curl \
+        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 curl \
     && rm -rf /var/lib/apt/lists/* \
     && useradd --system --home /data --shell /usr/sbin/nologin cellar \
     && mkdir -p /data && chown cellar:cellar /data

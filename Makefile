@@ -24,7 +24,8 @@ DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev
               libxml2-dev libpq-dev
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely sqlite3 \
-              g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev
+              g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
+              postgresql postgresql-client nginx-light
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)

@@ -221,8 +221,9 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
 
 /* Opens (creating or migrating) the PostgreSQL store at conninfo (a postgresql:// or
  * postgres:// URI, or libpq's key=value form), as store_sqlite_open; several daemons may
- * share it.  A database that cannot be reached at open is an error (later losses are
- * retried: an op fails while the database is away, and the next one connects again). */
+ * share it.  A database that cannot be reached is waited for, 30 s at most, then an error
+ * (later losses are retried: an op fails while the database is away, and the next one
+ * connects again). */
 store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_seconds, int flags,
                      char *err, size_t errlen);
 

@@ -47,6 +47,7 @@
 #include <time.h>
 
 #define PG_RECONNECT_S 0.5        /* a thread tries to connect again at most this often */
+#define PG_OPEN_WAIT_S 30         /* open waits this long for a database that cannot be reached */
 #define PG_LOCK_ID     1667591276 /* advisory lock of the migrations ("cell") */
 
 static const char *const pg_migrations[] = {
@@ -1448,7 +1449,15 @@ store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_s
         goto fail;
     }
     s->key_made = 1;
-    pg_conn *c = pg_conn_get(s, err, errlen);
+    /* a database that is still starting (a compose stack's) is waited for, PG_OPEN_WAIT_S */
+    pg_conn *c = NULL;
+    for (double t0 = pg_now();;) {
+        c = pg_conn_get(s, err, errlen);
+        int starting = !strstr(err, "FATAL") || strstr(err, "starting up") ||
+                       strstr(err, "shutting down"); /* not a refusal: the server is not up */
+        if (c || pg_now() - t0 > PG_OPEN_WAIT_S || !strstr(err, "connect") || !starting) break;
+        nanosleep(&(struct timespec){1, 0}, NULL);
+    }
     if (!c || pg_migrate(c, flags, err, errlen)) goto fail;
     return &s->base;
 fail:

@@ -441,3 +441,142 @@ TEST(cluster_sqlite_refuses_a_second_daemon)
     srv_term(&a);
     srv_finish(&a);
 }
+
+/* ---- nginx from Debian in front of two daemons, with deploy/nginx.conf ---- */
+
+/* Sets up nginx in dir as deploy/nginx.conf's header says, in a copy of the stock /etc/nginx
+ * (the port and the daemons' addresses are the test's), and starts it.  0, or -1. */
+static int nginx_up(const char *dir, int port, int up1, int up2)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd,
+             "set -e; d='%s'; cp -a /etc/nginx \"$d/etc\"; mkdir -p \"$d/logs\";"
+             " ln -s /usr/lib/nginx/modules \"$d/modules\";"
+             " sed -i \"s#/etc/nginx#$d/etc#g; s#^pid .*#pid $d/nginx.pid;#;"
+             " s#/var/log/nginx#$d/logs#g\" \"$d/etc/nginx.conf\";"
+             " sed -e 's/listen 80 default_server/listen %d default_server/'"
+             " -e 's/listen \\[::\\]:80 default_server/listen [::]:%d default_server/'"
+             " -e 's/127.0.0.1:8080/127.0.0.1:%d/' -e 's/127.0.0.1:8081/127.0.0.1:%d/'"
+             " deploy/nginx.conf > \"$d/etc/sites-available/cellar\";"
+             " [ -e /proc/net/if_inet6 ] || sed -i '/listen \\[::\\]/d'"
+             " \"$d/etc/sites-available/cellar\";"
+             " ln -sf ../sites-available/cellar \"$d/etc/sites-enabled/cellar\";"
+             " rm -f \"$d/etc/sites-enabled/default\";"
+             " nginx -t -q -c \"$d/etc/nginx.conf\" -p \"$d\" && nginx -c \"$d/etc/nginx.conf\" -p"
+             " \"$d\" > \"$d/logs/start.log\" 2>&1",
+             dir, port, port, up1, up2);
+    int st = system(cmd);
+    if (st != 0) {
+        snprintf(cmd, sizeof cmd, "tail -n 20 '%s/logs/error.log' '%s/logs/start.log' 2>&1", dir,
+                 dir);
+        if (system(cmd) != 0) printf("  (no nginx log)\n");
+    }
+    return st == 0 ? 0 : -1;
+}
+
+static void nginx_down(const char *dir)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "nginx -c '%s/etc/nginx.conf' -p '%s' -s stop 2>/dev/null", dir, dir);
+    if (system(cmd) != 0) printf("  (nginx -s stop failed)\n");
+}
+
+TEST(cluster_behind_nginx)
+{
+    char db[256];
+    if (access("/usr/sbin/nginx", X_OK) != 0) {
+        const char *skip = getenv("CELLAR_SKIP_NGINX");
+        if (skip && !strcmp(skip, "1")) {
+            test_skip("CELLAR_SKIP_NGINX=1");
+            return;
+        }
+        REQUIRE(0, "no /usr/sbin/nginx (apt-get install nginx-light; make deps does; "
+                   "CELLAR_SKIP_NGINX=1 skips)");
+    }
+    if (cluster_db(db, sizeof db)) return;
+    srv d[2];
+    int up = 0;
+    for (int i = 0; i < 2; i++) {
+        char flags[128];
+        snprintf(flags, sizeof flags, "--workers 1 --job-threads 1 --name n%d --max-per-ip 0", i);
+        up += srv_open_db(&d[i], db, flags) == 0;
+    }
+    char dir[64] = "/tmp/cellar-test-nginx-XXXXXX";
+    int port = free_port();
+    if (up < 2 || !mkdtemp(dir) || nginx_up(dir, port, d[0].port, d[1].port)) {
+        finish_all(d, 2);
+        REQUIRE(0, "2 daemons and nginx (%d daemons up)", up);
+    }
+    srv x = {0}; /* nginx, as a daemon for the HTTP helpers */
+    snprintf(x.base, sizeof x.base, "http://127.0.0.1:%d", port);
+    snprintf(x.dir, sizeof x.dir, "%s", dir);
+    hresp r;
+    /* cellar's page, not Debian's welcome page */
+    http_get(&x, "/", &r);
+    CHECK(r.status == 200 && r.body.p && strstr(r.body.p, "<title>cellar") &&
+              !strstr(r.body.p, "Welcome to nginx"),
+          "GET / through nginx: %ld %.100s", r.status, r.body.p ? r.body.p : "");
+    hresp_free(&r);
+    /* jobs through nginx: answered, equal to the CLI, spread over both daemons */
+    int same = 0;
+    for (int i = 0; i < 20; i++) {
+        size_t len, elen;
+        char *b = small_body(7000 + i, 0, &len);
+        http_post(&x, b, len, "wait=10", &r);
+        const char *exp = expect(b, len, &elen);
+        same += r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) == 1;
+        hresp_free(&r);
+        free(b);
+    }
+    CHECK(same == 20, "%d of 20 jobs through nginx equal to cellar run", same);
+    double posts0 = metric(&d[0], "cellar_http_requests_total{route=\"jobs\",status=\"200\"}"),
+           posts1 = metric(&d[1], "cellar_http_requests_total{route=\"jobs\",status=\"200\"}");
+    CHECK(posts0 > 0 && posts1 > 0 && posts0 + posts1 == 20,
+          "nginx sent the POSTs %g and %g to the two daemons", posts0, posts1);
+    /* gzip for a client that asks */
+    size_t mlen;
+    const char *med = medium(3, &mlen);
+    hreq q = {.method = "POST",
+              .path = "/v1/jobs",
+              .body = med,
+              .len = mlen,
+              .has_body = 1,
+              .h = {"Content-Type: application/json", "Prefer: wait=30", "Accept-Encoding: gzip"}};
+    http_do(&x, &q, &r);
+    char enc[32] = "", path[128];
+    hget(&r, "Content-Encoding", enc, sizeof enc);
+    snprintf(path, sizeof path, "%s/result.gz", dir);
+    int gz = r.status == 200 && !strcmp(enc, "gzip") && r.body.p &&
+             write_file(path, r.body.p, r.body.n) == 0;
+    size_t zl = r.body.n;
+    hresp_free(&r);
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "gzip -dc '%s'", path);
+    size_t ul = 0, elen;
+    char *un = gz ? run_capture(cmd, &ul) : NULL;
+    const char *exp = med ? expect(med, mlen, &elen) : NULL;
+    CHECK(un && exp && same_result(un, ul, exp, elen) == 1,
+          "a gzip answer through nginx (%s, %zu bytes) does not decode to the result", enc, zl);
+    printf("  (a %zu-byte result came through nginx as %zu bytes of gzip)\n", ul, zl);
+    free(un);
+    /* one daemon stops: nginx goes on with the other */
+    srv_term(&d[0]);
+    int ok = 0;
+    for (int i = 0; i < 10; i++) {
+        size_t len;
+        char *b = small_body(7100 + i, 0, &len);
+        http_post(&x, b, len, "wait=10", &r);
+        ok += r.status == 200;
+        hresp_free(&r);
+        free(b);
+    }
+    CHECK(ok == 10, "%d of 10 jobs answered through nginx with one daemon stopped", ok);
+    nginx_down(dir);
+    if (!test_failed_now()) {
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+        if (system(cmd) != 0) printf("  (could not remove %s)\n", dir);
+    } else {
+        printf("  (nginx directory kept: %s)\n", dir);
+    }
+    finish_all(d, 2);
+}

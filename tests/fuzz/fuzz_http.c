@@ -98,6 +98,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
                     spool,
                     "--workers=1",
                     "--job-threads=1",
+                    "--intake-threads=1",
                     "--queue=4",
                     "--max-body=4096",
                     "--max-inflight-bytes=65536",
@@ -135,7 +136,9 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
                      .queue_max = cfg.queue,
                      .spool_dir = cfg.spool,
                      .job_ttl = cfg.job_ttl,
-                     .max_jobs = cfg.max_jobs};
+                     .max_jobs = cfg.max_jobs,
+                     .lease = cfg.lease,
+                     .name = cfg.name};
     eng = engine_start(&ec, err, sizeof err);
     if (!eng) {
         fprintf(stderr, "fuzz_http: engine: %s\n", err);

@@ -137,7 +137,7 @@ J=0f1e2d3c4b5a69788796a5b4c3d2e1f0
 T0='"2025-11-22T06:30:00.123Z"'
 T1='"2025-11-22T06:30:01+01:00"'
 PROB='{"type":"about:blank","title":"Unprocessable Content","status":422,"detail":"lines[17][1]: expected 2 finite numbers","instance":"/v1/jobs","path":"lines[17][1]"}'
-JOB="\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0"
+JOB="\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"attempts\":1,\"daemon\":\"a\""
 SQUARE='"V":[[0,0],[0,1],[1,0],[1,1]],"EV":[[0,1],[0,2],[1,3],[2,3]],"FV":[[1,0,2,3]],"FE":[[-1,2,4,-3]],"holes":{},"exterior":[[0,1,3,2]]'
 CSR1='{"shape":[2,1],"indptr":[0,1,2],"indices":[0,0],"data":[-1,1]}'
 CSR0='{"shape":[1,0],"indptr":[0,0],"indices":[],"data":[]}'
@@ -227,15 +227,17 @@ bad result operators_no_d2 'operators' "{\"dim\":2,\"operators\":{\"d1\":$CSR1}}
 bad result operators_shape_1 'operators.d2.shape' "{\"dim\":2,\"operators\":{\"d1\":$CSR1,\"d2\":{\"shape\":[1],\"indptr\":[0],\"indices\":[],\"data\":[]}}}"
 bad result NaN_coordinate 'not JSON' '{"dim":2,"V":[[0,NaN]]}'
 bad job unknown_state 'state' "{$JOB,\"state\":\"paused\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
-bad job id_uppercase 'id' "{\"id\":\"0F1E2D3C4B5A69788796A5B4C3D2E1F0\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
-bad job hash_short 'hash' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"0123abc\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
-bad job created_not_rfc3339 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":\"22/11/2025 06:30\",\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
-bad job created_unix_seconds 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":1763793000,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job id_uppercase 'id' "{\"id\":\"0F1E2D3C4B5A69788796A5B4C3D2E1F0\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"attempts\":0,\"daemon\":null}"
+bad job hash_short 'hash' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"0123abc\",\"created\":$T0,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"attempts\":0,\"daemon\":null}"
+bad job created_not_rfc3339 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":\"22/11/2025 06:30\",\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"attempts\":0,\"daemon\":null}"
+bad job created_unix_seconds 'created' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":1763793000,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"attempts\":0,\"daemon\":null}"
 bad job no_progress '(document)' "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null}"
 bad job fraction_above_1 'progress.fraction' "{$JOB,\"state\":\"running\",\"started\":$T0,\"finished\":null,\"progress\":{\"stage\":\"faces\",\"fraction\":1.5}}"
 bad job failed_without_error '(document)' "{$JOB,\"state\":\"failed\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"snap\",\"fraction\":0}}"
 bad job done_without_result '(document)' "{$JOB,\"state\":\"done\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"done\",\"fraction\":1}}"
 bad job queued_with_result '(document)' "{$JOB,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0},\"result\":\"/v1/results/$H\"}"
+bad job attempts_negative 'attempts' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"attempts\":-1,\"daemon\":null,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
+bad job daemon_number 'daemon' "{\"id\":\"$J\",\"kind\":\"lines\",\"hash\":\"$H\",\"created\":$T0,\"attempts\":1,\"daemon\":7,\"state\":\"queued\",\"started\":null,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"
 bad job result_wrong_path 'result' "{$JOB,\"state\":\"done\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"done\",\"fraction\":1},\"result\":\"/results/$H\"}"
 bad job running_finished 'finished' "{$JOB,\"state\":\"running\",\"started\":$T0,\"finished\":$T1,\"progress\":{\"stage\":\"faces\",\"fraction\":0.5}}"
 bad job queued_started 'started' "{$JOB,\"state\":\"queued\",\"started\":$T0,\"finished\":null,\"progress\":{\"stage\":\"queued\",\"fraction\":0}}"

@@ -1732,7 +1732,7 @@ SERVER_TEST(damaged_result_dropped, "--workers 1 --job-threads 1")
     free(body);
 
     /* the store cannot be written (another process holds its write lock): not ready */
-    REQUIRE(sqlite3_open(d->db, &db) == SQLITE_OK &&
+    REQUIRE(sqlite3_open(d->db, &db) == SQLITE_OK && sqlite3_busy_timeout(db, 5000) == SQLITE_OK &&
                 sqlite3_exec(db, "BEGIN IMMEDIATE", NULL, NULL, NULL) == SQLITE_OK,
             "locking the store");
     sleep_s(1.1); /* past the probe's last answer */

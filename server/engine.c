@@ -496,16 +496,17 @@ static void *timer_main(void *arg)
         e->poll = 0;
         pthread_mutex_unlock(&e->lock);
         wake_all(w);
-        /* leases matter only where other daemons could take the jobs: in a store only this
-         * daemon uses, its jobs are requeued at its next start, and nobody else reads their
-         * progress or sets their cancel flag */
+        /* renewals also read the cancel flag (set by a DELETE in the instant between a claim
+         * and the job's entry in the running list, or by another daemon) */
         if (now >= next_tick) {
             next_tick = now + 1;
-            if (e->cfg.st->shared) renew_all(e);
+            renew_all(e);
             if (poll) poll_waiters(e);
         }
         char err[256];
-        if (now >= next_requeue && e->cfg.st->shared) { /* others' jobs whose leases ran out */
+        /* others' jobs whose leases ran out (a store only this daemon uses has none: its jobs
+         * are requeued at its next start) */
+        if (now >= next_requeue && e->cfg.st->shared) {
             size_t n = 0;
             next_requeue = now + (e->cfg.lease / 3 < 5 ? e->cfg.lease / 3 : 5);
             if (e->cfg.st->ops->jobs_requeue(e->cfg.st, now, 0, &n, err, sizeof err))

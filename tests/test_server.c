@@ -689,6 +689,7 @@ static void queue_full(void)
         CHECK(r.status == 202 && job_parse(&r, &j) == 0 && strcmp(j.id, q1.id) &&
                   !strcmp(j.hash, q1.hash) && !strcmp(j.state, "queued"),
               "identical to the queued job: %ld %s", r.status, r.body.p);
+        hresp_free(&r);
         CHECK(metric(d, COALESCE) == 1, "coalesced %g, want 1", metric(d, COALESCE));
         /* a refusal costs no parse: an invalid body (its error at its very end) is 503 while
          * the queue is full, not 422; and a body whose result is cached is still a hit */
@@ -699,7 +700,6 @@ static void queue_full(void)
         hresp_free(&r);
         char *cached = small_body(8, 0, &len);
         size_t cached_len = len;
-        hresp_free(&r);
         char *m = metrics_text(d);
         CHECK(m && mval(m, "cellar_queue_depth") == 1 &&
                   mval(m, "cellar_jobs{state=\"running\"}") == 1 &&

@@ -277,7 +277,9 @@ static int finish(engine *e, run *r, job_state st, double when, int status, cons
 /* Runs the claimed job r on this worker thread.  The result is written to a spool file as it
  * is made, then copied into the store a chunk at a time: a large result never sits whole in
  * memory. */
-static void run_job(engine *e, run *r)
+/* Returns whether the job was large (it ran half a second or more, or its request or result
+ * was large): then most of its peak is worth handing back to the system. */
+static int run_job(engine *e, run *r)
 {
     char err[256] = "";
     api_error ae = {0};
@@ -338,6 +340,7 @@ static void run_job(engine *e, run *r)
     char ms[32];
     log_kv(LOG_INFO, "job ended", "job", r->sj.id, "kind", r->sj.kind, "state", what, "ms",
            log_num(ms, (t1 - t0) * 1e3), NULL);
+    return t1 - t0 >= 0.5 || outlen > (8u << 20) || r->sj.request_len > (1u << 20);
 }
 
 static void *worker_main(void *arg)
@@ -393,13 +396,14 @@ static void *worker_main(void *arg)
             log_kv(LOG_INFO, "job resumed", "job", r->sj.id, "kind", r->sj.kind, "attempt",
                    log_num(a, r->sj.attempts), NULL);
         }
-        run_job(e, r);
+        int large = run_job(e, r);
         store_job_clear(&r->sj);
         free(r);
         try_now = 1; /* the queue may hold more */
         /* a large job leaves most of its peak free but kept by the allocator (16 000 cubes:
-         * 0.7 GB resident after a 1.7 GB peak): hand it back to the system */
-        malloc_trim(0);
+         * 0.7 GB resident after a 1.7 GB peak): hand it back to the system (not after every
+         * small one: a trim costs about 2 ms, more than a small job) */
+        if (large) malloc_trim(0);
     }
 }
 

@@ -1,6 +1,8 @@
-# cellard in a container: built on Debian, run as a non-root user with the database on a volume.
-#   docker build -t cellar .
-#   docker run -p 8080:8080 -v cellar-data:/data cellar
+# cellard in a container: built on Debian, run as a non-root user with its database on a volume.
+#   podman build --format docker -t cellar .     (docker build -t cellar . works the same)
+#   podman run -d -p 127.0.0.1:8080:8080 -v cellar-data:/data cellar
+# README, "Deploying with containers", says more (variables, volumes, a read-only root, the
+# compose stack); tests/t_containers.sh builds and runs this image in `make test`.
 FROM debian:12 AS build
 RUN apt-get update && apt-get install -y --no-install-recommends \
         gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev libxml2-dev \
@@ -10,10 +12,21 @@ WORKDIR /src
 COPY . .
 RUN make build/cellard build/cellar
 
+# The runtime holds only the libraries cellard links (ldd build/cellard): libjansson4 (JSON),
+# libmicrohttpd12 (HTTP), libsqlite3-0 (the embedded store), libpq5 (the PostgreSQL store),
+# libssl3 (SHA-256 of requests and results), libxml2 (SVG).  No curl: the HEALTHCHECK is
+# cellard --healthcheck.
 FROM debian:12-slim
+ARG VERSION=0.2.0
+ARG SOURCE=unknown
+LABEL org.opencontainers.image.title="cellar" \
+      org.opencontainers.image.description="cellular arrangements as a service: LAR complexes and Booleans of 2D drawings and 3D solids" \
+      org.opencontainers.image.version="${VERSION}" \
+      org.opencontainers.image.source="${SOURCE}" \
+      org.opencontainers.image.licenses="MIT"
 RUN apt-get update && apt-get install -y --no-install-recommends \
-        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 curl \
-    && rm -rf /var/lib/apt/lists/* \
+        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 \
+    && rm -rf /var/lib/apt/lists/* /var/cache/apt/* /usr/share/doc/* /usr/share/man/* \
     && useradd --system --home /data --shell /usr/sbin/nologin cellar \
     && mkdir -p /data && chown cellar:cellar /data
 COPY --from=build /src/build/cellard /src/build/cellar /usr/local/bin/
@@ -23,5 +36,5 @@ ENV CELLAR_LISTEN=0.0.0.0:8080 CELLAR_DB=/data/cellar.db
 EXPOSE 8080
 STOPSIGNAL SIGTERM
 HEALTHCHECK --interval=10s --timeout=3s --start-period=5s \
-    CMD curl -fsS http://127.0.0.1:8080/healthz || exit 1
+    CMD ["/usr/local/bin/cellard", "--healthcheck"]
 ENTRYPOINT ["/usr/local/bin/cellard"]

@@ -27,6 +27,8 @@
  *   --job-ttl       CELLAR_JOB_TTL      604800          seconds a finished job is kept
  *   --max-jobs      CELLAR_MAX_JOBS     100000          finished jobs kept at most
  *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
+ *   --healthcheck   (flag only)                         GET /healthz of the daemon at --listen:
+ *                                                       exit 0 on 200 (a container's check)
  *   --init          (flag only)                         make a store in an empty or foreign
  *                                                       --db file instead of refusing it
  */
@@ -56,7 +58,8 @@ typedef struct config {
     double job_ttl;
     size_t max_jobs;
     int log_level;
-    int init; /* --init */
+    int init;        /* --init */
+    int healthcheck; /* --healthcheck */
 } config;
 
 /* Fills *c from the environment and argv.  Returns 0; 1 after printing help (exit 0); -1 with

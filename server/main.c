@@ -11,7 +11,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <netdb.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
 
 #include "api/api.h"
 #include "server/config.h"
@@ -32,6 +36,38 @@ static const char *log_db(const char *db)
     return out;
 }
 
+/* --healthcheck: GET /healthz from the daemon at cfg's --listen (0.0.0.0 and :: asked at the
+ * loopback), 3 s at most; 0 when it answers 200. */
+static int healthcheck(const config *cfg)
+{
+    char port[8];
+    const char *host = cfg->host;
+    if (!strcmp(host, "0.0.0.0") || !*host) host = "127.0.0.1";
+    if (!strcmp(host, "::")) host = "::1";
+    snprintf(port, sizeof port, "%u", cfg->port);
+    struct addrinfo hints = {.ai_socktype = SOCK_STREAM}, *ai = NULL;
+    if (getaddrinfo(host, port, &hints, &ai) != 0) return 1;
+    int fd = socket(ai->ai_family, SOCK_STREAM | SOCK_CLOEXEC, 0), ok = 0;
+    struct timeval tv = {3, 0};
+    if (fd >= 0) {
+        setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+        setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+    }
+    if (fd >= 0 && connect(fd, ai->ai_addr, ai->ai_addrlen) == 0) {
+        static const char req[] = "GET /healthz HTTP/1.1\r\nHost: localhost\r\n"
+                                  "Connection: close\r\n\r\n";
+        char buf[64] = "";
+        if (write(fd, req, sizeof req - 1) == (ssize_t)(sizeof req - 1)) {
+            ssize_t n = read(fd, buf, sizeof buf - 1);
+            ok = n > 12 && !strncmp(buf, "HTTP/1.1 200", 12);
+        }
+    }
+    if (fd >= 0) close(fd);
+    freeaddrinfo(ai);
+    fprintf(stderr, "cellard: %s:%s /healthz: %s\n", host, port, ok ? "ok" : "not healthy");
+    return ok ? 0 : 1;
+}
+
 int main(int argc, char **argv)
 {
     config cfg;
@@ -42,6 +78,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "cellard: %s\n", err);
         return 2;
     }
+    if (cfg.healthcheck) return healthcheck(&cfg);
     log_set_level(cfg.log_level);
 
     sigset_t set;

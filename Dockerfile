@@ -17,6 +17,12 @@ RUN make build/cellard build/cellar
 # libssl3 (SHA-256 of requests and results), libxml2 (SVG).  No curl: the HEALTHCHECK is
 # cellard --healthcheck.
 FROM debian:12-slim
+RUN apt-get update && apt-get install -y --no-install-recommends \
+        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 \
+    && rm -rf /var/lib/apt/lists/* /var/cache/apt/* /usr/share/doc/* /usr/share/man/* \
+    && useradd --system --home /data --shell /usr/sbin/nologin cellar \
+    && mkdir -p /data && chown cellar:cellar /data
+COPY --from=build /src/build/cellard /src/build/cellar /usr/local/bin/
 ARG VERSION=0.2.0
 ARG SOURCE=unknown
 LABEL org.opencontainers.image.title="cellar" \
@@ -24,12 +30,6 @@ LABEL org.opencontainers.image.title="cellar" \
       org.opencontainers.image.version="${VERSION}" \
       org.opencontainers.image.source="${SOURCE}" \
       org.opencontainers.image.licenses="MIT"
-RUN apt-get update && apt-get install -y --no-install-recommends \
-        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 \
-    && rm -rf /var/lib/apt/lists/* /var/cache/apt/* /usr/share/doc/* /usr/share/man/* \
-    && useradd --system --home /data --shell /usr/sbin/nologin cellar \
-    && mkdir -p /data && chown cellar:cellar /data
-COPY --from=build /src/build/cellard /src/build/cellar /usr/local/bin/
 USER cellar
 VOLUME /data
 ENV CELLAR_LISTEN=0.0.0.0:8080 CELLAR_DB=/data/cellar.db

@@ -25,7 +25,9 @@ DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
-              postgresql postgresql-client nginx-light
+              postgresql postgresql-client nginx-light \
+              podman podman-compose runc conmon slirp4netns netavark aardvark-dns iptables \
+              catatonit debootstrap bc
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 CORE_SRC := $(wildcard core/*.c)

@@ -41,6 +41,21 @@
 
 /* ---- options ------------------------------------------------------------------------------- */
 
+const render_format render_formats[] = {
+    {"json", "application/json", "application/*", 0, NULL},
+    {"svg", "image/svg+xml", "image/*", 2, render_svg},
+    {"geojson", "application/geo+json", NULL, 2, render_geojson},
+    {"obj", "model/obj", "model/*", 3, render_obj},
+};
+const size_t render_nformats = sizeof render_formats / sizeof *render_formats;
+
+const render_format *render_format_named(const char *name)
+{
+    for (size_t i = 0; name && i < render_nformats; i++)
+        if (!strcmp(render_formats[i].name, name)) return &render_formats[i];
+    return NULL;
+}
+
 void render_opts_init(render_opts *o)
 {
     *o = (render_opts)RENDER_OPTS_INIT;

@@ -112,6 +112,25 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
 int render_obj(const char *result_json, size_t len, const render_opts *o, char **out,
                size_t *outlen, api_error *err);
 
+/* The representations of a result, in one table: what the daemon serves (Accept and ?format=)
+ * and what the command-line tool writes (--format).  A new one is a row here. */
+typedef int (*render_fn)(const char *result_json, size_t len, const render_opts *o, char **out,
+                         size_t *outlen, api_error *err);
+typedef struct render_format {
+    const char *name;  /* "json", "svg", "geojson", "obj": ?format= and --format */
+    const char *media; /* its media type (Content-Type, and what Accept names) */
+    const char *wild;  /* a wildcard media type that picks it (image/ and a star), or NULL */
+    int dim;           /* the results it is made of: 2, 3, or 0 (any) */
+    render_fn render;  /* NULL: the result JSON itself */
+} render_format;
+
+/* json, svg, geojson, obj, in that order (the order Accept's ties are broken in). */
+extern const render_format render_formats[];
+extern const size_t render_nformats;
+
+/* The row named name, or NULL. */
+const render_format *render_format_named(const char *name);
+
 /* Options from a URL's query, one parameter at a time (already percent-decoded, as
  * libmicrohttpd's MHD_get_connection_values gives them):
  *   explode=K   a number in [1, 100]

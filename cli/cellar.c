@@ -393,7 +393,7 @@ fail:
 /* What run, svg and solids print: the result JSON, or a picture, map or mesh of it
  * (api/render.h). */
 typedef struct out_format {
-    int kind; /* 0 json, 1 svg, 2 geojson, 3 obj */
+    int kind; /* an index into render_formats (0 json, 1 svg, 2 geojson, 3 obj), or 4 request */
     render_opts ro;
     const char *first;   /* the first SVG-only flag given, for "is for --format svg" errors */
     const char *explode; /* --explode when given: for --format svg or obj */
@@ -417,16 +417,9 @@ static int write_result(const char *out, size_t outlen, const out_format *of)
     char *pic = NULL;
     size_t piclen = 0;
     api_error err;
-    if (of->kind == 1 && render_svg(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
-        fprintf(stderr, "cellar: --format svg: %s\n", err.msg);
-        return 1;
-    }
-    if (of->kind == 2 && render_geojson(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
-        fprintf(stderr, "cellar: --format geojson: %s\n", err.msg);
-        return 1;
-    }
-    if (of->kind == 3 && render_obj(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
-        fprintf(stderr, "cellar: --format obj: %s\n", err.msg);
+    const render_format *f = &render_formats[of->kind];
+    if (f->render && f->render(out, outlen, &of->ro, &pic, &piclen, &err) != API_OK) {
+        fprintf(stderr, "cellar: --format %s: %s\n", f->name, err.msg);
         return 1;
     }
     fwrite(pic ? pic : out, 1, pic ? piclen : outlen, stdout);
@@ -837,12 +830,8 @@ int main(int argc, char **argv)
             }
             val = argv[++i];
             if (a[2] == 'f') {
-                of.kind = !strcmp(val, "json")      ? 0
-                          : !strcmp(val, "svg")     ? 1
-                          : !strcmp(val, "geojson") ? 2
-                          : !strcmp(val, "obj")     ? 3
-                          : !strcmp(val, "request") ? 4
-                                                    : -1;
+                const render_format *f = render_format_named(val);
+                of.kind = f ? (int)(f - render_formats) : !strcmp(val, "request") ? 4 : -1;
                 if (of.kind < 0) {
                     rc = usage_error(
                         "--format: expected json, svg, geojson, obj or request, not \"%s\"", val);

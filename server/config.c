@@ -46,6 +46,9 @@ const char config_usage[] =
     "days)\n"
     "  --max-jobs N          CELLAR_MAX_JOBS      finished jobs kept at most (default 100000)\n"
     "  --log-level LEVEL     CELLAR_LOG_LEVEL     debug, info, warn, error (default info)\n"
+    "  --cors-origins LIST   CELLAR_CORS_ORIGINS  origins whose pages may call the API (CORS):\n"
+    "                                             \"*\", or comma-separated origins such as\n"
+    "                                             https://app.example (default none)\n"
     "  --init                make a store in an empty --db file, or add its tables to another\n"
     "                        program's SQLite database (both are refused without it)\n"
     "  --healthcheck         ask the daemon at --listen for /healthz and exit 0 when it answers\n"
@@ -103,6 +106,9 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "lease-seconds")) {
         if (parse_secs(v, 2, 3600, &c->lease))
             return bad(err, errlen, "--lease-seconds (2..3600)", v);
+    } else if (!strcmp(name, "cors-origins")) {
+        if (strlen(v) >= sizeof c->cors_origins) return bad(err, errlen, "--cors-origins", v);
+        strcpy(c->cors_origins, v);
     } else if (!strcmp(name, "spool")) {
         if (!*v || strlen(v) >= sizeof c->spool) return bad(err, errlen, "--spool", v);
         strcpy(c->spool, v);
@@ -189,7 +195,8 @@ static const char *names[] = {"listen",
                               "log-level",
                               "name",
                               "lease-seconds",
-                              "intake-threads"};
+                              "intake-threads",
+                              "cors-origins"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {

@@ -27,6 +27,7 @@
  *   --job-ttl       CELLAR_JOB_TTL      604800          seconds a finished job is kept
  *   --max-jobs      CELLAR_MAX_JOBS     100000          finished jobs kept at most
  *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
+ *   --cors-origins  CELLAR_CORS_ORIGINS ""              origins allowed by CORS ("*": any)
  *   --healthcheck   (flag only)                         GET /healthz of the daemon at --listen:
  *                                                       exit 0 on 200 (a container's check)
  *   --init          (flag only)                         make a store in an empty or foreign
@@ -44,6 +45,7 @@ typedef struct config {
     char db[4096];
     char spool[4096]; /* "": the system's temporary directory */
     char name[64];
+    char cors_origins[1024]; /* --cors-origins: "" none, "*" any, or a comma-separated list */
     double lease;
     int workers, job_threads, intake_threads;
     size_t queue;

@@ -18,6 +18,7 @@
 #include <microhttpd.h>
 #include <netdb.h>
 #include <openssl/evp.h>
+#include <zlib.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -135,9 +136,12 @@ typedef struct conn {
     int parked;               /* counted in h->parked until completed */
     double wait_applied;
     unsigned status; /* the status sent, for the log */
-    int fmt;         /* result routes: 0 JSON, 1 SVG picture, 2 GeoJSON, 3 OBJ (from Accept) */
+    const render_format *fmt; /* result routes: the representation (Accept, ?format=); NULL
+                                 or render_formats[0]: the JSON itself */
     render_opts ro;  /* the picture's options (query parameters) */
     char rep[48];    /* the ETag suffix of the representation: "" for JSON */
+    int gz;          /* the client takes gzip (Accept-Encoding): compressible answers are */
+    char origin[256]; /* the request's Origin when CORS allows it ("": no CORS headers) */
     char job_id[33]; /* for the log */
     int close;       /* answer with Connection: close (the rest of the stream cannot be trusted) */
     uint64_t reserved; /* bytes of h->inflight this request's body holds */
@@ -183,6 +187,35 @@ static void unpark(conn *c)
     if (c->parked) {
         c->parked = 0;
         atomic_fetch_sub(&c->h->parked, 1);
+    }
+}
+
+/* What a CORS answer lets a page elsewhere read. */
+#define CORS_EXPOSE "Location, Content-Location, Retry-After, ETag, X-Cellar-Job, X-Cellar-Cache, " \
+                    "Preference-Applied"
+
+/* c->origin from the request's Origin and --cors-origins ("*": any origin; else a comma-separated
+ * list of origins, compared exactly); "" when CORS does not apply. */
+static void cors_origin(conn *c)
+{
+    const char *list = c->h->cfg->cors_origins;
+    c->origin[0] = 0;
+    if (!list[0]) return;
+    const char *o = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "Origin");
+    if (!o || !*o) return;
+    if (!strcmp(list, "*")) {
+        snprintf(c->origin, sizeof c->origin, "*");
+        return;
+    }
+    size_t n = strlen(o);
+    for (const char *p = list; *p;) {
+        while (*p == ' ' || *p == ',') p++;
+        size_t k = strcspn(p, ", ");
+        if (k == n && !strncmp(p, o, n) && n < sizeof c->origin) {
+            memcpy(c->origin, o, n + 1);
+            return;
+        }
+        p += k;
     }
 }
 
@@ -279,20 +312,96 @@ static enum MHD_Result queue(conn *c, unsigned status, const char *ctype, struct
     if (ctype) MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
     for (size_t i = 0; i < nh; i++)
         if (hs[i].name && hs[i].value) MHD_add_response_header(r, hs[i].name, hs[i].value);
+    if (c->origin[0]) { /* CORS (--cors-origins): a page elsewhere may read this answer */
+        MHD_add_response_header(r, "Access-Control-Allow-Origin", c->origin);
+        MHD_add_response_header(r, "Access-Control-Expose-Headers", CORS_EXPOSE);
+        if (strcmp(c->origin, "*")) MHD_add_response_header(r, MHD_HTTP_HEADER_VARY, "Origin");
+    }
     c->status = status;
     enum MHD_Result ok = MHD_queue_response(c->mc, status, r);
     MHD_destroy_response(r);
     return ok;
 }
 
-/* Queues the response: body is malloc'd and taken (or, with `persistent`, static). */
+/* ---- gzip (Accept-Encoding) ---- */
+
+/* Whether the Accept-Encoding header takes gzip (or any coding, "*") with q > 0. */
+static int accepts_gzip(struct MHD_Connection *mc)
+{
+    const char *p = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, "Accept-Encoding");
+    while (p && *p) {
+        while (*p == ' ' || *p == ',' || *p == '\t') p++;
+        size_t n = strcspn(p, ",");
+        size_t tl = strcspn(p, ";, \t");
+        if (tl > n) tl = n;
+        int match = (tl == 4 && !strncasecmp(p, "gzip", 4)) || (tl == 1 && *p == '*');
+        const char *q = memmem(p, n, "q=", 2);
+        if (match && !(q && strtod(q + 2, NULL) <= 0)) return 1;
+        p += n;
+    }
+    return 0;
+}
+
+/* Media types worth compressing: every text we send. */
+static int compressible(const char *ctype)
+{
+    return ctype && (!strncmp(ctype, "application/json", 16) ||
+                     !strncmp(ctype, "application/problem+json", 24) ||
+                     !strncmp(ctype, "application/geo+json", 20) ||
+                     !strncmp(ctype, "image/svg+xml", 13) || !strncmp(ctype, "model/obj", 9) ||
+                     !strncmp(ctype, "text/", 5) || !strncmp(ctype, "application/javascript", 22));
+}
+
+/* gzip of data[0..len) (level 1: results are big, and the CPU is the jobs'), malloc'd; NULL
+ * when out of memory. */
+static char *gzip_buf(const char *data, size_t len, size_t *outlen)
+{
+    z_stream z = {0};
+    if (deflateInit2(&z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return NULL;
+    size_t cap = deflateBound(&z, (uLong)len) + 32;
+    char *out = malloc(cap);
+    if (!out) {
+        deflateEnd(&z);
+        return NULL;
+    }
+    z.next_in = (Bytef *)data;
+    z.avail_in = (uInt)len;
+    z.next_out = (Bytef *)out;
+    z.avail_out = (uInt)cap;
+    int rc = deflate(&z, Z_FINISH);
+    *outlen = z.total_out;
+    deflateEnd(&z);
+    if (rc != Z_STREAM_END) {
+        free(out);
+        return NULL;
+    }
+    return out;
+}
+
+/* Queues the response: body is malloc'd and taken (or, with `persistent`, static); a body worth
+ * it goes gzipped to a client that takes gzip. */
 static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char *body, size_t len,
                                int persistent, const hdr *hs, size_t nh)
 {
+    hdr all[16];
+    size_t na = 0;
+    for (size_t i = 0; i < nh && na < 14; i++) all[na++] = hs[i];
+    if (compressible(ctype) && len >= 1024) {
+        all[na++] = (hdr){MHD_HTTP_HEADER_VARY, "Accept-Encoding"};
+        size_t zl = 0;
+        char *z = c->gz ? gzip_buf(body, len, &zl) : NULL;
+        if (z) {
+            if (!persistent) free(body);
+            body = z;
+            len = zl;
+            persistent = 0;
+            all[na++] = (hdr){MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip"};
+        }
+    }
     struct MHD_Response *r = MHD_create_response_from_buffer(
         len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
     if (!r && !persistent) free(body);
-    return queue(c, status, ctype, r, hs, nh);
+    return queue(c, status, ctype, r, all, na);
 }
 
 static enum MHD_Result respond_json(conn *c, unsigned status, json_t *o, const hdr *hs, size_t nh)
@@ -403,17 +512,27 @@ static json_t *job_json(const job_info *ji)
  * times the result's size in memory and ~0.2 s per MB). */
 #define RENDER_MAX_BYTES (16u << 20)
 
-/* Sends r, a result's representation, with its cache headers. */
+/* The strong ETag of a result's representation: its hash, the rendering's suffix, and "-gz"
+ * when it goes gzipped (every representation has its own). */
+static void result_etag(const conn *c, const char *hash, char *etag, size_t n)
+{
+    snprintf(etag, n, "\"%s%s%s\"", hash, c->rep, c->gz ? "-gz" : "");
+}
+
+/* Sends r, a result's representation (gzipped already when c->gz), with its cache headers. */
 static enum MHD_Result send_result(conn *c, const char *hash, struct MHD_Response *r,
                                    const char *ctype, const char *job_id, const char *cache)
 {
     char etag[120], loc[100], applied[40];
-    snprintf(etag, sizeof etag, "\"%s%s\"", hash, c->rep);
+    result_etag(c, hash, etag, sizeof etag);
     snprintf(loc, sizeof loc, "/v1/results/%s", hash);
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
                 {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
-                {MHD_HTTP_HEADER_VARY, c->route == ROUTE_JOBS ? NULL : "Accept"},
+                {MHD_HTTP_HEADER_VARY,
+                 c->route == ROUTE_JOBS ? "Accept-Encoding" : "Accept, Accept-Encoding"},
+                {c->gz ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
+                {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_LOCATION, loc},
                 {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
                 {"X-Cellar-Job", job_id},
                 {"X-Cellar-Cache", cache},
@@ -432,31 +551,39 @@ static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
     return problem(c, 422, msg, NULL, NULL);
 }
 
+/* Whether c asks for a rendering of the result rather than its JSON. */
+static int rendered(const conn *c)
+{
+    return c->fmt && c->fmt->render;
+}
+
 /* A result body (taken) with its cache headers, as JSON or rendered (c->fmt). */
 static enum MHD_Result respond_result(conn *c, const char *hash, char *body, size_t len,
                                       const char *job_id, const char *cache)
 {
     const char *ctype = "application/json";
-    if (c->fmt) {
+    if (rendered(c)) {
         char *pic = NULL;
         size_t piclen = 0;
         api_error ae;
-        int rc = API_EINVALID;
         if (len > RENDER_MAX_BYTES) {
             free(body);
             return too_large_to_draw(c, len);
         }
-        if (c->fmt == 1)
-            rc = render_svg(body, len, &c->ro, &pic, &piclen, &ae);
-        else if (c->fmt == 2)
-            rc = render_geojson(body, len, &c->ro, &pic, &piclen, &ae);
-        else
-            rc = render_obj(body, len, &c->ro, &pic, &piclen, &ae);
+        int rc = c->fmt->render(body, len, &c->ro, &pic, &piclen, &ae);
         free(body);
         if (rc != API_OK) return problem(c, (unsigned)rc, ae.msg, NULL, NULL);
         body = pic;
         len = piclen;
-        ctype = c->fmt == 1 ? "image/svg+xml" : c->fmt == 2 ? "application/geo+json" : "model/obj";
+        ctype = c->fmt->media;
+    }
+    if (c->gz) { /* every result goes gzipped to such a client (its ETag says so) */
+        size_t zl = 0;
+        char *z = gzip_buf(body, len, &zl);
+        free(body);
+        if (!z) return problem(c, 503, "out of memory", "5", NULL);
+        body = z;
+        len = zl;
     }
     struct MHD_Response *r = MHD_create_response_from_buffer(len, body, MHD_RESPMEM_MUST_FREE);
     if (!r) {
@@ -512,6 +639,53 @@ static void result_reader_free(void *cls)
     free(rr);
 }
 
+/* The same, gzipped as it is read (its compressed size unknown: sent chunked). */
+typedef struct gz_reader {
+    result_reader *rr;
+    z_stream z;
+    uint64_t in_pos;  /* bytes of the result read */
+    int eof, finished;
+    char in[64 * 1024];
+} gz_reader;
+
+static ssize_t gz_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+    gz_reader *g = cls;
+    (void)pos;
+    if (g->finished) return MHD_CONTENT_READER_END_OF_STREAM;
+    g->z.next_out = (Bytef *)buf;
+    g->z.avail_out = (uInt)(max > (1u << 30) ? (1u << 30) : max);
+    while (g->z.avail_out > 0 && !g->finished) {
+        if (g->z.avail_in == 0 && !g->eof) {
+            ssize_t n = result_read(g->rr, g->in_pos, g->in, sizeof g->in);
+            if (n == MHD_CONTENT_READER_END_WITH_ERROR) return n;
+            if (n == MHD_CONTENT_READER_END_OF_STREAM || n == 0) {
+                g->eof = 1;
+            } else {
+                g->z.next_in = (Bytef *)g->in;
+                g->z.avail_in = (uInt)n;
+                g->in_pos += (uint64_t)n;
+            }
+        }
+        int rc = deflate(&g->z, g->eof ? Z_FINISH : Z_NO_FLUSH);
+        if (rc == Z_STREAM_END)
+            g->finished = 1;
+        else if (rc != Z_OK && rc != Z_BUF_ERROR)
+            return MHD_CONTENT_READER_END_WITH_ERROR;
+    }
+    size_t made = (size_t)((char *)g->z.next_out - buf);
+    if (!made && g->finished) return MHD_CONTENT_READER_END_OF_STREAM;
+    return (ssize_t)made;
+}
+
+static void gz_reader_free(void *cls)
+{
+    gz_reader *g = cls;
+    deflateEnd(&g->z);
+    result_reader_free(g->rr);
+    free(g);
+}
+
 /* The answer to a store error rc (not STORE_OK, err its message) about result `hash`.  post:
  * the answer to a POST (a result evicted since it was found or made is then "try again", not
  * "not found"). */
@@ -544,19 +718,32 @@ static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, co
     char *body = NULL;
     size_t len = 0;
     store *st = c->h->st;
-    if (c->fmt && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
-    if (!c->fmt && size > STORE_CHUNK) {
+    if (rendered(c) && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
+    if (!rendered(c) && size > STORE_CHUNK) {
         result_reader *rr = calloc(1, sizeof *rr);
         if (!rr) return problem(c, 503, "out of memory", "5", NULL);
         rr->st = st;
         snprintf(rr->hash, sizeof rr->hash, "%s", hash);
         rr->size = size;
-        struct MHD_Response *r = MHD_create_response_from_callback(size, 256 * 1024, result_read,
-                                                                   rr, result_reader_free);
-        if (!r) {
+        struct MHD_Response *r = NULL;
+        gz_reader *g = c->gz ? calloc(1, sizeof *g) : NULL;
+        if (c->gz && (!g || deflateInit2(&g->z, 1, Z_DEFLATED, 15 + 16, 8,
+                                         Z_DEFAULT_STRATEGY) != Z_OK)) {
+            free(g);
             free(rr);
-            return MHD_NO;
+            return problem(c, 503, "out of memory", "5", NULL);
         }
+        if (g) {
+            g->rr = rr;
+            r = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 256 * 1024, gz_read, g,
+                                                  gz_reader_free);
+            if (!r) gz_reader_free(g);
+        } else {
+            r = MHD_create_response_from_callback(size, 256 * 1024, result_read, rr,
+                                                  result_reader_free);
+            if (!r) free(rr);
+        }
+        if (!r) return MHD_NO;
         return send_result(c, hash, r, "application/json", job_id, cache);
     }
     int rc = st->ops->result_get(st, hash, &body, &len, err, sizeof err);
@@ -575,15 +762,16 @@ static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id,
     return serve_stored(c, hash, size, job_id, cache, post);
 }
 
-/* Which representation the Accept header asks for: 0 JSON, 1 SVG, 2 GeoJSON, 3 OBJ, -1 none we
- * have.  The highest q wins; at equal q an exact type beats a wildcard, then JSON, SVG, GeoJSON,
- * OBJ.  Whether the result can be drawn that way (SVG and GeoJSON of 2D results, OBJ of 3D
- * ones) is the renderer's to say: 422 naming "dim". */
-static int accept_format(const char *accept)
+/* Which representation the Accept header asks for (a row of render_formats), or NULL when it
+ * names none we have.  The highest q wins; at equal q an exact type beats a wildcard, then the
+ * table's order (JSON first).  Whether the result can be drawn that way (SVG and GeoJSON of 2D
+ * results, OBJ of 3D ones) is the renderer's to say: 422 naming "dim". */
+static const render_format *accept_format(const char *accept)
 {
-    int best = -1, best_exact = 0;
+    const render_format *best = NULL;
+    int best_exact = 0;
     double best_q = 0;
-    if (!accept || !*accept) return 0;
+    if (!accept || !*accept) return &render_formats[0];
     const char *p = accept;
     while (*p) {
         while (*p == ' ' || *p == ',' || *p == '\t') p++;
@@ -596,21 +784,19 @@ static int accept_format(const char *accept)
         const char *qp = memmem(p, n, ";q=", 3);
         if (!qp) qp = memmem(p, n, "; q=", 4);
         if (qp) q = strtod(strchr(qp, '=') + 1, NULL);
-        struct {
-            const char *type;
-            int fmt, exact;
-        } m[] = {
-            {"application/json", 0, 1}, {"image/svg+xml", 1, 1}, {"application/geo+json", 2, 1},
-            {"model/obj", 3, 1},        {"*/*", 0, 0},           {"application/*", 0, 0},
-            {"image/*", 1, 0},          {"model/*", 3, 0}};
-        for (size_t i = 0; i < sizeof m / sizeof *m; i++)
-            if (tl == strlen(m[i].type) && !strncasecmp(p, m[i].type, tl) && q > 0 &&
-                (q > best_q || (q == best_q && m[i].exact > best_exact) ||
-                 (q == best_q && m[i].exact == best_exact && m[i].fmt < best))) {
-                best = m[i].fmt;
+        for (size_t i = 0; i < render_nformats && q > 0; i++) {
+            const render_format *f = &render_formats[i];
+            int exact = tl == strlen(f->media) && !strncasecmp(p, f->media, tl);
+            int wild = !exact && ((f->wild && tl == strlen(f->wild) && !strncasecmp(p, f->wild, tl)) ||
+                                  (i == 0 && tl == 3 && !strncmp(p, "*/*", 3)));
+            if ((exact || wild) &&
+                (q > best_q || (q == best_q && exact > best_exact) ||
+                 (q == best_q && exact == best_exact && (!best || f < best)))) {
+                best = f;
                 best_q = q;
-                best_exact = m[i].exact;
+                best_exact = exact;
             }
+        }
         p += n;
     }
     return best;
@@ -627,7 +813,20 @@ static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char 
 {
     (void)kind;
     query_ctx *q = cls;
-    if (q->failed || !render_opts_is_query_key(key)) return MHD_YES;
+    if (q->failed) return MHD_YES;
+    if (!strcmp(key, "format")) { /* for links, which cannot set Accept */
+        const render_format *f = render_format_named(value);
+        if (!f) {
+            q->failed = 1;
+            q->err.status = API_EINVALID;
+            snprintf(q->err.msg, sizeof q->err.msg,
+                     "format: expected json, svg, geojson or obj, got \"%.40s\"",
+                     value ? value : "");
+        }
+        q->c->fmt = f;
+        return MHD_YES;
+    }
+    if (!render_opts_is_query_key(key)) return MHD_YES;
     if (render_opts_parse_query(key, value, &q->c->ro, &q->err) != API_OK) q->failed = 1;
     return MHD_YES;
 }
@@ -636,31 +835,42 @@ static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char 
  * 422 itself (returning 1) when it cannot. */
 static int negotiate(conn *c, enum MHD_Result *r)
 {
-    const char *acc = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
-    c->fmt = accept_format(acc);
-    if (c->fmt < 0) {
-        *r = problem(c, 406,
-                     "results are application/json, image/svg+xml (a picture of a 2D result), "
-                     "application/geo+json (a map of a 2D result) or model/obj (the cells of a "
-                     "3D result)",
-                     NULL, NULL);
-        return 1;
-    }
     render_opts def = RENDER_OPTS_INIT;
     c->ro = def;
+    c->fmt = NULL;
     query_ctx q = {.c = c};
     MHD_get_connection_values(c->mc, MHD_GET_ARGUMENT_KIND, query_arg, &q);
     if (q.failed) {
         *r = problem(c, 422, q.err.msg, NULL, NULL);
         return 1;
     }
-    if (c->fmt == 1)
-        snprintf(c->rep, sizeof c->rep, ".svg;%g;%d;%d;%d;%g", c->ro.explode, c->ro.numbers,
-                 c->ro.edges, c->ro.width, c->ro.stroke);
-    else if (c->fmt == 2)
-        snprintf(c->rep, sizeof c->rep, ".geojson;%d", c->ro.cells);
-    else if (c->fmt == 3)
-        snprintf(c->rep, sizeof c->rep, ".obj;%g", c->ro.explode);
+    if (!c->fmt) { /* no ?format=: the Accept header says */
+        const char *acc =
+            MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+        c->fmt = accept_format(acc);
+    }
+    if (!c->fmt) {
+        *r = problem(c, 406,
+                     "results are application/json, image/svg+xml (a picture of a 2D result), "
+                     "application/geo+json (a map of a 2D result) or model/obj (the cells of a "
+                     "3D result); a link can ask with ?format=json|svg|geojson|obj",
+                     NULL, NULL);
+        return 1;
+    }
+    /* the ETag of a rendering: the hash, the format's name and a digest of the options that
+     * made it ("HASH-svg-0123456789abcdef"), so that every representation has its own */
+    c->rep[0] = 0;
+    if (rendered(c)) {
+        char opts[160];
+        int n = snprintf(opts, sizeof opts, "%.17g;%d;%d;%d;%.17g;%d", c->ro.explode,
+                         c->ro.numbers, c->ro.edges, c->ro.width, c->ro.stroke, c->ro.cells);
+        uint64_t h = 1469598103934665603ull; /* FNV-1a */
+        for (int i = 0; i < n && i < (int)sizeof opts; i++) {
+            h ^= (unsigned char)opts[i];
+            h *= 1099511628211ull;
+        }
+        snprintf(c->rep, sizeof c->rep, "-%s-%016llx", c->fmt->name, (unsigned long long)h);
+    }
     return 0;
 }
 
@@ -757,14 +967,14 @@ static enum MHD_Result route_result(conn *c)
 {
     char etag[120];
     const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
-    snprintf(etag, sizeof etag, "\"%s%s\"", c->id, c->rep);
+    result_etag(c, c->id, etag, sizeof etag);
     if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
         char err[256];
         int rc = c->h->st->ops->result_exists(c->h->st, c->id, err, sizeof err);
         if (rc == STORE_OK) {
             hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
                         {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
-                        {MHD_HTTP_HEADER_VARY, "Accept"}};
+                        {MHD_HTTP_HEADER_VARY, "Accept, Accept-Encoding"}};
             return respond(c, 304, NULL, NULL, 0, 1, hs, 3);
         }
     }
@@ -1071,10 +1281,31 @@ static void *intake_main(void *arg)
     return NULL;
 }
 
+/* OPTIONS: a CORS preflight from an allowed origin gets what it may send; any other the
+ * methods of the path. */
+static enum MHD_Result route_options(conn *c)
+{
+    static const char *const allow[ROUTE_COUNT] = {
+        [ROUTE_INDEX] = "GET, HEAD, OPTIONS",   [ROUTE_HEALTHZ] = "GET, HEAD, OPTIONS",
+        [ROUTE_READYZ] = "GET, HEAD, OPTIONS",  [ROUTE_METRICS] = "GET, HEAD, OPTIONS",
+        [ROUTE_OPENAPI] = "GET, HEAD, OPTIONS", [ROUTE_JOBS] = "POST, OPTIONS",
+        [ROUTE_JOB] = "GET, HEAD, DELETE, OPTIONS", [ROUTE_JOB_RESULT] = "GET, HEAD, OPTIONS",
+        [ROUTE_RESULT] = "GET, HEAD, OPTIONS"};
+    const char *a = allow[c->route];
+    if (!a) return problem(c, 404, "no such resource", NULL, NULL);
+    hdr hs[] = {{MHD_HTTP_HEADER_ALLOW, a},
+                {c->origin[0] ? "Access-Control-Allow-Methods" : NULL, a},
+                {c->origin[0] ? "Access-Control-Allow-Headers" : NULL,
+                 "Content-Type, Accept, Prefer, If-None-Match"},
+                {c->origin[0] ? "Access-Control-Max-Age" : NULL, "600"}};
+    return respond(c, 204, NULL, NULL, 0, 1, hs, sizeof hs / sizeof *hs);
+}
+
 static enum MHD_Result dispatch(conn *c)
 {
     const char *m = c->method;
     int get = !strcmp(m, "GET") || !strcmp(m, "HEAD");
+    if (!strcmp(m, "OPTIONS")) return route_options(c);
     switch (c->route) {
     case ROUTE_INDEX:
         if (!get) break;
@@ -1165,6 +1396,8 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         snprintf(c->method, sizeof c->method, "%s", method);
         snprintf(c->path, sizeof c->path, "%s", url);
         c->route = classify(url, c->id);
+        c->gz = accepts_gzip(mc);
+        cors_origin(c);
         sock_ctx *sc = sock_of(mc);
         int bad_escape = sc && sc->bad_escape;
         if (sc) sc->bad_escape = 0;

@@ -49,6 +49,7 @@ all: $(BUILD)/cellar $(BUILD)/cellard
 deps:
 	@scripts/deps.sh $(DEPS_BUILD)
 	@scripts/browser-deps.sh
+	@scripts/npm-deps.sh tests/lint
 
 $(BUILD)/%.o: %.c $(wildcard core/*.h api/*.h server/*.h tests/*.h)
 	@mkdir -p $(dir $@)

@@ -126,9 +126,23 @@ static int cancelled(const ctx *c)
     return c->o->cancel && atomic_load(c->o->cancel);
 }
 
+/* A part [lo, hi] of a stage, for par_for_ex's tick. */
+typedef struct span {
+    const ctx *c;
+    const char *stage;
+    double lo, hi;
+} span;
+static void span_tick(void *sp, double f);
+
 static void progress(const ctx *c, const char *stage, double f)
 {
     if (c->o->progress) c->o->progress(c->o->udata, stage, f);
+}
+
+static void span_tick(void *sp, double f)
+{
+    const span *p = sp;
+    progress(p->c, p->stage, p->lo + (p->hi - p->lo) * f);
 }
 
 /* ---- snap ------------------------------------------------------------------------------ */
@@ -720,7 +734,8 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     progress(c, "buckets", 1);
 
     /* intersect */
-    par_for(c->threads, c->tree.nleaves, intersect_leaf, c);
+    span si = {c, "intersect", 0, 0.9};
+    par_for_ex(c->threads, c->tree.nleaves, intersect_leaf, c, span_tick, &si);
     if ((rc = atomic_load(&c->fail))) goto fail;
     rc = ARR_ENOMEM;
     for (int w = 0; w < c->threads; w++) st->pairs_tested += c->pairs[w];
@@ -759,7 +774,8 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     if (group_by(kv, c->npix, c->tree.nleaves, &c->pl_off, &c->pl_pix)) goto fail;
     free(kv);
     kv = NULL;
-    par_for(c->threads, c->tree.nleaves, hotpixel_leaf, c);
+    span sh = {c, "split", 0.05, 0.45};
+    par_for_ex(c->threads, c->tree.nleaves, hotpixel_leaf, c, span_tick, &sh);
     if ((rc = atomic_load(&c->fail))) goto fail;
     rc = ARR_ENOMEM;
     inc = gather(c->inc, c->threads, sizeof(uint64_t), &ninc);
@@ -772,7 +788,8 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     }
     free(inc);
     inc = NULL;
-    par_for(c->threads, (c->m + SEG_CHUNK - 1) / SEG_CHUNK, split_segments, c);
+    span ss = {c, "split", 0.5, 0.9};
+    par_for_ex(c->threads, (c->m + SEG_CHUNK - 1) / SEG_CHUNK, split_segments, c, span_tick, &ss);
     if ((rc = atomic_load(&c->fail))) goto fail;
     rc = ARR_ENOMEM;
     ev = gather(c->edges, c->threads, sizeof(uint64_t), &nev);

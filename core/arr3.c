@@ -94,6 +94,12 @@ void a3_progress(const a3 *A, const char *stage, double f)
     if (A->o->progress) A->o->progress(A->o->udata, stage, f);
 }
 
+void a3_span_tick(void *span, double f)
+{
+    const a3_span *sp = span;
+    a3_progress(sp->A, sp->stage, sp->lo + (sp->hi - sp->lo) * f);
+}
+
 uint32_t a3_uf_find(uint32_t *p, uint32_t x)
 {
     while (p[x] != x) {

@@ -762,7 +762,8 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         size_t nch = (ne + FAN_CHUNK - 1) / FAN_CHUNK;
         fanjob j = {A, I, ioff, ev, eside, eplane, out, ne, calloc(nch + 1, sizeof *j.bad)};
         if (!j.bad) goto done;
-        par_for(A->threads, nch, fans_sort, &j);
+        a3_span span = {A, "cells", 0.05, 0.45};
+        par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
         size_t bad = SIZE_MAX;
         for (size_t ch = 0; ch < nch && bad == SIZE_MAX; ch++)
             if (j.bad[ch]) bad = j.bad[ch] - 1;
@@ -782,6 +783,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         }
     }
     /* shells */
+    a3_progress(A, "cells", 0.5);
     shell = malloc((2 * nf + 1) * sizeof *shell);
     if (!shell) goto done;
     size_t nsh = 0;
@@ -844,6 +846,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         A->st->components = nvc;
     }
     /* the cells: union-find over the shells and the exterior */
+    a3_progress(A, "cells", 0.6);
     cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
     if (!cu) goto done;
     for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
@@ -1001,7 +1004,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
     {
         ddjob j = {A, dh, dl, NULL, 0};
-        par_for(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j);
+        a3_span span = {A, "cells", 0.8, 0.9};
+        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
+                   &span);
     }
     out->nc = nc;
     out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
@@ -1040,7 +1045,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     }
     {
         ddjob j = {A, dh, dl, out, h3};
-        par_for(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j);
+        a3_span span = {A, "cells", 0.9, 0.99};
+        par_for_ex(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j, a3_span_tick,
+                   &span);
     }
     free(fill);
     /* ---- output: vertices sorted by position, edges sorted, faces */

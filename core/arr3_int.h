@@ -137,6 +137,15 @@ int a3_cmp_u32(const void *pa, const void *pb);
 uint64_t a3_mix64(uint64_t x);
 int a3_cancelled(const a3 *A);
 void a3_progress(const a3 *A, const char *stage, double f);
+
+/* A part [lo, hi] of a stage, for par_for_ex's tick: a3_span_tick(span, f) reports the stage at
+ * lo + (hi - lo) * f. */
+typedef struct a3_span {
+    const a3 *A;
+    const char *stage;
+    double lo, hi;
+} a3_span;
+void a3_span_tick(void *span, double f);
 uint32_t a3_uf_find(uint32_t *p, uint32_t x);
 void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b);
 

@@ -1107,7 +1107,8 @@ int a3_planes(a3 *A, char *err, size_t errlen)
         if (A->pp_off[p + 1] > A->pp_off[p]) planes[n++] = (uint32_t)p;
     for (int t = 0; t < A->threads; t++) w[t].A = A;
     planesctx c = {A, planes, w, rc};
-    par_for(A->threads, n, plane_item, &c);
+    a3_span span = {A, "planes", 0, 0.95}; /* merging the planes' points follows */
+    par_for_ex(A->threads, n, plane_item, &c, a3_span_tick, &span);
     for (size_t i = 0; i < n && r == ARR_OK; i++) {
         if (rc[i] == -1) r = ARR_ENOMEM;
         if (rc[i] == -3) r = ARR_ECANCELED;

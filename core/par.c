@@ -12,6 +12,9 @@ typedef struct par_job {
     void *ctx;
     size_t n;
     atomic_size_t next; /* next item to hand out */
+    atomic_size_t done; /* items finished */
+    par_tick tick;      /* may be NULL: told by the calling thread how far the loop is */
+    void *tctx;
 } par_job;
 
 typedef struct par_worker {
@@ -25,6 +28,8 @@ static void par_drain(par_job *job, int id)
         size_t i = atomic_fetch_add_explicit(&job->next, 1, memory_order_relaxed);
         if (i >= job->n) return;
         job->fn(job->ctx, i, id);
+        size_t done = atomic_fetch_add_explicit(&job->done, 1, memory_order_relaxed) + 1;
+        if (id == 0 && job->tick) job->tick(job->tctx, (double)done / (double)job->n);
     }
 }
 
@@ -43,12 +48,18 @@ int par_ncpu(void)
 
 void par_for(int threads, size_t n, par_fn fn, void *ctx)
 {
-    par_job job = {.fn = fn, .ctx = ctx, .n = n};
+    par_for_ex(threads, n, fn, ctx, NULL, NULL);
+}
+
+void par_for_ex(int threads, size_t n, par_fn fn, void *ctx, par_tick tick, void *tctx)
+{
+    par_job job = {.fn = fn, .ctx = ctx, .n = n, .tick = tick, .tctx = tctx};
     pthread_t tid[PAR_MAX_THREADS];
     par_worker w[PAR_MAX_THREADS];
     int started = 0;
 
     atomic_init(&job.next, 0);
+    atomic_init(&job.done, 0);
     if (threads > PAR_MAX_THREADS) threads = PAR_MAX_THREADS;
     if ((size_t)threads > n) threads = (int)n;
     for (int t = 1; t < threads; t++) {

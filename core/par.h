@@ -15,6 +15,12 @@ typedef void (*par_fn)(void *ctx, size_t item, int worker);
 
 void par_for(int threads, size_t n, par_fn fn, void *ctx);
 
+/* The same, and after each item the calling thread finishes, tick(tctx, f): f the fraction of
+ * the items finished by all the threads (so a loop's progress can be told from the thread
+ * that owns the progress callback, never from the others). */
+typedef void (*par_tick)(void *tctx, double f);
+void par_for_ex(int threads, size_t n, par_fn fn, void *ctx, par_tick tick, void *tctx);
+
 /* Number of online CPUs (at least 1). */
 int par_ncpu(void);
 

@@ -246,7 +246,7 @@ static int spool_store(engine *e, run *r, FILE *f, uint64_t len, char *err, size
             snprintf(err, errlen, "the spool file: %s", strerror(errno));
             return STORE_ERR;
         }
-        if (st->ops->result_put_file(st, r->sj.hash, f, len, err, errlen) == STORE_OK)
+        if (st->ops->result_put_file(st, r->sj.hash, r->sj.id, f, len, err, errlen) == STORE_OK)
             return STORE_OK;
         if (t + 1 >= STORE_TRIES || run_lost(e, r)) return STORE_ERR;
         log_kv(LOG_WARN, "store: result_put failed, trying again", "job", r->sj.id, "error", err,

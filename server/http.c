@@ -755,11 +755,12 @@ static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, co
 static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id, const char *cache,
                                   int post)
 {
-    char err[256];
+    char err[256], made_by[33] = "";
     uint64_t size = 0;
-    int rc = c->h->st->ops->result_size(c->h->st, hash, &size, err, sizeof err);
+    int rc = c->h->st->ops->result_size(c->h->st, hash, &size, made_by, err, sizeof err);
     if (rc != STORE_OK) return store_problem(c, rc, err, hash, job_id, post);
-    return serve_stored(c, hash, size, job_id, cache, post);
+    return serve_stored(c, hash, size, job_id ? job_id : made_by[0] ? made_by : NULL, cache,
+                        post);
 }
 
 /* Which representation the Accept header asks for (a row of render_formats), or NULL when it
@@ -1119,7 +1120,7 @@ static void intake_work(conn *c)
     if (full != ENG_OK) { /* no new job: answer without parsing (see memo_slot) */
         body_release(c);
         if (!memo_get(h, raw, hash)) return plan_refused(pl, full);
-        hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
+        hit = h->st->ops->result_size(h->st, hash, &size, c->job_id, err, sizeof err);
         metrics_cache(h->m, hit == STORE_OK);
         if (hit == STORE_OK) return plan_result(pl, PLAN_STORED, hash, size);
         rc = engine_join(h->e, hash, c->job_id, c->job, err, sizeof err);
@@ -1135,8 +1136,8 @@ static void intake_work(conn *c)
     engine_hash(canon, clen, hash);
     memo_put(h, raw, hash);
 
-    /* a cached result costs one lookup (its size, then it is served) */
-    hit = h->st->ops->result_size(h->st, hash, &size, err, sizeof err);
+    /* a cached result costs one lookup (its size and the job that made it, then it is served) */
+    hit = h->st->ops->result_size(h->st, hash, &size, c->job_id, err, sizeof err);
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
@@ -1159,7 +1160,7 @@ static enum MHD_Result answer_plan(conn *c)
     plan *pl = &c->plan;
     switch (pl->kind) {
     case PLAN_STORED:
-        return serve_stored(c, pl->hash, pl->size, NULL, "hit", 1);
+        return serve_stored(c, pl->hash, pl->size, c->job_id[0] ? c->job_id : NULL, "hit", 1);
     case PLAN_RESULT:
         return get_result(c, pl->hash, NULL, "hit", 1);
     case PLAN_SUBMITTED:

@@ -166,19 +166,22 @@ typedef struct store_ops {
      * results until the total is within the budget (the new one is never evicted). */
     int (*result_put)(store *s, const char *hash, const char *body, size_t len, char *err,
                       size_t errlen);
-    /* The same with the body read from f: its next len bytes (a shorter file is an error,
+    /* The same with the body read from f: its next len bytes, made by job `job` (its id, kept
+     * with the result; may be NULL) (a shorter file is an error,
      * and nothing is stored).  The result appears whole or not at all: readers do not see
      * it until every chunk is written. */
-    int (*result_put_file)(store *s, const char *hash, FILE *f, uint64_t len, char *err,
-                           size_t errlen);
+    int (*result_put_file)(store *s, const char *hash, const char *job, FILE *f, uint64_t len,
+                           char *err, size_t errlen);
     /* Reads a result whole and marks it used now.  Every chunk is checked against the digest
      * stored with it: a result that does not match, or whose chunks do not add up to its size,
      * is dropped and reported STORE_DAMAGED, never returned. */
     int (*result_get)(store *s, const char *hash, char **body, size_t *len, char *err,
                       size_t errlen);
     /* A result's size in bytes, marking it used now (as result_get); its body is then read
-     * with result_chunk from position 0 to the size. */
-    int (*result_size)(store *s, const char *hash, uint64_t *bytes, char *err, size_t errlen);
+     * with result_chunk from position 0 to the size.  job (33 bytes, may be NULL) gets the id
+     * of the job that made it ("" when not known). */
+    int (*result_size)(store *s, const char *hash, uint64_t *bytes, char *job, char *err,
+                       size_t errlen);
     /* The chunk of a result that holds byte pos: *data (malloc'd, NUL-terminated past its
      * length) of *len bytes starting at byte *start <= pos.  STORE_NOTFOUND when the result
      * or that chunk is gone (evicted since result_size: a reader then stops with an error;

@@ -83,6 +83,8 @@ static const char *const pg_migrations[] = {
     " END IF; RETURN NULL; END $$;"
     "CREATE TRIGGER results_changed AFTER INSERT OR DELETE OR UPDATE OF bytes ON results"
     " FOR EACH ROW EXECUTE FUNCTION cellar_results_changed();",
+    /* 1 -> 2: the job that made each result (X-Cellar-Job of a cache hit) */
+    "ALTER TABLE results ADD COLUMN job text;",
 };
 #define PG_VERSION ((int)(sizeof pg_migrations / sizeof *pg_migrations))
 
@@ -687,7 +689,8 @@ static int pg_job_release(store *base, const char *id, const char *owner, char *
                      "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
                      " finished = CASE WHEN cancel THEN $3::double precision END,"
                      " request = CASE WHEN cancel THEN ''::bytea ELSE request END,"
-                     " lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1",
+                     " started = CASE WHEN cancel THEN started END, stage = NULL,"
+                     " fraction = NULL, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1",
                      &p, 'q', id, "job_release", err, errlen);
 }
 
@@ -716,7 +719,8 @@ static int pg_jobs_requeue(store *base, double now, int all, size_t *n, char *er
         " error_status = CASE WHEN NOT cancel AND attempts >= $3::int THEN 500 END,"
         " error = CASE WHEN NOT cancel AND attempts >= $3::int THEN $4 END,"
         " request = CASE WHEN cancel OR attempts >= $3::int THEN ''::bytea ELSE request END,"
-        " lease_until = NULL WHERE state = 1 AND ($2::boolean OR lease_until < $1)"
+        " started = CASE WHEN cancel OR attempts >= $3::int THEN started END, stage = NULL,"
+        " fraction = NULL, lease_until = NULL WHERE state = 1 AND ($2::boolean OR lease_until < $1)"
         " RETURNING id, state",
         &p, 0, "jobs_requeue", err, errlen);
     if (!r) goto fail;
@@ -977,8 +981,8 @@ static int pg_evict(pg_conn *c, uint64_t budget, const char *keep, char *err, si
     }
 }
 
-static int pg_put(pg_store *s, const char *hash, uint64_t len, pg_source *src, char *err,
-                  size_t errlen)
+static int pg_put(pg_store *s, const char *hash, const char *job, uint64_t len, pg_source *src,
+                  char *err, size_t errlen)
 {
     pg_conn *c = pg_conn_get(s, err, errlen);
     if (!c) return STORE_ERR;
@@ -1015,10 +1019,12 @@ static int pg_put(pg_store *s, const char *hash, uint64_t len, pg_source *src, c
     p_text(&q, hash);
     p_int(&q, (long long)len);
     p_num(&q, pg_now());
+    p_text(&q, job && *job ? job : NULL);
     if (pg_cmd(c,
-               "INSERT INTO results(hash, bytes, created, last_used) VALUES($1, $2, $3, $3)"
-               " ON CONFLICT (hash) DO UPDATE SET bytes = excluded.bytes,"
-               " created = excluded.created, last_used = excluded.last_used",
+               "INSERT INTO results(hash, bytes, created, last_used, job)"
+               " VALUES($1, $2, $3, $3, $4) ON CONFLICT (hash) DO UPDATE SET"
+               " bytes = excluded.bytes, created = excluded.created,"
+               " last_used = excluded.last_used, job = excluded.job",
                &q, "result_put", err, errlen))
         goto fail;
     if (s->budget && pg_evict(c, s->budget, hash, err, errlen)) goto fail;
@@ -1037,18 +1043,18 @@ static int pg_result_put(store *base, const char *hash, const char *body, size_t
         return STORE_ERR;
     }
     pg_source src = {.mem = body ? body : ""};
-    return pg_put((pg_store *)base, hash, len, &src, err, errlen);
+    return pg_put((pg_store *)base, hash, NULL, len, &src, err, errlen);
 }
 
-static int pg_result_put_file(store *base, const char *hash, FILE *f, uint64_t len, char *err,
-                              size_t errlen)
+static int pg_result_put_file(store *base, const char *hash, const char *job, FILE *f,
+                              uint64_t len, char *err, size_t errlen)
 {
     pg_source src = {.f = f, .buf = malloc(STORE_CHUNK)};
     if (!src.buf) {
         pg_errf(err, errlen, "postgresql result_put: out of memory");
         return STORE_ERR;
     }
-    int rc = pg_put((pg_store *)base, hash, len, &src, err, errlen);
+    int rc = pg_put((pg_store *)base, hash, job, len, &src, err, errlen);
     free(src.buf);
     return rc;
 }
@@ -1063,18 +1069,19 @@ static void pg_drop(pg_conn *c, const char *hash)
 }
 
 /* The result's size and last mark: STORE_OK, STORE_NOTFOUND. */
-static int pg_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *err,
-                   size_t errlen)
+static int pg_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                   char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
-    PGresult *r = pg_rows(c, "SELECT bytes, last_used FROM results WHERE hash = $1", &p, 0,
+    PGresult *r = pg_rows(c, "SELECT bytes, last_used, job FROM results WHERE hash = $1", &p, 0,
                           "result", err, errlen);
     if (!r) return STORE_ERR;
     int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
     if (rc == STORE_OK) {
         *bytes = strtoull(PQgetvalue(r, 0, 0), NULL, 10);
         *used = col_num(r, 0, 1);
+        if (job && col_fixed(r, 0, 2, job, 33)) job[0] = 0;
     }
     PQclear(r);
     return rc;
@@ -1126,7 +1133,7 @@ static int pg_result_get(store *base, const char *hash, char **body, size_t *len
     if (!c) return STORE_ERR;
     if (pg_cmd(c, "BEGIN ISOLATION LEVEL REPEATABLE READ", NULL, "result_get", err, errlen))
         return STORE_ERR;
-    int rc = pg_head(c, hash, &bytes, &used, err, errlen);
+    int rc = pg_head(c, hash, &bytes, &used, NULL, err, errlen);
     PGresult *r = NULL;
     if (rc) goto out;
     rc = STORE_ERR;
@@ -1178,14 +1185,16 @@ out:
     return STORE_OK;
 }
 
-static int pg_result_size(store *base, const char *hash, uint64_t *bytes, char *err, size_t errlen)
+static int pg_result_size(store *base, const char *hash, uint64_t *bytes, char *job, char *err,
+                          size_t errlen)
 {
     pg_store *s = (pg_store *)base;
     double used = 0;
     *bytes = 0;
     pg_conn *c = pg_conn_get(s, err, errlen);
     if (!c) return STORE_ERR;
-    int rc = pg_head(c, hash, bytes, &used, err, errlen);
+    if (job) job[0] = 0;
+    int rc = pg_head(c, hash, bytes, &used, job, err, errlen);
     if (rc == STORE_OK) rc = pg_touch(s, c, hash, used, err, errlen);
     return rc;
 }
@@ -1239,7 +1248,7 @@ static int pg_result_exists(store *base, const char *hash, char *err, size_t err
     uint64_t bytes;
     double used;
     pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    return c ? pg_head(c, hash, &bytes, &used, err, errlen) : STORE_ERR;
+    return c ? pg_head(c, hash, &bytes, &used, NULL, err, errlen) : STORE_ERR;
 }
 
 static int pg_result_stats(store *base, size_t *count, uint64_t *bytes, char *err, size_t errlen)

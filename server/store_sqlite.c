@@ -142,6 +142,8 @@ static const char *const sq_migrations[] = {
     " (SELECT min(rowid) FROM jobs WHERE state IN (0, 1) GROUP BY hash);"
     "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1);"
     "CREATE INDEX jobs_queue ON jobs(created) WHERE state = 0;",
+    /* 5 -> 6: the job that made each result (X-Cellar-Job of a cache hit) */
+    "ALTER TABLE results ADD COLUMN job TEXT;",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -215,7 +217,9 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     [SQ_JOB_RELEASE] = "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
                        " finished = CASE WHEN cancel THEN ?3 END,"
                        " request = CASE WHEN cancel THEN zeroblob(0) ELSE request END,"
-                       " lease_until = NULL WHERE id = ?1 AND owner = ?2 AND state = 1",
+                       " started = CASE WHEN cancel THEN started END, stage = NULL,"
+                       " fraction = NULL, lease_until = NULL"
+                       " WHERE id = ?1 AND owner = ?2 AND state = 1",
     /* running jobs whose lease ended before ?1 (all of them when ?2): asked to stop, canceled;
      * started ?3 times already, failed; else queued again */
     [SQ_JOBS_REQUEUE] =
@@ -224,7 +228,8 @@ static const char *const sq_sql_text[SQ_NSQL] = {
         " error_status = CASE WHEN NOT cancel AND attempts >= ?3 THEN 500 END,"
         " error = CASE WHEN NOT cancel AND attempts >= ?3 THEN ?4 END,"
         " request = CASE WHEN cancel OR attempts >= ?3 THEN zeroblob(0) ELSE request END,"
-        " lease_until = NULL WHERE state = 1 AND (?2 OR lease_until < ?1)",
+        " started = CASE WHEN cancel OR attempts >= ?3 THEN started END, stage = NULL,"
+        " fraction = NULL, lease_until = NULL WHERE state = 1 AND (?2 OR lease_until < ?1)",
     /* a submission of a job that exists */
     [SQ_SUB_INSERT] = "INSERT INTO subs(id, job, created, canceled) SELECT ?1, ?2, ?3, ?4"
                       " WHERE EXISTS (SELECT 1 FROM jobs WHERE id = ?2)",
@@ -239,10 +244,10 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     [SQ_JOBS_PRUNE] = "DELETE FROM jobs WHERE state IN (2, 3, 4) AND (finished < ?1 OR rowid IN"
                       " (SELECT rowid FROM jobs WHERE state IN (2, 3, 4) ORDER BY finished DESC"
                       " LIMIT -1 OFFSET ?2))",
-    [SQ_RESULT_UPSERT] = "INSERT INTO results(hash, bytes, created, last_used)"
-                         " VALUES(?1, ?2, ?3, ?3) ON CONFLICT(hash) DO UPDATE SET"
+    [SQ_RESULT_UPSERT] = "INSERT INTO results(hash, bytes, created, last_used, job)"
+                         " VALUES(?1, ?2, ?3, ?3, ?4) ON CONFLICT(hash) DO UPDATE SET"
                          " bytes = excluded.bytes, created = excluded.created,"
-                         " last_used = excluded.last_used",
+                         " last_used = excluded.last_used, job = excluded.job",
     [SQ_BEGIN_READ] = "BEGIN",
     [SQ_RESULT_DELETE] = "DELETE FROM results WHERE hash = ?1",
     /* the chunks of a put that has no results row (yet, or any more) */
@@ -257,7 +262,7 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     /* the least recently used result but ?1 (the one just stored), through the index */
     [SQ_RESULT_EVICT_ONE] = "DELETE FROM results WHERE rowid = (SELECT rowid FROM results"
                             " WHERE hash <> ?1 ORDER BY last_used LIMIT 1)",
-    [SQ_RESULT_HEAD] = "SELECT bytes, last_used FROM results WHERE hash = ?1",
+    [SQ_RESULT_HEAD] = "SELECT bytes, last_used, job FROM results WHERE hash = ?1",
     [SQ_CHUNKS_ALL] = "SELECT off, body, sha FROM result_chunks WHERE hash = ?1 ORDER BY off",
     [SQ_CHUNK_AT] = "SELECT off, body, sha FROM result_chunks WHERE hash = ?1 AND off <= ?2"
                     " ORDER BY off DESC LIMIT 1",
@@ -1196,8 +1201,8 @@ static int sq_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t
  * transaction, and the last transaction checks that they are all there (another put of the
  * same hash, or an eviction of it, could have touched them in between), writes the results
  * row and evicts.  A small result is one transaction, as before chunks. */
-static int sq_put(sq_store *s, const char *hash, uint64_t len, sq_source *src, char *err,
-                  size_t errlen)
+static int sq_put(sq_store *s, const char *hash, const char *job, uint64_t len, sq_source *src,
+                  char *err, size_t errlen)
 {
     sq_conn *c = sq_conn_get(s, err, errlen);
     uint64_t pos = 0, nchunks = 0;
@@ -1240,6 +1245,7 @@ static int sq_put(sq_store *s, const char *hash, uint64_t len, sq_source *src, c
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
     sqlite3_bind_int64(st, 2, (sqlite3_int64)len);
     sqlite3_bind_double(st, 3, sq_stamp(s));
+    if (job && *job) sqlite3_bind_text(st, 4, job, -1, SQLITE_STATIC);
     int rc = sqlite3_step(st);
     if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put", c->db);
     sq_done(st);
@@ -1268,11 +1274,11 @@ static int sq_result_put(store *base, const char *hash, const char *body, size_t
         return STORE_ERR;
     }
     sq_source src = {.mem = body ? body : ""};
-    return sq_put((sq_store *)base, hash, len, &src, err, errlen);
+    return sq_put((sq_store *)base, hash, NULL, len, &src, err, errlen);
 }
 
-static int sq_result_put_file(store *base, const char *hash, FILE *f, uint64_t len, char *err,
-                              size_t errlen)
+static int sq_result_put_file(store *base, const char *hash, const char *job, FILE *f,
+                              uint64_t len, char *err, size_t errlen)
 {
     if (!f) {
         sq_errf(err, errlen, "sqlite result_put: no file");
@@ -1283,14 +1289,14 @@ static int sq_result_put_file(store *base, const char *hash, FILE *f, uint64_t l
         sq_errf(err, errlen, "sqlite result_put: out of memory");
         return STORE_ERR;
     }
-    int rc = sq_put((sq_store *)base, hash, len, &src, err, errlen);
+    int rc = sq_put((sq_store *)base, hash, job, len, &src, err, errlen);
     free(src.buf);
     return rc;
 }
 
 /* A result's size and mark (no transaction of its own: the caller's, or one snapshot). */
-static int sq_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, const char *where,
-                   char *err, size_t errlen)
+static int sq_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                   const char *where, char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_HEAD, where, err, errlen);
     int rc;
@@ -1300,6 +1306,7 @@ static int sq_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, 
     if (rc == SQLITE_ROW) {
         *bytes = (uint64_t)sqlite3_column_int64(st, 0);
         *used = sq_column_time(st, 1);
+        if (job && sq_column_fixed(st, 2, job, 33)) job[0] = 0;
     } else if (rc != SQLITE_DONE) {
         sq_dberr(err, errlen, where, c->db);
     }
@@ -1352,7 +1359,7 @@ static int sq_result_get(store *base, const char *hash, char **body, size_t *len
     if (len) *len = 0;
     if (!c) return STORE_ERR;
     if (sq_run(c, SQ_BEGIN_READ, "result_get: begin", err, errlen)) return STORE_ERR;
-    rc = sq_head(c, hash, &bytes, &used, "result_get", err, errlen);
+    rc = sq_head(c, hash, &bytes, &used, NULL, "result_get", err, errlen);
     if (rc) goto out;
     rc = STORE_ERR;
     if (bytes >= SIZE_MAX || !(copy = malloc((size_t)bytes + 1))) {
@@ -1419,14 +1426,16 @@ out:
     return STORE_OK;
 }
 
-static int sq_result_size(store *base, const char *hash, uint64_t *bytes, char *err, size_t errlen)
+static int sq_result_size(store *base, const char *hash, uint64_t *bytes, char *job, char *err,
+                          size_t errlen)
 {
     sq_store *s = (sq_store *)base;
     double used = 0;
     sq_conn *c = sq_conn_get(s, err, errlen);
     *bytes = 0;
     if (!c) return STORE_ERR;
-    int rc = sq_head(c, hash, bytes, &used, "result_size", err, errlen);
+    if (job) job[0] = 0;
+    int rc = sq_head(c, hash, bytes, &used, job, "result_size", err, errlen);
     if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_size: mark used", err, errlen);
     return rc;
 }

@@ -2,6 +2,7 @@
 #include "tests/daemon.h"
 
 #include <arpa/inet.h>
+#include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -474,6 +475,57 @@ static size_t on_read(char *dst, size_t size, size_t n, void *ud)
     return k;
 }
 
+/* Appends the exchange to DIR/responses.jsonl (one line, written at once: threads may record
+ * together), for srv_finish's check against schemas/openapi.json (tests/openapi_check.py).
+ * Bodies over 256 KiB, or not JSON, or gzipped, are not kept. */
+static void record(const srv *d, const char *method, const char *path, const hresp *r)
+{
+    if (!d->dir[0] || r->status <= 0) return;
+    json_t *o = json_object(), *h = json_object();
+    const char *block = r->hdr.p ? r->hdr.p : "";
+    for (const char *p = strstr(block, "HTTP/"); p; p = strstr(p + 5, "\r\nHTTP/"))
+        block = p; /* the last header block (after any 100 Continue) */
+    for (const char *l = block; l && *l;) {
+        const char *e = strstr(l, "\r\n");
+        size_t n = e ? (size_t)(e - l) : strlen(l);
+        const char *colon = memchr(l, ':', n);
+        if (colon) {
+            char name[64], value[1024];
+            size_t k = (size_t)(colon - l);
+            if (k < sizeof name) {
+                for (size_t i = 0; i < k; i++) name[i] = (char)tolower((unsigned char)l[i]);
+                name[k] = 0;
+                const char *v = colon + 1;
+                while (v < l + n && *v == ' ') v++;
+                snprintf(value, sizeof value, "%.*s", (int)(l + n - v), v);
+                json_object_set_new(h, name, json_string(value));
+            }
+        }
+        l = e ? e + 2 : NULL;
+    }
+    const char *ct = json_string_value(json_object_get(h, "content-type"));
+    int keep = r->body.n <= (256u << 10) && !json_object_get(h, "content-encoding") && ct &&
+               strstr(ct, "json");
+    json_object_set_new(o, "method", json_string(method));
+    json_object_set_new(o, "path", json_string(path));
+    json_object_set_new(o, "status", json_integer(r->status));
+    json_object_set_new(o, "headers", h);
+    json_object_set_new(o, "body", keep ? json_stringn(r->body.p, r->body.n) : json_null());
+    char *line = json_dumps(o, JSON_COMPACT);
+    json_decref(o);
+    if (!line) return;
+    char file[320];
+    snprintf(file, sizeof file, "%s/responses.jsonl", d->dir);
+    int fd = open(file, O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (fd >= 0) {
+        size_t n = strlen(line);
+        line[n] = '\n';
+        if (write(fd, line, n + 1) != (ssize_t)(n + 1)) fprintf(stderr, "record: short write\n");
+        close(fd);
+    }
+    free(line);
+}
+
 void http_do(const srv *d, const hreq *q, hresp *r)
 {
     char url[512];
@@ -525,6 +577,7 @@ void http_do(const srv *d, const hreq *q, hresp *r)
     curl_easy_cleanup(c);
     if (!r->body.p) buf_add(&r->body, "", 0);
     if (!r->hdr.p) buf_add(&r->hdr, "", 0);
+    record(d, m, q->path, r);
 }
 
 void http_get(const srv *d, const char *path, hresp *r)
@@ -823,10 +876,32 @@ void vq_check(srv *d)
     d->nv = 0;
 }
 
+/* Every response the test recorded, against schemas/openapi.json. */
+static void openapi_check(srv *d)
+{
+    char file[320], cmd[1024];
+    snprintf(file, sizeof file, "%s/responses.jsonl", d->dir);
+    if (access(file, R_OK) != 0) return;
+    const char *py = getenv("PYTHON");
+    const char *src = getenv("CELLAR_SRC");
+    snprintf(cmd, sizeof cmd, "'%s' '%s/tests/openapi_check.py' '%s' 2>&1",
+             py && *py ? py : "python3", src && *src ? src : ".", file);
+    size_t n = 0;
+    FILE *p = popen(cmd, "r");
+    buf out = {0};
+    char tmp[4096];
+    while (p && (n = fread(tmp, 1, sizeof tmp, p)) > 0) buf_add(&out, tmp, n);
+    int st = p ? pclose(p) : -1;
+    CHECK(st == 0 && out.p && !strncmp(out.p, "ok ", 3), "responses against openapi.json:\n%s",
+          out.p ? out.p : "(no output)");
+    free(out.p);
+}
+
 void srv_finish(srv *d)
 {
     if (!d->dir[0]) return;
     vq_check(d);
+    openapi_check(d);
     if (d->pid) srv_kill(d);
     const char *keep = getenv("CELLAR_TEST_KEEP");
     if (test_failed_now() || (keep && *keep)) {
@@ -1064,13 +1139,23 @@ size_t raw_read(int fd, char *out, size_t max, double timeout)
     return n;
 }
 
-/* One raw exchange: the status of the answer (0: none). */
+/* One raw exchange: the status of the answer (0: none).  The write side is shut after the
+ * request, as a client that sends garbage might. */
 int raw_exchange(const srv *d, const void *data, size_t len, char *out, size_t max)
+{
+    return raw_exchange_ex(d, data, len, out, max, 1);
+}
+
+/* The same; half_close 0 leaves the write side open, as HTTP clients do (one that shuts it
+ * while its request is suspended, in the intake or in a wait, loses the answer: libmicrohttpd
+ * takes the end of its input for the end of the connection when it resumes it). */
+int raw_exchange_ex(const srv *d, const void *data, size_t len, char *out, size_t max,
+                    int half_close)
 {
     int fd = raw_connect(d);
     if (fd < 0) return -1;
     raw_send(fd, data, len);
-    shutdown(fd, SHUT_WR);
+    if (half_close) shutdown(fd, SHUT_WR);
     size_t n = raw_read(fd, out, max, 10 * slowdown());
     close(fd);
     int status = 0;

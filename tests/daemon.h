@@ -160,6 +160,8 @@ int raw_connect(const srv *d);
 size_t raw_send(int fd, const void *data, size_t len);
 size_t raw_read(int fd, char *out, size_t max, double timeout);
 int raw_exchange(const srv *d, const void *data, size_t len, char *out, size_t max);
+int raw_exchange_ex(const srv *d, const void *data, size_t len, char *out, size_t max,
+                    int half_close);
 void *post_thread(void *arg);
 
 #endif

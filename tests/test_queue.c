@@ -594,10 +594,10 @@ CONTRACT(queue_results)
     FILE *f = tmpfile();
     REQUIRE(f && fwrite(large, 1, big, f) == big && fseek(f, 0, SEEK_SET) == 0, "tmpfile");
     hash_of(h, 2);
-    CHECK(s->ops->result_put_file(s, h, f, big, b->err, sizeof b->err) == STORE_OK, "put_file: %s",
+    CHECK(s->ops->result_put_file(s, h, NULL, f, big, b->err, sizeof b->err) == STORE_OK, "put_file: %s",
           b->err);
     fclose(f);
-    CHECK(s->ops->result_size(s, h, &size, b->err, sizeof b->err) == STORE_OK && size == big,
+    CHECK(s->ops->result_size(s, h, &size, NULL, b->err, sizeof b->err) == STORE_OK && size == big,
           "size %llu", (unsigned long long)size);
     int whole = 1;
     for (uint64_t pos = 0; pos < big && whole; pos += len) {
@@ -620,7 +620,7 @@ CONTRACT(queue_results)
     hash_of(h, 3);
     f = tmpfile();
     REQUIRE(f && fwrite("abc", 1, 3, f) == 3 && fseek(f, 0, SEEK_SET) == 0, "tmpfile");
-    CHECK(s->ops->result_put_file(s, h, f, 10, b->err, sizeof b->err) == STORE_ERR,
+    CHECK(s->ops->result_put_file(s, h, NULL, f, 10, b->err, sizeof b->err) == STORE_ERR,
           "a short file was stored");
     fclose(f);
     CHECK(s->ops->result_exists(s, h, b->err, sizeof b->err) == STORE_NOTFOUND,

@@ -229,7 +229,7 @@ TEST(store_open_creates_schema)
     store *s = f.s;
     struct stat sb;
     CHECK(stat(f.path, &sb) == 0 && S_ISREG(sb.st_mode), "no database file at %s", f.path);
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 5, "user_version %lld, want 5",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld, want 6",
           sql_int(f.path, "PRAGMA user_version"));
     sql_text(f.path, "PRAGMA journal_mode", mode, sizeof mode);
     CHECK(!strcmp(mode, "wal"), "journal_mode %s, want wal", mode);
@@ -517,7 +517,7 @@ TEST(store_schema_versions)
     REQUIRE(f.s, "open of a version-0 database with --init: %s", f.err);
     CHECK(sql_int(f.path, "PRAGMA application_id") == 0x63656c6c, "application_id %lld",
           sql_int(f.path, "PRAGMA application_id"));
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 5, "user_version %lld after migration",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld after migration",
           sql_int(f.path, "PRAGMA user_version"));
     char t[16];
     sql_text(f.path, "SELECT t FROM notes", t, sizeof t);
@@ -856,7 +856,7 @@ static int chunks_are(store *s, unsigned k, size_t n)
     char h[65], err[256];
     uint64_t size = 0, pos = 0;
     hash_of(h, k);
-    if (s->ops->result_size(s, h, &size, err, sizeof err) != STORE_OK || size != n) return 0;
+    if (s->ops->result_size(s, h, &size, NULL, err, sizeof err) != STORE_OK || size != n) return 0;
     char *want = body_make(k, n);
     int ok = want != NULL;
     while (ok && pos < size) {
@@ -895,7 +895,7 @@ TEST(store_large_results_in_chunks)
     FILE *in = file_with_body(1, n1, 1000);
     REQUIRE(in, "tmpfile");
     hash_of(h, 1);
-    CHECK(s->ops->result_put_file(s, h, in, n1, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    CHECK(s->ops->result_put_file(s, h, NULL, in, n1, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
     fclose(in);
     CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 4, "%lld chunks, want 5",
           sql_int(f.path, "SELECT count(*) FROM result_chunks"));
@@ -908,7 +908,7 @@ TEST(store_large_results_in_chunks)
     size_t n4 = 33 * STORE_CHUNK + 5;
     in = file_with_body(4, n4, 0);
     hash_of(h, 4);
-    CHECK(s->ops->result_put_file(s, h, in, n4, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    CHECK(s->ops->result_put_file(s, h, NULL, in, n4, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
     fclose(in);
     CHECK(chunks_are(s, 4, n4) == 1 && get_is(s, 4, n4) == 1, "result 4 wrong");
     /* a replacement by a smaller body leaves no chunk of the old one */
@@ -920,7 +920,7 @@ TEST(store_large_results_in_chunks)
     /* a file shorter than announced, past the first transaction: nothing stored, nothing left */
     in = file_with_body(5, 34 * STORE_CHUNK, 0);
     hash_of(h, 5);
-    CHECK(s->ops->result_put_file(s, h, in, 40 * STORE_CHUNK, f.err, sizeof f.err) == STORE_ERR,
+    CHECK(s->ops->result_put_file(s, h, NULL, in, 40 * STORE_CHUNK, f.err, sizeof f.err) == STORE_ERR,
           "a short file was stored");
     CHECK(strstr(f.err, "ended after 35651584 of 41943040 bytes") != NULL, "message: %s", f.err);
     fclose(in);
@@ -1073,7 +1073,7 @@ TEST(store_migrates_version_1)
             "making a version-1 database");
     REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
     store *s = f.s;
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 5, "user_version %lld",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld",
           sql_int(f.path, "PRAGMA user_version"));
     CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name = 'result_bodies'") == 0,
           "result_bodies left");

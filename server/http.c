@@ -135,15 +135,15 @@ typedef struct conn {
     struct conn *next_intake; /* h->in's queue */
     int parked;               /* counted in h->parked until completed */
     double wait_applied;
-    unsigned status; /* the status sent, for the log */
+    unsigned status;          /* the status sent, for the log */
     const render_format *fmt; /* result routes: the representation (Accept, ?format=); NULL
                                  or render_formats[0]: the JSON itself */
-    render_opts ro;  /* the picture's options (query parameters) */
-    char rep[48];    /* the ETag suffix of the representation: "" for JSON */
-    int gz;          /* the client takes gzip (Accept-Encoding): compressible answers are */
+    render_opts ro;           /* the picture's options (query parameters) */
+    char rep[48];             /* the ETag suffix of the representation: "" for JSON */
+    int gz;           /* the client takes gzip (Accept-Encoding): compressible answers are */
     char origin[256]; /* the request's Origin when CORS allows it ("": no CORS headers) */
-    char job_id[33]; /* for the log */
-    int close;       /* answer with Connection: close (the rest of the stream cannot be trusted) */
+    char job_id[33];  /* for the log */
+    int close;        /* answer with Connection: close (the rest of the stream cannot be trusted) */
     uint64_t reserved; /* bytes of h->inflight this request's body holds */
 } conn;
 
@@ -191,8 +191,9 @@ static void unpark(conn *c)
 }
 
 /* What a CORS answer lets a page elsewhere read. */
-#define CORS_EXPOSE "Location, Content-Location, Retry-After, ETag, X-Cellar-Job, X-Cellar-Cache, " \
-                    "Preference-Applied"
+#define CORS_EXPOSE                                                                                \
+    "Location, Content-Location, Retry-After, ETag, X-Cellar-Job, X-Cellar-Cache, "                \
+    "Preference-Applied"
 
 /* c->origin from the request's Origin and --cors-origins ("*": any origin; else a comma-separated
  * list of origins, compared exactly); "" when CORS does not apply. */
@@ -643,7 +644,7 @@ static void result_reader_free(void *cls)
 typedef struct gz_reader {
     result_reader *rr;
     z_stream z;
-    uint64_t in_pos;  /* bytes of the result read */
+    uint64_t in_pos; /* bytes of the result read */
     int eof, finished;
     char in[64 * 1024];
 } gz_reader;
@@ -727,8 +728,8 @@ static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, co
         rr->size = size;
         struct MHD_Response *r = NULL;
         gz_reader *g = c->gz ? calloc(1, sizeof *g) : NULL;
-        if (c->gz && (!g || deflateInit2(&g->z, 1, Z_DEFLATED, 15 + 16, 8,
-                                         Z_DEFAULT_STRATEGY) != Z_OK)) {
+        if (c->gz &&
+            (!g || deflateInit2(&g->z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)) {
             free(g);
             free(rr);
             return problem(c, 503, "out of memory", "5", NULL);
@@ -759,8 +760,7 @@ static enum MHD_Result get_result(conn *c, const char *hash, const char *job_id,
     uint64_t size = 0;
     int rc = c->h->st->ops->result_size(c->h->st, hash, &size, made_by, err, sizeof err);
     if (rc != STORE_OK) return store_problem(c, rc, err, hash, job_id, post);
-    return serve_stored(c, hash, size, job_id ? job_id : made_by[0] ? made_by : NULL, cache,
-                        post);
+    return serve_stored(c, hash, size, job_id ? job_id : made_by[0] ? made_by : NULL, cache, post);
 }
 
 /* Which representation the Accept header asks for (a row of render_formats), or NULL when it
@@ -788,11 +788,11 @@ static const render_format *accept_format(const char *accept)
         for (size_t i = 0; i < render_nformats && q > 0; i++) {
             const render_format *f = &render_formats[i];
             int exact = tl == strlen(f->media) && !strncasecmp(p, f->media, tl);
-            int wild = !exact && ((f->wild && tl == strlen(f->wild) && !strncasecmp(p, f->wild, tl)) ||
-                                  (i == 0 && tl == 3 && !strncmp(p, "*/*", 3)));
-            if ((exact || wild) &&
-                (q > best_q || (q == best_q && exact > best_exact) ||
-                 (q == best_q && exact == best_exact && (!best || f < best)))) {
+            int wild =
+                !exact && ((f->wild && tl == strlen(f->wild) && !strncasecmp(p, f->wild, tl)) ||
+                           (i == 0 && tl == 3 && !strncmp(p, "*/*", 3)));
+            if ((exact || wild) && (q > best_q || (q == best_q && exact > best_exact) ||
+                                    (q == best_q && exact == best_exact && (!best || f < best)))) {
                 best = f;
                 best_q = q;
                 best_exact = exact;
@@ -863,8 +863,8 @@ static int negotiate(conn *c, enum MHD_Result *r)
     c->rep[0] = 0;
     if (rendered(c)) {
         char opts[160];
-        int n = snprintf(opts, sizeof opts, "%.17g;%d;%d;%d;%.17g;%d", c->ro.explode,
-                         c->ro.numbers, c->ro.edges, c->ro.width, c->ro.stroke, c->ro.cells);
+        int n = snprintf(opts, sizeof opts, "%.17g;%d;%d;%d;%.17g;%d", c->ro.explode, c->ro.numbers,
+                         c->ro.edges, c->ro.width, c->ro.stroke, c->ro.cells);
         uint64_t h = 1469598103934665603ull; /* FNV-1a */
         for (int i = 0; i < n && i < (int)sizeof opts; i++) {
             h ^= (unsigned char)opts[i];
@@ -1287,9 +1287,9 @@ static void *intake_main(void *arg)
 static enum MHD_Result route_options(conn *c)
 {
     static const char *const allow[ROUTE_COUNT] = {
-        [ROUTE_INDEX] = "GET, HEAD, OPTIONS",   [ROUTE_HEALTHZ] = "GET, HEAD, OPTIONS",
-        [ROUTE_READYZ] = "GET, HEAD, OPTIONS",  [ROUTE_METRICS] = "GET, HEAD, OPTIONS",
-        [ROUTE_OPENAPI] = "GET, HEAD, OPTIONS", [ROUTE_JOBS] = "POST, OPTIONS",
+        [ROUTE_INDEX] = "GET, HEAD, OPTIONS",       [ROUTE_HEALTHZ] = "GET, HEAD, OPTIONS",
+        [ROUTE_READYZ] = "GET, HEAD, OPTIONS",      [ROUTE_METRICS] = "GET, HEAD, OPTIONS",
+        [ROUTE_OPENAPI] = "GET, HEAD, OPTIONS",     [ROUTE_JOBS] = "POST, OPTIONS",
         [ROUTE_JOB] = "GET, HEAD, DELETE, OPTIONS", [ROUTE_JOB_RESULT] = "GET, HEAD, OPTIONS",
         [ROUTE_RESULT] = "GET, HEAD, OPTIONS"};
     const char *a = allow[c->route];

@@ -685,13 +685,14 @@ static int pg_job_release(store *base, const char *id, const char *owner, char *
     p_text(&p, id);
     p_text(&p, owner);
     p_num(&p, pg_now());
-    return pg_write1((pg_store *)base,
-                     "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
-                     " finished = CASE WHEN cancel THEN $3::double precision END,"
-                     " request = CASE WHEN cancel THEN ''::bytea ELSE request END,"
-                     " started = CASE WHEN cancel THEN started END, stage = NULL,"
-                     " fraction = NULL, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1",
-                     &p, 'q', id, "job_release", err, errlen);
+    return pg_write1(
+        (pg_store *)base,
+        "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
+        " finished = CASE WHEN cancel THEN $3::double precision END,"
+        " request = CASE WHEN cancel THEN ''::bytea ELSE request END,"
+        " started = CASE WHEN cancel THEN started END, stage = NULL,"
+        " fraction = NULL, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1",
+        &p, 'q', id, "job_release", err, errlen);
 }
 
 static int pg_jobs_requeue(store *base, double now, int all, size_t *n, char *err, size_t errlen)
@@ -1046,8 +1047,8 @@ static int pg_result_put(store *base, const char *hash, const char *body, size_t
     return pg_put((pg_store *)base, hash, NULL, len, &src, err, errlen);
 }
 
-static int pg_result_put_file(store *base, const char *hash, const char *job, FILE *f,
-                              uint64_t len, char *err, size_t errlen)
+static int pg_result_put_file(store *base, const char *hash, const char *job, FILE *f, uint64_t len,
+                              char *err, size_t errlen)
 {
     pg_source src = {.f = f, .buf = malloc(STORE_CHUNK)};
     if (!src.buf) {

@@ -1277,8 +1277,8 @@ static int sq_result_put(store *base, const char *hash, const char *body, size_t
     return sq_put((sq_store *)base, hash, NULL, len, &src, err, errlen);
 }
 
-static int sq_result_put_file(store *base, const char *hash, const char *job, FILE *f,
-                              uint64_t len, char *err, size_t errlen)
+static int sq_result_put_file(store *base, const char *hash, const char *job, FILE *f, uint64_t len,
+                              char *err, size_t errlen)
 {
     if (!f) {
         sq_errf(err, errlen, "sqlite result_put: no file");

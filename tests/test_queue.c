@@ -594,8 +594,8 @@ CONTRACT(queue_results)
     FILE *f = tmpfile();
     REQUIRE(f && fwrite(large, 1, big, f) == big && fseek(f, 0, SEEK_SET) == 0, "tmpfile");
     hash_of(h, 2);
-    CHECK(s->ops->result_put_file(s, h, NULL, f, big, b->err, sizeof b->err) == STORE_OK, "put_file: %s",
-          b->err);
+    CHECK(s->ops->result_put_file(s, h, NULL, f, big, b->err, sizeof b->err) == STORE_OK,
+          "put_file: %s", b->err);
     fclose(f);
     CHECK(s->ops->result_size(s, h, &size, NULL, b->err, sizeof b->err) == STORE_OK && size == big,
           "size %llu", (unsigned long long)size);

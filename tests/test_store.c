@@ -895,7 +895,8 @@ TEST(store_large_results_in_chunks)
     FILE *in = file_with_body(1, n1, 1000);
     REQUIRE(in, "tmpfile");
     hash_of(h, 1);
-    CHECK(s->ops->result_put_file(s, h, NULL, in, n1, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    CHECK(s->ops->result_put_file(s, h, NULL, in, n1, f.err, sizeof f.err) == STORE_OK, "put: %s",
+          f.err);
     fclose(in);
     CHECK(sql_int(f.path, "SELECT count(*) FROM result_chunks") == 4, "%lld chunks, want 5",
           sql_int(f.path, "SELECT count(*) FROM result_chunks"));
@@ -908,7 +909,8 @@ TEST(store_large_results_in_chunks)
     size_t n4 = 33 * STORE_CHUNK + 5;
     in = file_with_body(4, n4, 0);
     hash_of(h, 4);
-    CHECK(s->ops->result_put_file(s, h, NULL, in, n4, f.err, sizeof f.err) == STORE_OK, "put: %s", f.err);
+    CHECK(s->ops->result_put_file(s, h, NULL, in, n4, f.err, sizeof f.err) == STORE_OK, "put: %s",
+          f.err);
     fclose(in);
     CHECK(chunks_are(s, 4, n4) == 1 && get_is(s, 4, n4) == 1, "result 4 wrong");
     /* a replacement by a smaller body leaves no chunk of the old one */
@@ -920,7 +922,8 @@ TEST(store_large_results_in_chunks)
     /* a file shorter than announced, past the first transaction: nothing stored, nothing left */
     in = file_with_body(5, 34 * STORE_CHUNK, 0);
     hash_of(h, 5);
-    CHECK(s->ops->result_put_file(s, h, NULL, in, 40 * STORE_CHUNK, f.err, sizeof f.err) == STORE_ERR,
+    CHECK(s->ops->result_put_file(s, h, NULL, in, 40 * STORE_CHUNK, f.err, sizeof f.err) ==
+              STORE_ERR,
           "a short file was stored");
     CHECK(strstr(f.err, "ended after 35651584 of 41943040 bytes") != NULL, "message: %s", f.err);
     fclose(in);

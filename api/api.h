@@ -43,8 +43,11 @@ typedef struct api_error {
 typedef struct api_run_opts {
     int threads;              /* core worker threads; <= 0: number of online CPUs */
     const atomic_int *cancel; /* borrowed, may be NULL: non-zero asks the core to stop */
-    void (*progress)(void *udata, const char *stage, double fraction); /* may be NULL */
-    void *udata;                                                       /* passed to progress */
+    /* may be NULL: told, from the running thread, the stage running now (one of
+     * api_stage_name's for the kind) and the fraction of the whole run done, 0 to 1, neither of
+     * which goes back; a few hundred times per run at most */
+    void (*progress)(void *udata, const char *stage, double fraction);
+    void *udata; /* passed to progress */
     /* may be NULL: the result is written to this stream as it is made (a megabyte at a time)
      * instead of being returned: then *out is NULL and *outlen the bytes written.  A failure
      * after some bytes were written leaves them written (the output is then incomplete). */
@@ -57,6 +60,10 @@ typedef struct api_run_opts {
  * On failure returns the status, fills *err (may be NULL) and sets *out = NULL, *outlen = 0. */
 int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,
                  api_error *err);
+
+/* The stages a request of this kind reports to api_run_opts.progress, in the order they run:
+ * the i-th name, NULL past the last (or for an unknown kind). */
+const char *api_stage_name(const char *kind, size_t i);
 
 /* The same with cancellation and progress (ro may be NULL: all CPUs, no cancel, no progress). */
 int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,

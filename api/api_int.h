@@ -40,9 +40,10 @@ typedef struct api_buf {
     unsigned nsections, sections;
 } api_buf;
 
-/* A top-level key of the result begins: "output" progress from 0.99 toward 1 by the share of
- * the keys written. */
+/* A top-level key of the result begins: "output" progress by the share of the keys written. */
 void api_buf_section(api_buf *b);
+/* Row i of the n of the section being written (cheap: reports every 8192nd). */
+void api_buf_tick(api_buf *b, size_t i, size_t n);
 #define API_BUF_SINK (1u << 20)
 
 /* Writes what the buffer holds to its sink (no-op without one); failed on a write error. */
@@ -98,6 +99,34 @@ int api_only_keys(const json_t *req, const char *own, api_error *err);
 /* Maps an ARR_* code of the core and its message to an api status and *err. */
 int api_core_fail(api_error *err, int arr_code, const char *core_msg);
 
+/* ---- progress ---------------------------------------------------------------------------- *
+ * The cores and the kinds report (stage, fraction of that stage done); a kind's table of stages
+ * (api_stage: its name and the share of the whole run done at its end, in the order they run)
+ * turns that into (the stage running now, fraction of the whole run) for api_run_opts.progress:
+ * a stage's end (fraction 1) names the next one, a stage that does not run (a solids request
+ * without op has no membership) is passed over, and a report of an earlier stage than the one
+ * running (or of a name not in the table) is dropped, so both stay monotonic. */
+typedef struct api_stage {
+    const char *name;
+    double end;
+} api_stage;
+
+typedef struct api_progress {
+    const api_stage *st; /* the kind's table, {NULL, 0}-terminated */
+    size_t cur;          /* the stage running */
+    double last;         /* the fraction last reported */
+    void (*up)(void *udata, const char *stage, double fraction);
+    void *udata;
+} api_progress;
+
+/* Fills *wrapped as a copy of ro whose progress goes through p and the table st; ro unchanged
+ * (and p unused) when it has no progress callback. */
+void api_progress_wrap(api_progress *p, const api_stage *st, const api_run_opts *ro,
+                       api_run_opts *wrapped);
+/* The stages of each kind (api/run.c). */
+extern const api_stage api_stages_lines[], api_stages_svg[], api_stages_polygons[],
+    api_stages_solids[];
+
 /* One kind of request, in three steps so that the parsed JSON tree (jansson keeps a node per
  * number: ten times the size of the body) is freed before the core runs:
  *   parse       req (borrowed, its "kind" already matched) -> *parsed, the kind's own request
@@ -112,6 +141,7 @@ typedef struct api_kind {
     /* optional, run by api_check_request() only (the daemon's submit, before queueing): the
      * checks that parse leaves to run but a client should hear about at once (svg: the XML) */
     int (*check)(const void *parsed, api_error *err);
+    const api_stage *stages; /* its stages, for progress */
 } api_kind;
 
 /* The "lines" kind (api/lines.c). */

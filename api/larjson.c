@@ -41,7 +41,15 @@ void api_buf_section(api_buf *b)
     if (!b->progress) return;
     unsigned n = b->nsections ? b->nsections : 1, k = b->sections < n ? b->sections : n;
     b->sections++;
-    b->progress(b->udata, "output", 0.99 + 0.01 * (double)k / (double)(n + 1));
+    b->progress(b->udata, "output", (double)k / (double)(n + 1));
+}
+
+void api_buf_tick(api_buf *b, size_t i, size_t n)
+{
+    if (!b->progress || (i & 8191) || !n) return;
+    unsigned ns = b->nsections ? b->nsections : 1, k = b->sections ? b->sections - 1 : 0;
+    if (k > ns) k = ns;
+    b->progress(b->udata, "output", ((double)k + (double)i / (double)n) / (double)(ns + 1));
 }
 
 void api_buf_flush(api_buf *b)
@@ -525,6 +533,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         put_field(b, &first, "V");
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
+            api_buf_tick(b, v, c->nv);
             api_buf_puts(b, v ? ",[" : "[");
             api_buf_double(b, c->V[2 * v]);
             api_buf_putc(b, ',');
@@ -537,6 +546,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         put_field(b, &first, "EV");
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
+            api_buf_tick(b, e, c->ne);
             if (e) api_buf_putc(b, ',');
             api_buf_u32_list(b, c->EV + 2 * e, 2);
         }
@@ -547,6 +557,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const uint32_t *v;
+            api_buf_tick(b, f, r.nrows);
             size_t k = fv_row(&r, f, &v);
             if (f) api_buf_putc(b, ',');
             api_buf_u32_list(b, v, k);
@@ -558,6 +569,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const int32_t *e;
+            api_buf_tick(b, f, r.nrows);
             size_t k = fe_row(&r, f, &e);
             api_buf_puts(b, f ? ",[" : "[");
             for (size_t i = 0; i < k; i++) {

@@ -196,7 +196,7 @@ int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_
         rc = api_core_fail(err, rc, core_msg);
         goto out;
     }
-    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
+    if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar2_write(out, &c, &fmt, err);
 out:
     lar2_free(&c);

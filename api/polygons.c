@@ -557,7 +557,7 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
                         .exterior_last = r->opt.exterior_last,
                         .more = put_bool2,
                         .more_udata = &res};
-    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
+    if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar2_write(out, &res.c, &fmt, err);
 out:
     bool2_free(&res);

@@ -22,11 +22,40 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The stages of each kind in the order they run, with the share of the run's time done at the
+ * end of each, measured with `cellar --progress` on two threads: lines on 30 000 random
+ * segments, svg on 30 000 lines and 3 000 circles, polygons on the union of 20 000 turned
+ * squares, solids on 2 000 turned cubes with an op (the output, writing every double in its
+ * shortest form, is a third of a 2D run).  Reading the request comes before the first stage
+ * and is not counted.  openapi.json lists the same names. */
+const api_stage api_stages_lines[] = {
+    {"snap", 0.002},       {"buckets", 0.014}, {"intersect", 0.07}, {"split", 0.33},
+    {"biconnected", 0.38}, {"faces", 0.64},    {"output", 1},       {NULL, 0}};
+const api_stage api_stages_svg[] = {{"svg", 0.18},       {"snap", 0.182}, {"buckets", 0.19},
+                                    {"intersect", 0.24}, {"split", 0.45}, {"biconnected", 0.50},
+                                    {"faces", 0.68},     {"output", 1},   {NULL, 0}};
+const api_stage api_stages_polygons[] = {{"snap", 0.002},
+                                         {"buckets", 0.016},
+                                         {"intersect", 0.057},
+                                         {"split", 0.22},
+                                         {"biconnected", 0.26},
+                                         {"faces", 0.45},
+                                         {"membership", 0.57},
+                                         {"select", 0.58},
+                                         {"polygons", 0.59},
+                                         {"output", 1},
+                                         {NULL, 0}};
+const api_stage api_stages_solids[] = {{"check", 0.01},      {"snap", 0.02},   {"pairs", 0.065},
+                                       {"cuts", 0.20},       {"planes", 0.44}, {"cells", 0.81},
+                                       {"membership", 0.82}, {"output", 1},    {NULL, 0}};
+
 static const api_kind kinds[] = {
-    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL},
-    {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check},
-    {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check},
-    {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL},
+    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL, api_stages_lines},
+    {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check, api_stages_svg},
+    {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check,
+     api_stages_solids},
+    {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL,
+     api_stages_polygons},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 
@@ -38,6 +67,45 @@ size_t api_kind_count(void)
 const char *api_kind_name(size_t i)
 {
     return i < NKINDS ? kinds[i].name : NULL;
+}
+
+const char *api_stage_name(const char *kind, size_t i)
+{
+    for (size_t k = 0; k < NKINDS; k++)
+        if (!strcmp(kinds[k].name, kind)) {
+            const api_stage *st = kinds[k].stages;
+            for (size_t j = 0; st[j].name; j++)
+                if (j == i) return st[j].name;
+            return NULL;
+        }
+    return NULL;
+}
+
+static void progress_tick(void *udata, const char *stage, double f)
+{
+    api_progress *p = udata;
+    size_t i = p->cur;
+    while (p->st[i].name && strcmp(p->st[i].name, stage)) i++;
+    if (!p->st[i].name) return; /* an earlier stage, or one this kind does not list */
+    if (!(f >= 0)) f = 0;       /* NaN too */
+    if (f > 1) f = 1;
+    double lo = i ? p->st[i - 1].end : 0, whole = lo + (p->st[i].end - lo) * f;
+    if (f == 1 && p->st[i + 1].name) i++; /* this stage is over: the next one runs */
+    if (whole < p->last) whole = p->last;
+    if (i == p->cur && whole == p->last && f > 0) return; /* nothing new */
+    p->cur = i;
+    p->last = whole;
+    p->up(p->udata, p->st[i].name, whole);
+}
+
+void api_progress_wrap(api_progress *p, const api_stage *st, const api_run_opts *ro,
+                       api_run_opts *wrapped)
+{
+    *wrapped = *ro;
+    if (!ro->progress) return;
+    *p = (api_progress){.st = st, .up = ro->progress, .udata = ro->udata};
+    wrapped->progress = progress_tick;
+    wrapped->udata = p;
 }
 
 int api_fail(api_error *err, int status, const char *fmt, ...)
@@ -243,6 +311,8 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     api_buf b = {0};
     const api_kind *kind = NULL;
     void *req = NULL;
+    api_progress pr;
+    api_run_opts wr;
     int rc;
     *out = NULL;
     *outlen = 0;
@@ -250,13 +320,18 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     if (!ro) ro = &dflt;
     rc = parse(body, len, &kind, &req, NULL, err);
     if (rc != API_OK) goto fail;
-    b.sink = ro->stream;
-    b.progress = ro->progress;
-    b.udata = ro->udata;
-    rc = kind->run(req, ro, &b, err);
+    api_progress_wrap(&pr, kind->stages, ro, &wr);
+    b.sink = wr.stream;
+    b.progress = wr.progress;
+    b.udata = wr.udata;
+    rc = kind->run(req, &wr, &b, err);
 fail:
     if (kind) kind->free(req);
-    return api_buf_finish(&b, rc, out, outlen, err);
+    void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
+    void *uu = b.udata;
+    rc = api_buf_finish(&b, rc, out, outlen, err);
+    if (rc == API_OK && up) up(uu, "output", 1);
+    return rc;
 }
 
 int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,

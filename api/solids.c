@@ -501,12 +501,16 @@ out:
 
 /* Checks the geometry at the grid step; fixed (ns entries, may be NULL) gets solid_check's
  * fixed copies, w (may be NULL) the warnings. */
-static int validate(const solids_req *r, solid *fixed, warn_list *w, const atomic_int *cancel,
+static int validate(const solids_req *r, solid *fixed, warn_list *w, const api_run_opts *ro,
                     api_error *err)
 {
+    size_t step = r->ns / 100 + 1; /* progress at each percent */
     for (size_t i = 0; i < r->ns; i++) {
         int rc;
-        if (cancel && atomic_load(cancel)) return api_fail(err, API_ECANCELED, "canceled");
+        if (ro && ro->cancel && atomic_load(ro->cancel))
+            return api_fail(err, API_ECANCELED, "canceled");
+        if (ro && ro->progress && i % step == 0)
+            ro->progress(ro->udata, "check", (double)i / (double)r->ns);
         rc = check_solid(&r->s[i], i, r->soup, r->step, fixed ? &fixed[i] : NULL, w, err);
         if (rc != API_OK) return rc;
     }
@@ -519,11 +523,11 @@ int api_solids_check(const void *parsed, api_error *err)
     return validate(r, NULL, NULL, NULL, err);
 }
 
-/* Progress inside the membership walk: "membership", from 0.97 to 0.98 of the whole job. */
+/* Progress inside the membership walk. */
 static void membership_tick(void *udata, double f)
 {
     const api_run_opts *ro = udata;
-    ro->progress(ro->udata, "membership", 0.97 + 0.01 * f);
+    ro->progress(ro->udata, "membership", f);
 }
 
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
@@ -548,8 +552,9 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
         goto out;
     }
-    rc = validate(r, r->soup ? NULL : fixed, w, ro->cancel, err);
+    rc = validate(r, r->soup ? NULL : fixed, w, ro, err);
     if (rc != API_OK) goto out;
+    if (ro->progress) ro->progress(ro->udata, "check", 1);
     warn_finish(w);
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
@@ -563,9 +568,10 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
-        if (ro->progress) ro->progress(ro->udata, "membership", 0.97);
+        if (ro->progress) ro->progress(ro->udata, "membership", 0);
         int m = bool3_membership_ex(&c, &mem, &bad_face, ro->progress ? membership_tick : NULL,
                                     (void *)ro);
+        if (!m && ro->progress) ro->progress(ro->udata, "membership", 1);
         if (m) {
             rc = m < 0 ? api_fail(err, API_ENOMEM, "out of memory")
                        : api_fail(err, API_EINTERNAL,
@@ -581,7 +587,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         fmt.membership = &mem;
         fmt.result = &res;
     }
-    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
+    if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar3_write(out, &c, &fmt, err);
 out:
     bool3_result_free(&res);
@@ -702,10 +708,18 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
             goto out;
         }
     }
-    b.sink = ro ? ro->stream : NULL;
-    rc = api_solids_run(r, ro, &b, err);
+    api_progress pr;
+    api_run_opts wr;
+    api_progress_wrap(&pr, api_stages_solids, ro, &wr);
+    b.sink = wr.stream;
+    b.progress = wr.progress;
+    b.udata = wr.udata;
+    rc = api_solids_run(r, &wr, &b, err);
 out:
+    void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
+    void *uu = b.udata;
     rc = api_buf_finish(&b, rc, out, outlen, err);
+    if (rc == API_OK && up) up(uu, "output", 1);
     api_solids_free(r);
     return rc;
 }

@@ -121,10 +121,19 @@ fail:
 
 /* Reads the drawing, for its errors only (the segments are read again when the job runs:
  * reading is a small part of a job, and a malformed drawing is then refused at once). */
-static int read_drawing(const svg_req *r, svg_result *sr, api_error *err)
+static void reading_tick(void *udata, double f)
+{
+    const api_run_opts *ro = udata;
+    ro->progress(ro->udata, "svg", f);
+}
+
+/* Reads the drawing (ro may be NULL: no progress). */
+static int read_drawing(const svg_req *r, const api_run_opts *ro, svg_result *sr, api_error *err)
 {
     char msg[API_ERRMAX] = "";
-    int rc = svg_read(r->text, r->len, &r->so, sr, msg, sizeof msg);
+    svg_opts so = r->so;
+    if (ro && ro->progress) so.progress = reading_tick, so.udata = (void *)ro;
+    int rc = svg_read(r->text, r->len, &so, sr, msg, sizeof msg);
     if (rc == ARR_OK) return API_OK;
     if (rc == ARR_ENOMEM)
         return api_fail(err, API_ENOMEM, "out of memory while reading the drawing: %s", msg);
@@ -135,7 +144,7 @@ static int read_drawing(const svg_req *r, svg_result *sr, api_error *err)
 int api_svg_check(const void *parsed, api_error *err)
 {
     svg_result sr = {0};
-    int rc = read_drawing(parsed, &sr, err);
+    int rc = read_drawing(parsed, NULL, &sr, err);
     svg_result_free(&sr);
     return rc;
 }
@@ -189,14 +198,15 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
     char msg[API_ERRMAX] = "";
     int rc;
     if (ro->progress) ro->progress(ro->udata, "svg", 0);
-    rc = read_drawing(r, &sr, err);
+    rc = read_drawing(r, ro, &sr, err);
     if (rc != API_OK) goto out;
+    if (ro->progress) ro->progress(ro->udata, "svg", 1);
     rc = arr2_build(sr.n ? sr.seg : no_segment, sr.n, &ao, &c, msg, sizeof msg);
     if (rc != ARR_OK) {
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
-    if (ro->progress) ro->progress(ro->udata, "output", 0.99);
+    if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar2_write(out, &c, &fmt, err);
 out:
     lar2_free(&c);

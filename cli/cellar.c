@@ -19,7 +19,8 @@
  * Exit status: 0 success, 1 the request failed (message "cellar: <where>: <what>" on stderr:
  * malformed or hostile SVG is "cellar: svg: line L, column C: ...") or an I/O error, 2 a usage
  * error.  Options (anywhere on the line): --threads N, --options JSON (gen, svg, solids: the
- * request's "options"), the svg and solids flags, --format, --help, --version.
+ * request's "options"), the svg and solids flags, --format, --quiet, --progress, --help,
+ * --version.  A run draws a progress bar on stderr when stderr is a terminal.
  *
  * The random generator is our own (xoshiro256** seeded by splitmix64) and the arithmetic is
  * written one operation per statement (no contraction into fused multiply-adds), so that a seed
@@ -42,11 +43,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <time.h>
+#include <unistd.h>
 
 #define EXIT_USAGE 2
 
 static const char usage_text[] =
-    "usage: cellar [--threads N] COMMAND ...\n"
+    "usage: cellar [--threads N] [--quiet | --progress] COMMAND ...\n"
     "\n"
     "  cellar run REQUEST.json         run a request (\"-\": standard input) and print the\n"
     "                                  result JSON, exactly as the service returns it\n"
@@ -72,6 +75,9 @@ static const char usage_text[] =
     "\n"
     "options:\n"
     "  --threads N       worker threads of the core (default 0: one per CPU)\n"
+    "  --quiet           no progress bar (one is drawn on stderr when it is a terminal)\n"
+    "  --progress        progress on stderr even when it is not a terminal: a line per\n"
+    "                    stage and per tenth of the run (stage, percent, seconds)\n"
     "  --options JSON    gen, svg, solids: a JSON object used as the request's \"options\",\n"
     "                    e.g.\n"
     "                    '{\"precision\":1e-6,\"fields\":[\"V\",\"EV\",\"stats\"]}'\n"
@@ -439,6 +445,70 @@ static int write_request(const char *body, size_t len)
     return 0;
 }
 
+/* ---- progress on stderr ----------------------------------------------------------------- *
+ * A bar redrawn in place when stderr is a terminal (at most ten times a second), or with
+ * --progress a line per stage and per tenth of the run (for logs); --quiet: nothing. */
+enum { PROGRESS_OFF, PROGRESS_BAR, PROGRESS_LINES };
+static struct {
+    int mode;
+    double t0;
+    double last_draw, last_f;
+    char stage[32];
+    int drawn; /* a bar is on the terminal's last line */
+} bar;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static void progress_cb(void *udata, const char *stage, double f)
+{
+    (void)udata;
+    double t = now_s() - bar.t0;
+    int new_stage = strcmp(stage, bar.stage) != 0;
+    if (bar.mode == PROGRESS_LINES) {
+        if (!new_stage && (int)(f * 10) == (int)(bar.last_f * 10)) return;
+        fprintf(stderr, "cellar: %-11s %5.1f%% at %.2f s\n", stage, 100 * f, t);
+    } else {
+        if (!new_stage && t - bar.last_draw < 0.1) return;
+        char cells[31];
+        int k = (int)(f * 30);
+        for (int i = 0; i < 30; i++) cells[i] = i < k ? '#' : '.';
+        cells[30] = 0;
+        fprintf(stderr, "\r\033[K[%s] %3d%% %-11s %.1f s", cells, (int)(100 * f), stage, t);
+        bar.drawn = 1;
+    }
+    fflush(stderr);
+    snprintf(bar.stage, sizeof bar.stage, "%s", stage);
+    bar.last_draw = t;
+    bar.last_f = f;
+}
+
+/* The end of a run: the bar is cleared (the result or the error follows on a clean line). */
+static void progress_end(void)
+{
+    if (bar.mode == PROGRESS_LINES)
+        fprintf(stderr, "cellar: %-11s %5.1f%% at %.2f s\n", "end", 100 * bar.last_f,
+                now_s() - bar.t0);
+    if (bar.drawn) fputs("\r\033[K", stderr);
+    bar.drawn = 0;
+}
+
+static api_run_opts run_opts(int threads, const out_format *of)
+{
+    api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+    if (bar.mode != PROGRESS_OFF) {
+        ro.progress = progress_cb;
+        bar.t0 = now_s();
+        bar.stage[0] = 0;
+        bar.last_f = 0;
+    }
+    return ro;
+}
+
 static int run(char **pos, int npos, int threads, const out_format *of)
 {
     size_t len, outlen;
@@ -450,8 +520,9 @@ static int run(char **pos, int npos, int threads, const out_format *of)
     if (!body) return 1;
     /* JSON goes out as it is made (a large result never sits whole in memory); pictures and
      * maps need the whole result */
-    api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+    api_run_opts ro = run_opts(threads, of);
     rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    progress_end();
     free(body);
     if (rc != API_OK) {
         fprintf(stderr, "cellar: %s\n", err.msg);
@@ -538,8 +609,10 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
         rc = write_request(body, strlen(body));
         goto out;
     }
-    api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
-    if (api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err) != API_OK) {
+    api_run_opts ro = run_opts(threads, of);
+    int ok = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err) == API_OK;
+    progress_end();
+    if (!ok) {
         fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
     }
@@ -683,9 +756,10 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
     if (!fl->faces && of->kind != 4) {
         /* the solids as read, straight to the run: the bytes of `cellar run` on the request
          * that --format request prints, without writing and parsing it */
-        api_run_opts ro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
+        api_run_opts ro = run_opts(threads, of);
         int r = api_solids_run_direct(sv, n, 0, op, json_object_size(opts) ? opts : NULL, &ro, &out,
                                       &outlen, &err);
+        progress_end();
         sv = NULL; /* taken over, array and all */
         if (r != API_OK) goto failed;
         rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
@@ -727,8 +801,10 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         rc = write_request(body, blen);
         goto out;
     }
-    api_run_opts sro = {.threads = threads, .stream = of->kind == 0 ? stdout : NULL};
-    if (api_run_json_ex(body, blen, &sro, &out, &outlen, &err) != API_OK) {
+    api_run_opts sro = run_opts(threads, of);
+    int ok = api_run_json_ex(body, blen, &sro, &out, &outlen, &err) == API_OK;
+    progress_end();
+    if (!ok) {
     failed:;
         size_t i;
         int k = -1;
@@ -759,7 +835,7 @@ int main(int argc, char **argv)
     const char *options_text = NULL;
     svg_flags fl = {0};
     out_format of = {.kind = 0, .ro = RENDER_OPTS_INIT};
-    int npos = 0, threads = 0, rc;
+    int npos = 0, threads = 0, rc, progress_flag = 0;
     if (!pos) return 1;
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
     for (int i = 1; i < argc; i++) {
@@ -807,6 +883,10 @@ int main(int argc, char **argv)
         }
         if (strcmp(a, "--faces") == 0) {
             fl.faces = 1;
+            continue;
+        }
+        if (strcmp(a, "--quiet") == 0 || strcmp(a, "--progress") == 0) {
+            progress_flag = a[2];
             continue;
         }
         if (strcmp(a, "--op") == 0 || strncmp(a, "--op=", 5) == 0) {
@@ -875,6 +955,10 @@ int main(int argc, char **argv)
             options_text = val;
         }
     }
+    bar.mode = progress_flag == 'q'    ? PROGRESS_OFF
+               : isatty(STDERR_FILENO) ? PROGRESS_BAR
+               : progress_flag == 'p'  ? PROGRESS_LINES
+                                       : PROGRESS_OFF;
     const char *cmd = npos ? pos[0] : "";
     if (fl.first && strcmp(cmd, "svg") != 0) {
         rc = usage_error("%s is for the svg command", fl.first);

@@ -1437,7 +1437,9 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
         goto fail;
     }
+    progress(c, "faces", 0.3);
     if ((rc = walk_faces(g, pos, &w))) goto fail;
+    progress(c, "faces", 0.55);
     rc = ARR_ENOMEM;
     /* connected components */
     comp = malloc((g->nv + 1) * sizeof *comp);
@@ -1491,7 +1493,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     }
     double t2 = now_ms();
     st->ms_faces = t2 - t1;
-    progress(c, "faces", 1);
+    progress(c, "faces", 0.7);
 
     /* holes */
     if (ncomp > 1) {
@@ -1503,9 +1505,11 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         rc = ARR_ENOMEM;
     }
     st->ms_holes = now_ms() - t2;
+    progress(c, "faces", 0.85);
 
     /* output */
     if ((rc = emit_complex(c, g, &w, face_idx, face_of, nf, out, err, el))) goto fail;
+    progress(c, "faces", 1);
     st->nv = g->nv;
     st->ne = g->ne;
     st->nf = nf;
@@ -1608,6 +1612,7 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
                     ARR2_MAX_SEGMENTS);
         goto fail;
     }
+    progress(c, "snap", 0);
     if ((rc = stage_snap(c, seg, n, &out->stats, err, errlen))) goto fail;
     if ((rc = check_range(c, err, errlen))) goto fail;
     out->stats.ms_snap = now_ms() - t0;

@@ -36,8 +36,10 @@ typedef struct arr2_opts {
     int keep_dangling;        /* keep bridges and dangling trees (and their vertices) */
     int threads;              /* worker threads; <= 0: number of online CPUs */
     const atomic_int *cancel; /* borrowed, may be NULL: non-zero asks to stop */
-    void (*progress)(void *udata, const char *stage, double fraction); /* may be NULL */
-    void *udata;                                                       /* passed to progress */
+    /* may be NULL: told the stage running ("snap", "buckets", "intersect", "split",
+     * "biconnected", "faces") and the fraction of it done, 1 at its end */
+    void (*progress)(void *udata, const char *stage, double fraction);
+    void *udata; /* passed to progress */
     /* Provenance (may be NULL): a tag per input segment (borrowed, n of them).  Then each edge
      * of the result lists the tags of the input segments lying on it an odd number of times
      * (lar2.etag_off / etag): through snapping, splitting and the merging of collinear overlaps,

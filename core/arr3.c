@@ -1910,7 +1910,9 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.threads = A.o->threads > 0 ? A.o->threads : par_ncpu();
     A.st = &out->stats;
     A.soup = soup;
+    a3_progress(&A, "snap", 0);
     if ((rc = stage_input(&A, solids, ns, err, errlen))) goto fail;
+    a3_progress(&A, "snap", 1);
     out->nsolids = ns;
     out->solid_face_off = A.solid_face_off;
     A.solid_face_off = NULL;

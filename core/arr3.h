@@ -41,6 +41,8 @@ typedef struct arr3_opts {
                          (extent: the largest side of the input's box) */
     int threads;      /* <= 0: number of online CPUs */
     const atomic_int *cancel;
+    /* may be NULL: told the stage running ("snap", "pairs", "cuts", "planes", "cells") and the
+     * fraction of it done, 1 at its end */
     void (*progress)(void *udata, const char *stage, double fraction);
     void *udata;
 } arr3_opts;

@@ -724,6 +724,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             free(ent_f), free(ek2);
             goto done;
         }
+        a3_progress(A, "cells", 0.25); /* the fractions of this stage: of 2 000 turned cubes */
         for (size_t i = 0; i < m; i++) ne += i == 0 || ek2[i].k != ek2[i - 1].k;
         ev = malloc((2 * ne + 2) * sizeof *ev);
         eside = malloc((ne + 1) * sizeof *eside);
@@ -762,7 +763,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         size_t nch = (ne + FAN_CHUNK - 1) / FAN_CHUNK;
         fanjob j = {A, I, ioff, ev, eside, eplane, out, ne, calloc(nch + 1, sizeof *j.bad)};
         if (!j.bad) goto done;
-        a3_span span = {A, "cells", 0.05, 0.45};
+        a3_span span = {A, "cells", 0.25, 0.33};
         par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
         size_t bad = SIZE_MAX;
         for (size_t ch = 0; ch < nch && bad == SIZE_MAX; ch++)
@@ -783,7 +784,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         }
     }
     /* shells */
-    a3_progress(A, "cells", 0.5);
+    a3_progress(A, "cells", 0.35);
     shell = malloc((2 * nf + 1) * sizeof *shell);
     if (!shell) goto done;
     size_t nsh = 0;
@@ -846,7 +847,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         A->st->components = nvc;
     }
     /* the cells: union-find over the shells and the exterior */
-    a3_progress(A, "cells", 0.6);
+    a3_progress(A, "cells", 0.38);
     cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
     if (!cu) goto done;
     for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
@@ -942,6 +943,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         nhit = m;
         hoff[c + 1] = (uint32_t)nhit;
     }
+    a3_progress(A, "cells", 0.41);
     /* pass 2: walk down each part's ray from just beyond its first face.  Entering another
      * part from its outside (the side we come from is that part's outer shell) and leaving it
      * again are skipped (a stack of parts); the first face met outside every part whose side
@@ -1004,7 +1006,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
     {
         ddjob j = {A, dh, dl, NULL, 0};
-        a3_span span = {A, "cells", 0.8, 0.9};
+        a3_span span = {A, "cells", 0.41, 0.45};
         par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
                    &span);
     }
@@ -1045,7 +1047,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     }
     {
         ddjob j = {A, dh, dl, out, h3};
-        a3_span span = {A, "cells", 0.9, 0.99};
+        a3_span span = {A, "cells", 0.45, 0.5};
         par_for_ex(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j, a3_span_tick,
                    &span);
     }
@@ -1060,6 +1062,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         if (newid[A->ent[i]] == NONE) newid[A->ent[i]] = 0, used[nu++] = A->ent[i];
     if (nu > 1) qsort_r(used, nu, sizeof *used, vcmp, A);
     for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+    a3_progress(A, "cells", 0.54);
     out->nv = nu;
     out->V = malloc((3 * nu + 1) * sizeof *out->V);
     if (!out->V) goto done;
@@ -1104,6 +1107,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             newe[idx[i]] = (uint32_t)i;
         }
         free(idx), free(buf);
+        a3_progress(A, "cells", 0.58);
         /* faces */
         out->nf = nf;
         out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
@@ -1160,16 +1164,18 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
         for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     }
+    a3_progress(A, "cells", 0.65);
     /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
      * read off in vertex order, a small one sorted); CF rows sorted */
     out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
     if (!out->cv_off) goto done;
     {
         uint32_t *cv = NULL, *stamp = calloc(out->nv + 1, sizeof *stamp);
-        size_t ncv = 0, capcv = 0;
+        size_t ncv = 0, capcv = 0, step = nc / 50 + 1;
         if (!stamp) goto done;
         for (size_t k = 0; k < nc; k++) {
             size_t start = ncv;
+            if (k % step == 0) a3_progress(A, "cells", 0.65 + 0.35 * (double)k / (double)nc);
             for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
                 uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
                 for (uint32_t cy = out->fc_off[f]; cy < out->fc_off[f + 1]; cy++)

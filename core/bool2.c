@@ -151,11 +151,11 @@ static int stage_sides(const lar2 *c, uint32_t *side, char *err, size_t el)
 
 /* The rows of the nf + 1 faces (the last is EXT, empty) by member_walk() over the faces
  * through the edges with two different faces beside them, each listing its polygons (etag). */
-/* Progress inside the walk: "membership", from 0.95 to 0.96 of the whole job. */
+/* Progress inside the walk (a fraction of the membership stage). */
 static void membership_tick(void *udata, double f)
 {
     const arr2_opts *po = udata;
-    po->progress(po->udata, "membership", 0.95 + 0.01 * f);
+    po->progress(po->udata, "membership", f);
 }
 
 static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_opts *po, char *err,
@@ -480,20 +480,21 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     grp = malloc((nf + 1) * sizeof *grp);
     if (!side || !sel || !grp) goto fail;
     if ((rc = stage_sides(c, side, err, errlen)) != ARR_OK) goto fail;
-        /* progress after the arrangement's stages, as fractions of the whole job */
+        /* the stages after the arrangement's, each reported at its end */
 #define BOOL2_PROGRESS(stage, f)                                                                   \
     do {                                                                                           \
         if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
     } while (0)
     if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
-    BOOL2_PROGRESS("membership", 0.96);
+    BOOL2_PROGRESS("membership", 1);
     rc = ARR_ENOMEM;
     if (stage_select(out, op, sel)) goto fail;
     stage_groups(c, side, sel, grp);
-    BOOL2_PROGRESS("select", 0.97);
+    BOOL2_PROGRESS("select", 1);
     if ((rc = stage_rings(out, side, sel, grp, &ring_grp, err, errlen)) != ARR_OK) goto fail;
+    BOOL2_PROGRESS("polygons", 0.5);
     if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
-    BOOL2_PROGRESS("polygons", 0.98);
+    BOOL2_PROGRESS("polygons", 1);
 #undef BOOL2_PROGRESS
     free(side);
     free(sel);

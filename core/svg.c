@@ -164,8 +164,10 @@ typedef struct reader {
     size_t nseg, capseg;
     curve *cur;
     size_t ncur, capcur;
-    size_t commands;      /* path commands read, all paths */
-    size_t visited;       /* elements walked, <use> expansions included */
+    size_t commands;    /* path commands read, all paths */
+    size_t visited;     /* elements walked, <use> expansions included */
+    size_t nelem, tick; /* elements of the document; visited at the next progress report */
+    const svg_opts *o;
     size_t entity_budget; /* bytes entity references in attributes may still expand to */
     id_entry *ids;
     size_t nids;
@@ -1290,6 +1292,7 @@ static int index_ids(reader *r, const xmlNode *root)
             }
             order++;
         }
+        r->nelem = order;
         if (n->type == XML_ELEMENT_NODE && n->children) {
             n = n->children;
             continue;
@@ -1433,6 +1436,11 @@ static int walk(reader *r, const xmlNode *n, const mat *ctm, vpt vp, size_t dept
     if (depth > r->max_depth)
         return fail(r, ARR_ELIMIT, "line %ld: elements nested deeper than %zu (limit max_depth)",
                     xmlGetLineNo(n), r->max_depth);
+    if (r->o->progress && r->visited >= r->tick) { /* parsing was 0.3, walking is to 0.8 */
+        r->tick = r->visited + r->nelem / 100 + 1;
+        double f = (double)r->visited / (double)(r->nelem + 1);
+        r->o->progress(r->o->udata, 0.3 + 0.5 * (f < 1 ? f : 1));
+    }
     if (hidden(r, n, &fatal) || fatal) return fatal;
     if (strcmp(name, "g") == 0 || strcmp(name, "a") == 0) {
         if (element_transform(r, n, ctm, &m, &fatal)) rc = walk_children(r, n, &m, vp, depth);
@@ -1836,6 +1844,7 @@ int svg_read(const char *text, size_t len, const svg_opts *o, svg_result *out, c
     r.err = err;
     r.errlen = errlen;
     r.out = out;
+    r.o = o;
     r.max_elements = or_default(o->max_elements, SVG_MAX_ELEMENTS);
     r.max_cmds = or_default(o->max_path_commands, SVG_MAX_PATH_COMMANDS);
     r.max_segs = or_default(o->max_segments, SVG_MAX_SEGMENTS);
@@ -1851,6 +1860,7 @@ int svg_read(const char *text, size_t len, const svg_opts *o, svg_result *out, c
     if (!r.cloc) return fail(&r, ARR_ENOMEM, "out of memory for a locale");
     rc = parse(&r, text ? text : "", len, &doc);
     if (rc) goto fail;
+    if (o->progress) o->progress(o->udata, 0.3);
     r.doc = doc;
     root = xmlDocGetRootElement(doc);
     r.root_ns = root->ns ? root->ns->href : NULL;
@@ -1887,6 +1897,7 @@ int svg_read(const char *text, size_t len, const svg_opts *o, svg_result *out, c
         if (!rc) rc = fatal;
         if (rc) goto fail;
     }
+    if (o->progress) o->progress(o->udata, 0.8);
     rc = flatten(&r, o->flatten_tolerance);
     if (rc) goto fail;
     /* bbox in root user space, then the output map */

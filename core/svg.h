@@ -36,6 +36,10 @@ typedef struct svg_opts {
     double flatten_tolerance; /* most distance of a curve from its chords, in root user units;
                                  0: 1e-3 of the drawing's size */
     size_t max_elements, max_path_commands, max_segments, max_depth; /* 0: defaults above */
+    /* may be NULL: told the fraction of the reading done (parsing the XML, walking the
+     * elements, flattening the curves), up to 1 at the end */
+    void (*progress)(void *udata, double fraction);
+    void *udata;
 } svg_opts;
 
 typedef struct svg_result {

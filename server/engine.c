@@ -165,31 +165,11 @@ typedef struct progress_ctx {
     run *r;
 } progress_ctx;
 
-/* The cores report the end of each stage (and some stages their own fraction); these are the
- * shares of a job's time spent up to the end of each, so that `fraction` is of the whole job:
- * the 2D core's measured on random lines, the 3D core's on 16 000 turned cubes.  The API's own
- * stages (membership, select, polygons, output) report fractions of the whole job already. */
-typedef struct stage_share {
-    const char *stage;
-    double done;
-} stage_share;
-static const stage_share shares2[] = {{"snap", 0.02},  {"buckets", 0.08},     {"intersect", 0.30},
-                                      {"split", 0.65}, {"biconnected", 0.75}, {"faces", 0.95}};
-static const stage_share shares3[] = {
-    {"pairs", 0.06}, {"cuts", 0.20}, {"planes", 0.45}, {"cells", 0.95}};
-
+/* api/ reports the stage running and the fraction of the whole job (api_run_opts.progress),
+ * a few hundred times per job at most: the engine lock is fine. */
 static void progress_cb(void *udata, const char *stage, double fraction)
 {
-    progress_ctx *p = udata; /* a few calls per job: the engine lock is fine */
-    int solids = !strcmp(p->r->sj.kind, "solids");
-    const stage_share *sh = solids ? shares3 : shares2;
-    size_t n = solids ? sizeof shares3 / sizeof *shares3 : sizeof shares2 / sizeof *shares2;
-    for (size_t i = 0; i < n; i++)
-        if (!strcmp(stage, sh[i].stage)) {
-            double before = i ? sh[i - 1].done : 0;
-            fraction = before + (sh[i].done - before) * fraction;
-            break;
-        }
+    progress_ctx *p = udata;
     pthread_mutex_lock(&p->e->lock);
     snprintf(p->r->stage, sizeof p->r->stage, "%s", stage);
     if (fraction > p->r->fraction) p->r->fraction = fraction;
@@ -783,13 +763,17 @@ static void info_fill(engine *e, const store_job *sj, const store_sub *s, job_in
             }
         pthread_mutex_unlock(&e->lock);
     } else {
-        snprintf(out->stage, sizeof out->stage, "%s", sj->state == JOB_QUEUED ? "queued" : "done");
+        static const char *const names[] = {[JOB_QUEUED] = "queued",
+                                            [JOB_DONE] = "done",
+                                            [JOB_FAILED] = "failed",
+                                            [JOB_CANCELED] = "canceled"};
+        snprintf(out->stage, sizeof out->stage, "%s", names[sj->state] ? names[sj->state] : "");
         out->fraction = sj->state == JOB_DONE ? 1 : 0;
     }
     if (s->canceled > 0 && sj->state != JOB_CANCELED) { /* the submission's own cancel */
         out->state = JOB_CANCELED;
         out->finished = s->canceled;
-        snprintf(out->stage, sizeof out->stage, "done");
+        snprintf(out->stage, sizeof out->stage, "canceled");
         out->fraction = 0;
         out->error_status = 0;
         out->error[0] = 0;

@@ -316,8 +316,10 @@ static enum MHD_Result queue(conn *c, unsigned status, const char *ctype, struct
     if (c->origin[0]) { /* CORS (--cors-origins): a page elsewhere may read this answer */
         MHD_add_response_header(r, "Access-Control-Allow-Origin", c->origin);
         MHD_add_response_header(r, "Access-Control-Expose-Headers", CORS_EXPOSE);
-        if (strcmp(c->origin, "*")) MHD_add_response_header(r, MHD_HTTP_HEADER_VARY, "Origin");
     }
+    const char *cors = c->h->cfg->cors_origins;
+    if (cors[0] && strcmp(cors, "*")) /* the answer depends on Origin: caches must know */
+        MHD_add_response_header(r, MHD_HTTP_HEADER_VARY, "Origin");
     c->status = status;
     enum MHD_Result ok = MHD_queue_response(c->mc, status, r);
     MHD_destroy_response(r);
@@ -875,13 +877,32 @@ static int negotiate(conn *c, enum MHD_Result *r)
     return 0;
 }
 
+/* Retry-After for a job not finished (buf: 16 bytes): the seconds until a poll is worth making.
+ * A running job's rest is estimated from its progress rate, elapsed * (1 - f) / f, and kept
+ * within 1 to RETRY_AFTER_MAX seconds so that a progress bar polling by it keeps moving; 1 for a
+ * queued job and for one too young for an estimate (under 1% done). */
+#define RETRY_AFTER_MAX 5
+static const char *retry_after(const job_info *ji, char *buf)
+{
+    long s = 1;
+    if (ji->state == JOB_RUNNING && ji->started > 0 && ji->fraction >= 0.01) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        double el = (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9 - ji->started;
+        double rest = el * (1 - ji->fraction) / ji->fraction;
+        s = rest > RETRY_AFTER_MAX ? RETRY_AFTER_MAX : rest > 1 ? (long)(rest + 0.999) : 1;
+    }
+    snprintf(buf, 16, "%ld", s);
+    return buf;
+}
+
 static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
 {
-    char loc[100], applied[40];
+    char loc[100], applied[40], retry[16];
     snprintf(loc, sizeof loc, "/v1/jobs/%s", ji->id);
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_LOCATION, loc},
-                {MHD_HTTP_HEADER_RETRY_AFTER, "1"},
+                {MHD_HTTP_HEADER_RETRY_AFTER, retry_after(ji, retry)},
                 {"X-Cellar-Job", ji->id},
                 {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
     return respond_json(c, 202, job_json(ji), hs, sizeof hs / sizeof *hs);
@@ -990,7 +1011,12 @@ static enum MHD_Result route_job(conn *c, int want_result)
     int rc = engine_lookup(c->h->e, c->id, &ji, err, sizeof err);
     if (rc == ENG_NOTFOUND) return problem(c, 404, "no job with this id", NULL, NULL);
     if (rc != ENG_OK) return problem(c, 503, err, "5", NULL);
-    if (!want_result) return respond_json(c, 200, job_json(&ji), NULL, 0);
+    char retry[16];
+    int busy = ji.state == JOB_QUEUED || ji.state == JOB_RUNNING;
+    if (!want_result) {
+        hdr hs[] = {{busy ? MHD_HTTP_HEADER_RETRY_AFTER : NULL, retry_after(&ji, retry)}};
+        return respond_json(c, 200, job_json(&ji), hs, 1);
+    }
     switch (ji.state) {
     case JOB_DONE:
         return get_result(c, ji.hash, ji.id, "hit", 0);
@@ -999,7 +1025,7 @@ static enum MHD_Result route_job(conn *c, int want_result)
     case JOB_CANCELED:
         return problem(c, 409, "the job was canceled", NULL, NULL);
     default:
-        return problem(c, 409, "the job has not finished yet", "1", NULL);
+        return problem(c, 409, "the job has not finished yet", retry_after(&ji, retry), NULL);
     }
 }
 

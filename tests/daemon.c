@@ -566,6 +566,7 @@ void http_do(const srv *d, const hreq *q, hresp *r)
     } else if (strcmp(m, "GET")) {
         curl_easy_setopt(c, CURLOPT_CUSTOMREQUEST, m);
     }
+    if (q->decode) curl_easy_setopt(c, CURLOPT_ACCEPT_ENCODING, "gzip");
     for (int i = 0; i < 8 && q->h[i]; i++) hl = curl_slist_append(hl, q->h[i]);
     if (!q->no_expect_off) hl = curl_slist_append(hl, "Expect:");
     curl_easy_setopt(c, CURLOPT_HTTPHEADER, hl);

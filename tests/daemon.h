@@ -42,6 +42,7 @@ typedef struct hreq {
     const char *h[8];  /* extra header lines */
     double timeout;    /* seconds; default 60 (x3 under the sanitizers) */
     int no_expect_off; /* leave libcurl's Expect: 100-continue alone */
+    int decode;        /* ask for gzip and let libcurl decode it (Content-Encoding stays) */
 } hreq;
 
 typedef struct hresp {

@@ -720,3 +720,153 @@ TEST(check_reads_svg_drawings)
     const char *notsvg = "{\"kind\":\"svg\",\"svg\":\"<html></html>\"}";
     CHECK(api_check_json(notsvg, strlen(notsvg), NULL, NULL, &err) == 422, "html accepted");
 }
+
+/* ---- progress ------------------------------------------------------------------------------ */
+
+/* What a run told its progress callback: the stages in the order first told, the fractions. */
+typedef struct prog_rec {
+    const char *kind;
+    char seen[16][16];
+    int nseen, calls, back, unknown, out_of_order, inside[16];
+    double last, first_f[16];
+    char last_stage[16];
+} prog_rec;
+
+static int stage_index(const char *kind, const char *stage)
+{
+    for (size_t i = 0; api_stage_name(kind, i); i++)
+        if (!strcmp(api_stage_name(kind, i), stage)) return (int)i;
+    return -1;
+}
+
+static void prog_rec_cb(void *udata, const char *stage, double f)
+{
+    prog_rec *p = udata;
+    int i = stage_index(p->kind, stage);
+    p->calls++;
+    if (i < 0) {
+        p->unknown++;
+        return;
+    }
+    if (!(f >= p->last) || f > 1) p->back++;
+    if (p->nseen && strcmp(p->seen[p->nseen - 1], stage)) {
+        if (i < stage_index(p->kind, p->seen[p->nseen - 1])) p->out_of_order++;
+    }
+    if (!p->nseen || strcmp(p->seen[p->nseen - 1], stage)) {
+        if (p->nseen < 16) {
+            snprintf(p->seen[p->nseen], sizeof p->seen[0], "%s", stage);
+            p->first_f[i] = f;
+            p->nseen++;
+        }
+    } else if (f > p->first_f[i]) {
+        p->inside[i]++; /* a report within the stage, past its start */
+    }
+    p->last = f;
+    snprintf(p->last_stage, sizeof p->last_stage, "%s", stage);
+}
+
+/* xorshift for the generated requests */
+static double prog_rand(uint64_t *s)
+{
+    *s ^= *s << 13, *s ^= *s >> 7, *s ^= *s << 17;
+    return (double)(*s >> 11) / 9007199254740992.0;
+}
+
+/* A request of each kind, large enough for reports inside its long stages. */
+static char *progress_request(const char *kind)
+{
+    size_t cap = 4 << 20, w = 0;
+    char *b = malloc(cap);
+    uint64_t s = 88172645463325252ull;
+    if (!b) return NULL;
+#define P(...) (w += (size_t)snprintf(b + w, cap - w, __VA_ARGS__))
+    if (!strcmp(kind, "lines")) {
+        P("{\"kind\":\"lines\",\"options\":{\"fields\":[\"V\",\"FV\",\"stats\"]},\"lines\":[");
+        for (int i = 0; i < 6000; i++) {
+            double x = prog_rand(&s) * 100, y = prog_rand(&s) * 100;
+            P("%s[[%.6f,%.6f],[%.6f,%.6f]]", i ? "," : "", x, y, x + prog_rand(&s) * 8 - 4,
+              y + prog_rand(&s) * 8 - 4);
+        }
+        P("]}");
+    } else if (!strcmp(kind, "svg")) {
+        P("{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'>");
+        for (int i = 0; i < 4000; i++) {
+            double x = prog_rand(&s) * 100, y = prog_rand(&s) * 100;
+            if (i % 10)
+                P("<line x1='%.4f' y1='%.4f' x2='%.4f' y2='%.4f'/>", x, y,
+                  x + prog_rand(&s) * 8 - 4, y + prog_rand(&s) * 8 - 4);
+            else
+                P("<circle cx='%.3f' cy='%.3f' r='%.3f'/>", x, y, 0.5 + prog_rand(&s) * 2);
+        }
+        P("</svg>\"}");
+    } else if (!strcmp(kind, "polygons")) {
+        P("{\"kind\":\"polygons\",\"op\":\"union\",\"polygons\":[");
+        for (int i = 0; i < 3000; i++) {
+            double x = prog_rand(&s) * 40, y = prog_rand(&s) * 40, t = prog_rand(&s) * 1.5;
+            double c = cos(t) / 2, n = sin(t) / 2;
+            P("%s[[[%.6f,%.6f],[%.6f,%.6f],[%.6f,%.6f],[%.6f,%.6f]]]", i ? "," : "", x - c + n,
+              y - n - c, x + c + n, y + n - c, x + c - n, y + n + c, x - c - n, y - n + c);
+        }
+        P("]}");
+    } else { /* solids: 60 overlapping boxes, their union */
+        P("{\"kind\":\"solids\",\"op\":\"union\",\"solids\":[");
+        for (int i = 0; i < 60; i++) {
+            double x0 = prog_rand(&s) * 4, y0 = prog_rand(&s) * 4, z0 = prog_rand(&s) * 4;
+            double x1 = x0 + 0.5 + prog_rand(&s), y1 = y0 + 0.5 + prog_rand(&s),
+                   z1 = z0 + 0.5 + prog_rand(&s);
+            P("%s{\"V\":[[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f],"
+              "[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f],[%.5f,%.5f,%.5f]],"
+              "\"FV\":[[0,4,6,2],[1,3,7,5],[0,1,5,4],[2,6,7,3],[0,2,3,1],[4,5,7,6]]}",
+              i ? "," : "", x0, y0, z0, x1, y0, z0, x0, y1, z0, x1, y1, z0, x0, y0, z1, x1, y0, z1,
+              x0, y1, z1, x1, y1, z1);
+        }
+        P("]}");
+    }
+#undef P
+    return b;
+}
+
+/* Every kind reports each of its documented stages (api_stage_name) in order, fractions of
+ * the whole run that never go back and end at 1 in "output", and reports inside its long
+ * stages, not only at their ends. */
+TEST(progress_every_kind)
+{
+    static const struct {
+        const char *kind;
+        const char *long_stages[3];
+    } kinds[] = {{"lines", {"split", "faces", "output"}},
+                 {"svg", {"svg", "split", "faces"}},
+                 {"polygons", {"split", "faces", "output"}},
+                 {"solids", {"planes", "cells", "output"}}};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        const char *kind = kinds[k].kind;
+        char *body = progress_request(kind);
+        REQUIRE(body, "memory");
+        prog_rec p = {.kind = kind, .last = 0};
+        api_run_opts ro = {.threads = 2, .progress = prog_rec_cb, .udata = &p};
+        char *out = NULL;
+        size_t outlen;
+        api_error err = {0};
+        int rc = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err);
+        CHECK(rc == API_OK, "%s: %d %s", kind, rc, err.msg);
+        CHECK(p.back == 0 && p.unknown == 0 && p.out_of_order == 0,
+              "%s: %d reports back, %d of unknown stages, %d out of order", kind, p.back, p.unknown,
+              p.out_of_order);
+        CHECK(p.last == 1 && !strcmp(p.last_stage, "output"), "%s: ends at %g in %s", kind, p.last,
+              p.last_stage);
+        size_t nst = 0;
+        while (api_stage_name(kind, nst)) nst++;
+        CHECK(nst >= 5 && (size_t)p.nseen == nst, "%s: %d stages seen of %zu", kind, p.nseen, nst);
+        for (size_t i = 0; i < nst && i < (size_t)p.nseen; i++)
+            CHECK(!strcmp(p.seen[i], api_stage_name(kind, i)), "%s: stage %zu is %s, want %s", kind,
+                  i, p.seen[i], api_stage_name(kind, i));
+        for (int j = 0; j < 3; j++) {
+            int i = stage_index(kind, kinds[k].long_stages[j]);
+            CHECK(i >= 0 && p.inside[i] >= 2, "%s: %d reports inside %s", kind,
+                  i >= 0 ? p.inside[i] : -1, kinds[k].long_stages[j]);
+        }
+        free(out);
+        free(body);
+    }
+    CHECK(api_stage_name("nonsense", 0) == NULL, "stages of an unknown kind");
+}

@@ -740,25 +740,24 @@ TEST(bool2_many_operands)
     free(xy);
 }
 
-/* Progress of a large Boolean: the arrangement's stages, then membership (also inside the walk:
- * 67 600 faces pass a tick), select, polygons and output (moving as the result's keys are
- * written), never going back. */
+/* Progress of a large Boolean (fractions of the whole job): the arrangement's stages, then
+ * membership (also inside the walk: 67 600 faces pass a tick), select, polygons and output
+ * (moving as the result's keys are written), never going back, ending at 1. */
 typedef struct prog_log {
     int n, back, membership_inside, select, polygons, output;
-    double last;
+    double last, membership_from;
 } prog_log;
 
 static void prog_cb(void *udata, const char *stage, double f)
 {
     prog_log *l = udata;
-    /* the arrangement reports fractions of its own stages; the rest of the job's whole */
-    int own = !strcmp(stage, "membership") || !strcmp(stage, "select") ||
-              !strcmp(stage, "polygons") || !strcmp(stage, "output");
     l->n++;
-    if (!own) return;
-    if (f < l->last) l->back++;
+    if (f < l->last || f > 1) l->back++;
     l->last = f;
-    if (!strcmp(stage, "membership") && f > 0.95 && f < 0.96) l->membership_inside++;
+    if (!strcmp(stage, "membership")) {
+        if (!l->membership_from) l->membership_from = f;
+        l->membership_inside += f > l->membership_from;
+    }
     l->select += !strcmp(stage, "select");
     l->polygons += !strcmp(stage, "polygons");
     l->output += !strcmp(stage, "output");
@@ -786,8 +785,8 @@ TEST(bool2_progress)
     api_error err = {0};
     int rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
     CHECK(rc == API_OK, "%d %s", rc, err.msg);
-    CHECK(l.membership_inside >= 1 && l.select == 1 && l.polygons == 1 && l.output >= 3 &&
-              l.back == 0 && l.last <= 1,
+    CHECK(l.membership_inside >= 1 && l.select >= 1 && l.polygons >= 1 && l.output >= 3 &&
+              l.back == 0 && l.last == 1,
           "progress: %d calls, %d inside membership, select %d, polygons %d, output %d, %d back",
           l.n, l.membership_inside, l.select, l.polygons, l.output, l.back);
     free(out);

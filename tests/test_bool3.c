@@ -232,8 +232,7 @@ TEST(threads_give_identical_complex)
 }
 
 /* Progress of a 3D Boolean through the API: the arrangement's stages, then membership, then
- * output moving as the result's keys are written; never back, never
- * past 1. */
+ * output moving as the result's keys are written; never back, never past 1. */
 typedef struct prog3 {
     int membership, output, back;
     double last;
@@ -242,8 +241,6 @@ typedef struct prog3 {
 static void prog3_cb(void *udata, const char *stage, double f)
 {
     prog3 *l = udata;
-    int own = !strcmp(stage, "membership") || !strcmp(stage, "output");
-    if (!own) return;
     l->membership += !strcmp(stage, "membership");
     l->output += !strcmp(stage, "output");
     if (f < l->last || f > 1) l->back++;

@@ -16,6 +16,7 @@
  * under the sanitizers (CELLAR_SANITIZED).  On a failure the daemon's log tail is printed and
  * its directory is kept. */
 #include "tests/daemon.h"
+#include "api/api.h"
 #include "server/store.h"
 
 #include <arpa/inet.h>
@@ -42,6 +43,7 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+#include <zlib.h>
 
 /* ---- 1. post, poll, fetch ---------------------------------------------------------------- */
 
@@ -186,6 +188,10 @@ SERVER_TEST(cache_hit_runs_no_job, "--workers 2 --job-threads 1")
     CHECK(has_header(&r2, "X-Cellar-Cache", "hit"), "repeat is not a hit");
     CHECK(r2.body.n == r1.body.n && !memcmp(r2.body.p, r1.body.p, r1.body.n), "hit bytes differ");
     CHECK(has_header(&r2, "ETag", etag), "hit ETag differs");
+    char job1[40] = "";
+    hget(&r1, "X-Cellar-Job", job1, sizeof job1);
+    CHECK(has_header(&r2, "X-Cellar-Job", job1) && has_header(&r2, "Location", loc),
+          "a hit names the job that made the result (%s) and its Location", job1);
     CHECK(r2.secs < 2 * slowdown(), "a hit took %.2f s", r2.secs);
     hresp_free(&r2);
 
@@ -538,6 +544,91 @@ SERVER_TEST(cancel_per_submission, "--workers 1 --job-threads 1")
     CHECK(xs == 4, "x's job after the restart: state %lld, want 4 (canceled)", xs);
     CHECK(metric_until(d, DONE, 1) == 1, "jobs done after the restart: %g, want 1 (c2's)",
           metric(d, DONE));
+    srv_term(d);
+}
+
+/* ---- 4b. progress as a poller sees it ---------------------------------------------------- */
+
+/* The index of stage in the documented order of kind, -1 for "started" (before them), -2 for
+ * a name that is not documented. */
+static int stage_rank(const char *kind, const char *stage)
+{
+    if (!strcmp(stage, "started")) return -1;
+    for (size_t i = 0; api_stage_name(kind, i); i++)
+        if (!strcmp(api_stage_name(kind, i), stage)) return (int)i;
+    return -2;
+}
+
+/* A long job polled every 0.1 s: its fraction only goes up and moves from poll to poll (not
+ * only at stage ends), its stages come in the documented order of its kind, each poll carries
+ * Retry-After (1 to 5 s: the estimate of the rest), and once canceled it says "canceled". */
+SERVER_TEST(progress_moves, "--workers 1 --job-threads 1")
+{
+    size_t hlen;
+    const char *huge = huge_body(&hlen);
+    REQUIRE(huge, "no slow request");
+    hresp r;
+    jobv h, j;
+    char path[128], v[32];
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "job");
+    REQUIRE(wait_state(d, h.id, "running", 30 * slowdown(), &j), "not running: %s", j.state);
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    double last = -1, deadline = now_s() + 2.5;
+    int polls = 0, moved = 0, back = 0, disorder = 0, unknown = 0, bad_retry = 0, stages = 0;
+    int rank = -1, retry_max = 0;
+    char seen[200] = "";
+    while (now_s() < deadline) {
+        http_get(d, path, &r);
+        json_t *o = jbody(&r), *pr = json_object_get(o, "progress");
+        if (r.status != 200 || strcmp(jstr(o, "state"), "running")) {
+            json_decref(o);
+            hresp_free(&r);
+            break;
+        }
+        polls++;
+        double f = json_number_value(json_object_get(pr, "fraction"));
+        const char *st = jstr(pr, "stage");
+        int k = stage_rank("lines", st);
+        unknown += k == -2;
+        disorder += k >= -1 && k < rank;
+        if (k > rank || !stages) {
+            stages++;
+            snprintf(seen + strlen(seen), sizeof seen - strlen(seen), "%s%s", stages > 1 ? " " : "",
+                     st);
+        }
+        if (k > rank) rank = k;
+        back += f < last;
+        moved += f > last && last >= 0;
+        last = f;
+        long ra = hget(&r, "Retry-After", v, sizeof v) ? strtol(v, NULL, 10) : 0;
+        bad_retry += ra < 1 || ra > 5;
+        if (ra > retry_max) retry_max = (int)ra;
+        vq_add(d, "job", &r);
+        json_decref(o);
+        hresp_free(&r);
+        sleep_s(0.1);
+    }
+    printf("  (progress: %d polls, moved %d times, stages %s, last %.3f, Retry-After up to %d)\n",
+           polls, moved, seen, last, retry_max);
+    CHECK(polls >= 10, "only %d polls while the job ran", polls);
+    CHECK(back == 0 && disorder == 0 && unknown == 0,
+          "progress: %d times back, stages out of order %d times, %d undocumented (%s)", back,
+          disorder, unknown, seen);
+    CHECK(moved >= polls / 2, "the fraction moved on %d of %d polls", moved, polls);
+    CHECK(stages >= 2, "one stage in 2.5 s: %s", seen);
+    CHECK(bad_retry == 0, "%d polls without a Retry-After of 1 to 5", bad_retry);
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE: %ld", r.status);
+    hresp_free(&r);
+    CHECK(wait_state(d, h.id, "canceled", 10 * slowdown(), &j), "not canceled: %s", j.state);
+    http_get(d, path, &r);
+    json_t *o = jbody(&r), *pr = json_object_get(o, "progress");
+    CHECK(r.status == 200 && !strcmp(jstr(pr, "stage"), "canceled") &&
+              !hget(&r, "Retry-After", v, sizeof v),
+          "a canceled job: %s", r.body.p);
+    vq_add(d, "job", &r);
+    json_decref(o);
+    hresp_free(&r);
     srv_term(d);
 }
 
@@ -1619,6 +1710,161 @@ SERVER_TEST(large_results_stream, "--workers 1 --job-threads 1 --cache-bytes 400
     free(big);
     free(other);
     check_sane(d, "an evicted stream", 4);
+    srv_term(d);
+}
+
+/* ---- browser-facing HTTP: CORS, gzip, ?format ---------------------------------------------- */
+
+/* Inflates a gzip body; NULL when it is not one. */
+static char *gunzip(const char *p, size_t n, size_t *outlen)
+{
+    z_stream z = {0};
+    size_t cap = 4 * n + 1024, w = 0;
+    char *out = malloc(cap);
+    if (!out || inflateInit2(&z, 16 + MAX_WBITS) != Z_OK) {
+        free(out);
+        return NULL;
+    }
+    z.next_in = (Bytef *)p;
+    z.avail_in = (uInt)n;
+    int rc;
+    do {
+        if (w == cap) {
+            char *q = realloc(out, cap *= 2);
+            if (!q) break;
+            out = q;
+        }
+        z.next_out = (Bytef *)out + w;
+        z.avail_out = (uInt)(cap - w);
+        rc = inflate(&z, Z_NO_FLUSH);
+        w = cap - z.avail_out;
+    } while (rc == Z_OK);
+    inflateEnd(&z);
+    if (rc != Z_STREAM_END || z.avail_in) {
+        free(out);
+        return NULL;
+    }
+    *outlen = w;
+    return out;
+}
+
+/* A page on another origin: preflights answered for the allowed origins only, answers readable
+ * there (Allow-Origin, Expose-Headers, Vary: Origin); gzip when asked, for small answers,
+ * stored results and a result streamed from the store (the bytes equal the plain ones, read by
+ * zlib and by libcurl's own decoding); ?format= for links. */
+SERVER_TEST(browser_http, "--workers 1 --job-threads 2 --cache-bytes 40000000 "
+                          "--cors-origins https://a.example,https://b.example")
+{
+    hresp r;
+    char v[512], path[200], etag[120];
+    /* preflight of a POST from an allowed origin, and from another */
+    hreq q = {.method = "OPTIONS", .path = "/v1/jobs"};
+    q.h[0] = "Origin: https://b.example";
+    q.h[1] = "Access-Control-Request-Method: POST";
+    q.h[2] = "Access-Control-Request-Headers: content-type, prefer";
+    http_do(d, &q, &r);
+    CHECK(r.status == 204 && has_header(&r, "Access-Control-Allow-Origin", "https://b.example"),
+          "preflight: %ld, Allow-Origin %s", r.status,
+          hget(&r, "Access-Control-Allow-Origin", v, sizeof v) ? v : "(none)");
+    CHECK(hget(&r, "Access-Control-Allow-Methods", v, sizeof v) && strstr(v, "POST"),
+          "Allow-Methods %s", v);
+    CHECK(hget(&r, "Access-Control-Allow-Headers", v, sizeof v) && strcasestr(v, "prefer") &&
+              strcasestr(v, "content-type"),
+          "Allow-Headers %s", v);
+    CHECK(has_header(&r, "Vary", "Origin"), "preflight without Vary: Origin");
+    hresp_free(&r);
+    q.h[0] = "Origin: https://evil.example";
+    http_do(d, &q, &r);
+    CHECK(r.status == 204 && !hget(&r, "Access-Control-Allow-Origin", v, sizeof v) &&
+              !hget(&r, "Access-Control-Allow-Methods", v, sizeof v),
+          "preflight from another origin: %ld, Allow-Origin %s", r.status, v);
+    hresp_free(&r);
+
+    /* a POST from the page, gzip asked: readable there, and the same bytes as a plain GET */
+    size_t len;
+    const char *body = medium(3, &len);
+    REQUIRE(body, "no request");
+    hreq p = {.path = "/v1/jobs", .body = body, .len = len, .has_body = 1};
+    p.h[0] = "Origin: https://a.example";
+    p.h[1] = "Accept-Encoding: gzip";
+    p.h[2] = "Prefer: wait=30";
+    p.h[3] = "Content-Type: application/json";
+    http_do(d, &p, &r);
+    REQUIRE(r.status == 200, "POST: %ld %s", r.status, r.err);
+    CHECK(has_header(&r, "Access-Control-Allow-Origin", "https://a.example"), "POST Allow-Origin");
+    CHECK(hget(&r, "Access-Control-Expose-Headers", v, sizeof v) && strstr(v, "ETag") &&
+              strstr(v, "Location") && strstr(v, "X-Cellar-Job"),
+          "Expose-Headers %s", v);
+    CHECK(has_header(&r, "Content-Encoding", "gzip"), "POST result not gzipped");
+    REQUIRE(hget(&r, "ETag", etag, sizeof etag), "no ETag");
+    size_t zn = 0;
+    char *plain_post = gunzip(r.body.p, r.body.n, &zn);
+    size_t gz_bytes = r.body.n;
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+    http_get(d, path, &r);
+    CHECK(r.status == 200 && !hget(&r, "Content-Encoding", v, sizeof v) &&
+              !hget(&r, "Access-Control-Allow-Origin", v, sizeof v),
+          "plain GET: %ld", r.status);
+    CHECK(plain_post && zn == r.body.n && !memcmp(plain_post, r.body.p, zn),
+          "gunzipped POST (%zu bytes from %zu) differs from the plain GET (%zu)", zn, gz_bytes,
+          r.body.n);
+    CHECK(gz_bytes * 2 < r.body.n, "gzip: %zu bytes for %zu", gz_bytes, r.body.n);
+    free(plain_post);
+    hresp_free(&r);
+
+    /* a result streamed from the store (2.8 MB: three chunks), decoded by libcurl */
+    size_t glen, elen;
+    char *grid = grid_body(180, 0, &glen);
+    const char *exp = expect(grid, glen, &elen);
+    REQUIRE(exp && elen > 2 * STORE_CHUNK, "expected result of %zu bytes", elen);
+    http_post(d, grid, glen, "wait=60", &r);
+    REQUIRE(r.status == 200 && hget(&r, "ETag", etag, sizeof etag), "POST grid: %ld", r.status);
+    hresp_free(&r);
+    free(grid);
+    snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+    hreq g = {.path = path, .decode = 1};
+    http_do(d, &g, &r);
+    CHECK(r.status == 200 && has_header(&r, "Content-Encoding", "gzip") && r.body.n == elen &&
+              !memcmp(r.body.p, exp, elen),
+          "gzipped stream: %ld, %zu bytes decoded, want %zu", r.status, r.body.n, elen);
+    CHECK(hget(&r, "ETag", v, sizeof v) && strstr(v, "-gz"), "gzip ETag %s", v);
+    hresp_free(&r);
+
+    /* ?format= for links: a picture and a map, each with its own ETag; OBJ of a 2D result and
+     * an unknown format refused (422, naming dim and format) */
+    static const struct {
+        const char *q, *ctype;
+        long status;
+    } fm[] = {{"svg", "image/svg+xml", 200},
+              {"geojson", "application/geo+json", 200},
+              {"json", "application/json", 200},
+              {"obj", NULL, 422},
+              {"png", NULL, 422}};
+    const char *small = medium(0, &len);
+    REQUIRE(small, "no request");
+    http_post(d, small, len, "wait=30", &r);
+    REQUIRE(r.status == 200 && hget(&r, "ETag", etag, sizeof etag), "POST: %ld", r.status);
+    hresp_free(&r);
+    for (size_t i = 0; i < sizeof fm / sizeof fm[0]; i++) {
+        snprintf(path, sizeof path, "/v1/results/%.64s?format=%s", etag + 1, fm[i].q);
+        http_get(d, path, &r);
+        CHECK(r.status == fm[i].status, "?format=%s: %ld, want %ld", fm[i].q, r.status,
+              fm[i].status);
+        if (fm[i].ctype) {
+            CHECK(hget(&r, "Content-Type", v, sizeof v) &&
+                      !strncmp(v, fm[i].ctype, strlen(fm[i].ctype)),
+                  "?format=%s: Content-Type %s", fm[i].q, v);
+            char e[160];
+            CHECK(hget(&r, "ETag", e, sizeof e) && !strncmp(e, etag, 65) &&
+                      (strcmp(fm[i].q, "json") ? strstr(e, fm[i].q) != NULL : !strcmp(e, etag)),
+                  "?format=%s: ETag %s", fm[i].q, e);
+        } else {
+            path[strcspn(path, "?")] = 0; /* the problem's instance: the path alone */
+            check_problem(d, &r, fm[i].status, path, fm[i].q);
+        }
+        hresp_free(&r);
+    }
     srv_term(d);
 }
 

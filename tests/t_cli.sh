@@ -123,5 +123,18 @@ if [ -w /dev/full ]; then
     check "... and says why" grep -q 'No space left' "$T/err"
 fi
 
+# Progress on stderr: --progress writes a line per stage and per tenth (for logs), in the
+# documented order, ending at 100%, the result unchanged; a terminal gets a bar redrawn in place
+# and cleared at the end; --quiet silences it.
+check "--progress exits 0" sh -c "'$BIN' --progress run '$T/many.json' >'$T/p.json' 2>'$T/p.err'"
+check "... the result unchanged" sh -c "'$BIN' run '$T/many.json' | sed 's/\"ms\":{[^}]*}//' >'$T/a' && sed 's/\"ms\":{[^}]*}//' '$T/p.json' | cmp -s - '$T/a'"
+check "... a line per stage, in the documented order" sh -c "sed -n 's/^cellar: \([a-z]*\) .*% at .* s$/\1/p' '$T/p.err' | uniq | tr '\n' ' ' | grep -qx 'snap buckets intersect split biconnected faces membership select polygons output end '"
+check "... ending at 100%" grep -q '^cellar: end *100.0% at' "$T/p.err"
+check "... fractions that never go back" sh -c "sed -n 's/^cellar: [a-z]* *\([0-9.]*\)% .*/\1/p' '$T/p.err' | sort -n -c"
+check "a terminal gets a bar" sh -c "script -qec \"'$BIN' run '$T/many.json' >/dev/null\" /dev/null >'$T/tty' && grep -q '\[###.*%' '$T/tty' && grep -q \"\$(printf '\r')\" '$T/tty'"
+check "... cleared at the end" sh -c "tail -c 8 '$T/tty' | grep -q \"\$(printf '\033\\[K')\""
+check "--quiet: no bar on a terminal" sh -c "script -qec \"'$BIN' --quiet run '$T/many.json' >/dev/null\" /dev/null >'$T/tty' && ! grep -q '%' '$T/tty'"
+check "no bar when stderr is not a terminal" sh -c "'$BIN' run '$T/many.json' 2>'$T/e' >/dev/null && test ! -s '$T/e'"
+
 echo "$P passed, $F failed"
 [ "$F" -eq 0 ]

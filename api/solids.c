@@ -715,7 +715,7 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
     b.progress = wr.progress;
     b.udata = wr.udata;
     rc = api_solids_run(r, &wr, &b, err);
-out:
+out:;
     void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
     void *uu = b.udata;
     rc = api_buf_finish(&b, rc, out, outlen, err);

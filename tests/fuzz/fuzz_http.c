@@ -197,6 +197,12 @@ static size_t response_end(const char *a, size_t n, size_t pos, int head, int *c
         }
         l = e + 2;
     }
+    /* head: the input began with HEAD, but pipelined requests after it may not be HEADs (the
+     * requests are not parsed here): a response whose declared body is there, where the next
+     * status line would be, has one */
+    if (head && has_len && n - body >= len && len > 0 && n > body &&
+        memcmp(a + body, "HTTP/1.", n - body < 7 ? n - body : 7) != 0)
+        head = 0;
     if ((status >= 100 && status < 200) || status == 204 || status == 304 || head) return body;
     if (has_len) return n - body >= len ? body + len : 0;
     if (!chunked) return 0;   /* the body runs to the end of the connection */

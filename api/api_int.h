@@ -258,17 +258,55 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
  * checked (bool_expr_free it), or API_EINVALID naming the JSON path under "op". */
 int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err);
 
-/* Readers of results (LAR JSON), for the renderers (api/render.c).
- * api_result_load: parses text and checks that it is an object with "dim" equal to dim (why
- *   completes the message "dim: expected D (why)"); *root is the caller's (json_decref).
- * api_result_cycle: checks that row is an array of at least minlen vertex indices < nv, named by
- *   what printf'd with a (and b unless b == SIZE_MAX), and copies them to out (may be NULL).
- * api_face_key: a key of "holes", canonical decimal ("0", "17": no sign, no leading zero) below
- *   nf, into *out; 0 when it is not one. */
-int api_result_load(const char *text, size_t len, int dim, const char *why, json_t **root,
+/* A result (LAR JSON) as the renderers read it (api/result.c): one reader for every renderer,
+ * the dimension a parameter.  Every index is checked while reading, so writers index without
+ * checks.  Faces' rings: face f's are rings face_ring[f] .. face_ring[f+1] (its outer cycle
+ * first, then its holes), ring r's vertices idx[ring_off[r] .. ring_off[r+1]). */
+typedef struct api_result {
+    int dim;           /* 2 or 3 */
+    size_t nv;         /* vertices */
+    double *V;         /* owned: dim coordinates per vertex, all finite */
+    size_t ne;         /* 2D: edges in ev (0 when the result has no EV); 3D: 0, EV is not read */
+    uint32_t *ev;      /* owned, may be NULL: 2 per edge */
+    size_t nf;         /* faces: 2D the bounded rows of FV (exterior_last rows left out), 3D all */
+    size_t *face_ring; /* owned, nf + 1 */
+    size_t nrings;     /* the faces' rings (nface_rings), then a 2D Boolean's result's */
+    size_t nface_rings;
+    size_t *ring_off; /* owned, nrings + 1 */
+    uint32_t *idx;    /* owned, ring_off[nrings] */
+    /* 3D: the cells, CF: cell c's signed faces ±(f+1) are cf[cell_off[c] .. cell_off[c+1]) */
+    size_t nc;
+    size_t *cell_off; /* owned, nc + 1 (NULL in 2D) */
+    int32_t *cf;      /* owned */
+    /* a Boolean's result ("result" of a polygons or solids result), else has_result = 0 */
+    int has_result;
+    /* 2D: polygon q's rings (shell, then holes) are rings poly_ring[q] .. poly_ring[q+1], after
+     * the faces' (rings nface_rings .. nrings); res_area its "area"; selected[f]: face f is one
+     * of its "cells" */
+    size_t npoly;
+    size_t *poly_ring; /* owned, npoly + 1 */
+    double res_area;
+    uint8_t *selected; /* owned, nf */
+    size_t ninputs;    /* 2D: inputs of "membership" (0: none) */
+    size_t *mem_off;   /* owned, nf + 1 (NULL: no "membership"): face f lies in the inputs */
+    uint32_t *mem;     /* mem[mem_off[f] .. mem_off[f+1]) */
+    /* 3D: the signed faces of the result's boundary ("result".faces) */
+    size_t nres_faces;
+    int32_t *res_faces; /* owned */
+} api_result;
+
+/* Reads the result text[0..len) of dimension dim (2 or 3) into *m: "dim" must equal dim (why
+ * completes the message "dim: expected D (why)").  2D: V, FV and holes required, EV optional,
+ * a Boolean's result and membership; 3D: V, FV and CF required, holes optional, a Boolean's
+ * result.faces (api/result.c says more).  Returns API_OK, API_EINVALID with a message naming
+ * the JSON path, or API_ENOMEM; on failure *m is empty.  api_result_free() frees *m either way
+ * (and leaves it empty). */
+int api_result_read(const char *text, size_t len, int dim, const char *why, api_result *m,
                     api_error *err);
-int api_result_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
-                     const char *what, size_t a, size_t b);
+void api_result_free(api_result *m);
+
+/* A key of "holes", canonical decimal ("0", "17": no sign, no leading zero) below nf, into
+ * *out; 0 when it is not one (api/result.c). */
 int api_face_key(const char *key, size_t nf, size_t *out);
 
 #endif

@@ -1,19 +1,20 @@
 /* render.c — a 2D result (LAR JSON) drawn as SVG or written as GeoJSON (api/render.h).
  *
- * The result is read with jansson into a flat model: V as doubles, and for each bounded face
- * its rings (the outer cycle, then its holes) as runs of vertex indices:
+ * The result is read by api_result_read() (api/result.c, dim 2) into a flat model: V as
+ * doubles, and for each bounded face its rings (the outer cycle, then its holes) as runs of
+ * vertex indices:
  *
  *     face_ring:  f -> [face_ring[f], face_ring[f+1])      rings of face f, outer first
  *     ring_off:   r -> [ring_off[r], ring_off[r+1])        positions in idx
  *     idx:        vertex indices, every one < nv (checked while reading)
  *
- * so the writers never look at JSON again and never index out of bounds.  The jansson tree
- * costs about ten times the result's own size while it is read (api/larjson.c says why results
- * are not written that way); it is freed before anything is drawn.  Output is streamed into
- * api_bufs (api/api_int.h), numbers formatted by api_format_double.  The faces and the edges
- * are written into buffers of their own, and the label points kept, before the SVG's header:
- * the viewBox (and with it the stroke width and the font size in user units) must fit every
- * coordinate drawn, exploded faces and labels included, which is known only at the end.
+ * so the writers never look at JSON again and never index out of bounds; a Boolean's result
+ * polygons are rings of the same table, after the faces'.  The JSON tree is freed before
+ * anything is drawn.  Output is streamed into api_bufs (api/api_int.h), numbers formatted by
+ * api_format_double.  The faces and the edges are written into buffers of their own, and the
+ * label points kept, before the SVG's header: the viewBox (and with it the stroke width and the
+ * font size in user units) must fit every coordinate drawn, exploded faces and labels included,
+ * which is known only at the end.
  *
  * Geometry here is for pictures, not for the complex: floating point, no exact predicates.
  * The face label point is the one place that must be right: the midpoint of the widest
@@ -31,7 +32,6 @@
 #include "api/api_int.h"
 
 #include <ctype.h>
-#include <jansson.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -228,451 +228,16 @@ fail:
     return rc;
 }
 
-/* ---- the result, read ---------------------------------------------------------------------- */
+/* ---- the result's rings (read by api_result_read, api/result.c) ---------------------------- */
 
-typedef struct rmodel {
-    size_t nv;
-    double *xy;        /* owned: x, y of each vertex */
-    size_t ne;         /* edges in ev (0 when the result has no EV) */
-    uint32_t *ev;      /* owned, may be NULL: 2 per edge */
-    size_t nf;         /* bounded faces */
-    size_t *face_ring; /* owned, nf + 1 */
-    size_t nrings;
-    size_t *ring_off; /* owned, nrings + 1 */
-    uint32_t *idx;    /* owned, ring_off[nrings] */
-    double cx, cy;    /* centre of the bounding box of V (0, 0 when V is empty) */
-    /* a Boolean's result ("result" of a polygons result), else npoly = 0 and has_result = 0:
-     * polygon q's rings (shell, then holes) are rings poly_ring[q] .. poly_ring[q+1] of the
-     * table above, after the faces' (rings nface_rings .. nrings) */
-    int has_result;
-    size_t npoly, nface_rings;
-    size_t *poly_ring; /* owned, npoly + 1 */
-    double res_area;
-    uint8_t *selected; /* owned, nf: the face is a cell of the result */
-    size_t ninputs;    /* inputs (0: no "membership") */
-    size_t *mem_off;   /* owned, nf + 1 (NULL: no "membership"): face f lies in the inputs */
-    uint32_t *mem;     /* mem[mem_off[f] .. mem_off[f+1]) */
-} rmodel;
-
-static void rmodel_free(rmodel *m)
-{
-    free(m->xy);
-    free(m->ev);
-    free(m->poly_ring);
-    free(m->selected);
-    free(m->mem_off);
-    free(m->mem);
-    free(m->face_ring);
-    free(m->ring_off);
-    free(m->idx);
-    *m = (rmodel){0};
-}
-
-static size_t ring_len(const rmodel *m, size_t r)
+static size_t ring_len(const api_result *m, size_t r)
 {
     return m->ring_off[r + 1] - m->ring_off[r];
 }
 
-static const uint32_t *ring_idx(const rmodel *m, size_t r)
+static const uint32_t *ring_idx(const api_result *m, size_t r)
 {
     return m->idx + m->ring_off[r];
-}
-
-int api_result_cycle(const json_t *row, size_t nv, size_t minlen, uint32_t *out, api_error *err,
-                     const char *what, size_t a, size_t b)
-{
-    size_t n = json_array_size(row);
-    char path[96];
-    if (b == SIZE_MAX)
-        snprintf(path, sizeof path, what, a);
-    else
-        snprintf(path, sizeof path, what, a, b);
-    if (!json_is_array(row) || n < minlen) {
-        if (minlen <= 1)
-            return api_fail(err, API_EINVALID, "%s: expected an array of vertex indices", path);
-        return api_fail(err, API_EINVALID, "%s: expected an array of at least %zu vertex indices",
-                        path, minlen);
-    }
-    for (size_t i = 0; i < n; i++) {
-        const json_t *v = json_array_get(row, i);
-        json_int_t k = json_is_integer(v) ? json_integer_value(v) : -1;
-        if (k < 0 || (uint64_t)k >= nv)
-            return api_fail(err, API_EINVALID, "%s[%zu]: expected a vertex index < %zu", path, i,
-                            nv);
-        if (out) out[i] = (uint32_t)k;
-    }
-    return API_OK;
-}
-
-/* Twice the signed area of the cycle row (JSON, checked) of the vertices xy. */
-static double json_cycle_area2(const json_t *row, const double *xy)
-{
-    size_t n = json_array_size(row);
-    double s = 0, ox, oy;
-    if (n < 3) return 0;
-    ox = xy[2 * json_integer_value(json_array_get(row, 0))];
-    oy = xy[2 * json_integer_value(json_array_get(row, 0)) + 1];
-    for (size_t i = 0; i < n; i++) {
-        size_t a = (size_t)json_integer_value(json_array_get(row, i));
-        size_t b = (size_t)json_integer_value(json_array_get(row, (i + 1) % n));
-        s += (xy[2 * a] - ox) * (xy[2 * b + 1] - oy) - (xy[2 * b] - ox) * (xy[2 * a + 1] - oy);
-    }
-    return s;
-}
-
-/* How many rows of FV are bounded faces (see render.h): the rest are exterior_last rows. */
-static size_t bounded_rows(const json_t *root, const json_t *FV, const double *xy)
-{
-    size_t rows = json_array_size(FV), k;
-    const json_t *F = json_object_get(json_object_get(root, "stats"), "F");
-    const json_t *ext = json_object_get(root, "exterior");
-    if (json_is_integer(F) && json_integer_value(F) >= 0 && (uint64_t)json_integer_value(F) <= rows)
-        return (size_t)json_integer_value(F);
-    k = json_array_size(ext);
-    if (json_is_array(ext) && k > 0 && k <= rows) {
-        size_t i = 0;
-        while (i < k && json_equal(json_array_get(ext, i), json_array_get(FV, rows - k + i))) i++;
-        if (i == k) return rows - k;
-        return rows;
-    }
-    while (rows > 0 && json_cycle_area2(json_array_get(FV, rows - 1), xy) <= 0) rows--;
-    return rows;
-}
-
-int api_face_key(const char *key, size_t nf, size_t *out)
-{
-    size_t v = 0, n = strlen(key);
-    if (n == 0 || n > 19 || (n > 1 && key[0] == '0')) return 0;
-    for (size_t i = 0; i < n; i++) {
-        if (!isdigit((unsigned char)key[i])) return 0;
-        v = v * 10 + (size_t)(key[i] - '0');
-    }
-    *out = v;
-    return v < nf;
-}
-
-int api_result_load(const char *text, size_t len, int dim, const char *why, json_t **out,
-                    api_error *err)
-{
-    json_error_t je;
-    json_t *root;
-    const json_t *d;
-    *out = NULL;
-    if (!text || len == 0) return api_fail(err, API_EINVALID, "result: empty");
-    root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
-    if (!root) {
-        if (json_error_code(&je) == json_error_out_of_memory)
-            return api_fail(err, API_ENOMEM, "out of memory reading the result");
-        return api_fail(err, API_EINVALID, "result: malformed JSON at line %d, column %d: %s",
-                        je.line, je.column, je.text);
-    }
-    int rc = API_OK;
-    d = json_object_get(root, "dim");
-    if (!json_is_object(root))
-        rc = api_fail(err, API_EINVALID, "result: expected a JSON object (LAR JSON)");
-    else if (!d)
-        rc = api_fail(err, API_EINVALID, "dim: required (not a LAR JSON result)");
-    else if (json_is_integer(d) && json_integer_value(d) != dim)
-        rc = api_fail(err, API_EINVALID, "dim: expected %d (%s), got %lld", dim, why,
-                      (long long)json_integer_value(d));
-    else if (!json_is_integer(d))
-        rc = api_fail(err, API_EINVALID, "dim: expected %d (%s)", dim, why);
-    if (rc != API_OK) {
-        json_decref(root);
-        return rc;
-    }
-    *out = root;
-    return API_OK;
-}
-
-static int read_result(const char *text, size_t len, rmodel *m, api_error *err)
-{
-    json_t *root = NULL;
-    const json_t *V, *FV, *EV, *holes, *val;
-    const char *key;
-    size_t rows, nring, nidx, r, w;
-    int rc;
-    *m = (rmodel){0};
-    rc = api_result_load(text, len, 2, "only 2D results are drawn", &root, err);
-    if (rc != API_OK) return rc;
-    V = json_object_get(root, "V");
-    FV = json_object_get(root, "FV");
-    EV = json_object_get(root, "EV");
-    holes = json_object_get(root, "holes");
-    if (!V || !FV) {
-        rc = api_fail(err, API_EINVALID,
-                      "%s: required (the result was made with \"fields\" leaving it out: ask for "
-                      "\"V\", \"FV\" and \"holes\")",
-                      !V ? "V" : "FV");
-        goto fail;
-    }
-    if (!json_is_array(V)) {
-        rc = api_fail(err, API_EINVALID, "V: expected an array of [x, y]");
-        goto fail;
-    }
-    m->nv = json_array_size(V);
-    if (m->nv > UINT32_MAX) {
-        rc = api_fail(err, API_EINVALID, "V: more than 2^32 vertices");
-        goto fail;
-    }
-    m->xy = malloc(2 * m->nv * sizeof *m->xy + 1);
-    if (!m->xy) goto nomem;
-    for (size_t i = 0; i < m->nv; i++) {
-        const json_t *p = json_array_get(V, i);
-        const json_t *x = json_array_get(p, 0), *y = json_array_get(p, 1);
-        if (json_array_size(p) != 2 || !json_is_number(x) || !json_is_number(y) ||
-            !isfinite(json_number_value(x)) || !isfinite(json_number_value(y))) {
-            rc = api_fail(err, API_EINVALID, "V[%zu]: expected 2 finite numbers", i);
-            goto fail;
-        }
-        m->xy[2 * i] = json_number_value(x);
-        m->xy[2 * i + 1] = json_number_value(y);
-    }
-    if (m->nv > 0) {
-        double x0 = m->xy[0], x1 = m->xy[0], y0 = m->xy[1], y1 = m->xy[1];
-        for (size_t i = 1; i < m->nv; i++) {
-            x0 = fmin(x0, m->xy[2 * i]), x1 = fmax(x1, m->xy[2 * i]);
-            y0 = fmin(y0, m->xy[2 * i + 1]), y1 = fmax(y1, m->xy[2 * i + 1]);
-        }
-        m->cx = x0 / 2 + x1 / 2;
-        m->cy = y0 / 2 + y1 / 2;
-    }
-
-    if (EV && !json_is_null(EV)) {
-        if (!json_is_array(EV)) {
-            rc = api_fail(err, API_EINVALID, "EV: expected an array of [v0, v1]");
-            goto fail;
-        }
-        m->ne = json_array_size(EV);
-        m->ev = malloc(2 * m->ne * sizeof *m->ev + 1);
-        if (!m->ev) goto nomem;
-        for (size_t e = 0; e < m->ne; e++) {
-            const json_t *row = json_array_get(EV, e);
-            if (json_array_size(row) != 2) {
-                rc = api_fail(err, API_EINVALID, "EV[%zu]: expected 2 vertex indices", e);
-                goto fail;
-            }
-            rc = api_result_cycle(row, m->nv, 2, m->ev + 2 * e, err, "EV[%zu]", e, SIZE_MAX);
-            if (rc != API_OK) goto fail;
-        }
-    }
-
-    if (!json_is_array(FV)) {
-        rc = api_fail(err, API_EINVALID, "FV: expected an array of cycles");
-        goto fail;
-    }
-    rows = json_array_size(FV);
-    for (size_t f = 0; f < rows; f++) {
-        rc = api_result_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
-        if (rc != API_OK) goto fail;
-    }
-    m->nf = bounded_rows(root, FV, m->xy);
-    nring = m->nf;
-    nidx = 0;
-    for (size_t f = 0; f < m->nf; f++) {
-        const json_t *row = json_array_get(FV, f);
-        rc = api_result_cycle(row, m->nv, 3, NULL, err, "FV[%zu]", f, SIZE_MAX);
-        if (rc != API_OK) goto fail;
-        nidx += json_array_size(row);
-    }
-    if (holes && !json_is_null(holes)) {
-        if (!json_is_object(holes)) {
-            rc = api_fail(err, API_EINVALID, "holes: expected an object {\"f\": [[v, ...], ...]}");
-            goto fail;
-        }
-        json_object_foreach((json_t *)holes, key, val)
-        {
-            size_t f;
-            if (!api_face_key(key, m->nf, &f)) {
-                rc = api_fail(err, API_EINVALID, "holes.%.40s: not a bounded face (there are %zu)",
-                              key, m->nf);
-                goto fail;
-            }
-            if (!json_is_array(val)) {
-                rc = api_fail(err, API_EINVALID, "holes.%zu: expected an array of cycles", f);
-                goto fail;
-            }
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                const json_t *row = json_array_get(val, h);
-                rc = api_result_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
-                if (rc != API_OK) goto fail;
-                nidx += json_array_size(row);
-                nring++;
-            }
-        }
-    }
-
-    /* every key is well formed; without "holes" the faces would be drawn without their holes */
-    if (!holes) {
-        rc = api_fail(err, API_EINVALID,
-                      "holes: required (the result was made with \"fields\" leaving it out: ask "
-                      "for \"V\", \"FV\" and \"holes\"; the faces cannot be drawn without their "
-                      "holes)");
-        goto fail;
-    }
-
-    /* a Boolean's result: its polygons' rings after the faces' */
-    const json_t *res = json_object_get(root, "result");
-    const json_t *rFV = NULL, *rholes = NULL;
-    size_t nres = 0;
-    if (res) {
-        rFV = json_object_get(res, "FV");
-        rholes = json_object_get(res, "holes");
-        if (!json_is_object(res) || !json_is_array(rFV) || !json_is_object(rholes)) {
-            rc = api_fail(err, API_EINVALID,
-                          "result: expected an object with \"FV\" (the result polygons' shells) "
-                          "and \"holes\"");
-            goto fail;
-        }
-        m->npoly = json_array_size(rFV);
-        for (size_t q = 0; q < m->npoly; q++) {
-            const json_t *row = json_array_get(rFV, q);
-            rc = api_result_cycle(row, m->nv, 3, NULL, err, "result.FV[%zu]", q, SIZE_MAX);
-            if (rc != API_OK) goto fail;
-            nidx += json_array_size(row);
-            nres++;
-        }
-        json_object_foreach((json_t *)rholes, key, val)
-        {
-            size_t q;
-            if (!api_face_key(key, m->npoly, &q) || !json_is_array(val)) {
-                rc = api_fail(err, API_EINVALID,
-                              "result.holes.%.40s: expected an array of rings of a result polygon "
-                              "(there are %zu)",
-                              key, m->npoly);
-                goto fail;
-            }
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                const json_t *row = json_array_get(val, h);
-                rc = api_result_cycle(row, m->nv, 3, NULL, err, "result.holes.%zu[%zu]", q, h);
-                if (rc != API_OK) goto fail;
-                nidx += json_array_size(row);
-                nres++;
-            }
-        }
-    }
-    m->nface_rings = nring;
-    nring += nres;
-    m->nrings = nring;
-    m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
-    m->ring_off = malloc((nring + 1) * sizeof *m->ring_off);
-    m->idx = malloc(nidx * sizeof *m->idx + 1);
-    if (!m->face_ring || !m->ring_off || !m->idx) goto nomem;
-    r = 0;
-    w = 0;
-    for (size_t f = 0; f < m->nf; f++) {
-        const json_t *row = json_array_get(FV, f), *hs = NULL;
-        char k[24];
-        m->face_ring[f] = r;
-        m->ring_off[r++] = w;
-        api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
-        w += json_array_size(row);
-        snprintf(k, sizeof k, "%zu", f);
-        if (json_is_object(holes)) hs = json_object_get(holes, k);
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            m->ring_off[r++] = w;
-            api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
-            w += json_array_size(row);
-        }
-    }
-    m->face_ring[m->nf] = r;
-    if (res) {
-        m->has_result = 1;
-        m->poly_ring = malloc((m->npoly + 1) * sizeof *m->poly_ring);
-        m->selected = calloc(m->nf + 1, 1);
-        if (!m->poly_ring || !m->selected) goto nomem;
-        for (size_t q = 0; q < m->npoly; q++) {
-            const json_t *row = json_array_get(rFV, q), *hs;
-            char k[24];
-            m->poly_ring[q] = r;
-            m->ring_off[r++] = w;
-            api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "result.FV[%zu]", q, SIZE_MAX);
-            w += json_array_size(row);
-            snprintf(k, sizeof k, "%zu", q);
-            hs = json_object_get(rholes, k);
-            for (size_t h = 0; h < json_array_size(hs); h++) {
-                row = json_array_get(hs, h);
-                m->ring_off[r++] = w;
-                api_result_cycle(row, m->nv, 3, m->idx + w, NULL, "result.holes.%zu[%zu]", q, h);
-                w += json_array_size(row);
-            }
-        }
-        m->poly_ring[m->npoly] = r;
-        const json_t *cells = json_object_get(res, "cells"), *area = json_object_get(res, "area");
-        m->res_area = json_is_number(area) ? json_number_value(area) : 0;
-        for (size_t i = 0; i < json_array_size(cells); i++) {
-            const json_t *x = json_array_get(cells, i);
-            if (!json_is_integer(x) || json_integer_value(x) < 0 ||
-                (uint64_t)json_integer_value(x) >= m->nf) {
-                rc = api_fail(err, API_EINVALID, "result.cells[%zu]: expected a face index < %zu",
-                              i, m->nf);
-                goto fail;
-            }
-            m->selected[json_integer_value(x)] = 1;
-        }
-        /* the membership, compressed sparse rows: one row per face */
-        const json_t *mem = json_object_get(root, "membership");
-        if (mem) {
-            const json_t *shape = json_object_get(mem, "shape");
-            const json_t *ip = json_object_get(mem, "indptr"),
-                         *ix = json_object_get(mem, "indices");
-            size_t nnz = json_array_size(ix);
-            if (!json_is_object(mem) || !json_is_array(ip) || !json_is_array(ix) ||
-                json_array_size(shape) != 2 ||
-                (size_t)json_integer_value(json_array_get(shape, 0)) != m->nf ||
-                json_integer_value(json_array_get(shape, 1)) < 0 ||
-                json_array_size(ip) != m->nf + 1) {
-                rc = api_fail(err, API_EINVALID,
-                              "membership: expected {\"shape\": [%zu, inputs], \"indptr\": [%zu "
-                              "offsets], \"indices\": [...]}",
-                              m->nf, m->nf + 1);
-                goto fail;
-            }
-            m->ninputs = (size_t)json_integer_value(json_array_get(shape, 1));
-            m->mem_off = malloc((m->nf + 1) * sizeof *m->mem_off);
-            m->mem = malloc((nnz + 1) * sizeof *m->mem);
-            if (!m->mem_off || !m->mem) goto nomem;
-            for (size_t f = 0; f <= m->nf; f++) {
-                const json_t *x = json_array_get(ip, f);
-                json_int_t v = json_integer_value(x);
-                if (!json_is_integer(x) || v < 0 || (size_t)v > nnz ||
-                    (f > 0 && (size_t)v < m->mem_off[f - 1]) || (f == 0 && v != 0) ||
-                    (f == m->nf && (size_t)v != nnz)) {
-                    rc = api_fail(err, API_EINVALID,
-                                  "membership.indptr[%zu]: expected offsets from 0 to %zu, "
-                                  "non-decreasing",
-                                  f, nnz);
-                    goto fail;
-                }
-                m->mem_off[f] = (size_t)v;
-            }
-            for (size_t k = 0; k < nnz; k++) {
-                const json_t *x = json_array_get(ix, k);
-                json_int_t v = json_integer_value(x);
-                if (!json_is_integer(x) || v < 0 || (size_t)v >= m->ninputs) {
-                    rc = api_fail(err, API_EINVALID,
-                                  "membership.indices[%zu]: expected an input index < %zu", k,
-                                  m->ninputs);
-                    goto fail;
-                }
-                m->mem[k] = (uint32_t)v;
-            }
-        }
-    }
-    m->ring_off[r] = w;
-    if (r != nring || w != nidx) { /* cannot happen: keys were checked canonical and < nf */
-        rc = api_fail(err, API_EINTERNAL, "render: holes counted twice differently");
-        goto fail;
-    }
-    json_decref(root);
-    return API_OK;
-nomem:
-    rc = api_fail(err, API_ENOMEM, "out of memory reading the result");
-fail:
-    json_decref(root);
-    rmodel_free(m);
-    return rc;
 }
 
 /* Every vertex's coordinates formatted once, "x<sep>y" (y negated for SVG): a vertex is written
@@ -690,16 +255,16 @@ static void vtext_free(vtext *t)
     t->off = NULL;
 }
 
-static int vtext_make(const rmodel *m, int negate_y, char sep, vtext *t)
+static int vtext_make(const api_result *m, int negate_y, char sep, vtext *t)
 {
     t->pool = (api_buf){0};
     t->off = malloc((m->nv + 1) * sizeof *t->off);
     if (!t->off) return API_ENOMEM;
     for (size_t v = 0; v < m->nv; v++) {
         t->off[v] = t->pool.len;
-        api_buf_double(&t->pool, m->xy[2 * v]);
+        api_buf_double(&t->pool, m->V[2 * v]);
         api_buf_putc(&t->pool, sep);
-        api_buf_double(&t->pool, negate_y ? -m->xy[2 * v + 1] : m->xy[2 * v + 1]);
+        api_buf_double(&t->pool, negate_y ? -m->V[2 * v + 1] : m->V[2 * v + 1]);
     }
     t->off[m->nv] = t->pool.len;
     if (!t->pool.failed) return API_OK;
@@ -716,13 +281,14 @@ static void vtext_put(api_buf *b, const vtext *t, uint32_t v)
 
 /* Twice the signed area of ring r, and (when cx is not NULL) the first moments about (ox, oy)
  * times 6: the ring's share of the centroid sums. */
-static double ring_area2(const rmodel *m, size_t r, double ox, double oy, double *mx, double *my)
+static double ring_area2(const api_result *m, size_t r, double ox, double oy, double *mx,
+                         double *my)
 {
     const uint32_t *v = ring_idx(m, r);
     size_t n = ring_len(m, r);
     double s = 0, sx = 0, sy = 0;
     for (size_t i = 0; i < n; i++) {
-        const double *a = m->xy + 2 * (size_t)v[i], *b = m->xy + 2 * (size_t)v[(i + 1) % n];
+        const double *a = m->V + 2 * (size_t)v[i], *b = m->V + 2 * (size_t)v[(i + 1) % n];
         double ax = a[0] - ox, ay = a[1] - oy, bx = b[0] - ox, by = b[1] - oy;
         double c = ax * by - bx * ay;
         s += c;
@@ -735,9 +301,9 @@ static double ring_area2(const rmodel *m, size_t r, double ox, double oy, double
 }
 
 /* The face's area with its holes subtracted (holes are clockwise: their signed areas are <= 0). */
-static double face_area(const rmodel *m, size_t f)
+static double face_area(const api_result *m, size_t f)
 {
-    const double *o = m->xy + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
+    const double *o = m->V + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
     double s = 0;
     for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
         s += ring_area2(m, r, o[0], o[1], NULL, NULL);
@@ -745,9 +311,9 @@ static double face_area(const rmodel *m, size_t f)
 }
 
 /* The face's area centroid (holes subtracted); its outer cycle's first vertex if the area is 0. */
-static void face_centroid(const rmodel *m, size_t f, double *x, double *y)
+static void face_centroid(const api_result *m, size_t f, double *x, double *y)
 {
-    const double *o = m->xy + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
+    const double *o = m->V + 2 * (size_t)ring_idx(m, m->face_ring[f])[0];
     double s = 0, sx = 0, sy = 0;
     for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++) {
         double mx, my;
@@ -773,7 +339,7 @@ static int cmp_double(const void *a, const void *b)
 
 /* Width of the widest inside chord of face f at height y (no vertex at y), its midpoint in *mid;
  * xs has room for the face's vertex count. */
-static double widest_chord(const rmodel *m, size_t f, double y, double *xs, double *mid)
+static double widest_chord(const api_result *m, size_t f, double y, double *xs, double *mid)
 {
     size_t k = 0;
     double best = -1;
@@ -781,7 +347,7 @@ static double widest_chord(const rmodel *m, size_t f, double y, double *xs, doub
         const uint32_t *v = ring_idx(m, r);
         size_t n = ring_len(m, r);
         for (size_t i = 0; i < n; i++) {
-            const double *a = m->xy + 2 * (size_t)v[i], *b = m->xy + 2 * (size_t)v[(i + 1) % n];
+            const double *a = m->V + 2 * (size_t)v[i], *b = m->V + 2 * (size_t)v[(i + 1) % n];
             if ((a[1] > y) != (b[1] > y))
                 xs[k++] = a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
         }
@@ -798,14 +364,14 @@ static double widest_chord(const rmodel *m, size_t f, double y, double *xs, doub
 
 /* A point strictly inside face f (holes excluded), for its number; ys and xs have room for the
  * face's vertex count. */
-static void face_label_point(const rmodel *m, size_t f, double *ys, double *xs, double *px,
+static void face_label_point(const api_result *m, size_t f, double *ys, double *xs, double *px,
                              double *py)
 {
     size_t n = 0, u = 0, gaps, big = 0, tries;
     double best = -1;
     for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
         for (size_t i = 0; i < ring_len(m, r); i++)
-            ys[n++] = m->xy[2 * (size_t)ring_idx(m, r)[i] + 1];
+            ys[n++] = m->V[2 * (size_t)ring_idx(m, r)[i] + 1];
     qsort(ys, n, sizeof *ys, cmp_double);
     for (size_t i = 0; i < n; i++)
         if (u == 0 || ys[i] != ys[u - 1]) ys[u++] = ys[i];
@@ -896,10 +462,10 @@ static void svg_label(api_buf *b, double sx, double sy, double scale, size_t n)
 }
 
 /* Writes "x y" of vertex v translated by (dx, dy); in place, its text from vt. */
-static void svg_vertex(svg_ctx *c, api_buf *b, const rmodel *m, const vtext *vt, uint32_t v,
+static void svg_vertex(svg_ctx *c, api_buf *b, const api_result *m, const vtext *vt, uint32_t v,
                        double dx, double dy)
 {
-    const double *p = m->xy + 2 * (size_t)v;
+    const double *p = m->V + 2 * (size_t)v;
     double sx, sy;
     if (dx == 0 && dy == 0) {
         svg_track(c, p[0], p[1], &sx, &sy);
@@ -910,8 +476,8 @@ static void svg_vertex(svg_ctx *c, api_buf *b, const rmodel *m, const vtext *vt,
 }
 
 /* Writes ring r of the model as "M x y L x y ... Z", translated by (dx, dy). */
-static void svg_ring(svg_ctx *c, api_buf *b, const rmodel *m, const vtext *vt, size_t r, double dx,
-                     double dy)
+static void svg_ring(svg_ctx *c, api_buf *b, const api_result *m, const vtext *vt, size_t r,
+                     double dx, double dy)
 {
     const uint32_t *v = ring_idx(m, r);
     for (size_t i = 0; i < ring_len(m, r); i++) {
@@ -1034,7 +600,7 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
 }
 
 /* The sorted keys of the edges walked by the faces' rings; NULL when out of memory. */
-static uint64_t *face_edge_keys(const rmodel *m, size_t *n)
+static uint64_t *face_edge_keys(const api_result *m, size_t *n)
 {
     uint64_t *k = malloc(m->ring_off[m->nrings] * sizeof *k + 1);
     size_t w = 0;
@@ -1073,6 +639,7 @@ typedef struct svg_parts {
     double *ys, *xs; /* scratch of the label points */
     uint64_t *keys;  /* sorted edges of the faces' rings (exploded drawings with EV) */
     vtext vt;        /* the vertices' SVG coordinates */
+    double cx, cy;   /* centre of the bounding box of V (0, 0 when V is empty) */
 } svg_parts;
 
 static void svg_parts_free(svg_parts *p)
@@ -1090,7 +657,7 @@ static void svg_parts_free(svg_parts *p)
 
 /* The edges' path data: in place, EV (or, without EV, the faces' rings); exploded, each face's
  * rings with the face and the edges on no face moved by their midpoints. */
-static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_parts *p)
+static int svg_edges(const api_result *m, const render_opts *o, svg_ctx *c, svg_parts *p)
 {
     double k1 = o->explode - 1;
     size_t nkeys = 0;
@@ -1106,11 +673,11 @@ static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_part
     for (size_t e = 0; e < m->ne; e++) {
         double dx = 0, dy = 0;
         if (k1 > 0) {
-            const double *a = m->xy + 2 * (size_t)m->ev[2 * e];
-            const double *b = m->xy + 2 * (size_t)m->ev[2 * e + 1];
+            const double *a = m->V + 2 * (size_t)m->ev[2 * e];
+            const double *b = m->V + 2 * (size_t)m->ev[2 * e + 1];
             if (has_key(p->keys, nkeys, edge_key(m->ev[2 * e], m->ev[2 * e + 1]))) continue;
-            dx = k1 * ((a[0] / 2 + b[0] / 2) - m->cx);
-            dy = k1 * ((a[1] / 2 + b[1] / 2) - m->cy);
+            dx = k1 * ((a[0] / 2 + b[0] / 2) - p->cx);
+            dy = k1 * ((a[1] / 2 + b[1] / 2) - p->cy);
         }
         api_buf_puts(&p->edges, p->edges.len ? " M" : "M");
         svg_vertex(c, &p->edges, m, &p->vt, m->ev[2 * e], dx, dy);
@@ -1120,7 +687,7 @@ static int svg_edges(const rmodel *m, const render_opts *o, svg_ctx *c, svg_part
     return API_OK;
 }
 
-static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_error *err)
+static int svg_write(const api_result *m, const render_opts *o, api_buf *out, api_error *err)
 {
     svg_parts p = {0};
     svg_ctx c = {0};
@@ -1130,13 +697,22 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
     long height;
     int rc = API_OK;
 
+    if (m->nv > 0) {
+        double x0 = m->V[0], x1 = m->V[0], y0 = m->V[1], y1 = m->V[1];
+        for (size_t i = 1; i < m->nv; i++) {
+            x0 = fmin(x0, m->V[2 * i]), x1 = fmax(x1, m->V[2 * i]);
+            y0 = fmin(y0, m->V[2 * i + 1]), y1 = fmax(y1, m->V[2 * i + 1]);
+        }
+        p.cx = x0 / 2 + x1 / 2;
+        p.cy = y0 / 2 + y1 / 2;
+    }
     p.off = calloc(2 * m->nf + 1, sizeof *p.off);
     if (!p.off || vtext_make(m, 1, ' ', &p.vt) != API_OK) goto nomem;
     for (size_t f = 0; k1 > 0 && f < m->nf; f++) {
         double x, y;
         face_centroid(m, f, &x, &y);
-        p.off[2 * f] = k1 * (x - m->cx);
-        p.off[2 * f + 1] = k1 * (y - m->cy);
+        p.off[2 * f] = k1 * (x - p.cx);
+        p.off[2 * f + 1] = k1 * (y - p.cy);
     }
 
     for (size_t f = 0; f < m->nf; f++) {
@@ -1158,7 +734,7 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
             svg_ring(&c, &p.result, m, &p.vt, r, 0, 0);
     if (o->numbers) {
         double sx, sy;
-        for (size_t v = 0; v < m->nv; v++) svg_track(&c, m->xy[2 * v], m->xy[2 * v + 1], &sx, &sy);
+        for (size_t v = 0; v < m->nv; v++) svg_track(&c, m->V[2 * v], m->V[2 * v + 1], &sx, &sy);
         for (size_t f = 0; f < m->nf; f++) {
             size_t n = m->ring_off[m->face_ring[f + 1]] - m->ring_off[m->face_ring[f]];
             if (n > maxv) maxv = n;
@@ -1184,8 +760,8 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
 
     /* the frame: every coordinate written, plus a margin of 5% of the larger side */
     if (!c.any) {
-        c.x0 = c.x1 = m->cx;
-        c.y0 = c.y1 = -m->cy;
+        c.x0 = c.x1 = p.cx;
+        c.y0 = c.y1 = -p.cy;
     }
     s = fmax(c.x1 - c.x0, c.y1 - c.y0);
     margin = s > 0 ? 0.05 * s : fmax(1.0, 1e-3 * fmax(fabs(c.x0), fabs(c.y0)));
@@ -1262,7 +838,7 @@ static int svg_write(const rmodel *m, const render_opts *o, api_buf *out, api_er
             api_buf_puts(out, " text-anchor=\"middle\" dominant-baseline=\"central\">\n");
             if (i == 0)
                 for (size_t v = 0; v < m->nv; v++)
-                    svg_label(out, m->xy[2 * v], -m->xy[2 * v + 1], scale, v);
+                    svg_label(out, m->V[2 * v], -m->V[2 * v + 1], scale, v);
             else
                 for (size_t f = 0; f < m->nf; f++)
                     svg_label(out, p.label[2 * f], p.label[2 * f + 1], scale, f);
@@ -1296,7 +872,7 @@ int render_svg(const char *result_json, size_t len, const render_opts *o, char *
                size_t *outlen, api_error *err)
 {
     render_opts def = RENDER_OPTS_INIT;
-    rmodel m;
+    api_result m;
     api_buf b = {0};
     int rc;
     *out = NULL;
@@ -1304,10 +880,10 @@ int render_svg(const char *result_json, size_t len, const render_opts *o, char *
     if (!o) o = &def;
     rc = check_opts(o, err);
     if (rc != API_OK) return rc;
-    rc = read_result(result_json, len, &m, err);
+    rc = api_result_read(result_json, len, 2, "only 2D results are drawn", &m, err);
     if (rc != API_OK) return rc;
     rc = svg_write(&m, o, &b, err);
-    rmodel_free(&m);
+    api_result_free(&m);
     return finish(&b, rc, out, outlen, err);
 }
 
@@ -1325,7 +901,7 @@ static void geojson_cycle(api_buf *b, const vtext *vt, const uint32_t *v, size_t
     api_buf_putc(b, ']');
 }
 
-static void geojson_ring(api_buf *b, const rmodel *m, const vtext *vt, size_t r)
+static void geojson_ring(api_buf *b, const api_result *m, const vtext *vt, size_t r)
 {
     geojson_cycle(b, vt, ring_idx(m, r), ring_len(m, r));
 }
@@ -1356,7 +932,7 @@ static void pieces_free(pieces *p)
 }
 
 /* Room for any one face's pieces; API_ENOMEM. */
-static int pieces_init(pieces *p, const rmodel *m)
+static int pieces_init(pieces *p, const api_result *m)
 {
     size_t most = 0;
     for (size_t f = 0; f < m->nf; f++) {
@@ -1375,7 +951,7 @@ static int pieces_init(pieces *p, const rmodel *m)
 }
 
 /* Face f's walks cut into simple cycles (pieces of 3 or more vertices). */
-static void pieces_of_face(pieces *p, const rmodel *m, size_t f)
+static void pieces_of_face(pieces *p, const api_result *m, size_t f)
 {
     p->n = p->nidx = 0;
     p->off[0] = 0;
@@ -1404,12 +980,12 @@ static void pieces_of_face(pieces *p, const rmodel *m, size_t f)
     }
 }
 
-static double cycle_area2(const rmodel *m, const uint32_t *v, size_t n)
+static double cycle_area2(const api_result *m, const uint32_t *v, size_t n)
 {
-    const double *o = m->xy + 2 * (size_t)v[0];
+    const double *o = m->V + 2 * (size_t)v[0];
     long double s = 0;
     for (size_t i = 0; i < n; i++) {
-        const double *a = m->xy + 2 * (size_t)v[i], *c = m->xy + 2 * (size_t)v[(i + 1) % n];
+        const double *a = m->V + 2 * (size_t)v[i], *c = m->V + 2 * (size_t)v[(i + 1) % n];
         s += ((long double)a[0] - o[0]) * ((long double)c[1] - o[1]) -
              ((long double)c[0] - o[0]) * ((long double)a[1] - o[1]);
     }
@@ -1417,7 +993,8 @@ static double cycle_area2(const rmodel *m, const uint32_t *v, size_t n)
 }
 
 /* Face f as a Polygon Feature (pieces: pieces_of_face(f) done). */
-static void geojson_face(api_buf *b, const rmodel *m, const vtext *vt, size_t f, const pieces *p)
+static void geojson_face(api_buf *b, const api_result *m, const vtext *vt, size_t f,
+                         const pieces *p)
 {
     size_t shell = SIZE_MAX;
     double best = 0;
@@ -1451,7 +1028,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
                    size_t *outlen, api_error *err)
 {
     render_opts def = RENDER_OPTS_INIT;
-    rmodel m;
+    api_result m;
     api_buf b = {0};
     vtext vt;
     pieces pc;
@@ -1461,10 +1038,10 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
     *out = NULL;
     *outlen = 0;
     if (!o) o = &def;
-    rc = read_result(result_json, len, &m, err);
+    rc = api_result_read(result_json, len, 2, "only 2D results are drawn", &m, err);
     if (rc != API_OK) return rc;
     if (vtext_make(&m, 0, ',', &vt) != API_OK) {
-        rmodel_free(&m);
+        api_result_free(&m);
         return api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
     }
     keys = malloc((m.ring_off[m.nrings] + 1) * sizeof *keys);
@@ -1529,6 +1106,6 @@ done:
     free(keys);
     pieces_free(&pc);
     vtext_free(&vt);
-    rmodel_free(&m);
+    api_result_free(&m);
     return finish(&b, rc, out, outlen, err);
 }

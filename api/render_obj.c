@@ -1,7 +1,7 @@
 /* render_obj.c — a 3D result (LAR JSON, dim 3) written as Wavefront OBJ (api/render.h).
  *
- * The result is read with jansson into a flat model, every index checked on the way (so the
- * writer never indexes out of bounds):
+ * The result is read by api_result_read() (api/result.c, dim 3) into a flat model, every index
+ * checked on the way (so the writer never indexes out of bounds):
  *
  *     face_ring:  f -> [face_ring[f], face_ring[f+1])   rings of face f: FV[f], then holes."f"
  *     ring_off:   r -> [ring_off[r], ring_off[r+1])     positions in idx (vertex indices)
@@ -9,7 +9,8 @@
  *
  * Then every face is triangulated once, in its own orientation (the outer cycle's Newell
  * normal), and each cell writes the triangles of its faces, reversed for a face it lists as
- * -(f+1), so every triangle of a cell faces out of it.
+ * -(f+1), so every triangle of a cell faces out of it.  Of a Boolean's result the one cell
+ * written is the result's boundary ("result".faces) in place of the cells.
  *
  * Triangulation: the face's rings are projected on the two coordinates that drop the largest
  * component of the normal (in cyclic order, mirrored when that component is negative, so the
@@ -39,235 +40,22 @@
 
 #include "api/api_int.h"
 
-#include <jansson.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- the result, read ------------------------------------------------------------------------ */
+/* ---- the cells written ---------------------------------------------------------------------- */
 
-typedef struct omodel {
-    size_t nv;
-    double *xyz; /* owned: 3 per vertex */
-    size_t nf;
-    size_t *face_ring; /* owned, nf + 1 */
-    size_t nrings;
-    size_t *ring_off; /* owned, nrings + 1 */
-    uint32_t *idx;    /* owned */
+/* The result is read by api_result_read() (api/result.c, dim 3).  The cells written are its
+ * cells (CF), or a Boolean's result's boundary ("result".faces) as the one cell. */
+typedef struct ocells {
     size_t nc;
-    size_t *cell_off; /* owned, nc + 1 */
-    int32_t *cf;      /* owned: ±(f+1), 1 <= f+1 <= nf */
-    int result;       /* the one cell is a Boolean result's boundary ("result".faces) */
-} omodel;
-
-static void omodel_free(omodel *m)
-{
-    free(m->xyz);
-    free(m->face_ring);
-    free(m->ring_off);
-    free(m->idx);
-    free(m->cell_off);
-    free(m->cf);
-    *m = (omodel){0};
-}
-
-static int read_result(const char *text, size_t len, omodel *m, api_error *err)
-{
-    json_t *root = NULL;
-    const json_t *V, *FV, *holes, *CF, *val;
-    const char *key;
-    size_t nidx = 0, ncf = 0, r, w;
-    int rc;
-    *m = (omodel){0};
-    rc = api_result_load(text, len, 3, "OBJ is written of 3D results", &root, err);
-    if (rc != API_OK) return rc;
-    V = json_object_get(root, "V");
-    FV = json_object_get(root, "FV");
-    CF = json_object_get(root, "CF");
-    holes = json_object_get(root, "holes");
-    if (!V || !FV || !CF) {
-        rc = api_fail(err, API_EINVALID,
-                      "%s: required (the result was made with \"fields\" leaving it out: ask for "
-                      "\"V\", \"FV\", \"holes\" and \"CF\")",
-                      !V    ? "V"
-                      : !FV ? "FV"
-                            : "CF");
-        goto fail;
-    }
-    if (!json_is_array(V)) {
-        rc = api_fail(err, API_EINVALID, "V: expected an array of [x, y, z]");
-        goto fail;
-    }
-    m->nv = json_array_size(V);
-    if (m->nv > UINT32_MAX) {
-        rc = api_fail(err, API_EINVALID, "V: more than 2^32 vertices");
-        goto fail;
-    }
-    m->xyz = malloc(3 * m->nv * sizeof *m->xyz + 1);
-    if (!m->xyz) goto nomem;
-    for (size_t i = 0; i < m->nv; i++) {
-        const json_t *p = json_array_get(V, i);
-        if (json_array_size(p) != 3) {
-            rc = api_fail(err, API_EINVALID, "V[%zu]: expected 3 finite numbers", i);
-            goto fail;
-        }
-        for (size_t a = 0; a < 3; a++) {
-            const json_t *x = json_array_get(p, a);
-            if (!json_is_number(x) || !isfinite(json_number_value(x))) {
-                rc = api_fail(err, API_EINVALID, "V[%zu]: expected 3 finite numbers", i);
-                goto fail;
-            }
-            m->xyz[3 * i + a] = json_number_value(x);
-        }
-    }
-
-    if (!json_is_array(FV)) {
-        rc = api_fail(err, API_EINVALID, "FV: expected an array of cycles");
-        goto fail;
-    }
-    m->nf = json_array_size(FV);
-    m->nrings = m->nf;
-    for (size_t f = 0; f < m->nf; f++) {
-        rc = api_result_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
-        if (rc != API_OK) goto fail;
-        nidx += json_array_size(json_array_get(FV, f));
-    }
-    if (holes && !json_is_null(holes)) {
-        if (!json_is_object(holes)) {
-            rc = api_fail(err, API_EINVALID, "holes: expected an object {\"f\": [[v, ...], ...]}");
-            goto fail;
-        }
-        json_object_foreach((json_t *)holes, key, val)
-        {
-            size_t f;
-            if (!api_face_key(key, m->nf, &f)) {
-                rc = api_fail(err, API_EINVALID, "holes.%.40s: not a face (there are %zu)", key,
-                              m->nf);
-                goto fail;
-            }
-            if (!json_is_array(val)) {
-                rc = api_fail(err, API_EINVALID, "holes.%zu: expected an array of cycles", f);
-                goto fail;
-            }
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                const json_t *row = json_array_get(val, h);
-                rc = api_result_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
-                if (rc != API_OK) goto fail;
-                nidx += json_array_size(row);
-                m->nrings++;
-            }
-        }
-    }
-
-    if (!json_is_array(CF)) {
-        rc = api_fail(err, API_EINVALID, "CF: expected an array of rows of signed faces");
-        goto fail;
-    }
-    m->nc = json_array_size(CF);
-    for (size_t c = 0; c < m->nc; c++) {
-        const json_t *row = json_array_get(CF, c);
-        if (!json_is_array(row)) {
-            rc = api_fail(err, API_EINVALID, "CF[%zu]: expected an array of signed faces", c);
-            goto fail;
-        }
-        for (size_t i = 0; i < json_array_size(row); i++) {
-            const json_t *s = json_array_get(row, i);
-            json_int_t k = json_is_integer(s) ? json_integer_value(s) : 0;
-            if (k == 0 || k < -(json_int_t)m->nf || k > (json_int_t)m->nf) {
-                rc = api_fail(err, API_EINVALID,
-                              "CF[%zu][%zu]: expected a signed face +(f+1) or -(f+1), "
-                              "0 <= f < %zu",
-                              c, i, m->nf);
-                goto fail;
-            }
-        }
-        ncf += json_array_size(row);
-    }
-
-    m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
-    m->ring_off = malloc((m->nrings + 1) * sizeof *m->ring_off);
-    m->idx = malloc(nidx * sizeof *m->idx + 1);
-    m->cell_off = malloc((m->nc + 1) * sizeof *m->cell_off);
-    m->cf = malloc(ncf * sizeof *m->cf + 1);
-    if (!m->face_ring || !m->ring_off || !m->idx || !m->cell_off || !m->cf) goto nomem;
-    r = w = 0;
-    for (size_t f = 0; f < m->nf; f++) {
-        const json_t *row = json_array_get(FV, f), *hs = NULL;
-        char k[24];
-        m->face_ring[f] = r;
-        m->ring_off[r++] = w;
-        api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
-        w += json_array_size(row);
-        snprintf(k, sizeof k, "%zu", f);
-        if (json_is_object(holes)) hs = json_object_get(holes, k);
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            m->ring_off[r++] = w;
-            api_result_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
-            w += json_array_size(row);
-        }
-    }
-    m->face_ring[m->nf] = r;
-    m->ring_off[r] = w;
-    if (r != m->nrings || w != nidx) { /* cannot happen: keys were checked canonical and < nf */
-        rc = api_fail(err, API_EINTERNAL, "render: holes counted twice differently");
-        goto fail;
-    }
-    w = 0;
-    for (size_t c = 0; c < m->nc; c++) {
-        const json_t *row = json_array_get(CF, c);
-        m->cell_off[c] = w;
-        for (size_t i = 0; i < json_array_size(row); i++)
-            m->cf[w++] = (int32_t)json_integer_value(json_array_get(row, i));
-    }
-    m->cell_off[m->nc] = w;
-    /* a Boolean result: its boundary is the one solid written */
-    const json_t *res = json_object_get(root, "result"), *rf = json_object_get(res, "faces");
-    if (res) {
-        if (!json_is_array(rf)) {
-            rc = api_fail(err, API_EINVALID, "result.faces: expected an array of signed faces");
-            goto fail;
-        }
-        size_t n = json_array_size(rf);
-        int32_t *cf = malloc(n * sizeof *cf + 1);
-        if (!cf) goto nomem;
-        for (size_t i = 0; i < n; i++) {
-            const json_t *x = json_array_get(rf, i);
-            json_int_t k = json_is_integer(x) ? json_integer_value(x) : 0;
-            if (k == 0 || k < -(json_int_t)m->nf || k > (json_int_t)m->nf) {
-                free(cf);
-                rc = api_fail(err, API_EINVALID,
-                              "result.faces[%zu]: expected a signed face +(f+1) or -(f+1), "
-                              "0 <= f < %zu",
-                              i, m->nf);
-                goto fail;
-            }
-            cf[i] = (int32_t)k;
-        }
-        size_t *co = realloc(m->cell_off, 2 * sizeof *co);
-        if (!co) {
-            free(cf);
-            goto nomem;
-        }
-        m->cell_off = co;
-        free(m->cf);
-        m->cf = cf;
-        m->nc = 1;
-        m->cell_off[0] = 0;
-        m->cell_off[1] = n;
-        m->result = 1;
-    }
-    json_decref(root);
-    return API_OK;
-nomem:
-    rc = api_fail(err, API_ENOMEM, "out of memory reading the result");
-fail:
-    json_decref(root);
-    omodel_free(m);
-    return rc;
-}
+    const size_t *off; /* nc + 1: cell c's signed faces are cf[off[c] .. off[c+1]) */
+    const int32_t *cf; /* ±(f+1), 1 <= f+1 <= nf */
+    int result;        /* the one cell is a Boolean result's boundary */
+} ocells;
 
 /* ---- triangulation --------------------------------------------------------------------------- */
 
@@ -467,14 +255,14 @@ static double ring_area2(const pnode *n, uint32_t start)
 }
 
 /* Newell normal of ring r (unnormalized). */
-static void ring_normal(const omodel *m, size_t r, double nrm[3])
+static void ring_normal(const api_result *m, size_t r, double nrm[3])
 {
     const uint32_t *v = m->idx + m->ring_off[r];
     size_t k = m->ring_off[r + 1] - m->ring_off[r];
-    const double *o = m->xyz + 3 * (size_t)v[0];
+    const double *o = m->V + 3 * (size_t)v[0];
     nrm[0] = nrm[1] = nrm[2] = 0;
     for (size_t i = 0; i < k; i++) {
-        const double *x = m->xyz + 3 * (size_t)v[i], *y = m->xyz + 3 * (size_t)v[(i + 1) % k];
+        const double *x = m->V + 3 * (size_t)v[i], *y = m->V + 3 * (size_t)v[(i + 1) % k];
         double dx[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
         double dy[3] = {y[0] - o[0], y[1] - o[1], y[2] - o[2]};
         nrm[0] += dx[1] * dy[2] - dx[2] * dy[1];
@@ -497,7 +285,7 @@ static int cmp_hole(const void *pa, const void *pb)
 
 /* Triangulates face f into out, triangles oriented like the face (its outer ring's normal).
  * n and holes are scratch of room for the face's ring vertices + 2 per hole, and its holes. */
-static void triangulate_face(const omodel *m, size_t f, pnode *n, hole_ref *holes, tri_buf *out)
+static void triangulate_face(const api_result *m, size_t f, pnode *n, hole_ref *holes, tri_buf *out)
 {
     size_t r0 = m->face_ring[f], r1 = m->face_ring[f + 1], nn = 0, nh = 0, count = 0;
     double nrm[3];
@@ -516,7 +304,7 @@ static void triangulate_face(const omodel *m, size_t f, pnode *n, hole_ref *hole
         size_t len = m->ring_off[r + 1] - m->ring_off[r], first = nn;
         if (len < 3) continue; /* encloses nothing */
         for (size_t i = 0; i < len; i++) {
-            const double *x = m->xyz + 3 * (size_t)v[i];
+            const double *x = m->V + 3 * (size_t)v[i];
             n[nn] =
                 (pnode){flip ? -x[u] : x[u], x[w], v[i], (uint32_t)(i ? nn - 1 : first + len - 1),
                         (uint32_t)(i + 1 < len ? nn + 1 : first)};
@@ -583,12 +371,12 @@ static void cell_triangle(const tri_buf *tb, const size_t *toff, int32_t s, size
 }
 
 /* Translation of cell c by explode k: (k - 1) * (centroid - centre). */
-static void cell_shift(const omodel *m, const tri_buf *tb, const size_t *toff, size_t c, double k,
-                       const double *centre, double *shift)
+static void cell_shift(const api_result *m, const ocells *cl, const tri_buf *tb, const size_t *toff,
+                       size_t c, double k, const double *centre, double *shift)
 {
     double vol6 = 0, acc[3] = {0, 0, 0}, mean[3] = {0, 0, 0}, cnt = 0, cen[3];
-    for (size_t i = m->cell_off[c]; i < m->cell_off[c + 1]; i++) {
-        int32_t s = m->cf[i];
+    for (size_t i = cl->off[c]; i < cl->off[c + 1]; i++) {
+        int32_t s = cl->cf[i];
         size_t f = (size_t)llabs(s) - 1;
         for (size_t j = 0; j < toff[f + 1] - toff[f]; j++) {
             uint32_t t[3];
@@ -596,7 +384,7 @@ static void cell_shift(const omodel *m, const tri_buf *tb, const size_t *toff, s
             cell_triangle(tb, toff, s, j, t);
             for (int q = 0; q < 3; q++)
                 for (int a = 0; a < 3; a++) {
-                    p[q][a] = m->xyz[3 * (size_t)t[q] + a] - centre[a];
+                    p[q][a] = m->V[3 * (size_t)t[q] + a] - centre[a];
                     mean[a] += p[q][a];
                 }
             cnt += 3;
@@ -619,15 +407,15 @@ static void cell_shift(const omodel *m, const tri_buf *tb, const size_t *toff, s
 
 /* Numbers the vertices of cell c's triangles in the order they first appear: local[v] (all
  * UINT32_MAX on entry; the caller resets those in list) and list[0..n); returns n. */
-static size_t cell_vertices(const omodel *m, const tri_buf *tb, const size_t *toff, size_t c,
+static size_t cell_vertices(const ocells *cl, const tri_buf *tb, const size_t *toff, size_t c,
                             uint32_t *local, uint32_t *list)
 {
     size_t nl = 0;
-    for (size_t i = m->cell_off[c]; i < m->cell_off[c + 1]; i++) {
-        size_t f = (size_t)llabs(m->cf[i]) - 1;
+    for (size_t i = cl->off[c]; i < cl->off[c + 1]; i++) {
+        size_t f = (size_t)llabs(cl->cf[i]) - 1;
         for (size_t j = 0; j < toff[f + 1] - toff[f]; j++) {
             uint32_t t[3];
-            cell_triangle(tb, toff, m->cf[i], j, t);
+            cell_triangle(tb, toff, cl->cf[i], j, t);
             for (int q = 0; q < 3; q++)
                 if (local[t[q]] == UINT32_MAX) {
                     local[t[q]] = (uint32_t)nl;
@@ -638,7 +426,8 @@ static size_t cell_vertices(const omodel *m, const tri_buf *tb, const size_t *to
     return nl;
 }
 
-static int obj_write(const omodel *m, const render_opts *o, api_buf *b, api_error *err)
+static int obj_write(const api_result *m, const ocells *cl, const render_opts *o, api_buf *b,
+                     api_error *err)
 {
     tri_buf tb = {0};
     size_t *toff = malloc((m->nf + 1) * sizeof *toff), maxn = 0, maxh = 0;
@@ -665,23 +454,23 @@ static int obj_write(const omodel *m, const render_opts *o, api_buf *b, api_erro
     if (tb.failed) goto nomem;
 
     api_buf_puts(b, "# cellar: ");
-    api_buf_u64(b, m->nc);
+    api_buf_u64(b, cl->nc);
     api_buf_puts(b, " cells, ");
     api_buf_u64(b, m->nf);
     api_buf_puts(b, " faces, ");
     api_buf_u64(b, m->nv);
     api_buf_puts(b, " vertices\n");
     if (!explode) {
-        for (size_t v = 0; v < m->nv; v++) put_vertex(b, m->xyz + 3 * v, zero);
-        for (size_t c = 0; c < m->nc; c++) {
-            api_buf_puts(b, m->result ? "g result" : "g cell");
-            if (!m->result) api_buf_u64(b, c);
+        for (size_t v = 0; v < m->nv; v++) put_vertex(b, m->V + 3 * v, zero);
+        for (size_t c = 0; c < cl->nc; c++) {
+            api_buf_puts(b, cl->result ? "g result" : "g cell");
+            if (!cl->result) api_buf_u64(b, c);
             api_buf_putc(b, '\n');
-            for (size_t i = m->cell_off[c]; i < m->cell_off[c + 1]; i++) {
-                size_t f = (size_t)llabs(m->cf[i]) - 1;
+            for (size_t i = cl->off[c]; i < cl->off[c + 1]; i++) {
+                size_t f = (size_t)llabs(cl->cf[i]) - 1;
                 for (size_t j = 0; j < toff[f + 1] - toff[f]; j++) {
                     uint32_t t[3];
-                    cell_triangle(&tb, toff, m->cf[i], j, t);
+                    cell_triangle(&tb, toff, cl->cf[i], j, t);
                     put_face(b, (uint64_t)t[0] + 1, (uint64_t)t[1] + 1, (uint64_t)t[2] + 1);
                 }
             }
@@ -696,34 +485,34 @@ static int obj_write(const omodel *m, const render_opts *o, api_buf *b, api_erro
     for (size_t v = 0; v < m->nv; v++) local[v] = UINT32_MAX;
     if (m->nv) {
         double lo[3], hi[3];
-        for (int a = 0; a < 3; a++) lo[a] = hi[a] = m->xyz[a];
+        for (int a = 0; a < 3; a++) lo[a] = hi[a] = m->V[a];
         for (size_t v = 1; v < m->nv; v++)
             for (int a = 0; a < 3; a++) {
-                lo[a] = fmin(lo[a], m->xyz[3 * v + a]);
-                hi[a] = fmax(hi[a], m->xyz[3 * v + a]);
+                lo[a] = fmin(lo[a], m->V[3 * v + a]);
+                hi[a] = fmax(hi[a], m->V[3 * v + a]);
             }
         for (int a = 0; a < 3; a++) centre[a] = lo[a] / 2 + hi[a] / 2;
     }
-    for (size_t c = 0; c < m->nc; c++) {
+    for (size_t c = 0; c < cl->nc; c++) {
         double shift[3];
-        size_t nl = cell_vertices(m, &tb, toff, c, local, list);
-        cell_shift(m, &tb, toff, c, o->explode, centre, shift);
+        size_t nl = cell_vertices(cl, &tb, toff, c, local, list);
+        cell_shift(m, cl, &tb, toff, c, o->explode, centre, shift);
         for (size_t i = 0; i < nl; i++) {
-            put_vertex(b, m->xyz + 3 * (size_t)list[i], shift);
+            put_vertex(b, m->V + 3 * (size_t)list[i], shift);
             local[list[i]] = UINT32_MAX;
         }
     }
     uint64_t base = 0;
-    for (size_t c = 0; c < m->nc; c++) {
-        size_t nl = cell_vertices(m, &tb, toff, c, local, list);
+    for (size_t c = 0; c < cl->nc; c++) {
+        size_t nl = cell_vertices(cl, &tb, toff, c, local, list);
         api_buf_puts(b, "g cell");
         api_buf_u64(b, c);
         api_buf_putc(b, '\n');
-        for (size_t i = m->cell_off[c]; i < m->cell_off[c + 1]; i++) {
-            size_t f = (size_t)llabs(m->cf[i]) - 1;
+        for (size_t i = cl->off[c]; i < cl->off[c + 1]; i++) {
+            size_t f = (size_t)llabs(cl->cf[i]) - 1;
             for (size_t j = 0; j < toff[f + 1] - toff[f]; j++) {
                 uint32_t t[3];
-                cell_triangle(&tb, toff, m->cf[i], j, t);
+                cell_triangle(&tb, toff, cl->cf[i], j, t);
                 put_face(b, base + local[t[0]] + 1, base + local[t[1]] + 1, base + local[t[2]] + 1);
             }
         }
@@ -747,7 +536,9 @@ int render_obj(const char *result_json, size_t len, const render_opts *o, char *
                size_t *outlen, api_error *err)
 {
     render_opts def = RENDER_OPTS_INIT;
-    omodel m;
+    api_result m;
+    ocells cl;
+    size_t one[2];
     api_buf b = {0};
     int rc;
     *out = NULL;
@@ -756,10 +547,16 @@ int render_obj(const char *result_json, size_t len, const render_opts *o, char *
     if (!(o->explode >= 1 && o->explode <= RENDER_EXPLODE_MAX))
         return api_fail(err, API_EINVALID, "explode: expected a number in [1, %g]",
                         RENDER_EXPLODE_MAX);
-    rc = read_result(result_json, len, &m, err);
+    rc = api_result_read(result_json, len, 3, "OBJ is written of 3D results", &m, err);
     if (rc != API_OK) return rc;
-    rc = obj_write(&m, o, &b, err);
-    omodel_free(&m);
+    cl = (ocells){m.nc, m.cell_off, m.cf, 0};
+    if (m.has_result) { /* a Boolean result: its boundary is the one solid written */
+        one[0] = 0;
+        one[1] = m.nres_faces;
+        cl = (ocells){1, one, m.res_faces, 1};
+    }
+    rc = obj_write(&m, &cl, o, &b, err);
+    api_result_free(&m);
     if (rc == API_OK && b.failed) rc = api_fail(err, API_ENOMEM, "out of memory");
     if (rc != API_OK) {
         api_buf_free(&b);

@@ -1054,6 +1054,12 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
                       "membership: required for cells=all (the result has no \"membership\")");
         goto done;
     }
+    for (size_t f = 0; f < m.nf; f++) /* each face's area is written: it must be a number */
+        if (!isfinite(face_area(&m, f))) {
+            rc = api_fail(err, API_EINVALID,
+                          "FV[%zu]: the face's area is beyond a double (coordinates too large)", f);
+            goto done;
+        }
     api_buf_puts(&b, "{\"type\":\"FeatureCollection\",\"features\":[");
     if (m.has_result) {
         api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"MultiPolygon\","

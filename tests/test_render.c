@@ -1039,6 +1039,18 @@ TEST(render_boolean_result)
             res_free(&r);
         }
     }
+    /* a face whose area overflows a double (an edited result): refused, not written as inf */
+    {
+        static const char huge[] = "{\"dim\":2,\"V\":[[1e308,0],[-1e308,0],[0,1]],"
+                                   "\"EV\":[[0,1],[1,2],[0,2]],\"FV\":[[0,2,1]],\"holes\":{}}";
+        char *text = NULL;
+        size_t len = 0;
+        api_error err;
+        CHECK(render_geojson(huge, sizeof huge - 1, NULL, &text, &len, &err) == 422 &&
+                  strstr(err.msg, "FV[0]"),
+              "a face of infinite area: %s", text ? text : err.msg);
+        free(text);
+    }
 }
 
 /* Walks that pass a vertex twice: a triangle touching the square's side at a vertex, two

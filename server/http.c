@@ -31,6 +31,7 @@
 #include "api/api.h"
 #include "api/render.h"
 #include "server/log.h"
+#include "server/webassets.h"
 
 extern const unsigned char cellar_openapi[];
 extern const size_t cellar_openapi_len;
@@ -703,7 +704,7 @@ static int is_hex(const char *s, size_t n)
 static metrics_route classify(const char *url, char *id)
 {
     id[0] = 0;
-    if (!strcmp(url, "/")) return ROUTE_INDEX;
+    if (!strcmp(url, "/") || !strncmp(url, "/assets/", 8)) return ROUTE_INDEX; /* the page */
     if (!strcmp(url, "/healthz")) return ROUTE_HEALTHZ;
     if (!strcmp(url, "/readyz")) return ROUTE_READYZ;
     if (!strcmp(url, "/metrics")) return ROUTE_METRICS;
@@ -723,35 +724,27 @@ static metrics_route classify(const char *url, char *id)
     return ROUTE_OTHER;
 }
 
-/* The page at /: post line segments (JSON) or an SVG drawing, see the complex as a picture. */
-static const char index_html[] =
-    "<!doctype html><html lang=en><meta charset=utf-8><title>cellar</title>\n"
-    "<style>body{font:15px system-ui;margin:2em;max-width:70em}textarea{width:100%;height:9em;"
-    "font:13px monospace}#pic svg{max-width:100%;height:auto;border:1px solid #ddd}"
-    "pre{background:#f4f4f4;padding:1em;overflow:auto;max-height:20em}</style>\n"
-    "<h1>cellar</h1><p>Post line segments or an SVG drawing; get its cell complex (LAR). "
-    "API: <a href=/openapi.json>/openapi.json</a> &middot; <a href=/metrics>/metrics</a></p>\n"
-    "<p><label>Request (JSON)<br><textarea id=req>{\"kind\":\"lines\",\"lines\":[[[0,0],[6,0]],"
-    "[[0,4],[10,4]],[[0,0],[0,4]],[[3,0],[3,4]],[[6,0],[6,8]],[[3,2],[6,2]],[[10,0],[10,8]],"
-    "[[0,8],[10,8]]]}</textarea></label></p>\n<p><label>or an SVG drawing: <input type=file "
-    "id=file accept=\".svg,image/svg+xml\"></label> <label>explode <input id=ex type=number "
-    "value=1.1 min=1 max=3 step=0.05 style=width:5em></label> <label><input type=checkbox "
-    "id=num> numbers</label></p>\n<p><button id=go>Compute</button> <span id=st></span></p>"
-    "<div id=pic></div><pre id=out></pre>\n<script>\n"
-    "const $=id=>document.getElementById(id);\n"
-    "$('file').onchange=async()=>{const f=$('file').files[0];if(f)$('req').value=JSON.stringify("
-    "{kind:'svg',svg:await f.text(),options:{y_up:true}})};\n"
-    "$('go').onclick=async()=>{$('st').textContent='working…';$('pic').innerHTML='';"
-    "$('out').textContent='';try{const r=await fetch('/v1/jobs',{method:'POST',headers:{"
-    "'Content-Type':'application/json','Prefer':'wait=50'},body:$('req').value});"
-    "const t=await r.text();$('st').textContent=r.status+' '+r.statusText;let j;try{j=JSON.parse(t)"
-    "}catch(e){$('out').textContent=t;return}if(r.status!=200){$('out').textContent="
-    "JSON.stringify(j,null,1);return}const s=j.stats||{};$('st').textContent+=' — '+s.V+"
-    "' vertices, '+s.E+' edges, '+s.F+' faces, '+(s.ms?s.ms.total.toFixed(1)+' ms':'');"
-    "$('out').textContent=t.length>20000?t.slice(0,20000)+'…':t;const h=(r.headers.get('ETag')||"
-    "'').replace(/\"/g,'');if(h){const p=await fetch('/v1/results/'+h+'?explode='+$('ex').value+"
-    "($('num').checked?'&numbers=1':''),{headers:{Accept:'image/svg+xml'}});if(p.ok)$('pic')"
-    ".innerHTML=await p.text()}}catch(e){$('st').textContent=String(e)}};\n</script>\n";
+/* The page (web/, bundled at build time and embedded as build/gen/web.c): "/" and its assets
+ * under /assets/ (their names carry a hash of their bytes: immutable), each with a strong ETag
+ * (If-None-Match answers 304); an unknown asset is a 404 problem. */
+static enum MHD_Result route_page(conn *c)
+{
+    const web_asset *a = NULL;
+    for (size_t i = 0; i < cellar_web_assets_n && !a; i++)
+        if (!strcmp(cellar_web_assets[i].path, c->path)) a = &cellar_web_assets[i];
+    if (!a) return problem(c, 404, "no such asset", NULL, NULL);
+    int html = !strncmp(a->type, "text/html", 9);
+    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, a->etag},
+                {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
+                {"X-Content-Type-Options", "nosniff"},
+                {html ? "Content-Security-Policy" : NULL,
+                 "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+                 "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
+    const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
+    if (inm && (strstr(inm, a->etag) || !strcmp(inm, "*")))
+        return respond(c, 304, NULL, NULL, 0, 1, hs, sizeof hs / sizeof *hs);
+    return respond(c, 200, a->type, (char *)a->data, a->len, 1, hs, sizeof hs / sizeof *hs);
+}
 
 static enum MHD_Result route_result(conn *c)
 {
@@ -1078,8 +1071,7 @@ static enum MHD_Result dispatch(conn *c)
     switch (c->route) {
     case ROUTE_INDEX:
         if (!get) break;
-        return respond(c, 200, "text/html; charset=utf-8", (char *)index_html,
-                       sizeof index_html - 1, 1, NULL, 0);
+        return route_page(c);
     case ROUTE_HEALTHZ:
         if (!get) break;
         return status_json(c, 200, "ok", NULL);

@@ -90,7 +90,7 @@ export function geojsonRequest(doc, name) {
   if (!polygons.length)
     throw new Error(`${name}: no Polygon or MultiPolygon in this GeoJSON (${skipped} other geometries)`);
   const request = { kind: 'polygons', polygons, op: 'union' };
-  const note = skipped ? ` (${skipped} features that are not polygons left out)` : '';
+  const note = skipped ? ` (${skipped} feature${skipped > 1 ? 's' : ''} without a polygon left out)` : '';
   return { request, label: `${name}: ${polygons.length} polygons${note}`, names };
 }
 

@@ -34,6 +34,8 @@ window.cellar = cellar;
 function setState(s) {
   cellar.state = s;
   $('stage').dataset.state = s;
+  // the picture on the stage is not of the current input until the next is drawn
+  if (s !== 'drawn' && s !== 'idle') $('stage').classList.add('stale');
 }
 
 // ---- the worker -----------------------------------------------------------------------------
@@ -94,6 +96,7 @@ const explodePaths = (k) => ask({ explode: k }).done;
 async function loadFiles(list) {
   state.t0 = performance.now();
   setState('loading');
+  $('example').value = '';
   clearError();
   try {
     const files = await Promise.all([...list].map(async (f) => ({ name: f.name, text: await f.text() })));
@@ -232,6 +235,7 @@ async function compute() {
     return;
   }
   state.sent = req;
+  cellar.sent = { kind: req.kind, options: req.options || {}, op: req.op };
   showRequest(req);
   const body = JSON.stringify(req);
   cellar.timing = { t0, built: performance.now() - t0 };
@@ -289,6 +293,7 @@ async function compute() {
     showError(e);
     return;
   }
+  $('stage').classList.remove('stale');
   // painted: after the next frame
   await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
   if (run !== state.run) return;
@@ -313,6 +318,8 @@ async function draw(model) {
   $('view3dopts').hidden = !is3;
   $('explode').value = '1';
   $('info').textContent = is3 ? 'Click a cell to pick it.' : 'Hover a face.';
+  delete $('info').dataset.face;
+  delete $('info').dataset.cell;
   if (state.view && (state.view instanceof View2D) === is3) {
     state.view.destroy();
     state.view = null;
@@ -457,7 +464,11 @@ function hover2(f, at) {
   const m = state.model;
   const info = $('info');
   const where = at ? `at (${fmt(at[0])}, ${fmt(at[1])})` : '';
-  if (!m || f < 0) { info.textContent = where || 'Hover a face.'; return; }
+  if (!m || f < 0) {
+    info.textContent = where || 'Hover a face.';
+    delete info.dataset.face;
+    return;
+  }
   let t = `face ${f} · area ${fmt(m.area[f])}${m.nholes[f] ? ` · ${m.nholes[f]} hole${m.nholes[f] > 1 ? 's' : ''}` : ''}`;
   const mem = memberOf(m, f);
   if (mem) t += ` · in ${named(mem)}`;
@@ -600,4 +611,5 @@ async function loadExamples() {
 
 wire();
 loadExamples();
+theWorker(); // loaded with the page, not at the first result
 setState('idle');

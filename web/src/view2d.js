@@ -9,8 +9,8 @@
 // grid of the faces' boxes, then an exact even-odd test) for its id, area and membership;
 // face and vertex numbers of what is in view; explode.
 // The paths are made by the worker (worker.js, paths2) as SVG path data.
-// For the tests: `drawn` = {faces, selected} counts what the current paths hold (faces filled,
-// faces filled as the result), `drawnSelected()` the latter's ids, facePixel(f) where face f's
+// For the tests: `drawn` = {faces, selected, dangling} counts what the current paths hold
+// (faces filled, faces filled as the result, dangling edges), `drawnSelected()` the result's, facePixel(f) where face f's
 // number goes and the colour it is filled with.
 const BUCKETS = 48;
 const MAX_LABELS = 1500;
@@ -74,7 +74,7 @@ export class View2D {
     this.paths = {
       fills: pd.fills.map(mk), grey: mk(pd.grey), dangling: mk(pd.dangling), outline: mk(pd.outline),
     };
-    this.drawn = { faces: pd.faces, selected: pd.selected };
+    this.drawn = { faces: pd.faces, selected: pd.selected, dangling: pd.dangling_edges };
     this.canvas.dataset.faces = String(pd.faces);
     this.canvas.dataset.selected = String(pd.selected);
   }
@@ -90,6 +90,7 @@ export class View2D {
   show(model) {
     this.model = model;
     this.hovered = -1;
+    this.onHover(-1, null);
     this.explode = 1;
     this.setPaths(model.paths);
     model.paths = null;
@@ -171,7 +172,7 @@ export class View2D {
       ctx.fill(p.fills[b]);
     }
     ctx.lineJoin = 'round';
-    if (this.faceSize * k >= 3) { // the outlines: where faces are specks, only darkness
+    if (this.faceSize * k >= 8) { // the outlines: where faces are specks, only darkness
       ctx.lineWidth = 0.7 / k;
       ctx.strokeStyle = '#a3a9b2';
       if (p.grey) ctx.stroke(p.grey);
@@ -189,6 +190,15 @@ export class View2D {
       ctx.stroke(p.outline);
     }
     this.renderLabels();
+    // the face under the pointer may have changed with the view
+    if (this.pointer && !this.dragging) {
+      const [x, y] = this.toView(...this.pointer);
+      const f = this.faceAt(x, y);
+      if (f !== this.hovered) {
+        this.hovered = f;
+        this.onHover(f, this.toWorld(x, y));
+      }
+    }
     this.renderHover();
     this.lastFrameMs = performance.now() - t0;
     this.canvas.dataset.frames = String(Number(this.canvas.dataset.frames || 0) + 1);
@@ -311,6 +321,7 @@ export class View2D {
     el.addEventListener('pointerdown', (e) => {
       if (!this.model || e.button !== 0) return;
       drag = { x: e.clientX, y: e.clientY, tx: this.tx, ty: this.ty, id: e.pointerId };
+      this.dragging = true;
       el.setPointerCapture(e.pointerId);
       el.classList.add('dragging');
     });
@@ -323,17 +334,22 @@ export class View2D {
       }
       if (!this.model) return;
       const r = el.getBoundingClientRect();
-      const [x, y] = this.toView(e.clientX - r.left, e.clientY - r.top);
+      this.pointer = [e.clientX - r.left, e.clientY - r.top];
+      const [x, y] = this.toView(...this.pointer);
       this.hover(this.faceAt(x, y), this.toWorld(x, y));
     });
     const up = (e) => {
       if (!drag || e.pointerId !== drag.id) return;
       drag = null;
+      this.dragging = false;
       el.classList.remove('dragging');
     };
     el.addEventListener('pointerup', up);
     el.addEventListener('pointercancel', up);
-    el.addEventListener('pointerleave', () => { if (!drag) this.hover(-1, null); });
+    el.addEventListener('pointerleave', () => {
+      this.pointer = null;
+      if (!drag) this.hover(-1, null);
+    });
     el.addEventListener('dblclick', () => this.fit());
   }
 

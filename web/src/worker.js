@@ -359,11 +359,12 @@ function paths2(m, k) {
     if (boolean && on) selected++;
     (on ? fills[f % BUCKETS] : grey).push(d);
   }
-  let dangling = '', outline = '';
+  let dangling = '', outline = '', ndangling = 0;
   if (!t) {
     const { ev } = m;
     for (let e = 0; e < m.edges; e++) {
       if (!m.dangling[e]) continue;
+      ndangling++;
       const a = ev[2 * e], b = ev[2 * e + 1];
       dangling += `M${num(vxy[2 * a])} ${num(vxy[2 * a + 1])}L${num(vxy[2 * b])} ${num(vxy[2 * b + 1])}`;
     }
@@ -379,7 +380,7 @@ function paths2(m, k) {
   }
   return {
     fills: fills.map((x) => x.join('')), grey: grey.join(''), dangling, outline,
-    explode: k, faces: m.faces, selected,
+    explode: k, faces: m.faces, selected, dangling_edges: ndangling,
   };
 }
 

@@ -3,10 +3,13 @@
 #   podman run -d -p 127.0.0.1:8080:8080 -v cellar-data:/data cellar
 # README, "Deploying with containers", says more (variables, volumes, a read-only root, the
 # compose stack); tests/t_containers.sh builds and runs this image in `make test`.
+# The build stage also needs node and npm: the page cellard serves is bundled from web/ with
+# three.js and esbuild from npm (web/package-lock.json) and embedded in the binary; the runtime
+# stage has no node.
 FROM debian:12 AS build
 RUN apt-get update && apt-get install -y --no-install-recommends \
         gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev libxml2-dev \
-        libpq-dev zlib1g-dev \
+        libpq-dev zlib1g-dev nodejs npm ca-certificates \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY . .

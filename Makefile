@@ -21,7 +21,7 @@ SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lpq -lcrypto -lz
 TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
-              libxml2-dev libpq-dev zlib1g-dev
+              libxml2-dev libpq-dev zlib1g-dev nodejs npm
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
@@ -35,7 +35,9 @@ API_SRC  := $(wildcard api/*.c)
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
 API_OBJ  := $(API_SRC:%.c=$(BUILD)/%.o)
 SERVER_SRC := $(filter-out server/main.c,$(wildcard server/*.c))
-SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o) $(BUILD)/gen/openapi.o
+SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o) $(BUILD)/gen/openapi.o $(BUILD)/gen/web.o
+WEB_SRC  := web/index.html web/style.css web/build.mjs web/package.json web/package-lock.json \
+            $(wildcard web/src/*.js) $(wildcard examples/*)
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
@@ -68,6 +70,18 @@ $(BUILD)/gen/openapi.c: schemas/openapi.json scripts/embed.sh
 
 $(BUILD)/gen/openapi.o: $(BUILD)/gen/openapi.c
 	$(CC) $(CFLAGS) -c $< -o $@
+
+# The page at / (web/): bundled by esbuild (npm ci in web/ first when web/node_modules is
+# missing or stale: node and npm are build dependencies), then embedded as a table of assets.
+$(BUILD)/web/assets.list: $(WEB_SRC) scripts/web-build.sh
+	scripts/web-build.sh $(BUILD)/web
+
+$(BUILD)/gen/web.c: $(BUILD)/web/assets.list scripts/web-embed.sh
+	@mkdir -p $(dir $@)
+	scripts/web-embed.sh $(BUILD)/web > $@.tmp && mv $@.tmp $@
+
+$(BUILD)/gen/web.o: $(BUILD)/gen/web.c server/webassets.h
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/libcellard.a: $(SERVER_OBJ)
 	@rm -f $@

@@ -32,6 +32,7 @@
 #include "api/api.h"
 #include "api/render.h"
 #include "server/log.h"
+#include "server/webassets.h"
 
 extern const unsigned char cellar_openapi[];
 extern const size_t cellar_openapi_len;
@@ -355,12 +356,12 @@ static int compressible(const char *ctype)
                      !strncmp(ctype, "text/", 5) || !strncmp(ctype, "application/javascript", 22));
 }
 
-/* gzip of data[0..len) (level 1: results are big, and the CPU is the jobs'), malloc'd; NULL
- * when out of memory. */
-static char *gzip_buf(const char *data, size_t len, size_t *outlen)
+/* gzip of data[0..len) at `level` (1 for answers: results are big, and the CPU is the jobs'),
+ * malloc'd; NULL when out of memory. */
+static char *gzip_buf(const char *data, size_t len, int level, size_t *outlen)
 {
     z_stream z = {0};
-    if (deflateInit2(&z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return NULL;
+    if (deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return NULL;
     size_t cap = deflateBound(&z, (uLong)len) + 32;
     char *out = malloc(cap);
     if (!out) {
@@ -392,7 +393,7 @@ static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char
     if (compressible(ctype) && len >= 1024) {
         all[na++] = (hdr){MHD_HTTP_HEADER_VARY, "Accept-Encoding"};
         size_t zl = 0;
-        char *z = c->gz ? gzip_buf(body, len, &zl) : NULL;
+        char *z = c->gz ? gzip_buf(body, len, 1, &zl) : NULL;
         if (z) {
             if (!persistent) free(body);
             body = z;
@@ -582,7 +583,7 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
     }
     if (c->gz) { /* every result goes gzipped to such a client (its ETag says so) */
         size_t zl = 0;
-        char *z = gzip_buf(body, len, &zl);
+        char *z = gzip_buf(body, len, 1, &zl);
         free(body);
         if (!z) return problem(c, 503, "out of memory", "5", NULL);
         body = z;
@@ -935,7 +936,7 @@ static int is_hex(const char *s, size_t n)
 static metrics_route classify(const char *url, char *id)
 {
     id[0] = 0;
-    if (!strcmp(url, "/")) return ROUTE_INDEX;
+    if (!strcmp(url, "/") || !strncmp(url, "/assets/", 8)) return ROUTE_INDEX; /* the page */
     if (!strcmp(url, "/healthz")) return ROUTE_HEALTHZ;
     if (!strcmp(url, "/readyz")) return ROUTE_READYZ;
     if (!strcmp(url, "/metrics")) return ROUTE_METRICS;
@@ -955,35 +956,72 @@ static metrics_route classify(const char *url, char *id)
     return ROUTE_OTHER;
 }
 
-/* The page at /: post line segments (JSON) or an SVG drawing, see the complex as a picture. */
-static const char index_html[] =
-    "<!doctype html><html lang=en><meta charset=utf-8><title>cellar</title>\n"
-    "<style>body{font:15px system-ui;margin:2em;max-width:70em}textarea{width:100%;height:9em;"
-    "font:13px monospace}#pic svg{max-width:100%;height:auto;border:1px solid #ddd}"
-    "pre{background:#f4f4f4;padding:1em;overflow:auto;max-height:20em}</style>\n"
-    "<h1>cellar</h1><p>Post line segments or an SVG drawing; get its cell complex (LAR). "
-    "API: <a href=/openapi.json>/openapi.json</a> &middot; <a href=/metrics>/metrics</a></p>\n"
-    "<p><label>Request (JSON)<br><textarea id=req>{\"kind\":\"lines\",\"lines\":[[[0,0],[6,0]],"
-    "[[0,4],[10,4]],[[0,0],[0,4]],[[3,0],[3,4]],[[6,0],[6,8]],[[3,2],[6,2]],[[10,0],[10,8]],"
-    "[[0,8],[10,8]]]}</textarea></label></p>\n<p><label>or an SVG drawing: <input type=file "
-    "id=file accept=\".svg,image/svg+xml\"></label> <label>explode <input id=ex type=number "
-    "value=1.1 min=1 max=3 step=0.05 style=width:5em></label> <label><input type=checkbox "
-    "id=num> numbers</label></p>\n<p><button id=go>Compute</button> <span id=st></span></p>"
-    "<div id=pic></div><pre id=out></pre>\n<script>\n"
-    "const $=id=>document.getElementById(id);\n"
-    "$('file').onchange=async()=>{const f=$('file').files[0];if(f)$('req').value=JSON.stringify("
-    "{kind:'svg',svg:await f.text(),options:{y_up:true}})};\n"
-    "$('go').onclick=async()=>{$('st').textContent='working…';$('pic').innerHTML='';"
-    "$('out').textContent='';try{const r=await fetch('/v1/jobs',{method:'POST',headers:{"
-    "'Content-Type':'application/json','Prefer':'wait=50'},body:$('req').value});"
-    "const t=await r.text();$('st').textContent=r.status+' '+r.statusText;let j;try{j=JSON.parse(t)"
-    "}catch(e){$('out').textContent=t;return}if(r.status!=200){$('out').textContent="
-    "JSON.stringify(j,null,1);return}const s=j.stats||{};$('st').textContent+=' — '+s.V+"
-    "' vertices, '+s.E+' edges, '+s.F+' faces, '+(s.ms?s.ms.total.toFixed(1)+' ms':'');"
-    "$('out').textContent=t.length>20000?t.slice(0,20000)+'…':t;const h=(r.headers.get('ETag')||"
-    "'').replace(/\"/g,'');if(h){const p=await fetch('/v1/results/'+h+'?explode='+$('ex').value+"
-    "($('num').checked?'&numbers=1':''),{headers:{Accept:'image/svg+xml'}});if(p.ok)$('pic')"
-    ".innerHTML=await p.text()}}catch(e){$('st').textContent=String(e)}};\n</script>\n";
+/* The page (web/, bundled at build time and embedded as build/gen/web.c): "/" and its assets
+ * under /assets/ (their names carry a hash of their bytes: immutable), each with a strong ETag
+ * (If-None-Match answers 304); an unknown asset is a 404 problem. */
+/* The assets gzipped once (level 9), at the first request that takes gzip: each with its own
+ * ETag (the asset's with "-gz"), as a different representation must have. */
+typedef struct page_gz {
+    char *data; /* NULL: not worth it (small or not text), or out of memory */
+    size_t len;
+    char etag[48];
+} page_gz;
+static page_gz *page_gzs;
+static pthread_once_t page_gz_once = PTHREAD_ONCE_INIT;
+
+static void page_gz_init(void)
+{
+    page_gzs = calloc(cellar_web_assets_n ? cellar_web_assets_n : 1, sizeof *page_gzs);
+    for (size_t i = 0; page_gzs && i < cellar_web_assets_n; i++) {
+        const web_asset *a = &cellar_web_assets[i];
+        size_t n = strlen(a->etag);
+        if (!compressible(a->type) || a->len < 1024 || n < 2 || n + 3 >= sizeof page_gzs->etag)
+            continue;
+        page_gz *g = &page_gzs[i];
+        g->data = gzip_buf((const char *)a->data, a->len, 9, &g->len);
+        if (g->data && g->len >= a->len) { /* no gain */
+            free(g->data);
+            g->data = NULL;
+        }
+        snprintf(g->etag, sizeof g->etag, "%.*s-gz\"", (int)(n - 1), a->etag);
+    }
+}
+
+static enum MHD_Result route_page(conn *c)
+{
+    size_t i = 0;
+    while (i < cellar_web_assets_n && strcmp(cellar_web_assets[i].path, c->path)) i++;
+    if (i == cellar_web_assets_n) return problem(c, 404, "no such asset", NULL, NULL);
+    const web_asset *a = &cellar_web_assets[i];
+    const page_gz *g = NULL;
+    if (compressible(a->type) && a->len >= 1024) {
+        pthread_once(&page_gz_once, page_gz_init);
+        if (c->gz && page_gzs && page_gzs[i].data) g = &page_gzs[i];
+    }
+    int html = !strncmp(a->type, "text/html", 9);
+    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, g ? g->etag : a->etag},
+                {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
+                {"X-Content-Type-Options", "nosniff"},
+                {g ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
+                {a->len >= 1024 && compressible(a->type) ? MHD_HTTP_HEADER_VARY : NULL,
+                 "Accept-Encoding"},
+                {html ? "Content-Security-Policy" : NULL,
+                 "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+                 "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
+    size_t nh = sizeof hs / sizeof *hs;
+    /* If-None-Match: either representation's tag names the same bytes once decoded */
+    const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
+    if (inm && (strstr(inm, a->etag) || !strcmp(inm, "*") ||
+                (page_gzs && page_gzs[i].etag[0] && strstr(inm, page_gzs[i].etag)))) {
+        struct MHD_Response *r = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);
+        return queue(c, 304, NULL, r, hs, nh);
+    }
+    const char *data = g ? g->data : (const char *)a->data;
+    size_t len = g ? g->len : a->len;
+    struct MHD_Response *r =
+        MHD_create_response_from_buffer(len, (void *)data, MHD_RESPMEM_PERSISTENT);
+    return queue(c, 200, a->type, r, hs, nh);
+}
 
 static enum MHD_Result route_result(conn *c)
 {
@@ -1336,8 +1374,7 @@ static enum MHD_Result dispatch(conn *c)
     switch (c->route) {
     case ROUTE_INDEX:
         if (!get) break;
-        return respond(c, 200, "text/html; charset=utf-8", (char *)index_html,
-                       sizeof index_html - 1, 1, NULL, 0);
+        return route_page(c);
     case ROUTE_HEALTHZ:
         if (!get) break;
         return status_json(c, 200, "ok", NULL);

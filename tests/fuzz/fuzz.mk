@@ -22,7 +22,8 @@ FUZZ_TARGETS ?= $(FUZZ_ALL)
 FUZZ_BIN     := $(FUZZ_ALL:%=$(FUZZ_BUILD)/fuzz_%)
 FUZZ_HDR     := $(wildcard core/*.h api/*.h server/*.h tests/fuzz/*.h)
 FUZZ_LIB_OBJ := $(CORE_SRC:%.c=$(FUZZ_BUILD)/obj/%.o) $(API_SRC:%.c=$(FUZZ_BUILD)/obj/%.o)
-FUZZ_SRV_OBJ := $(SERVER_SRC:%.c=$(FUZZ_BUILD)/obj/%.o) $(FUZZ_BUILD)/obj/gen/openapi.o
+FUZZ_SRV_OBJ := $(SERVER_SRC:%.c=$(FUZZ_BUILD)/obj/%.o) $(FUZZ_BUILD)/obj/gen/openapi.o \
+                $(FUZZ_BUILD)/obj/gen/web.o
 
 .PHONY: fuzz-build
 .SECONDARY: $(FUZZ_LIB_OBJ) $(FUZZ_SRV_OBJ) $(FUZZ_ALL:%=$(FUZZ_BUILD)/obj/tests/fuzz/fuzz_%.o)
@@ -39,6 +40,14 @@ $(FUZZ_BUILD)/obj/gen/openapi.c: schemas/openapi.json scripts/embed.sh
 
 $(FUZZ_BUILD)/obj/gen/openapi.o: $(FUZZ_BUILD)/obj/gen/openapi.c
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -c $< -o $@
+
+# the page's assets, from the main build's bundle ($(BUILD)/web)
+$(FUZZ_BUILD)/obj/gen/web.c: $(BUILD)/web/assets.list scripts/web-embed.sh
+	@mkdir -p $(dir $@)
+	scripts/web-embed.sh $(BUILD)/web > $@.tmp && mv $@.tmp $@
+
+$(FUZZ_BUILD)/obj/gen/web.o: $(FUZZ_BUILD)/obj/gen/web.c server/webassets.h
+	$(FUZZ_CC) $(CPPFLAGS) $(FUZZ_CFLAGS) -c $< -o $@
 
 $(FUZZ_BUILD)/libcellar.a: $(FUZZ_LIB_OBJ)
 	@rm -f $@

@@ -999,15 +999,15 @@ static enum MHD_Result route_page(conn *c)
         if (c->gz && page_gzs && page_gzs[i].data) g = &page_gzs[i];
     }
     int html = !strncmp(a->type, "text/html", 9);
-    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, g ? g->etag : a->etag},
-                {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
-                {"X-Content-Type-Options", "nosniff"},
-                {g ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
-                {a->len >= 1024 && compressible(a->type) ? MHD_HTTP_HEADER_VARY : NULL,
-                 "Accept-Encoding"},
-                {html ? "Content-Security-Policy" : NULL,
-                 "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
-                 "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
+    hdr hs[] = {
+        {MHD_HTTP_HEADER_ETAG, g ? g->etag : a->etag},
+        {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
+        {"X-Content-Type-Options", "nosniff"},
+        {g ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
+        {a->len >= 1024 && compressible(a->type) ? MHD_HTTP_HEADER_VARY : NULL, "Accept-Encoding"},
+        {html ? "Content-Security-Policy" : NULL,
+         "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+         "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
     size_t nh = sizeof hs / sizeof *hs;
     /* If-None-Match: either representation's tag names the same bytes once decoded */
     const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");

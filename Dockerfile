@@ -17,7 +17,8 @@ RUN make build/cellard build/cellar
 
 # The runtime holds only the libraries cellard links (ldd build/cellard): libjansson4 (JSON),
 # libmicrohttpd12 (HTTP), libsqlite3-0 (the embedded store), libpq5 (the PostgreSQL store),
-# libssl3 (SHA-256 of requests and results), libxml2 (SVG).  No curl: the HEALTHCHECK is
+# libssl3 (SHA-256 of requests and results), libxml2 (SVG); zlib1g (gzip) is in every Debian
+# image already.  No curl: the HEALTHCHECK is
 # cellard --healthcheck.
 FROM debian:12-slim
 RUN apt-get update && apt-get install -y --no-install-recommends \

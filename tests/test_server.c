@@ -2176,6 +2176,7 @@ SERVER_TEST(slow_clients, "--workers 1 --job-threads 1 --header-timeout 2 --body
     REQUIRE(fds, "no memory");
     const char half[] = "GET /healthz HTTP/1.1\r\nHo";
     int opened = 0;
+    long rss0 = rss_kb(d->pid);
     double t0 = now_s();
     for (int i = 0; i < NSLOW; i++) {
         fds[i] = raw_connect(d);
@@ -2205,8 +2206,10 @@ SERVER_TEST(slow_clients, "--workers 1 --job-threads 1 --header-timeout 2 --body
     CHECK(answered == 5 && worst < 0.1 * slowdown(),
           "/healthz beside %d slow connections: %d of 5 answered, the slowest in %.3f s", opened,
           answered, worst);
-    printf("  (slow clients: /healthz in %.1f ms at worst beside %d half-sent requests)\n",
-           worst * 1e3, opened);
+    long rss1 = rss_kb(d->pid);
+    printf("  (slow clients: /healthz in %.1f ms at worst beside %d half-sent requests; RSS %ld "
+           "MiB before, %ld MiB with them)\n",
+           worst * 1e3, opened, rss0 / 1024, rss1 / 1024);
     /* the address's share is cut off at once, the rest at the header deadline */
     int early = 0, late = 0;
     for (int i = 0; i < NSLOW; i++)

@@ -13,7 +13,11 @@ RUN apt-get update && apt-get install -y --no-install-recommends \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY . .
-RUN make build/cellard build/cellar
+# Behind a proxy that re-signs TLS, npm needs the proxy's CA: give it as the build secret "ca"
+# (podman build --secret id=ca,src=/path/to/ca.pem ..., docker the same); without it, none.
+RUN --mount=type=secret,id=ca \
+    if [ -s /run/secrets/ca ]; then export NODE_EXTRA_CA_CERTS=/run/secrets/ca; fi; \
+    make build/cellard build/cellar
 
 # The runtime holds only the libraries cellard links (ldd build/cellard): libjansson4 (JSON),
 # libmicrohttpd12 (HTTP), libsqlite3-0 (the embedded store), libpq5 (the PostgreSQL store),

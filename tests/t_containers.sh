@@ -81,8 +81,13 @@ EOF
 if [ "${CELLAR_SANITIZED:-0}" != 1 ]; then
     source=$(git remote get-url origin 2>/dev/null || echo "file://$(pwd)")
     podman rmi -f "$IMG" >/dev/null 2>&1
+    # npm through a proxy that re-signs TLS (as on our machines): its CA as the build secret
+    ca=${CELLAR_BUILD_CA:-${NODE_EXTRA_CA_CERTS:-}}
+    secret=""
+    [ -n "$ca" ] && [ -s "$ca" ] && secret="--secret id=ca,src=$ca"
     t0=$(now)
-    if podman build --format docker --network=host --pull=never --no-cache \
+    # shellcheck disable=SC2086
+    if podman build --format docker --network=host --pull=never --no-cache $secret \
         --build-arg VERSION="$VERSION" --build-arg SOURCE="$source" -t "$IMG" . >"$T/build.log" 2>&1; then
         cold=$(since "$t0")
         pass "the image builds from the Dockerfile (cold: ${cold} s)"
@@ -92,7 +97,8 @@ if [ "${CELLAR_SANITIZED:-0}" != 1 ]; then
     fi
     id1=$(podman image inspect "$IMG" --format '{{.Id}}')
     t0=$(now)
-    podman build --format docker --network=host --pull=never --build-arg VERSION="$VERSION" \
+    # shellcheck disable=SC2086
+    podman build --format docker --network=host --pull=never $secret --build-arg VERSION="$VERSION" \
         --build-arg SOURCE="$source" -t "$IMG" . >"$T/build2.log" 2>&1
     cached=$(since "$t0")
     id2=$(podman image inspect "$IMG" --format '{{.Id}}')
@@ -180,7 +186,8 @@ export CELLAR_HTTP_PORT=$(python3 -c 'import socket; s=socket.socket(); s.bind((
 export CELLAR_LEASE_SECONDS=5
 podman tag "$IMG" localhost/cellar:latest # the stack's cellard image: built above (its cache)
 t0=$(now)
-if ! podman-compose -p "$N" -f deploy/compose.yaml build >"$T/cbuild.log" 2>&1; then
+# (the cellard services' image is the one built and tagged above: only postgres and nginx here)
+if ! podman-compose -p "$N" -f deploy/compose.yaml build postgres nginx >"$T/cbuild.log" 2>&1; then
     tail -n 30 "$T/cbuild.log"
     give_up "containers: podman-compose build failed"
 fi

@@ -270,7 +270,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
      * second for hours never run out of local ports (connect would fail) */
     struct linger lg = {.l_onoff = 1, .l_linger = 0};
     setsockopt(fd, SOL_SOCKET, SO_LINGER, &lg, sizeof lg);
-    if (connect(fd, (struct sockaddr *)&addr, sizeof addr) < 0) {
+    int rc = connect(fd, (struct sockaddr *)&addr, sizeof addr);
+    if (rc < 0 && errno == EINTR) {
+        /* a signal (libFuzzer's timer) cut the call short: the connection goes on being made;
+         * wait for it and take its outcome */
+        struct pollfd p = {.fd = fd, .events = POLLOUT};
+        while (poll(&p, 1, 5000) < 0 && errno == EINTR) {
+        }
+        int err = ETIMEDOUT;
+        socklen_t len = sizeof err;
+        if (p.revents && getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) < 0) err = errno;
+        rc = err ? -1 : 0;
+        errno = err;
+    }
+    if (rc < 0) {
         /* the daemon is gone or refuses connections: a finding, not a bad input */
         FUZZ_CHECK(0, "connect to 127.0.0.1:%u: %s", ntohs(addr.sin_port), strerror(errno));
     }

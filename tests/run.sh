@@ -1,6 +1,7 @@
 #!/bin/sh
 # Runs every test program of a build directory and every shell test (tests/t_*.sh), adds up
-# their "N passed, N failed[, N skipped]" lines and prints the total as the last line.
+# their "N passed, N failed[, N skipped]" lines and prints the total as the last line (and
+# each test's wall time after its output, to keep the suite's time in view).
 # Every test runs from the repository's top (its data is tests/data).
 # Usage: tests/run.sh BUILD_DIR [NAME ...]   (BUILD_DIR relative to the repository's top, or
 # absolute; NAMEs, e.g. test_exact3d t_real3d, run only those: make stress)
@@ -17,9 +18,11 @@ for t in "$B"/tests/test_* tests/t_*.sh; do
     n=$(basename "$t" .sh)
     [ "$ONLY" = "  " ] || case $ONLY in *" $n "*) ;; *) continue ;; esac
     echo "== $t"
+    t0=$(date +%s)
     "$t" >"$log" 2>&1
     rc=$?
     cat "$log"
+    echo "   ($n: $(($(date +%s) - t0)) s)"
     last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$log" | tail -n 1)
     if [ -z "$last" ]; then
         echo "FAIL $t: exited $rc without a summary line"

@@ -356,12 +356,24 @@ static int compressible(const char *ctype)
                      !strncmp(ctype, "text/", 5) || !strncmp(ctype, "application/javascript", 22));
 }
 
+/* Whether an answer of this type and size goes gzipped to a client that takes gzip. */
+static int worth_gzip(const char *ctype, size_t len)
+{
+    return compressible(ctype) && len >= 1024;
+}
+
+/* Starts a gzip stream (deflate with a gzip header) at `level`; 0 on failure. */
+static int gzip_init(z_stream *z, int level)
+{
+    return deflateInit2(z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK;
+}
+
 /* gzip of data[0..len) at `level` (1 for answers: results are big, and the CPU is the jobs'),
  * malloc'd; NULL when out of memory. */
 static char *gzip_buf(const char *data, size_t len, int level, size_t *outlen)
 {
     z_stream z = {0};
-    if (deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return NULL;
+    if (!gzip_init(&z, level)) return NULL;
     size_t cap = deflateBound(&z, (uLong)len) + 32;
     char *out = malloc(cap);
     if (!out) {
@@ -390,7 +402,7 @@ static enum MHD_Result respond(conn *c, unsigned status, const char *ctype, char
     hdr all[16];
     size_t na = 0;
     for (size_t i = 0; i < nh && na < 14; i++) all[na++] = hs[i];
-    if (compressible(ctype) && len >= 1024) {
+    if (worth_gzip(ctype, len)) {
         all[na++] = (hdr){MHD_HTTP_HEADER_VARY, "Accept-Encoding"};
         size_t zl = 0;
         char *z = c->gz ? gzip_buf(body, len, 1, &zl) : NULL;
@@ -731,8 +743,7 @@ static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, co
         rr->size = size;
         struct MHD_Response *r = NULL;
         gz_reader *g = c->gz ? calloc(1, sizeof *g) : NULL;
-        if (c->gz &&
-            (!g || deflateInit2(&g->z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)) {
+        if (c->gz && (!g || !gzip_init(&g->z, 1))) {
             free(g);
             free(rr);
             return problem(c, 503, "out of memory", "5", NULL);
@@ -956,9 +967,6 @@ static metrics_route classify(const char *url, char *id)
     return ROUTE_OTHER;
 }
 
-/* The page (web/, bundled at build time and embedded as build/gen/web.c): "/" and its assets
- * under /assets/ (their names carry a hash of their bytes: immutable), each with a strong ETag
- * (If-None-Match answers 304); an unknown asset is a 404 problem. */
 /* The assets gzipped once (level 9), at the first request that takes gzip: each with its own
  * ETag (the asset's with "-gz"), as a different representation must have. */
 typedef struct page_gz {
@@ -975,8 +983,7 @@ static void page_gz_init(void)
     for (size_t i = 0; page_gzs && i < cellar_web_assets_n; i++) {
         const web_asset *a = &cellar_web_assets[i];
         size_t n = strlen(a->etag);
-        if (!compressible(a->type) || a->len < 1024 || n < 2 || n + 3 >= sizeof page_gzs->etag)
-            continue;
+        if (!worth_gzip(a->type, a->len) || n < 2 || n + 3 >= sizeof page_gzs->etag) continue;
         page_gz *g = &page_gzs[i];
         g->data = gzip_buf((const char *)a->data, a->len, 9, &g->len);
         if (g->data && g->len >= a->len) { /* no gain */
@@ -987,6 +994,9 @@ static void page_gz_init(void)
     }
 }
 
+/* The page (web/, bundled at build time and embedded as build/gen/web.c): "/" and its assets
+ * under /assets/ (their names carry a hash of their bytes: immutable), each with a strong ETag
+ * (If-None-Match answers 304); an unknown asset is a 404 problem. */
 static enum MHD_Result route_page(conn *c)
 {
     size_t i = 0;
@@ -994,20 +1004,20 @@ static enum MHD_Result route_page(conn *c)
     if (i == cellar_web_assets_n) return problem(c, 404, "no such asset", NULL, NULL);
     const web_asset *a = &cellar_web_assets[i];
     const page_gz *g = NULL;
-    if (compressible(a->type) && a->len >= 1024) {
+    int gzippable = worth_gzip(a->type, a->len);
+    if (gzippable) {
         pthread_once(&page_gz_once, page_gz_init);
         if (c->gz && page_gzs && page_gzs[i].data) g = &page_gzs[i];
     }
     int html = !strncmp(a->type, "text/html", 9);
-    hdr hs[] = {
-        {MHD_HTTP_HEADER_ETAG, g ? g->etag : a->etag},
-        {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
-        {"X-Content-Type-Options", "nosniff"},
-        {g ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
-        {a->len >= 1024 && compressible(a->type) ? MHD_HTTP_HEADER_VARY : NULL, "Accept-Encoding"},
-        {html ? "Content-Security-Policy" : NULL,
-         "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
-         "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
+    hdr hs[] = {{MHD_HTTP_HEADER_ETAG, g ? g->etag : a->etag},
+                {MHD_HTTP_HEADER_CACHE_CONTROL, a->cache},
+                {"X-Content-Type-Options", "nosniff"},
+                {g ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
+                {gzippable ? MHD_HTTP_HEADER_VARY : NULL, "Accept-Encoding"},
+                {html ? "Content-Security-Policy" : NULL,
+                 "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+                 "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"}};
     size_t nh = sizeof hs / sizeof *hs;
     /* If-None-Match: either representation's tag names the same bytes once decoded */
     const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");

@@ -396,10 +396,14 @@ fail:
     return NULL;
 }
 
+/* --format request: the request itself, not a row of render_formats (a format added there
+ * takes the next index) */
+#define OUT_REQUEST (-2)
+
 /* What run, svg and solids print: the result JSON, or a picture, map or mesh of it
  * (api/render.h). */
 typedef struct out_format {
-    int kind; /* an index into render_formats (0 json, 1 svg, 2 geojson, 3 obj), or 4 request */
+    int kind; /* an index into render_formats (0 json, 1 svg, 2 geojson, 3 obj), or OUT_REQUEST */
     render_opts ro;
     const char *first;   /* the first SVG-only flag given, for "is for --format svg" errors */
     const char *explode; /* --explode when given: for --format svg or obj */
@@ -605,7 +609,7 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
         fprintf(stderr, "cellar: out of memory\n");
         goto out;
     }
-    if (of->kind == 4) {
+    if (of->kind == OUT_REQUEST) {
         rc = write_request(body, strlen(body));
         goto out;
     }
@@ -753,7 +757,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
             goto out;
         }
     }
-    if (!fl->faces && of->kind != 4) {
+    if (!fl->faces && of->kind != OUT_REQUEST) {
         /* the solids as read, straight to the run: the bytes of `cellar run` on the request
          * that --format request prints, without writing and parsing it */
         api_run_opts ro = run_opts(threads, of);
@@ -797,7 +801,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         goto out;
     }
     m = NULL;
-    if (of->kind == 4) {
+    if (of->kind == OUT_REQUEST) {
         rc = write_request(body, blen);
         goto out;
     }
@@ -911,8 +915,10 @@ int main(int argc, char **argv)
             val = argv[++i];
             if (a[2] == 'f') {
                 const render_format *f = render_format_named(val);
-                of.kind = f ? (int)(f - render_formats) : !strcmp(val, "request") ? 4 : -1;
-                if (of.kind < 0) {
+                of.kind = f                         ? (int)(f - render_formats)
+                          : !strcmp(val, "request") ? OUT_REQUEST
+                                                    : -1;
+                if (of.kind == -1) {
                     rc = usage_error(
                         "--format: expected json, svg, geojson, obj or request, not \"%s\"", val);
                     goto out;
@@ -972,7 +978,7 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for --format geojson", of.cells);
     } else if (of.explode && of.kind != 1 && of.kind != 3) {
         rc = usage_error("%s is for --format svg or obj", of.explode);
-    } else if (of.kind == 4 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
+    } else if (of.kind == OUT_REQUEST && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
         rc = usage_error("%s", "--format request is for the svg and solids commands");
     } else if (npos == 0) {
         rc = usage_error("%s", "no command (run, gen, svg, solids)");

@@ -1022,7 +1022,7 @@ static enum MHD_Result route_page(conn *c)
     /* If-None-Match: either representation's tag names the same bytes once decoded */
     const char *inm = MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, "If-None-Match");
     if (inm && (strstr(inm, a->etag) || !strcmp(inm, "*") ||
-                (page_gzs && page_gzs[i].etag[0] && strstr(inm, page_gzs[i].etag)))) {
+                (gzippable && page_gzs && page_gzs[i].etag[0] && strstr(inm, page_gzs[i].etag)))) {
         struct MHD_Response *r = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);
         return queue(c, 304, NULL, r, hs, nh);
     }

@@ -199,6 +199,8 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
                                         "planes",
                                         "coplanar_groups",
                                         "pairs_tested",
+                                        "pairs_meeting",
+                                        "faces_reached",
                                         "split_faces",
                                         "cuts",
                                         "points",
@@ -209,12 +211,14 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
                                         "shells",
                                         "components"};
     const size_t counts[] = {s->input_solids, s->input_faces, s->planes, s->coplanar_groups,
-                             s->pairs_tested, s->split_faces, s->cuts,   s->points,
+                             s->pairs_tested, s->pairs_meeting, s->faces_reached,
+                             s->split_faces,  s->cuts,          s->points,
                              c->nv,           c->ne,          c->nf,     c->nc,
                              s->shells,       s->components};
-    static const char *const ms_names[] = {"snap", "pairs", "cuts", "faces", "cells", "total"};
-    const double ms[] = {s->ms_snap,  s->ms_pairs, s->ms_cuts,
-                         s->ms_faces, s->ms_cells, s->ms_total};
+    static const char *const ms_names[] = {"check", "snap",  "pairs",   "cuts",
+                                           "faces", "cells", "boolean", "total"};
+    const double ms[] = {s->ms_check, s->ms_snap,  s->ms_pairs,   s->ms_cuts,
+                         s->ms_faces, s->ms_cells, s->ms_boolean, s->ms_total};
     api_buf_putc(b, '{');
     for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++) {
         if (i) api_buf_putc(b, ',');

@@ -39,6 +39,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "core/arr3.h"
 #include "core/solid.h"
@@ -523,6 +524,13 @@ int api_solids_check(const void *parsed, api_error *err)
     return validate(r, NULL, NULL, NULL, err);
 }
 
+static double ms_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
 /* Progress inside the membership walk. */
 static void membership_tick(void *udata, double f)
 {
@@ -547,6 +555,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     char msg[API_ERRMAX] = "";
     int rc;
     if (!w) return api_fail(err, API_ENOMEM, "out of memory");
+    double t_check = ms_now(), ms_check;
     if (ro->progress) ro->progress(ro->udata, "check", 0);
     if (!r->soup && !(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed))) {
         rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
@@ -555,6 +564,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     rc = validate(r, r->soup ? NULL : fixed, w, ro, err);
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "check", 1);
+    ms_check = ms_now() - t_check;
     warn_finish(w);
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
@@ -565,9 +575,12 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         goto out;
     }
     if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
+    c.stats.ms_check = ms_check;
+    c.stats.ms_total += ms_check;
     api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
+        double t_bool = ms_now();
         if (ro->progress) ro->progress(ro->udata, "membership", 0);
         int m = bool3_membership_ex(&c, &mem, &bad_face, ro->progress ? membership_tick : NULL,
                                     (void *)ro);
@@ -586,6 +599,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         }
         fmt.membership = &mem;
         fmt.result = &res;
+        c.stats.ms_boolean = ms_now() - t_bool;
+        c.stats.ms_total += c.stats.ms_boolean;
     }
     if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar3_write(out, &c, &fmt, err);

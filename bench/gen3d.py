@@ -9,6 +9,8 @@ Usage:
                                      fivecubes-input.json: 1-based FV in cuboid order)
   gen3d.py mesh FILE.off SCENE       a mesh (as read) and a second solid made from it:
                                      SCENE rot, box or shell (below)
+  gen3d.py refine FILE.off N SCENE   the mesh refined to exactly N triangles (N >= its face
+                                     count, even), then as mesh: SCENE rot, box or shell
 Output (at least one; default --json -):
   --json PATH     a cellar request {"kind": "solids", "solids": [{"V": [[x,y,z],...],
                   "FV": [[v,...],...]}, ...]} (0-based indices; '-' = stdout)
@@ -54,6 +56,13 @@ mesh: the mesh M of FILE.off (its numbers kept as read) and, as tests/real3d.py 
                         M to 0.1 e above: through M from top to bottom;
                  shell  M scaled by 0.8 about c (inside M: the union is M, the difference a
                         shell).
+refine: every face of FILE.off cut into a fan of triangles; k the most rounds such that
+  N / 4^k is a whole number M of at least those triangles with M minus them even; the longest
+  edges (ties by vertex indices) split at their midpoints, two triangles an edge, until there
+  are M; then k rounds of Loop subdivision (every triangle into four, the surface smoothed:
+  a real mesh refined as a scanner would give it, with no two triangles in one plane).  The
+  surface stays closed and oriented; that it does not intersect itself is checked with CGAL
+  (bench/mesh3.py does so for each size).
 larcubes: faces grouped into solids by shared vertices, each quad [a,b,c,d] (LAR cuboid order)
   made the cycle [a,b,d,c], each face turned outward (the solids are convex).
 """
@@ -199,6 +208,10 @@ def read_off(path):
 
 def mesh(path, scene):
     V, F = read_off(path)
+    return mesh_of(V, F, scene)
+
+
+def mesh_of(V, F, scene):
     lo = [min(v[i] for v in V) for i in range(3)]
     hi = [max(v[i] for v in V) for i in range(3)]
     c = [(lo[i] + hi[i]) / 2 for i in range(3)]
@@ -227,6 +240,101 @@ def mesh(path, scene):
     else:
         raise ValueError("unknown scene '%s' (rot, box or shell)" % scene)
     return [(V, F), other]
+
+
+def split_longest(V, T, n):
+    """Splits the longest edges of the closed triangle mesh (V, T) at their midpoints, two
+    triangles an edge, until it has n triangles (n - len(T) even); passes over the edges from
+    the longest, an edge at most once a pass and no triangle twice a pass."""
+    if (n - len(T)) % 2:
+        raise ValueError("refine: %d - %d must be even" % (n, len(T)))
+    while len(T) < n:
+        edges = {}
+        for t, (a, b, c) in enumerate(T):
+            for u, v in ((a, b), (b, c), (c, a)):
+                edges.setdefault((u, v) if u < v else (v, u), []).append(t)
+
+        def len2(k):
+            return sum((V[k[0]][i] - V[k[1]][i]) ** 2 for i in range(3))
+        used = bytearray(len(T))
+        todo = (n - len(T)) // 2
+        split = {}
+        for k in sorted(edges, key=lambda k: (-len2(k), k)):
+            if todo == 0:
+                break
+            ts = edges[k]
+            if len(ts) != 2 or used[ts[0]] or used[ts[1]]:
+                continue
+            used[ts[0]] = used[ts[1]] = 1
+            split[k] = len(V)
+            V.append([(V[k[0]][i] + V[k[1]][i]) / 2 for i in range(3)])
+            todo -= 1
+        if not split:
+            raise ValueError("refine: no edge left to split")
+        U = []
+        for t, (a, b, c) in enumerate(T):
+            if not used[t]:
+                U.append([a, b, c])
+                continue
+            for u, v, w in ((a, b, c), (b, c, a), (c, a, b)):
+                m = split.get((u, v) if u < v else (v, u))
+                if m is not None:
+                    U += [[u, m, w], [m, v, w]]
+                    break
+        T = U
+    return V, T
+
+
+def loop_round(V, T):
+    """One round of Loop subdivision of the closed triangle mesh (V, T): every triangle into
+    four, edge points 3/8 (a + b) + 1/8 (c + d), old vertices moved by Loop's weights."""
+    opp = {}
+    nbr = [set() for _ in V]
+    for a, b, c in T:
+        for u, v, w in ((a, b, c), (b, c, a), (c, a, b)):
+            opp.setdefault((u, v) if u < v else (v, u), []).append(w)
+            nbr[u].add(v)
+            nbr[v].add(u)
+    W = []
+    for i, v in enumerate(V):
+        k = len(nbr[i])
+        beta = (5 / 8 - (3 / 8 + math.cos(2 * math.pi / k) / 4) ** 2) / k
+        s = [sum(V[j][a] for j in nbr[i]) for a in range(3)]
+        W.append([(1 - k * beta) * v[a] + beta * s[a] for a in range(3)])
+    mid = {}
+    for e, ws in opp.items():
+        if len(ws) != 2:
+            raise ValueError("refine: the mesh is not closed and manifold")
+        a, b = e
+        c, d = ws
+        mid[e] = len(W)
+        W.append([3 / 8 * (V[a][i] + V[b][i]) + 1 / 8 * (V[c][i] + V[d][i]) for i in range(3)])
+    U = []
+    for a, b, c in T:
+        ab = mid[(a, b) if a < b else (b, a)]
+        bc = mid[(b, c) if b < c else (c, b)]
+        ca = mid[(c, a) if c < a else (a, c)]
+        U += [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+    return W, U
+
+
+def refine(path, n, scene):
+    V, F = read_off(path)
+    T = []
+    for f in F:
+        T.extend([f[0], f[k], f[k + 1]] for k in range(1, len(f) - 1))
+    if n < len(T):
+        raise ValueError("refine: N = %d is below the mesh's %d triangles" % (n, len(T)))
+    # the most Loop rounds k such that N / 4^k is a whole number of at least the mesh's
+    # triangles, at an even distance from them (an edge split adds two)
+    k = 0
+    while n % 4 ** (k + 1) == 0 and n // 4 ** (k + 1) >= len(T) and \
+            (n // 4 ** (k + 1) - len(T)) % 2 == 0:
+        k += 1
+    V, T = split_longest(V, T, n // 4 ** k)
+    for _ in range(k):
+        V, T = loop_round(V, T)
+    return mesh_of(V, T, scene)
 
 
 def write_json(solids, options, f):
@@ -280,7 +388,7 @@ def main(argv):
             pos.append(a)
             i += 1
     if not pos:
-        die("no generator (cubes, grid, tets, larcubes or mesh)")
+        die("no generator (cubes, grid, tets, larcubes, mesh or refine)")
     kind, args = pos[0], pos[1:]
     info = {"kind": kind}
     try:
@@ -305,6 +413,8 @@ def main(argv):
             solids = larcubes(args[0])
         elif kind == "mesh" and len(args) == 2:
             solids = mesh(args[0], args[1])
+        elif kind == "refine" and len(args) == 3:
+            solids = refine(args[0], int(args[1]), args[2])
         else:
             die("bad arguments for '%s'" % kind)
     except (ValueError, OSError, IndexError) as e:

@@ -52,13 +52,18 @@ typedef struct arr3_stats {
     size_t planes;          /* exact planes holding pieces */
     size_t coplanar_groups; /* planes holding pieces of more than one input face */
     size_t split_faces;     /* input faces not planar on the grid, split into triangles */
-    size_t pairs_tested;    /* candidate piece pairs from the box-kd-tree */
+    size_t pairs_tested;    /* candidate piece pairs (of different solids, boxes meeting) */
+    size_t pairs_meeting;   /* of those, pairs whose pieces meet (cut, contact, coplanar overlap) */
+    size_t faces_reached;   /* pieces that go through a plane arrangement (the rest kept whole) */
     size_t cuts;            /* segments where pieces of different solids meet */
     size_t points;          /* vertices made by the arrangement (implicit, exact) */
     size_t nv, ne, nf, nc;  /* result counts (nc: bounded cells) */
     size_t shells, components;
     double precision;
-    double ms_snap, ms_pairs, ms_cuts, ms_faces, ms_cells, ms_total;
+    double ms_check; /* set by the caller that checked the solids (0 if none) */
+    double ms_snap, ms_pairs, ms_cuts, ms_faces, ms_cells;
+    double ms_boolean; /* set by the caller that ran a Boolean (0 if none) */
+    double ms_total;   /* the arrangement; callers add their check and Boolean */
 } arr3_stats;
 
 /* The 3-complex.  Face f's cycles are fc[fc_off[f] .. fc_off[f+1]), the first its outer cycle

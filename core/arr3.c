@@ -715,31 +715,34 @@ static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
     return id;
 }
 
-/* Adds a piece with the given cycles (vertex lists) on plane pl (canonical id); the vertical
- * planes of its edges are left to stage_sides. */
-static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t **cyc,
-                     const size_t *len, size_t nc)
+/* Adds a piece with the given cycles (vertex lists), anchor vertices av (their raw plane's
+ * normal has its largest component on axis k) and orientation sgn about that plane; the
+ * vertical planes of its edges are left to stage_sides, its canonical plane to whoever needs
+ * it (piece_plane_id). */
+static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, int k, int sgn,
+                     uint32_t **cyc, const size_t *len, size_t nc)
 {
-    piece P = {solid, face, pl, (uint32_t)A->npcyc, (uint32_t)nc, {0}, 1};
-    int k = plane_axis(&A->pl[pl]);
-    P.sgn = (area2(A, k, cyc[0], len[0]) > 0) == (A->pl[pl].n[k] > 0) ? 1 : -1;
-    for (int a = 0; a < 3; a++) P.box[a] = INT64_MAX, P.box[3 + a] = INT64_MIN;
+    piece P = {solid, face, NONE, (uint32_t)A->npcyc, (uint32_t)nc, {av[0], av[1], av[2]}, NONE,
+               {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN}, (int8_t)sgn,
+               nc > 1};
+    size_t total = 0;
+    for (size_t c = 0; c < nc; c++) total += len[c];
+    if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + nc + 1, sizeof *A->pc_off) ||
+        a3_grow(&A->pcv, &A->cappcv, A->npcv + total, sizeof *A->pcv) ||
+        a3_grow(&A->pcvp, &A->cappcvp, A->npcv + total, sizeof *A->pcvp))
+        return -1;
     for (size_t c = 0; c < nc; c++) {
-        if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + 2, sizeof *A->pc_off)) return -1;
         A->pc_off[A->npcyc] = (uint32_t)A->npcv;
         for (size_t i = 0; i < len[c]; i++) {
             uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
             const int64_t *gv = A->g + 3 * (size_t)v, *gw = A->g + 3 * (size_t)w;
             if (gv[(k + 1) % 3] == gw[(k + 1) % 3] && gv[(k + 2) % 3] == gw[(k + 2) % 3])
                 return -2; /* an edge along the normal's largest axis: not in the plane */
-            if (a3_grow(&A->pcv, &A->cappcv, A->npcv + 1, sizeof *A->pcv) ||
-                a3_grow(&A->pcvp, &A->cappcvp, A->npcv + 1, sizeof *A->pcvp))
-                return -1;
             A->pcv[A->npcv] = v;
             A->pcvp[A->npcv] = SIDE_LAZY; /* made by stage_sides where needed */
             A->npcv++;
             for (int a = 0; a < 3; a++) {
-                int64_t x = A->g[3 * (size_t)v + a];
+                int32_t x = (int32_t)gv[a];
                 if (x < P.box[a]) P.box[a] = x;
                 if (x > P.box[3 + a]) P.box[3 + a] = x;
             }
@@ -750,9 +753,19 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, uint32_t pl, uint32_t
     return A3_PUSH(A->pc, A->npc, A->cappc, P);
 }
 
-/* The exact plane of a face's vertices, when they lie in one: 0 (plane in *p), 1 when they do
- * not, -1 when all are collinear. */
-static int face_plane(const a3 *A, uint32_t **cyc, const size_t *len, size_t nc, plane3 *p)
+/* Index (0..2) of the largest |n_i| of a normal. */
+static int normal_axis(const int64_t *n)
+{
+    int k = 0;
+    for (int i = 1; i < 3; i++)
+        if (llabs(n[i]) > llabs(n[k])) k = i;
+    return k;
+}
+
+/* The exact plane of a face's vertices, when they lie in one: 0 (its raw plane in *p, through
+ * the anchor vertices av), 1 when they do not, -1 when all are collinear. */
+static int face_plane(const a3 *A, uint32_t **cyc, const size_t *len, size_t nc, plane3 *p,
+                      uint32_t *av)
 {
     uint32_t v0 = cyc[0][0], v1 = NONE, v2 = NONE;
     const int64_t *p0 = A->g + 3 * (size_t)v0;
@@ -777,7 +790,8 @@ static int face_plane(const a3 *A, uint32_t **cyc, const size_t *len, size_t nc,
             if (m > best) best = m, v2 = cyc[c][i];
         }
     if (v2 == NONE) return -1;
-    if (plane_through(p0, p1, A->g + 3 * (size_t)v2, p)) return -1;
+    if (plane_through_raw(p0, p1, A->g + 3 * (size_t)v2, p)) return -1;
+    av[0] = v0, av[1] = v1, av[2] = v2;
     for (size_t c = 0; c < nc; c++)
         for (size_t i = 0; i < len[c]; i++) {
             const int64_t *q = A->g + 3 * (size_t)cyc[c][i];
@@ -852,8 +866,10 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
                 uint32_t u = A->pcv[o + j], w = A->pcv[o + (j + 1) % len];
                 if (!in[u] || !in[w]) continue;
                 for (size_t i = 0; i < m && !rc; i++)
-                    if (drop[i] != u && drop[i] != w && inside_segment(A, u, drop[i], w))
-                        rc = add_contact(A, pc->plane, drop[i]);
+                    if (drop[i] != u && drop[i] != w && inside_segment(A, u, drop[i], w)) {
+                        cpt x = {(uint32_t)pi, drop[i]}; /* given to its plane by stage_cuts */
+                        rc = A3_PUSH(A->dcp, A->ndcp, A->capdcp, x);
+                    }
             }
         }
     }
@@ -954,8 +970,16 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
             if (nc == 0 || gone) continue;
             for (size_t c = 0, off = 0; c < nc; off += len[c], c++) cyc[c] = tv + off;
             plane3 p;
-            uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s;
-            int planar = face_plane(A, cyc, len, nc, &p);
+            uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s, av[3];
+            int planar;
+            if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
+                planar = plane_through_raw(A->g + 3 * (size_t)cyc[0][0],
+                                           A->g + 3 * (size_t)cyc[0][1],
+                                           A->g + 3 * (size_t)cyc[0][2], &p);
+                memcpy(av, cyc[0], sizeof av);
+            } else {
+                planar = face_plane(A, cyc, len, nc, &p, av);
+            }
             if (planar < 0) {
                 if (A->soup) continue;
                 if (nc > 1) {
@@ -972,10 +996,11 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 continue;
             }
             if (planar == 0) {
-                uint32_t id = plane_id(A, &p);
-                int r;
-                if (id == NONE) goto oom;
-                if ((r = add_piece(A, sol, (uint32_t)face, id, cyc, len, nc))) {
+                int k = normal_axis(p.n), r;
+                int sgn = nc == 1 && len[0] == 3
+                              ? 1
+                              : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
+                if ((r = add_piece(A, sol, (uint32_t)face, av, k, sgn, cyc, len, nc))) {
                     if (r == -1) goto oom;
                     rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
                     goto fail;
@@ -1025,8 +1050,8 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 }
                 size_t tl = 3;
                 plane3 tp;
-                if (plane_through(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
-                                  A->g + 3 * (size_t)tc[2], &tp)) {
+                if (plane_through_raw(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
+                                      A->g + 3 * (size_t)tc[2], &tp)) {
                     /* collinear in space: no surface, but its middle vertex may lie inside
                      * an edge of a neighbour (mend_dropped) */
                     if (!A->soup)
@@ -1034,9 +1059,7 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                             if (A3_PUSH(drop, ndrop, capdrop, tc[q])) goto oom;
                     continue;
                 }
-                uint32_t id = plane_id(A, &tp);
-                if (id == NONE) goto oom;
-                if ((r = add_piece(A, sol, (uint32_t)face, id, &tc, &tl, 1))) {
+                if ((r = add_piece(A, sol, (uint32_t)face, tc, normal_axis(tp.n), 1, &tc, &tl, 1))) {
                     if (r == -1) goto oom;
                     rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
                     goto fail;
@@ -1058,6 +1081,249 @@ fail:
     free(tri);
     free(drop);
     return rc;
+}
+
+/* ------------------------------------------------------------------ coplanar classes
+ *
+ * Which pieces lie in one plane is asked of every piece (a plane of two solids, or of two pieces
+ * of one solid turning opposite ways, needs an arrangement), but most pieces never need their
+ * canonical plane (the gcd that reduces it is the costly part).  So the classes come from a key
+ * that every representation of a plane shares without reducing it: modulo the prime
+ * p = 2^61 - 1, with k the first non-zero component of the raw normal (the same for every
+ * multiple), the residues of n_i / n_k and d / n_k.  Proportional planes have equal keys; the
+ * inverses are taken for a chunk of pieces at once (Montgomery's trick: one exponentiation and
+ * three products a piece).  Equal keys are then confirmed exactly against the class's first
+ * piece, so a collision of keys can only cost time.  A normal whose n_k is a multiple of p
+ * (|n_k| < 2^62 leaves p and 2p) gets a key from its reduced plane instead. */
+
+#define MP ((UINT64_C(1) << 61) - 1)
+
+static uint64_t mp_red(u128 x)
+{
+    uint64_t r = (uint64_t)(x & MP) + (uint64_t)((x >> 61) & MP) + (uint64_t)(x >> 122);
+    r = (r & MP) + (r >> 61);
+    return r >= MP ? r - MP : r;
+}
+
+static uint64_t mp_mul(uint64_t a, uint64_t b)
+{
+    return mp_red((u128)a * b);
+}
+
+static uint64_t mp_of(i128 x)
+{
+    uint64_t r = mp_red(x < 0 ? (u128)0 - (u128)x : (u128)x);
+    return x < 0 && r ? MP - r : r;
+}
+
+static uint64_t mp_inv(uint64_t a)
+{
+    uint64_t r = 1, e = MP - 2;
+    while (e) {
+        if (e & 1) r = mp_mul(r, a);
+        a = mp_mul(a, a);
+        e >>= 1;
+    }
+    return r;
+}
+
+/* The class key of raw plane P (see above); 0 is never returned. */
+typedef struct ckey {
+    uint64_t r[3]; /* the residues of the two other components and of d (before division) */
+    uint64_t nk;   /* n_k mod p (0: no inverse: keyed by the reduced plane) */
+    int k;
+} ckey;
+
+static void ckey_start(const plane3 *P, ckey *c)
+{
+    int k = P->n[0] ? 0 : P->n[1] ? 1 : 2;
+    c->k = k;
+    c->nk = mp_of(P->n[k]);
+    c->r[0] = mp_of(P->n[(k + 1) % 3]);
+    c->r[1] = mp_of(P->n[(k + 2) % 3]);
+    c->r[2] = mp_of(P->d);
+}
+
+static uint64_t ckey_hash(const ckey *c, uint64_t inv)
+{
+    uint64_t h = a3_mix64((uint64_t)c->k + 0x51ed27);
+    for (int i = 0; i < 3; i++) h = a3_mix64(h ^ mp_mul(c->r[i], inv));
+    return h ? h : 1;
+}
+
+/* Are raw planes P and Q the same plane (either orientation)? */
+static int plane_equal_raw(const plane3 *P, const plane3 *Q)
+{
+    i128 c0 = (i128)P->n[1] * Q->n[2] - (i128)P->n[2] * Q->n[1];
+    i128 c1 = (i128)P->n[2] * Q->n[0] - (i128)P->n[0] * Q->n[2];
+    i128 c2 = (i128)P->n[0] * Q->n[1] - (i128)P->n[1] * Q->n[0];
+    if (c0 || c1 || c2) return 0;
+    int k = P->n[0] ? 0 : P->n[1] ? 1 : 2;
+    xint a, b;
+    xi_mul_i128(&a, P->d, Q->n[k]);
+    xi_mul_i128(&b, Q->d, P->n[k]);
+    return xi_cmp(&a, &b) == 0;
+}
+
+/* Sign of the dot product of two normals (|n_i| < 2^62: each product below 2^124). */
+static int normals_dot_sign(const int64_t *a, const int64_t *b)
+{
+    i128 d = (i128)a[0] * b[0] + (i128)a[1] * b[1] + (i128)a[2] * b[2];
+    return (d > 0) - (d < 0);
+}
+
+#define CLS_CHUNK 1024
+typedef struct clsjob {
+    const a3 *A;
+    uint64_t *key;
+} clsjob;
+
+/* The keys of one chunk of pieces. */
+static void cls_keys(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const clsjob *j = ctx;
+    const a3 *A = j->A;
+    size_t p0 = item * CLS_CHUNK, p1 = p0 + CLS_CHUNK < A->npc ? p0 + CLS_CHUNK : A->npc;
+    ckey c[CLS_CHUNK];
+    uint64_t pre[CLS_CHUNK + 1];
+    pre[0] = 1;
+    for (size_t i = p0; i < p1; i++) {
+        plane3 P;
+        a3_piece_plane(A, (uint32_t)i, &P);
+        ckey_start(&P, &c[i - p0]);
+        if (!c[i - p0].nk) { /* no inverse modulo p: the reduced plane's own hash */
+            plane_reduce(&P);
+            plane_canon(&P);
+            uint64_t h = a3_mix64((uint64_t)P.n[0] ^ 0x7f4a7c15ULL);
+            h = a3_mix64(h ^ (uint64_t)P.n[1]);
+            h = a3_mix64(h ^ (uint64_t)P.n[2]);
+            h = a3_mix64(h ^ (uint64_t)P.d ^ (uint64_t)((u128)P.d >> 64));
+            j->key[i] = h ? h : 1;
+        }
+        pre[i - p0 + 1] = c[i - p0].nk ? mp_mul(pre[i - p0], c[i - p0].nk) : pre[i - p0];
+    }
+    uint64_t inv = mp_inv(pre[p1 - p0]); /* of the product of every n_k */
+    for (size_t i = p1; i-- > p0;) {
+        if (!c[i - p0].nk) continue;
+        uint64_t ik = mp_mul(inv, pre[i - p0]); /* 1 / n_k */
+        inv = mp_mul(inv, c[i - p0].nk);        /* 1 / (product of those before) */
+        j->key[i] = ckey_hash(&c[i - p0], ik);
+    }
+}
+
+/* Every piece's coplanar class (piece.cls); a class holding pieces of one solid turning both
+ * ways (a surface touching itself face to face) has all its pieces reached.  Fills the stats
+ * planes and coplanar_groups. */
+static int stage_classes(a3 *A)
+{
+    size_t n = A->npc, cap = 1024;
+    while (cap < 2 * n + 2) cap *= 2;
+    uint64_t *key = malloc((n + 1) * sizeof *key), *tkey = calloc(cap, sizeof *tkey);
+    uint32_t *tcls = malloc(cap * sizeof *tcls), *first = malloc((n + 1) * sizeof *first);
+    uint8_t *flag = calloc(n + 1, 1); /* by class: 1 another face, 2 another solid, 4 a wall */
+    int8_t *dir = malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
+    int rc = -1;
+    if (!key || !tkey || !tcls || !first || !flag || !dir) goto done;
+    clsjob j = {A, key};
+    par_for(A->threads, (n + CLS_CHUNK - 1) / CLS_CHUNK, cls_keys, &j);
+    uint32_t ncls = 0;
+    for (size_t i = 0; i < n; i++) {
+        piece *pc = &A->pc[i];
+        size_t h = key[i] & (cap - 1);
+        plane3 P, Q;
+        const plane3 *pp = NULL;
+        for (;; h = (h + 1) & (cap - 1)) {
+            if (!tkey[h]) { /* a new class */
+                tkey[h] = key[i];
+                tcls[h] = ncls;
+                first[ncls] = (uint32_t)i;
+                pc->cls = ncls++;
+                dir[i] = pc->sgn;
+                break;
+            }
+            if (tkey[h] != key[i]) continue;
+            const piece *f = &A->pc[first[tcls[h]]];
+            if (!pp) pp = a3_piece_plane(A, (uint32_t)i, &P);
+            const plane3 *fp = a3_piece_plane(A, first[tcls[h]], &Q);
+            if (!plane_equal_raw(pp, fp)) continue; /* a collision of keys */
+            uint32_t c = tcls[h];
+            pc->cls = c;
+            dir[i] = (int8_t)(pc->sgn * normals_dot_sign(pp->n, fp->n));
+            if (pc->face != f->face) flag[c] |= 1;
+            if (pc->solid != f->solid) flag[c] |= 2;
+            else if (dir[i] != dir[first[c]] && !A->soup) flag[c] |= 4;
+            break;
+        }
+    }
+    A->ncls = ncls;
+    /* in a class of several solids, a wall of any of them: its pieces by (class, solid) */
+    size_t nm = 0;
+    for (size_t i = 0; i < n; i++) nm += (flag[A->pc[i].cls] & 2) != 0;
+    if (nm && !A->soup) {
+        kv *m = malloc(nm * sizeof *m);
+        if (!m) goto done;
+        nm = 0;
+        for (size_t i = 0; i < n; i++)
+            if (flag[A->pc[i].cls] & 2)
+                m[nm++] = (kv){(uint64_t)A->pc[i].cls << 32 | A->pc[i].solid, (uint32_t)i};
+        if (sort_kv(m, nm)) {
+            free(m);
+            goto done;
+        }
+        for (size_t i = 1; i < nm; i++)
+            if (m[i].k == m[i - 1].k && dir[m[i].v] != dir[m[i - 1].v])
+                flag[A->pc[m[i].v].cls] |= 4;
+        free(m);
+    }
+    size_t groups = 0;
+    for (uint32_t c = 0; c < ncls; c++) groups += flag[c] & 1;
+    for (size_t i = 0; i < n; i++)
+        if (flag[A->pc[i].cls] & 4) A->pc[i].reached = 1;
+    A->st->planes = ncls;
+    A->st->coplanar_groups = groups;
+    rc = 0;
+done:
+    free(key);
+    free(tkey);
+    free(tcls);
+    free(first);
+    free(flag);
+    free(dir);
+    return rc;
+}
+
+/* Gives piece pi its canonical plane (once), turning its sgn to that plane's normal.  Returns
+ * -1 out of memory. */
+static int piece_plane_id(a3 *A, uint32_t pi)
+{
+    piece *pc = &A->pc[pi];
+    if (pc->plane != NONE) return 0;
+    plane3 P;
+    if (plane_through(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
+                      A->g + 3 * (size_t)pc->av[2], &P))
+        return -1; /* not reached: the anchors span a plane */
+    int flip = plane_canon(&P);
+    uint32_t id = plane_id(A, &P);
+    if (id == NONE) return -1;
+    pc->plane = id;
+    pc->sgn = (int8_t)(pc->sgn * flip);
+    return 0;
+}
+
+const plane3 *a3_piece_plane(const a3 *A, uint32_t pi, plane3 *tmp)
+{
+    const piece *pc = &A->pc[pi];
+    if (pc->plane != NONE) return &A->pl[pc->plane];
+    plane_through_raw(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
+                      A->g + 3 * (size_t)pc->av[2], tmp);
+    return tmp;
+}
+
+const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp)
+{
+    if (A->f_plane[f] != NONE) return &A->pl[A->f_plane[f]];
+    return a3_piece_plane(A, A->cov[A->f_cov[f]], tmp);
 }
 
 int arr3_grid_step(double extent, double precision, double *step, char *err, size_t errlen)
@@ -1103,119 +1369,6 @@ int arr3_solids_step(const solid *s, size_t n, double precision, double *step, c
 
 /* ------------------------------------------------------------------ pairs */
 
-static int box_overlap(const int64_t *a, const int64_t *b)
-{
-    for (int k = 0; k < 3; k++)
-        if (a[k] > b[3 + k] || b[k] > a[3 + k]) return 0;
-    return 1;
-}
-
-/* The box-kd-tree of the seeds ("Construction of independent buckets"), in 3D: the pieces'
- * boxes are split at the mean of their centres along the axis where the centres spread most; a
- * box meeting both sides goes to both.  A bucket stops splitting when it is small, when a split
- * would leave 7/8 of it on each side, or when it would copy more than a third of its boxes to
- * both sides.  Pairs found in two buckets are made unique at the end. */
-#define KD_LEAF 24
-
-typedef struct kdwork {
-    const a3 *A;
-    uint64_t *pairs;
-    size_t np, cap;
-    int fail;
-} kdwork;
-
-static int pair_wanted(const a3 *A, uint32_t a, uint32_t b)
-{
-    const piece *p = &A->pc[a], *q = &A->pc[b];
-    return p->solid != q->solid && p->plane != q->plane && box_overlap(p->box, q->box);
-}
-
-static void kd_leaf(kdwork *w, const uint32_t *ids, size_t n)
-{
-    for (size_t i = 0; i < n && !w->fail; i++)
-        for (size_t j = i + 1; j < n; j++) {
-            if (!pair_wanted(w->A, ids[i], ids[j])) continue;
-            uint32_t a = ids[i] < ids[j] ? ids[i] : ids[j], b = ids[i] ^ ids[j] ^ a;
-            if (A3_PUSH(w->pairs, w->np, w->cap, (uint64_t)a << 32 | b)) {
-                w->fail = 1;
-                return;
-            }
-        }
-}
-
-static void kd_split(kdwork *w, uint32_t *ids, size_t n, int depth)
-{
-    if (w->fail) return;
-    if (n <= KD_LEAF || depth > 40) {
-        kd_leaf(w, ids, n);
-        return;
-    }
-    double mean[3] = {0, 0, 0}, lo[3], hi[3];
-    for (int a = 0; a < 3; a++) lo[a] = DBL_MAX, hi[a] = -DBL_MAX;
-    for (size_t i = 0; i < n; i++)
-        for (int a = 0; a < 3; a++) {
-            const int64_t *b = w->A->pc[ids[i]].box;
-            double ctr = ((double)b[a] + (double)b[3 + a]) / 2;
-            mean[a] += ctr;
-            if (ctr < lo[a]) lo[a] = ctr;
-            if (ctr > hi[a]) hi[a] = ctr;
-        }
-    int ax = 0;
-    for (int a = 1; a < 3; a++)
-        if (hi[a] - lo[a] > hi[ax] - lo[ax]) ax = a;
-    double t = mean[ax] / (double)n;
-    size_t nl = 0, nr = 0;
-    for (size_t i = 0; i < n; i++) {
-        const int64_t *b = w->A->pc[ids[i]].box;
-        nl += (double)b[ax] <= t;
-        nr += (double)b[3 + ax] > t;
-    }
-    if ((nl * 8 >= n * 7 && nr * 8 >= n * 7) || (nl + nr - n) * 3 > n) {
-        kd_leaf(w, ids, n);
-        return;
-    }
-    uint32_t *l = malloc((nl + 1) * sizeof *l), *r = malloc((nr + 1) * sizeof *r);
-    if (!l || !r) {
-        free(l);
-        free(r);
-        w->fail = 1;
-        return;
-    }
-    nl = nr = 0;
-    for (size_t i = 0; i < n; i++) {
-        const int64_t *b = w->A->pc[ids[i]].box;
-        if ((double)b[ax] <= t) l[nl++] = ids[i];
-        if ((double)b[3 + ax] > t) r[nr++] = ids[i];
-    }
-    kd_split(w, l, nl, depth + 1);
-    free(l);
-    kd_split(w, r, nr, depth + 1);
-    free(r);
-}
-
-static int piece_pairs(a3 *A, uint64_t **out, size_t *nout)
-{
-    uint32_t *ids = malloc((A->npc + 1) * sizeof *ids);
-    kdwork w = {A, NULL, 0, 0, 0};
-    if (!ids) return -1;
-    for (size_t i = 0; i < A->npc; i++) ids[i] = (uint32_t)i;
-    kd_split(&w, ids, A->npc, 0);
-    free(ids);
-    if (w.fail) {
-        free(w.pairs);
-        return -1;
-    }
-    if (sort_u64(w.pairs, w.np)) {
-        free(w.pairs);
-        return -1;
-    }
-    size_t m = 0;
-    for (size_t i = 0; i < w.np; i++)
-        if (!m || w.pairs[i] != w.pairs[m - 1]) w.pairs[m++] = w.pairs[i];
-    *out = w.pairs;
-    *nout = m;
-    return 0;
-}
 
 /* ------------------------------------------------------------------ cuts */
 
@@ -1260,7 +1413,10 @@ typedef struct cutout {
     size_t ncs, capcs;
     cpt *cp;
     size_t ncp, capcp;
-    int rc; /* 0, -1 out of memory, -3 cancelled */
+    uint32_t *met; /* pieces of the pairs that meet */
+    size_t nmet, capmet;
+    size_t npairs; /* pairs that meet */
+    int rc;        /* 0, -1 out of memory, -3 cancelled */
 } cutout;
 
 typedef struct cutjob {
@@ -1444,6 +1600,11 @@ static int chunk_contact(cutout *o, uint32_t plane, uint32_t p)
 static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
 {
     uint32_t pa = A->pc[a].plane, pb = A->pc[b].plane;
+    size_t ncs = o->ncs, ncp = o->ncp;
+    if (pa == pb) /* coplanar, boxes meeting: both go through their plane's arrangement */
+        return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b)
+                   ? -1
+                   : (o->npairs++, 0);
     i128 d[3];
     cross_ll(A->pl[pa].n, A->pl[pb].n, d);
     if (!d[0] && !d[1] && !d[2]) return 0; /* parallel planes */
@@ -1474,7 +1635,10 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
         else
             j++;
     }
-    return 0;
+    if (o->ncs == ncs && o->ncp == ncp) return 0;
+    o->npairs++;
+    return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
+                                                                                          : 0;
 }
 
 static void cut_chunk(void *ctx, size_t item, int worker)
@@ -1496,6 +1660,7 @@ static void cut_chunk(void *ctx, size_t item, int worker)
 
 static void cutout_free(cutout *o)
 {
+    free(o->met);
     free(o->pt);
     free(o->lt.id);
     free(o->cs);
@@ -1519,6 +1684,13 @@ static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
     size_t capmap = 0;
     int rc = -1;
     if (!j.w || !j.o) goto done;
+    /* the pairs' pieces need their canonical planes (in pair order: the ids do not depend on
+     * the threads) */
+    for (size_t k = 0; k < np; k++)
+        if (piece_plane_id(A, (uint32_t)(pairs[k] >> 32)) ||
+            piece_plane_id(A, (uint32_t)pairs[k]))
+            goto done;
+    A->G.pl = A->pl;
     par_for(A->threads, nch, cut_chunk, &j);
     for (size_t ch = 0; ch < nch; ch++)
         if (j.o[ch].rc) {
@@ -1555,8 +1727,23 @@ static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         }
         for (size_t i = 0; i < o->ncp; i++)
             if (add_contact(A, o->cp[i].plane, merged_id(map, o->cp[i].p))) goto done;
+        for (size_t i = 0; i < o->nmet; i++) A->pc[o->met[i]].reached = 1;
+        A->st->pairs_meeting += o->npairs;
         cutout_free(o);
     }
+    /* the contacts of left-out faces: their pieces are reached */
+    for (size_t i = 0; i < A->ndcp; i++) {
+        uint32_t pi = A->dcp[i].plane;
+        if (piece_plane_id(A, pi) || add_contact(A, A->pc[pi].plane, A->dcp[i].p)) goto done;
+        A->pc[pi].reached = 1;
+    }
+    /* every reached piece has its canonical plane */
+    for (size_t i = 0; i < A->npc; i++) {
+        if (!A->pc[i].reached) continue;
+        if (piece_plane_id(A, (uint32_t)i)) goto done;
+        A->st->faces_reached++;
+    }
+    A->G.pl = A->pl;
     rc = 0;
 done:
     free(lt.id);
@@ -1649,13 +1836,15 @@ static int cmp_cpt(const void *pa, const void *pb)
 
 static int plane_inputs(a3 *A)
 {
-    /* pieces by plane */
+    /* reached pieces by plane (the others are faces as they are: merge_planes) */
     A->pp_off = calloc(A->npl + 2, sizeof *A->pp_off);
     A->pp = malloc((A->npc + 1) * sizeof *A->pp);
     if (!A->pp_off || !A->pp) return -1;
-    for (size_t i = 0; i < A->npc; i++) A->pp_off[A->pc[i].plane + 2]++;
+    for (size_t i = 0; i < A->npc; i++)
+        if (A->pc[i].reached) A->pp_off[A->pc[i].plane + 2]++;
     for (size_t p = 0; p < A->npl; p++) A->pp_off[p + 2] += A->pp_off[p + 1];
-    for (size_t i = 0; i < A->npc; i++) A->pp[A->pp_off[A->pc[i].plane + 1]++] = (uint32_t)i;
+    for (size_t i = 0; i < A->npc; i++)
+        if (A->pc[i].reached) A->pp[A->pp_off[A->pc[i].plane + 1]++] = (uint32_t)i;
     /* cuts by plane (order kept: deterministic) */
     cseg *cs = malloc((A->ncs + 1) * sizeof *cs);
     if (!cs ||
@@ -1694,12 +1883,13 @@ int a3_plane_simple(const a3 *A, uint32_t P)
     return 1;
 }
 
-const plane3 *a3_side(const a3 *A, uint32_t fp, uint32_t a, uint32_t b, uint32_t S, plane3 *tmp)
+const plane3 *a3_side(const a3 *A, const plane3 *FP, uint32_t a, uint32_t b, uint32_t S,
+                      plane3 *tmp)
 {
     if (S == NONE) return NULL;
     if (S != SIDE_LAZY) return &A->pl[S];
     /* a and b are input vertices (points a, b are their grid points) */
-    if (plane_vertical(A->g + 3 * (size_t)a, A->g + 3 * (size_t)b, plane_axis(&A->pl[fp]), tmp))
+    if (plane_vertical(A->g + 3 * (size_t)a, A->g + 3 * (size_t)b, plane_axis(FP), tmp))
         return NULL;
     return tmp;
 }
@@ -1759,50 +1949,79 @@ void pfaces_free(pfaces *f)
     memset(f, 0, sizeof *f);
 }
 
-/* Every plane's new points join the global ones (deduplicated), and its faces become faces of
- * the complex with global point ids. */
+/* Piece pi written as a face of the complex as it is: its outer cycle counter-clockwise about
+ * its plane's normal (its only cycle: a piece with holes is always reached). */
+static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov)
+{
+    const piece *pc = &A->pc[pi];
+    uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
+    int rev = pc->sgn < 0;
+    A->f_cyc[A->nf] = (uint32_t)A->ncyc;
+    A->f_cov[A->nf] = (uint32_t)*ncov;
+    A->f_plane[A->nf] = pc->plane;
+    A->cov[(*ncov)++] = pi;
+    A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+    uint32_t *ent = A->ent + A->nent, *side = A->side + A->nent;
+    const uint32_t *v = A->pcv + o, *vp = A->pcvp + o;
+    if (!rev) {
+        memcpy(ent, v, n * sizeof *ent);
+        memcpy(side, vp, n * sizeof *side);
+    } else {
+        for (uint32_t i = 0; i < n; i++) {
+            ent[i] = v[n - 1 - i];
+            side[i] = vp[(2 * n - 2 - i) % n];
+        }
+    }
+    A->nent += n;
+    A->ncyc++;
+    A->nf++;
+}
+
+/* Every plane's new points join the global ones (deduplicated), and the faces of the complex
+ * are written with global point ids: first the pieces that nothing reached (in piece order),
+ * then each plane's: its pieces kept as they are, then the faces of its arrangement. */
 static int merge_planes(a3 *A, pset *ps)
 {
     uint32_t *map = NULL;
-    size_t capmap = 0, capf = 0, capc = 0, cape = 0, capside = 0, capcov = 0, capfc = 0, capfp = 0;
+    size_t capmap = 0, nf = 0, ncyc = 0, nent = 0, ncov = 0;
     int rc = -1;
+    /* sizes first */
+    for (size_t i = 0; i < A->npc; i++) {
+        const piece *pc = &A->pc[i];
+        if (pc->reached) continue;
+        nf++, ncyc++, ncov++;
+        nent += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
+    }
+    for (size_t p = 0; p < A->npl; p++) {
+        const pfaces *F = &A->pf[p];
+        uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;
+        for (uint32_t k = 0; k < nd; k++) {
+            const piece *pc = &A->pc[F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k]];
+            nf++, ncyc++, ncov++;
+            nent += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
+        }
+        if (F->trivial) continue;
+        nf += F->nf, ncyc += F->ncyc, ncov += F->ncov;
+        nent += F->nent;
+    }
+    A->f_cyc = malloc((nf + 1) * sizeof *A->f_cyc);
+    A->f_plane = malloc((nf + 1) * sizeof *A->f_plane);
+    A->f_cov = malloc((nf + 1) * sizeof *A->f_cov);
+    A->cyc_off = malloc((ncyc + 1) * sizeof *A->cyc_off);
+    A->ent = malloc((nent + 1) * sizeof *A->ent);
+    A->side = malloc((nent + 1) * sizeof *A->side);
+    A->cov = malloc((ncov + 1) * sizeof *A->cov);
+    if (!A->f_cyc || !A->f_plane || !A->f_cov || !A->cyc_off || !A->ent || !A->side || !A->cov)
+        goto done;
     A->nf = A->ncyc = A->nent = 0;
-    size_t ncov = 0;
+    ncov = 0;
+    for (size_t i = 0; i < A->npc; i++)
+        if (!A->pc[i].reached) put_piece_face(A, (uint32_t)i, &ncov);
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
-        /* pieces written as they are (all of a simple plane's, or those that nothing reaches):
-         * each one a face, counter-clockwise about n_P */
         uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;
-        {
-            for (uint32_t k = 0; k < nd; k++) {
-                uint32_t pi = F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k];
-                const piece *pc = &A->pc[pi];
-                uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
-                int rev = pc->sgn < 0;
-                if (a3_grow(&A->f_cyc, &capfc, A->nf + 2, sizeof *A->f_cyc) ||
-                    a3_grow(&A->f_plane, &capfp, A->nf + 1, sizeof *A->f_plane) ||
-                    a3_grow(&A->f_cov, &capf, A->nf + 2, sizeof *A->f_cov) ||
-                    a3_grow(&A->cyc_off, &capc, A->ncyc + 2, sizeof *A->cyc_off) ||
-                    a3_grow(&A->ent, &cape, A->nent + n, sizeof *A->ent) ||
-                    a3_grow(&A->side, &capside, A->nent + n, sizeof *A->side) ||
-                    A3_PUSH(A->cov, ncov, capcov, pi))
-                    goto done;
-                A->f_cyc[A->nf] = (uint32_t)A->ncyc;
-                A->f_cov[A->nf] = (uint32_t)ncov - 1;
-                A->f_plane[A->nf] = (uint32_t)p;
-                A->cyc_off[A->ncyc] = (uint32_t)A->nent;
-                for (uint32_t i = 0; i < n; i++) {
-                    A->ent[A->nent + i] = rev ? A->pcv[o + n - 1 - i] : A->pcv[o + i];
-                    A->side[A->nent + i] = rev ? A->pcvp[o + (2 * n - 2 - i) % n] : A->pcvp[o + i];
-                }
-                A->nent += n;
-                A->ncyc++;
-                A->cyc_off[A->ncyc] = (uint32_t)A->nent;
-                A->nf++;
-                A->f_cyc[A->nf] = (uint32_t)A->ncyc;
-                A->f_cov[A->nf] = (uint32_t)ncov;
-            }
-        }
+        for (uint32_t k = 0; k < nd; k++)
+            put_piece_face(A, F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k], &ncov);
         if (F->trivial) continue;
         if (!F->nf && !F->nnew) {
             pfaces_free(F);
@@ -1818,42 +2037,26 @@ static int merge_planes(a3 *A, pset *ps)
             map[i] = q;
         }
         for (uint32_t f = 0; f < F->nf; f++) {
-            if (a3_grow(&A->f_cyc, &capfc, A->nf + 2, sizeof *A->f_cyc) ||
-                a3_grow(&A->f_plane, &capfp, A->nf + 1, sizeof *A->f_plane) ||
-                a3_grow(&A->f_cov, &capf, A->nf + 2, sizeof *A->f_cov))
-                goto done;
             A->f_cyc[A->nf] = (uint32_t)A->ncyc;
             A->f_cov[A->nf] = (uint32_t)ncov;
             A->f_plane[A->nf] = (uint32_t)p;
             for (uint32_t c = F->f_cyc[f]; c < F->f_cyc[f + 1]; c++) {
-                if (a3_grow(&A->cyc_off, &capc, A->ncyc + 2, sizeof *A->cyc_off)) goto done;
                 A->cyc_off[A->ncyc] = (uint32_t)A->nent;
                 for (uint32_t e = F->cyc_off[c]; e < F->cyc_off[c + 1]; e++) {
-                    if (a3_grow(&A->ent, &cape, A->nent + 1, sizeof *A->ent) ||
-                        a3_grow(&A->side, &capside, A->nent + 1, sizeof *A->side))
-                        goto done;
                     uint32_t v = F->ent[e];
                     A->ent[A->nent] = v >= F->base ? map[v - F->base] : v;
                     A->side[A->nent] = F->side[e];
                     A->nent++;
                 }
                 A->ncyc++;
-                A->cyc_off[A->ncyc] = (uint32_t)A->nent;
             }
-            for (uint32_t i = F->f_cov[f]; i < F->f_cov[f + 1]; i++)
-                if (A3_PUSH(A->cov, ncov, capcov, F->cov[i])) goto done;
+            for (uint32_t i = F->f_cov[f]; i < F->f_cov[f + 1]; i++) A->cov[ncov++] = F->cov[i];
             A->nf++;
-            A->f_cyc[A->nf] = (uint32_t)A->ncyc;
-            A->f_cov[A->nf] = (uint32_t)ncov;
         }
         pfaces_free(F);
     }
-    if (!A->f_cyc && (a3_grow(&A->f_cyc, &capfc, 2, sizeof *A->f_cyc) ||
-                      a3_grow(&A->f_cov, &capf, 2, sizeof *A->f_cov)))
-        goto done;
     A->f_cyc[A->nf] = (uint32_t)A->ncyc;
     A->f_cov[A->nf] = (uint32_t)ncov;
-    if (!A->cyc_off && a3_grow(&A->cyc_off, &capc, 1, sizeof *A->cyc_off)) goto done;
     A->cyc_off[A->ncyc] = (uint32_t)A->nent;
     rc = 0;
 done:
@@ -1872,6 +2075,7 @@ static void a3_free(a3 *A)
     free(A->vpkey);
     free(A->vpval);
     free(A->pc);
+    free(A->dcp);
     free(A->pc_off);
     free(A->pcv);
     free(A->pcvp);
@@ -1920,10 +2124,11 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.G.pl = A.pl;
     for (size_t v = 0; v < A.nv; v++)
         if (add_point(&A, xpt_grid(&A.G, (uint32_t)v)) == NONE) goto oom;
+    if (stage_classes(&A)) goto oom;
     out->stats.split_faces = A.split_faces;
     out->stats.ms_snap = now_ms() - t0;
     t = now_ms();
-    if (piece_pairs(&A, &pairs, &np)) goto oom;
+    if (a3_pairs(&A, &pairs, &np)) goto oom;
     out->stats.pairs_tested = np;
     out->stats.ms_pairs = now_ms() - t;
     a3_progress(&A, "pairs", 1);
@@ -1939,21 +2144,6 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     out->stats.ms_cuts = now_ms() - t;
     if (a3_cancelled(&A)) goto cancel;
     t = now_ms();
-    {
-        size_t planes = 0, cop = 0;
-        for (size_t p = 0; p < A.npl; p++) {
-            uint32_t n = A.pp_off[p + 1] - A.pp_off[p];
-            if (!n) continue;
-            planes++;
-            for (uint32_t i = A.pp_off[p] + 1; i < A.pp_off[p + 1]; i++)
-                if (A.pc[A.pp[i]].face != A.pc[A.pp[A.pp_off[p]]].face) {
-                    cop++;
-                    break;
-                }
-        }
-        out->stats.planes = planes;
-        out->stats.coplanar_groups = cop;
-    }
     if ((rc = a3_planes(&A, err, errlen)) != ARR_OK) goto fail;
     size_t npt_before = A.npt;
     if (merge_planes(&A, &ps)) goto oom;

@@ -93,14 +93,16 @@ typedef struct fanctx {
     int s0;
 } fanctx;
 
-static const int64_t *face_n(const a3 *A, uint32_t f)
+/* The normal of face f (its anchor plane's when it has no canonical plane). */
+static const int64_t *face_n(const a3 *A, uint32_t f, plane3 *tmp)
 {
-    return A->pl[A->f_plane[f]].n;
+    return a3_face_plane(A, f, tmp)->n;
 }
 
 static int fan_half(const fanctx *x, const inc *a)
 {
-    const int64_t *na = face_n(x->A, a->f);
+    plane3 tmp;
+    const int64_t *na = face_n(x->A, a->f, &tmp);
     int s = det3_sign(x->n0, na, x->d) * x->s0 * a->s;
     if (s > 0) return 0;
     if (s < 0) return 1;
@@ -114,7 +116,8 @@ static int fan_cmp(const void *pa, const void *pb, void *vx)
     const inc *a = pa, *b = pb;
     int ha = fan_half(x, a), hb = fan_half(x, b);
     if (ha != hb) return ha - hb;
-    int s = det3_sign(face_n(x->A, a->f), face_n(x->A, b->f), x->d) * a->s * b->s;
+    plane3 ta, tb;
+    int s = det3_sign(face_n(x->A, a->f, &ta), face_n(x->A, b->f, &tb), x->d) * a->s * b->s;
     if (s > 0) return -1;
     if (s < 0) return 1;
     return (a->f > b->f) - (a->f < b->f);
@@ -189,7 +192,7 @@ bad : {
 typedef struct fanjob {
     const a3 *A;
     inc *I;
-    const uint32_t *ioff, *ev, *eside, *eplane;
+    const uint32_t *ioff, *ev, *eside, *eface;
     const lar3 *out;
     size_t ne;
     size_t *bad; /* by chunk: 1 + its first edge that failed, or 0 */
@@ -205,9 +208,9 @@ static int fan_sort(const fanjob *j, size_t e, char *err, size_t errlen)
     size_t n = j->ioff[e + 1] - j->ioff[e];
     if (n >= 3) {
         fanctx x = {A, {0, 0, 0}, NULL, 0};
-        const plane3 *P = &A->pl[j->eplane[e]];
-        plane3 tmp;
-        const plane3 *SP = a3_side(A, j->eplane[e], ev[2 * e], ev[2 * e + 1], j->eside[e], &tmp);
+        plane3 tp, tmp, t0;
+        const plane3 *P = a3_face_plane(A, j->eface[e], &tp);
+        const plane3 *SP = a3_side(A, P, ev[2 * e], ev[2 * e + 1], j->eside[e], &tmp);
         if (!SP) {
             snprintf(err, errlen, "solids: an edge of %zu faces has no line (a bug)", n);
             return ARR_EINTERNAL;
@@ -219,7 +222,7 @@ static int fan_sort(const fanjob *j, size_t e, char *err, size_t errlen)
         int c = cmp_coord(&A->G, &A->pt[ev[2 * e + 1]], &A->pt[ev[2 * e]], ax);
         if ((c > 0) != (x.d[ax] > 0))
             for (int a = 0; a < 3; a++) x.d[a] = -x.d[a];
-        x.n0 = face_n(A, F[0].f);
+        x.n0 = face_n(A, F[0].f, &t0);
         x.s0 = F[0].s;
         qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
     }
@@ -297,7 +300,8 @@ static int pi_side(const a3 *A, const plane3 *P, const plane3 *S, const probe *p
 /* Does the perturbed probe line meet face f? */
 static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
 {
-    const plane3 *P = &A->pl[A->f_plane[f]];
+    plane3 tp;
+    const plane3 *P = a3_face_plane(A, f, &tp);
     if (P->n[pr->k] == 0) return 0;
     int par = 0;
     for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
@@ -308,7 +312,7 @@ static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
             int sa = cmp_q(A, &A->pt[a], pr, pr->j) > 0, sb = cmp_q(A, &A->pt[b], pr, pr->j) > 0;
             if (sa == sb || S == NONE) continue;
             plane3 tmp;
-            const plane3 *SP = a3_side(A, A->f_plane[f], a, b, S, &tmp);
+            const plane3 *SP = a3_side(A, P, a, b, S, &tmp);
             if (!SP) continue;
             int si, s = pi_side(A, P, SP, pr, &si);
             if (s == 0) s = si;
@@ -328,7 +332,8 @@ static void probe_t(const plane3 *P, const probe *pr, i128 *num, i128 *den)
 /* Order of faces f and g along the perturbed probe line (both hit). */
 static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
 {
-    const plane3 *F = &A->pl[A->f_plane[f]], *G = &A->pl[A->f_plane[g]];
+    plane3 tf, tg;
+    const plane3 *F = a3_face_plane(A, f, &tf), *G = a3_face_plane(A, g, &tg);
     i128 nf, df, ng, dg;
     probe_t(F, pr, &nf, &df);
     probe_t(G, pr, &ng, &dg);
@@ -360,7 +365,8 @@ static int piece_tris(const a3 *A, uint32_t pi, uint32_t **tri, size_t *ntri, si
     uint32_t *cyc[64], **cp = cyc;
     size_t len[64], *lp = len;
     int rc = -1;
-    *k = plane_axis(&A->pl[pc->plane]);
+    plane3 tp;
+    *k = plane_axis(a3_piece_plane(A, pi, &tp));
     *ntri = 0;
     if (pc->nc > 64) {
         cp = malloc(pc->nc * sizeof *cp);
@@ -683,7 +689,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     int rc = ARR_ENOMEM;
     inc *I = NULL;
     size_t ne = 0;
-    uint32_t *ev = NULL, *eside = NULL, *eplane = NULL, *ioff = NULL;
+    uint32_t *ev = NULL, *eside = NULL, *eface = NULL, *ioff = NULL;
     uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
     uint32_t *cpiece = NULL, *newid = NULL, *used = NULL, *ptri = NULL;
     size_t nptri = 0, capptri = 0;
@@ -728,10 +734,10 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         for (size_t i = 0; i < m; i++) ne += i == 0 || ek2[i].k != ek2[i - 1].k;
         ev = malloc((2 * ne + 2) * sizeof *ev);
         eside = malloc((ne + 1) * sizeof *eside);
-        eplane = malloc((ne + 1) * sizeof *eplane);
+        eface = malloc((ne + 1) * sizeof *eface);
         ioff = malloc((ne + 2) * sizeof *ioff);
         I = malloc((m + 1) * sizeof *I);
-        if (!ev || !eside || !eplane || !ioff || !I) {
+        if (!ev || !eside || !eface || !ioff || !I) {
             free(ent_f), free(ek2);
             goto done;
         }
@@ -741,7 +747,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             if (i == 0 || ek2[i].k != ek2[i - 1].k) {
                 ev[2 * ne] = lo, ev[2 * ne + 1] = (uint32_t)ek2[i].k;
                 eside[ne] = A->side[x];
-                eplane[ne] = A->f_plane[ent_f[x]];
+                eface[ne] = ent_f[x];
                 ioff[ne] = (uint32_t)i;
                 ne++;
             }
@@ -761,7 +767,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         /* each edge's fan sorted and checked, in chunks on the threads; the first failing edge
          * is checked again here for its message */
         size_t nch = (ne + FAN_CHUNK - 1) / FAN_CHUNK;
-        fanjob j = {A, I, ioff, ev, eside, eplane, out, ne, calloc(nch + 1, sizeof *j.bad)};
+        fanjob j = {A, I, ioff, ev, eside, eface, out, ne, calloc(nch + 1, sizeof *j.bad)};
         if (!j.bad) goto done;
         a3_span span = {A, "cells", 0.25, 0.33};
         par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
@@ -889,7 +895,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                 fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
                 if (!fbox) goto done;
                 for (size_t q = 0; q < A->npc; q++) {
-                    const int64_t *b = A->pc[q].box;
+                    const int32_t *b = A->pc[q].box;
                     double *bx = fbox + 4 * q;
                     bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
                     bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
@@ -906,7 +912,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
             /* the faces of the pieces whose boxes hold the point (exactly: Q / 3 in [lo, hi]) */
             for (size_t ci = 0; ci < ncand; ci++) {
-                const int64_t *b = A->pc[cand[ci]].box;
+                const int32_t *b = A->pc[cand[ci]].box;
                 if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
                     (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
                     (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
@@ -935,7 +941,8 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
             goto done;
         }
-        int up = A->pl[A->f_plane[own]].n[pr->k] > 0;
+        plane3 town;
+        int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
         outer[c] = shell[2 * own + (up ? 1 : 0)]; /* the side facing -k */
         size_t m = h0;
         for (size_t h = h0; h < nhit; h++)
@@ -956,7 +963,8 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
         for (uint32_t h = 0; h < nh && host == EXT; h++) {
             uint32_t f = H[h], d = fcomp[f];
-            int fup = A->pl[A->f_plane[f]].n[pr->k] > 0;
+            plane3 tf;
+            int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
             uint32_t s_up = shell[2 * f + (fup ? 0 : 1)], s_down = shell[2 * f + (fup ? 1 : 0)];
             if (depth && s_down == outer[stack[depth - 1]] && d == stack[depth - 1]) {
                 depth--; /* leaving the part we were inside */
@@ -1129,7 +1137,8 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         size_t nfe = 0, nfs = 0;
         out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
         for (size_t f = 0; f < nf; f++) {
-            const plane3 *P = &A->pl[A->f_plane[f]];
+            plane3 tp;
+            const plane3 *P = a3_face_plane(A, (uint32_t)f, &tp);
             double len = sqrt(P->nd[0] * P->nd[0] + P->nd[1] * P->nd[1] + P->nd[2] * P->nd[2]);
             for (int k = 0; k < 3; k++) out->FN[3 * f + k] = P->nd[k] / len;
             out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
@@ -1217,7 +1226,7 @@ done:
     free(I);
     free(ev);
     free(eside);
-    free(eplane);
+    free(eface);
     free(ioff);
     free(sp);
     free(fcomp);

@@ -35,11 +35,18 @@
 typedef struct piece {
     uint32_t solid; /* solid index (in a soup: the input face, so that faces meet each other) */
     uint32_t face;  /* input face (index over all solids) */
-    uint32_t plane;
+    uint32_t plane; /* canonical plane id, or NONE while the piece needs none (nothing reaches
+                       it: its anchor plane serves) */
     uint32_t c0, nc; /* cycles pc_off[c0 .. c0 + nc) */
-    int64_t box[6];  /* lo xyz, hi xyz */
-    int sgn;         /* +1: the order of its outer cycle turns about the plane's normal (for a
-                        solid: the plane's normal points out of it); -1: the other way */
+    uint32_t av[3];  /* three of its vertices spanning its plane: the anchor plane is the raw
+                        plane through them (plane_through_raw) */
+    uint32_t cls;    /* its coplanar class: pieces in one plane, whatever its representation */
+    int32_t box[6];  /* lo xyz, hi xyz (grid coordinates fit 32 bits) */
+    int8_t sgn;      /* +1: the order of its outer cycle turns about the normal of its plane
+                        (the canonical one once it has it, else the anchor plane's); for a solid
+                        that normal then points out of it.  -1: the other way */
+    uint8_t reached; /* goes through its plane's arrangement (a cut, a contact, a coplanar
+                        piece of another solid, holes, or a surface touching itself there) */
 } piece;
 
 typedef struct cseg {
@@ -103,6 +110,10 @@ typedef struct a3 {
     uint32_t *solid_face_off;
     size_t nsolids;
     size_t split_faces; /* input faces split into triangles */
+    uint32_t ncls;      /* coplanar classes of the pieces */
+    cpt *dcp;           /* contacts of left-out faces: (piece, point), given to the piece's
+                           plane once it has one */
+    size_t ndcp, capdcp;
     /* points */
     xpt *pt;
     size_t npt, cappt;
@@ -179,10 +190,24 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
  * their edges' side planes are made only when asked for (SIDE_LAZY). */
 int a3_plane_simple(const a3 *A, uint32_t P);
 
-/* The side plane of the edge from point a to point b of a face on plane fp with side entry S:
+/* The side plane of the edge from point a to point b of a face on plane FP with side entry S:
  * A->pl[S], or, for S == SIDE_LAZY (a and b input vertices), that vertical plane made in *tmp.
  * NULL when S is NONE (an edge with no side: a contact hole). */
-const plane3 *a3_side(const a3 *A, uint32_t fp, uint32_t a, uint32_t b, uint32_t S, plane3 *tmp);
+const plane3 *a3_side(const a3 *A, const plane3 *FP, uint32_t a, uint32_t b, uint32_t S,
+                      plane3 *tmp);
+
+/* The plane of piece pi: its canonical plane, or its anchor plane made in *tmp. */
+const plane3 *a3_piece_plane(const a3 *A, uint32_t pi, plane3 *tmp);
+
+/* The plane of face f of the complex (A->f_plane[f], or for a face that is a piece kept whole
+ * without a canonical plane, that piece's anchor plane, made in *tmp): f's cycles turn
+ * counter-clockwise about its normal. */
+const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp);
+
+/* The candidate pairs: pieces of different solids whose closed boxes meet, each pair once as
+ * (lower id << 32 | higher id), sorted (arr3_pairs.c: a bounding-volume hierarchy per solid).
+ * Returns 0, or -1 out of memory. */
+int a3_pairs(const a3 *A, uint64_t **out, size_t *nout);
 
 /* ---- the stages ------------------------------------------------------------------------ */
 

@@ -801,7 +801,7 @@ static void pt_box(const xpt *p, int64_t *lo, int64_t *hi)
     }
 }
 
-static int box_meets(const int64_t *lo, const int64_t *hi, const int64_t *b)
+static int box_meets(const int64_t *lo, const int64_t *hi, const int32_t *b)
 {
     for (int a = 0; a < 3; a++)
         if (hi[a] < b[a] || lo[a] > b[3 + a]) return 0;

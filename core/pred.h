@@ -71,6 +71,10 @@ typedef struct xhom {
 /* The plane through grid points p, q, r (not collinear): normal (q - p) x (r - p), reduced.
  * Returns 0, or -1 when they are collinear. */
 int plane_through(const int64_t *p, const int64_t *q, const int64_t *r, plane3 *out);
+/* The same, not reduced: the normal (q - p) x (r - p) as it is (its direction and orientation
+ * are those of the triangle pqr), and d = -n . p.  The bounds above hold; every predicate takes
+ * such a plane.  Returns -1 when p, q, r are collinear. */
+int plane_through_raw(const int64_t *p, const int64_t *q, const int64_t *r, plane3 *out);
 
 /* The plane through grid points a != b parallel to axis k (0, 1, 2), reduced: normal
  * (b - a) x e_k.  Returns -1 when ab is parallel to e_k. */

@@ -140,7 +140,8 @@ bench: deps
 	    echo "bench: npm ci --prefix bench failed: manifold is skipped" >&2; fi
 	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/run3d.sh $(BUILD) || s=1; echo; \
 	    bench/runbool.sh $(BUILD) || s=1; echo; bench/runbool2.sh $(BUILD) || s=1; echo; \
-	    bench/runmany.sh $(BUILD) || s=1; exit $$s
+	    bench/runmany.sh $(BUILD) || s=1; echo; \
+	    python3 bench/mesh3.py $(BUILD) $(BENCH_MESH3_ARGS) || s=1; exit $$s
 
 $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 	@mkdir -p $(dir $@)

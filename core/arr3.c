@@ -722,9 +722,11 @@ static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
 static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, int k, int sgn,
                      uint32_t **cyc, const size_t *len, size_t nc)
 {
-    piece P = {solid, face, NONE, (uint32_t)A->npcyc, (uint32_t)nc, {av[0], av[1], av[2]}, NONE,
-               {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN}, (int8_t)sgn,
-               nc > 1};
+    piece P = {solid,        face,
+               NONE,         (uint32_t)A->npcyc,
+               (uint32_t)nc, {av[0], av[1], av[2]},
+               NONE,         {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
+               (int8_t)sgn,  nc > 1};
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
     if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + nc + 1, sizeof *A->pc_off) ||
@@ -973,9 +975,9 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
             uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s, av[3];
             int planar;
             if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
-                planar = plane_through_raw(A->g + 3 * (size_t)cyc[0][0],
-                                           A->g + 3 * (size_t)cyc[0][1],
-                                           A->g + 3 * (size_t)cyc[0][2], &p);
+                planar =
+                    plane_through_raw(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
+                                      A->g + 3 * (size_t)cyc[0][2], &p);
                 memcpy(av, cyc[0], sizeof av);
             } else {
                 planar = face_plane(A, cyc, len, nc, &p, av);
@@ -1059,7 +1061,8 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                             if (A3_PUSH(drop, ndrop, capdrop, tc[q])) goto oom;
                     continue;
                 }
-                if ((r = add_piece(A, sol, (uint32_t)face, tc, normal_axis(tp.n), 1, &tc, &tl, 1))) {
+                if ((r = add_piece(A, sol, (uint32_t)face, tc, normal_axis(tp.n), 1, &tc, &tl,
+                                   1))) {
                     if (r == -1) goto oom;
                     rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
                     goto fail;
@@ -1251,8 +1254,10 @@ static int stage_classes(a3 *A)
             pc->cls = c;
             dir[i] = (int8_t)(pc->sgn * normals_dot_sign(pp->n, fp->n));
             if (pc->face != f->face) flag[c] |= 1;
-            if (pc->solid != f->solid) flag[c] |= 2;
-            else if (dir[i] != dir[first[c]] && !A->soup) flag[c] |= 4;
+            if (pc->solid != f->solid)
+                flag[c] |= 2;
+            else if (dir[i] != dir[first[c]] && !A->soup)
+                flag[c] |= 4;
             break;
         }
     }
@@ -1368,7 +1373,6 @@ int arr3_solids_step(const solid *s, size_t n, double precision, double *step, c
 }
 
 /* ------------------------------------------------------------------ pairs */
-
 
 /* ------------------------------------------------------------------ cuts */
 
@@ -1638,7 +1642,7 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
     if (o->ncs == ncs && o->ncp == ncp) return 0;
     o->npairs++;
     return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
-                                                                                          : 0;
+                                                                                            : 0;
 }
 
 static void cut_chunk(void *ctx, size_t item, int worker)
@@ -1687,8 +1691,7 @@ static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
     /* the pairs' pieces need their canonical planes (in pair order: the ids do not depend on
      * the threads) */
     for (size_t k = 0; k < np; k++)
-        if (piece_plane_id(A, (uint32_t)(pairs[k] >> 32)) ||
-            piece_plane_id(A, (uint32_t)pairs[k]))
+        if (piece_plane_id(A, (uint32_t)(pairs[k] >> 32)) || piece_plane_id(A, (uint32_t)pairs[k]))
             goto done;
     A->G.pl = A->pl;
     par_for(A->threads, nch, cut_chunk, &j);

@@ -38,6 +38,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define U (DBL_EPSILON / 2)
 
@@ -46,12 +47,6 @@
 static int cmpu32(const void *pa, const void *pb)
 {
     uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
-
-static int cmpi32(const void *pa, const void *pb)
-{
-    int32_t a = *(const int32_t *)pa, b = *(const int32_t *)pb;
     return (a > b) - (a < b);
 }
 
@@ -226,7 +221,15 @@ static int fan_sort(const fanjob *j, size_t e, char *err, size_t errlen)
         x.s0 = F[0].s;
         qsort_r(F + 1, n - 1, sizeof *F, fan_cmp, &x);
     }
-    return A->soup ? ARR_OK : fan_check(A, F, n, ev + 2 * e, j->out, err, errlen);
+    if (A->soup) return ARR_OK;
+    if (n == 2 && A->f_cov[F[0].f + 1] - A->f_cov[F[0].f] == 1 &&
+        A->f_cov[F[1].f + 1] - A->f_cov[F[1].f] == 1) {
+        /* two faces of one piece each (most edges): a solid's winding goes up across one and
+         * down across the other, or the surface passes through itself */
+        const piece *p0 = &A->pc[A->cov[A->f_cov[F[0].f]]], *p1 = &A->pc[A->cov[A->f_cov[F[1].f]]];
+        if (p0->solid == p1->solid && (F[0].s != p0->sgn) != (F[1].s != p1->sgn)) return ARR_OK;
+    }
+    return fan_check(A, F, n, ev + 2 * e, j->out, err, errlen);
 }
 
 static void fans_sort(void *ctx, size_t item, int worker)
@@ -541,43 +544,6 @@ static void points_dd(void *ctx, size_t item, int worker)
         if (!isnan(j->dh[3 * p])) xpt_dd(&A->G, &A->pt[p], j->dh + 3 * p, j->dl + 3 * p);
 }
 
-/* The volumes of one chunk of cells: the sum of their faces' cones from a vertex of the cell. */
-static void cells_volume(void *ctx, size_t item, int worker)
-{
-    (void)worker;
-    const ddjob *j = ctx;
-    const a3 *A = j->A;
-    const lar3 *out = j->out;
-    const double *dh = j->dh, *dl = j->dl;
-    double h3 = j->h3;
-    size_t k0 = item * DD_CHUNK, k1 = k0 + DD_CHUNK < out->nc ? k0 + DD_CHUNK : out->nc;
-    for (size_t k = k0; k < k1; k++) {
-        dd org[3] = {{0, 0}, {0, 0}, {0, 0}}, vol = {0, 0};
-        const int64_t *gorg = NULL; /* the origin's grid point, when it is one */
-        if (out->cf_off[k + 1] > out->cf_off[k]) {
-            /* a vertex of the cell's first face, on the grid when one is */
-            int32_t s0 = out->cf[out->cf_off[k]];
-            uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
-            uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0, v0 = A->ent[o0];
-            for (uint32_t i = 0; i < n0; i++)
-                if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
-                    v0 = A->ent[o0 + i];
-                    gorg = A->g + 3 * (size_t)A->pt[v0].a;
-                    break;
-                }
-            for (int a = 0; a < 3; a++)
-                org[a].hi = dh[3 * (size_t)v0 + a], org[a].lo = dl[3 * (size_t)v0 + a];
-        }
-        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
-            int32_t sf = out->cf[i];
-            uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1;
-            dd c = face_cone6(A, dh, dl, f, org, gorg);
-            vol = dd_add(vol, sf > 0 ? c : dd_neg(c));
-        }
-        out->cvol[k] = (vol.hi + vol.lo) * h3;
-    }
-}
-
 /* ---- a grid over the pieces' boxes in a probe's projection ----------------------------------
  * Which faces may a ray along -k through (qi, qj) cross?  Those whose projected box holds the
  * point: a uniform grid over the boxes (about two faces per cell) answers with the boxes of one
@@ -683,203 +649,258 @@ static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, siz
     return 0;
 }
 
-int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
+/* ==== the stages ====================================================================== *
+ * Each stage reads what the ones before made and makes one typed product; the faces that the
+ * arrangement kept whole (most of them, where nothing reaches) cost each stage a few linear
+ * passes and no predicate:
+ *   edges     the cycle entries grouped by edge (a counting sort by lower endpoint)
+ *   fans      the faces about every edge of three or more, sorted; windings checked
+ *   shells    face sides linked across the edges; parts linked through edges
+ *   nesting   each part's outside shell and the cell holding it, by exact probes
+ *   cells     shells into cells, each cell's faces, volumes
+ *   output    the lar3: vertices sorted by position, edges sorted, faces, cells' vertices */
+
+typedef struct cedges {
+    size_t ne;
+    uint32_t *ev;    /* 2 ne: lower and higher point */
+    uint32_t *eface; /* ne: a face on the edge (with eside: the edge's line) */
+    uint32_t *eside; /* ne: that face's side plane entry of the edge */
+    uint32_t *ioff;  /* ne + 1: the edge's incidences I[ioff[e] .. ioff[e + 1]) */
+    inc *I;
+    uint32_t *ent_e; /* by cycle entry: the edge to the next entry (NONE: a cycle of one point) */
+} cedges;
+
+static void cedges_free(cedges *E)
 {
-    size_t nf = A->nf;
-    int rc = ARR_ENOMEM;
-    inc *I = NULL;
-    size_t ne = 0;
-    uint32_t *ev = NULL, *eside = NULL, *eface = NULL, *ioff = NULL;
-    uint32_t *sp = NULL, *fcomp = NULL, *shell = NULL, *cu = NULL, *cell = NULL, *outer = NULL;
-    uint32_t *cpiece = NULL, *newid = NULL, *used = NULL, *ptri = NULL;
-    size_t nptri = 0, capptri = 0;
-    double *fbox = NULL, *dh = NULL, *dl = NULL;
-    fgrid fgk[3] = {{0}};
-    double *fboxk[3] = {NULL, NULL, NULL};
-    uint32_t *cand = NULL, *pf_off = NULL, *pf = NULL, *ff = NULL;
-    size_t capcand = 0, capff = 0;
-    uint32_t *hits = NULL, *hoff = NULL, *stack = NULL;
-    size_t caphits = 0, capstack = 0;
-    probe *probes = NULL;
-    uint64_t *ek = NULL;
-    uint32_t *ent_e = NULL; /* the edge of each cycle entry (to the next one) */
-    /* edges: the entries sorted by their (lower, higher) vertex pair (stable: by face within an
-     * edge); an edge per pair, its incidences the run of entries, its side and plane from the
-     * first */
-    {
-        uint32_t *ent_f = malloc((A->nent + 1) * sizeof *ent_f);
-        kv *ek2 = malloc((A->nent + 1) * sizeof *ek2);
-        ent_e = malloc((A->nent + 1) * sizeof *ent_e);
-        if (!ent_f || !ek2 || !ent_e) {
-            free(ent_f), free(ek2);
-            goto done;
-        }
-        size_t m = 0;
-        for (size_t f = 0; f < nf; f++)
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
-                if (n < 2) continue;
-                for (uint32_t t = 0; t < n; t++) {
-                    uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n];
-                    uint32_t lo = a < b ? a : b, hi = a ^ b ^ lo;
-                    ek2[m++] = (kv){(uint64_t)lo << 32 | hi, o + t};
-                    ent_f[o + t] = (uint32_t)f;
+    free(E->ev), free(E->eface), free(E->eside), free(E->ioff), free(E->I), free(E->ent_e);
+    memset(E, 0, sizeof *E);
+}
+
+/* Stage "edges".  Returns -1 out of memory. */
+static int edges_make(const a3 *A, cedges *E)
+{
+    size_t npt = A->npt, nent = A->nent, nf = A->nf;
+    uint32_t *pos = calloc(npt + 2, sizeof *pos), *lo_e = malloc((nent + 1) * sizeof *lo_e);
+    uint32_t *hi_e = malloc((nent + 1) * sizeof *hi_e), *ent_f = malloc((nent + 1) * sizeof *ent_f);
+    uint32_t *sk = NULL, *sx = NULL;
+    int rc = -1;
+    E->ent_e = malloc((nent + 1) * sizeof *E->ent_e);
+    if (!pos || !lo_e || !hi_e || !ent_f || !E->ent_e) goto done;
+    size_t m = 0;
+    for (size_t f = 0; f < nf; f++)
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+            for (uint32_t t = 0; t < n; t++) {
+                uint32_t x = o + t;
+                ent_f[x] = (uint32_t)f;
+                E->ent_e[x] = NONE;
+                if (n < 2) {
+                    lo_e[x] = NONE;
+                    continue;
                 }
+                uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
+                uint32_t lo = a < b ? a : b;
+                lo_e[x] = lo, hi_e[x] = a ^ b ^ lo;
+                pos[lo + 2]++;
+                m++;
             }
-        if (sort_kv(ek2, m)) {
-            free(ent_f), free(ek2);
-            goto done;
         }
-        a3_progress(A, "cells", 0.25); /* the fractions of this stage: of 2 000 turned cubes */
-        for (size_t i = 0; i < m; i++) ne += i == 0 || ek2[i].k != ek2[i - 1].k;
-        ev = malloc((2 * ne + 2) * sizeof *ev);
-        eside = malloc((ne + 1) * sizeof *eside);
-        eface = malloc((ne + 1) * sizeof *eface);
-        ioff = malloc((ne + 2) * sizeof *ioff);
-        I = malloc((m + 1) * sizeof *I);
-        if (!ev || !eside || !eface || !ioff || !I) {
-            free(ent_f), free(ek2);
-            goto done;
+    for (size_t p = 0; p < npt; p++) pos[p + 2] += pos[p + 1];
+    sk = malloc((m + 1) * sizeof *sk);
+    sx = malloc((m + 1) * sizeof *sx);
+    E->I = malloc((m + 1) * sizeof *E->I);
+    if (!sk || !sx || !E->I) goto done;
+    for (size_t x = 0; x < nent; x++) {
+        if (lo_e[x] == NONE) continue;
+        uint32_t slot = pos[lo_e[x] + 1]++;
+        sk[slot] = hi_e[x], sx[slot] = (uint32_t)x;
+    }
+    /* by lower endpoint, then by higher (insertion: a handful a point; stable, so the entries of
+     * an edge stay in face order), then edges */
+    size_t ne = 0;
+    for (size_t p = 0; p < npt; p++) {
+        uint32_t r0 = pos[p], r1 = pos[p + 1];
+        for (uint32_t i = r0 + 1; i < r1; i++) {
+            uint32_t k = sk[i], x = sx[i], j = i;
+            for (; j > r0 && sk[j - 1] > k; j--) sk[j] = sk[j - 1], sx[j] = sx[j - 1];
+            sk[j] = k, sx[j] = x;
         }
-        ne = 0;
-        for (size_t i = 0; i < m; i++) {
-            uint32_t x = ek2[i].v, lo = (uint32_t)(ek2[i].k >> 32);
-            if (i == 0 || ek2[i].k != ek2[i - 1].k) {
-                ev[2 * ne] = lo, ev[2 * ne + 1] = (uint32_t)ek2[i].k;
-                eside[ne] = A->side[x];
-                eface[ne] = ent_f[x];
-                ioff[ne] = (uint32_t)i;
+        for (uint32_t i = r0; i < r1; i++) ne += i == r0 || sk[i] != sk[i - 1];
+    }
+    E->ev = malloc((2 * ne + 2) * sizeof *E->ev);
+    E->eface = malloc((ne + 1) * sizeof *E->eface);
+    E->eside = malloc((ne + 1) * sizeof *E->eside);
+    E->ioff = malloc((ne + 2) * sizeof *E->ioff);
+    if (!E->ev || !E->eface || !E->eside || !E->ioff) goto done;
+    ne = 0;
+    for (size_t p = 0; p < npt; p++)
+        for (uint32_t i = pos[p]; i < pos[p + 1]; i++) {
+            uint32_t x = sx[i];
+            if (i == pos[p] || sk[i] != sk[i - 1]) {
+                E->ev[2 * ne] = (uint32_t)p, E->ev[2 * ne + 1] = sk[i];
+                E->eside[ne] = A->side[x];
+                E->eface[ne] = ent_f[x];
+                E->ioff[ne] = i;
                 ne++;
             }
-            I[i] = (inc){(uint32_t)ne - 1, ent_f[x], A->ent[x] == lo ? 1 : -1};
-            ent_e[x] = (uint32_t)ne - 1;
+            E->I[i] = (inc){(uint32_t)ne - 1, ent_f[x], A->ent[x] == p ? 1 : -1};
+            E->ent_e[x] = (uint32_t)ne - 1;
         }
-        ioff[ne] = (uint32_t)m;
-        free(ent_f), free(ek2);
-    }
-    /* fans: face sides 2f (+, the normal's side) and 2f+1 (-) */
-    sp = malloc((2 * nf + 1) * sizeof *sp);
-    fcomp = malloc((nf + 1) * sizeof *fcomp);
-    if (!sp || !fcomp) goto done;
+    E->ioff[ne] = (uint32_t)m;
+    E->ne = ne;
+    rc = 0;
+done:
+    free(pos), free(lo_e), free(hi_e), free(ent_f), free(sk), free(sx);
+    return rc;
+}
+
+/* Stage "fans": every edge's faces sorted about it and its windings checked, in chunks on the
+ * threads; the first failing edge is checked again here for its message. */
+static int fans_make(const a3 *A, cedges *E, const lar3 *out, char *err, size_t errlen)
+{
+    size_t nch = (E->ne + FAN_CHUNK - 1) / FAN_CHUNK;
+    fanjob j = {
+        A, E->I, E->ioff, E->ev, E->eside, E->eface, out, E->ne, calloc(nch + 1, sizeof *j.bad)};
+    if (!j.bad) return ARR_ENOMEM;
+    a3_span span = {A, "cells", 0.1, 0.25};
+    par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
+    size_t bad = SIZE_MAX;
+    for (size_t ch = 0; ch < nch && bad == SIZE_MAX; ch++)
+        if (j.bad[ch]) bad = j.bad[ch] - 1;
+    free(j.bad);
+    if (bad != SIZE_MAX) return fan_sort(&j, bad, err, errlen);
+    return ARR_OK;
+}
+
+typedef struct cshells {
+    uint32_t *shell; /* 2 nf: the shell of each face side (2f: the normal's side, 2f+1 the other) */
+    size_t nsh;
+    uint32_t *fcomp; /* nf: the part (faces linked through edges) of each face */
+    size_t ncomp;
+    uint32_t *cpiece; /* ncomp: the lowest input piece covering a face of each part */
+} cshells;
+
+static void cshells_free(cshells *S)
+{
+    free(S->shell), free(S->fcomp), free(S->cpiece);
+    memset(S, 0, sizeof *S);
+}
+
+/* Stage "shells".  Returns -1 out of memory. */
+static int shells_make(a3 *A, const cedges *E, cshells *S)
+{
+    size_t nf = A->nf;
+    uint32_t *sp = malloc((2 * nf + 1) * sizeof *sp), *fu = malloc((nf + 1) * sizeof *fu);
+    S->shell = malloc((2 * nf + 1) * sizeof *S->shell);
+    S->fcomp = malloc((nf + 1) * sizeof *S->fcomp);
+    int rc = -1;
+    if (!sp || !fu || !S->shell || !S->fcomp) goto done;
     for (size_t i = 0; i < 2 * nf; i++) sp[i] = (uint32_t)i;
-    for (size_t i = 0; i < nf; i++) fcomp[i] = (uint32_t)i;
-    {
-        /* each edge's fan sorted and checked, in chunks on the threads; the first failing edge
-         * is checked again here for its message */
-        size_t nch = (ne + FAN_CHUNK - 1) / FAN_CHUNK;
-        fanjob j = {A, I, ioff, ev, eside, eface, out, ne, calloc(nch + 1, sizeof *j.bad)};
-        if (!j.bad) goto done;
-        a3_span span = {A, "cells", 0.25, 0.33};
-        par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
-        size_t bad = SIZE_MAX;
-        for (size_t ch = 0; ch < nch && bad == SIZE_MAX; ch++)
-            if (j.bad[ch]) bad = j.bad[ch] - 1;
-        free(j.bad);
-        if (bad != SIZE_MAX && (rc = fan_sort(&j, bad, err, errlen)) != ARR_OK) goto done;
-    }
-    for (size_t e = 0; e < ne; e++) {
-        inc *F = I + ioff[e];
-        size_t n = ioff[e + 1] - ioff[e];
-        rc = ARR_ENOMEM;
+    for (size_t i = 0; i < nf; i++) fu[i] = (uint32_t)i;
+    for (size_t e = 0; e < E->ne; e++) {
+        const inc *F = E->I + E->ioff[e];
+        size_t n = E->ioff[e + 1] - E->ioff[e];
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
-            uint32_t n0 = 2 * f0->f + (f0->s > 0 ? 0 : 1);
-            uint32_t n1 = 2 * f1->f + (f1->s > 0 ? 1 : 0);
-            a3_uf_union(sp, n0, n1);
-            a3_uf_union(fcomp, f0->f, f1->f);
+            a3_uf_union(sp, 2 * f0->f + (f0->s > 0 ? 0 : 1), 2 * f1->f + (f1->s > 0 ? 1 : 0));
+            if (k + 1 < n) a3_uf_union(fu, f0->f, f1->f);
         }
     }
-    /* shells */
-    a3_progress(A, "cells", 0.35);
-    shell = malloc((2 * nf + 1) * sizeof *shell);
-    if (!shell) goto done;
-    size_t nsh = 0;
-    for (size_t i = 0; i < 2 * nf; i++) shell[i] = NONE;
+    /* shells and parts numbered in order of their first face side (a root's number kept at
+     * the root, which may come later) */
+    size_t nsh = 0, ncomp = 0;
+    for (size_t i = 0; i < 2 * nf; i++) S->shell[i] = NONE;
     for (size_t i = 0; i < 2 * nf; i++) {
         uint32_t r = a3_uf_find(sp, (uint32_t)i);
-        if (shell[r] == NONE) shell[r] = (uint32_t)nsh++;
-        shell[i] = shell[r];
+        if (S->shell[r] == NONE) S->shell[r] = (uint32_t)nsh++;
+        S->shell[i] = S->shell[r];
     }
-    /* components, and an input piece of each */
-    size_t ncomp = 0;
-    outer = malloc((nf + 1) * sizeof *outer);           /* by component: its outside shell */
-    cpiece = malloc((nf + 1) * sizeof *cpiece);         /* by component: a piece of it */
-    uint32_t *croot = malloc((nf + 1) * sizeof *croot); /* by face root: component */
-    if (!outer || !cpiece || !croot) {
-        free(croot);
-        goto done;
-    }
-    for (size_t f = 0; f < nf; f++) croot[f] = NONE;
+    for (size_t f = 0; f < nf; f++) S->fcomp[f] = NONE;
     for (size_t f = 0; f < nf; f++) {
-        uint32_t r = a3_uf_find(fcomp, (uint32_t)f);
-        if (croot[r] == NONE) {
-            croot[r] = (uint32_t)ncomp;
-            outer[ncomp] = NONE;
-            cpiece[ncomp] = NONE;
-            ncomp++;
-        }
+        uint32_t r = a3_uf_find(fu, (uint32_t)f);
+        if (S->fcomp[r] == NONE) S->fcomp[r] = (uint32_t)ncomp++;
+        S->fcomp[f] = S->fcomp[r];
     }
-    for (size_t f = 0; f < nf; f++) sp[2 * f] = a3_uf_find(fcomp, (uint32_t)f); /* roots */
-    for (size_t f = 0; f < nf; f++) fcomp[f] = croot[sp[2 * f]];
-    free(croot);
+    S->nsh = nsh, S->ncomp = ncomp;
+    S->cpiece = malloc((ncomp + 1) * sizeof *S->cpiece);
+    if (!S->cpiece) goto done;
+    for (size_t c = 0; c < ncomp; c++) S->cpiece[c] = NONE;
     for (size_t f = 0; f < nf; f++) {
-        uint32_t c = fcomp[f];
+        uint32_t c = S->fcomp[f];
         for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
-            if (cpiece[c] == NONE || A->cov[i] < cpiece[c]) cpiece[c] = A->cov[i];
+            if (A->cov[i] < S->cpiece[c]) S->cpiece[c] = A->cov[i];
     }
     A->st->shells = nsh;
+    /* reported: parts connected through any shared point (solids that touch at a point are one);
+     * the probes work on parts connected through edges */
     {
-        /* reported: parts connected through any shared vertex (solids that touch at a point are
-         * one); the probes below work on parts connected through edges */
-        uint32_t *vf = malloc((A->npt + 1) * sizeof *vf), *vu = malloc((ncomp + 1) * sizeof *vu);
-        if (!vf || !vu) {
-            free(vf), free(vu);
+        uint32_t *pf = malloc((A->npt + 1) * sizeof *pf), *vu = malloc((ncomp + 1) * sizeof *vu);
+        if (!pf || !vu) {
+            free(pf), free(vu);
             goto done;
         }
-        for (size_t p = 0; p < A->npt; p++) vf[p] = NONE;
+        for (size_t p = 0; p < A->npt; p++) pf[p] = NONE;
         for (size_t c = 0; c < ncomp; c++) vu[c] = (uint32_t)c;
         for (size_t f = 0; f < nf; f++)
-            for (uint32_t e = A->cyc_off[A->f_cyc[f]]; e < A->cyc_off[A->f_cyc[f + 1]]; e++) {
-                uint32_t p = A->ent[e];
-                if (vf[p] == NONE)
-                    vf[p] = fcomp[f];
-                else
-                    a3_uf_union(vu, vf[p], fcomp[f]);
+            for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++) {
+                uint32_t p = A->ent[x];
+                if (pf[p] == NONE)
+                    pf[p] = S->fcomp[f];
+                else if (pf[p] != S->fcomp[f])
+                    a3_uf_union(vu, pf[p], S->fcomp[f]);
             }
         size_t nvc = 0;
         for (size_t c = 0; c < ncomp; c++) nvc += a3_uf_find(vu, (uint32_t)c) == c;
-        free(vf);
-        free(vu);
+        free(pf), free(vu);
         A->st->components = nvc;
     }
-    /* the cells: union-find over the shells and the exterior */
-    a3_progress(A, "cells", 0.38);
-    cu = malloc((nsh + 2) * sizeof *cu); /* union-find over shells + the exterior */
-    if (!cu) goto done;
-    for (size_t s = 0; s <= nsh; s++) cu[s] = (uint32_t)s;
+    rc = 0;
+done:
+    free(sp);
+    free(fu);
+    return rc;
+}
+
+/* Stage "nesting": into cu (a union-find over the shells and the exterior, nsh + 1 entries, the
+ * exterior last), each part's outside shell joined to the cell holding the part.  Returns an
+ * ARR_* code. */
+static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, char *err, size_t errlen)
+{
+    size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
+    const uint32_t *fcomp = S->fcomp, *shell = S->shell;
     uint32_t EXT = (uint32_t)nsh;
+    int rc = ARR_ENOMEM;
+    uint32_t *outer = malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
+    uint32_t *pf_off = NULL, *pf = NULL, *ff = NULL, *hits = NULL, *hoff = NULL, *stack = NULL;
+    size_t nptri = 0, capptri = 0, capcand = 0, capff = 0, caphits = 0, capstack = 0;
+    probe *probes = malloc((ncomp + 1) * sizeof *probes);
+    fgrid fgk[3] = {{0}};
+    double *fboxk[3] = {NULL, NULL, NULL};
+    /* few parts: each probe looks at every face (whose covering piece's box holds its point);
+     * many: through a grid over the pieces' boxes, and the faces by their first piece */
+    int use_grid = ncomp > 8;
+    hoff = calloc(ncomp + 2, sizeof *hoff);
+    if (!outer || !probes || !hoff) goto done;
+    for (uint32_t s = 0; s <= nsh; s++) cu[s] = s;
+    if (use_grid) {
+        pf_off = calloc(A->npc + 2, sizeof *pf_off);
+        pf = malloc((nf + 1) * sizeof *pf);
+        if (!pf_off || !pf) goto done;
+        for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
+        for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
+        for (size_t f = 0; f < nf; f++) pf[pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
+    }
     /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
      * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
-    /* faces by their first covering piece (a face lies inside each piece covering it, so
-     * inside that piece's box): the probes find faces through the pieces' boxes */
-    pf_off = calloc(A->npc + 2, sizeof *pf_off);
-    pf = malloc((nf + 1) * sizeof *pf);
-    if (!pf_off || !pf) goto done;
-    for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
-    for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
-    for (size_t f = 0; f < nf; f++) pf[pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
-    probes = malloc((ncomp + 1) * sizeof *probes);
-    hoff = calloc(ncomp + 2, sizeof *hoff);
-    if (!probes || !hoff) goto done;
     size_t nhit = 0;
     for (size_t c = 0; c < ncomp; c++) {
         probe *pr = &probes[c];
-        int pk, r = piece_tris(A, cpiece[c], &ptri, &nptri, &capptri, &pk);
+        int pk, r = piece_tris(A, S->cpiece[c], &ptri, &nptri, &capptri, &pk);
         if (r == -1) goto done;
         if (r) {
             rc = ARR_EINTERNAL;
             snprintf(err, errlen, "solids: no point found inside input face %u",
-                     A->pc[cpiece[c]].face);
+                     A->pc[S->cpiece[c]].face);
             goto done;
         }
         /* the centroid of the piece's first triangle, or of the next one while the line misses
@@ -890,40 +911,51 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         for (size_t t = 0; t < nptri && own == NONE; t++) {
             tri_probe(A, ptri + 3 * t, pk, pr);
             nhit = h0;
-            if (!fgk[pr->k].off) { /* the pieces' boxes in this probe's projection, and a grid:
-                                       once per axis (parts alternate between axes) */
-                fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
-                if (!fbox) goto done;
-                for (size_t q = 0; q < A->npc; q++) {
-                    const int32_t *b = A->pc[q].box;
-                    double *bx = fbox + 4 * q;
-                    bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
-                    bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
-                    /* widened by more than the rounding of the conversions */
-                    double m =
-                        (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
-                    bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
+            size_t nff = 0;
+            if (use_grid) {
+                if (!fgk[pr->k].off) { /* the pieces' boxes in this projection: once per axis */
+                    double *fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
+                    if (!fbox) goto done;
+                    for (size_t q = 0; q < A->npc; q++) {
+                        const int32_t *b = A->pc[q].box;
+                        double *bx = fbox + 4 * q;
+                        bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
+                        bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
+                        /* widened by more than the rounding of the conversions */
+                        double m =
+                            (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
+                        bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
+                    }
+                    if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
                 }
-                if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
+                double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
+                size_t ncand;
+                if (fgrid_query(&fgk[pr->k], qi, qj, &cand, &capcand, &ncand)) goto done;
+                for (size_t ci = 0; ci < ncand; ci++) {
+                    const int32_t *b = A->pc[cand[ci]].box;
+                    if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
+                        (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
+                        (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
+                        (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
+                        continue;
+                    uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
+                    if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
+                    memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
+                    nff += n;
+                }
+                if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
+            } else {
+                for (size_t f = 0; f < nf; f++) {
+                    /* a face lies inside each piece covering it, so inside its box */
+                    const int32_t *b = A->pc[A->cov[A->f_cov[f]]].box;
+                    if ((int64_t)pr->Q[pr->i] < 3 * (int64_t)b[pr->i] ||
+                        (int64_t)pr->Q[pr->i] > 3 * (int64_t)b[3 + pr->i] ||
+                        (int64_t)pr->Q[pr->j] < 3 * (int64_t)b[pr->j] ||
+                        (int64_t)pr->Q[pr->j] > 3 * (int64_t)b[3 + pr->j])
+                        continue;
+                    if (A3_PUSH(ff, nff, capff, (uint32_t)f)) goto done;
+                }
             }
-            const fgrid *fg = &fgk[pr->k];
-            double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
-            size_t ncand, nff = 0;
-            if (fgrid_query(fg, qi, qj, &cand, &capcand, &ncand)) goto done;
-            /* the faces of the pieces whose boxes hold the point (exactly: Q / 3 in [lo, hi]) */
-            for (size_t ci = 0; ci < ncand; ci++) {
-                const int32_t *b = A->pc[cand[ci]].box;
-                if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
-                    (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
-                    (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
-                    (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
-                    continue;
-                uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
-                if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
-                memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
-                nff += n;
-            }
-            if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
             for (size_t ci = 0; ci < nff; ci++) {
                 uint32_t f = ff[ci];
                 if (fcomp[f] != c && ncomp == 1) continue;
@@ -950,7 +982,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         nhit = m;
         hoff[c + 1] = (uint32_t)nhit;
     }
-    a3_progress(A, "cells", 0.41);
+    a3_progress(A, "cells", 0.45);
     /* pass 2: walk down each part's ray from just beyond its first face.  Entering another
      * part from its outside (the side we come from is that part's outer shell) and leaving it
      * again are skipped (a stack of parts); the first face met outside every part whose side
@@ -979,22 +1011,85 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         }
         a3_uf_union(cu, outer[c], host);
     }
-    /* cells: classes of shells; the one holding EXT is the exterior */
-    cell = malloc((nsh + 2) * sizeof *cell);
-    if (!cell) goto done;
-    size_t nc = 0;
-    for (size_t s = 0; s <= nsh; s++) cell[s] = NONE;
-    uint32_t ext_root = a3_uf_find(cu, EXT);
-    for (size_t i = 0; i < 2 * nf; i++) {
-        uint32_t r = a3_uf_find(cu, shell[i]);
-        if (r == ext_root || cell[r] != NONE) continue;
-        cell[r] = (uint32_t)nc++;
+    rc = ARR_OK;
+done:
+    if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
+    free(outer), free(ptri), free(cand), free(pf_off), free(pf), free(ff), free(hits);
+    free(hoff), free(stack), free(probes);
+    for (int k = 0; k < 3; k++) {
+        fgrid_free(&fgk[k]);
+        free(fboxk[k]);
     }
+    return rc;
+}
+
+/* ---- volumes: per cell-face entry on the threads, summed per cell in order ---------------- */
+
+typedef struct voljob {
+    const a3 *A;
+    const double *dh, *dl;
+    const lar3 *out;
+    const uint32_t *org;     /* by cell: the point its cones start from */
+    const uint32_t *cell_of; /* by CF entry: its cell */
+    dd *cone;                /* by CF entry */
+} voljob;
+
+#define VOL_CHUNK 4096
+static void vol_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const voljob *j = ctx;
+    const a3 *A = j->A;
+    size_t n = j->out->cf_off[j->out->nc];
+    size_t i1 = (item + 1) * VOL_CHUNK < n ? (item + 1) * VOL_CHUNK : n;
+    for (size_t i = item * VOL_CHUNK; i < i1; i++) {
+        int32_t sf = j->out->cf[i];
+        uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1, v0 = j->org[j->cell_of[i]];
+        const xpt *p0 = &A->pt[v0];
+        dd org[3];
+        for (int a = 0; a < 3; a++)
+            org[a].hi = j->dh[3 * (size_t)v0 + a], org[a].lo = j->dl[3 * (size_t)v0 + a];
+        dd c = face_cone6(A, j->dh, j->dl, f, org,
+                          p0->kind == PT_GRID ? A->g + 3 * (size_t)p0->a : NULL);
+        j->cone[i] = sf > 0 ? c : dd_neg(c);
+    }
+}
+
+/* Stage "cells": cell ids from cu (the class of the exterior is none), each cell's faces (CF,
+ * in order of face: the - side first) and the exterior's, and the volumes.  Returns an ARR_*
+ * code. */
+static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
+                      double **dl_out, char *err, size_t errlen)
+{
+    size_t nf = A->nf, nsh = S->nsh;
+    const uint32_t *shell = S->shell;
+    uint32_t *cellof = malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
+    uint32_t *cell_of = NULL;
+    double *dh = NULL, *dl = NULL;
+    dd *cone = NULL;
+    int rc = ARR_ENOMEM;
+    if (!cellof) goto done;
+    /* the cell of every shell: its class's number (the exterior's class: NONE) */
+    {
+        uint32_t ext_root = a3_uf_find(cu, (uint32_t)nsh);
+        uint32_t *lab = malloc((nsh + 2) * sizeof *lab);
+        if (!lab) goto done;
+        for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
+        size_t nc = 0;
+        for (size_t i = 0; i < 2 * nf; i++) {
+            uint32_t r = a3_uf_find(cu, shell[i]);
+            if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
+        }
+        for (size_t s = 0; s < nsh; s++) cellof[s] = lab[a3_uf_find(cu, (uint32_t)s)];
+        free(lab);
+        out->nc = nc;
+    }
+    size_t nc = out->nc;
     /* closed solids: every face separates its solids' inside from their outside, so its two
      * sides lie in two cells; one cell on both sides means a surface that passes through
      * itself (an input that intersects itself, or that the grid makes so) */
     for (size_t f = 0; f < nf && !A->soup; f++) {
-        if (a3_uf_find(cu, shell[2 * f]) != a3_uf_find(cu, shell[2 * f + 1])) continue;
+        if (cellof[shell[2 * f]] != cellof[shell[2 * f + 1]]) continue;
         const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
         const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
         rc = ARR_EINVAL;
@@ -1006,71 +1101,203 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                  ((double)A->oi[2] + x->x[2]) * A->step, A->step);
         goto done;
     }
-    /* the points to 2^-100 (volumes and the written coordinates come from these) */
-    dh = malloc((3 * A->npt + 1) * sizeof *dh);
-    dl = malloc((3 * A->npt + 1) * sizeof *dl);
-    if (!dh || !dl) goto done;
-    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
-    for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
-    {
-        ddjob j = {A, dh, dl, NULL, 0};
-        a3_span span = {A, "cells", 0.41, 0.45};
-        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
-                   &span);
-    }
-    out->nc = nc;
-    out->cf_off = calloc(nc + 1, sizeof *out->cf_off);
+    /* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then
+     * the + entries by rising face); the exterior's likewise */
+    out->cf_off = calloc(nc + 2, sizeof *out->cf_off);
     out->cvol = calloc(nc + 1, sizeof *out->cvol);
     if (!out->cf_off || !out->cvol) goto done;
     size_t next = 0;
     for (size_t i = 0; i < 2 * nf; i++) {
-        uint32_t r = a3_uf_find(cu, shell[i]), o = a3_uf_find(cu, shell[i ^ 1]);
-        if (r == o) continue; /* both sides in one cell: not on its boundary */
-        if (r == ext_root)
+        uint32_t k = cellof[shell[i]], o = cellof[shell[i ^ 1]];
+        if (k == o) continue;
+        if (k == NONE)
             next++;
         else
-            out->cf_off[cell[r] + 1]++;
+            out->cf_off[k + 1]++;
     }
     for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
     out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
     out->ext = malloc((next + 1) * sizeof *out->ext);
-    uint32_t *fill = calloc(nc + 1, sizeof *fill);
-    if (!out->cf || !out->ext || !fill) {
-        free(fill);
-        goto done;
-    }
+    fill = calloc(nc + 1, sizeof *fill);
+    cell_of = malloc((out->cf_off[nc] + 1) * sizeof *cell_of);
+    if (!out->cf || !out->ext || !fill || !cell_of) goto done;
     out->next = 0;
-    double h3 = A->step * A->step * A->step / 6;
-    for (size_t i = 0; i < 2 * nf; i++) {
-        uint32_t r = a3_uf_find(cu, shell[i]);
-        if (r == a3_uf_find(cu, shell[i ^ 1])) continue;
-        /* the - side's cell has the normal pointing out of it: +(f+1) */
-        int32_t sf = (i & 1) ? (int32_t)(i / 2 + 1) : -(int32_t)(i / 2 + 1);
-        if (r == ext_root) {
-            out->ext[out->next++] = sf;
-        } else {
-            uint32_t k = cell[r];
-            out->cf[out->cf_off[k] + fill[k]++] = sf;
+    /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t t = 0; t < nf; t++) {
+            size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
+            uint32_t k = cellof[shell[i]];
+            if (k == cellof[shell[i ^ 1]]) continue;
+            int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
+            if (k == NONE)
+                out->ext[out->next++] = sf;
+            else {
+                uint32_t at = out->cf_off[k] + fill[k]++;
+                out->cf[at] = sf;
+                cell_of[at] = k;
+            }
         }
-    }
+    /* the points to 2^-100 (volumes and the written coordinates come from these) */
+    dh = malloc((3 * A->npt + 1) * sizeof *dh);
+    dl = malloc((3 * A->npt + 1) * sizeof *dl);
+    orgv = malloc((nc + 1) * sizeof *orgv);
+    cone = malloc((out->cf_off[nc] + 1) * sizeof *cone);
+    if (!dh || !dl || !orgv || !cone) goto done;
+    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
+    for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
     {
-        ddjob j = {A, dh, dl, out, h3};
+        ddjob j = {A, dh, dl, NULL, 0};
         a3_span span = {A, "cells", 0.45, 0.5};
-        par_for_ex(A->threads, (nc + DD_CHUNK - 1) / DD_CHUNK, cells_volume, &j, a3_span_tick,
+        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
                    &span);
     }
-    free(fill);
-    /* ---- output: vertices sorted by position, edges sorted, faces */
-    newid = malloc((A->npt + 1) * sizeof *newid);
-    used = malloc((A->npt + 1) * sizeof *used);
-    if (!newid || !used) goto done;
+    /* each cell's cones from a point of its first face, on the grid when one is (taken from a
+     * vertex of the cell, the terms are as small as the cell, so a sliver keeps its volume) */
+    for (size_t k = 0; k < nc; k++) {
+        orgv[k] = NONE;
+        if (out->cf_off[k + 1] == out->cf_off[k]) continue;
+        int32_t s0 = out->cf[out->cf_off[k]];
+        uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
+        uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0;
+        orgv[k] = A->ent[o0];
+        for (uint32_t i = 0; i < n0; i++)
+            if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
+                orgv[k] = A->ent[o0 + i];
+                break;
+            }
+    }
+    {
+        voljob j = {A, dh, dl, out, orgv, cell_of, cone};
+        par_for(A->threads, (out->cf_off[nc] + VOL_CHUNK - 1) / VOL_CHUNK, vol_chunk, &j);
+    }
+    double h3 = A->step * A->step * A->step / 6;
+    for (size_t k = 0; k < nc; k++) {
+        dd vol = {0, 0};
+        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) vol = dd_add(vol, cone[i]);
+        out->cvol[k] = (vol.hi + vol.lo) * h3;
+    }
+    *dh_out = dh, *dl_out = dl;
+    dh = dl = NULL;
+    rc = ARR_OK;
+done:
+    if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
+    free(cellof), free(fill), free(orgv), free(cell_of), free(dh), free(dl), free(cone);
+    return rc;
+}
+
+/* ---- output ------------------------------------------------------------------------------ */
+
+/* The used points sorted by position: the grid points by an LSD radix sort on z, y, x (stable:
+ * equal points cannot occur, they are one point), the others (few: where surfaces meet) by the
+ * exact comparison, then the two runs merged by it. */
+static int sort_points(const a3 *A, uint32_t *used, size_t nu)
+{
+    size_t ng = 0, nx = 0;
+    kv *g = malloc((nu + 1) * sizeof *g);
+    uint32_t *x = malloc((nu + 1) * sizeof *x);
+    int rc = -1;
+    if (!g || !x) goto done;
+    for (size_t i = 0; i < nu; i++)
+        if (A->pt[used[i]].kind == PT_GRID)
+            g[ng++] = (kv){0, used[i]};
+        else
+            x[nx++] = used[i];
+    for (int k = 2; k >= 0; k--) {
+        for (size_t i = 0; i < ng; i++)
+            g[i].k = (uint64_t)(A->g[3 * (size_t)A->pt[g[i].v].a + k] + ((int64_t)1 << 40));
+        if (sort_kv(g, ng)) goto done;
+    }
+    if (nx > 1) qsort_r(x, nx, sizeof *x, vcmp, (void *)A);
+    size_t i = 0, j = 0, m = 0;
+    while (i < ng || j < nx) {
+        if (j == nx || (i < ng && vcmp(&g[i].v, &x[j], (void *)A) < 0))
+            used[m++] = g[i++].v;
+        else
+            used[m++] = x[j++];
+    }
+    rc = 0;
+done:
+    free(g), free(x);
+    return rc;
+}
+
+#define OUT_CHUNK 8192
+typedef struct outjob {
+    const a3 *A;
+    lar3 *out;
+    const uint32_t *newid, *newe, *ent_e;
+} outjob;
+
+/* One chunk of faces written: FN, fsrc, FE, fsol (the solids covering f an odd number of times,
+ * ascending), fc; fsol_off and fe_off are known. */
+static void out_faces(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const outjob *j = ctx;
+    const a3 *A = j->A;
+    lar3 *out = j->out;
+    size_t f1 = (item + 1) * OUT_CHUNK < A->nf ? (item + 1) * OUT_CHUNK : A->nf;
+    for (size_t f = item * OUT_CHUNK; f < f1; f++) {
+        plane3 tp;
+        const plane3 *P = a3_face_plane(A, (uint32_t)f, &tp);
+        double len = sqrt(P->nd[0] * P->nd[0] + P->nd[1] * P->nd[1] + P->nd[2] * P->nd[2]);
+        for (int k = 0; k < 3; k++) out->FN[3 * f + k] = P->nd[k] / len;
+        out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
+        uint32_t nfe = out->fe_off[f];
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            out->fc[cy] = cy;
+            uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+            if (n < 2) continue;
+            for (uint32_t t = 0; t < n; t++) {
+                uint32_t a = j->newid[A->ent[o + t]],
+                         b = j->newid[A->ent[t + 1 < n ? o + t + 1 : o]];
+                uint32_t e = j->newe[j->ent_e[o + t]];
+                out->fe[nfe++] = a < b ? (int32_t)(e + 1) : -(int32_t)(e + 1);
+            }
+        }
+        uint32_t s0 = out->fsol_off[f], c0 = A->f_cov[f], c1 = A->f_cov[f + 1];
+        if (c1 - c0 == 1) {
+            out->fsol[s0] = A->pc[A->cov[c0]].solid;
+            continue;
+        }
+        /* several pieces: the solids an odd number of times, ascending (at most a few) */
+        uint32_t nfs = s0;
+        for (uint32_t i = c0; i < c1; i++) {
+            uint32_t so = A->pc[A->cov[i]].solid, q = s0;
+            while (q < nfs && out->fsol[q] < so) q++;
+            if (q < nfs && out->fsol[q] == so) { /* even: out */
+                memmove(out->fsol + q, out->fsol + q + 1, (nfs - q - 1) * sizeof *out->fsol);
+                nfs--;
+                continue;
+            }
+            memmove(out->fsol + q + 1, out->fsol + q, (nfs - q) * sizeof *out->fsol);
+            out->fsol[q] = so;
+            nfs++;
+        }
+        for (uint32_t q = nfs; q < out->fsol_off[f + 1]; q++) out->fsol[q] = NONE; /* gap */
+    }
+}
+
+/* Stage "output".  Returns -1 out of memory. */
+static int output_make(a3 *A, const cedges *E, const double *dh, const double *dl, lar3 *out)
+{
+    size_t nf = A->nf, ne = E->ne;
+    uint32_t *newid = malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
+    kv *ek = NULL;
+    int rc = -1;
+    if (!newid) goto done;
     for (size_t p = 0; p < A->npt; p++) newid[p] = NONE;
     size_t nu = 0;
     for (size_t i = 0; i < A->nent; i++)
-        if (newid[A->ent[i]] == NONE) newid[A->ent[i]] = 0, used[nu++] = A->ent[i];
-    if (nu > 1) qsort_r(used, nu, sizeof *used, vcmp, A);
+        nu += newid[A->ent[i]] == NONE ? (newid[A->ent[i]] = 0, 1) : 0;
+    used = malloc((nu + 1) * sizeof *used);
+    if (!used) goto done;
+    nu = 0;
+    for (size_t p = 0; p < A->npt; p++)
+        if (newid[p] == 0) used[nu++] = (uint32_t)p;
+    if (sort_points(A, used, nu)) goto done;
     for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
-    a3_progress(A, "cells", 0.54);
+    a3_progress(A, "cells", 0.6);
     out->nv = nu;
     out->V = malloc((3 * nu + 1) * sizeof *out->V);
     if (!out->V) goto done;
@@ -1079,103 +1306,72 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
             out->V[3 * i + k] =
                 ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
                 A->step;
+    /* edges in the order of their new ends */
     ek = malloc((ne + 1) * sizeof *ek);
-    if (!ek) goto done;
-    for (size_t e = 0; e < ne; e++) {
-        uint32_t a = newid[ev[2 * e]], b = newid[ev[2 * e + 1]];
-        ek[e] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-    }
-    out->ne = ne;
+    newe = malloc((ne + 1) * sizeof *newe);
     out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
-    if (!out->EV) goto done;
-    {
-        /* edges in the order of their new keys: LSD radix sort of the old ids by key, skipping
-         * the bytes every key shares; newe[old] = new id */
-        uint32_t *idx = malloc((ne + 1) * sizeof *idx), *buf = malloc((ne + 1) * sizeof *buf);
-        uint32_t *newe = malloc((ne + 1) * sizeof *newe);
-        if (!idx || !buf || !newe) {
-            free(idx), free(buf), free(newe);
-            goto done;
-        }
-        uint64_t all_or = 0, all_and = ~(uint64_t)0;
-        for (size_t e = 0; e < ne; e++) idx[e] = (uint32_t)e, all_or |= ek[e], all_and &= ek[e];
-        for (int pass = 0; pass < 8; pass++) {
-            int sh = 8 * pass;
-            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
-            size_t cnt[257] = {0};
-            for (size_t i = 0; i < ne; i++) cnt[((ek[idx[i]] >> sh) & 255) + 1]++;
-            for (int q = 0; q < 256; q++) cnt[q + 1] += cnt[q];
-            for (size_t i = 0; i < ne; i++) buf[cnt[(ek[idx[i]] >> sh) & 255]++] = idx[i];
-            uint32_t *t = idx;
-            idx = buf, buf = t;
-        }
-        for (size_t i = 0; i < ne; i++) {
-            out->EV[2 * i] = (uint32_t)(ek[idx[i]] >> 32);
-            out->EV[2 * i + 1] = (uint32_t)ek[idx[i]];
-            newe[idx[i]] = (uint32_t)i;
-        }
-        free(idx), free(buf);
-        a3_progress(A, "cells", 0.58);
-        /* faces */
-        out->nf = nf;
-        out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
-        out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
-        out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
-        out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
-        out->fe = malloc((A->nent + 1) * sizeof *out->fe);
-        out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
-        out->ncyc = A->ncyc;
-        out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
-        out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
-        out->fsol = malloc((A->f_cov[nf] + 1) * sizeof *out->fsol);
-        if (!out->FN || !out->fc_off || !out->fc || !out->fe_off || !out->fe || !out->fsrc ||
-            !out->cyc_off || !out->cyc || !out->fsol_off || !out->fsol) {
-            free(newe);
-            goto done;
-        }
-        size_t nfe = 0, nfs = 0;
-        out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
-        for (size_t f = 0; f < nf; f++) {
-            plane3 tp;
-            const plane3 *P = a3_face_plane(A, (uint32_t)f, &tp);
-            double len = sqrt(P->nd[0] * P->nd[0] + P->nd[1] * P->nd[1] + P->nd[2] * P->nd[2]);
-            for (int k = 0; k < 3; k++) out->FN[3 * f + k] = P->nd[k] / len;
-            out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                out->fc[cy] = cy;
-                uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
-                if (n < 2) continue;
-                for (uint32_t t = 0; t < n; t++) {
-                    uint32_t a = newid[A->ent[o + t]], b = newid[A->ent[o + (t + 1) % n]];
-                    uint32_t e = newe[ent_e[o + t]];
-                    out->fe[nfe++] = a < b ? (int32_t)(e + 1) : -(int32_t)(e + 1);
-                }
-            }
-            out->fc_off[f + 1] = A->f_cyc[f + 1];
-            out->fe_off[f + 1] = (uint32_t)nfe;
-            /* solids covering f an odd number of times */
-            size_t s0 = nfs;
-            for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
-                out->fsol[nfs++] = A->pc[A->cov[i]].solid;
-            if (nfs - s0 > 1) qsort(out->fsol + s0, nfs - s0, sizeof *out->fsol, cmpu32);
-            size_t m = s0;
-            for (size_t i = s0; i < nfs;) {
-                size_t j = i;
-                while (j < nfs && out->fsol[j] == out->fsol[i]) j++;
-                if ((j - i) & 1) out->fsol[m++] = out->fsol[i];
-                i = j;
-            }
-            nfs = m;
-            out->fsol_off[f + 1] = (uint32_t)nfs;
-        }
-        free(newe);
-        for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
-        for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+    if (!ek || !newe || !out->EV) goto done;
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
+        ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
     }
-    a3_progress(A, "cells", 0.65);
+    if (sort_kv(ek, ne)) goto done;
+    out->ne = ne;
+    for (size_t i = 0; i < ne; i++) {
+        out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
+        out->EV[2 * i + 1] = (uint32_t)ek[i].k;
+        newe[ek[i].v] = (uint32_t)i;
+    }
+    a3_progress(A, "cells", 0.7);
+    /* faces */
+    out->nf = nf;
+    out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
+    out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
+    out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
+    out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+    out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
+    out->ncyc = A->ncyc;
+    out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
+    out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
+    if (!out->FN || !out->fc_off || !out->fc || !out->fe_off || !out->fsrc || !out->cyc_off ||
+        !out->cyc || !out->fsol_off)
+        goto done;
+    out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t nfe = 0;
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
+            nfe += n < 2 ? 0 : n;
+        }
+        out->fc_off[f + 1] = A->f_cyc[f + 1];
+        out->fe_off[f + 1] = out->fe_off[f] + nfe;
+        out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]); /* room */
+    }
+    out->fe = malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
+    out->fsol = malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
+    if (!out->fe || !out->fsol) goto done;
+    {
+        outjob j = {A, out, newid, newe, E->ent_e};
+        par_for(A->threads, (nf + OUT_CHUNK - 1) / OUT_CHUNK, out_faces, &j);
+    }
+    /* fsol: the room a face with several pieces left unused (NONE) closed up */
+    {
+        uint32_t w = 0;
+        for (size_t f = 0; f < nf; f++) {
+            uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
+            out->fsol_off[f] = w;
+            for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
+                out->fsol[w++] = out->fsol[i];
+        }
+        out->fsol_off[nf] = w;
+    }
+    for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
+    for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+    a3_progress(A, "cells", 0.8);
     /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
-     * read off in vertex order, a small one sorted); CF rows sorted */
+     * read off in vertex order, a small one sorted) */
+    size_t nc = out->nc;
     out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
     if (!out->cv_off) goto done;
     {
@@ -1184,19 +1380,19 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
         if (!stamp) goto done;
         for (size_t k = 0; k < nc; k++) {
             size_t start = ncv;
-            if (k % step == 0) a3_progress(A, "cells", 0.65 + 0.35 * (double)k / (double)nc);
+            if (k % step == 0) a3_progress(A, "cells", 0.8 + 0.2 * (double)k / (double)nc);
             for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
                 uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
-                for (uint32_t cy = out->fc_off[f]; cy < out->fc_off[f + 1]; cy++)
-                    for (uint32_t j = out->cyc_off[cy]; j < out->cyc_off[cy + 1]; j++) {
-                        uint32_t v = out->cyc[j];
-                        if (stamp[v] == k + 1) continue;
-                        stamp[v] = (uint32_t)k + 1;
-                        if (A3_PUSH(cv, ncv, capcv, v)) {
-                            free(stamp), free(cv);
-                            goto done;
-                        }
+                for (uint32_t x = out->cyc_off[out->fc_off[f]];
+                     x < out->cyc_off[out->fc_off[f + 1]]; x++) {
+                    uint32_t v = out->cyc[x];
+                    if (stamp[v] == k + 1) continue;
+                    stamp[v] = (uint32_t)k + 1;
+                    if (A3_PUSH(cv, ncv, capcv, v)) {
+                        free(stamp), free(cv);
+                        goto done;
                     }
+                }
             }
             size_t m = ncv - start;
             if (m > out->nv / 16) {
@@ -1207,52 +1403,67 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
                 qsort(cv + start, m, sizeof *cv, cmpu32);
             }
             out->cv_off[k + 1] = (uint32_t)ncv;
-            if (out->cf_off[k + 1] - out->cf_off[k] > 1)
-                qsort(out->cf + out->cf_off[k], out->cf_off[k + 1] - out->cf_off[k],
-                      sizeof *out->cf, cmpi32);
         }
         free(stamp);
         out->cv = cv ? cv : malloc(sizeof *out->cv);
         if (!out->cv) goto done;
     }
-    if (out->next > 1) qsort(out->ext, out->next, sizeof *out->ext, cmpi32);
     out->stats.nv = out->nv;
     out->stats.ne = out->ne;
     out->stats.nf = out->nf;
     out->stats.nc = out->nc;
+    rc = 0;
+done:
+    free(newid), free(used), free(newe), free(ek);
+    return rc;
+}
+
+int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
+{
+    cedges E = {0};
+    cshells S = {0};
+    uint32_t *cu = NULL;
+    double *dh = NULL, *dl = NULL;
+    int rc = ARR_ENOMEM;
+    struct timespec T0, T1;
+#ifdef A3_PROF /* a developer's build (make OPT='-O2 -DA3_PROF'): each stage's time on stderr */
+#define TICK(name)                                                                                 \
+    do {                                                                                           \
+        clock_gettime(CLOCK_MONOTONIC, &T1);                                                       \
+        fprintf(stderr, "  cells/%-8s %7.1f ms\n", name,                                           \
+                (double)(T1.tv_sec - T0.tv_sec) * 1e3 + (double)(T1.tv_nsec - T0.tv_nsec) / 1e6);  \
+        T0 = T1;                                                                                   \
+    } while (0)
+#else
+#define TICK(name) (void)T1
+#endif
+    clock_gettime(CLOCK_MONOTONIC, &T0);
+    if (edges_make(A, &E)) goto done;
+    TICK("edges");
+    a3_progress(A, "cells", 0.1);
+    if ((rc = fans_make(A, &E, out, err, errlen)) != ARR_OK) goto done;
+    TICK("fans");
+    rc = ARR_ENOMEM;
+    if (shells_make(A, &E, &S)) goto done;
+    TICK("shells");
+    a3_progress(A, "cells", 0.3);
+    if (!(cu = malloc((S.nsh + 2) * sizeof *cu))) goto done;
+    if ((rc = nesting_make(A, &S, cu, err, errlen)) != ARR_OK) goto done;
+    TICK("nesting");
+    if ((rc = cells_make(A, &S, cu, out, &dh, &dl, err, errlen)) != ARR_OK) goto done;
+    TICK("cells");
+    cshells_free(&S);
+    a3_progress(A, "cells", 0.55);
+    rc = ARR_ENOMEM;
+    if (output_make(A, &E, dh, dl, out)) goto done;
+    TICK("output");
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(I);
-    free(ev);
-    free(eside);
-    free(eface);
-    free(ioff);
-    free(sp);
-    free(fcomp);
-    free(shell);
+    cedges_free(&E);
+    cshells_free(&S);
     free(cu);
-    free(cell);
-    free(outer);
-    free(cpiece);
-    free(ptri);
-    free(newid);
-    free(used);
     free(dh);
     free(dl);
-    for (int k = 0; k < 3; k++) {
-        fgrid_free(&fgk[k]);
-        free(fboxk[k]);
-    }
-    free(cand);
-    free(pf_off);
-    free(pf);
-    free(ff);
-    free(hits);
-    free(hoff);
-    free(stack);
-    free(probes);
-    free(ek);
-    free(ent_e);
     return rc;
 }

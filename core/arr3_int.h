@@ -33,10 +33,10 @@
 #define SIDE_LAZY (NONE - 2)
 
 typedef struct piece {
-    uint32_t solid; /* solid index (in a soup: the input face, so that faces meet each other) */
-    uint32_t face;  /* input face (index over all solids) */
-    uint32_t plane; /* canonical plane id, or NONE while the piece needs none (nothing reaches
-                       it: its anchor plane serves) */
+    uint32_t solid;  /* solid index (in a soup: the input face, so that faces meet each other) */
+    uint32_t face;   /* input face (index over all solids) */
+    uint32_t plane;  /* canonical plane id, or NONE while the piece needs none (nothing reaches
+                        it: its anchor plane serves) */
     uint32_t c0, nc; /* cycles pc_off[c0 .. c0 + nc) */
     uint32_t av[3];  /* three of its vertices spanning its plane: the anchor plane is the raw
                         plane through them (plane_through_raw) */

@@ -231,8 +231,7 @@ static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
     for (uint32_t i = x->a; i < x->a + (x->b & ~LEAFBIT); i++)
         for (uint32_t j = y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
             uint32_t p = F->item[i], q = F->item[j];
-            if (A->pc[p].solid == A->pc[q].solid || !box_meet(A->pc[p].box, A->pc[q].box))
-                continue;
+            if (A->pc[p].solid == A->pc[q].solid || !box_meet(A->pc[p].box, A->pc[q].box)) continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
         }
     return 0;
@@ -297,8 +296,7 @@ static int top_pairs(const forest *F, const bvh *T, out64 *o, out64 *stack)
                 for (uint32_t j = y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
                     uint32_t g = T->item[i], h = T->item[j];
                     if (!box_meet(group_box(F, g), group_box(F, h))) continue;
-                    if (push64(o, g < h ? (uint64_t)g << 32 | h : (uint64_t)h << 32 | g))
-                        return -1;
+                    if (push64(o, g < h ? (uint64_t)g << 32 | h : (uint64_t)h << 32 | g)) return -1;
                 }
         } else if (lx || (!ly && extent(y) > extent(x))) {
             if (push64(stack, (uint64_t)xi << 32 | y->a) ||

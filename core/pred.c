@@ -107,7 +107,8 @@ int plane_through_raw(const int64_t *p, const int64_t *q, const int64_t *r, plan
      * product below 2^61 and each component below 2^62: int64 throughout */
     int64_t u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
     int64_t v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
-    int64_t n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    int64_t n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0]};
     if (!n[0] && !n[1] && !n[2]) return -1;
     for (int i = 0; i < 3; i++) out->n[i] = n[i], out->nd[i] = (double)n[i];
     out->d = -((i128)n[0] * p[0] + (i128)n[1] * p[1] + (i128)n[2] * p[2]);

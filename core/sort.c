@@ -26,12 +26,10 @@
         return 1;                                                                                  \
     }
 
-#define KEY_U64(e) (e)
-RADIX_PASS(uint64_t, KEY_U64)
+#define KEY_U64(e)   (e)
 #define KEY_IPT_X(e) ((uint64_t)(e).x ^ (UINT64_C(1) << 63))
 #define KEY_IPT_Y(e) ((uint64_t)(e).y ^ (UINT64_C(1) << 63))
 #define KEY_KV(e)    ((e).k)
-RADIX_PASS(kv, KEY_KV)
 typedef ipt ipt_x;
 typedef ipt ipt_y;
 RADIX_PASS(ipt_x, KEY_IPT_X)
@@ -41,7 +39,10 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
  * 2^RBITS counts each): the 3D core sorts many tiny arrangements. */
 #define SMALL 48
 
-/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, else the passes. */
+/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, else the passes.  The
+ * histograms of every digit are counted in one read of the data; a digit that every key shares
+ * costs no pass. */
+#define NDIG ((64 + RBITS - 1) / RBITS)
 #define RADIX_SORT(NAME, T, KEY)                                                                   \
     int NAME(T *a, size_t n)                                                                       \
     {                                                                                              \
@@ -56,19 +57,31 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
             return 0;                                                                              \
         }                                                                                          \
         T *tmp = malloc(n * sizeof *tmp);                                                          \
-        size_t *cnt = malloc(RSIZE * sizeof *cnt);                                                 \
+        size_t *cnt = calloc(NDIG * RSIZE, sizeof *cnt);                                           \
         if (!tmp || !cnt) {                                                                        \
             free(tmp);                                                                             \
             free(cnt);                                                                             \
             return -1;                                                                             \
         }                                                                                          \
+        for (size_t i = 0; i < n; i++) {                                                           \
+            uint64_t k = KEY(a[i]);                                                                \
+            for (unsigned d = 0; d < NDIG; d++)                                                    \
+                cnt[d * RSIZE + ((k >> (d * RBITS)) & (RSIZE - 1))]++;                             \
+        }                                                                                          \
         T *src = a, *dst = tmp;                                                                    \
-        for (unsigned sh = 0; sh < 64; sh += RBITS) {                                              \
-            if (pass_##T(src, dst, n, sh, cnt)) {                                                  \
-                T *t = src;                                                                        \
-                src = dst;                                                                         \
-                dst = t;                                                                           \
+        for (unsigned d = 0; d < NDIG; d++) {                                                      \
+            size_t *c = cnt + d * RSIZE, s = 0;                                                    \
+            unsigned sh = d * RBITS;                                                               \
+            if (c[(KEY(a[0]) >> sh) & (RSIZE - 1)] == n) continue; /* one digit for all */         \
+            for (size_t q = 0; q < RSIZE; q++) {                                                   \
+                size_t t = c[q];                                                                   \
+                c[q] = s;                                                                          \
+                s += t;                                                                            \
             }                                                                                      \
+            for (size_t i = 0; i < n; i++) dst[c[(KEY(src[i]) >> sh) & (RSIZE - 1)]++] = src[i];   \
+            T *t = src;                                                                            \
+            src = dst;                                                                             \
+            dst = t;                                                                               \
         }                                                                                          \
         if (src != a) memcpy(a, src, n * sizeof *a);                                               \
         free(tmp);                                                                                 \

@@ -472,7 +472,8 @@ static int check_solid(const solid *s, size_t i, int soup, double p, solid *fixe
         snprintf(label, sizeof label, "faces");
     else
         snprintf(label, sizeof label, "solids[%zu]", i);
-    int bad = soup ? solid_check_faces(s, p, label, rep) : solid_check(s, p, label, rep, fixed);
+    int bad =
+        soup ? solid_check_faces(s, p, label, rep) : solid_check_nocopy(s, p, label, rep, fixed);
     if (bad == 0) {
         for (size_t m = 0; w && m < rep->nmsg; m++) warn_add(w, rep, m, label);
         if (w) w->total += rep->warnings > rep->nmsg ? rep->warnings - rep->nmsg : 0;
@@ -568,8 +569,14 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     warn_finish(w);
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
-    else
+    else {
+        /* a solid that needed no change is used as it is (no fixed copy was made) */
+        for (size_t i = 0; i < r->ns; i++)
+            if (fixed[i].nf == 0) fixed[i] = r->s[i];
         rc = arr3_build(r->ns ? fixed : &no_solid, r->ns, 0, &ao, &c, msg, sizeof msg);
+        for (size_t i = 0; i < r->ns; i++)
+            if (fixed[i].V == r->s[i].V) memset(&fixed[i], 0, sizeof fixed[i]);
+    }
     if (rc != ARR_OK) {
         rc = api_core_fail(err, rc, msg);
         goto out;

@@ -53,7 +53,8 @@
  * with a count the text announces: OFF's counts are believed only after checking that the
  * bytes left could hold that many lines, so "OFF\n1000000 1000000 0" costs nothing.
  * Numbers are decimal (digits, sign, point, exponent: no "nan", "inf" or hex) and finite,
- * converted with strtod_l in a "C" locale of the reader's own, whatever the process locale.
+ * converted correctly rounded by core/fastfloat.h (strtod's double, whatever the process
+ * locale).
  *
  * Threads: reentrant, no globals.  Ownership: inputs borrowed; outputs freed with solid_free().
  * Bounds: O(n log n) time (sorts), O(n) memory in the total length of the cycles; no recursion.
@@ -68,6 +69,7 @@
 #include <string.h>
 
 #include "core/facecheck.h"
+#include "core/fastfloat.h"
 
 #define SOLID_MAX_VERTICES 10000000u /* a reader's limits, see above */
 #define SOLID_MAX_FACES    10000000u
@@ -294,18 +296,19 @@ static int cycle_distinct(const ck *c, size_t k)
     return u1 == NONE ? 1 : 2;
 }
 
-/* Do the vertices of cycle k lie on one line on the grid (llround of x / p, exact)? */
+/* Do the vertices of cycle k lie on one line on the grid (c->g: llround of x / p, exact)? */
 static int collinear_on_grid(const ck *c, size_t k)
 {
     const uint32_t *cy = c->s->cyc;
     uint32_t lo = c->s->cyc_off[k], hi = c->s->cyc_off[k + 1];
-    int64_t g0[3], d[3] = {0, 0, 0};
+    const int64_t *g0 = c->g + 3 * (size_t)cy[lo];
+    int64_t d[3] = {0, 0, 0};
     int have_d = 0;
-    for (int a = 0; a < 3; a++) g0[a] = (int64_t)llround(vert(c, cy[lo])[a] / c->p);
     for (uint32_t i = lo + 1; i < hi; i++) {
+        const int64_t *gi = c->g + 3 * (size_t)cy[i];
         int64_t e[3];
         for (int a = 0; a < 3; a++) {
-            e[a] = (int64_t)llround(vert(c, cy[i])[a] / c->p) - g0[a];
+            e[a] = gi[a] - g0[a];
             if (e[a] > ((int64_t)1 << 61) || e[a] < -((int64_t)1 << 61)) return 0; /* too far */
         }
         if (!e[0] && !e[1] && !e[2]) continue;
@@ -491,6 +494,17 @@ static int check_faces(ck *c)
                  cycle_distinct(c, k0) < 3 ? "fewer than 3 distinct vertices"
                                            : "its vertices on one line");
             c->rep->degenerate_faces++;
+            continue;
+        }
+        if (k1 - k0 == 1 && s->cyc_off[k0 + 1] - s->cyc_off[k0] == 3) {
+            /* a triangle, not flat on the grid: planar; its area, and nothing more to check */
+            const double *a = vert(c, cy[s->cyc_off[k0]]), *b = vert(c, cy[s->cyc_off[k0] + 1]),
+                         *d = vert(c, cy[s->cyc_off[k0] + 2]);
+            double u[3], w[3], n[3];
+            sub3(b, a, u);
+            sub3(d, a, w);
+            cross3(u, w, n);
+            c->area[f] = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
             continue;
         }
         for (size_t k = k0; k < k1; k++)
@@ -856,7 +870,7 @@ fail:
 }
 
 static int check(const solid *s, double precision, const char *label, solid_report *rep,
-                 solid *fixed, int faces_only)
+                 solid *fixed, int faces_only, int copy_unchanged)
 {
     solid_report local;
     ck c = {.s = s,
@@ -882,7 +896,9 @@ static int check(const solid *s, double precision, const char *label, solid_repo
     if (bad) goto done;
     if (orient(&c, &bad)) goto oom;
     if (bad || check_volume(&c)) goto done;
-    if (c.rep->errors == 0 && fixed && make_fixed(&c, fixed)) goto oom;
+    if (c.rep->errors == 0 && fixed && (copy_unchanged || c.rep->flipped_faces) &&
+        make_fixed(&c, fixed))
+        goto oom;
     goto done;
 oom:
     note(&c, 1, SOLID_AT_SOLID, 0, "out of memory");
@@ -900,12 +916,18 @@ done:
 int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
                 solid *fixed)
 {
-    return check(s, precision, label, rep, fixed, 0);
+    return check(s, precision, label, rep, fixed, 0, 1);
+}
+
+int solid_check_nocopy(const solid *s, double precision, const char *label, solid_report *rep,
+                       solid *fixed)
+{
+    return check(s, precision, label, rep, fixed, 0, 0);
 }
 
 int solid_check_faces(const solid *s, double precision, const char *label, solid_report *rep)
 {
-    return check(s, precision, label, rep, NULL, 1);
+    return check(s, precision, label, rep, NULL, 1, 0);
 }
 
 /* ---- readers: text ---------------------------------------------------------------------- */
@@ -966,21 +988,12 @@ static const char *tok_show(span tok, char *buf, size_t cap)
     return buf;
 }
 
-/* A finite decimal number, read in the "C" locale cl: 0, or -1 (malformed or not finite). */
-static int parse_number(span tok, locale_t cl, double *out)
+/* A finite decimal number (as strtod reads it in the "C" locale, correctly rounded): 0, or -1
+ * (malformed or not finite). */
+static int parse_number(span tok, double *out)
 {
-    size_t n = (size_t)(tok.end - tok.p);
-    char buf[NUMBER_MAX + 1];
-    if (n == 0 || n > NUMBER_MAX) return -1;
-    for (size_t i = 0; i < n; i++)
-        if (!strchr("0123456789+-.eE", tok.p[i]) || tok.p[i] == 0) return -1;
-    memcpy(buf, tok.p, n);
-    buf[n] = 0;
-    char *end;
-    double v = strtod_l(buf, &end, cl);
-    if (end != buf + n || !isfinite(v)) return -1;
-    *out = v;
-    return 0;
+    if (tok.end - tok.p > NUMBER_MAX) return -1;
+    return ff_parse(tok.p, tok.end, out);
 }
 
 /* An optionally signed integer with at most 18 digits: 0, or -1. */
@@ -1118,15 +1131,13 @@ int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t er
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
     if (!txt && len) return read_error(err, errlen, 0, "no text");
-    locale_t cl = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
-    if (!cl) return read_error(err, errlen, 0, "out of memory for a locale");
     while (next_line(&t, &l)) {
         if (!next_token(&l, &tok)) continue;
         if (tok_is(tok, "v")) {
             double x[3], w;
             int n = 0;
             for (; next_token(&l, &tok); n++) {
-                if (parse_number(tok, cl, n < 3 ? &x[n] : &w)) {
+                if (parse_number(tok, n < 3 ? &x[n] : &w)) {
                     read_error(err, errlen, t.line, "malformed number '%s'",
                                tok_show(tok, show, sizeof show));
                     goto fail;
@@ -1183,13 +1194,11 @@ int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t er
         /* anything else (vt, vn, vp, o, g, s, usemtl, mtllib, l, p, ...) is not geometry */
     }
     if (build_finish(&b, out)) goto oom;
-    freelocale(cl);
     return 0;
 oom:
     read_error(err, errlen, t.line, "out of memory");
 fail:
     build_free(&b);
-    freelocale(cl);
     return -1;
 }
 
@@ -1265,8 +1274,6 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
         return read_error(err, errlen, t.line,
                           "%zu vertices and %zu faces announced, but only %zu bytes follow", nv, nf,
                           left);
-    locale_t cl = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
-    if (!cl) return read_error(err, errlen, t.line, "out of memory for a locale");
     while (b.nv < nv) {
         if (!next_data_line(&t, &l)) {
             read_error(err, errlen, t.line, "the file ends after %zu of %zu vertices", b.nv, nv);
@@ -1275,7 +1282,7 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
         double x[3], extra;
         int n = 0;
         for (; next_token(&l, &tok); n++)
-            if (parse_number(tok, cl, n < 3 ? &x[n] : &extra)) {
+            if (parse_number(tok, n < 3 ? &x[n] : &extra)) {
                 read_error(err, errlen, t.line, "malformed number '%s'",
                            tok_show(tok, show, sizeof show));
                 goto fail;
@@ -1320,7 +1327,7 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
         int extra = 0;
         double c;
         for (; next_token(&l, &tok); extra++)
-            if (parse_number(tok, cl, &c) || extra == 4) {
+            if (parse_number(tok, &c) || extra == 4) {
                 read_error(err, errlen, t.line,
                            "after the %lld indices of a face only a colour may follow, not '%s'",
                            (long long)k, tok_show(tok, show, sizeof show));
@@ -1333,12 +1340,10 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
         goto fail;
     }
     if (build_finish(&b, out)) goto oom;
-    freelocale(cl);
     return 0;
 oom:
     read_error(err, errlen, t.line, "out of memory");
 fail:
     build_free(&b);
-    freelocale(cl);
     return -1;
 }

@@ -81,6 +81,12 @@ typedef struct solid_report {
 int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
                 solid *fixed);
 
+/* The same, but *fixed is made only when the fixed copy differs from s (rep->flipped_faces > 0);
+ * otherwise it is left empty (nf == 0) and s itself is the usable solid: no copy of a large
+ * input that needs none. */
+int solid_check_nocopy(const solid *s, double precision, const char *label, solid_report *rep,
+                       solid *fixed);
+
 /* The per-face checks of solid_check only (shape, indices, distinct vertices, zero area,
  * planarity), for a face soup: no closedness, no orientation, no volume. */
 int solid_check_faces(const solid *s, double precision, const char *label, solid_report *rep);

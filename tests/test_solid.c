@@ -24,6 +24,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "core/fastfloat.h"
 #include "core/solid.h"
 #include "tests/check.h"
 
@@ -1321,4 +1322,135 @@ TEST(fivecubes_arrangement_cells)
      * (n vertices, h holes: n + 2h - 2 triangles, n + 3h - 3 diagonals) */
     double ext, sum = arrangement_cells("fivecubes.obj", 137, 952, 589, 27, 1e-7, &ext);
     CHECK(fabs(sum - ext) < 1e-12 && sum > 0, "bounded %.17g exterior %.17g", sum, ext);
+}
+
+/* ---- the readers' numbers: core/fastfloat.h against strtod ------------------------------- */
+
+static uint64_t ff_next(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+/* One string: both parsers accept it or refuse it, and agree bit for bit. */
+static int ff_agree(const char *str, size_t *bad)
+{
+    double a = 0, b;
+    char *end;
+    int ra = ff_parse(str, str + strlen(str), &a);
+    b = strtod(str, &end);
+    int rb = (*end == 0 && end != str && isfinite(b)) ? 0 : -1;
+    uint64_t ba, bb;
+    memcpy(&ba, &a, 8);
+    memcpy(&bb, &b, 8);
+    if (ra != rb || (ra == 0 && ba != bb)) {
+        if ((*bad)++ < 5)
+            fprintf(stderr, "fastfloat: '%s': %d %.17g, strtod %d %.17g\n", str, ra, a, rb, b);
+        return 0;
+    }
+    return 1;
+}
+
+/* Random doubles printed every way a file may hold them, random digit strings with random
+ * exponents (short, long, beyond 19 digits, subnormal, overflowing), the integers about 2^53
+ * and 2^64 where every other one is a tie, and the classic hard cases: each read as strtod
+ * reads it.  Malformed strings are refused by both. */
+TEST(fastfloat_is_strtod)
+{
+    static const char *hard[] = {
+        "9007199254740993",
+        "9007199254740995",
+        "1e23",
+        "8.98846567431158e307",
+        "1.7976931348623157e308",
+        "1.7976931348623158e308",
+        "1.7976931348623159e308",
+        "2.2250738585072011e-308",
+        "2.2250738585072014e-308",
+        "4.9406564584124654e-324",
+        "2.4703282292062327e-324",
+        "2.4703282292062328e-324",
+        "1e-400",
+        "1e400",
+        "-0",
+        "0e999",
+        "0.000000000000000000000000000000000000001",
+        "123456789012345678901234567890",
+        "7.038531e-26",
+        "9223372036854775807",
+        "9223372036854775808",
+        "18446744073709551615",
+        "18446744073709551616",
+        "1.00000000000000011102230246251565404236316680908203125",
+        "1.00000000000000011102230246251565404236316680908203124",
+        "0.1",
+        "0.2",
+        "0.3",
+        "3.14159265358979323846264338327950288",
+        ".5",
+        "5.",
+        "+1",
+        "-1e-5",
+        "1E+5",
+        "1e",
+        "e5",
+        ".",
+        "+",
+        "-",
+        "1.2.3",
+        "1e5.5",
+        "--1",
+        "1-1",
+        "",
+        "00000000000000000000001",
+        "1.000000000000000000000000000000000000000000000000000000000000000000000001"};
+    size_t bad = 0, n = 0;
+    for (size_t i = 0; i < sizeof hard / sizeof *hard; i++, n++) ff_agree(hard[i], &bad);
+    uint64_t s = 24;
+    char buf[96];
+    for (int i = 0; i < 200000; i++, n++) {
+        uint64_t r = ff_next(&s), bits = ff_next(&s);
+        double d;
+        memcpy(&d, &bits, 8);
+        if (!isfinite(d)) continue;
+        switch (r % 8) {
+        case 0:
+            snprintf(buf, sizeof buf, "%.17g", d);
+            break;
+        case 1:
+            snprintf(buf, sizeof buf, "%.16g", d);
+            break;
+        case 2:
+            snprintf(buf, sizeof buf, "%.15g", d);
+            break;
+        case 3:
+            snprintf(buf, sizeof buf, "%.6e", d);
+            break;
+        case 4: /* a coordinate of a mesh: a few units, 17 digits */
+            snprintf(buf, sizeof buf, "%.17g", (double)(int64_t)(bits >> 11) * 0x1p-50);
+            break;
+        case 5: { /* random digits, a point somewhere, an exponent */
+            int nd = 1 + (int)((r >> 8) % 24), pt = (int)((r >> 16) % (uint64_t)(nd + 1)), k = 0;
+            if (r & 0x100000) buf[k++] = '-';
+            for (int j = 0; j < nd; j++) {
+                if (j == pt) buf[k++] = '.';
+                buf[k++] = (char)('0' + ff_next(&s) % 10);
+            }
+            snprintf(buf + k, sizeof buf - (size_t)k, "e%d", (int)(ff_next(&s) % 700) - 350);
+            break;
+        }
+        case 6: /* integers about 2^53 and 2^64: every other one a tie */
+            snprintf(buf, sizeof buf, "%llu",
+                     (unsigned long long)(((r & 1) ? (1ULL << 53) : (UINT64_MAX - (1ULL << 40))) +
+                                          (bits % (1ULL << 30))));
+            break;
+        default:
+            snprintf(buf, sizeof buf, "%.20e", d);
+            break;
+        }
+        ff_agree(buf, &bad);
+    }
+    CHECK(bad == 0, "%zu of %zu strings read otherwise than strtod reads them", bad, n);
 }

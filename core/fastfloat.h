@@ -1,0 +1,17 @@
+/* fastfloat.h — decimal numbers read at the speed of the text: a correctly rounded (to nearest,
+ * ties to even: the same double as strtod) parser after Eisel and Lemire ("Number Parsing at a
+ * Gigabyte per Second", 2021): a 64-bit significand times a 128-bit power of five, strtod only
+ * where that cannot decide (a tie within one unit, a subnormal result, more than 19 significant
+ * digits).  See fastfloat.c.
+ *
+ * Threads: reentrant (the "C" locale of the strtod fallback is made once, atomically). */
+#ifndef CELLAR_FASTFLOAT_H
+#define CELLAR_FASTFLOAT_H
+
+/* The decimal number that is exactly the bytes [p, end): an optional sign, digits with an
+ * optional point (at least one digit), an optional exponent (e or E, optional sign, digits).
+ * Returns 0 with the nearest double in *out, or -1 when the bytes are not such a number or it
+ * is not finite. */
+int ff_parse(const char *p, const char *end, double *out);
+
+#endif

@@ -755,6 +755,18 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, i
     return A3_PUSH(A->pc, A->npc, A->cappc, P);
 }
 
+/* The normal (q - p) x (r - p) of three grid points, exactly (each component below 2^62);
+ * -1 when they are collinear. */
+static int grid_normal(const int64_t *p, const int64_t *q, const int64_t *r, int64_t *n)
+{
+    int64_t u0 = q[0] - p[0], u1 = q[1] - p[1], u2 = q[2] - p[2];
+    int64_t v0 = r[0] - p[0], v1 = r[1] - p[1], v2 = r[2] - p[2];
+    n[0] = u1 * v2 - u2 * v1;
+    n[1] = u2 * v0 - u0 * v2;
+    n[2] = u0 * v1 - u1 * v0;
+    return n[0] || n[1] || n[2] ? 0 : -1;
+}
+
 /* Index (0..2) of the largest |n_i| of a normal. */
 static int normal_axis(const int64_t *n)
 {
@@ -879,7 +891,7 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
     return rc;
 }
 
-static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t el)
+A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t el)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     size_t nfaces = 0;
@@ -924,6 +936,13 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
         }
         A->solid_face_off[s] = (uint32_t)face;
         size_t pc0 = A->npc;
+        /* room for the solid's faces as they are (more only where a face is split) */
+        size_t sent = so->cyc_off[so->ncyc];
+        if (a3_grow(&A->pc, &A->cappc, A->npc + so->nf, sizeof *A->pc) ||
+            a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + so->ncyc + 1, sizeof *A->pc_off) ||
+            a3_grow(&A->pcv, &A->cappcv, A->npcv + sent, sizeof *A->pcv) ||
+            a3_grow(&A->pcvp, &A->cappcvp, A->npcv + sent, sizeof *A->pcvp))
+            goto oom;
         ndrop = 0;
         for (size_t f = 0; f < so->nf; f++, face++) {
             size_t nc = 0, ntv = 0;
@@ -975,9 +994,8 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
             uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s, av[3];
             int planar;
             if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
-                planar =
-                    plane_through_raw(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
-                                      A->g + 3 * (size_t)cyc[0][2], &p);
+                planar = grid_normal(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
+                                     A->g + 3 * (size_t)cyc[0][2], p.n);
                 memcpy(av, cyc[0], sizeof av);
             } else {
                 planar = face_plane(A, cyc, len, nc, &p, av);
@@ -1052,8 +1070,8 @@ static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t 
                 }
                 size_t tl = 3;
                 plane3 tp;
-                if (plane_through_raw(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
-                                      A->g + 3 * (size_t)tc[2], &tp)) {
+                if (grid_normal(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
+                                A->g + 3 * (size_t)tc[2], tp.n)) {
                     /* collinear in space: no surface, but its middle vertex may lie inside
                      * an edge of a neighbour (mend_dropped) */
                     if (!A->soup)
@@ -1193,7 +1211,10 @@ static void cls_keys(void *ctx, size_t item, int worker)
     pre[0] = 1;
     for (size_t i = p0; i < p1; i++) {
         plane3 P;
-        a3_piece_plane(A, (uint32_t)i, &P);
+        const piece *pc = &A->pc[i];
+        const int64_t *g0 = A->g + 3 * (size_t)pc->av[0];
+        grid_normal(g0, A->g + 3 * (size_t)pc->av[1], A->g + 3 * (size_t)pc->av[2], P.n);
+        P.d = -((i128)P.n[0] * g0[0] + (i128)P.n[1] * g0[1] + (i128)P.n[2] * g0[2]);
         ckey_start(&P, &c[i - p0]);
         if (!c[i - p0].nk) { /* no inverse modulo p: the reduced plane's own hash */
             plane_reduce(&P);
@@ -1218,7 +1239,7 @@ static void cls_keys(void *ctx, size_t item, int worker)
 /* Every piece's coplanar class (piece.cls); a class holding pieces of one solid turning both
  * ways (a surface touching itself face to face) has all its pieces reached.  Fills the stats
  * planes and coplanar_groups. */
-static int stage_classes(a3 *A)
+A3_STAGE static int stage_classes(a3 *A)
 {
     size_t n = A->npc, cap = 1024;
     while (cap < 2 * n + 2) cap *= 2;
@@ -1323,6 +1344,21 @@ const plane3 *a3_piece_plane(const a3 *A, uint32_t pi, plane3 *tmp)
     plane_through_raw(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
                       A->g + 3 * (size_t)pc->av[2], tmp);
     return tmp;
+}
+
+void a3_face_normal(const a3 *A, uint32_t f, int64_t *n)
+{
+    if (A->f_plane[f] != NONE) {
+        memcpy(n, A->pl[A->f_plane[f]].n, 3 * sizeof *n);
+        return;
+    }
+    const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
+    if (pc->plane != NONE) {
+        memcpy(n, A->pl[pc->plane].n, 3 * sizeof *n);
+        return;
+    }
+    grid_normal(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
+                A->g + 3 * (size_t)pc->av[2], n);
 }
 
 const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp)
@@ -1677,7 +1713,7 @@ static uint32_t merged_id(const uint32_t *map, uint32_t p)
     return p & CUT_LOCAL ? map[p & ~CUT_LOCAL] : p;
 }
 
-static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
+A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
     size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
     cutjob j = {
@@ -1770,7 +1806,7 @@ static const xpt *get_global(const void *ctx, uint32_t id)
 }
 
 /* Merges equal points among those the cuts made; rewrites the cuts and contacts. */
-static int dedup_cut_points(a3 *A, pset *ps)
+A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
 {
     uint32_t *alias = malloc((A->npt + 1) * sizeof *alias);
     if (!alias) return -1;
@@ -1837,7 +1873,7 @@ static int cmp_cpt(const void *pa, const void *pb)
     return (a->p > b->p) - (a->p < b->p);
 }
 
-static int plane_inputs(a3 *A)
+A3_STAGE static int plane_inputs(a3 *A)
 {
     /* reached pieces by plane (the others are faces as they are: merge_planes) */
     A->pp_off = calloc(A->npl + 2, sizeof *A->pp_off);
@@ -1899,7 +1935,7 @@ const plane3 *a3_side(const a3 *A, const plane3 *FP, uint32_t a, uint32_t b, uin
 
 /* The vertical planes of the edges of the pieces that go through a plane arrangement (where
  * they are the lines of the segments, shared by id).  Serial: it adds planes. */
-static int stage_sides(a3 *A)
+A3_STAGE static int stage_sides(a3 *A)
 {
     uint32_t npl0 = (uint32_t)A->npl;
     for (uint32_t P = 0; P < npl0; P++) {
@@ -1983,7 +2019,7 @@ static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov)
 /* Every plane's new points join the global ones (deduplicated), and the faces of the complex
  * are written with global point ids: first the pieces that nothing reached (in piece order),
  * then each plane's: its pieces kept as they are, then the faces of its arrangement. */
-static int merge_planes(a3 *A, pset *ps)
+A3_STAGE static int merge_planes(a3 *A, pset *ps)
 {
     uint32_t *map = NULL;
     size_t capmap = 0, nf = 0, ncyc = 0, nent = 0, ncov = 0;

@@ -88,10 +88,11 @@ typedef struct fanctx {
     int s0;
 } fanctx;
 
-/* The normal of face f (its anchor plane's when it has no canonical plane). */
+/* The normal of face f (its anchor plane's when it has no canonical plane), in tmp->n. */
 static const int64_t *face_n(const a3 *A, uint32_t f, plane3 *tmp)
 {
-    return a3_face_plane(A, f, tmp)->n;
+    a3_face_normal(A, f, tmp->n);
+    return tmp->n;
 }
 
 static int fan_half(const fanctx *x, const inc *a)
@@ -472,57 +473,6 @@ static void dd_rel(const double *dh, const double *dl, uint32_t v, const dd *org
     }
 }
 
-/* Six times the cone volume over face f's cycles from org, in double-double: taken from a
- * vertex of the cell, the terms are as small as the cell, so a sliver keeps its volume. */
-static dd face_cone6(const a3 *A, const double *dh, const double *dl, uint32_t f, const dd *org,
-                     const int64_t *gorg)
-{
-    dd s = {0, 0};
-    for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-        uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
-        dd p[3][3];
-        if (gorg && n >= 3) {
-            /* the origin and every point of the cycle on the grid: exact in 128 bits (grid
-             * coordinates below 2^31 in magnitude: differences below 2^32, each term below
-             * 2^96, the sum of a cycle's 3 (n - 2) terms far below 2^127) */
-            uint32_t i = 0;
-            while (i < n && A->pt[A->ent[o + i]].kind == PT_GRID) i++;
-            if (i == n) {
-                i128 acc = 0;
-                int64_t q[3][3];
-                for (int k = 0; k < 3; k++)
-                    q[0][k] = A->g[3 * (size_t)A->pt[A->ent[o]].a + k] - gorg[k];
-                for (i = 1; i + 1 < n; i++) {
-                    for (int k = 0; k < 3; k++) {
-                        q[1][k] = A->g[3 * (size_t)A->pt[A->ent[o + i]].a + k] - gorg[k];
-                        q[2][k] = A->g[3 * (size_t)A->pt[A->ent[o + i + 1]].a + k] - gorg[k];
-                    }
-                    i128 c0 = (i128)q[1][1] * q[2][2] - (i128)q[1][2] * q[2][1];
-                    i128 c1 = (i128)q[1][2] * q[2][0] - (i128)q[1][0] * q[2][2];
-                    i128 c2 = (i128)q[1][0] * q[2][1] - (i128)q[1][1] * q[2][0];
-                    acc += q[0][0] * c0 + q[0][1] * c1 + q[0][2] * c2;
-                }
-                double hi = (double)acc;
-                dd t = {hi, (double)(acc - (i128)hi)};
-                s = dd_add(s, t);
-                continue;
-            }
-        }
-        if (n >= 3) dd_rel(dh, dl, A->ent[o], org, p[0]);
-        for (uint32_t i = 1; i + 1 < n; i++) {
-            dd_rel(dh, dl, A->ent[o + i], org, p[1]);
-            dd_rel(dh, dl, A->ent[o + i + 1], org, p[2]);
-            dd c0 = dd_add(dd_mul(p[1][1], p[2][2]), dd_neg(dd_mul(p[1][2], p[2][1])));
-            dd c1 = dd_add(dd_mul(p[1][2], p[2][0]), dd_neg(dd_mul(p[1][0], p[2][2])));
-            dd c2 = dd_add(dd_mul(p[1][0], p[2][1]), dd_neg(dd_mul(p[1][1], p[2][0])));
-            s = dd_add(s, dd_mul(p[0][0], c0));
-            s = dd_add(s, dd_mul(p[0][1], c1));
-            s = dd_add(s, dd_mul(p[0][2], c2));
-        }
-    }
-    return s;
-}
-
 /* ---- the parallel parts of the output ---------------------------------------------------- */
 
 #define DD_CHUNK 4096
@@ -677,7 +627,7 @@ static void cedges_free(cedges *E)
 }
 
 /* Stage "edges".  Returns -1 out of memory. */
-static int edges_make(const a3 *A, cedges *E)
+A3_STAGE static int edges_make(const a3 *A, cedges *E)
 {
     size_t npt = A->npt, nent = A->nent, nf = A->nf;
     uint32_t *pos = calloc(npt + 2, sizeof *pos), *lo_e = malloc((nent + 1) * sizeof *lo_e);
@@ -756,7 +706,7 @@ done:
 
 /* Stage "fans": every edge's faces sorted about it and its windings checked, in chunks on the
  * threads; the first failing edge is checked again here for its message. */
-static int fans_make(const a3 *A, cedges *E, const lar3 *out, char *err, size_t errlen)
+A3_STAGE static int fans_make(const a3 *A, cedges *E, const lar3 *out, char *err, size_t errlen)
 {
     size_t nch = (E->ne + FAN_CHUNK - 1) / FAN_CHUNK;
     fanjob j = {
@@ -787,7 +737,7 @@ static void cshells_free(cshells *S)
 }
 
 /* Stage "shells".  Returns -1 out of memory. */
-static int shells_make(a3 *A, const cedges *E, cshells *S)
+A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
 {
     size_t nf = A->nf;
     uint32_t *sp = malloc((2 * nf + 1) * sizeof *sp), *fu = malloc((nf + 1) * sizeof *fu);
@@ -864,7 +814,8 @@ done:
 /* Stage "nesting": into cu (a union-find over the shells and the exterior, nsh + 1 entries, the
  * exterior last), each part's outside shell joined to the cell holding the part.  Returns an
  * ARR_* code. */
-static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, char *err, size_t errlen)
+A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, char *err,
+                                 size_t errlen)
 {
     size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
     const uint32_t *fcomp = S->fcomp, *shell = S->shell;
@@ -1023,15 +974,30 @@ done:
     return rc;
 }
 
-/* ---- volumes: per cell-face entry on the threads, summed per cell in order ---------------- */
+/* ---- volumes ------------------------------------------------------------------------------
+ * Six times a cell's volume is the sum over its faces of the cones from any one point o.  A
+ * cycle whose points are all on the grid contributes exactly, in 128-bit integers: its fan's
+ * determinants from the grid's origin, C = sum det(p0, pi, pi+1), less o . S with S = sum
+ * p_i x p_i+1 (det(a - o, b - o, c - o) = det(a, b, c) - o . (a x b + b x c + c x a));
+ * coordinates are below 2^30, so C < 2^90 and S < 2^60 a cycle, with room for 2^25 faces a
+ * cell.  A cycle with points made by the arrangement contributes in double-double from o, a
+ * vertex of the cell (on the grid when one is), so a sliver keeps its volume.  The CF entries
+ * run on the threads in fixed chunks, each summing per cell run (CF is sorted by cell); the
+ * runs are then added in chunk order: the result does not depend on the number of threads. */
+
+typedef struct volrun {
+    i128 C, S[3];
+    dd X;
+} volrun;
 
 typedef struct voljob {
     const a3 *A;
     const double *dh, *dl;
     const lar3 *out;
-    const uint32_t *org;     /* by cell: the point its cones start from */
+    const uint32_t *org;     /* by cell: the point its double-double cones start from */
     const uint32_t *cell_of; /* by CF entry: its cell */
-    dd *cone;                /* by CF entry */
+    const size_t *roff;      /* by chunk: its first run */
+    volrun *run;
 } voljob;
 
 #define VOL_CHUNK 4096
@@ -1041,32 +1007,76 @@ static void vol_chunk(void *ctx, size_t item, int worker)
     const voljob *j = ctx;
     const a3 *A = j->A;
     size_t n = j->out->cf_off[j->out->nc];
-    size_t i1 = (item + 1) * VOL_CHUNK < n ? (item + 1) * VOL_CHUNK : n;
-    for (size_t i = item * VOL_CHUNK; i < i1; i++) {
+    size_t i0 = item * VOL_CHUNK, i1 = i0 + VOL_CHUNK < n ? i0 + VOL_CHUNK : n;
+    uint32_t k0 = j->cell_of[i0];
+    for (size_t i = i0; i < i1; i++) {
         int32_t sf = j->out->cf[i];
-        uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1, v0 = j->org[j->cell_of[i]];
-        const xpt *p0 = &A->pt[v0];
-        dd org[3];
-        for (int a = 0; a < 3; a++)
-            org[a].hi = j->dh[3 * (size_t)v0 + a], org[a].lo = j->dl[3 * (size_t)v0 + a];
-        dd c = face_cone6(A, j->dh, j->dl, f, org,
-                          p0->kind == PT_GRID ? A->g + 3 * (size_t)p0->a : NULL);
-        j->cone[i] = sf > 0 ? c : dd_neg(c);
+        uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1, k = j->cell_of[i];
+        volrun *r = &j->run[j->roff[item] + (k - k0)];
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o;
+            if (m < 3) continue;
+            uint32_t t = 0;
+            while (t < m && A->ent[o + t] < A->nv) t++; /* point ids below nv: the vertices */
+            if (t == m) {
+                /* |coordinates| <= 2^29 + 1: each cross product component below 2^60 */
+                i128 C = 0, S[3] = {0, 0, 0};
+                const int64_t *p0 = A->g + 3 * (size_t)A->ent[o], *q = p0;
+                for (t = 1; t <= m; t++) {
+                    const int64_t *p = t < m ? A->g + 3 * (size_t)A->ent[o + t] : p0;
+                    int64_t c0 = q[1] * p[2] - q[2] * p[1];
+                    int64_t c1 = q[2] * p[0] - q[0] * p[2];
+                    int64_t c2 = q[0] * p[1] - q[1] * p[0];
+                    S[0] += c0, S[1] += c1, S[2] += c2;
+                    if (t >= 2 && t < m)
+                        C += (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
+                    q = p;
+                }
+                if (sf < 0) C = -C, S[0] = -S[0], S[1] = -S[1], S[2] = -S[2];
+                r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
+                continue;
+            }
+            uint32_t v0 = j->org[k];
+            dd org[3], p[3][3], c = {0, 0};
+            for (int a = 0; a < 3; a++)
+                org[a].hi = j->dh[3 * (size_t)v0 + a], org[a].lo = j->dl[3 * (size_t)v0 + a];
+            dd_rel(j->dh, j->dl, A->ent[o], org, p[0]);
+            for (t = 1; t + 1 < m; t++) {
+                dd_rel(j->dh, j->dl, A->ent[o + t], org, p[1]);
+                dd_rel(j->dh, j->dl, A->ent[o + t + 1], org, p[2]);
+                dd c0 = dd_add(dd_mul(p[1][1], p[2][2]), dd_neg(dd_mul(p[1][2], p[2][1])));
+                dd c1 = dd_add(dd_mul(p[1][2], p[2][0]), dd_neg(dd_mul(p[1][0], p[2][2])));
+                dd c2 = dd_add(dd_mul(p[1][0], p[2][1]), dd_neg(dd_mul(p[1][1], p[2][0])));
+                c = dd_add(c, dd_mul(p[0][0], c0));
+                c = dd_add(c, dd_mul(p[0][1], c1));
+                c = dd_add(c, dd_mul(p[0][2], c2));
+            }
+            r->X = dd_add(r->X, sf > 0 ? c : dd_neg(c));
+        }
     }
+}
+
+/* An exact 128-bit integer as a double-double. */
+static dd dd_of(i128 v)
+{
+    double hi = (double)v;
+    dd r = {hi, (double)(v - (i128)hi)};
+    return r;
 }
 
 /* Stage "cells": cell ids from cu (the class of the exterior is none), each cell's faces (CF,
  * in order of face: the - side first) and the exterior's, and the volumes.  Returns an ARR_*
  * code. */
-static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
-                      double **dl_out, char *err, size_t errlen)
+A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
+                               double **dl_out, char *err, size_t errlen)
 {
     size_t nf = A->nf, nsh = S->nsh;
     const uint32_t *shell = S->shell;
     uint32_t *cellof = malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
     uint32_t *cell_of = NULL;
     double *dh = NULL, *dl = NULL;
-    dd *cone = NULL;
+    size_t *roff = NULL;
+    volrun *run = NULL;
     int rc = ARR_ENOMEM;
     if (!cellof) goto done;
     /* the cell of every shell: its class's number (the exterior's class: NONE) */
@@ -1141,8 +1151,7 @@ static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double *
     dh = malloc((3 * A->npt + 1) * sizeof *dh);
     dl = malloc((3 * A->npt + 1) * sizeof *dl);
     orgv = malloc((nc + 1) * sizeof *orgv);
-    cone = malloc((out->cf_off[nc] + 1) * sizeof *cone);
-    if (!dh || !dl || !orgv || !cone) goto done;
+    if (!dh || !dl || !orgv) goto done;
     for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
     for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
     {
@@ -1151,8 +1160,8 @@ static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double *
         par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
                    &span);
     }
-    /* each cell's cones from a point of its first face, on the grid when one is (taken from a
-     * vertex of the cell, the terms are as small as the cell, so a sliver keeps its volume) */
+    /* each cell's double-double cones from a point of its first face, on the grid when one is
+     * (taken from a vertex of the cell, the terms are as small as the cell) */
     for (size_t k = 0; k < nc; k++) {
         orgv[k] = NONE;
         if (out->cf_off[k + 1] == out->cf_off[k]) continue;
@@ -1167,21 +1176,59 @@ static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double *
             }
     }
     {
-        voljob j = {A, dh, dl, out, orgv, cell_of, cone};
-        par_for(A->threads, (out->cf_off[nc] + VOL_CHUNK - 1) / VOL_CHUNK, vol_chunk, &j);
-    }
-    double h3 = A->step * A->step * A->step / 6;
-    for (size_t k = 0; k < nc; k++) {
-        dd vol = {0, 0};
-        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) vol = dd_add(vol, cone[i]);
-        out->cvol[k] = (vol.hi + vol.lo) * h3;
+        size_t ncf = out->cf_off[nc], nch = (ncf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
+        roff = malloc((nch + 1) * sizeof *roff);
+        if (!roff) goto done;
+        for (size_t c = 0; c < nch; c++) {
+            size_t i0 = c * VOL_CHUNK, i1 = i0 + VOL_CHUNK < ncf ? i0 + VOL_CHUNK : ncf;
+            roff[c] = nrun;
+            nrun += cell_of[i1 - 1] - cell_of[i0] + 1;
+        }
+        run = calloc(nrun + 1, sizeof *run);
+        if (!run) goto done;
+        voljob j = {A, dh, dl, out, orgv, cell_of, roff, run};
+        par_for(A->threads, nch, vol_chunk, &j);
+        double h3 = A->step * A->step * A->step / 6;
+        i128 *C = calloc(4 * nc + 1, sizeof *C);
+        dd *X = calloc(nc + 1, sizeof *X);
+        if (!C || !X) {
+            free(C), free(X);
+            goto done;
+        }
+        for (size_t c = 0; c < nch; c++) {
+            size_t i0 = c * VOL_CHUNK, i1 = i0 + VOL_CHUNK < ncf ? i0 + VOL_CHUNK : ncf;
+            for (uint32_t k = cell_of[i0]; k <= cell_of[i1 - 1]; k++) {
+                const volrun *r = &run[roff[c] + (k - cell_of[i0])];
+                C[4 * k] += r->C;
+                for (int a = 0; a < 3; a++) C[4 * k + 1 + a] += r->S[a];
+                X[k] = dd_add(X[k], r->X);
+            }
+        }
+        for (size_t k = 0; k < nc; k++) {
+            /* the grid cycles' cones from the origin point: C - o . S */
+            dd vol = X[k];
+            const xpt *o = orgv[k] == NONE ? NULL : &A->pt[orgv[k]];
+            if (o && o->kind == PT_GRID) {
+                const int64_t *g = A->g + 3 * (size_t)o->a;
+                vol = dd_add(vol, dd_of(C[4 * k] - (g[0] * C[4 * k + 1] + g[1] * C[4 * k + 2] +
+                                                    g[2] * C[4 * k + 3])));
+            } else {
+                vol = dd_add(vol, dd_of(C[4 * k]));
+                for (int a = 0; a < 3 && o; a++) {
+                    dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
+                    vol = dd_add(vol, dd_neg(dd_mul(oa, dd_of(C[4 * k + 1 + a]))));
+                }
+            }
+            out->cvol[k] = (vol.hi + vol.lo) * h3;
+        }
+        free(C), free(X);
     }
     *dh_out = dh, *dl_out = dl;
     dh = dl = NULL;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(cellof), free(fill), free(orgv), free(cell_of), free(dh), free(dl), free(cone);
+    free(cellof), free(fill), free(orgv), free(cell_of), free(dh), free(dl), free(roff), free(run);
     return rc;
 }
 
@@ -1238,10 +1285,11 @@ static void out_faces(void *ctx, size_t item, int worker)
     lar3 *out = j->out;
     size_t f1 = (item + 1) * OUT_CHUNK < A->nf ? (item + 1) * OUT_CHUNK : A->nf;
     for (size_t f = item * OUT_CHUNK; f < f1; f++) {
-        plane3 tp;
-        const plane3 *P = a3_face_plane(A, (uint32_t)f, &tp);
-        double len = sqrt(P->nd[0] * P->nd[0] + P->nd[1] * P->nd[1] + P->nd[2] * P->nd[2]);
-        for (int k = 0; k < 3; k++) out->FN[3 * f + k] = P->nd[k] / len;
+        int64_t nn[3];
+        a3_face_normal(A, (uint32_t)f, nn);
+        double nd[3] = {(double)nn[0], (double)nn[1], (double)nn[2]};
+        double len = sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
+        for (int k = 0; k < 3; k++) out->FN[3 * f + k] = nd[k] / len;
         out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
         uint32_t nfe = out->fe_off[f];
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
@@ -1279,7 +1327,8 @@ static void out_faces(void *ctx, size_t item, int worker)
 }
 
 /* Stage "output".  Returns -1 out of memory. */
-static int output_make(a3 *A, const cedges *E, const double *dh, const double *dl, lar3 *out)
+A3_STAGE static int output_make(a3 *A, const cedges *E, const double *dh, const double *dl,
+                                lar3 *out)
 {
     size_t nf = A->nf, ne = E->ne;
     uint32_t *newid = malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;

@@ -1319,6 +1319,71 @@ done:
     return rc;
 }
 
+/* Every entry's twin (a3.ptwin): the entries sorted by their edge's lower vertex (a counting
+ * sort), then by (higher vertex, solid), stably; a run of exactly two entries of one solid
+ * walking the edge opposite ways are each other's twins.  None in a soup.  -1 out of memory. */
+A3_STAGE static int stage_twins(a3 *A)
+{
+    size_t n = A->npcv, nv = A->nv;
+    int rc = -1;
+    uint32_t *pos = NULL, *lo = NULL, *nx = NULL, *sx = NULL;
+    uint64_t *sk = NULL;
+    A->ptwin = malloc((n + 1) * sizeof *A->ptwin);
+    if (!A->ptwin) return -1;
+    memset(A->ptwin, 0xff, (n + 1) * sizeof *A->ptwin);
+    if (A->soup || !n) return 0;
+    pos = calloc(nv + 2, sizeof *pos);
+    lo = malloc(n * sizeof *lo);
+    nx = malloc(n * sizeof *nx);
+    sk = malloc(n * sizeof *sk);
+    sx = malloc(n * sizeof *sx);
+    if (!pos || !lo || !nx || !sk || !sx) goto done;
+    for (size_t pi = 0; pi < A->npc; pi++) {
+        const piece *pc = &A->pc[pi];
+        for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc; cy++) {
+            uint32_t o = A->pc_off[cy], m = A->pc_off[cy + 1] - o;
+            for (uint32_t t = 0; t < m; t++) {
+                uint32_t a = A->pcv[o + t], b = A->pcv[t + 1 < m ? o + t + 1 : o];
+                nx[o + t] = b;
+                lo[o + t] = a < b ? a : b;
+                pos[lo[o + t] + 2]++;
+            }
+        }
+    }
+    for (size_t v = 0; v < nv; v++) pos[v + 2] += pos[v + 1];
+    for (size_t pi = 0; pi < A->npc; pi++) {
+        const piece *pc = &A->pc[pi];
+        uint32_t x0 = A->pc_off[pc->c0], x1 = A->pc_off[pc->c0 + pc->nc];
+        for (uint32_t x = x0; x < x1; x++) {
+            uint32_t a = A->pcv[x], b = nx[x], slot = pos[lo[x] + 1]++;
+            sk[slot] = (uint64_t)(a ^ b ^ lo[x]) << 32 | pc->solid;
+            sx[slot] = x;
+        }
+    }
+    for (size_t v = 0; v < nv; v++) {
+        uint32_t r0 = pos[v], r1 = pos[v + 1];
+        for (uint32_t i = r0 + 1; i < r1; i++) {
+            uint64_t k = sk[i];
+            uint32_t x = sx[i], j = i;
+            for (; j > r0 && sk[j - 1] > k; j--) sk[j] = sk[j - 1], sx[j] = sx[j - 1];
+            sk[j] = k, sx[j] = x;
+        }
+        for (uint32_t i = r0; i < r1;) {
+            uint32_t j = i + 1;
+            while (j < r1 && sk[j] == sk[i]) j++;
+            if (j - i == 2) {
+                uint32_t x = sx[i], y = sx[i + 1];
+                if (A->pcv[x] == nx[y] && A->pcv[y] == nx[x]) A->ptwin[x] = y, A->ptwin[y] = x;
+            }
+            i = j;
+        }
+    }
+    rc = 0;
+done:
+    free(pos), free(lo), free(nx), free(sk), free(sx);
+    return rc;
+}
+
 /* Gives piece pi its canonical plane (once), turning its sgn to that plane's normal.  Returns
  * -1 out of memory. */
 static int piece_plane_id(a3 *A, uint32_t pi)
@@ -1990,11 +2055,15 @@ void pfaces_free(pfaces *f)
 
 /* Piece pi written as a face of the complex as it is: its outer cycle counter-clockwise about
  * its plane's normal (its only cycle: a piece with holes is always reached). */
-static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov)
+static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov, uint32_t *pe2e)
 {
     const piece *pc = &A->pc[pi];
     uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o;
     int rev = pc->sgn < 0;
+    if (pe2e) /* where each of its entries goes: the edge from entry j runs backwards when
+               * the cycle is reversed, from entry (n - 2 - j) mod n */
+        for (uint32_t j = 0; j < n; j++)
+            pe2e[o + j] = (uint32_t)A->nent + (rev ? (2 * n - 2 - j) % n : j);
     A->f_cyc[A->nf] = (uint32_t)A->ncyc;
     A->f_cov[A->nf] = (uint32_t)*ncov;
     A->f_plane[A->nf] = pc->plane;
@@ -2016,14 +2085,65 @@ static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov)
     A->nf++;
 }
 
+/* The patches: the pieces that nothing reached (nc == 1), linked across their twins (whose
+ * pieces nothing reached either), numbered in order of their lowest piece; pieces of each patch
+ * listed in ascending order (pp_patch[ppo[k] .. ppo[k+1])).  -1 out of memory. */
+A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
+{
+    size_t npc = A->npc;
+    uint32_t *uf = malloc((npc + 1) * sizeof *uf), *lab = malloc((npc + 1) * sizeof *lab);
+    uint32_t *epc = malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
+    int rc = -1;
+    if (!uf || !lab || !epc) goto done;
+    for (size_t i = 0; i < npc; i++) {
+        uf[i] = (uint32_t)i;
+        const piece *pc = &A->pc[i];
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++)
+            epc[x] = (uint32_t)i;
+    }
+    for (size_t i = 0; i < npc; i++) {
+        const piece *pc = &A->pc[i];
+        if (pc->reached) continue;
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
+            uint32_t t = A->ptwin[x];
+            if (t != NONE && !A->pc[epc[t]].reached) a3_uf_union(uf, (uint32_t)i, epc[t]);
+        }
+    }
+    size_t np = 0;
+    for (size_t i = 0; i < npc; i++) lab[i] = NONE;
+    for (size_t i = 0; i < npc; i++) {
+        if (A->pc[i].reached) continue;
+        uint32_t r = a3_uf_find(uf, (uint32_t)i);
+        if (lab[r] == NONE) lab[r] = (uint32_t)np++;
+        lab[i] = lab[r];
+    }
+    ppo = calloc(np + 2, sizeof *ppo);
+    pp = malloc((npc + 1) * sizeof *pp);
+    if (!ppo || !pp) goto done;
+    for (size_t i = 0; i < npc; i++)
+        if (!A->pc[i].reached) ppo[lab[i] + 2]++;
+    for (size_t k = 0; k < np; k++) ppo[k + 2] += ppo[k + 1];
+    for (size_t i = 0; i < npc; i++)
+        if (!A->pc[i].reached) pp[ppo[lab[i] + 1]++] = (uint32_t)i;
+    A->npatch = np;
+    *ppo_out = ppo, *pp_out = pp;
+    ppo = pp = NULL;
+    rc = 0;
+done:
+    free(uf), free(lab), free(epc), free(ppo), free(pp);
+    return rc;
+}
+
 /* Every plane's new points join the global ones (deduplicated), and the faces of the complex
- * are written with global point ids: first the pieces that nothing reached (in piece order),
- * then each plane's: its pieces kept as they are, then the faces of its arrangement. */
+ * are written with global point ids, unit by unit: first the patches (each one's pieces as they
+ * are, in piece order), then each plane's: its pieces kept as they are, then the faces of its
+ * arrangement, each a unit of its own.  The entries of a patch's faces get their twins. */
 A3_STAGE static int merge_planes(a3 *A, pset *ps)
 {
-    uint32_t *map = NULL;
+    uint32_t *map = NULL, *ppo = NULL, *pp = NULL, *pe2e = NULL;
     size_t capmap = 0, nf = 0, ncyc = 0, nent = 0, ncov = 0;
     int rc = -1;
+    if (stage_patches(A, &ppo, &pp)) goto done;
     /* sizes first */
     for (size_t i = 0; i < A->npc; i++) {
         const piece *pc = &A->pc[i];
@@ -2050,17 +2170,44 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
     A->ent = malloc((nent + 1) * sizeof *A->ent);
     A->side = malloc((nent + 1) * sizeof *A->side);
     A->cov = malloc((ncov + 1) * sizeof *A->cov);
-    if (!A->f_cyc || !A->f_plane || !A->f_cov || !A->cyc_off || !A->ent || !A->side || !A->cov)
+    A->u_off = malloc((nf + 2) * sizeof *A->u_off);
+    A->f_unit = malloc((nf + 1) * sizeof *A->f_unit);
+    A->f_out = calloc(nf + 1, 1);
+    A->etwin = malloc((nent + 1) * sizeof *A->etwin);
+    pe2e = malloc((A->npcv + 1) * sizeof *pe2e);
+    if (!A->f_cyc || !A->f_plane || !A->f_cov || !A->cyc_off || !A->ent || !A->side || !A->cov ||
+        !A->u_off || !A->f_unit || !A->f_out || !A->etwin || !pe2e)
         goto done;
+    memset(pe2e, 0xff, (A->npcv + 1) * sizeof *pe2e); /* NONE: not in a patch */
     A->nf = A->ncyc = A->nent = 0;
     ncov = 0;
-    for (size_t i = 0; i < A->npc; i++)
-        if (!A->pc[i].reached) put_piece_face(A, (uint32_t)i, &ncov);
+    A->nunit = 0;
+    for (size_t k = 0; k < A->npatch; k++) {
+        A->u_off[A->nunit] = (uint32_t)A->nf;
+        for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) {
+            A->f_unit[A->nf] = (uint32_t)A->nunit;
+            A->f_out[A->nf] = A->pc[pp[i]].sgn > 0;
+            put_piece_face(A, pp[i], &ncov, pe2e);
+        }
+        A->nunit++;
+    }
+    /* the patches' entries: their twins, where they were put (a twin in no patch: NONE) */
+    for (size_t k = 0; k < A->npatch; k++)
+        for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) {
+            const piece *pc = &A->pc[pp[i]];
+            for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
+                uint32_t t = A->ptwin[x];
+                A->etwin[pe2e[x]] = t == NONE ? NONE : pe2e[t];
+            }
+        }
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
         uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;
-        for (uint32_t k = 0; k < nd; k++)
-            put_piece_face(A, F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k], &ncov);
+        for (uint32_t k = 0; k < nd; k++) {
+            A->u_off[A->nunit] = (uint32_t)A->nf;
+            A->f_unit[A->nf] = (uint32_t)A->nunit++;
+            put_piece_face(A, F->trivial ? A->pp[A->pp_off[p] + k] : F->direct[k], &ncov, NULL);
+        }
         if (F->trivial) continue;
         if (!F->nf && !F->nnew) {
             pfaces_free(F);
@@ -2076,6 +2223,8 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
             map[i] = q;
         }
         for (uint32_t f = 0; f < F->nf; f++) {
+            A->u_off[A->nunit] = (uint32_t)A->nf;
+            A->f_unit[A->nf] = (uint32_t)A->nunit++;
             A->f_cyc[A->nf] = (uint32_t)A->ncyc;
             A->f_cov[A->nf] = (uint32_t)ncov;
             A->f_plane[A->nf] = (uint32_t)p;
@@ -2097,9 +2246,15 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
     A->f_cyc[A->nf] = (uint32_t)A->ncyc;
     A->f_cov[A->nf] = (uint32_t)ncov;
     A->cyc_off[A->ncyc] = (uint32_t)A->nent;
+    A->u_off[A->nunit] = (uint32_t)A->nf;
+    /* entries of faces in no patch: no twin */
+    for (size_t x = A->u_off[A->npatch] < A->nf ? A->cyc_off[A->f_cyc[A->u_off[A->npatch]]]
+                                                : A->nent;
+         x < A->nent; x++)
+        A->etwin[x] = NONE;
     rc = 0;
 done:
-    free(map);
+    free(map), free(ppo), free(pp), free(pe2e);
     return rc;
 }
 
@@ -2118,6 +2273,7 @@ static void a3_free(a3 *A)
     free(A->pc_off);
     free(A->pcv);
     free(A->pcvp);
+    free(A->ptwin);
     free(A->solid_face_off);
     free(A->pt);
     free(A->pp_off);
@@ -2135,6 +2291,10 @@ static void a3_free(a3 *A)
     free(A->side);
     free(A->f_cov);
     free(A->cov);
+    free(A->u_off);
+    free(A->f_unit);
+    free(A->f_out);
+    free(A->etwin);
 }
 
 int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
@@ -2163,7 +2323,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.G.pl = A.pl;
     for (size_t v = 0; v < A.nv; v++)
         if (add_point(&A, xpt_grid(&A.G, (uint32_t)v)) == NONE) goto oom;
-    if (stage_classes(&A)) goto oom;
+    if (stage_classes(&A) || stage_twins(&A)) goto oom;
     out->stats.split_faces = A.split_faces;
     out->stats.ms_snap = now_ms() - t0;
     t = now_ms();

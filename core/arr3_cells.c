@@ -630,27 +630,27 @@ static void cedges_free(cedges *E)
 A3_STAGE static int edges_make(const a3 *A, cedges *E)
 {
     size_t npt = A->npt, nent = A->nent, nf = A->nf;
-    uint32_t *pos = calloc(npt + 2, sizeof *pos), *lo_e = malloc((nent + 1) * sizeof *lo_e);
-    uint32_t *hi_e = malloc((nent + 1) * sizeof *hi_e), *ent_f = malloc((nent + 1) * sizeof *ent_f);
+    uint32_t *pos = calloc(npt + 2, sizeof *pos), *xs = malloc((nent + 1) * sizeof *xs);
+    uint32_t *lo_e = malloc((nent + 1) * sizeof *lo_e), *hi_e = malloc((nent + 1) * sizeof *hi_e);
+    uint32_t *xf = malloc((nent + 1) * sizeof *xf);
     uint32_t *sk = NULL, *sx = NULL;
     int rc = -1;
     E->ent_e = malloc((nent + 1) * sizeof *E->ent_e);
-    if (!pos || !lo_e || !hi_e || !ent_f || !E->ent_e) goto done;
+    if (!pos || !xs || !lo_e || !hi_e || !xf || !E->ent_e) goto done;
+    memset(E->ent_e, 0xff, (nent + 1) * sizeof *E->ent_e);
+    /* the entries whose edges are not inside a patch (those are made with the output), by
+     * their edge's lower end */
     size_t m = 0;
     for (size_t f = 0; f < nf; f++)
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
+            if (n < 2) continue;
             for (uint32_t t = 0; t < n; t++) {
                 uint32_t x = o + t;
-                ent_f[x] = (uint32_t)f;
-                E->ent_e[x] = NONE;
-                if (n < 2) {
-                    lo_e[x] = NONE;
-                    continue;
-                }
+                if (A->etwin[x] != NONE) continue;
                 uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
                 uint32_t lo = a < b ? a : b;
-                lo_e[x] = lo, hi_e[x] = a ^ b ^ lo;
+                xs[m] = x, xf[m] = (uint32_t)f, lo_e[m] = lo, hi_e[m] = a ^ b ^ lo;
                 pos[lo + 2]++;
                 m++;
             }
@@ -660,10 +660,9 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
     sx = malloc((m + 1) * sizeof *sx);
     E->I = malloc((m + 1) * sizeof *E->I);
     if (!sk || !sx || !E->I) goto done;
-    for (size_t x = 0; x < nent; x++) {
-        if (lo_e[x] == NONE) continue;
-        uint32_t slot = pos[lo_e[x] + 1]++;
-        sk[slot] = hi_e[x], sx[slot] = (uint32_t)x;
+    for (size_t i = 0; i < m; i++) {
+        uint32_t slot = pos[lo_e[i] + 1]++;
+        sk[slot] = hi_e[i], sx[slot] = (uint32_t)i;
     }
     /* by lower endpoint, then by higher (insertion: a handful a point; stable, so the entries of
      * an edge stay in face order), then edges */
@@ -685,22 +684,22 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
     ne = 0;
     for (size_t p = 0; p < npt; p++)
         for (uint32_t i = pos[p]; i < pos[p + 1]; i++) {
-            uint32_t x = sx[i];
+            uint32_t k = sx[i], x = xs[k];
             if (i == pos[p] || sk[i] != sk[i - 1]) {
                 E->ev[2 * ne] = (uint32_t)p, E->ev[2 * ne + 1] = sk[i];
                 E->eside[ne] = A->side[x];
-                E->eface[ne] = ent_f[x];
+                E->eface[ne] = xf[k];
                 E->ioff[ne] = i;
                 ne++;
             }
-            E->I[i] = (inc){(uint32_t)ne - 1, ent_f[x], A->ent[x] == p ? 1 : -1};
+            E->I[i] = (inc){(uint32_t)ne - 1, xf[k], A->ent[x] == p ? 1 : -1};
             E->ent_e[x] = (uint32_t)ne - 1;
         }
     E->ioff[ne] = (uint32_t)m;
     E->ne = ne;
     rc = 0;
 done:
-    free(pos), free(lo_e), free(hi_e), free(ent_f), free(sk), free(sx);
+    free(pos), free(xs), free(lo_e), free(hi_e), free(xf), free(sk), free(sx);
     return rc;
 }
 
@@ -723,67 +722,92 @@ A3_STAGE static int fans_make(const a3 *A, cedges *E, const lar3 *out, char *err
 }
 
 typedef struct cshells {
-    uint32_t *shell; /* 2 nf: the shell of each face side (2f: the normal's side, 2f+1 the other) */
+    uint32_t *shell; /* by node (2 a unit: its faces' sides, fnode()): its shell */
     size_t nsh;
-    uint32_t *fcomp; /* nf: the part (faces linked through edges) of each face */
+    uint32_t *ucomp; /* by unit: its part (units linked through edges) */
     size_t ncomp;
     uint32_t *cpiece; /* ncomp: the lowest input piece covering a face of each part */
 } cshells;
 
 static void cshells_free(cshells *S)
 {
-    free(S->shell), free(S->fcomp), free(S->cpiece);
+    free(S->shell), free(S->ucomp), free(S->cpiece);
     memset(S, 0, sizeof *S);
 }
 
-/* Stage "shells".  Returns -1 out of memory. */
+/* The node of side s (0: the normal's side, 1: the other) of face f.  A patch has two nodes for
+ * all its faces, 2u its solid's outside and 2u + 1 its inside (every edge inside a patch joins
+ * two of its faces, walked both ways: their outward sides face one wedge, their inward sides
+ * the other); any other face has its own two. */
+static inline uint32_t fnode(const a3 *A, uint32_t f, int s)
+{
+    uint32_t u = A->f_unit[f];
+    return 2 * u + (uint32_t)(u < A->npatch ? s ^ !A->f_out[f] : s);
+}
+
+/* The shell of side s of face f; its part. */
+static inline uint32_t fshell(const a3 *A, const cshells *S, uint32_t f, int s)
+{
+    return S->shell[fnode(A, f, s)];
+}
+
+static inline uint32_t fcomp(const a3 *A, const cshells *S, uint32_t f)
+{
+    return S->ucomp[A->f_unit[f]];
+}
+
+/* Stage "shells": the units' nodes linked across the edges between units (the edges inside a
+ * patch link nothing new).  Returns -1 out of memory. */
 A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
 {
-    size_t nf = A->nf;
-    uint32_t *sp = malloc((2 * nf + 1) * sizeof *sp), *fu = malloc((nf + 1) * sizeof *fu);
-    S->shell = malloc((2 * nf + 1) * sizeof *S->shell);
-    S->fcomp = malloc((nf + 1) * sizeof *S->fcomp);
+    size_t nn = 2 * A->nunit, nu = A->nunit;
+    uint32_t *sp = malloc((nn + 1) * sizeof *sp), *uu = malloc((nu + 1) * sizeof *uu);
+    S->shell = malloc((nn + 1) * sizeof *S->shell);
+    S->ucomp = malloc((nu + 1) * sizeof *S->ucomp);
     int rc = -1;
-    if (!sp || !fu || !S->shell || !S->fcomp) goto done;
-    for (size_t i = 0; i < 2 * nf; i++) sp[i] = (uint32_t)i;
-    for (size_t i = 0; i < nf; i++) fu[i] = (uint32_t)i;
+    if (!sp || !uu || !S->shell || !S->ucomp) goto done;
+    for (size_t i = 0; i < nn; i++) sp[i] = (uint32_t)i;
+    for (size_t i = 0; i < nu; i++) uu[i] = (uint32_t)i;
     for (size_t e = 0; e < E->ne; e++) {
         const inc *F = E->I + E->ioff[e];
         size_t n = E->ioff[e + 1] - E->ioff[e];
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
-            a3_uf_union(sp, 2 * f0->f + (f0->s > 0 ? 0 : 1), 2 * f1->f + (f1->s > 0 ? 1 : 0));
-            if (k + 1 < n) a3_uf_union(fu, f0->f, f1->f);
+            a3_uf_union(sp, fnode(A, f0->f, f0->s > 0 ? 0 : 1), fnode(A, f1->f, f1->s > 0 ? 1 : 0));
+            if (k + 1 < n) a3_uf_union(uu, A->f_unit[f0->f], A->f_unit[f1->f]);
         }
     }
-    /* shells and parts numbered in order of their first face side (a root's number kept at
-     * the root, which may come later) */
+    /* shells and parts numbered in order of their first node (a root's number kept at the
+     * root, which may come later) */
     size_t nsh = 0, ncomp = 0;
-    for (size_t i = 0; i < 2 * nf; i++) S->shell[i] = NONE;
-    for (size_t i = 0; i < 2 * nf; i++) {
+    for (size_t i = 0; i < nn; i++) S->shell[i] = NONE;
+    for (size_t i = 0; i < nn; i++) {
         uint32_t r = a3_uf_find(sp, (uint32_t)i);
         if (S->shell[r] == NONE) S->shell[r] = (uint32_t)nsh++;
         S->shell[i] = S->shell[r];
     }
-    for (size_t f = 0; f < nf; f++) S->fcomp[f] = NONE;
-    for (size_t f = 0; f < nf; f++) {
-        uint32_t r = a3_uf_find(fu, (uint32_t)f);
-        if (S->fcomp[r] == NONE) S->fcomp[r] = (uint32_t)ncomp++;
-        S->fcomp[f] = S->fcomp[r];
+    for (size_t u = 0; u < nu; u++) S->ucomp[u] = NONE;
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t r = a3_uf_find(uu, (uint32_t)u);
+        if (S->ucomp[r] == NONE) S->ucomp[r] = (uint32_t)ncomp++;
+        S->ucomp[u] = S->ucomp[r];
     }
     S->nsh = nsh, S->ncomp = ncomp;
     S->cpiece = malloc((ncomp + 1) * sizeof *S->cpiece);
     if (!S->cpiece) goto done;
     for (size_t c = 0; c < ncomp; c++) S->cpiece[c] = NONE;
-    for (size_t f = 0; f < nf; f++) {
-        uint32_t c = S->fcomp[f];
-        for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
-            if (A->cov[i] < S->cpiece[c]) S->cpiece[c] = A->cov[i];
+    for (size_t u = 0; u < nu; u++) {
+        /* a patch's pieces come in ascending order: its first face's is its lowest */
+        uint32_t c = S->ucomp[u], f1 = u < A->npatch ? A->u_off[u] + 1 : A->u_off[u + 1];
+        for (uint32_t f = A->u_off[u]; f < f1; f++)
+            for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1]; i++)
+                if (A->cov[i] < S->cpiece[c]) S->cpiece[c] = A->cov[i];
     }
     A->st->shells = nsh;
     /* reported: parts connected through any shared point (solids that touch at a point are one);
      * the probes work on parts connected through edges */
-    {
+    A->st->components = ncomp;
+    if (ncomp > 1) {
         uint32_t *pf = malloc((A->npt + 1) * sizeof *pf), *vu = malloc((ncomp + 1) * sizeof *vu);
         if (!pf || !vu) {
             free(pf), free(vu);
@@ -791,14 +815,16 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
         }
         for (size_t p = 0; p < A->npt; p++) pf[p] = NONE;
         for (size_t c = 0; c < ncomp; c++) vu[c] = (uint32_t)c;
-        for (size_t f = 0; f < nf; f++)
+        for (size_t f = 0; f < A->nf; f++) {
+            uint32_t c = fcomp(A, S, (uint32_t)f);
             for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++) {
                 uint32_t p = A->ent[x];
                 if (pf[p] == NONE)
-                    pf[p] = S->fcomp[f];
-                else if (pf[p] != S->fcomp[f])
-                    a3_uf_union(vu, pf[p], S->fcomp[f]);
+                    pf[p] = c;
+                else if (pf[p] != c)
+                    a3_uf_union(vu, pf[p], c);
             }
+        }
         size_t nvc = 0;
         for (size_t c = 0; c < ncomp; c++) nvc += a3_uf_find(vu, (uint32_t)c) == c;
         free(pf), free(vu);
@@ -807,7 +833,7 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
     rc = 0;
 done:
     free(sp);
-    free(fu);
+    free(uu);
     return rc;
 }
 
@@ -818,7 +844,6 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
                                  size_t errlen)
 {
     size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
-    const uint32_t *fcomp = S->fcomp, *shell = S->shell;
     uint32_t EXT = (uint32_t)nsh;
     int rc = ARR_ENOMEM;
     uint32_t *outer = malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
@@ -909,9 +934,9 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
             }
             for (size_t ci = 0; ci < nff; ci++) {
                 uint32_t f = ff[ci];
-                if (fcomp[f] != c && ncomp == 1) continue;
+                if (ncomp == 1 && fcomp(A, S, f) != c) continue;
                 if (!probe_hits(A, f, pr)) continue;
-                if (fcomp[f] == c) {
+                if (fcomp(A, S, f) == c) {
                     if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
                 } else {
                     if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
@@ -926,7 +951,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
         }
         plane3 town;
         int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
-        outer[c] = shell[2 * own + (up ? 1 : 0)]; /* the side facing -k */
+        outer[c] = fshell(A, S, own, up ? 1 : 0); /* the side facing -k */
         size_t m = h0;
         for (size_t h = h0; h < nhit; h++)
             if (probe_cmp(A, hits[h], own, pr) < 0) hits[m++] = hits[h];
@@ -945,10 +970,10 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
         size_t depth = 0;
         if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
         for (uint32_t h = 0; h < nh && host == EXT; h++) {
-            uint32_t f = H[h], d = fcomp[f];
+            uint32_t f = H[h], d = fcomp(A, S, f);
             plane3 tf;
             int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
-            uint32_t s_up = shell[2 * f + (fup ? 0 : 1)], s_down = shell[2 * f + (fup ? 1 : 0)];
+            uint32_t s_up = fshell(A, S, f, fup ? 0 : 1), s_down = fshell(A, S, f, fup ? 1 : 0);
             if (depth && s_down == outer[stack[depth - 1]] && d == stack[depth - 1]) {
                 depth--; /* leaving the part we were inside */
                 continue;
@@ -1071,7 +1096,6 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                                double **dl_out, char *err, size_t errlen)
 {
     size_t nf = A->nf, nsh = S->nsh;
-    const uint32_t *shell = S->shell;
     uint32_t *cellof = malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
     uint32_t *cell_of = NULL;
     double *dh = NULL, *dl = NULL;
@@ -1086,10 +1110,12 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         if (!lab) goto done;
         for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
         size_t nc = 0;
-        for (size_t i = 0; i < 2 * nf; i++) {
-            uint32_t r = a3_uf_find(cu, shell[i]);
-            if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
-        }
+        /* in order of the faces' sides: a unit's faces come together, its first face first */
+        for (size_t u = 0; u < A->nunit; u++)
+            for (int sd = 0; sd < 2; sd++) {
+                uint32_t r = a3_uf_find(cu, fshell(A, S, A->u_off[u], sd));
+                if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
+            }
         for (size_t s = 0; s < nsh; s++) cellof[s] = lab[a3_uf_find(cu, (uint32_t)s)];
         free(lab);
         out->nc = nc;
@@ -1098,8 +1124,9 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     /* closed solids: every face separates its solids' inside from their outside, so its two
      * sides lie in two cells; one cell on both sides means a surface that passes through
      * itself (an input that intersects itself, or that the grid makes so) */
-    for (size_t f = 0; f < nf && !A->soup; f++) {
-        if (cellof[shell[2 * f]] != cellof[shell[2 * f + 1]]) continue;
+    for (size_t u = 0; u < A->nunit && !A->soup; u++) {
+        uint32_t f = A->u_off[u]; /* a unit's faces share its two sides */
+        if (cellof[fshell(A, S, f, 0)] != cellof[fshell(A, S, f, 1)]) continue;
         const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
         const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
         rc = ARR_EINVAL;
@@ -1118,7 +1145,8 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     if (!out->cf_off || !out->cvol) goto done;
     size_t next = 0;
     for (size_t i = 0; i < 2 * nf; i++) {
-        uint32_t k = cellof[shell[i]], o = cellof[shell[i ^ 1]];
+        uint32_t f = (uint32_t)(i / 2);
+        uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))], o = cellof[fshell(A, S, f, !(i & 1))];
         if (k == o) continue;
         if (k == NONE)
             next++;
@@ -1136,8 +1164,8 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     for (int pass = 0; pass < 2; pass++)
         for (size_t t = 0; t < nf; t++) {
             size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
-            uint32_t k = cellof[shell[i]];
-            if (k == cellof[shell[i ^ 1]]) continue;
+            uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
+            if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
             int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
             if (k == NONE)
                 out->ext[out->next++] = sf;
@@ -1327,8 +1355,7 @@ static void out_faces(void *ctx, size_t item, int worker)
 }
 
 /* Stage "output".  Returns -1 out of memory. */
-A3_STAGE static int output_make(a3 *A, const cedges *E, const double *dh, const double *dl,
-                                lar3 *out)
+A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double *dl, lar3 *out)
 {
     size_t nf = A->nf, ne = E->ne;
     uint32_t *newid = malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
@@ -1355,6 +1382,27 @@ A3_STAGE static int output_make(a3 *A, const cedges *E, const double *dh, const 
             out->V[3 * i + k] =
                 ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
                 A->step;
+    /* the edges inside the patches: one a twin pair of entries */
+    {
+        size_t nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
+        for (size_t f = 0; f < pe; f++)
+            for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++)
+                nin += A->etwin[x] != NONE && x < A->etwin[x];
+        uint32_t *ev = realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
+        if (!ev) goto done;
+        E->ev = ev;
+        for (size_t f = 0; f < pe; f++) {
+            uint32_t o = A->cyc_off[A->f_cyc[f]], n = A->cyc_off[A->f_cyc[f] + 1] - o;
+            for (uint32_t t = 0; t < n; t++) {
+                uint32_t x = o + t, y = A->etwin[x];
+                if (y == NONE || x > y) continue;
+                uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
+                ev[2 * ne] = a < b ? a : b, ev[2 * ne + 1] = a < b ? b : a;
+                E->ent_e[x] = E->ent_e[y] = (uint32_t)ne++;
+            }
+        }
+        E->ne = ne;
+    }
     /* edges in the order of their new ends */
     ek = malloc((ne + 1) * sizeof *ek);
     newe = malloc((ne + 1) * sizeof *newe);

@@ -105,8 +105,10 @@ typedef struct a3 {
     size_t npc, cappc;
     uint32_t *pc_off; /* npcyc+1 */
     size_t npcyc, cappc_off;
-    uint32_t *pcv;  /* vertex ids */
-    uint32_t *pcvp; /* vertical plane of each entry's edge */
+    uint32_t *pcv;   /* vertex ids */
+    uint32_t *pcvp;  /* vertical plane of each entry's edge */
+    uint32_t *ptwin; /* by entry: the entry of another piece of the same solid walking its edge
+                        the other way, the edge's only other one in that solid; NONE if none */
     size_t npcv, cappcv, cappcvp;
     size_t nfaces; /* input faces */
     uint32_t *solid_face_off;
@@ -138,6 +140,14 @@ typedef struct a3 {
     uint32_t *ent, *side;
     size_t nent;
     uint32_t *f_cov, *cov;
+    /* units of the faces: a patch (pieces that nothing reached, linked across their twins:
+     * faces units[0 .. npatch) in order), then every other face a unit of its own */
+    size_t npatch, nunit;
+    uint32_t *u_off;  /* nunit + 1: unit u holds faces u_off[u] .. u_off[u + 1) */
+    uint32_t *f_unit; /* by face */
+    uint8_t *f_out;   /* by face of a patch: 1 when its normal points out of its solid */
+    uint32_t *etwin;  /* by cycle entry of a patch's face: the entry walking the same edge in
+                         the patch's other face (an edge inside the patch), else NONE */
 } a3;
 
 /* ---- shared tools (arr3.c) ------------------------------------------------------------- */

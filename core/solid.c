@@ -578,27 +578,30 @@ static int check_faces(ck *c)
 
 /* ---- check: edges --------------------------------------------------------------------- */
 
-/* Sorts the half-edges by key, stably (so those of one edge stay in face order): LSD radix on
- * the key's bytes, skipping the bytes every key shares. */
+/* Sorts the half-edges by key, stably (so those of one edge stay in face order): a counting sort
+ * by the lower merged vertex, then each vertex's few halves by the higher one (insertion). */
 static int sort_halves(ck *c)
 {
-    size_t n = c->nhe;
-    half *tmp = malloc((n ? n : 1) * sizeof *tmp), *src = c->he, *dst = tmp;
-    if (!tmp) return -1;
-    uint64_t all_or = 0, all_and = ~(uint64_t)0;
-    for (size_t i = 0; i < n; i++) all_or |= src[i].key, all_and &= src[i].key;
-    for (int pass = 0; pass < 8; pass++) {
-        int sh = 8 * pass;
-        if (((all_or ^ all_and) >> sh & 255) == 0) continue; /* the same byte everywhere */
-        size_t cnt[257] = {0};
-        for (size_t i = 0; i < n; i++) cnt[(src[i].key >> sh & 255) + 1]++;
-        for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
-        for (size_t i = 0; i < n; i++) dst[cnt[src[i].key >> sh & 255]++] = src[i];
-        half *t = src;
-        src = dst, dst = t;
+    size_t n = c->nhe, nv = c->s->nv;
+    half *tmp = malloc((n ? n : 1) * sizeof *tmp);
+    uint32_t *pos = calloc(nv + 2, sizeof *pos);
+    if (!tmp || !pos) {
+        free(tmp), free(pos);
+        return -1;
     }
-    if (src != c->he) memcpy(c->he, src, n * sizeof *c->he);
-    free(tmp);
+    for (size_t i = 0; i < n; i++) pos[(c->he[i].key >> 32) + 2]++;
+    for (size_t v = 0; v < nv; v++) pos[v + 2] += pos[v + 1];
+    for (size_t i = 0; i < n; i++) tmp[pos[(c->he[i].key >> 32) + 1]++] = c->he[i];
+    for (size_t v = 0; v < nv; v++)
+        for (uint32_t i = pos[v] + 1; i < pos[v + 1]; i++) {
+            half x = tmp[i];
+            uint32_t j = i;
+            for (; j > pos[v] && tmp[j - 1].key > x.key; j--) tmp[j] = tmp[j - 1];
+            tmp[j] = x;
+        }
+    free(c->he);
+    c->he = tmp;
+    free(pos);
     return 0;
 }
 
@@ -708,6 +711,11 @@ static int orient(ck *c, int *bad)
                  "walks edge %u-%u twice in the same direction (no flip can fix it)", h->a, h->b);
             *bad = 1;
         }
+    }
+    if (!inconsistent) { /* every edge walked both ways: nothing to flip, nothing to walk */
+        memset(c->flip, 0, nf);
+        free(adj_off), free(adj), free(queue);
+        return 0;
     }
     for (size_t e = 0; e < c->npair; e++) {
         const half *h = &c->he[c->pair[e]];

@@ -63,13 +63,14 @@ static int index_ok(const uint32_t *a, size_t n, size_t bound)
     return 1;
 }
 
-/* Checks the indices the writer follows and the numbers it prints. */
-static int check_complex(const lar3 *c, api_error *err)
+/* Checks the indices the writer follows and the numbers it prints (V and CV only when the
+ * fields print them: the core makes them only when asked). */
+static int check_complex(const lar3 *c, unsigned fl, api_error *err)
 {
     const char *what = NULL;
     size_t ncycv, nfc, nfe, ncf, ncv;
-    if (c->nv && !c->V) what = "V";
-    for (size_t i = 0; !what && i < 3 * c->nv; i++)
+    if ((fl & API_F3_V) && c->nv && !c->V) what = "V";
+    for (size_t i = 0; !what && (fl & API_F3_V) && i < 3 * c->nv; i++)
         if (!isfinite(c->V[i])) what = "V (not finite)";
     if (!what && !index_ok(c->EV, 2 * c->ne, c->nv)) what = "EV";
     if (!what && (!offsets_ok(c->cyc_off, c->ncyc, &ncycv) || !index_ok(c->cyc, ncycv, c->nv)))
@@ -82,7 +83,9 @@ static int check_complex(const lar3 *c, api_error *err)
         what = "fe";
     if (!what && (!offsets_ok(c->cf_off, c->nc, &ncf) || !signed_ok(c->cf, ncf, c->nf)))
         what = "cf";
-    if (!what && (!offsets_ok(c->cv_off, c->nc, &ncv) || !index_ok(c->cv, ncv, c->nv))) what = "cv";
+    if (!what && (fl & API_F3_CV) &&
+        (!offsets_ok(c->cv_off, c->nc, &ncv) || !index_ok(c->cv, ncv, c->nv)))
+        what = "cv";
     if (!what && !signed_ok(c->ext, c->next, c->nf)) what = "ext";
     if (!what && c->nc && !c->cvol) what = "cvol";
     for (size_t i = 0; !what && i < c->nc; i++)
@@ -210,11 +213,22 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
                                         "C",
                                         "shells",
                                         "components"};
-    const size_t counts[] = {s->input_solids, s->input_faces, s->planes, s->coplanar_groups,
-                             s->pairs_tested, s->pairs_meeting, s->faces_reached,
-                             s->split_faces,  s->cuts,          s->points,
-                             c->nv,           c->ne,          c->nf,     c->nc,
-                             s->shells,       s->components};
+    const size_t counts[] = {s->input_solids,
+                             s->input_faces,
+                             s->planes,
+                             s->coplanar_groups,
+                             s->pairs_tested,
+                             s->pairs_meeting,
+                             s->faces_reached,
+                             s->split_faces,
+                             s->cuts,
+                             s->points,
+                             c->nv,
+                             c->ne,
+                             c->nf,
+                             c->nc,
+                             s->shells,
+                             s->components};
     static const char *const ms_names[] = {"check", "snap",  "pairs",   "cuts",
                                            "faces", "cells", "boolean", "total"};
     const double ms[] = {s->ms_check, s->ms_snap,  s->ms_pairs,   s->ms_cuts,
@@ -316,7 +330,7 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r)
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err)
 {
     unsigned fl = fmt->fields;
-    int rc = check_complex(c, err);
+    int rc = check_complex(c, fl, err);
     if (rc != API_OK) return rc;
     b->nsections = (unsigned)__builtin_popcount(fl) + 2;
     api_buf_puts(b, "{\"dim\":3");

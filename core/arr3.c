@@ -2396,6 +2396,9 @@ void lar3_free(lar3 *c)
     free(c->solid_face_off);
     free(c->fsol_off);
     free(c->fsol);
+    free(c->u_off);
+    free(c->ucell);
+    free(c->frev);
     memset(c, 0, sizeof *c);
 }
 

@@ -45,7 +45,18 @@ typedef struct arr3_opts {
      * fraction of it done, 1 at its end */
     void (*progress)(void *udata, const char *stage, double fraction);
     void *udata;
+    /* which optional parts of the lar3 to make: 0 for all of them, else ARR3_WANT_ONLY and
+     * the ARR3_WANT_* bits of those wanted (the others are left NULL); the cells, faces, edges
+     * and their numbering are always made */
+    unsigned want;
 } arr3_opts;
+
+enum {
+    ARR3_WANT_ONLY = 1u << 0,    /* the bits below say what is wanted */
+    ARR3_WANT_COORDS = 1u << 1,  /* V (nv is always set) */
+    ARR3_WANT_NORMALS = 1u << 2, /* FN and fsrc */
+    ARR3_WANT_CV = 1u << 3       /* cv_off and cv */
+};
 
 typedef struct arr3_stats {
     size_t input_solids, input_faces;
@@ -98,6 +109,16 @@ typedef struct lar3 {
     int32_t *ext;             /* signed faces of the exterior cell (same sign rule) */
     uint32_t *solid_face_off; /* nsolids+1: input faces of solid s are [off[s], off[s+1]) */
     size_t nsolids;
+    /* The faces come in units: the faces of a patch (input faces that nothing reached, joined
+     * edge to edge: one cell on each side of all of them), or one face.  Unit u holds faces
+     * u_off[u] .. u_off[u + 1); ucell[2u] is the cell its faces' normals point into and
+     * ucell[2u + 1] the cell they point out of, for a face whose frev is 0 (the other way round
+     * for one whose frev is 1); nc for the exterior.  The faces of a unit have the same solids
+     * (fsol). */
+    size_t nunit;
+    uint32_t *u_off; /* nunit + 1 */
+    uint32_t *ucell; /* 2 nunit */
+    uint8_t *frev;   /* nf */
     arr3_stats stats;
 } lar3;
 

@@ -1121,6 +1121,20 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         out->nc = nc;
     }
     size_t nc = out->nc;
+    /* the units and their cells */
+    out->nunit = A->nunit;
+    out->u_off = malloc((A->nunit + 1) * sizeof *out->u_off);
+    out->ucell = malloc((2 * A->nunit + 1) * sizeof *out->ucell);
+    out->frev = malloc(nf + 1);
+    if (!out->u_off || !out->ucell || !out->frev) goto done;
+    memcpy(out->u_off, A->u_off, (A->nunit + 1) * sizeof *out->u_off);
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t k = cellof[S->shell[2 * u + (uint32_t)sd]];
+            out->ucell[2 * u + (uint32_t)sd] = k == NONE ? (uint32_t)nc : k;
+        }
+    for (size_t f = 0; f < nf; f++)
+        out->frev[f] = (uint8_t)(A->f_unit[f] < A->npatch && !A->f_out[f]);
     /* closed solids: every face separates its solids' inside from their outside, so its two
      * sides lie in two cells; one cell on both sides means a surface that passes through
      * itself (an input that intersects itself, or that the grid makes so) */
@@ -1313,12 +1327,14 @@ static void out_faces(void *ctx, size_t item, int worker)
     lar3 *out = j->out;
     size_t f1 = (item + 1) * OUT_CHUNK < A->nf ? (item + 1) * OUT_CHUNK : A->nf;
     for (size_t f = item * OUT_CHUNK; f < f1; f++) {
-        int64_t nn[3];
-        a3_face_normal(A, (uint32_t)f, nn);
-        double nd[3] = {(double)nn[0], (double)nn[1], (double)nn[2]};
-        double len = sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
-        for (int k = 0; k < 3; k++) out->FN[3 * f + k] = nd[k] / len;
-        out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
+        if (out->FN) {
+            int64_t nn[3];
+            a3_face_normal(A, (uint32_t)f, nn);
+            double nd[3] = {(double)nn[0], (double)nn[1], (double)nn[2]};
+            double len = sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
+            for (int k = 0; k < 3; k++) out->FN[3 * f + k] = nd[k] / len;
+            out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
+        }
         uint32_t nfe = out->fe_off[f];
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             out->fc[cy] = cy;
@@ -1375,9 +1391,12 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
     a3_progress(A, "cells", 0.6);
     out->nv = nu;
-    out->V = malloc((3 * nu + 1) * sizeof *out->V);
-    if (!out->V) goto done;
-    for (size_t i = 0; i < nu; i++)
+    unsigned want = A->o->want ? A->o->want : ~0u;
+    if (want & ARR3_WANT_COORDS) {
+        out->V = malloc((3 * nu + 1) * sizeof *out->V);
+        if (!out->V) goto done;
+    }
+    for (size_t i = 0; out->V && i < nu; i++)
         for (int k = 0; k < 3; k++)
             out->V[3 * i + k] =
                 ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
@@ -1422,17 +1441,19 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     a3_progress(A, "cells", 0.7);
     /* faces */
     out->nf = nf;
-    out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
+    if (want & ARR3_WANT_NORMALS) {
+        out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
+        out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
+        if (!out->FN || !out->fsrc) goto done;
+    }
     out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
     out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
     out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
-    out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
     out->ncyc = A->ncyc;
     out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
     out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
     out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
-    if (!out->FN || !out->fc_off || !out->fc || !out->fe_off || !out->fsrc || !out->cyc_off ||
-        !out->cyc || !out->fsol_off)
+    if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc || !out->fsol_off)
         goto done;
     out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
     for (size_t f = 0; f < nf; f++) {
@@ -1469,9 +1490,9 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
      * read off in vertex order, a small one sorted) */
     size_t nc = out->nc;
-    out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
-    if (!out->cv_off) goto done;
-    {
+    if (want & ARR3_WANT_CV) {
+        out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
+        if (!out->cv_off) goto done;
         uint32_t *cv = NULL, *stamp = calloc(out->nv + 1, sizeof *stamp);
         size_t ncv = 0, capcv = 0, step = nc / 50 + 1;
         if (!stamp) goto done;

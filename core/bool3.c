@@ -38,9 +38,65 @@ int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
     return bool3_membership_ex(c, rows, bad_face, NULL, NULL);
 }
 
+/* The walk over the units (lar3.u_off): a unit's faces separate the same two cells and have the
+ * same solids, so the walk crosses units, not faces. */
+static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face,
+                            void (*tick)(void *udata, double f), void *udata)
+{
+    size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
+    uint32_t *toff = malloc((nu + 2) * sizeof *toff);
+    uint32_t *tags = malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
+    uint32_t *aoff = calloc(nn + 2, sizeof *aoff);
+    uint32_t *nb = malloc((2 * nu + 1) * sizeof *nb), *el = malloc((2 * nu + 1) * sizeof *el);
+    int rc = -1;
+    *bad_face = UINT32_MAX;
+    memset(rows, 0, sizeof *rows);
+    if (!toff || !tags || !aoff || !nb || !el) goto done;
+    /* each unit's solids (those of its first face), sorted, counted modulo 2 */
+    toff[0] = 0;
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t w = toff[u], n = 0, f = c->u_off[u];
+        if (f < c->u_off[u + 1])
+            for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
+                if (c->fsol[j] < ns) tags[w + n++] = c->fsol[j];
+        qsort(tags + w, n, sizeof *tags, cmp_u32);
+        uint32_t k = 0;
+        for (uint32_t i = 0; i < n;) {
+            uint32_t j = i;
+            while (j < n && tags[w + j] == tags[w + i]) j++;
+            if ((j - i) & 1) tags[w + k++] = tags[w + i];
+            i = j;
+        }
+        toff[u + 1] = w + k;
+    }
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t a = c->ucell[2 * u], b = c->ucell[2 * u + 1];
+        if (a > nc || b > nc) goto done;
+        if (a != b) aoff[a + 2]++, aoff[b + 2]++;
+    }
+    for (size_t k = 0; k < nn; k++) aoff[k + 2] += aoff[k + 1];
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t a = c->ucell[2 * u], b = c->ucell[2 * u + 1];
+        if (a == b) continue;
+        nb[aoff[a + 1]] = b, el[aoff[a + 1]++] = (uint32_t)u;
+        nb[aoff[b + 1]] = a, el[aoff[b + 1]++] = (uint32_t)u;
+    }
+    uint32_t bad = UINT32_MAX;
+    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, el, toff, tags, rows, &bad, tick, udata);
+    if (bad != UINT32_MAX) *bad_face = c->u_off[bad];
+done:
+    free(toff);
+    free(tags);
+    free(aoff);
+    free(nb);
+    free(el);
+    return rc;
+}
+
 int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
                         void (*tick)(void *udata, double f), void *udata)
 {
+    if (c->u_off && c->ucell) return membership_units(c, rows, bad_face, tick, udata);
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1;
     uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
@@ -100,7 +156,8 @@ int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, boo
     bool_tree t = {0};
     int rc = -1, tree = 0;
     memset(r, 0, sizeof *r);
-    if (!sel || !minus || !plus || face_sides(c, minus, plus)) goto done;
+    if (!sel || !minus || !plus || (!(c->u_off && c->ucell) && face_sides(c, minus, plus)))
+        goto done;
     if (bool_tree_build(e, c->nsolids, &t)) goto done;
     tree = 1;
     r->cells = malloc((nc + 1) * sizeof *r->cells);
@@ -114,10 +171,21 @@ int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, boo
             r->volume += c->cvol[k];
         }
     }
-    for (size_t f = 0; f < c->nf; f++) {
-        if (minus[f] == NONE || plus[f] == NONE) continue;
-        int a = sel[minus[f]], b = sel[plus[f]];
-        if (a != b) r->faces[r->nfaces++] = a ? (int32_t)(f + 1) : -(int32_t)(f + 1);
+    if (c->u_off && c->ucell) { /* unit by unit: its faces separate the same two cells */
+        for (size_t u = 0; u < c->nunit; u++) {
+            uint32_t into = c->ucell[2 * u], outof = c->ucell[2 * u + 1];
+            if (into == outof || sel[into] == sel[outof]) continue;
+            for (uint32_t f = c->u_off[u]; f < c->u_off[u + 1]; f++) {
+                int a = sel[c->frev[f] ? into : outof]; /* the cell f's normal points out of */
+                r->faces[r->nfaces++] = a ? (int32_t)(f + 1) : -(int32_t)(f + 1);
+            }
+        }
+    } else {
+        for (size_t f = 0; f < c->nf; f++) {
+            if (minus[f] == NONE || plus[f] == NONE) continue;
+            int a = sel[minus[f]], b = sel[plus[f]];
+            if (a != b) r->faces[r->nfaces++] = a ? (int32_t)(f + 1) : -(int32_t)(f + 1);
+        }
     }
     rc = 0;
 done:

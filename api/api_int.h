@@ -251,6 +251,8 @@ typedef struct api_lar3_fmt {
  * API_ENOMEM (b failed or a scratch allocation failed) or API_EINTERNAL (c breaks an invariant
  * the writer relies on: an index out of range, offsets that decrease). */
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err);
+/* The arr3_opts.want for a request of these fields (API_F3_*): the parts the writer prints. */
+unsigned api_lar3_want(unsigned fields);
 
 /* Compiles a request's "op" (api/boolop.c): a named operation ("union", "intersection",
  * "difference", "xor") over all ninputs inputs, or an expression tree such as

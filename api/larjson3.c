@@ -63,8 +63,28 @@ static int index_ok(const uint32_t *a, size_t n, size_t bound)
     return 1;
 }
 
-/* Checks the indices the writer follows and the numbers it prints (V and CV only when the
- * fields print them: the core makes them only when asked). */
+/* The parts of the lar3 the fields need (the core makes the others only when asked: api/solids.c
+ * asks for these). */
+static int need_faces(unsigned fl)
+{
+    return (fl & (API_F3_V | API_F3_EV | API_F3_FV | API_F3_FE | API_F3_HOLES | API_F3_CV |
+                  API_F3_OPERATORS)) != 0;
+}
+
+static int need_cf(unsigned fl)
+{
+    return (fl & (API_F3_CF | API_F3_CV | API_F3_EXTERIOR | API_F3_OPERATORS)) != 0;
+}
+
+unsigned api_lar3_want(unsigned fl)
+{
+    return ARR3_WANT_ONLY | (fl & API_F3_V ? ARR3_WANT_COORDS : 0) |
+           (fl & API_F3_CV ? ARR3_WANT_CV : 0) | (need_faces(fl) ? ARR3_WANT_FACES : 0) |
+           (need_cf(fl) ? ARR3_WANT_CF : 0);
+}
+
+/* Checks the indices the writer follows and the numbers it prints (of the parts the fields
+ * print). */
 static int check_complex(const lar3 *c, unsigned fl, api_error *err)
 {
     const char *what = NULL;
@@ -72,21 +92,25 @@ static int check_complex(const lar3 *c, unsigned fl, api_error *err)
     if ((fl & API_F3_V) && c->nv && !c->V) what = "V";
     for (size_t i = 0; !what && (fl & API_F3_V) && i < 3 * c->nv; i++)
         if (!isfinite(c->V[i])) what = "V (not finite)";
-    if (!what && !index_ok(c->EV, 2 * c->ne, c->nv)) what = "EV";
-    if (!what && (!offsets_ok(c->cyc_off, c->ncyc, &ncycv) || !index_ok(c->cyc, ncycv, c->nv)))
-        what = "cyc";
-    if (!what && (!offsets_ok(c->fc_off, c->nf, &nfc) || !index_ok(c->fc, nfc, c->ncyc)))
-        what = "fc";
-    for (size_t f = 0; !what && f < c->nf; f++)
-        if (c->fc_off[f + 1] == c->fc_off[f]) what = "fc_off (a face without a cycle)";
-    if (!what && (!offsets_ok(c->fe_off, c->nf, &nfe) || !signed_ok(c->fe, nfe, c->ne)))
-        what = "fe";
-    if (!what && (!offsets_ok(c->cf_off, c->nc, &ncf) || !signed_ok(c->cf, ncf, c->nf)))
-        what = "cf";
+    if (need_faces(fl)) {
+        if (!what && !index_ok(c->EV, 2 * c->ne, c->nv)) what = "EV";
+        if (!what && (!offsets_ok(c->cyc_off, c->ncyc, &ncycv) || !index_ok(c->cyc, ncycv, c->nv)))
+            what = "cyc";
+        if (!what && (!offsets_ok(c->fc_off, c->nf, &nfc) || !index_ok(c->fc, nfc, c->ncyc)))
+            what = "fc";
+        for (size_t f = 0; !what && f < c->nf; f++)
+            if (c->fc_off[f + 1] == c->fc_off[f]) what = "fc_off (a face without a cycle)";
+        if (!what && (!offsets_ok(c->fe_off, c->nf, &nfe) || !signed_ok(c->fe, nfe, c->ne)))
+            what = "fe";
+    }
+    if (need_cf(fl)) {
+        if (!what && (!offsets_ok(c->cf_off, c->nc, &ncf) || !signed_ok(c->cf, ncf, c->nf)))
+            what = "cf";
+        if (!what && !signed_ok(c->ext, c->next, c->nf)) what = "ext";
+    }
     if (!what && (fl & API_F3_CV) &&
         (!offsets_ok(c->cv_off, c->nc, &ncv) || !index_ok(c->cv, ncv, c->nv)))
         what = "cv";
-    if (!what && !signed_ok(c->ext, c->next, c->nf)) what = "ext";
     if (!what && c->nc && !c->cvol) what = "cvol";
     for (size_t i = 0; !what && i < c->nc; i++)
         if (!isfinite(c->cvol[i])) what = "cvol (not finite)";
@@ -283,30 +307,42 @@ static void put_cycle_dir(api_buf *b, const lar3 *c, uint32_t cy, int reversed)
 /* "result": {"cells": [...], "faces": [±(f+1), ...], "FV": [...], "FE": [...], "holes": {...},
  * "volume": v}: row i of FV, FE and holes is result face i (faces[i]), oriented out of the
  * result (a face listed -(f+1) has its cycles reversed and its edges' signs flipped). */
-static void put_result(api_buf *b, const lar3 *c, const bool3_result *r)
+static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigned fl)
 {
     put_key(b, "result");
     api_buf_puts(b, "{\"cells\":");
     api_buf_u32_list(b, r->cells, r->ncells);
     api_buf_puts(b, ",\"faces\":");
     api_buf_i32_list(b, r->faces, r->nfaces);
-    api_buf_puts(b, ",\"FV\":[");
-    for (size_t i = 0; i < r->nfaces; i++) {
-        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
-        if (i) api_buf_putc(b, ',');
-        put_cycle_dir(b, c, c->fc[c->fc_off[f]], r->faces[i] < 0);
-    }
-    api_buf_puts(b, "],\"FE\":[");
-    for (size_t i = 0; i < r->nfaces; i++) {
-        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
-        api_buf_puts(b, i ? ",[" : "[");
-        for (uint32_t j = c->fe_off[f]; j < c->fe_off[f + 1]; j++) {
-            if (j > c->fe_off[f]) api_buf_putc(b, ',');
-            api_buf_i64(b, r->faces[i] > 0 ? c->fe[j] : -(int64_t)c->fe[j]);
+    if (fl & API_F3_FV) {
+        api_buf_puts(b, ",\"FV\":[");
+        for (size_t i = 0; i < r->nfaces; i++) {
+            uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+            if (i) api_buf_putc(b, ',');
+            put_cycle_dir(b, c, c->fc[c->fc_off[f]], r->faces[i] < 0);
         }
         api_buf_putc(b, ']');
     }
-    api_buf_puts(b, "],\"holes\":{");
+    if (fl & API_F3_FE) {
+        api_buf_puts(b, ",\"FE\":[");
+        for (size_t i = 0; i < r->nfaces; i++) {
+            uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+            api_buf_puts(b, i ? ",[" : "[");
+            for (uint32_t j = c->fe_off[f]; j < c->fe_off[f + 1]; j++) {
+                if (j > c->fe_off[f]) api_buf_putc(b, ',');
+                api_buf_i64(b, r->faces[i] > 0 ? c->fe[j] : -(int64_t)c->fe[j]);
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    if (!(fl & API_F3_HOLES)) {
+        api_buf_puts(b, ",\"volume\":");
+        api_buf_double(b, r->volume);
+        api_buf_putc(b, '}');
+        return;
+    }
+    api_buf_puts(b, ",\"holes\":{");
     int first = 1;
     for (size_t i = 0; i < r->nfaces; i++) {
         uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
@@ -416,7 +452,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
     }
     if (fmt->membership)
         api_put_membership(b, c->nc, c->nsolids, fmt->membership->off, fmt->membership->idx);
-    if (fmt->result) put_result(b, c, fmt->result);
+    if (fmt->result) put_result(b, c, fmt->result, fl);
     if (fl & API_F3_STATS) {
         put_key(b, "stats");
         put_stats(b, c, fmt);

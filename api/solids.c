@@ -548,9 +548,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
                     .cancel = ro->cancel,
                     .progress = ro->progress,
                     .udata = ro->udata,
-                    /* V and CV only when printed */
-                    .want = ARR3_WANT_ONLY | (r->fields & API_F3_V ? ARR3_WANT_COORDS : 0) |
-                            (r->fields & API_F3_CV ? ARR3_WANT_CV : 0)};
+                    /* only the parts of the complex the fields print */
+                    .want = api_lar3_want(r->fields)};
     solid *fixed = NULL;
     warn_list *w = calloc(1, sizeof *w);
     lar3 c = {0};

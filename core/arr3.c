@@ -74,6 +74,16 @@ int a3_grow(void *pp, size_t *cap, size_t need, size_t elem)
     return 0;
 }
 
+#ifdef A3_PROF
+void a3_prof(const char *name)
+{
+    static double last;
+    double t = now_ms();
+    if (name) fprintf(stderr, "  %-16s %7.1f ms\n", name, t - last);
+    last = t;
+}
+#endif
+
 uint64_t a3_mix64(uint64_t x)
 {
     x ^= x >> 33;
@@ -2314,7 +2324,9 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.st = &out->stats;
     A.soup = soup;
     a3_progress(&A, "snap", 0);
+    A3_TICK(NULL);
     if ((rc = stage_input(&A, solids, ns, err, errlen))) goto fail;
+    A3_TICK("input");
     a3_progress(&A, "snap", 1);
     out->nsolids = ns;
     out->solid_face_off = A.solid_face_off;
@@ -2323,11 +2335,16 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.G.pl = A.pl;
     for (size_t v = 0; v < A.nv; v++)
         if (add_point(&A, xpt_grid(&A.G, (uint32_t)v)) == NONE) goto oom;
-    if (stage_classes(&A) || stage_twins(&A)) goto oom;
+    A3_TICK("points");
+    if (stage_classes(&A)) goto oom;
+    A3_TICK("classes");
+    if (stage_twins(&A)) goto oom;
+    A3_TICK("twins");
     out->stats.split_faces = A.split_faces;
     out->stats.ms_snap = now_ms() - t0;
     t = now_ms();
     if (a3_pairs(&A, &pairs, &np)) goto oom;
+    A3_TICK("pairs");
     out->stats.pairs_tested = np;
     out->stats.ms_pairs = now_ms() - t;
     a3_progress(&A, "pairs", 1);
@@ -2338,14 +2355,18 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     free(pairs);
     pairs = NULL;
     out->stats.cuts = A.ncs / 2;
+    A3_TICK("cuts");
     if (dedup_cut_points(&A, &ps) || plane_inputs(&A) || stage_sides(&A)) goto oom;
+    A3_TICK("dedup+inputs");
     A.G.pl = A.pl; /* stage_sides may have moved the planes */
     out->stats.ms_cuts = now_ms() - t;
     if (a3_cancelled(&A)) goto cancel;
     t = now_ms();
     if ((rc = a3_planes(&A, err, errlen)) != ARR_OK) goto fail;
+    A3_TICK("planes");
     size_t npt_before = A.npt;
     if (merge_planes(&A, &ps)) goto oom;
+    A3_TICK("merge");
     pset_free(&ps);
     out->stats.points = A.npt - A.nv;
     (void)npt_before;

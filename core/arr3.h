@@ -55,7 +55,10 @@ enum {
     ARR3_WANT_ONLY = 1u << 0,    /* the bits below say what is wanted */
     ARR3_WANT_COORDS = 1u << 1,  /* V (nv is always set) */
     ARR3_WANT_NORMALS = 1u << 2, /* FN and fsrc */
-    ARR3_WANT_CV = 1u << 3       /* cv_off and cv */
+    ARR3_WANT_CV = 1u << 3,      /* cv_off and cv */
+    ARR3_WANT_CF = 1u << 4,      /* cf_off, cf and ext */
+    ARR3_WANT_FACES = 1u << 5    /* EV, the faces' cycles and edges (fc, cyc, fe): V and EV
+                                    numbered (else nv and ne are only counted) */
 };
 
 typedef struct arr3_stats {

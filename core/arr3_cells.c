@@ -1011,74 +1011,69 @@ done:
  * runs are then added in chunk order: the result does not depend on the number of threads. */
 
 typedef struct volrun {
-    i128 C, S[3];
-    dd X;
+    i128 C, S[3]; /* the unit's grid cycles, each face turned to point into its unit's cell 2u */
 } volrun;
 
 typedef struct voljob {
     const a3 *A;
-    const double *dh, *dl;
-    const lar3 *out;
-    const uint32_t *org;     /* by cell: the point its double-double cones start from */
-    const uint32_t *cell_of; /* by CF entry: its cell */
-    const size_t *roff;      /* by chunk: its first run */
+    const size_t *roff; /* by chunk of faces: its first run (a run a unit the chunk touches) */
     volrun *run;
 } voljob;
 
 #define VOL_CHUNK 4096
+/* The grid cycles of one chunk of faces, summed per unit. */
 static void vol_chunk(void *ctx, size_t item, int worker)
 {
     (void)worker;
     const voljob *j = ctx;
     const a3 *A = j->A;
-    size_t n = j->out->cf_off[j->out->nc];
-    size_t i0 = item * VOL_CHUNK, i1 = i0 + VOL_CHUNK < n ? i0 + VOL_CHUNK : n;
-    uint32_t k0 = j->cell_of[i0];
-    for (size_t i = i0; i < i1; i++) {
-        int32_t sf = j->out->cf[i];
-        uint32_t f = (uint32_t)(sf > 0 ? sf : -sf) - 1, k = j->cell_of[i];
-        volrun *r = &j->run[j->roff[item] + (k - k0)];
+    size_t f0 = item * VOL_CHUNK, f1 = f0 + VOL_CHUNK < A->nf ? f0 + VOL_CHUNK : A->nf;
+    uint32_t u0 = A->f_unit[f0];
+    for (size_t f = f0; f < f1; f++) {
+        uint32_t u = A->f_unit[f];
+        volrun *r = &j->run[j->roff[item] + (u - u0)];
+        int neg = u < A->npatch && !A->f_out[f];
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-            uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o;
+            uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
             if (m < 3) continue;
-            uint32_t t = 0;
             while (t < m && A->ent[o + t] < A->nv) t++; /* point ids below nv: the vertices */
-            if (t == m) {
-                /* |coordinates| <= 2^29 + 1: each cross product component below 2^60 */
-                i128 C = 0, S[3] = {0, 0, 0};
-                const int64_t *p0 = A->g + 3 * (size_t)A->ent[o], *q = p0;
-                for (t = 1; t <= m; t++) {
-                    const int64_t *p = t < m ? A->g + 3 * (size_t)A->ent[o + t] : p0;
-                    int64_t c0 = q[1] * p[2] - q[2] * p[1];
-                    int64_t c1 = q[2] * p[0] - q[0] * p[2];
-                    int64_t c2 = q[0] * p[1] - q[1] * p[0];
-                    S[0] += c0, S[1] += c1, S[2] += c2;
-                    if (t >= 2 && t < m)
-                        C += (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
-                    q = p;
-                }
-                if (sf < 0) C = -C, S[0] = -S[0], S[1] = -S[1], S[2] = -S[2];
-                r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
-                continue;
+            if (t < m) continue;                        /* in double-double, per cell */
+            /* |coordinates| <= 2^29 + 1: each cross product component below 2^60 */
+            i128 C = 0, S[3] = {0, 0, 0};
+            const int64_t *p0 = A->g + 3 * (size_t)A->ent[o], *q = p0;
+            for (t = 1; t <= m; t++) {
+                const int64_t *p = t < m ? A->g + 3 * (size_t)A->ent[o + t] : p0;
+                int64_t c0 = q[1] * p[2] - q[2] * p[1];
+                int64_t c1 = q[2] * p[0] - q[0] * p[2];
+                int64_t c2 = q[0] * p[1] - q[1] * p[0];
+                S[0] += c0, S[1] += c1, S[2] += c2;
+                if (t >= 2 && t < m) C += (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
+                q = p;
             }
-            uint32_t v0 = j->org[k];
-            dd org[3], p[3][3], c = {0, 0};
-            for (int a = 0; a < 3; a++)
-                org[a].hi = j->dh[3 * (size_t)v0 + a], org[a].lo = j->dl[3 * (size_t)v0 + a];
-            dd_rel(j->dh, j->dl, A->ent[o], org, p[0]);
-            for (t = 1; t + 1 < m; t++) {
-                dd_rel(j->dh, j->dl, A->ent[o + t], org, p[1]);
-                dd_rel(j->dh, j->dl, A->ent[o + t + 1], org, p[2]);
-                dd c0 = dd_add(dd_mul(p[1][1], p[2][2]), dd_neg(dd_mul(p[1][2], p[2][1])));
-                dd c1 = dd_add(dd_mul(p[1][2], p[2][0]), dd_neg(dd_mul(p[1][0], p[2][2])));
-                dd c2 = dd_add(dd_mul(p[1][0], p[2][1]), dd_neg(dd_mul(p[1][1], p[2][0])));
-                c = dd_add(c, dd_mul(p[0][0], c0));
-                c = dd_add(c, dd_mul(p[0][1], c1));
-                c = dd_add(c, dd_mul(p[0][2], c2));
-            }
-            r->X = dd_add(r->X, sf > 0 ? c : dd_neg(c));
+            if (neg) C = -C, S[0] = -S[0], S[1] = -S[1], S[2] = -S[2];
+            r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
         }
     }
+}
+
+/* Six times the cone from org over the cycle's fan, in double-double. */
+static dd cycle_cone6(const a3 *A, const double *dh, const double *dl, uint32_t cy, const dd *org)
+{
+    uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o;
+    dd p[3][3], c = {0, 0};
+    if (m < 3) return c;
+    dd_rel(dh, dl, A->ent[o], org, p[0]);
+    for (uint32_t t = 1; t + 1 < m; t++) {
+        dd_rel(dh, dl, A->ent[o + t], org, p[1]);
+        dd_rel(dh, dl, A->ent[o + t + 1], org, p[2]);
+        dd c0 = dd_add(dd_mul(p[1][1], p[2][2]), dd_neg(dd_mul(p[1][2], p[2][1])));
+        dd c1 = dd_add(dd_mul(p[1][2], p[2][0]), dd_neg(dd_mul(p[1][0], p[2][2])));
+        dd c2 = dd_add(dd_mul(p[1][0], p[2][1]), dd_neg(dd_mul(p[1][1], p[2][0])));
+        c = dd_add(c, dd_mul(p[0][0], c0));
+        c = dd_add(c, dd_mul(p[0][1], c1));
+        c = dd_add(c, dd_mul(p[0][2], c2));
+    }
+    return c;
 }
 
 /* An exact 128-bit integer as a double-double. */
@@ -1097,7 +1092,6 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
 {
     size_t nf = A->nf, nsh = S->nsh;
     uint32_t *cellof = malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
-    uint32_t *cell_of = NULL;
     double *dh = NULL, *dl = NULL;
     size_t *roff = NULL;
     volrun *run = NULL;
@@ -1153,42 +1147,43 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         goto done;
     }
     /* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then
-     * the + entries by rising face); the exterior's likewise */
-    out->cf_off = calloc(nc + 2, sizeof *out->cf_off);
+     * the + entries by rising face); the exterior's likewise.  Only when asked for. */
+    unsigned want = A->o->want ? A->o->want : ~0u;
     out->cvol = calloc(nc + 1, sizeof *out->cvol);
-    if (!out->cf_off || !out->cvol) goto done;
-    size_t next = 0;
-    for (size_t i = 0; i < 2 * nf; i++) {
-        uint32_t f = (uint32_t)(i / 2);
-        uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))], o = cellof[fshell(A, S, f, !(i & 1))];
-        if (k == o) continue;
-        if (k == NONE)
-            next++;
-        else
-            out->cf_off[k + 1]++;
-    }
-    for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
-    out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
-    out->ext = malloc((next + 1) * sizeof *out->ext);
-    fill = calloc(nc + 1, sizeof *fill);
-    cell_of = malloc((out->cf_off[nc] + 1) * sizeof *cell_of);
-    if (!out->cf || !out->ext || !fill || !cell_of) goto done;
-    out->next = 0;
-    /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
-    for (int pass = 0; pass < 2; pass++)
-        for (size_t t = 0; t < nf; t++) {
-            size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
-            uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
-            if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
-            int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
+    if (!out->cvol) goto done;
+    if (want & ARR3_WANT_CF) {
+        out->cf_off = calloc(nc + 2, sizeof *out->cf_off);
+        if (!out->cf_off) goto done;
+        size_t next = 0;
+        for (size_t i = 0; i < 2 * nf; i++) {
+            uint32_t f = (uint32_t)(i / 2);
+            uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))],
+                     o = cellof[fshell(A, S, f, !(i & 1))];
+            if (k == o) continue;
             if (k == NONE)
-                out->ext[out->next++] = sf;
-            else {
-                uint32_t at = out->cf_off[k] + fill[k]++;
-                out->cf[at] = sf;
-                cell_of[at] = k;
-            }
+                next++;
+            else
+                out->cf_off[k + 1]++;
         }
+        for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
+        out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
+        out->ext = malloc((next + 1) * sizeof *out->ext);
+        fill = calloc(nc + 1, sizeof *fill);
+        if (!out->cf || !out->ext || !fill) goto done;
+        out->next = 0;
+        /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
+        for (int pass = 0; pass < 2; pass++)
+            for (size_t t = 0; t < nf; t++) {
+                size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
+                uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
+                if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
+                int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
+                if (k == NONE)
+                    out->ext[out->next++] = sf;
+                else
+                    out->cf[out->cf_off[k] + fill[k]++] = sf;
+            }
+    }
     /* the points to 2^-100 (volumes and the written coordinates come from these) */
     dh = malloc((3 * A->npt + 1) * sizeof *dh);
     dl = malloc((3 * A->npt + 1) * sizeof *dl);
@@ -1202,75 +1197,107 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
                    &span);
     }
-    /* each cell's double-double cones from a point of its first face, on the grid when one is
-     * (taken from a vertex of the cell, the terms are as small as the cell) */
-    for (size_t k = 0; k < nc; k++) {
-        orgv[k] = NONE;
-        if (out->cf_off[k + 1] == out->cf_off[k]) continue;
-        int32_t s0 = out->cf[out->cf_off[k]];
-        uint32_t f0 = (uint32_t)(s0 > 0 ? s0 : -s0) - 1, o0 = A->cyc_off[A->f_cyc[f0]];
-        uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0;
-        orgv[k] = A->ent[o0];
-        for (uint32_t i = 0; i < n0; i++)
-            if (A->pt[A->ent[o0 + i]].kind == PT_GRID) {
-                orgv[k] = A->ent[o0 + i];
-                break;
-            }
-    }
+    /* each cell's origin: a point of the first face that bounds it (in unit order), on the grid
+     * when one is; the double-double cones start from it (a vertex of the cell: the terms are as
+     * small as the cell, so a sliver keeps its volume) */
+    for (size_t k = 0; k < nc; k++) orgv[k] = NONE;
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t k = out->ucell[2 * u + (uint32_t)sd];
+            if (k >= nc || orgv[k] != NONE) continue;
+            uint32_t f0 = A->u_off[u], o0 = A->cyc_off[A->f_cyc[f0]];
+            uint32_t n0 = A->cyc_off[A->f_cyc[f0] + 1] - o0;
+            orgv[k] = A->ent[o0];
+            for (uint32_t i = 0; i < n0; i++)
+                if (A->ent[o0 + i] < A->nv) {
+                    orgv[k] = A->ent[o0 + i];
+                    break;
+                }
+        }
     {
-        size_t ncf = out->cf_off[nc], nch = (ncf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
+        /* the grid cycles, per unit (on the threads, in fixed chunks of faces) */
+        size_t nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
         roff = malloc((nch + 1) * sizeof *roff);
         if (!roff) goto done;
         for (size_t c = 0; c < nch; c++) {
-            size_t i0 = c * VOL_CHUNK, i1 = i0 + VOL_CHUNK < ncf ? i0 + VOL_CHUNK : ncf;
+            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
             roff[c] = nrun;
-            nrun += cell_of[i1 - 1] - cell_of[i0] + 1;
+            nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
         }
         run = calloc(nrun + 1, sizeof *run);
-        if (!run) goto done;
-        voljob j = {A, dh, dl, out, orgv, cell_of, roff, run};
-        par_for(A->threads, nch, vol_chunk, &j);
-        double h3 = A->step * A->step * A->step / 6;
-        i128 *C = calloc(4 * nc + 1, sizeof *C);
+        i128 *UC = calloc(4 * A->nunit + 1, sizeof *UC);
         dd *X = calloc(nc + 1, sizeof *X);
-        if (!C || !X) {
-            free(C), free(X);
+        if (!run || !UC || !X) {
+            free(UC), free(X);
             goto done;
         }
+        voljob j = {A, roff, run};
+        par_for(A->threads, nch, vol_chunk, &j);
         for (size_t c = 0; c < nch; c++) {
-            size_t i0 = c * VOL_CHUNK, i1 = i0 + VOL_CHUNK < ncf ? i0 + VOL_CHUNK : ncf;
-            for (uint32_t k = cell_of[i0]; k <= cell_of[i1 - 1]; k++) {
-                const volrun *r = &run[roff[c] + (k - cell_of[i0])];
-                C[4 * k] += r->C;
-                for (int a = 0; a < 3; a++) C[4 * k + 1 + a] += r->S[a];
-                X[k] = dd_add(X[k], r->X);
+            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
+            for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
+                const volrun *r = &run[roff[c] + (u - A->f_unit[f0])];
+                UC[4 * u] += r->C;
+                for (int a = 0; a < 3; a++) UC[4 * u + 1 + a] += r->S[a];
             }
         }
-        for (size_t k = 0; k < nc; k++) {
-            /* the grid cycles' cones from the origin point: C - o . S */
-            dd vol = X[k];
-            const xpt *o = orgv[k] == NONE ? NULL : &A->pt[orgv[k]];
-            if (o && o->kind == PT_GRID) {
-                const int64_t *g = A->g + 3 * (size_t)o->a;
-                vol = dd_add(vol, dd_of(C[4 * k] - (g[0] * C[4 * k + 1] + g[1] * C[4 * k + 2] +
-                                                    g[2] * C[4 * k + 3])));
-            } else {
-                vol = dd_add(vol, dd_of(C[4 * k]));
-                for (int a = 0; a < 3 && o; a++) {
-                    dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
-                    vol = dd_add(vol, dd_neg(dd_mul(oa, dd_of(C[4 * k + 1 + a]))));
+        /* the cycles with made points (faces of no patch: few), in double-double per cell */
+        for (size_t f = A->npatch ? A->u_off[A->npatch] : 0; f < nf; f++)
+            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+                uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
+                while (t < m && A->ent[o + t] < A->nv) t++;
+                if (m < 3 || t == m) continue;
+                uint32_t u = A->f_unit[f];
+                for (int sd = 0; sd < 2; sd++) {
+                    /* into 2u (its normal's side: -) and out of 2u + 1 (+) */
+                    uint32_t k = out->ucell[2 * u + (uint32_t)sd];
+                    if (k >= nc) continue;
+                    dd org[3];
+                    for (int a = 0; a < 3; a++)
+                        org[a].hi = dh[3 * (size_t)orgv[k] + a],
+                        org[a].lo = dl[3 * (size_t)orgv[k] + a];
+                    dd c = cycle_cone6(A, dh, dl, cy, org);
+                    X[k] = dd_add(X[k], sd ? c : dd_neg(c));
                 }
             }
+        double h3 = A->step * A->step * A->step / 6;
+        i128 *V6 = calloc(nc + 1, sizeof *V6);
+        if (!V6) {
+            free(UC), free(X);
+            goto done;
+        }
+        /* each unit's grid part into its two cells, from each cell's own origin when it is on
+         * the grid (C - o . S, exact), else from the grid's origin and o . S in double-double */
+        for (size_t u = 0; u < A->nunit; u++)
+            for (int sd = 0; sd < 2; sd++) {
+                uint32_t k = out->ucell[2 * u + (uint32_t)sd];
+                if (k >= nc) continue;
+                const i128 *Uu = UC + 4 * u;
+                i128 v = Uu[0];
+                if (orgv[k] < A->nv) {
+                    const int64_t *g = A->g + 3 * (size_t)orgv[k];
+                    v -= g[0] * Uu[1] + g[1] * Uu[2] + g[2] * Uu[3];
+                } else {
+                    for (int a = 0; a < 3; a++) {
+                        dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
+                        dd t = dd_mul(oa, dd_of(Uu[1 + a]));
+                        X[k] = dd_add(X[k], sd ? dd_neg(t) : t);
+                    }
+                }
+                V6[k] += sd ? v : -v;
+            }
+        for (size_t k = 0; k < nc; k++) {
+            dd vol = dd_add(X[k], dd_of(V6[k]));
             out->cvol[k] = (vol.hi + vol.lo) * h3;
         }
-        free(C), free(X);
+        free(UC), free(X), free(V6);
     }
     *dh_out = dh, *dl_out = dl;
     dh = dl = NULL;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(cellof), free(fill), free(orgv), free(cell_of), free(dh), free(dl), free(roff), free(run);
+    free(cellof), free(fill), free(orgv), free(dh), free(dl), free(roff), free(run);
     return rc;
 }
 
@@ -1335,8 +1362,8 @@ static void out_faces(void *ctx, size_t item, int worker)
             for (int k = 0; k < 3; k++) out->FN[3 * f + k] = nd[k] / len;
             out->fsrc[f] = A->pc[A->cov[A->f_cov[f]]].face;
         }
-        uint32_t nfe = out->fe_off[f];
-        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+        uint32_t nfe = out->fe ? out->fe_off[f] : 0;
+        for (uint32_t cy = A->f_cyc[f]; out->fe && cy < A->f_cyc[f + 1]; cy++) {
             out->fc[cy] = cy;
             uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
             if (n < 2) continue;
@@ -1370,43 +1397,54 @@ static void out_faces(void *ctx, size_t item, int worker)
     }
 }
 
-/* Stage "output".  Returns -1 out of memory. */
+/* Stage "output": the faces' solids (fsol); with ARR3_WANT_FACES the points numbered in order
+ * of position and the edges in order of their ends, EV, and the faces' cycles and edges; V, FN
+ * and fsrc, CV when asked for.  Returns -1 out of memory. */
 A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double *dl, lar3 *out)
 {
-    size_t nf = A->nf, ne = E->ne;
+    size_t nf = A->nf, ne = E->ne, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
+    unsigned want = A->o->want ? A->o->want : ~0u;
     uint32_t *newid = malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
     kv *ek = NULL;
     int rc = -1;
     if (!newid) goto done;
+    /* the points the faces use, and the edges inside the patches: one a twin pair */
     for (size_t p = 0; p < A->npt; p++) newid[p] = NONE;
     size_t nu = 0;
     for (size_t i = 0; i < A->nent; i++)
         nu += newid[A->ent[i]] == NONE ? (newid[A->ent[i]] = 0, 1) : 0;
-    used = malloc((nu + 1) * sizeof *used);
-    if (!used) goto done;
-    nu = 0;
-    for (size_t p = 0; p < A->npt; p++)
-        if (newid[p] == 0) used[nu++] = (uint32_t)p;
-    if (sort_points(A, used, nu)) goto done;
-    for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
-    a3_progress(A, "cells", 0.6);
+    for (size_t f = 0; f < pe; f++)
+        for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++)
+            nin += A->etwin[x] != NONE && x < A->etwin[x];
     out->nv = nu;
-    unsigned want = A->o->want ? A->o->want : ~0u;
-    if (want & ARR3_WANT_COORDS) {
-        out->V = malloc((3 * nu + 1) * sizeof *out->V);
-        if (!out->V) goto done;
-    }
-    for (size_t i = 0; out->V && i < nu; i++)
-        for (int k = 0; k < 3; k++)
-            out->V[3 * i + k] =
-                ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
-                A->step;
-    /* the edges inside the patches: one a twin pair of entries */
-    {
-        size_t nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
-        for (size_t f = 0; f < pe; f++)
-            for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++)
-                nin += A->etwin[x] != NONE && x < A->etwin[x];
+    out->ne = ne + nin;
+    out->nf = nf;
+    /* the faces' solids: those covering it an odd number of times (room first, then closed up) */
+    out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
+    if (!out->fsol_off) goto done;
+    out->fsol_off[0] = 0;
+    for (size_t f = 0; f < nf; f++)
+        out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]);
+    out->fsol = malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
+    if (!out->fsol) goto done;
+    if (want & ARR3_WANT_FACES) {
+        used = malloc((nu + 1) * sizeof *used);
+        if (!used) goto done;
+        nu = 0;
+        for (size_t p = 0; p < A->npt; p++)
+            if (newid[p] == 0) used[nu++] = (uint32_t)p;
+        if (sort_points(A, used, nu)) goto done;
+        for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+        a3_progress(A, "cells", 0.6);
+        if (want & ARR3_WANT_COORDS) {
+            out->V = malloc((3 * nu + 1) * sizeof *out->V);
+            if (!out->V) goto done;
+            for (size_t i = 0; i < nu; i++)
+                for (int k = 0; k < 3; k++)
+                    out->V[3 * i + k] = ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] +
+                                         dl[3 * (size_t)used[i] + k]) *
+                                        A->step;
+        }
         uint32_t *ev = realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
         if (!ev) goto done;
         E->ev = ev;
@@ -1421,54 +1459,49 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             }
         }
         E->ne = ne;
+        /* edges in the order of their new ends */
+        ek = malloc((ne + 1) * sizeof *ek);
+        newe = malloc((ne + 1) * sizeof *newe);
+        out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
+        if (!ek || !newe || !out->EV) goto done;
+        for (size_t e = 0; e < ne; e++) {
+            uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
+            ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
+        }
+        if (sort_kv(ek, ne)) goto done;
+        for (size_t i = 0; i < ne; i++) {
+            out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
+            out->EV[2 * i + 1] = (uint32_t)ek[i].k;
+            newe[ek[i].v] = (uint32_t)i;
+        }
+        a3_progress(A, "cells", 0.7);
+        out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
+        out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
+        out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+        out->ncyc = A->ncyc;
+        out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
+        if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) goto done;
+        out->fc_off[0] = out->fe_off[0] = 0;
+        for (size_t f = 0; f < nf; f++) {
+            uint32_t nfe = 0;
+            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+                uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
+                nfe += n < 2 ? 0 : n;
+            }
+            out->fc_off[f + 1] = A->f_cyc[f + 1];
+            out->fe_off[f + 1] = out->fe_off[f] + nfe;
+        }
+        out->fe = malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
+        if (!out->fe) goto done;
+        for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
+        for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     }
-    /* edges in the order of their new ends */
-    ek = malloc((ne + 1) * sizeof *ek);
-    newe = malloc((ne + 1) * sizeof *newe);
-    out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
-    if (!ek || !newe || !out->EV) goto done;
-    for (size_t e = 0; e < ne; e++) {
-        uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
-        ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
-    }
-    if (sort_kv(ek, ne)) goto done;
-    out->ne = ne;
-    for (size_t i = 0; i < ne; i++) {
-        out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
-        out->EV[2 * i + 1] = (uint32_t)ek[i].k;
-        newe[ek[i].v] = (uint32_t)i;
-    }
-    a3_progress(A, "cells", 0.7);
-    /* faces */
-    out->nf = nf;
     if (want & ARR3_WANT_NORMALS) {
         out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
         out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
         if (!out->FN || !out->fsrc) goto done;
     }
-    out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
-    out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
-    out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
-    out->ncyc = A->ncyc;
-    out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
-    out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
-    out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
-    if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc || !out->fsol_off)
-        goto done;
-    out->fc_off[0] = out->fe_off[0] = out->fsol_off[0] = 0;
-    for (size_t f = 0; f < nf; f++) {
-        uint32_t nfe = 0;
-        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-            uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
-            nfe += n < 2 ? 0 : n;
-        }
-        out->fc_off[f + 1] = A->f_cyc[f + 1];
-        out->fe_off[f + 1] = out->fe_off[f] + nfe;
-        out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]); /* room */
-    }
-    out->fe = malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
-    out->fsol = malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
-    if (!out->fe || !out->fsol) goto done;
     {
         outjob j = {A, out, newid, newe, E->ent_e};
         par_for(A->threads, (nf + OUT_CHUNK - 1) / OUT_CHUNK, out_faces, &j);
@@ -1484,13 +1517,11 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         }
         out->fsol_off[nf] = w;
     }
-    for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
-    for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     a3_progress(A, "cells", 0.8);
     /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
      * read off in vertex order, a small one sorted) */
     size_t nc = out->nc;
-    if (want & ARR3_WANT_CV) {
+    if ((want & ARR3_WANT_CV) && out->cyc && out->cf) {
         out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
         if (!out->cv_off) goto done;
         uint32_t *cv = NULL, *stamp = calloc(out->nv + 1, sizeof *stamp);
@@ -1543,38 +1574,26 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     uint32_t *cu = NULL;
     double *dh = NULL, *dl = NULL;
     int rc = ARR_ENOMEM;
-    struct timespec T0, T1;
-#ifdef A3_PROF /* a developer's build (make OPT='-O2 -DA3_PROF'): each stage's time on stderr */
-#define TICK(name)                                                                                 \
-    do {                                                                                           \
-        clock_gettime(CLOCK_MONOTONIC, &T1);                                                       \
-        fprintf(stderr, "  cells/%-8s %7.1f ms\n", name,                                           \
-                (double)(T1.tv_sec - T0.tv_sec) * 1e3 + (double)(T1.tv_nsec - T0.tv_nsec) / 1e6);  \
-        T0 = T1;                                                                                   \
-    } while (0)
-#else
-#define TICK(name) (void)T1
-#endif
-    clock_gettime(CLOCK_MONOTONIC, &T0);
+
     if (edges_make(A, &E)) goto done;
-    TICK("edges");
+    A3_TICK("cells/edges");
     a3_progress(A, "cells", 0.1);
     if ((rc = fans_make(A, &E, out, err, errlen)) != ARR_OK) goto done;
-    TICK("fans");
+    A3_TICK("cells/fans");
     rc = ARR_ENOMEM;
     if (shells_make(A, &E, &S)) goto done;
-    TICK("shells");
+    A3_TICK("cells/shells");
     a3_progress(A, "cells", 0.3);
     if (!(cu = malloc((S.nsh + 2) * sizeof *cu))) goto done;
     if ((rc = nesting_make(A, &S, cu, err, errlen)) != ARR_OK) goto done;
-    TICK("nesting");
+    A3_TICK("cells/nesting");
     if ((rc = cells_make(A, &S, cu, out, &dh, &dl, err, errlen)) != ARR_OK) goto done;
-    TICK("cells");
+    A3_TICK("cells/cells");
     cshells_free(&S);
     a3_progress(A, "cells", 0.55);
     rc = ARR_ENOMEM;
     if (output_make(A, &E, dh, dl, out)) goto done;
-    TICK("output");
+    A3_TICK("cells/output");
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");

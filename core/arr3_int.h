@@ -30,6 +30,13 @@
 #define NONE UINT32_MAX
 /* A stage of the pipeline: a function of its own in profiles (perf, callgrind), never inlined. */
 #define A3_STAGE __attribute__((noinline))
+/* A developer's build (make OPT='-O2 -DA3_PROF') prints each step's wall time on stderr. */
+#ifdef A3_PROF
+void a3_prof(const char *name);
+#define A3_TICK(name) a3_prof(name)
+#else
+#define A3_TICK(name) ((void)0)
+#endif
 /* The side plane of an edge between two input vertices whose plane needs no arrangement: not
  * made (nor added to the planes) unless asked for, by a3_side(). */
 #define SIDE_LAZY (NONE - 2)

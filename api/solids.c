@@ -42,6 +42,7 @@
 #include <time.h>
 
 #include "core/arr3.h"
+#include "core/par.h"
 #include "core/solid.h"
 
 #define SOLIDS_MAX_SOLIDS   100000u        /* entries of "solids" */
@@ -459,70 +460,101 @@ static void warn_finish(warn_list *w)
     }
 }
 
-/* solid_check (or, for the soup, solid_check_faces) of solids[i] at the grid step p; the fixed
- * copy into *fixed (may be NULL), warnings into w (may be NULL).  The first error is the 422. */
-static int check_solid(const solid *s, size_t i, int soup, double p, solid *fixed, warn_list *w,
-                       api_error *err)
+/* What check_solid found for solids[i] (rep), turned into the request's answer: its warnings
+ * into w (may be NULL), or the 422 of its first error. */
+static int report_solid(const solid_report *rep, size_t i, int soup, warn_list *w, api_error *err)
 {
     char label[32], where[API_ERRMAX];
-    solid_report *rep = malloc(sizeof *rep);
-    int rc = API_OK;
-    if (!rep) return api_fail(err, API_ENOMEM, "out of memory");
     if (soup)
         snprintf(label, sizeof label, "faces");
     else
         snprintf(label, sizeof label, "solids[%zu]", i);
-    int bad =
-        soup ? solid_check_faces(s, p, label, rep) : solid_check_nocopy(s, p, label, rep, fixed);
-    if (bad == 0) {
+    if (rep->errors == 0) {
         for (size_t m = 0; w && m < rep->nmsg; m++) warn_add(w, rep, m, label);
         if (w) w->total += rep->warnings > rep->nmsg ? rep->warnings - rep->nmsg : 0;
-        goto out;
+        return API_OK;
     }
     size_t first = rep->nmsg;
     for (size_t m = 0; m < rep->nmsg && first == rep->nmsg; m++)
         if (!rep->info[m].warning) first = m;
-    if (first == rep->nmsg) {
-        rc = api_fail(err, API_EINVALID, "%s: invalid solid", label);
-        goto out;
-    }
-    if (strcmp(rep->msg[first] + rep->info[first].what, "out of memory") == 0) {
-        rc = api_fail(err, API_ENOMEM, "out of memory while checking %s", label);
-        goto out;
-    }
+    if (first == rep->nmsg) return api_fail(err, API_EINVALID, "%s: invalid solid", label);
+    if (strcmp(rep->msg[first] + rep->info[first].what, "out of memory") == 0)
+        return api_fail(err, API_ENOMEM, "out of memory while checking %s", label);
     json_path_message(rep, first, label, where, sizeof where);
     if (rep->errors > 1)
-        rc = api_fail(err, API_EINVALID, "%s (and %zu more errors in %s)", where, rep->errors - 1,
-                      label);
+        return api_fail(err, API_EINVALID, "%s (and %zu more errors in %s)", where, rep->errors - 1,
+                        label);
+    return api_fail(err, API_EINVALID, "%s", where);
+}
+
+/* The checks of the solids, one a task on the threads (each writes only its own report, fixed
+ * copy and twins; the reports are read in order after). */
+typedef struct checkjob {
+    const solids_req *r;
+    solid *fixed;      /* may be NULL */
+    uint32_t **twin;   /* may be NULL */
+    solid_report *rep; /* by solid */
+    const api_run_opts *ro;
+} checkjob;
+
+static void check_one(void *ctx, size_t i, int worker)
+{
+    (void)worker;
+    const checkjob *j = ctx;
+    const solids_req *r = j->r;
+    solid_report *rep = &j->rep[i];
+    char label[32];
+    if (j->ro && j->ro->cancel && atomic_load(j->ro->cancel)) {
+        rep->errors = 0, rep->nmsg = 0;
+        return;
+    }
+    if (r->soup)
+        snprintf(label, sizeof label, "faces");
     else
-        rc = api_fail(err, API_EINVALID, "%s", where);
+        snprintf(label, sizeof label, "solids[%zu]", i);
+    if (r->soup)
+        solid_check_faces(&r->s[i], r->step, label, rep);
+    else
+        solid_check_nocopy(&r->s[i], r->step, label, rep, j->fixed ? &j->fixed[i] : NULL,
+                           j->twin ? j->twin[i] : NULL);
+}
+
+static void check_tick(void *ctx, double f)
+{
+    const api_run_opts *ro = ctx;
+    ro->progress(ro->udata, "check", f);
+}
+
+/* Checks the geometry at the grid step (the solids on ro->threads threads); fixed (ns entries,
+ * may be NULL) gets solid_check's fixed copies, twin (ns arrays, may be NULL) the pairings it
+ * found, w (may be NULL) the warnings.  The first error (by solid) is the answer. */
+static int validate(const solids_req *r, solid *fixed, uint32_t **twin, warn_list *w,
+                    const api_run_opts *ro, api_error *err)
+{
+    solid_report *rep = calloc(r->ns ? r->ns : 1, sizeof *rep);
+    int rc = API_OK;
+    if (!rep) return api_fail(err, API_ENOMEM, "out of memory");
+    checkjob j = {r, fixed, twin, rep, ro};
+    int threads = ro && ro->threads > 0 ? ro->threads : 1;
+    if (ro && ro->progress)
+        par_for_ex(threads, r->ns, check_one, &j, check_tick, (void *)ro);
+    else
+        par_for(threads, r->ns, check_one, &j);
+    if (ro && ro->cancel && atomic_load(ro->cancel)) {
+        rc = api_fail(err, API_ECANCELED, "canceled");
+        goto out;
+    }
+    for (size_t i = 0; i < r->ns && rc == API_OK; i++)
+        rc = report_solid(&rep[i], i, r->soup, w, err);
 out:
     free(rep);
     return rc;
 }
 
-/* Checks the geometry at the grid step; fixed (ns entries, may be NULL) gets solid_check's
- * fixed copies, w (may be NULL) the warnings. */
-static int validate(const solids_req *r, solid *fixed, warn_list *w, const api_run_opts *ro,
-                    api_error *err)
-{
-    size_t step = r->ns / 100 + 1; /* progress at each percent */
-    for (size_t i = 0; i < r->ns; i++) {
-        int rc;
-        if (ro && ro->cancel && atomic_load(ro->cancel))
-            return api_fail(err, API_ECANCELED, "canceled");
-        if (ro && ro->progress && i % step == 0)
-            ro->progress(ro->udata, "check", (double)i / (double)r->ns);
-        rc = check_solid(&r->s[i], i, r->soup, r->step, fixed ? &fixed[i] : NULL, w, err);
-        if (rc != API_OK) return rc;
-    }
-    return API_OK;
-}
-
 int api_solids_check(const void *parsed, api_error *err)
 {
     const solids_req *r = parsed;
-    return validate(r, NULL, NULL, NULL, err);
+    return validate(r, NULL, NULL, NULL, NULL, err);
 }
 
 static double ms_now(void)
@@ -551,6 +583,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
                     /* only the parts of the complex the fields print */
                     .want = api_lar3_want(r->fields)};
     solid *fixed = NULL;
+    uint32_t **twin = NULL;
     warn_list *w = calloc(1, sizeof *w);
     lar3 c = {0};
     bool3_result res = {0};
@@ -560,11 +593,18 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (!w) return api_fail(err, API_ENOMEM, "out of memory");
     double t_check = ms_now(), ms_check;
     if (ro->progress) ro->progress(ro->udata, "check", 0);
-    if (!r->soup && !(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed))) {
+    if (!r->soup && (!(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed)) ||
+                     !(twin = calloc(r->ns ? r->ns : 1, sizeof *twin)))) {
         rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
         goto out;
     }
-    rc = validate(r, r->soup ? NULL : fixed, w, ro, err);
+    /* the checks' pairings of the edges, handed to the arrangement (arr3_build_ex) */
+    for (size_t i = 0; twin && i < r->ns; i++)
+        if (!(twin[i] = malloc((r->s[i].cyc_off[r->s[i].ncyc] + 1) * sizeof *twin[i]))) {
+            rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+            goto out;
+        }
+    rc = validate(r, r->soup ? NULL : fixed, twin, w, ro, err);
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "check", 1);
     ms_check = ms_now() - t_check;
@@ -575,7 +615,11 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         /* a solid that needed no change is used as it is (no fixed copy was made) */
         for (size_t i = 0; i < r->ns; i++)
             if (fixed[i].nf == 0) fixed[i] = r->s[i];
-        rc = arr3_build(r->ns ? fixed : &no_solid, r->ns, 0, &ao, &c, msg, sizeof msg);
+        rc = arr3_build_ex(r->ns ? fixed : &no_solid, r->ns, 0, (const uint32_t *const *)twin, &ao,
+                           &c, msg, sizeof msg);
+        for (size_t i = 0; i < r->ns; i++) free(twin[i]);
+        free(twin);
+        twin = NULL;
         for (size_t i = 0; i < r->ns; i++)
             if (fixed[i].V == r->s[i].V) memset(&fixed[i], 0, sizeof fixed[i]);
     }
@@ -617,6 +661,8 @@ out:
     bool3_result_free(&res);
     member_rows_free(&mem);
     lar3_free(&c);
+    for (size_t i = 0; twin && i < r->ns; i++) free(twin[i]);
+    free(twin);
     for (size_t i = 0; fixed && i < r->ns; i++) solid_free(&fixed[i]);
     free(fixed);
     free(w);

@@ -741,7 +741,8 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, i
     for (size_t c = 0; c < nc; c++) total += len[c];
     if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + nc + 1, sizeof *A->pc_off) ||
         a3_grow(&A->pcv, &A->cappcv, A->npcv + total, sizeof *A->pcv) ||
-        a3_grow(&A->pcvp, &A->cappcvp, A->npcv + total, sizeof *A->pcvp))
+        a3_grow(&A->pcvp, &A->cappcvp, A->npcv + total, sizeof *A->pcvp) ||
+        a3_grow(&A->ptwin, &A->capptwin, A->npcv + total, sizeof *A->ptwin))
         return -1;
     for (size_t c = 0; c < nc; c++) {
         A->pc_off[A->npcyc] = (uint32_t)A->npcv;
@@ -752,6 +753,7 @@ static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, i
                 return -2; /* an edge along the normal's largest axis: not in the plane */
             A->pcv[A->npcv] = v;
             A->pcvp[A->npcv] = SIDE_LAZY; /* made by stage_sides where needed */
+            A->ptwin[A->npcv] = NONE;
             A->npcv++;
             for (int a = 0; a < 3; a++) {
                 int32_t x = (int32_t)gv[a];
@@ -901,13 +903,16 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
     return rc;
 }
 
-A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err, size_t el)
+A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
+                                char *err, size_t el)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     size_t nfaces = 0;
     int rc = ARR_OK;
-    uint32_t *map = NULL, *tv = NULL, **cyc = NULL, *tri = NULL, *drop = NULL;
+    uint32_t *map = NULL, *tv = NULL, **cyc = NULL, *tri = NULL, *drop = NULL, *in2pcv = NULL;
+    uint32_t *inlo = NULL;
     size_t capmap = 0, captv = 0, capcyc = 0, ntri = 0, captri = 0, *len = NULL, caplen = 0;
+    size_t capin2pcv = 0, capinlo = 0;
     size_t ndrop = 0, capdrop = 0;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
@@ -927,7 +932,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err
         return seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u", nfaces,
                       ARR3_MAX_FACES);
     A->solid_face_off = calloc(ns + 1, sizeof *A->solid_face_off);
-    if (!A->solid_face_off) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    A->twinned = calloc(ns + 1, 1);
+    if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
     if (!nfaces) return ARR_OK;
     double step;
@@ -951,15 +957,22 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err
         if (a3_grow(&A->pc, &A->cappc, A->npc + so->nf, sizeof *A->pc) ||
             a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + so->ncyc + 1, sizeof *A->pc_off) ||
             a3_grow(&A->pcv, &A->cappcv, A->npcv + sent, sizeof *A->pcv) ||
-            a3_grow(&A->pcvp, &A->cappcvp, A->npcv + sent, sizeof *A->pcvp))
+            a3_grow(&A->pcvp, &A->cappcvp, A->npcv + sent, sizeof *A->pcvp) ||
+            a3_grow(&A->ptwin, &A->capptwin, A->npcv + sent, sizeof *A->ptwin))
             goto oom;
+        const uint32_t *tw = twins ? twins[s] : NULL;
+        if (tw) { /* where each input entry went, when its face went as it is */
+            if (a3_grow(&in2pcv, &capin2pcv, sent + 1, sizeof *in2pcv)) goto oom;
+            memset(in2pcv, 0xff, (sent + 1) * sizeof *in2pcv);
+        }
         ndrop = 0;
         for (size_t f = 0; f < so->nf; f++, face++) {
             size_t nc = 0, ntv = 0;
             int gone = 0;
             size_t ncy = so->face_off[f + 1] - so->face_off[f];
             if (a3_grow(&cyc, &capcyc, ncy + 1, sizeof *cyc) ||
-                a3_grow(&len, &caplen, ncy + 1, sizeof *len))
+                a3_grow(&len, &caplen, ncy + 1, sizeof *len) ||
+                a3_grow(&inlo, &capinlo, ncy + 1, sizeof *inlo))
                 goto oom;
             size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
             if (a3_grow(&tv, &captv, total + 1, sizeof *tv)) goto oom;
@@ -996,6 +1009,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err
                                 s, f, step);
                     goto fail;
                 }
+                /* its input entries, when they all went as they are */
+                inlo[nc] =
+                    ntv - start == so->cyc_off[cy + 1] - so->cyc_off[cy] ? so->cyc_off[cy] : NONE;
                 len[nc++] = ntv - start;
             }
             if (nc == 0 || gone) continue;
@@ -1030,11 +1046,15 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err
                 int sgn = nc == 1 && len[0] == 3
                               ? 1
                               : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
+                uint32_t base = (uint32_t)A->npcv;
                 if ((r = add_piece(A, sol, (uint32_t)face, av, k, sgn, cyc, len, nc))) {
                     if (r == -1) goto oom;
                     rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
                     goto fail;
                 }
+                for (size_t c = 0; tw && c < nc; base += (uint32_t)len[c], c++)
+                    for (uint32_t t = 0; inlo[c] != NONE && t < len[c]; t++)
+                        in2pcv[inlo[c] + t] = base + t;
                 continue;
             }
             /* not planar on the grid: triangles, each with its own exact plane */
@@ -1097,6 +1117,14 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, char *err
                 }
             }
         }
+        if (tw) { /* the twins the check found, between entries that went as they are */
+            for (size_t i = 0; i < sent; i++) {
+                uint32_t x = in2pcv[i], t = tw[i];
+                if (x != NONE && t != NONE && t < sent && in2pcv[t] != NONE)
+                    A->ptwin[x] = in2pcv[t];
+            }
+            A->twinned[s] = 1;
+        }
         if (ndrop && mend_dropped(A, pc0, drop, ndrop)) goto oom;
     }
     A->solid_face_off[ns] = (uint32_t)face;
@@ -1109,6 +1137,8 @@ fail:
     free(tv);
     free(cyc);
     free(len);
+    free(in2pcv);
+    free(inlo);
     free(tri);
     free(drop);
     return rc;
@@ -1334,14 +1364,13 @@ done:
  * walking the edge opposite ways are each other's twins.  None in a soup.  -1 out of memory. */
 A3_STAGE static int stage_twins(a3 *A)
 {
-    size_t n = A->npcv, nv = A->nv;
+    size_t n = A->npcv, nv = A->nv, left = 0;
     int rc = -1;
     uint32_t *pos = NULL, *lo = NULL, *nx = NULL, *sx = NULL;
     uint64_t *sk = NULL;
-    A->ptwin = malloc((n + 1) * sizeof *A->ptwin);
-    if (!A->ptwin) return -1;
-    memset(A->ptwin, 0xff, (n + 1) * sizeof *A->ptwin);
     if (A->soup || !n) return 0;
+    for (size_t s = 0; s < A->nsolids; s++) left += !A->twinned[s];
+    if (!left) return 0; /* every solid's twins came with its check */
     pos = calloc(nv + 2, sizeof *pos);
     lo = malloc(n * sizeof *lo);
     nx = malloc(n * sizeof *nx);
@@ -1350,6 +1379,7 @@ A3_STAGE static int stage_twins(a3 *A)
     if (!pos || !lo || !nx || !sk || !sx) goto done;
     for (size_t pi = 0; pi < A->npc; pi++) {
         const piece *pc = &A->pc[pi];
+        if (A->twinned[pc->solid]) continue;
         for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc; cy++) {
             uint32_t o = A->pc_off[cy], m = A->pc_off[cy + 1] - o;
             for (uint32_t t = 0; t < m; t++) {
@@ -1363,6 +1393,7 @@ A3_STAGE static int stage_twins(a3 *A)
     for (size_t v = 0; v < nv; v++) pos[v + 2] += pos[v + 1];
     for (size_t pi = 0; pi < A->npc; pi++) {
         const piece *pc = &A->pc[pi];
+        if (A->twinned[pc->solid]) continue;
         uint32_t x0 = A->pc_off[pc->c0], x1 = A->pc_off[pc->c0 + pc->nc];
         for (uint32_t x = x0; x < x1; x++) {
             uint32_t a = A->pcv[x], b = nx[x], slot = pos[lo[x] + 1]++;
@@ -1884,10 +1915,25 @@ static const xpt *get_global(const void *ctx, uint32_t id)
 A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
 {
     uint32_t *alias = malloc((A->npt + 1) * sizeof *alias);
-    if (!alias) return -1;
+    uint8_t *near = calloc(A->nv + 1, 1);
+    if (!alias || !near) {
+        free(alias), free(near);
+        return -1;
+    }
+    /* A made point (here, or later in a plane) lies on a reached piece, and an input vertex at
+     * the same place is one of a reached piece's own: any other piece holding it meets that one
+     * there (a pair, a contact), or, of the same solid, shares it as a vertex.  So only those
+     * vertices go into the set, not all of them. */
+    for (size_t pi = 0; pi < A->npc; pi++) {
+        const piece *pc = &A->pc[pi];
+        if (!pc->reached) continue;
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++)
+            near[A->pcv[x]] = 1;
+    }
     pset_clear(ps, 0);
     for (size_t i = 0; i < A->npt; i++) {
         alias[i] = (uint32_t)i;
+        if (i < A->nv && !near[i]) continue;
         if (A->pt[i].kind != PT_GRID) {
             uint32_t q = pset_find(ps, &A->G, &A->pt[i], get_global, A);
             if (q != NONE) {
@@ -1896,10 +1942,11 @@ A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
             }
         }
         if (pset_add(ps, &A->pt[i], (uint32_t)i)) {
-            free(alias);
+            free(alias), free(near);
             return -1;
         }
     }
+    free(near);
     size_t m = 0;
     for (size_t i = 0; i < A->ncs; i++) {
         cseg c = A->cs[i];
@@ -2284,6 +2331,7 @@ static void a3_free(a3 *A)
     free(A->pcv);
     free(A->pcvp);
     free(A->ptwin);
+    free(A->twinned);
     free(A->solid_face_off);
     free(A->pt);
     free(A->pp_off);
@@ -2310,6 +2358,12 @@ static void a3_free(a3 *A)
 int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
                char *err, size_t errlen)
 {
+    return arr3_build_ex(solids, ns, soup, NULL, opts, out, err, errlen);
+}
+
+int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *const *twins,
+                  const arr3_opts *opts, lar3 *out, char *err, size_t errlen)
+{
     static const arr3_opts defaults = {0};
     a3 A = {0};
     pset ps = {0};
@@ -2325,7 +2379,7 @@ int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, 
     A.soup = soup;
     a3_progress(&A, "snap", 0);
     A3_TICK(NULL);
-    if ((rc = stage_input(&A, solids, ns, err, errlen))) goto fail;
+    if ((rc = stage_input(&A, solids, ns, soup ? NULL : twins, err, errlen))) goto fail;
     A3_TICK("input");
     a3_progress(&A, "snap", 1);
     out->nsolids = ns;

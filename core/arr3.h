@@ -143,6 +143,12 @@ int arr3_solids_step(const solid *s, size_t n, double precision, double *step, c
 int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
                char *err, size_t errlen);
 
+/* The same, given for each solid (twins may be NULL, and so may each twins[s]) the pairing its
+ * check found (solid_check_nocopy's twin: for each entry of its cycles, the entry walking the
+ * same edge the other way), so that the arrangement does not pair the edges again. */
+int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *const *twins,
+                  const arr3_opts *opts, lar3 *out, char *err, size_t errlen);
+
 void lar3_free(lar3 *c);
 
 /* Volume enclosed by face f's cycles as seen from its normal side's opposite (the signed

@@ -116,8 +116,9 @@ typedef struct a3 {
     uint32_t *pcvp;  /* vertical plane of each entry's edge */
     uint32_t *ptwin; /* by entry: the entry of another piece of the same solid walking its edge
                         the other way, the edge's only other one in that solid; NONE if none */
-    size_t npcv, cappcv, cappcvp;
-    size_t nfaces; /* input faces */
+    size_t npcv, cappcv, cappcvp, capptwin;
+    uint8_t *twinned; /* by solid: its entries' twins came with the input (arr3_build_ex) */
+    size_t nfaces;    /* input faces */
     uint32_t *solid_face_off;
     size_t nsolids;
     size_t split_faces; /* input faces split into triangles */

@@ -57,7 +57,7 @@ static void box_join(int32_t *r, const int32_t *a, const int32_t *b)
     }
 }
 
-/* 21 bits of x spread to every third bit. */
+/* 21 bits of x spread to every third bit (callers give 10). */
 static uint64_t spread3(uint64_t x)
 {
     x &= 0x1fffff;
@@ -132,10 +132,11 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         }
     }
     int sh[3];
-    for (int k = 0; k < 3; k++) { /* the centres' spread down to 21 bits */
+    for (int k = 0; k < 3; k++) { /* the centres' spread down to 10 bits (a 30-bit code: three
+                                   * passes of the radix sort; equal codes split in the middle) */
         uint64_t ext = (uint64_t)(hi[k] - lo[k]);
         sh[k] = 0;
-        while ((ext >> sh[k]) >= ((uint64_t)1 << 21)) sh[k]++;
+        while ((ext >> sh[k]) >= ((uint64_t)1 << 10)) sh[k]++;
     }
     for (size_t i = 0; i < n; i++) {
         const int32_t *b = boxof(ctx, ids[i]);

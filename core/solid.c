@@ -94,6 +94,7 @@ void solid_free(solid *s)
 
 typedef struct half {
     uint64_t key;  /* min << 32 | max of the merged end vertices */
+    uint32_t ent;  /* its entry in the cycles (cyc[ent] is its start) */
     uint32_t face; /* the face walking it */
     uint32_t a, b; /* input indices of its ends, in the face's direction */
     uint32_t fwd;  /* 1 when the face walks it from the smaller merged vertex to the larger */
@@ -654,6 +655,7 @@ static int check_edges(ck *c, int *bad)
                 if (u == w) continue;
                 half *h = &c->he[c->nhe++];
                 h->key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u;
+                h->ent = i;
                 h->face = (uint32_t)f;
                 h->a = a;
                 h->b = b;
@@ -877,8 +879,39 @@ fail:
     return -1;
 }
 
+/* The entry of the fixed copy that holds half h: its own, or in a face the copy reverses (every
+ * cycle reversed keeping its first vertex) the entry walking the same edge there. */
+static uint32_t fixed_entry(const ck *c, const half *h)
+{
+    const solid *s = c->s;
+    if (!c->flip[h->face]) return h->ent;
+    for (uint32_t k = s->face_off[h->face]; k < s->face_off[h->face + 1]; k++) {
+        uint32_t lo = s->cyc_off[k], n = s->cyc_off[k + 1] - lo;
+        if (h->ent < lo || h->ent >= lo + n) continue;
+        return lo + (n - 1 - (h->ent - lo)) % n;
+    }
+    return h->ent;
+}
+
+/* twin[i] for every entry of the fixed copy: the entry walking the same edge the other way when
+ * exactly two entries lie on that edge, else NONE. */
+static void export_twins(const ck *c, uint32_t *twin)
+{
+    const solid *s = c->s;
+    size_t total = s->cyc_off[s->ncyc];
+    for (size_t i = 0; i < total; i++) twin[i] = NONE;
+    for (size_t e = 0; e < c->npair; e++) {
+        size_t i = c->pair[e];
+        const half *h = &c->he[i];
+        if ((i > 0 && h[-1].key == h->key) || (i + 2 < c->nhe && h[2].key == h->key))
+            continue; /* a pair of a surface touching itself: four faces on the edge */
+        uint32_t x = fixed_entry(c, &h[0]), y = fixed_entry(c, &h[1]);
+        twin[x] = y, twin[y] = x;
+    }
+}
+
 static int check(const solid *s, double precision, const char *label, solid_report *rep,
-                 solid *fixed, int faces_only, int copy_unchanged)
+                 solid *fixed, int faces_only, int copy_unchanged, uint32_t *twin)
 {
     solid_report local;
     ck c = {.s = s,
@@ -907,6 +940,7 @@ static int check(const solid *s, double precision, const char *label, solid_repo
     if (c.rep->errors == 0 && fixed && (copy_unchanged || c.rep->flipped_faces) &&
         make_fixed(&c, fixed))
         goto oom;
+    if (c.rep->errors == 0 && twin) export_twins(&c, twin);
     goto done;
 oom:
     note(&c, 1, SOLID_AT_SOLID, 0, "out of memory");
@@ -924,18 +958,18 @@ done:
 int solid_check(const solid *s, double precision, const char *label, solid_report *rep,
                 solid *fixed)
 {
-    return check(s, precision, label, rep, fixed, 0, 1);
+    return check(s, precision, label, rep, fixed, 0, 1, NULL);
 }
 
 int solid_check_nocopy(const solid *s, double precision, const char *label, solid_report *rep,
-                       solid *fixed)
+                       solid *fixed, uint32_t *twin)
 {
-    return check(s, precision, label, rep, fixed, 0, 0);
+    return check(s, precision, label, rep, fixed, 0, 0, twin);
 }
 
 int solid_check_faces(const solid *s, double precision, const char *label, solid_report *rep)
 {
-    return check(s, precision, label, rep, NULL, 1, 0);
+    return check(s, precision, label, rep, NULL, 1, 0, NULL);
 }
 
 /* ---- readers: text ---------------------------------------------------------------------- */

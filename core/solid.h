@@ -83,9 +83,12 @@ int solid_check(const solid *s, double precision, const char *label, solid_repor
 
 /* The same, but *fixed is made only when the fixed copy differs from s (rep->flipped_faces > 0);
  * otherwise it is left empty (nf == 0) and s itself is the usable solid: no copy of a large
- * input that needs none. */
+ * input that needs none.  twin (may be NULL; one entry per cycle entry of s) gets, when s is
+ * usable, the pairing the check found, in the usable solid's entries: twin[i] is the entry
+ * that walks the edge from entry i to the next the other way when exactly those two walk it,
+ * else UINT32_MAX (what arr3_build_ex takes, so that the arrangement does not pair them again). */
 int solid_check_nocopy(const solid *s, double precision, const char *label, solid_report *rep,
-                       solid *fixed);
+                       solid *fixed, uint32_t *twin);
 
 /* The per-face checks of solid_check only (shape, indices, distinct vertices, zero area,
  * planarity), for a face soup: no closedness, no orientation, no volume. */

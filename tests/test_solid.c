@@ -232,6 +232,62 @@ TEST(cube_one_face_reversed_is_fixed_by_bfs)
     }
 }
 
+/* The pairing the check hands to the arrangement (solid_check_nocopy's twins): every entry of
+ * the usable solid (the input, or the fixed copy when faces were flipped) has its twin, which
+ * walks the same edge the other way, and twins are mutual.  Cubes with 0 to 6 faces reversed
+ * (6: inside out, every face flipped back), and an edge that four faces share (the surface
+ * touching itself): no twins there. */
+TEST(check_twins_are_the_usable_solids_pairs)
+{
+    for (unsigned rev = 0; rev < 64; rev += 7) {
+        solid s = cube(63, rev), fx = {0};
+        solid_report r;
+        uint32_t tw[24];
+        REQUIRE(solid_check_nocopy(&s, 1e-3, "tw", &r, &fx, tw) == 0, "rev %u: %s", rev, r.msg[0]);
+        const solid *u = fx.nf ? &fx : &s;
+        CHECK((fx.nf != 0) == (r.flipped_faces != 0), "rev %u: a copy iff faces flipped", rev);
+        for (uint32_t i = 0; i < 24; i++) {
+            uint32_t j = tw[i];
+            REQUIRE(j < 24 && tw[j] == i, "rev %u: entry %u's twin %u", rev, i, j);
+            uint32_t ni = i % 4 == 3 ? i - 3 : i + 1, nj = j % 4 == 3 ? j - 3 : j + 1;
+            CHECK(u->cyc[i] == u->cyc[nj] && u->cyc[ni] == u->cyc[j],
+                  "rev %u: entries %u and %u do not walk one edge both ways", rev, i, j);
+        }
+        solid_free(&fx);
+        solid_free(&s);
+    }
+    /* cube A = [0,1]^3 and B = [1,2]x[1,2]x[0,1] touching along the edge x=y=1 (B's ends of it
+     * merged with A's at the precision): that edge lies on four faces, and has no twins */
+    double V[16][3];
+    int F[2 * 6 * 5 + 1];
+    size_t n = 0;
+    for (int i = 0; i < 8; i++)
+        for (int a = 0; a < 3; a++) {
+            V[i][a] = CUBE_V[i][a];
+            V[8 + i][a] = CUBE_V[i][a] + (a < 2 ? 1 : 0) + (a == 0 ? 1e-7 : 0);
+        }
+    for (int c = 0; c < 2; c++)
+        for (int f = 0; f < 6; f++) {
+            for (int i = 0; i < 4; i++) F[n++] = CUBE_F[f][i] + 8 * c;
+            F[n++] = -2;
+        }
+    solid two = make(&V[0][0], 16, F, n), fx = {0};
+    solid_report r;
+    uint32_t tw[48];
+    REQUIRE(solid_check_nocopy(&two, 1e-3, "two", &r, &fx, tw) == 0, "two: %s", r.msg[0]);
+    size_t none = 0;
+    for (uint32_t i = 0; i < 48; i++) {
+        if (tw[i] == UINT32_MAX) {
+            none++;
+            continue;
+        }
+        CHECK(tw[i] < 48 && tw[tw[i]] == i, "two: entry %u's twin %u", i, tw[i]);
+    }
+    CHECK(none == 4, "two: %zu entries without a twin, want the 4 on the shared edge", none);
+    solid_free(&fx);
+    solid_free(&two);
+}
+
 /* ---- errors ------------------------------------------------------------------------------- */
 
 TEST(cube_missing_face_is_open)

@@ -940,6 +940,12 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     if ((rc = arr3_solids_step(solids, ns, A->o->precision, &step, err, el)) != ARR_OK) return rc;
     A->step = step;
     A->st->precision = step;
+    for (int a = 0; a < 3; a++)
+        if (!(fabs(lo[a]) / step < 0x1p62) || !(fabs(hi[a]) / step < 0x1p62))
+            return seterr(err, el, ARR_ELIMIT,
+                          "solids: a coordinate is too large for the grid of step %g (at most "
+                          "2^62 steps from the origin)",
+                          step);
     for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
     size_t face = 0;
     for (size_t s = 0; s < ns; s++) {
@@ -947,7 +953,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         if (a3_grow(&map, &capmap, so->nv + 1, sizeof *map)) goto oom;
         for (size_t i = 0; i < so->nv; i++) {
             int64_t g[3];
-            for (int a = 0; a < 3; a++) g[a] = llround(so->V[3 * i + a] / step) - A->oi[a];
+            for (int a = 0; a < 3; a++) g[a] = round_half_away(so->V[3 * i + a] / step) - A->oi[a];
             if ((map[i] = vertex_at(A, g)) == NONE) goto oom;
         }
         A->solid_face_off[s] = (uint32_t)face;

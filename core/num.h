@@ -23,6 +23,15 @@ static inline i128 orient2(ipt a, ipt b, ipt c)
     return (i128)(b.x - a.x) * (c.y - a.y) - (i128)(b.y - a.y) * (c.x - a.x);
 }
 
+/* llround(q) (to nearest, halves away from zero), inline: q - trunc(q) is exact below 2^53, and
+ * a larger q is a whole number already.  |q| must be below 2^63. */
+static inline int64_t round_half_away(double q)
+{
+    int64_t t = (int64_t)q;
+    double f = q - (double)t;
+    return t + (f >= 0.5) - (f <= -0.5);
+}
+
 static inline int sign128(i128 v)
 {
     return (v > 0) - (v < 0);

@@ -69,6 +69,7 @@
 #include <string.h>
 
 #include "core/facecheck.h"
+#include "core/num.h"
 #include "core/fastfloat.h"
 
 #define SOLID_MAX_VERTICES 10000000u /* a reader's limits, see above */
@@ -251,7 +252,7 @@ static int merge_vertices(ck *c)
     for (size_t v = 0; v < nv; v++) {
         const double *x = vert(c, (uint32_t)v);
         int64_t *gv = g + 3 * v;
-        for (int a = 0; a < 3; a++) gv[a] = (int64_t)llround(x[a] / c->p);
+        for (int a = 0; a < 3; a++) gv[a] = round_half_away(x[a] / c->p);
         size_t h = gmix(gv) & (cap - 1);
         while (tab[h] != NONE && memcmp(g + 3 * (size_t)tab[h], gv, 3 * sizeof *gv))
             h = (h + 1) & (cap - 1);

@@ -725,48 +725,6 @@ static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
     return id;
 }
 
-/* Adds a piece with the given cycles (vertex lists), anchor vertices av (their raw plane's
- * normal has its largest component on axis k) and orientation sgn about that plane; the
- * vertical planes of its edges are left to stage_sides, its canonical plane to whoever needs
- * it (piece_plane_id). */
-static int add_piece(a3 *A, uint32_t solid, uint32_t face, const uint32_t *av, int k, int sgn,
-                     uint32_t **cyc, const size_t *len, size_t nc)
-{
-    piece P = {solid,        face,
-               NONE,         (uint32_t)A->npcyc,
-               (uint32_t)nc, {av[0], av[1], av[2]},
-               NONE,         {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
-               (int8_t)sgn,  nc > 1};
-    size_t total = 0;
-    for (size_t c = 0; c < nc; c++) total += len[c];
-    if (a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + nc + 1, sizeof *A->pc_off) ||
-        a3_grow(&A->pcv, &A->cappcv, A->npcv + total, sizeof *A->pcv) ||
-        a3_grow(&A->pcvp, &A->cappcvp, A->npcv + total, sizeof *A->pcvp) ||
-        a3_grow(&A->ptwin, &A->capptwin, A->npcv + total, sizeof *A->ptwin))
-        return -1;
-    for (size_t c = 0; c < nc; c++) {
-        A->pc_off[A->npcyc] = (uint32_t)A->npcv;
-        for (size_t i = 0; i < len[c]; i++) {
-            uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
-            const int64_t *gv = A->g + 3 * (size_t)v, *gw = A->g + 3 * (size_t)w;
-            if (gv[(k + 1) % 3] == gw[(k + 1) % 3] && gv[(k + 2) % 3] == gw[(k + 2) % 3])
-                return -2; /* an edge along the normal's largest axis: not in the plane */
-            A->pcv[A->npcv] = v;
-            A->pcvp[A->npcv] = SIDE_LAZY; /* made by stage_sides where needed */
-            A->ptwin[A->npcv] = NONE;
-            A->npcv++;
-            for (int a = 0; a < 3; a++) {
-                int32_t x = (int32_t)gv[a];
-                if (x < P.box[a]) P.box[a] = x;
-                if (x > P.box[3 + a]) P.box[3 + a] = x;
-            }
-        }
-        A->npcyc++;
-        A->pc_off[A->npcyc] = (uint32_t)A->npcv;
-    }
-    return A3_PUSH(A->pc, A->npc, A->cappc, P);
-}
-
 /* The normal (q - p) x (r - p) of three grid points, exactly (each component below 2^62);
  * -1 when they are collinear. */
 static int grid_normal(const int64_t *p, const int64_t *q, const int64_t *r, int64_t *n)
@@ -903,17 +861,318 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
     return rc;
 }
 
+/* The pieces of a run of faces, made on a thread with their own numbering of cycles and
+ * entries (stage_input joins the runs in order and shifts it). */
+typedef struct pbuf {
+    piece *pc;
+    size_t npc, cappc;
+    uint32_t *pc_off; /* start of each of its cycles, in its own entries */
+    size_t npcyc, cappc_off;
+    uint32_t *pcv;
+    size_t npcv, cappcv;
+    uint32_t *in; /* pairs (input entry of the solid, own entry) of the faces that went as they
+                     are: where the check's pairing goes */
+    size_t nin, capin;
+    uint32_t *drop; /* vertices of faces left out (mend_dropped) */
+    size_t ndrop, capdrop;
+    size_t split_faces;
+    int rc; /* ARR_OK, or the run's first error (msg) */
+    char msg[256];
+    /* scratch */
+    uint32_t *tv, **cyc, *inlo, *tri;
+    size_t *len, captv, capcyc, capinlo, captri, caplen;
+} pbuf;
+
+static void pbuf_free(pbuf *B)
+{
+    free(B->pc), free(B->pc_off), free(B->pcv), free(B->in), free(B->drop);
+    free(B->tv), free(B->cyc), free(B->inlo), free(B->tri), free(B->len);
+    memset(B, 0, sizeof *B);
+}
+
+/* Adds a piece with the given cycles (vertex lists), anchor vertices av (their raw plane's
+ * normal has its largest component on axis k) and orientation sgn about that plane; the
+ * vertical planes of its edges are left to stage_sides, its canonical plane to whoever needs
+ * it (piece_plane_id).  -1 out of memory, -2 an edge along axis k (not in the plane). */
+static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *av, int k,
+                     int sgn, uint32_t **cyc, const size_t *len, size_t nc)
+{
+    piece P = {solid,        face,
+               NONE,         (uint32_t)B->npcyc,
+               (uint32_t)nc, {av[0], av[1], av[2]},
+               NONE,         {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
+               (int8_t)sgn,  nc > 1};
+    size_t total = 0;
+    for (size_t c = 0; c < nc; c++) total += len[c];
+    if (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
+        a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv))
+        return -1;
+    for (size_t c = 0; c < nc; c++) {
+        B->pc_off[B->npcyc++] = (uint32_t)B->npcv;
+        for (size_t i = 0; i < len[c]; i++) {
+            uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
+            const int64_t *gv = A->g + 3 * (size_t)v, *gw = A->g + 3 * (size_t)w;
+            if (gv[(k + 1) % 3] == gw[(k + 1) % 3] && gv[(k + 2) % 3] == gw[(k + 2) % 3]) return -2;
+            B->pcv[B->npcv++] = v;
+            for (int a = 0; a < 3; a++) {
+                int32_t x = (int32_t)gv[a];
+                if (x < P.box[a]) P.box[a] = x;
+                if (x > P.box[3 + a]) P.box[3 + a] = x;
+            }
+        }
+    }
+    return A3_PUSH(B->pc, B->npc, B->cappc, P);
+}
+
+/* A run of faces of one solid: stage_input's tasks. */
+typedef struct intask {
+    uint32_t s, f0, f1; /* solid, faces f0 .. f1 */
+} intask;
+
+typedef struct injob {
+    const a3 *A;
+    const solid *solids;
+    const uint32_t *vmap; /* by input vertex of all solids (voff): its vertex */
+    const size_t *voff;
+    const intask *task;
+    pbuf *buf; /* by task */
+} injob;
+
+#define IN_CHUNK 16384 /* faces a task */
+
+/* The faces of one task into its pbuf: each face's vertices, without repeats; a face whose
+ * vertices lie in one plane on the grid a piece as it is (its entries recorded for the check's
+ * pairing when none was dropped), one that does not split into triangles. */
+static void in_task(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const injob *j = ctx;
+    const a3 *A = j->A;
+    const intask *T = &j->task[item];
+    const solid *so = &j->solids[T->s];
+    const uint32_t *map = j->vmap + j->voff[T->s];
+    pbuf *B = &j->buf[item];
+    size_t s = T->s;
+    double step = A->step;
+#define TASK_FAIL(code, ...)                                                                       \
+    do {                                                                                           \
+        B->rc = seterr(B->msg, sizeof B->msg, code, __VA_ARGS__);                                  \
+        return;                                                                                    \
+    } while (0)
+#define TASK_OOM TASK_FAIL(ARR_ENOMEM, "%s", "out of memory")
+    for (size_t f = T->f0; f < T->f1; f++) {
+        uint32_t face = A->solid_face_off[s] + (uint32_t)f;
+        size_t nc = 0, ntv = 0;
+        int gone = 0;
+        size_t ncy = so->face_off[f + 1] - so->face_off[f];
+        if (a3_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
+            a3_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
+            a3_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo))
+            TASK_OOM;
+        size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
+        if (a3_grow(&B->tv, &B->captv, total + 1, sizeof *B->tv)) TASK_OOM;
+        uint32_t *tv = B->tv, **cyc = B->cyc, *inlo = B->inlo;
+        size_t *len = B->len;
+        for (uint32_t cy = so->face_off[f]; cy < so->face_off[f + 1]; cy++) {
+            size_t start = ntv;
+            for (uint32_t i = so->cyc_off[cy]; i < so->cyc_off[cy + 1]; i++) {
+                uint32_t vi = so->cyc[i];
+                if (vi >= so->nv)
+                    TASK_FAIL(ARR_EINVAL, "solids[%zu]: face %zu: vertex index %u out of range", s,
+                              f, vi);
+                uint32_t v = map[vi];
+                if (ntv > start && tv[ntv - 1] == v) continue;
+                tv[ntv++] = v;
+            }
+            while (ntv - start > 1 && tv[ntv - 1] == tv[start]) ntv--;
+            if (ntv - start < 3) {
+                if (A->soup && cy == so->face_off[f]) break; /* a soup face may vanish */
+                if (A->soup) {
+                    ntv = start;
+                    continue;
+                }
+                if (cy == so->face_off[f] && ncy == 1) {
+                    /* a face of two points on the grid: its edges are its neighbours' edges
+                     * between the same two points; left out */
+                    gone = 1;
+                    break;
+                }
+                TASK_FAIL(ARR_EINVAL,
+                          "solids[%zu]: face %zu: fewer than 3 distinct vertices on the grid of "
+                          "step %g",
+                          s, f, step);
+            }
+            /* its input entries, when they all went as they are */
+            inlo[nc] =
+                ntv - start == so->cyc_off[cy + 1] - so->cyc_off[cy] ? so->cyc_off[cy] : NONE;
+            len[nc++] = ntv - start;
+        }
+        if (nc == 0 || gone) continue;
+        for (size_t c = 0, off = 0; c < nc; off += len[c], c++) cyc[c] = tv + off;
+        plane3 p;
+        uint32_t sol = A->soup ? face : (uint32_t)s, av[3];
+        int planar;
+        if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
+            planar = grid_normal(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
+                                 A->g + 3 * (size_t)cyc[0][2], p.n);
+            memcpy(av, cyc[0], sizeof av);
+        } else {
+            planar = face_plane(A, cyc, len, nc, &p, av);
+        }
+        if (planar < 0) {
+            if (A->soup) continue;
+            if (nc > 1)
+                TASK_FAIL(ARR_EINVAL,
+                          "solids[%zu]: face %zu: zero area on the grid of step %g (a face with "
+                          "holes whose vertices lie on one line)",
+                          s, f, step);
+            /* all on one line: left out; where its vertices lie inside its neighbours' edges,
+             * those edges are split there (mend_dropped) */
+            for (size_t i = 0; i < len[0]; i++)
+                if (A3_PUSH(B->drop, B->ndrop, B->capdrop, cyc[0][i])) TASK_OOM;
+            continue;
+        }
+        if (planar == 0) {
+            int k = normal_axis(p.n), r;
+            int sgn = nc == 1 && len[0] == 3
+                          ? 1
+                          : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
+            uint32_t base = (uint32_t)B->npcv;
+            if ((r = add_piece(A, B, sol, face, av, k, sgn, cyc, len, nc))) {
+                if (r == -1) TASK_OOM;
+                TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
+            }
+            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++)
+                for (uint32_t t = 0; inlo[c] != NONE && t < len[c]; t++)
+                    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + 1), sizeof *B->in))
+                        TASK_OOM;
+                    else
+                        B->in[2 * B->nin] = inlo[c] + t, B->in[2 * B->nin++ + 1] = base + t;
+            continue;
+        }
+        /* not planar on the grid: triangles, each with its own exact plane */
+        int k = face_newell_axis(A->g, cyc[0], len[0]); /* as solid_check's */
+        size_t ntri = 0;
+        int r;
+        int quad = nc == 1 && len[0] == 4;
+        if (quad) {
+            /* a quad: the diagonal whose two triangles' normals agree best (the larger dot
+             * product of their normals), as CGAL's triangulate_faces chooses.  Both keep the
+             * quad's order, whatever its projection looks like: two triangles in different
+             * planes (no three of the four points are on one line) that share the diagonal,
+             * walked once each way */
+            if (a3_grow(&B->tri, &B->captri, 6, sizeof *B->tri)) TASK_OOM;
+            const uint32_t *q = cyc[0];
+            i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
+            i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
+            int a = d02 > d13 ? 0 : 1;
+            uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
+            memcpy(B->tri, t, sizeof t);
+            ntri = 2;
+            r = 0;
+        } else {
+            r = a3_triangulate(A, k, cyc, len, nc, &B->tri, &ntri, &B->captri);
+        }
+        if (r == -1) TASK_OOM;
+        if (r == -2 || ntri == 0)
+            TASK_FAIL(ARR_EINVAL,
+                      "solids[%zu]: face %zu: not planar on the grid of step %g, and its "
+                      "projection is not a simple polygon to split into triangles",
+                      s, f, step);
+        B->split_faces++;
+        /* a3_triangulate's triangles come counter-clockwise in the projection: turned as the
+         * face's outer cycle turns there */
+        int ccw = quad || area2(A, k, cyc[0], len[0]) > 0;
+        for (size_t t = 0; t < ntri; t++) {
+            uint32_t *tc = B->tri + 3 * t;
+            if (!ccw) {
+                uint32_t x = tc[1];
+                tc[1] = tc[2], tc[2] = x;
+            }
+            size_t tl = 3;
+            plane3 tp;
+            if (grid_normal(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
+                            A->g + 3 * (size_t)tc[2], tp.n)) {
+                /* collinear in space: no surface, but its middle vertex may lie inside an edge
+                 * of a neighbour (mend_dropped) */
+                if (!A->soup)
+                    for (int q = 0; q < 3; q++)
+                        if (A3_PUSH(B->drop, B->ndrop, B->capdrop, tc[q])) TASK_OOM;
+                continue;
+            }
+            if ((r = add_piece(A, B, sol, face, tc, normal_axis(tp.n), 1, &tc, &tl, 1))) {
+                if (r == -1) TASK_OOM;
+                TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
+            }
+        }
+    }
+#undef TASK_FAIL
+#undef TASK_OOM
+}
+
+/* The grid points of a chunk of the input's vertices. */
+typedef struct snapjob {
+    const a3 *A;
+    const solid *solids;
+    const size_t *voff;
+    size_t ns, nv;
+    int64_t *g; /* 3 by input vertex of all solids */
+} snapjob;
+
+#define SNAP_CHUNK 65536
+static void snap_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const snapjob *j = ctx;
+    size_t i0 = item * SNAP_CHUNK, i1 = i0 + SNAP_CHUNK < j->nv ? i0 + SNAP_CHUNK : j->nv, s = 0;
+    while (s + 1 < j->ns && j->voff[s + 1] <= i0) s++;
+    for (size_t i = i0; i < i1; i++) {
+        while (j->voff[s + 1] <= i) s++;
+        const double *x = j->solids[s].V + 3 * (i - j->voff[s]);
+        for (int a = 0; a < 3; a++)
+            j->g[3 * i + a] = round_half_away(x[a] / j->A->step) - j->A->oi[a];
+    }
+}
+
+/* The pieces' twins from the check's pairings (twins[s], by input entry of solid s). */
+typedef struct twinjob {
+    a3 *A;
+    const uint32_t *const *twins;
+    const uint32_t *in2pcv; /* by input entry of all solids (eoff) */
+    const size_t *eoff;
+    size_t ns, ne;
+} twinjob;
+
+static void twin_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const twinjob *j = ctx;
+    size_t i0 = item * SNAP_CHUNK, i1 = i0 + SNAP_CHUNK < j->ne ? i0 + SNAP_CHUNK : j->ne, s = 0;
+    while (s + 1 < j->ns && j->eoff[s + 1] <= i0) s++;
+    for (size_t i = i0; i < i1; i++) {
+        while (j->eoff[s + 1] <= i) s++;
+        const uint32_t *tw = j->twins[s];
+        uint32_t x = j->in2pcv[i];
+        if (!tw || x == NONE) continue;
+        size_t sent = j->eoff[s + 1] - j->eoff[s];
+        uint32_t t = tw[i - j->eoff[s]];
+        if (t != NONE && t < sent && j->in2pcv[j->eoff[s] + t] != NONE)
+            j->A->ptwin[x] = j->in2pcv[j->eoff[s] + t];
+    }
+}
+
 A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
                                 char *err, size_t el)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
-    size_t nfaces = 0;
+    size_t nfaces = 0, nvin = 0, nein = 0, ntask = 0;
     int rc = ARR_OK;
-    uint32_t *map = NULL, *tv = NULL, **cyc = NULL, *tri = NULL, *drop = NULL, *in2pcv = NULL;
-    uint32_t *inlo = NULL;
-    size_t capmap = 0, captv = 0, capcyc = 0, ntri = 0, captri = 0, *len = NULL, caplen = 0;
-    size_t capin2pcv = 0, capinlo = 0;
+    size_t *voff = NULL, *eoff = NULL;
+    int64_t *gin = NULL;
+    uint32_t *vmap = NULL, *in2pcv = NULL, *drop = NULL;
     size_t ndrop = 0, capdrop = 0;
+    intask *task = NULL;
+    pbuf *buf = NULL;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
             for (int a = 0; a < 3; a++) {
@@ -925,6 +1184,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                 if (x > hi[a]) hi[a] = x;
             }
         nfaces += solids[s].nf;
+        nvin += solids[s].nv;
+        nein += solids[s].cyc_off[solids[s].ncyc];
+        ntask += (solids[s].nf + IN_CHUNK - 1) / IN_CHUNK;
     }
     A->st->input_solids = ns;
     A->st->input_faces = nfaces;
@@ -935,6 +1197,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     A->twinned = calloc(ns + 1, 1);
     if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
+    for (size_t s = 0; s < ns; s++)
+        A->solid_face_off[s + 1] = A->solid_face_off[s] + (uint32_t)solids[s].nf;
+    A->nfaces = nfaces;
     if (!nfaces) return ARR_OK;
     double step;
     if ((rc = arr3_solids_step(solids, ns, A->o->precision, &step, err, el)) != ARR_OK) return rc;
@@ -947,205 +1212,101 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                           "2^62 steps from the origin)",
                           step);
     for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
-    size_t face = 0;
+    voff = malloc((ns + 1) * sizeof *voff);
+    eoff = malloc((ns + 1) * sizeof *eoff);
+    gin = malloc((3 * nvin + 1) * sizeof *gin);
+    vmap = malloc((nvin + 1) * sizeof *vmap);
+    task = malloc((ntask + 1) * sizeof *task);
+    buf = calloc(ntask + 1, sizeof *buf);
+    if (!voff || !eoff || !gin || !vmap || !task || !buf) goto oom;
+    voff[0] = eoff[0] = 0;
     for (size_t s = 0; s < ns; s++) {
-        const solid *so = &solids[s];
-        if (a3_grow(&map, &capmap, so->nv + 1, sizeof *map)) goto oom;
-        for (size_t i = 0; i < so->nv; i++) {
-            int64_t g[3];
-            for (int a = 0; a < 3; a++) g[a] = round_half_away(so->V[3 * i + a] / step) - A->oi[a];
-            if ((map[i] = vertex_at(A, g)) == NONE) goto oom;
+        voff[s + 1] = voff[s] + solids[s].nv;
+        eoff[s + 1] = eoff[s] + solids[s].cyc_off[solids[s].ncyc];
+    }
+    /* the vertices on the grid (on the threads), then one vertex per grid point (in order) */
+    {
+        snapjob j = {A, solids, voff, ns, nvin, gin};
+        par_for(A->threads, (nvin + SNAP_CHUNK - 1) / SNAP_CHUNK, snap_chunk, &j);
+    }
+    for (size_t i = 0; i < nvin; i++)
+        if ((vmap[i] = vertex_at(A, gin + 3 * i)) == NONE) goto oom;
+    free(gin);
+    gin = NULL;
+    /* the faces into pieces, a run of faces a task on the threads, joined in order */
+    ntask = 0;
+    for (size_t s = 0; s < ns; s++)
+        for (size_t f0 = 0; f0 < solids[s].nf; f0 += IN_CHUNK)
+            task[ntask++] =
+                (intask){(uint32_t)s, (uint32_t)f0,
+                         (uint32_t)(f0 + IN_CHUNK < solids[s].nf ? f0 + IN_CHUNK : solids[s].nf)};
+    {
+        injob j = {A, solids, vmap, voff, task, buf};
+        par_for(A->threads, ntask, in_task, &j);
+    }
+    size_t npc = 0, npcyc = 0, npcv = 0;
+    for (size_t t = 0; t < ntask; t++) {
+        if (buf[t].rc != ARR_OK) {
+            rc = seterr(err, el, buf[t].rc, "%s", buf[t].msg);
+            goto fail;
         }
-        A->solid_face_off[s] = (uint32_t)face;
+        npc += buf[t].npc, npcyc += buf[t].npcyc, npcv += buf[t].npcv;
+    }
+    if (a3_grow(&A->pc, &A->cappc, npc + 1, sizeof *A->pc) ||
+        a3_grow(&A->pc_off, &A->cappc_off, npcyc + 2, sizeof *A->pc_off) ||
+        a3_grow(&A->pcv, &A->cappcv, npcv + 1, sizeof *A->pcv) ||
+        a3_grow(&A->pcvp, &A->cappcvp, npcv + 1, sizeof *A->pcvp) ||
+        a3_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
+        goto oom;
+    if (twins) {
+        in2pcv = malloc((nein + 1) * sizeof *in2pcv);
+        if (!in2pcv) goto oom;
+        memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
+    }
+    size_t t = 0;
+    for (size_t s = 0; s < ns; s++) {
         size_t pc0 = A->npc;
-        /* room for the solid's faces as they are (more only where a face is split) */
-        size_t sent = so->cyc_off[so->ncyc];
-        if (a3_grow(&A->pc, &A->cappc, A->npc + so->nf, sizeof *A->pc) ||
-            a3_grow(&A->pc_off, &A->cappc_off, A->npcyc + so->ncyc + 1, sizeof *A->pc_off) ||
-            a3_grow(&A->pcv, &A->cappcv, A->npcv + sent, sizeof *A->pcv) ||
-            a3_grow(&A->pcvp, &A->cappcvp, A->npcv + sent, sizeof *A->pcvp) ||
-            a3_grow(&A->ptwin, &A->capptwin, A->npcv + sent, sizeof *A->ptwin))
-            goto oom;
-        const uint32_t *tw = twins ? twins[s] : NULL;
-        if (tw) { /* where each input entry went, when its face went as it is */
-            if (a3_grow(&in2pcv, &capin2pcv, sent + 1, sizeof *in2pcv)) goto oom;
-            memset(in2pcv, 0xff, (sent + 1) * sizeof *in2pcv);
-        }
         ndrop = 0;
-        for (size_t f = 0; f < so->nf; f++, face++) {
-            size_t nc = 0, ntv = 0;
-            int gone = 0;
-            size_t ncy = so->face_off[f + 1] - so->face_off[f];
-            if (a3_grow(&cyc, &capcyc, ncy + 1, sizeof *cyc) ||
-                a3_grow(&len, &caplen, ncy + 1, sizeof *len) ||
-                a3_grow(&inlo, &capinlo, ncy + 1, sizeof *inlo))
-                goto oom;
-            size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
-            if (a3_grow(&tv, &captv, total + 1, sizeof *tv)) goto oom;
-            for (uint32_t cy = so->face_off[f]; cy < so->face_off[f + 1]; cy++) {
-                size_t start = ntv;
-                for (uint32_t i = so->cyc_off[cy]; i < so->cyc_off[cy + 1]; i++) {
-                    uint32_t vi = so->cyc[i];
-                    if (vi >= so->nv) {
-                        rc =
-                            seterr(err, el, ARR_EINVAL,
-                                   "solids[%zu]: face %zu: vertex index %u out of range", s, f, vi);
-                        goto fail;
-                    }
-                    uint32_t v = map[vi];
-                    if (ntv > start && tv[ntv - 1] == v) continue;
-                    tv[ntv++] = v;
-                }
-                while (ntv - start > 1 && tv[ntv - 1] == tv[start]) ntv--;
-                if (ntv - start < 3) {
-                    if (A->soup && cy == so->face_off[f]) break; /* a soup face may vanish */
-                    if (A->soup) {
-                        ntv = start;
-                        continue;
-                    }
-                    if (cy == so->face_off[f] && ncy == 1) {
-                        /* a face of two points on the grid: its edges are its neighbours'
-                         * edges between the same two points; left out */
-                        gone = 1;
-                        break;
-                    }
-                    rc = seterr(err, el, ARR_EINVAL,
-                                "solids[%zu]: face %zu: fewer than 3 distinct vertices on the "
-                                "grid of step %g",
-                                s, f, step);
-                    goto fail;
-                }
-                /* its input entries, when they all went as they are */
-                inlo[nc] =
-                    ntv - start == so->cyc_off[cy + 1] - so->cyc_off[cy] ? so->cyc_off[cy] : NONE;
-                len[nc++] = ntv - start;
+        for (; t < ntask && task[t].s == s; t++) {
+            pbuf *B = &buf[t];
+            uint32_t cyc0 = (uint32_t)A->npcyc, ent0 = (uint32_t)A->npcv;
+            for (size_t i = 0; i < B->npc; i++) {
+                piece P = B->pc[i];
+                P.c0 += cyc0;
+                A->pc[A->npc++] = P;
             }
-            if (nc == 0 || gone) continue;
-            for (size_t c = 0, off = 0; c < nc; off += len[c], c++) cyc[c] = tv + off;
-            plane3 p;
-            uint32_t sol = A->soup ? (uint32_t)face : (uint32_t)s, av[3];
-            int planar;
-            if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
-                planar = grid_normal(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
-                                     A->g + 3 * (size_t)cyc[0][2], p.n);
-                memcpy(av, cyc[0], sizeof av);
-            } else {
-                planar = face_plane(A, cyc, len, nc, &p, av);
-            }
-            if (planar < 0) {
-                if (A->soup) continue;
-                if (nc > 1) {
-                    rc = seterr(err, el, ARR_EINVAL,
-                                "solids[%zu]: face %zu: zero area on the grid of step %g (a face "
-                                "with holes whose vertices lie on one line)",
-                                s, f, step);
-                    goto fail;
-                }
-                /* all on one line: left out; where its vertices lie inside its neighbours'
-                 * edges, those edges are split there (mend_dropped) */
-                for (size_t i = 0; i < len[0]; i++)
-                    if (A3_PUSH(drop, ndrop, capdrop, cyc[0][i])) goto oom;
-                continue;
-            }
-            if (planar == 0) {
-                int k = normal_axis(p.n), r;
-                int sgn = nc == 1 && len[0] == 3
-                              ? 1
-                              : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
-                uint32_t base = (uint32_t)A->npcv;
-                if ((r = add_piece(A, sol, (uint32_t)face, av, k, sgn, cyc, len, nc))) {
-                    if (r == -1) goto oom;
-                    rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
-                    goto fail;
-                }
-                for (size_t c = 0; tw && c < nc; base += (uint32_t)len[c], c++)
-                    for (uint32_t t = 0; inlo[c] != NONE && t < len[c]; t++)
-                        in2pcv[inlo[c] + t] = base + t;
-                continue;
-            }
-            /* not planar on the grid: triangles, each with its own exact plane */
-            int k = face_newell_axis(A->g, cyc[0], len[0]); /* as solid_check's */
-            ntri = 0;
-            int r;
-            int quad = nc == 1 && len[0] == 4;
-            if (quad) {
-                /* a quad: the diagonal whose two triangles' normals agree best (the larger dot
-                 * product of their normals), as CGAL's triangulate_faces chooses.  Both keep the
-                 * quad's order, whatever its projection looks like: two triangles in different
-                 * planes (no three of the four points are on one line) that share the diagonal,
-                 * walked once each way */
-                if (a3_grow(&tri, &captri, 6, sizeof *tri)) goto oom;
-                const uint32_t *q = cyc[0];
-                i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
-                i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
-                int a = d02 > d13 ? 0 : 1;
-                uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
-                memcpy(tri, t, sizeof t);
-                ntri = 2;
-                r = 0;
-            } else {
-                r = a3_triangulate(A, k, cyc, len, nc, &tri, &ntri, &captri);
-            }
-            if (r == -1) goto oom;
-            if (r == -2 || ntri == 0) {
-                rc = seterr(err, el, ARR_EINVAL,
-                            "solids[%zu]: face %zu: not planar on the grid of step %g, and its "
-                            "projection is not a simple polygon to split into triangles",
-                            s, f, step);
-                goto fail;
-            }
-            A->split_faces++;
-            /* a3_triangulate's triangles come counter-clockwise in the projection: turned as
-             * the face's outer cycle turns there */
-            int ccw = quad || area2(A, k, cyc[0], len[0]) > 0;
-            for (size_t t = 0; t < ntri; t++) {
-                uint32_t *tc = tri + 3 * t;
-                if (!ccw) {
-                    uint32_t x = tc[1];
-                    tc[1] = tc[2], tc[2] = x;
-                }
-                size_t tl = 3;
-                plane3 tp;
-                if (grid_normal(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
-                                A->g + 3 * (size_t)tc[2], tp.n)) {
-                    /* collinear in space: no surface, but its middle vertex may lie inside
-                     * an edge of a neighbour (mend_dropped) */
-                    if (!A->soup)
-                        for (int q = 0; q < 3; q++)
-                            if (A3_PUSH(drop, ndrop, capdrop, tc[q])) goto oom;
-                    continue;
-                }
-                if ((r = add_piece(A, sol, (uint32_t)face, tc, normal_axis(tp.n), 1, &tc, &tl,
-                                   1))) {
-                    if (r == -1) goto oom;
-                    rc = seterr(err, el, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
-                    goto fail;
-                }
-            }
+            for (size_t c = 0; c < B->npcyc; c++) A->pc_off[A->npcyc++] = B->pc_off[c] + ent0;
+            memcpy(A->pcv + A->npcv, B->pcv, B->npcv * sizeof *A->pcv);
+            A->npcv += B->npcv;
+            A->pc_off[A->npcyc] = (uint32_t)A->npcv; /* the last cycle's end */
+            A->split_faces += B->split_faces;
+            for (size_t i = 0; in2pcv && twins[s] && i < B->nin; i++)
+                in2pcv[eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
+            for (size_t i = 0; i < B->ndrop; i++)
+                if (A3_PUSH(drop, ndrop, capdrop, B->drop[i])) goto oom;
+            pbuf_free(B);
         }
-        if (tw) { /* the twins the check found, between entries that went as they are */
-            for (size_t i = 0; i < sent; i++) {
-                uint32_t x = in2pcv[i], t = tw[i];
-                if (x != NONE && t != NONE && t < sent && in2pcv[t] != NONE)
-                    A->ptwin[x] = in2pcv[t];
-            }
-            A->twinned[s] = 1;
-        }
+        if (twins && twins[s]) A->twinned[s] = 1;
         if (ndrop && mend_dropped(A, pc0, drop, ndrop)) goto oom;
     }
-    A->solid_face_off[ns] = (uint32_t)face;
-    A->nfaces = face;
+    A->pc_off[A->npcyc] = (uint32_t)A->npcv;
+    for (size_t i = 0; i < A->npcv; i++) A->pcvp[i] = SIDE_LAZY, A->ptwin[i] = NONE;
+    if (in2pcv) { /* the twins the check found, between entries that went as they are */
+        twinjob j = {A, twins, in2pcv, eoff, ns, nein};
+        par_for(A->threads, (nein + SNAP_CHUNK - 1) / SNAP_CHUNK, twin_chunk, &j);
+    }
     goto fail; /* rc == ARR_OK: just free */
 oom:
     rc = seterr(err, el, ARR_ENOMEM, "out of memory");
 fail:
-    free(map);
-    free(tv);
-    free(cyc);
-    free(len);
+    for (size_t i = 0; buf && i < ntask; i++) pbuf_free(&buf[i]);
+    free(buf);
+    free(task);
+    free(voff);
+    free(eoff);
+    free(gin);
+    free(vmap);
     free(in2pcv);
-    free(inlo);
-    free(tri);
     free(drop);
     return rc;
 }
@@ -2156,26 +2317,28 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     size_t npc = A->npc;
     uint32_t *uf = malloc((npc + 1) * sizeof *uf), *lab = malloc((npc + 1) * sizeof *lab);
     uint32_t *epc = malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
+    uint8_t *rch = malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
     int rc = -1;
-    if (!uf || !lab || !epc) goto done;
+    if (!uf || !lab || !epc || !rch) goto done;
     for (size_t i = 0; i < npc; i++) {
         uf[i] = (uint32_t)i;
         const piece *pc = &A->pc[i];
+        rch[i] = pc->reached;
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++)
             epc[x] = (uint32_t)i;
     }
     for (size_t i = 0; i < npc; i++) {
+        if (rch[i]) continue;
         const piece *pc = &A->pc[i];
-        if (pc->reached) continue;
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
             uint32_t t = A->ptwin[x];
-            if (t != NONE && !A->pc[epc[t]].reached) a3_uf_union(uf, (uint32_t)i, epc[t]);
+            if (t != NONE && !rch[epc[t]]) a3_uf_union(uf, (uint32_t)i, epc[t]);
         }
     }
     size_t np = 0;
     for (size_t i = 0; i < npc; i++) lab[i] = NONE;
     for (size_t i = 0; i < npc; i++) {
-        if (A->pc[i].reached) continue;
+        if (rch[i]) continue;
         uint32_t r = a3_uf_find(uf, (uint32_t)i);
         if (lab[r] == NONE) lab[r] = (uint32_t)np++;
         lab[i] = lab[r];
@@ -2184,16 +2347,16 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     pp = malloc((npc + 1) * sizeof *pp);
     if (!ppo || !pp) goto done;
     for (size_t i = 0; i < npc; i++)
-        if (!A->pc[i].reached) ppo[lab[i] + 2]++;
+        if (!rch[i]) ppo[lab[i] + 2]++;
     for (size_t k = 0; k < np; k++) ppo[k + 2] += ppo[k + 1];
     for (size_t i = 0; i < npc; i++)
-        if (!A->pc[i].reached) pp[ppo[lab[i] + 1]++] = (uint32_t)i;
+        if (!rch[i]) pp[ppo[lab[i] + 1]++] = (uint32_t)i;
     A->npatch = np;
     *ppo_out = ppo, *pp_out = pp;
     ppo = pp = NULL;
     rc = 0;
 done:
-    free(uf), free(lab), free(epc), free(ppo), free(pp);
+    free(uf), free(lab), free(epc), free(ppo), free(pp), free(rch);
     return rc;
 }
 

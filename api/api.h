@@ -69,6 +69,12 @@ const char *api_stage_name(const char *kind, size_t i);
 int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,
                     size_t *outlen, api_error *err);
 
+/* The most faces a solids request may have in all (ARR3_MAX_FACES unless set lower: process-wide
+ * configuration, as the daemon's or a test's; 0 restores the default).  Beyond the count, the
+ * core refuses at run an input whose memory estimate exceeds the machine's memory. */
+unsigned api_solids_max_faces(void);
+void api_solids_set_max_faces(unsigned n);
+
 /* A solids request whose solids are already read (the CLI's OBJ / OFF files): the same result
  * bytes as api_run_json() on {"kind": "solids", "solids" (or "faces" when soup): s, "op": op,
  * "options": options}, without writing and parsing that JSON.  s (a malloc'd array of n

@@ -25,7 +25,8 @@
  * (a precision finer than the input allows) is the 422 at options.precision.  The rule lives in
  * the core only; here it is called, never repeated.
  *
- * Limits (422 naming the key): the #defines below; ARR3_MAX_FACES faces in all.
+ * Limits (422 naming the key): the #defines below; at most api_solids_max_faces() faces in all
+ * (ARR3_MAX_FACES unless set lower), and at run what memory allows (the core's estimate).
  *
  * Threads: reentrant, no globals.  Ownership: req is borrowed; a parsed request (*parsed)
  * belongs to the caller, who frees it with api_solids_free().
@@ -45,13 +46,28 @@
 #include "core/par.h"
 #include "core/solid.h"
 
-#define SOLIDS_MAX_SOLIDS   100000u        /* entries of "solids" */
-#define SOLIDS_MAX_VERTICES 10000000u      /* rows of V, all solids together */
-#define SOLIDS_MAX_FACES    ARR3_MAX_FACES /* rows of FV, all solids together */
-#define SOLIDS_MAX_CYCLE    1000000u       /* vertex indices in one cycle */
-#define SOLIDS_MAX_INDICES  100000000u     /* vertex indices in all cycles together */
-#define SOLIDS_MAX_WARNINGS 64             /* stats.warnings: the last one counts those left out */
+#define SOLIDS_MAX_SOLIDS   100000u    /* entries of "solids" */
+#define SOLIDS_MAX_VERTICES 64000000u  /* rows of V, all solids together */
+#define SOLIDS_MAX_FACES    max_faces  /* rows of FV, all solids together (api_solids_max_faces) */
+#define SOLIDS_MAX_CYCLE    1000000u   /* vertex indices in one cycle */
+#define SOLIDS_MAX_INDICES  256000000u /* vertex indices in all cycles together */
+#define SOLIDS_MAX_WARNINGS 64         /* stats.warnings: the last one counts those left out */
 #define WARN_LEN            200
+
+/* The faces a request may have in all: ARR3_MAX_FACES, or less when set (the process's
+ * configuration: the daemon's --max-faces, the tests).  What memory allows is decided by the
+ * core (arr3_opts.max_bytes), at run. */
+static _Atomic unsigned max_faces = ARR3_MAX_FACES;
+
+unsigned api_solids_max_faces(void)
+{
+    return max_faces;
+}
+
+void api_solids_set_max_faces(unsigned n)
+{
+    max_faces = n && n < ARR3_MAX_FACES ? n : ARR3_MAX_FACES;
+}
 
 typedef struct solids_req {
     solid *s; /* owned: ns solids; with soup, the face soup as s[0] (ns == 1) */
@@ -227,7 +243,7 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     nf = json_array_size(FV);
     if (nf > SOLIDS_MAX_FACES - tot->nf)
         return api_fail(err, API_EINVALID, "%s.FV: %zu faces in all, at most %u allowed", path,
-                        tot->nf + nf, (unsigned)SOLIDS_MAX_FACES);
+                        tot->nf + nf, (unsigned)max_faces);
     if (nf == 0)
         return api_fail(err, API_EINVALID, "%s.FV: expected %s, got none", path,
                         soup ? "at least one face" : "the faces of a closed surface");

@@ -34,6 +34,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "core/facecheck.h"
 #include "core/par.h"
@@ -1193,6 +1194,19 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     if (nfaces > ARR3_MAX_FACES)
         return seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u", nfaces,
                       ARR3_MAX_FACES);
+    {
+        size_t avail = A->o->max_bytes;
+        if (!avail) {
+            long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+            avail = pages > 0 && size > 0 ? (size_t)pages * (size_t)size : SIZE_MAX;
+        }
+        if (nfaces > avail / ARR3_BYTES_PER_FACE)
+            return seterr(err, el, ARR_ELIMIT,
+                          "solids: %zu faces need about %.1f GB (%u bytes a face), more than the "
+                          "%.1f GB of memory this run may take",
+                          nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
+                          (double)avail / 1e9);
+    }
     A->solid_face_off = calloc(ns + 1, sizeof *A->solid_face_off);
     A->twinned = calloc(ns + 1, 1);
     if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");

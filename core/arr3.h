@@ -33,8 +33,15 @@
 #include "core/arr2.h" /* ARR_* codes */
 #include "core/solid.h"
 
-#define ARR3_GRID_BITS 30       /* extent / precision must be <= 2^ARR3_GRID_BITS */
-#define ARR3_MAX_FACES 2000000u /* input faces, all solids together */
+#define ARR3_GRID_BITS 30 /* extent / precision must be <= 2^ARR3_GRID_BITS */
+/* Input faces, all solids together: the hard limit of the 32-bit numbering (a face's cycle
+ * entries, its pieces, the complex's signed faces); below it, what memory allows: a run needs
+ * about ARR3_BYTES_PER_FACE bytes an input face at its peak (triangle meshes, reading and
+ * writing included: 1 million triangles a solid, 2 solids, peak at about 1 GB), and
+ * arr3_build refuses an input whose estimate exceeds arr3_opts.max_bytes (0: the machine's
+ * physical memory). */
+#define ARR3_MAX_FACES      64000000u
+#define ARR3_BYTES_PER_FACE 500u
 
 typedef struct arr3_opts {
     double precision; /* grid step; 0: the power of two closest above extent * 2^-ARR3_GRID_BITS
@@ -49,6 +56,7 @@ typedef struct arr3_opts {
      * the ARR3_WANT_* bits of those wanted (the others are left NULL); the cells, faces, edges
      * and their numbering are always made */
     unsigned want;
+    size_t max_bytes; /* the memory the run may take (0: the machine's physical memory) */
 } arr3_opts;
 
 enum {

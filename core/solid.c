@@ -72,8 +72,8 @@
 #include "core/num.h"
 #include "core/fastfloat.h"
 
-#define SOLID_MAX_VERTICES 10000000u /* a reader's limits, see above */
-#define SOLID_MAX_FACES    10000000u
+#define SOLID_MAX_VERTICES 64000000u /* a reader's limits, see above */
+#define SOLID_MAX_FACES    64000000u
 #define SOLID_MAX_FACE_LEN 1000000u
 #define GRID_LIMIT         4611686018427387904.0 /* 2^62: |coordinate / precision| below this */
 #define NUMBER_MAX         128                   /* longest number token a reader takes */

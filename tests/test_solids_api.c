@@ -262,24 +262,27 @@ TEST(check_accepts_valid_requests)
     }
 }
 
-/* FV of ARR3_MAX_FACES rows in solids[0] (one shared row) and one more in solids[1]: the limit
- * counts the faces of all solids together. */
+/* FV of as many rows as the limit in solids[0] (one shared row) and one more in solids[1]: the
+ * limit counts the faces of all solids together (set to 1000 here: the default is tens of
+ * millions, ARR3_MAX_FACES). */
 TEST(face_limit_counts_all_solids)
 {
+    CHECK(api_solids_max_faces() == ARR3_MAX_FACES, "default limit %u", api_solids_max_faces());
+    api_solids_set_max_faces(1000);
     json_t *row = json_pack("[i,i,i]", 0, 1, 2);
     json_t *big = json_array(), *small = json_array();
     json_t *V = json_pack("[[f,f,f],[f,f,f],[f,f,f]]", 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
     void *parsed = (void *)1;
     api_error err = {0};
     REQUIRE(row && big && small && V, "out of memory");
-    for (size_t i = 0; i < ARR3_MAX_FACES; i++) json_array_append(big, row);
+    for (size_t i = 0; i < 1000; i++) json_array_append(big, row);
     json_array_append(small, row);
     json_t *req = json_pack("{s:s, s:[{s:O, s:o}, {s:O, s:o}]}", "kind", "solids", "solids", "V", V,
                             "FV", big, "V", V, "FV", small);
     REQUIRE(req, "json_pack");
     int rc = api_solids_parse(req, &parsed, &err);
     CHECK(rc == API_EINVALID && parsed == NULL, "rc %d", rc);
-    CHECK(strcmp(err.msg, "solids[1].FV: 2000001 faces in all, at most 2000000 allowed") == 0,
+    CHECK(strcmp(err.msg, "solids[1].FV: 1001 faces in all, at most 1000 allowed") == 0,
           "message %s", err.msg);
     /* one face fewer passes the parse */
     json_array_remove(big, 0); /* req holds it */
@@ -289,6 +292,49 @@ TEST(face_limit_counts_all_solids)
     json_decref(req);
     json_decref(V);
     json_decref(row);
+    api_solids_set_max_faces(0);
+    CHECK(api_solids_max_faces() == ARR3_MAX_FACES, "restored limit %u", api_solids_max_faces());
+}
+
+/* The core's memory estimate: an input needing more than the run may take is refused at run,
+ * naming the bytes a face costs (max_bytes set to 1 MB for 6 000 faces). */
+TEST(memory_limit_refuses_at_run)
+{
+    size_t n = 1000;
+    solid s[1] = {{0}};
+    s[0].nv = 8 * n;
+    s[0].V = malloc(3 * s[0].nv * sizeof *s[0].V);
+    s[0].nf = s[0].ncyc = 6 * n;
+    s[0].face_off = malloc((s[0].nf + 1) * sizeof *s[0].face_off);
+    s[0].cyc_off = malloc((s[0].ncyc + 1) * sizeof *s[0].cyc_off);
+    s[0].cyc = malloc(24 * n * sizeof *s[0].cyc);
+    REQUIRE(s[0].V && s[0].face_off && s[0].cyc_off && s[0].cyc, "out of memory");
+    static const int box[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                  {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (size_t c = 0; c < n; c++) {
+        for (int i = 0; i < 8; i++) {
+            s[0].V[3 * (8 * c + i) + 0] = 3.0 * (double)c + (i & 1);
+            s[0].V[3 * (8 * c + i) + 1] = i & 2 ? 1 : 0;
+            s[0].V[3 * (8 * c + i) + 2] = i & 4 ? 1 : 0;
+        }
+        for (int f = 0; f < 6; f++)
+            for (int k = 0; k < 4; k++)
+                s[0].cyc[24 * c + 4 * f + k] = (uint32_t)(8 * c + box[f][k]);
+    }
+    for (size_t f = 0; f <= s[0].nf; f++)
+        s[0].face_off[f] = (uint32_t)f, s[0].cyc_off[f] = (uint32_t)(4 * f);
+    arr3_opts o = {.threads = 1, .max_bytes = 1000000};
+    lar3 c = {0};
+    char msg[256];
+    int rc = arr3_build(s, 1, 0, &o, &c, msg, sizeof msg);
+    CHECK(rc == ARR_ELIMIT && strstr(msg, "6000 faces need about") && strstr(msg, "bytes a face"),
+          "rc %d: %s", rc, msg);
+    lar3_free(&c);
+    o.max_bytes = 0; /* the machine's memory: enough */
+    rc = arr3_build(s, 1, 0, &o, &c, msg, sizeof msg);
+    CHECK(rc == ARR_OK && c.nc == n, "rc %d, %zu cells: %s", rc, c.nc, msg);
+    lar3_free(&c);
+    solid_free(&s[0]);
 }
 
 /* ---- the writer on a hand-built complex ------------------------------------------------------ */

@@ -1234,8 +1234,8 @@ TEST(off_errors_name_the_line)
 
     /* hostile counts: over the limit, or within it but without the data */
     off_fails("OFF\n1000000000000 1 0\n0 0 0\n",
-              "line 2: 1000000000000 vertices and 1 faces: at most 10000000");
-    off_fails("OFF\n3 1000000000000 0\n", "at most 10000000");
+              "line 2: 1000000000000 vertices and 1 faces: at most 64000000");
+    off_fails("OFF\n3 1000000000000 0\n", "at most 64000000");
     off_fails("OFF 99999999999999999999 1 0\n", "line 1: counts are");
     /* 10^7 vertices would be 240 MB of doubles: refused before anything is allocated, checked
      * with an address-space limit (not under the sanitizers, which reserve terabytes) */

@@ -2326,52 +2326,144 @@ static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov, uint32_t *pe2e)
 /* The patches: the pieces that nothing reached (nc == 1), linked across their twins (whose
  * pieces nothing reached either), numbered in order of their lowest piece; pieces of each patch
  * listed in ascending order (pp_patch[ppo[k] .. ppo[k+1])).  -1 out of memory. */
+/* The patches of a run of whole solids (twins never leave a solid): stage_patches' tasks, each
+ * on its own range of pieces, numbering its patches from 0 in order of their lowest piece. */
+typedef struct patchjob {
+    const a3 *A;
+    const uint32_t *r_off; /* ranges: pieces r_off[t] .. r_off[t + 1) */
+    uint32_t *uf, *lab, *epc;
+    uint8_t *rch;
+    uint32_t *np; /* by range: its patches */
+} patchjob;
+
+static void patch_range(void *ctx, size_t t, int worker)
+{
+    (void)worker;
+    const patchjob *j = ctx;
+    const a3 *A = j->A;
+    uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], np = 0;
+    for (uint32_t i = p0; i < p1; i++) {
+        const piece *pc = &A->pc[i];
+        j->uf[i] = i;
+        j->rch[i] = pc->reached;
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;
+    }
+    for (uint32_t i = p0; i < p1; i++) {
+        if (j->rch[i]) continue;
+        const piece *pc = &A->pc[i];
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
+            uint32_t t2 = A->ptwin[x];
+            if (t2 != NONE && !j->rch[j->epc[t2]]) a3_uf_union(j->uf, i, j->epc[t2]);
+        }
+    }
+    for (uint32_t i = p0; i < p1; i++) j->lab[i] = NONE;
+    for (uint32_t i = p0; i < p1; i++) {
+        if (j->rch[i]) continue;
+        uint32_t r = a3_uf_find(j->uf, i);
+        if (j->lab[r] == NONE) j->lab[r] = np++;
+        j->lab[i] = j->lab[r];
+    }
+    j->np[t] = np;
+}
+
+/* The patches: the pieces that nothing reached (nc == 1), linked across their twins (whose
+ * pieces nothing reached either), numbered in order of their lowest piece; pieces of each patch
+ * listed in ascending order (pp_patch[ppo[k] .. ppo[k+1])).  Runs of whole solids on the
+ * threads.  -1 out of memory. */
 A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
 {
-    size_t npc = A->npc;
+    size_t npc = A->npc, nr = 0;
     uint32_t *uf = malloc((npc + 1) * sizeof *uf), *lab = malloc((npc + 1) * sizeof *lab);
     uint32_t *epc = malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
     uint8_t *rch = malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
+    uint32_t *r_off = malloc((4 * (size_t)A->threads + 3) * sizeof *r_off);
+    uint32_t *np = calloc(4 * (size_t)A->threads + 3, sizeof *np);
     int rc = -1;
-    if (!uf || !lab || !epc || !rch) goto done;
-    for (size_t i = 0; i < npc; i++) {
-        uf[i] = (uint32_t)i;
-        const piece *pc = &A->pc[i];
-        rch[i] = pc->reached;
-        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++)
-            epc[x] = (uint32_t)i;
+    if (!uf || !lab || !epc || !rch || !r_off || !np) goto done;
+    /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
+    size_t want = npc / (4 * (size_t)A->threads) + 1;
+    r_off[nr++] = 0;
+    for (size_t i = 1; i < npc; i++)
+        if (i - r_off[nr - 1] >= want && A->pc[i].solid != A->pc[i - 1].solid &&
+            nr < 4 * (size_t)A->threads + 1)
+            r_off[nr++] = (uint32_t)i;
+    r_off[nr] = (uint32_t)npc;
+    patchjob j = {A, r_off, uf, lab, epc, rch, np};
+    par_for(A->threads, nr, patch_range, &j);
+    uint32_t total = 0;
+    for (size_t t = 0; t < nr; t++) {
+        uint32_t n = np[t];
+        np[t] = total; /* the range's first patch */
+        total += n;
     }
-    for (size_t i = 0; i < npc; i++) {
-        if (rch[i]) continue;
-        const piece *pc = &A->pc[i];
-        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
-            uint32_t t = A->ptwin[x];
-            if (t != NONE && !rch[epc[t]]) a3_uf_union(uf, (uint32_t)i, epc[t]);
-        }
-    }
-    size_t np = 0;
-    for (size_t i = 0; i < npc; i++) lab[i] = NONE;
-    for (size_t i = 0; i < npc; i++) {
-        if (rch[i]) continue;
-        uint32_t r = a3_uf_find(uf, (uint32_t)i);
-        if (lab[r] == NONE) lab[r] = (uint32_t)np++;
-        lab[i] = lab[r];
-    }
-    ppo = calloc(np + 2, sizeof *ppo);
+    ppo = calloc((size_t)total + 2, sizeof *ppo);
     pp = malloc((npc + 1) * sizeof *pp);
     if (!ppo || !pp) goto done;
-    for (size_t i = 0; i < npc; i++)
-        if (!rch[i]) ppo[lab[i] + 2]++;
-    for (size_t k = 0; k < np; k++) ppo[k + 2] += ppo[k + 1];
+    for (size_t t = 0; t < nr; t++)
+        for (uint32_t i = r_off[t]; i < r_off[t + 1]; i++)
+            if (!rch[i]) ppo[(lab[i] += np[t]) + 2]++;
+    for (size_t k = 0; k < total; k++) ppo[k + 2] += ppo[k + 1];
     for (size_t i = 0; i < npc; i++)
         if (!rch[i]) pp[ppo[lab[i] + 1]++] = (uint32_t)i;
-    A->npatch = np;
+    A->npatch = total;
     *ppo_out = ppo, *pp_out = pp;
     ppo = pp = NULL;
     rc = 0;
 done:
-    free(uf), free(lab), free(epc), free(ppo), free(pp), free(rch);
+    free(uf), free(lab), free(epc), free(ppo), free(pp), free(rch), free(r_off), free(np);
     return rc;
+}
+
+/* The patches' faces, written on the threads: face i is piece pp[i] (faces come patch by patch),
+ * its entries from eoff[i]; pe2e[x] where entry x of a patch's piece went. */
+typedef struct putjob {
+    a3 *A;
+    const uint32_t *pp, *ppo, *eoff;
+    uint32_t *pe2e;
+    size_t n;
+    int twins; /* 0: the faces; 1: their entries' twins (pe2e complete) */
+} putjob;
+
+#define PUT_CHUNK 8192
+static void put_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const putjob *j = ctx;
+    a3 *A = j->A;
+    size_t i0 = item * PUT_CHUNK, i1 = i0 + PUT_CHUNK < j->n ? i0 + PUT_CHUNK : j->n;
+    for (size_t i = i0; i < i1; i++) {
+        const piece *pc = &A->pc[j->pp[i]];
+        uint32_t o = A->pc_off[pc->c0], n = A->pc_off[pc->c0 + 1] - o, e0 = j->eoff[i];
+        if (j->twins) {
+            for (uint32_t x = o; x < o + n; x++) {
+                uint32_t t = A->ptwin[x];
+                A->etwin[j->pe2e[x]] = t == NONE ? NONE : j->pe2e[t];
+            }
+            continue;
+        }
+        int rev = pc->sgn < 0;
+        A->f_cyc[i] = (uint32_t)i;
+        A->f_cov[i] = (uint32_t)i;
+        A->cov[i] = j->pp[i];
+        A->f_plane[i] = pc->plane;
+        A->f_out[i] = pc->sgn > 0;
+        A->cyc_off[i] = e0;
+        uint32_t *ent = A->ent + e0, *side = A->side + e0;
+        const uint32_t *v = A->pcv + o, *vp = A->pcvp + o;
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t k = rev ? (2 * n - 2 - t) % n : t; /* entry t goes to k */
+            j->pe2e[o + t] = e0 + k;
+        }
+        if (!rev) {
+            memcpy(ent, v, n * sizeof *ent);
+            memcpy(side, vp, n * sizeof *side);
+        } else {
+            for (uint32_t t = 0; t < n; t++) {
+                ent[t] = v[n - 1 - t];
+                side[t] = vp[(2 * n - 2 - t) % n];
+            }
+        }
+    }
 }
 
 /* Every plane's new points join the global ones (deduplicated), and the faces of the complex
@@ -2419,27 +2511,31 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
         !A->u_off || !A->f_unit || !A->f_out || !A->etwin || !pe2e)
         goto done;
     memset(pe2e, 0xff, (A->npcv + 1) * sizeof *pe2e); /* NONE: not in a patch */
-    A->nf = A->ncyc = A->nent = 0;
-    ncov = 0;
-    A->nunit = 0;
-    for (size_t k = 0; k < A->npatch; k++) {
-        A->u_off[A->nunit] = (uint32_t)A->nf;
-        for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) {
-            A->f_unit[A->nf] = (uint32_t)A->nunit;
-            A->f_out[A->nf] = A->pc[pp[i]].sgn > 0;
-            put_piece_face(A, pp[i], &ncov, pe2e);
-        }
-        A->nunit++;
-    }
-    /* the patches' entries: their twins, where they were put (a twin in no patch: NONE) */
-    for (size_t k = 0; k < A->npatch; k++)
-        for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) {
+    /* the patches: their faces, then their entries' twins (a twin in no patch: NONE), on the
+     * threads */
+    {
+        size_t npf = A->npatch ? ppo[A->npatch] : 0;
+        uint32_t *eoff = malloc((npf + 1) * sizeof *eoff);
+        if (!eoff) goto done;
+        uint32_t e = 0;
+        for (size_t i = 0; i < npf; i++) {
             const piece *pc = &A->pc[pp[i]];
-            for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
-                uint32_t t = A->ptwin[x];
-                A->etwin[pe2e[x]] = t == NONE ? NONE : pe2e[t];
-            }
+            eoff[i] = e;
+            e += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
         }
+        for (size_t k = 0; k < A->npatch; k++) {
+            A->u_off[k] = ppo[k];
+            for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) A->f_unit[i] = (uint32_t)k;
+        }
+        putjob j = {A, pp, ppo, eoff, pe2e, npf, 0};
+        par_for(A->threads, (npf + PUT_CHUNK - 1) / PUT_CHUNK, put_chunk, &j);
+        j.twins = 1;
+        par_for(A->threads, (npf + PUT_CHUNK - 1) / PUT_CHUNK, put_chunk, &j);
+        free(eoff);
+        A->nf = A->ncyc = ncov = npf;
+        A->nent = e;
+        A->nunit = A->npatch;
+    }
     for (size_t p = 0; p < A->npl; p++) {
         pfaces *F = &A->pf[p];
         uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;

@@ -1290,7 +1290,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                 A->pc[A->npc++] = P;
             }
             for (size_t c = 0; c < B->npcyc; c++) A->pc_off[A->npcyc++] = B->pc_off[c] + ent0;
-            memcpy(A->pcv + A->npcv, B->pcv, B->npcv * sizeof *A->pcv);
+            if (B->npcv) memcpy(A->pcv + A->npcv, B->pcv, B->npcv * sizeof *A->pcv);
             A->npcv += B->npcv;
             A->pc_off[A->npcyc] = (uint32_t)A->npcv; /* the last cycle's end */
             A->split_faces += B->split_faces;

@@ -11,6 +11,11 @@
 //               the files, the construction of the input Manifolds or the module's start-up;
 //   triangles   of the result; status: Manifold's error status of the result ("NoError");
 //   coords      "float64" (default) or "float32" (--float32, see below);
+//   ms_build    the construction of the input Manifolds from their meshes (new Manifold(mesh)
+//               and its status: Manifold's check that each is closed and manifold, its half-edges,
+//               normals and collider), the work that cellar's figure counts as its check and
+//               input stages; the warp to double coordinates below is not counted; with
+//               --warm, each is constructed twice and the second construction timed;
 //   ms_warm     with --warm only: the same Boolean run a second time in the process (the first
 //               run includes WASM tier-up and heap growth: 3 times slower for 100 cubes, alike
 //               for 1000).
@@ -104,11 +109,20 @@ wasm.setup();
 const { Manifold, Mesh } = wasm;
 
 const key = (x, y, z) => `${x},${y},${z}`;
+let msBuild = 0; // the input Manifolds' construction from their meshes (see ms_build)
 const solids = files.map((path) => {
   const { pos, tri } = readOff(path);
   const mesh = new Mesh({ numProp: 3, vertProperties: Float32Array.from(pos), triVerts: tri });
+  if (warm) { // a first construction, not timed (WASM tier-up), as the op's below
+    const w = new Manifold(mesh);
+    w.status();
+    w.delete();
+  }
+  const tb = performance.now();
   let m = new Manifold(mesh);
-  if (m.status() !== 'NoError') throw new Error(`${path}: not a manifold (${m.status()})`);
+  const built = m.status();
+  msBuild += performance.now() - tb;
+  if (built !== 'NoError') throw new Error(`${path}: not a manifold (${built})`);
   if (!float32) {
     const exact = new Map();
     for (let v = 0; v < pos.length; v += 3) {
@@ -146,7 +160,7 @@ const round = (ms) => Math.round(ms * 1000) / 1000;
 const { r, status, ms } = boolean();
 const out = {
   op, volume: r.volume(), ms: round(ms), inputs: files.length, triangles: r.numTri(),
-  status: String(status), coords: float32 ? 'float32' : 'float64',
+  status: String(status), coords: float32 ? 'float32' : 'float64', ms_build: round(msBuild),
 };
 if (warm) out.ms_warm = round(boolean().ms);
 console.log(JSON.stringify(out));

@@ -35,6 +35,9 @@ Programs (one at a time, each on the same two OFF files, each under /usr/bin/tim
             volume result.volume;
   Manifold  node bench/manifold_bool.mjs --warm --op OP A.off B.off; its figure is ms_warm (the
             op and its evaluation run a second time in the process, past WASM tier-up);
+            beside it ms_build, the construction of its two input Manifolds (warm): its check,
+            half-edges and collider, which cellar's figure counts (its check and input
+            stages) and Manifold's op does not; xMe compares the two end to end;
   CGAL      cgal_bool --op OP A.off B.off (Epeck, PMP corefinement); its figure is "ms" (the
             Boolean only, after reading, checking and triangulating) and "area" is the area of
             the result's boundary.
@@ -252,11 +255,12 @@ def parse_cgal(path):
 
 
 def parse_mf(path):
-    """manifold_bool.mjs --warm's line: (ms_warm, {"volume", "ms_cold"})."""
+    """manifold_bool.mjs --warm's line: (ms_warm, {"volume", "ms_cold", "ms_build"})."""
     d = json_line(path)
-    if "ms_warm" not in d or "volume" not in d:
-        raise BadOutput("no ms_warm or volume")
-    return float(d["ms_warm"]), {"volume": float(d["volume"]), "ms_cold": float(d["ms"])}
+    if "ms_warm" not in d or "volume" not in d or "ms_build" not in d:
+        raise BadOutput("no ms_warm, ms_build or volume")
+    return float(d["ms_warm"]), {"volume": float(d["volume"]), "ms_cold": float(d["ms"]),
+                                 "ms_build": float(d["ms_build"])}
 
 
 def parse_wall(path):
@@ -473,6 +477,14 @@ def ratio(num, den):
     return None
 
 
+def ratio_e2e(mf, cel):
+    """Manifold's construction of its inputs plus its op over cellar's figure (which counts
+    cellar's check and input stages), or None."""
+    if mf.ok() and cel.ok() and cel.fig > 0 and mf.get("ms_build") is not None:
+        return (mf.get("ms_build") + mf.fig) / cel.fig
+    return None
+
+
 def fmt(x, spec="%.2f"):
     """x formatted, or "-" for None."""
     return "-" if x is None else spec % x
@@ -537,13 +549,17 @@ def part_a(progs, cache, meshes, threads):
     out("  turned, moved copy), box (a box through it), shell (its copy scaled by 0.8 inside")
     out("  it); one OFF file per solid, cached in %s." % cache)
     header_common(progs, "--threads %d" % threads)
-    out("  xM = Manifold ms / cellar ms, xC = CGAL ms / cellar ms (above 1: cellar is faster).")
+    out("  xM = Manifold ms / cellar ms, xC = CGAL ms / cellar ms (above 1: cellar is faster);")
+    out("  xMe = (Manifold's construction of its two inputs + its op) / cellar ms: end to end")
+    out("  from the meshes in memory, since cellar's figure counts its check and input stages")
+    out("  and Manifold's op does not (ms_build of manifold_bool.mjs, warm).")
     for m, why in SKIPPED.items():
         out("  %s is left out: %s." % (m, why))
-    W = (-16, -5, -12, 10, 10, 10, 6, 6, 8, 4, 8, 4)
+    W = (-16, -5, -12, 10, 10, 10, 6, 6, 6, 8, 4, 8, 4)
     out(table_row(W, ("mesh", "scene", "op", "cellar ms", "mf ms", "CGAL ms", "xM", "xC",
-                      "rel", "agr", "mf rel", "agr")))
+                      "xMe", "rel", "agr", "mf rel", "agr")))
     ratios = {s: [] for s in SCENES}            # per scene: xM of each row (None: no figure)
+    ratios_e = {s: [] for s in SCENES}          # and xMe
     for mesh in meshes:
         src = os.path.join(REAL, mesh + ".off")
         for scene in SCENES:
@@ -562,10 +578,11 @@ def part_a(progs, cache, meshes, threads):
                        if run.state in ("failed", "timeout")]
                 if bad:
                     fail("%s: %s" % (label, ", ".join(bad)))
-                xm, xc = ratio(mf, cel), ratio(cg, cel)
+                xm, xc, xe = ratio(mf, cel), ratio(cg, cel), ratio_e2e(mf, cel)
                 ratios[scene].append(xm)
-                out(table_row(W, (mesh, scene, op, ms(cel), ms(mf), ms(cg), fmt(xm), fmt(xc)) +
-                              volume_columns(cel, mf, cg)))
+                ratios_e[scene].append(xe)
+                out(table_row(W, (mesh, scene, op, ms(cel), ms(mf), ms(cg), fmt(xm), fmt(xc),
+                                  fmt(xe)) + volume_columns(cel, mf, cg)))
     out()
     out("Manifold ms / cellar ms per scene (all meshes and ops):")
     if progs.mf_why:
@@ -585,6 +602,10 @@ def part_a(progs, cache, meshes, threads):
         out("  %-5s verdict: median >= 1.5: %s; every row >= 1: %s" %
             (scene, "yes" if med >= 1.5 else "no",
              "yes" if low >= 1 and not missing else "no"))
+        xe = [x for x in ratios_e[scene] if x is not None]
+        if xe:
+            out("  %-5s end to end (xMe): median %.2f, minimum %.2f over %d rows" %
+                (scene, statistics.median(xe), min(xe), len(xe)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -606,15 +627,19 @@ def part_b(progs, cache, sizes, threads):
         % (threads, t2, threads, t2, t2, threads, t2))
     out("  xM = Manifold ms / c%d, xC = CGAL ms / c%d (above 1: cellar is faster);"
         % (threads, threads))
+    out("  mf bld = Manifold's construction of its two inputs (warm), xMe = (mf bld + mf ms) /")
+    out("  c%d: end to end from the meshes in memory (cellar's figure counts its check and" % threads)
+    out("  input stages, Manifold's op does not);")
     out("  MiB = peak RSS of the process (/usr/bin/time %M), Manifold's from a run without")
     out("  --warm (with it, its first result stays alive: 1.34 GB instead of 1.18 at 640000);")
     out("  wall c, wall mf = seconds of the whole process, reading and writing included: the")
     out("  c%d run (it writes the result as JSON) and Manifold's run without --warm (it writes"
         % threads)
     out("  one line).")
-    W = (-8, -12, 9, 9, 5, 9, 9, 6, 6, 6, 6, 6, 6, 7, 7, 8, 4, 8, 4)
+    W = (-8, -12, 9, 9, 5, 9, 9, 9, 6, 6, 6, 6, 6, 6, 6, 7, 7, 8, 4, 8, 4)
     out(table_row(W, ("N", "op", "c%d ms" % threads, "c%d ms" % t2, "x%d" % t2, "mf ms",
-                      "CGAL ms", "xM", "xC", "MiB c%d" % threads, "c%d" % t2, "mf", "CGAL",
+                      "mf bld", "CGAL ms", "xM", "xC", "xMe", "MiB c%d" % threads, "c%d" % t2,
+                      "mf", "CGAL",
                       "wall c", "wall mf", "rel", "agr", "mf rel", "agr")))
     rows = []
     for n in sizes:
@@ -643,10 +668,12 @@ def part_b(progs, cache, sizes, threads):
                 note("%s: cellar's volume on %d threads %r differs from %d threads' %r" %
                      (label, t2, c2.get("volume"), threads, c1.get("volume")))
             row = {"c1": c1, "c2": c2, "mf": mf, "mf1": mf1, "cg": cg,
-                   "x2": ratio(c1, c2), "xm": ratio(mf, c1), "xc": ratio(cg, c1)}
+                   "x2": ratio(c1, c2), "xm": ratio(mf, c1), "xc": ratio(cg, c1),
+                   "xe": ratio_e2e(mf, c1)}
             rows.append((n, op, row))
-            out(table_row(W, (str(n), op, ms(c1), ms(c2), fmt(row["x2"]), ms(mf), ms(cg),
-                              fmt(row["xm"]), fmt(row["xc"]), mib(c1), mib(c2), mib(mf1),
+            out(table_row(W, (str(n), op, ms(c1), ms(c2), fmt(row["x2"]), ms(mf),
+                              fmt(mf.get("ms_build"), "%.1f"), ms(cg), fmt(row["xm"]),
+                              fmt(row["xc"]), fmt(row["xe"]), mib(c1), mib(c2), mib(mf1),
                               mib(cg), fmt(c1.wall if c1.ok() else None, "%.1f"),
                               fmt(mf1.wall if mf1.ok() else None, "%.1f")) +
                           volume_columns(c1, mf, cg)))
@@ -693,6 +720,8 @@ def verdicts_b(rows, progs):
 
     line("Manifold ms / cellar ms >= 1.5 at every size", rows,
          lambda r: r["xm"] is not None and r["xm"] >= 1.5, True)
+    line("end to end, (Manifold's construction + op) / cellar ms >= 1.5 at every size", rows,
+         lambda r: r["xe"] is not None and r["xe"] >= 1.5, True)
     line("cellar peak RSS (both thread counts) <= Manifold's from %d up" % BIG, big,
          lambda r: r["c1"].ok() and r["c2"].ok() and r["mf1"].ok() and
          max(r["c1"].mib, r["c2"].mib) <= r["mf1"].mib, True)

@@ -34,6 +34,7 @@
 #include "api/render.h"
 #include "core/arr2.h"
 #include "core/solid.h"
+#include "core/mem.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -43,6 +44,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -369,10 +371,19 @@ static char *read_all(const char *path, size_t *len)
         fprintf(stderr, "cellar: %s: %s\n", path, strerror(errno));
         return NULL;
     }
+    struct stat st; /* a regular file: one buffer of its size (and one byte to see the end) */
+    if (f != stdin && fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0 &&
+        (uint64_t)st.st_size < SIZE_MAX / 2) {
+        cap = (size_t)st.st_size + 1;
+        if (!(buf = mem_malloc(cap))) {
+            fprintf(stderr, "cellar: %s: out of memory\n", path);
+            goto fail;
+        }
+    }
     for (;;) {
         if (n == cap) {
             cap = cap ? 2 * cap : 1 << 16;
-            p = realloc(buf, cap);
+            p = mem_realloc(buf, cap);
             if (!p) {
                 fprintf(stderr, "cellar: %s: out of memory\n", path);
                 goto fail;

@@ -37,6 +37,7 @@
 #include <unistd.h>
 
 #include "core/facecheck.h"
+#include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
 
@@ -68,7 +69,7 @@ int a3_grow(void *pp, size_t *cap, size_t need, size_t elem)
     if (need <= *cap) return 0;
     size_t nc = *cap ? *cap : 16;
     while (nc < need) nc *= 2;
-    void *q = realloc(*p, nc * elem);
+    void *q = mem_realloc(*p, nc * elem);
     if (!q) return -1;
     *p = q;
     *cap = nc;
@@ -172,8 +173,8 @@ static int pset_rehash(pset *s, size_t ncap)
     uint64_t *ok = s->key;
     uint32_t *oh = s->head;
     size_t ocap = s->cap;
-    s->key = calloc(ncap, sizeof *s->key);
-    s->head = malloc(ncap * sizeof *s->head);
+    s->key = mem_calloc(ncap, sizeof *s->key);
+    s->head = mem_malloc(ncap * sizeof *s->head);
     if (!s->key || !s->head) {
         free(s->key);
         free(s->head);
@@ -243,7 +244,7 @@ static uint64_t hash_g(const int64_t *x)
 
 static int vtab_rehash(a3 *A, size_t ncap)
 {
-    uint32_t *t = malloc(ncap * sizeof *t);
+    uint32_t *t = mem_malloc(ncap * sizeof *t);
     if (!t) return -1;
     memset(t, 0xff, ncap * sizeof *t);
     for (size_t v = 0; v < A->nv; v++) {
@@ -291,7 +292,7 @@ static int plane_same(const plane3 *a, const plane3 *b)
 
 static int pltab_rehash(a3 *A, size_t ncap)
 {
-    uint32_t *t = malloc(ncap * sizeof *t);
+    uint32_t *t = mem_malloc(ncap * sizeof *t);
     if (!t) return -1;
     memset(t, 0xff, ncap * sizeof *t);
     for (size_t i = 0; i < A->npl; i++) {
@@ -591,8 +592,8 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
     for (size_t i = 0; i < len[0]; i++)
         if (A3_PUSH(L.v, L.n, L.cap, cyc[0][flip_outer ? len[0] - 1 - i : i])) goto done;
     if (nc > 1) {
-        order = malloc(nc * sizeof *order);
-        used = calloc(nc, 1);
+        order = mem_malloc(nc * sizeof *order);
+        used = mem_calloc(nc, 1);
         if (!order || !used) goto done;
     }
     for (size_t h = 1; h < nc; h++) {
@@ -698,8 +699,8 @@ static uint32_t vertical_id(a3 *A, uint32_t v, uint32_t w, int k)
     uint64_t key = ((uint64_t)lo << 32 | hi) * 3 + (uint64_t)k + 1;
     if (2 * (A->nvp + 1) > A->vpcap) {
         size_t ncap = A->vpcap ? 2 * A->vpcap : 4096;
-        uint64_t *nk = calloc(ncap, sizeof *nk);
-        uint32_t *nv = malloc(ncap * sizeof *nv);
+        uint64_t *nk = mem_calloc(ncap, sizeof *nk);
+        uint32_t *nv = mem_malloc(ncap * sizeof *nv);
         if (!nk || !nv) {
             free(nk), free(nv);
             return NONE;
@@ -839,7 +840,7 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         if (!m || drop[i] != drop[m - 1]) drop[m++] = drop[i];
-    uint8_t *in = calloc(A->nv + 1, 1);
+    uint8_t *in = mem_calloc(A->nv + 1, 1);
     if (!in) return -1;
     for (size_t i = 0; i < m; i++) in[drop[i]] = 1;
     int rc = 0;
@@ -1207,8 +1208,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                           nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
                           (double)avail / 1e9);
     }
-    A->solid_face_off = calloc(ns + 1, sizeof *A->solid_face_off);
-    A->twinned = calloc(ns + 1, 1);
+    A->solid_face_off = mem_calloc(ns + 1, sizeof *A->solid_face_off);
+    A->twinned = mem_calloc(ns + 1, 1);
     if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
     for (size_t s = 0; s < ns; s++)
@@ -1216,6 +1217,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     A->nfaces = nfaces;
     if (!nfaces) return ARR_OK;
     double step;
+    A3_TICK("in/bounds");
     if ((rc = arr3_solids_step(solids, ns, A->o->precision, &step, err, el)) != ARR_OK) return rc;
     A->step = step;
     A->st->precision = step;
@@ -1226,12 +1228,12 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                           "2^62 steps from the origin)",
                           step);
     for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
-    voff = malloc((ns + 1) * sizeof *voff);
-    eoff = malloc((ns + 1) * sizeof *eoff);
-    gin = malloc((3 * nvin + 1) * sizeof *gin);
-    vmap = malloc((nvin + 1) * sizeof *vmap);
-    task = malloc((ntask + 1) * sizeof *task);
-    buf = calloc(ntask + 1, sizeof *buf);
+    voff = mem_malloc((ns + 1) * sizeof *voff);
+    eoff = mem_malloc((ns + 1) * sizeof *eoff);
+    gin = mem_malloc((3 * nvin + 1) * sizeof *gin);
+    vmap = mem_malloc((nvin + 1) * sizeof *vmap);
+    task = mem_malloc((ntask + 1) * sizeof *task);
+    buf = mem_calloc(ntask + 1, sizeof *buf);
     if (!voff || !eoff || !gin || !vmap || !task || !buf) goto oom;
     voff[0] = eoff[0] = 0;
     for (size_t s = 0; s < ns; s++) {
@@ -1243,10 +1245,12 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         snapjob j = {A, solids, voff, ns, nvin, gin};
         par_for(A->threads, (nvin + SNAP_CHUNK - 1) / SNAP_CHUNK, snap_chunk, &j);
     }
+    A3_TICK("in/snap");
     for (size_t i = 0; i < nvin; i++)
         if ((vmap[i] = vertex_at(A, gin + 3 * i)) == NONE) goto oom;
     free(gin);
     gin = NULL;
+    A3_TICK("in/vertex_at");
     /* the faces into pieces, a run of faces a task on the threads, joined in order */
     ntask = 0;
     for (size_t s = 0; s < ns; s++)
@@ -1258,6 +1262,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         injob j = {A, solids, vmap, voff, task, buf};
         par_for(A->threads, ntask, in_task, &j);
     }
+    A3_TICK("in/tasks");
     size_t npc = 0, npcyc = 0, npcv = 0;
     for (size_t t = 0; t < ntask; t++) {
         if (buf[t].rc != ARR_OK) {
@@ -1273,7 +1278,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         a3_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
         goto oom;
     if (twins) {
-        in2pcv = malloc((nein + 1) * sizeof *in2pcv);
+        in2pcv = mem_malloc((nein + 1) * sizeof *in2pcv);
         if (!in2pcv) goto oom;
         memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
     }
@@ -1304,6 +1309,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         if (ndrop && mend_dropped(A, pc0, drop, ndrop)) goto oom;
     }
     A->pc_off[A->npcyc] = (uint32_t)A->npcv;
+    A3_TICK("in/join");
     for (size_t i = 0; i < A->npcv; i++) A->pcvp[i] = SIDE_LAZY, A->ptwin[i] = NONE;
     if (in2pcv) { /* the twins the check found, between entries that went as they are */
         twinjob j = {A, twins, in2pcv, eoff, ns, nein};
@@ -1464,10 +1470,10 @@ A3_STAGE static int stage_classes(a3 *A)
 {
     size_t n = A->npc, cap = 1024;
     while (cap < 2 * n + 2) cap *= 2;
-    uint64_t *key = malloc((n + 1) * sizeof *key), *tkey = calloc(cap, sizeof *tkey);
-    uint32_t *tcls = malloc(cap * sizeof *tcls), *first = malloc((n + 1) * sizeof *first);
-    uint8_t *flag = calloc(n + 1, 1); /* by class: 1 another face, 2 another solid, 4 a wall */
-    int8_t *dir = malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
+    uint64_t *key = mem_malloc((n + 1) * sizeof *key), *tkey = mem_calloc(cap, sizeof *tkey);
+    uint32_t *tcls = mem_malloc(cap * sizeof *tcls), *first = mem_malloc((n + 1) * sizeof *first);
+    uint8_t *flag = mem_calloc(n + 1, 1); /* by class: 1 another face, 2 another solid, 4 a wall */
+    int8_t *dir = mem_malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
     int rc = -1;
     if (!key || !tkey || !tcls || !first || !flag || !dir) goto done;
     clsjob j = {A, key};
@@ -1508,7 +1514,7 @@ A3_STAGE static int stage_classes(a3 *A)
     size_t nm = 0;
     for (size_t i = 0; i < n; i++) nm += (flag[A->pc[i].cls] & 2) != 0;
     if (nm && !A->soup) {
-        kv *m = malloc(nm * sizeof *m);
+        kv *m = mem_malloc(nm * sizeof *m);
         if (!m) goto done;
         nm = 0;
         for (size_t i = 0; i < n; i++)
@@ -1552,11 +1558,11 @@ A3_STAGE static int stage_twins(a3 *A)
     if (A->soup || !n) return 0;
     for (size_t s = 0; s < A->nsolids; s++) left += !A->twinned[s];
     if (!left) return 0; /* every solid's twins came with its check */
-    pos = calloc(nv + 2, sizeof *pos);
-    lo = malloc(n * sizeof *lo);
-    nx = malloc(n * sizeof *nx);
-    sk = malloc(n * sizeof *sk);
-    sx = malloc(n * sizeof *sx);
+    pos = mem_calloc(nv + 2, sizeof *pos);
+    lo = mem_malloc(n * sizeof *lo);
+    nx = mem_malloc(n * sizeof *nx);
+    sk = mem_malloc(n * sizeof *sk);
+    sx = mem_malloc(n * sizeof *sx);
     if (!pos || !lo || !nx || !sk || !sx) goto done;
     for (size_t pi = 0; pi < A->npc; pi++) {
         const piece *pc = &A->pc[pi];
@@ -1762,7 +1768,7 @@ static uint64_t lkey(uint32_t a, uint32_t b, uint32_t c)
 
 static int ltab_rehash(const xpt *pt, ltab *t, size_t ncap)
 {
-    uint32_t *id = malloc(ncap * sizeof *id);
+    uint32_t *id = mem_malloc(ncap * sizeof *id);
     if (!id) return -1;
     memset(id, 0xff, ncap * sizeof *id);
     for (size_t i = 0; i < t->cap; i++) {
@@ -2003,9 +2009,12 @@ static uint32_t merged_id(const uint32_t *map, uint32_t p)
 A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
     size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
-    cutjob j = {
-        A, pairs, np, calloc((size_t)A->threads, sizeof(cutwork)), calloc(nch + 1, sizeof(cutout)),
-        0};
+    cutjob j = {A,
+                pairs,
+                np,
+                mem_calloc((size_t)A->threads, sizeof(cutwork)),
+                mem_calloc(nch + 1, sizeof(cutout)),
+                0};
     ltab lt = {0};
     uint32_t *map = NULL;
     size_t capmap = 0;
@@ -2095,8 +2104,8 @@ static const xpt *get_global(const void *ctx, uint32_t id)
 /* Merges equal points among those the cuts made; rewrites the cuts and contacts. */
 A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
 {
-    uint32_t *alias = malloc((A->npt + 1) * sizeof *alias);
-    uint8_t *near = calloc(A->nv + 1, 1);
+    uint32_t *alias = mem_malloc((A->npt + 1) * sizeof *alias);
+    uint8_t *near = mem_calloc(A->nv + 1, 1);
     if (!alias || !near) {
         free(alias), free(near);
         return -1;
@@ -2151,7 +2160,7 @@ A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
 static int csr_by_plane(size_t npl, size_t n, const void *items, size_t size, size_t plane_off,
                         uint32_t **off_out, void *sorted)
 {
-    uint32_t *off = calloc(npl + 2, sizeof *off);
+    uint32_t *off = mem_calloc(npl + 2, sizeof *off);
     if (!off) return -1;
     const char *it = items;
     for (size_t i = 0; i < n; i++) {
@@ -2179,8 +2188,8 @@ static int cmp_cpt(const void *pa, const void *pb)
 A3_STAGE static int plane_inputs(a3 *A)
 {
     /* reached pieces by plane (the others are faces as they are: merge_planes) */
-    A->pp_off = calloc(A->npl + 2, sizeof *A->pp_off);
-    A->pp = malloc((A->npc + 1) * sizeof *A->pp);
+    A->pp_off = mem_calloc(A->npl + 2, sizeof *A->pp_off);
+    A->pp = mem_malloc((A->npc + 1) * sizeof *A->pp);
     if (!A->pp_off || !A->pp) return -1;
     for (size_t i = 0; i < A->npc; i++)
         if (A->pc[i].reached) A->pp_off[A->pc[i].plane + 2]++;
@@ -2188,7 +2197,7 @@ A3_STAGE static int plane_inputs(a3 *A)
     for (size_t i = 0; i < A->npc; i++)
         if (A->pc[i].reached) A->pp[A->pp_off[A->pc[i].plane + 1]++] = (uint32_t)i;
     /* cuts by plane (order kept: deterministic) */
-    cseg *cs = malloc((A->ncs + 1) * sizeof *cs);
+    cseg *cs = mem_malloc((A->ncs + 1) * sizeof *cs);
     if (!cs ||
         csr_by_plane(A->npl, A->ncs, A->cs, sizeof *A->cs, offsetof(cseg, plane), &A->cs_off, cs)) {
         free(cs);
@@ -2202,7 +2211,7 @@ A3_STAGE static int plane_inputs(a3 *A)
     for (size_t i = 0; i < A->ncp; i++)
         if (!m || cmp_cpt(&A->cp[i], &A->cp[m - 1])) A->cp[m++] = A->cp[i];
     A->ncp = m;
-    cpt *cp = malloc((A->ncp + 1) * sizeof *cp);
+    cpt *cp = mem_malloc((A->ncp + 1) * sizeof *cp);
     if (!cp ||
         csr_by_plane(A->npl, A->ncp, A->cp, sizeof *A->cp, offsetof(cpt, plane), &A->cp_off, cp)) {
         free(cp);
@@ -2263,7 +2272,7 @@ A3_STAGE static int stage_sides(a3 *A)
     /* the new planes hold no pieces, cuts or contact points: extend the offsets */
     uint32_t **off[3] = {&A->pp_off, &A->cs_off, &A->cp_off};
     for (int i = 0; i < 3; i++) {
-        uint32_t *o = realloc(*off[i], (A->npl + 2) * sizeof *o);
+        uint32_t *o = mem_realloc(*off[i], (A->npl + 2) * sizeof *o);
         if (!o) return -1;
         for (size_t P = npl0 + 1; P < A->npl + 2; P++) o[P] = o[npl0];
         *off[i] = o;
@@ -2373,11 +2382,11 @@ static void patch_range(void *ctx, size_t t, int worker)
 A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
 {
     size_t npc = A->npc, nr = 0;
-    uint32_t *uf = malloc((npc + 1) * sizeof *uf), *lab = malloc((npc + 1) * sizeof *lab);
-    uint32_t *epc = malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
-    uint8_t *rch = malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
-    uint32_t *r_off = malloc((4 * (size_t)A->threads + 3) * sizeof *r_off);
-    uint32_t *np = calloc(4 * (size_t)A->threads + 3, sizeof *np);
+    uint32_t *uf = mem_malloc((npc + 1) * sizeof *uf), *lab = mem_malloc((npc + 1) * sizeof *lab);
+    uint32_t *epc = mem_malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
+    uint8_t *rch = mem_malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
+    uint32_t *r_off = mem_malloc((4 * (size_t)A->threads + 3) * sizeof *r_off);
+    uint32_t *np = mem_calloc(4 * (size_t)A->threads + 3, sizeof *np);
     int rc = -1;
     if (!uf || !lab || !epc || !rch || !r_off || !np) goto done;
     /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
@@ -2396,8 +2405,8 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
         np[t] = total; /* the range's first patch */
         total += n;
     }
-    ppo = calloc((size_t)total + 2, sizeof *ppo);
-    pp = malloc((npc + 1) * sizeof *pp);
+    ppo = mem_calloc((size_t)total + 2, sizeof *ppo);
+    pp = mem_malloc((npc + 1) * sizeof *pp);
     if (!ppo || !pp) goto done;
     for (size_t t = 0; t < nr; t++)
         for (uint32_t i = r_off[t]; i < r_off[t + 1]; i++)
@@ -2495,18 +2504,18 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
         nf += F->nf, ncyc += F->ncyc, ncov += F->ncov;
         nent += F->nent;
     }
-    A->f_cyc = malloc((nf + 1) * sizeof *A->f_cyc);
-    A->f_plane = malloc((nf + 1) * sizeof *A->f_plane);
-    A->f_cov = malloc((nf + 1) * sizeof *A->f_cov);
-    A->cyc_off = malloc((ncyc + 1) * sizeof *A->cyc_off);
-    A->ent = malloc((nent + 1) * sizeof *A->ent);
-    A->side = malloc((nent + 1) * sizeof *A->side);
-    A->cov = malloc((ncov + 1) * sizeof *A->cov);
-    A->u_off = malloc((nf + 2) * sizeof *A->u_off);
-    A->f_unit = malloc((nf + 1) * sizeof *A->f_unit);
-    A->f_out = calloc(nf + 1, 1);
-    A->etwin = malloc((nent + 1) * sizeof *A->etwin);
-    pe2e = malloc((A->npcv + 1) * sizeof *pe2e);
+    A->f_cyc = mem_malloc((nf + 1) * sizeof *A->f_cyc);
+    A->f_plane = mem_malloc((nf + 1) * sizeof *A->f_plane);
+    A->f_cov = mem_malloc((nf + 1) * sizeof *A->f_cov);
+    A->cyc_off = mem_malloc((ncyc + 1) * sizeof *A->cyc_off);
+    A->ent = mem_malloc((nent + 1) * sizeof *A->ent);
+    A->side = mem_malloc((nent + 1) * sizeof *A->side);
+    A->cov = mem_malloc((ncov + 1) * sizeof *A->cov);
+    A->u_off = mem_malloc((nf + 2) * sizeof *A->u_off);
+    A->f_unit = mem_malloc((nf + 1) * sizeof *A->f_unit);
+    A->f_out = mem_calloc(nf + 1, 1);
+    A->etwin = mem_malloc((nent + 1) * sizeof *A->etwin);
+    pe2e = mem_malloc((A->npcv + 1) * sizeof *pe2e);
     if (!A->f_cyc || !A->f_plane || !A->f_cov || !A->cyc_off || !A->ent || !A->side || !A->cov ||
         !A->u_off || !A->f_unit || !A->f_out || !A->etwin || !pe2e)
         goto done;
@@ -2515,7 +2524,7 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
      * threads */
     {
         size_t npf = A->npatch ? ppo[A->npatch] : 0;
-        uint32_t *eoff = malloc((npf + 1) * sizeof *eoff);
+        uint32_t *eoff = mem_malloc((npf + 1) * sizeof *eoff);
         if (!eoff) goto done;
         uint32_t e = 0;
         for (size_t i = 0; i < npf; i++) {

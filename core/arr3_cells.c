@@ -30,6 +30,7 @@
  * in fixed chunks, each writing only its own items; the rest runs on the calling thread.
  */
 #include "core/arr3_int.h"
+#include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
 
@@ -373,8 +374,8 @@ static int piece_tris(const a3 *A, uint32_t pi, uint32_t **tri, size_t *ntri, si
     *k = plane_axis(a3_piece_plane(A, pi, &tp));
     *ntri = 0;
     if (pc->nc > 64) {
-        cp = malloc(pc->nc * sizeof *cp);
-        lp = malloc(pc->nc * sizeof *lp);
+        cp = mem_malloc(pc->nc * sizeof *cp);
+        lp = mem_malloc(pc->nc * sizeof *lp);
         if (!cp || !lp) goto done;
     }
     for (uint32_t c = 0; c < pc->nc; c++) {
@@ -546,8 +547,8 @@ static int fgrid_build(fgrid *g, const double *box, size_t n)
     if (!(g->cw > 0) || !isfinite(g->cw)) g->cw = 1;
     if (!(g->ch > 0) || !isfinite(g->ch)) g->ch = 1;
     size_t ncell = (size_t)side * (size_t)side, total = 0;
-    g->off = calloc(ncell + 2, sizeof *g->off);
-    g->big = malloc((n + 1) * sizeof *g->big);
+    g->off = mem_calloc(ncell + 2, sizeof *g->off);
+    g->big = mem_malloc((n + 1) * sizeof *g->big);
     if (!g->off || !g->big) return -1;
     for (int pass = 0; pass < 2; pass++) {
         g->nbig = 0;
@@ -571,7 +572,7 @@ static int fgrid_build(fgrid *g, const double *box, size_t n)
             for (size_t c = 0; c < ncell; c++) g->off[c + 2] += g->off[c + 1];
             total = g->off[ncell + 1];
             if (total > UINT32_MAX) return -1;
-            g->items = malloc((total + 1) * sizeof *g->items);
+            g->items = mem_malloc((total + 1) * sizeof *g->items);
             if (!g->items) return -1;
         }
     }
@@ -630,12 +631,13 @@ static void cedges_free(cedges *E)
 A3_STAGE static int edges_make(const a3 *A, cedges *E)
 {
     size_t npt = A->npt, nent = A->nent, nf = A->nf;
-    uint32_t *pos = calloc(npt + 2, sizeof *pos), *xs = malloc((nent + 1) * sizeof *xs);
-    uint32_t *lo_e = malloc((nent + 1) * sizeof *lo_e), *hi_e = malloc((nent + 1) * sizeof *hi_e);
-    uint32_t *xf = malloc((nent + 1) * sizeof *xf);
+    uint32_t *pos = mem_calloc(npt + 2, sizeof *pos), *xs = mem_malloc((nent + 1) * sizeof *xs);
+    uint32_t *lo_e = mem_malloc((nent + 1) * sizeof *lo_e),
+             *hi_e = mem_malloc((nent + 1) * sizeof *hi_e);
+    uint32_t *xf = mem_malloc((nent + 1) * sizeof *xf);
     uint32_t *sk = NULL, *sx = NULL;
     int rc = -1;
-    E->ent_e = malloc((nent + 1) * sizeof *E->ent_e);
+    E->ent_e = mem_malloc((nent + 1) * sizeof *E->ent_e);
     if (!pos || !xs || !lo_e || !hi_e || !xf || !E->ent_e) goto done;
     memset(E->ent_e, 0xff, (nent + 1) * sizeof *E->ent_e);
     /* the entries whose edges are not inside a patch (those are made with the output), by
@@ -656,9 +658,9 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
             }
         }
     for (size_t p = 0; p < npt; p++) pos[p + 2] += pos[p + 1];
-    sk = malloc((m + 1) * sizeof *sk);
-    sx = malloc((m + 1) * sizeof *sx);
-    E->I = malloc((m + 1) * sizeof *E->I);
+    sk = mem_malloc((m + 1) * sizeof *sk);
+    sx = mem_malloc((m + 1) * sizeof *sx);
+    E->I = mem_malloc((m + 1) * sizeof *E->I);
     if (!sk || !sx || !E->I) goto done;
     for (size_t i = 0; i < m; i++) {
         uint32_t slot = pos[lo_e[i] + 1]++;
@@ -676,10 +678,10 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
         }
         for (uint32_t i = r0; i < r1; i++) ne += i == r0 || sk[i] != sk[i - 1];
     }
-    E->ev = malloc((2 * ne + 2) * sizeof *E->ev);
-    E->eface = malloc((ne + 1) * sizeof *E->eface);
-    E->eside = malloc((ne + 1) * sizeof *E->eside);
-    E->ioff = malloc((ne + 2) * sizeof *E->ioff);
+    E->ev = mem_malloc((2 * ne + 2) * sizeof *E->ev);
+    E->eface = mem_malloc((ne + 1) * sizeof *E->eface);
+    E->eside = mem_malloc((ne + 1) * sizeof *E->eside);
+    E->ioff = mem_malloc((ne + 2) * sizeof *E->ioff);
     if (!E->ev || !E->eface || !E->eside || !E->ioff) goto done;
     ne = 0;
     for (size_t p = 0; p < npt; p++)
@@ -708,8 +710,9 @@ done:
 A3_STAGE static int fans_make(const a3 *A, cedges *E, const lar3 *out, char *err, size_t errlen)
 {
     size_t nch = (E->ne + FAN_CHUNK - 1) / FAN_CHUNK;
-    fanjob j = {
-        A, E->I, E->ioff, E->ev, E->eside, E->eface, out, E->ne, calloc(nch + 1, sizeof *j.bad)};
+    fanjob j = {A,     E->I,     E->ioff,
+                E->ev, E->eside, E->eface,
+                out,   E->ne,    mem_calloc(nch + 1, sizeof *j.bad)};
     if (!j.bad) return ARR_ENOMEM;
     a3_span span = {A, "cells", 0.1, 0.25};
     par_for_ex(A->threads, nch, fans_sort, &j, a3_span_tick, &span);
@@ -761,9 +764,9 @@ static inline uint32_t fcomp(const a3 *A, const cshells *S, uint32_t f)
 A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
 {
     size_t nn = 2 * A->nunit, nu = A->nunit;
-    uint32_t *sp = malloc((nn + 1) * sizeof *sp), *uu = malloc((nu + 1) * sizeof *uu);
-    S->shell = malloc((nn + 1) * sizeof *S->shell);
-    S->ucomp = malloc((nu + 1) * sizeof *S->ucomp);
+    uint32_t *sp = mem_malloc((nn + 1) * sizeof *sp), *uu = mem_malloc((nu + 1) * sizeof *uu);
+    S->shell = mem_malloc((nn + 1) * sizeof *S->shell);
+    S->ucomp = mem_malloc((nu + 1) * sizeof *S->ucomp);
     int rc = -1;
     if (!sp || !uu || !S->shell || !S->ucomp) goto done;
     for (size_t i = 0; i < nn; i++) sp[i] = (uint32_t)i;
@@ -793,7 +796,7 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
         S->ucomp[u] = S->ucomp[r];
     }
     S->nsh = nsh, S->ncomp = ncomp;
-    S->cpiece = malloc((ncomp + 1) * sizeof *S->cpiece);
+    S->cpiece = mem_malloc((ncomp + 1) * sizeof *S->cpiece);
     if (!S->cpiece) goto done;
     for (size_t c = 0; c < ncomp; c++) S->cpiece[c] = NONE;
     for (size_t u = 0; u < nu; u++) {
@@ -808,7 +811,8 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
      * the probes work on parts connected through edges */
     A->st->components = ncomp;
     if (ncomp > 1) {
-        uint32_t *pf = malloc((A->npt + 1) * sizeof *pf), *vu = malloc((ncomp + 1) * sizeof *vu);
+        uint32_t *pf = mem_malloc((A->npt + 1) * sizeof *pf),
+                 *vu = mem_malloc((ncomp + 1) * sizeof *vu);
         if (!pf || !vu) {
             free(pf), free(vu);
             goto done;
@@ -846,21 +850,21 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
     size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
     uint32_t EXT = (uint32_t)nsh;
     int rc = ARR_ENOMEM;
-    uint32_t *outer = malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
+    uint32_t *outer = mem_malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
     uint32_t *pf_off = NULL, *pf = NULL, *ff = NULL, *hits = NULL, *hoff = NULL, *stack = NULL;
     size_t nptri = 0, capptri = 0, capcand = 0, capff = 0, caphits = 0, capstack = 0;
-    probe *probes = malloc((ncomp + 1) * sizeof *probes);
+    probe *probes = mem_malloc((ncomp + 1) * sizeof *probes);
     fgrid fgk[3] = {{0}};
     double *fboxk[3] = {NULL, NULL, NULL};
     /* few parts: each probe looks at every face (whose covering piece's box holds its point);
      * many: through a grid over the pieces' boxes, and the faces by their first piece */
     int use_grid = ncomp > 8;
-    hoff = calloc(ncomp + 2, sizeof *hoff);
+    hoff = mem_calloc(ncomp + 2, sizeof *hoff);
     if (!outer || !probes || !hoff) goto done;
     for (uint32_t s = 0; s <= nsh; s++) cu[s] = s;
     if (use_grid) {
-        pf_off = calloc(A->npc + 2, sizeof *pf_off);
-        pf = malloc((nf + 1) * sizeof *pf);
+        pf_off = mem_calloc(A->npc + 2, sizeof *pf_off);
+        pf = mem_malloc((nf + 1) * sizeof *pf);
         if (!pf_off || !pf) goto done;
         for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
         for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
@@ -890,7 +894,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
             size_t nff = 0;
             if (use_grid) {
                 if (!fgk[pr->k].off) { /* the pieces' boxes in this projection: once per axis */
-                    double *fbox = fboxk[pr->k] = malloc((4 * A->npc + 1) * sizeof *fbox);
+                    double *fbox = fboxk[pr->k] = mem_malloc((4 * A->npc + 1) * sizeof *fbox);
                     if (!fbox) goto done;
                     for (size_t q = 0; q < A->npc; q++) {
                         const int32_t *b = A->pc[q].box;
@@ -1091,7 +1095,7 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                                double **dl_out, char *err, size_t errlen)
 {
     size_t nf = A->nf, nsh = S->nsh;
-    uint32_t *cellof = malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
+    uint32_t *cellof = mem_malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
     double *dh = NULL, *dl = NULL;
     size_t *roff = NULL;
     volrun *run = NULL;
@@ -1100,7 +1104,7 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     /* the cell of every shell: its class's number (the exterior's class: NONE) */
     {
         uint32_t ext_root = a3_uf_find(cu, (uint32_t)nsh);
-        uint32_t *lab = malloc((nsh + 2) * sizeof *lab);
+        uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
         if (!lab) goto done;
         for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
         size_t nc = 0;
@@ -1117,9 +1121,9 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     size_t nc = out->nc;
     /* the units and their cells */
     out->nunit = A->nunit;
-    out->u_off = malloc((A->nunit + 1) * sizeof *out->u_off);
-    out->ucell = malloc((2 * A->nunit + 1) * sizeof *out->ucell);
-    out->frev = malloc(nf + 1);
+    out->u_off = mem_malloc((A->nunit + 1) * sizeof *out->u_off);
+    out->ucell = mem_malloc((2 * A->nunit + 1) * sizeof *out->ucell);
+    out->frev = mem_malloc(nf + 1);
     if (!out->u_off || !out->ucell || !out->frev) goto done;
     memcpy(out->u_off, A->u_off, (A->nunit + 1) * sizeof *out->u_off);
     for (size_t u = 0; u < A->nunit; u++)
@@ -1149,10 +1153,10 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     /* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then
      * the + entries by rising face); the exterior's likewise.  Only when asked for. */
     unsigned want = A->o->want ? A->o->want : ~0u;
-    out->cvol = calloc(nc + 1, sizeof *out->cvol);
+    out->cvol = mem_calloc(nc + 1, sizeof *out->cvol);
     if (!out->cvol) goto done;
     if (want & ARR3_WANT_CF) {
-        out->cf_off = calloc(nc + 2, sizeof *out->cf_off);
+        out->cf_off = mem_calloc(nc + 2, sizeof *out->cf_off);
         if (!out->cf_off) goto done;
         size_t next = 0;
         for (size_t i = 0; i < 2 * nf; i++) {
@@ -1166,9 +1170,9 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                 out->cf_off[k + 1]++;
         }
         for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
-        out->cf = malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
-        out->ext = malloc((next + 1) * sizeof *out->ext);
-        fill = calloc(nc + 1, sizeof *fill);
+        out->cf = mem_malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
+        out->ext = mem_malloc((next + 1) * sizeof *out->ext);
+        fill = mem_calloc(nc + 1, sizeof *fill);
         if (!out->cf || !out->ext || !fill) goto done;
         out->next = 0;
         /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
@@ -1185,9 +1189,9 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
             }
     }
     /* the points to 2^-100 (volumes and the written coordinates come from these) */
-    dh = malloc((3 * A->npt + 1) * sizeof *dh);
-    dl = malloc((3 * A->npt + 1) * sizeof *dl);
-    orgv = malloc((nc + 1) * sizeof *orgv);
+    dh = mem_malloc((3 * A->npt + 1) * sizeof *dh);
+    dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
+    orgv = mem_malloc((nc + 1) * sizeof *orgv);
     if (!dh || !dl || !orgv) goto done;
     for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
     for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
@@ -1217,16 +1221,16 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     {
         /* the grid cycles, per unit (on the threads, in fixed chunks of faces) */
         size_t nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
-        roff = malloc((nch + 1) * sizeof *roff);
+        roff = mem_malloc((nch + 1) * sizeof *roff);
         if (!roff) goto done;
         for (size_t c = 0; c < nch; c++) {
             size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
             roff[c] = nrun;
             nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
         }
-        run = calloc(nrun + 1, sizeof *run);
-        i128 *UC = calloc(4 * A->nunit + 1, sizeof *UC);
-        dd *X = calloc(nc + 1, sizeof *X);
+        run = mem_calloc(nrun + 1, sizeof *run);
+        i128 *UC = mem_calloc(4 * A->nunit + 1, sizeof *UC);
+        dd *X = mem_calloc(nc + 1, sizeof *X);
         if (!run || !UC || !X) {
             free(UC), free(X);
             goto done;
@@ -1261,7 +1265,7 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                 }
             }
         double h3 = A->step * A->step * A->step / 6;
-        i128 *V6 = calloc(nc + 1, sizeof *V6);
+        i128 *V6 = mem_calloc(nc + 1, sizeof *V6);
         if (!V6) {
             free(UC), free(X);
             goto done;
@@ -1309,8 +1313,8 @@ done:
 static int sort_points(const a3 *A, uint32_t *used, size_t nu)
 {
     size_t ng = 0, nx = 0;
-    kv *g = malloc((nu + 1) * sizeof *g);
-    uint32_t *x = malloc((nu + 1) * sizeof *x);
+    kv *g = mem_malloc((nu + 1) * sizeof *g);
+    uint32_t *x = mem_malloc((nu + 1) * sizeof *x);
     int rc = -1;
     if (!g || !x) goto done;
     for (size_t i = 0; i < nu; i++)
@@ -1404,7 +1408,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
 {
     size_t nf = A->nf, ne = E->ne, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
     unsigned want = A->o->want ? A->o->want : ~0u;
-    uint32_t *newid = malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
+    uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
     kv *ek = NULL;
     int rc = -1;
     if (!newid) goto done;
@@ -1420,15 +1424,15 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     out->ne = ne + nin;
     out->nf = nf;
     /* the faces' solids: those covering it an odd number of times (room first, then closed up) */
-    out->fsol_off = malloc((nf + 1) * sizeof *out->fsol_off);
+    out->fsol_off = mem_malloc((nf + 1) * sizeof *out->fsol_off);
     if (!out->fsol_off) goto done;
     out->fsol_off[0] = 0;
     for (size_t f = 0; f < nf; f++)
         out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]);
-    out->fsol = malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
+    out->fsol = mem_malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
     if (!out->fsol) goto done;
     if (want & ARR3_WANT_FACES) {
-        used = malloc((nu + 1) * sizeof *used);
+        used = mem_malloc((nu + 1) * sizeof *used);
         if (!used) goto done;
         nu = 0;
         for (size_t p = 0; p < A->npt; p++)
@@ -1437,7 +1441,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
         a3_progress(A, "cells", 0.6);
         if (want & ARR3_WANT_COORDS) {
-            out->V = malloc((3 * nu + 1) * sizeof *out->V);
+            out->V = mem_malloc((3 * nu + 1) * sizeof *out->V);
             if (!out->V) goto done;
             for (size_t i = 0; i < nu; i++)
                 for (int k = 0; k < 3; k++)
@@ -1445,7 +1449,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
                                          dl[3 * (size_t)used[i] + k]) *
                                         A->step;
         }
-        uint32_t *ev = realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
+        uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
         if (!ev) goto done;
         E->ev = ev;
         for (size_t f = 0; f < pe; f++) {
@@ -1460,9 +1464,9 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         }
         E->ne = ne;
         /* edges in the order of their new ends */
-        ek = malloc((ne + 1) * sizeof *ek);
-        newe = malloc((ne + 1) * sizeof *newe);
-        out->EV = malloc((2 * ne + 1) * sizeof *out->EV);
+        ek = mem_malloc((ne + 1) * sizeof *ek);
+        newe = mem_malloc((ne + 1) * sizeof *newe);
+        out->EV = mem_malloc((2 * ne + 1) * sizeof *out->EV);
         if (!ek || !newe || !out->EV) goto done;
         for (size_t e = 0; e < ne; e++) {
             uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
@@ -1475,12 +1479,12 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             newe[ek[i].v] = (uint32_t)i;
         }
         a3_progress(A, "cells", 0.7);
-        out->fc_off = malloc((nf + 1) * sizeof *out->fc_off);
-        out->fc = malloc((A->ncyc + 1) * sizeof *out->fc);
-        out->fe_off = malloc((nf + 1) * sizeof *out->fe_off);
+        out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
+        out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
+        out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
         out->ncyc = A->ncyc;
-        out->cyc_off = malloc((A->ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = malloc((A->nent + 1) * sizeof *out->cyc);
+        out->cyc_off = mem_malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = mem_malloc((A->nent + 1) * sizeof *out->cyc);
         if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) goto done;
         out->fc_off[0] = out->fe_off[0] = 0;
         for (size_t f = 0; f < nf; f++) {
@@ -1492,14 +1496,14 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             out->fc_off[f + 1] = A->f_cyc[f + 1];
             out->fe_off[f + 1] = out->fe_off[f] + nfe;
         }
-        out->fe = malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
+        out->fe = mem_malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
         if (!out->fe) goto done;
         for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
         for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
     }
     if (want & ARR3_WANT_NORMALS) {
-        out->FN = malloc((3 * nf + 1) * sizeof *out->FN);
-        out->fsrc = malloc((nf + 1) * sizeof *out->fsrc);
+        out->FN = mem_malloc((3 * nf + 1) * sizeof *out->FN);
+        out->fsrc = mem_malloc((nf + 1) * sizeof *out->fsrc);
         if (!out->FN || !out->fsrc) goto done;
     }
     {
@@ -1522,9 +1526,9 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
      * read off in vertex order, a small one sorted) */
     size_t nc = out->nc;
     if ((want & ARR3_WANT_CV) && out->cyc && out->cf) {
-        out->cv_off = calloc(nc + 1, sizeof *out->cv_off);
+        out->cv_off = mem_calloc(nc + 1, sizeof *out->cv_off);
         if (!out->cv_off) goto done;
-        uint32_t *cv = NULL, *stamp = calloc(out->nv + 1, sizeof *stamp);
+        uint32_t *cv = NULL, *stamp = mem_calloc(out->nv + 1, sizeof *stamp);
         size_t ncv = 0, capcv = 0, step = nc / 50 + 1;
         if (!stamp) goto done;
         for (size_t k = 0; k < nc; k++) {
@@ -1554,7 +1558,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             out->cv_off[k + 1] = (uint32_t)ncv;
         }
         free(stamp);
-        out->cv = cv ? cv : malloc(sizeof *out->cv);
+        out->cv = cv ? cv : mem_malloc(sizeof *out->cv);
         if (!out->cv) goto done;
     }
     out->stats.nv = out->nv;
@@ -1584,7 +1588,7 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     if (shells_make(A, &E, &S)) goto done;
     A3_TICK("cells/shells");
     a3_progress(A, "cells", 0.3);
-    if (!(cu = malloc((S.nsh + 2) * sizeof *cu))) goto done;
+    if (!(cu = mem_malloc((S.nsh + 2) * sizeof *cu))) goto done;
     if ((rc = nesting_make(A, &S, cu, err, errlen)) != ARR_OK) goto done;
     A3_TICK("cells/nesting");
     if ((rc = cells_make(A, &S, cu, out, &dh, &dl, err, errlen)) != ARR_OK) goto done;

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
 
@@ -385,7 +386,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     size_t n = A->npc;
     if (n == 0) return 0;
     /* groups: runs of one solid (the pieces come solid by solid) */
-    F.g_off = malloc((n + 1) * sizeof *F.g_off);
+    F.g_off = mem_malloc((n + 1) * sizeof *F.g_off);
     if (!F.g_off) goto done;
     for (size_t i = 0; i < n; i++)
         if (i == 0 || A->pc[i].solid != A->pc[i - 1].solid) F.g_off[F.ng++] = (uint32_t)i;
@@ -394,10 +395,10 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
         rc = 0; /* one solid: nothing to pair */
         goto done;
     }
-    F.root = malloc(F.ng * sizeof *F.root);
-    F.node = malloc(2 * n * sizeof *F.node); /* pages of unused room are never touched */
-    F.item = malloc(n * sizeof *F.item);
-    F.srt = malloc(n * sizeof *F.srt);
+    F.root = mem_malloc(F.ng * sizeof *F.root);
+    F.node = mem_malloc(2 * n * sizeof *F.node); /* pages of unused room are never touched */
+    F.item = mem_malloc(n * sizeof *F.item);
+    F.srt = mem_malloc(n * sizeof *F.srt);
     if (!F.root || !F.node || !F.item || !F.srt) goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
@@ -405,10 +406,10 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     free(F.srt);
     F.srt = NULL;
     /* the top tree over the groups, walked against itself */
-    gids = malloc(F.ng * sizeof *gids);
-    tsrt = malloc(F.ng * sizeof *tsrt);
-    T.node = malloc(2 * F.ng * sizeof *T.node);
-    T.item = malloc(F.ng * sizeof *T.item);
+    gids = mem_malloc(F.ng * sizeof *gids);
+    tsrt = mem_malloc(F.ng * sizeof *tsrt);
+    T.node = mem_malloc(2 * F.ng * sizeof *T.node);
+    T.item = mem_malloc(F.ng * sizeof *T.item);
     if (!gids || !tsrt || !T.node || !T.item) goto done;
     for (size_t g = 0; g < F.ng; g++) gids[g] = (uint32_t)g;
     if (build_tree(group_box, &F, gids, F.ng, tsrt, &T)) goto done;
@@ -420,14 +421,14 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
             goto done;
     if (split_tasks(&F, &q, (size_t)A->threads * 64)) goto done;
     j.task = q.v;
-    j.out = calloc(q.n + 1, sizeof *j.out);
-    j.stack = calloc((size_t)A->threads, sizeof *j.stack);
+    j.out = mem_calloc(q.n + 1, sizeof *j.out);
+    j.stack = mem_calloc((size_t)A->threads, sizeof *j.stack);
     if (!j.out || !j.stack) goto done;
     par_for(A->threads, q.n, walk_task, &j);
     if (j.fail) goto done;
     size_t total = 0;
     for (size_t i = 0; i < q.n; i++) total += j.out[i].n;
-    all.v = malloc((total + 1) * sizeof *all.v);
+    all.v = mem_malloc((total + 1) * sizeof *all.v);
     if (!all.v) goto done;
     for (size_t i = 0; i < q.n; i++) {
         if (j.out[i].n) memcpy(all.v + all.n, j.out[i].v, j.out[i].n * sizeof *all.v);

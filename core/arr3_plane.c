@@ -35,6 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/mem.h"
 #include "core/par.h"
 
 #define NEWBASE 0x80000000u /* output ids from here are the plane's new points */
@@ -131,7 +132,7 @@ static uint32_t lp_global(pwork *w, uint32_t gid)
 {
     if (2 * (w->nhused + 1) > w->hcap) {
         size_t ncap = w->hcap ? 2 * w->hcap : 256;
-        uint32_t *t = malloc(ncap * sizeof *t);
+        uint32_t *t = mem_malloc(ncap * sizeof *t);
         if (!t) return NONE;
         memset(t, 0xff, ncap * sizeof *t);
         for (size_t i = 0; i < w->nhused; i++) {
@@ -852,7 +853,7 @@ static int reached_pieces(pwork *w, pfaces *F)
     uint32_t nd = 0;
     for (uint32_t i = 0; i < m; i++) nd += !w->reached[i];
     if (!nd) return 0;
-    F->direct = malloc(nd * sizeof *F->direct);
+    F->direct = mem_malloc(nd * sizeof *F->direct);
     if (!F->direct) return -1;
     for (uint32_t i = 0; i < m; i++)
         if (!w->reached[i]) F->direct[F->ndirect++] = A->pp[o + i];
@@ -1094,10 +1095,10 @@ static void pwork_free(pwork *w)
 int a3_planes(a3 *A, char *err, size_t errlen)
 {
     size_t n = 0;
-    uint32_t *planes = malloc((A->npl + 1) * sizeof *planes);
-    int *rc = calloc(A->npl + 1, sizeof *rc);
-    pwork *w = calloc((size_t)A->threads, sizeof *w);
-    A->pf = calloc(A->npl + 1, sizeof *A->pf);
+    uint32_t *planes = mem_malloc((A->npl + 1) * sizeof *planes);
+    int *rc = mem_calloc(A->npl + 1, sizeof *rc);
+    pwork *w = mem_calloc((size_t)A->threads, sizeof *w);
+    A->pf = mem_calloc(A->npl + 1, sizeof *A->pf);
     int r = ARR_OK;
     if (!planes || !rc || !w || !A->pf) {
         r = ARR_ENOMEM;

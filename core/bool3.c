@@ -1,6 +1,8 @@
 /* bool3.c — see bool3.h. */
 #include "core/bool3.h"
 
+#include "core/mem.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,10 +46,11 @@ static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face
                             void (*tick)(void *udata, double f), void *udata)
 {
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
-    uint32_t *toff = malloc((nu + 2) * sizeof *toff);
-    uint32_t *tags = malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
-    uint32_t *aoff = calloc(nn + 2, sizeof *aoff);
-    uint32_t *nb = malloc((2 * nu + 1) * sizeof *nb), *el = malloc((2 * nu + 1) * sizeof *el);
+    uint32_t *toff = mem_malloc((nu + 2) * sizeof *toff);
+    uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
+    uint32_t *aoff = mem_calloc(nn + 2, sizeof *aoff);
+    uint32_t *nb = mem_malloc((2 * nu + 1) * sizeof *nb),
+             *el = mem_malloc((2 * nu + 1) * sizeof *el);
     int rc = -1;
     *bad_face = UINT32_MAX;
     memset(rows, 0, sizeof *rows);
@@ -98,12 +101,13 @@ int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
 {
     if (c->u_off && c->ucell) return membership_units(c, rows, bad_face, tick, udata);
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1;
-    uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
-    uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
-    uint32_t *toff = malloc((c->nf + 2) * sizeof *toff);
-    uint32_t *tags = malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
-    uint32_t *aoff = calloc(nn + 2, sizeof *aoff);
-    uint32_t *nb = malloc((2 * c->nf + 1) * sizeof *nb), *fc = malloc((2 * c->nf + 1) * sizeof *fc);
+    uint32_t *minus = mem_malloc((c->nf + 1) * sizeof *minus);
+    uint32_t *plus = mem_malloc((c->nf + 1) * sizeof *plus);
+    uint32_t *toff = mem_malloc((c->nf + 2) * sizeof *toff);
+    uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
+    uint32_t *aoff = mem_calloc(nn + 2, sizeof *aoff);
+    uint32_t *nb = mem_malloc((2 * c->nf + 1) * sizeof *nb),
+             *fc = mem_malloc((2 * c->nf + 1) * sizeof *fc);
     int rc = -1;
     *bad_face = UINT32_MAX;
     memset(rows, 0, sizeof *rows);
@@ -150,9 +154,9 @@ done:
 int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r)
 {
     size_t nc = c->nc;
-    uint8_t *sel = calloc(nc + 1, 1);
-    uint32_t *minus = malloc((c->nf + 1) * sizeof *minus);
-    uint32_t *plus = malloc((c->nf + 1) * sizeof *plus);
+    uint8_t *sel = mem_calloc(nc + 1, 1);
+    uint32_t *minus = mem_malloc((c->nf + 1) * sizeof *minus);
+    uint32_t *plus = mem_malloc((c->nf + 1) * sizeof *plus);
     bool_tree t = {0};
     int rc = -1, tree = 0;
     memset(r, 0, sizeof *r);
@@ -160,8 +164,8 @@ int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, boo
         goto done;
     if (bool_tree_build(e, c->nsolids, &t)) goto done;
     tree = 1;
-    r->cells = malloc((nc + 1) * sizeof *r->cells);
-    r->faces = malloc((c->nf + 1) * sizeof *r->faces);
+    r->cells = mem_malloc((nc + 1) * sizeof *r->cells);
+    r->faces = mem_malloc((c->nf + 1) * sizeof *r->faces);
     if (!r->cells || !r->faces) goto done;
     for (size_t k = 0; k < nc; k++) {
         sel[k] =

@@ -69,6 +69,7 @@
 #include <string.h>
 
 #include "core/facecheck.h"
+#include "core/mem.h"
 #include "core/num.h"
 #include "core/fastfloat.h"
 
@@ -243,9 +244,9 @@ static int merge_vertices(ck *c)
 {
     size_t nv = c->s->nv, cap = 16;
     while (cap < 2 * nv + 2) cap *= 2;
-    int64_t *g = malloc((nv ? 3 * nv : 1) * sizeof *g);
-    uint32_t *tab = malloc(cap * sizeof *tab);
-    c->merged = malloc((nv ? nv : 1) * sizeof *c->merged);
+    int64_t *g = mem_malloc((nv ? 3 * nv : 1) * sizeof *g);
+    uint32_t *tab = mem_malloc(cap * sizeof *tab);
+    c->merged = mem_malloc((nv ? nv : 1) * sizeof *c->merged);
     c->g = g;
     if (!g || !tab || !c->merged) goto fail;
     memset(tab, 0xff, cap * sizeof *tab);
@@ -482,7 +483,7 @@ static int check_faces(ck *c)
     const uint32_t *cy = s->cyc;
     gface q = {0};
     int rc = 0;
-    c->area = malloc(s->nf * sizeof *c->area);
+    c->area = mem_malloc(s->nf * sizeof *c->area);
     if (!c->area) return -1;
     for (size_t f = 0; f < s->nf && rc == 0; f++) {
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
@@ -585,8 +586,8 @@ static int check_faces(ck *c)
 static int sort_halves(ck *c)
 {
     size_t n = c->nhe, nv = c->s->nv;
-    half *tmp = malloc((n ? n : 1) * sizeof *tmp);
-    uint32_t *pos = calloc(nv + 2, sizeof *pos);
+    half *tmp = mem_malloc((n ? n : 1) * sizeof *tmp);
+    uint32_t *pos = mem_calloc(nv + 2, sizeof *pos);
     if (!tmp || !pos) {
         free(tmp), free(pos);
         return -1;
@@ -644,8 +645,8 @@ static int check_edges(ck *c, int *bad)
     const solid *s = c->s;
     const uint32_t *cy = s->cyc;
     size_t total = s->cyc_off[s->ncyc];
-    c->he = malloc((total ? total : 1) * sizeof *c->he);
-    c->pair = malloc((total / 2 + 1) * sizeof *c->pair);
+    c->he = mem_malloc((total ? total : 1) * sizeof *c->he);
+    c->pair = mem_malloc((total / 2 + 1) * sizeof *c->pair);
     if (!c->he || !c->pair) return -1;
     for (size_t f = 0; f < s->nf; f++)
         for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
@@ -699,10 +700,10 @@ static int check_edges(ck *c, int *bad)
 static int orient(ck *c, int *bad)
 {
     size_t nf = c->s->nf, inconsistent = 0, flips = 0, first = SIZE_MAX;
-    size_t *adj_off = calloc(nf + 1, sizeof *adj_off);
-    uint32_t *adj = malloc((2 * c->npair + 1) * sizeof *adj);
-    uint32_t *queue = malloc(nf * sizeof *queue);
-    c->flip = malloc(nf);
+    size_t *adj_off = mem_calloc(nf + 1, sizeof *adj_off);
+    uint32_t *adj = mem_malloc((2 * c->npair + 1) * sizeof *adj);
+    uint32_t *queue = mem_malloc(nf * sizeof *queue);
+    c->flip = mem_malloc(nf);
     if (!adj_off || !adj || !queue || !c->flip) goto fail;
     for (size_t e = 0; e < c->npair; e++) {
         const half *h = &c->he[c->pair[e]];
@@ -851,10 +852,10 @@ static int make_fixed(const ck *c, solid *out)
 {
     const solid *s = c->s;
     size_t total = s->cyc_off[s->ncyc];
-    out->V = malloc((s->nv ? 3 * s->nv : 1) * sizeof *out->V);
-    out->face_off = malloc((s->nf + 1) * sizeof *out->face_off);
-    out->cyc_off = malloc((s->ncyc + 1) * sizeof *out->cyc_off);
-    out->cyc = malloc((total ? total : 1) * sizeof *out->cyc);
+    out->V = mem_malloc((s->nv ? 3 * s->nv : 1) * sizeof *out->V);
+    out->face_off = mem_malloc((s->nf + 1) * sizeof *out->face_off);
+    out->cyc_off = mem_malloc((s->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = mem_malloc((total ? total : 1) * sizeof *out->cyc);
     if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) goto fail;
     out->nv = s->nv;
     out->nf = s->nf;
@@ -1071,7 +1072,7 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
     size_t nc = *cap ? *cap : 64;
     while (nc < need) nc *= 2;
     if (nc > SIZE_MAX / elem) return -1;
-    void *q = realloc(*p, nc * elem);
+    void *q = mem_realloc(*p, nc * elem);
     if (!q) return -1;
     *p = q;
     *cap = nc;
@@ -1112,12 +1113,12 @@ static void build_free(build *b)
 /* Moves b into out (each face one cycle); b is left empty. */
 static int build_finish(build *b, solid *out)
 {
-    uint32_t *fo = malloc((b->nf + 1) * sizeof *fo);
+    uint32_t *fo = mem_malloc((b->nf + 1) * sizeof *fo);
     if (!fo) return -1;
     for (size_t f = 0; f <= b->nf; f++) fo[f] = (uint32_t)f;
     if (b->nf == 0) {
         free(b->off);
-        b->off = calloc(1, sizeof *b->off);
+        b->off = mem_calloc(1, sizeof *b->off);
         if (!b->off) {
             free(fo);
             return -1;

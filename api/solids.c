@@ -713,6 +713,11 @@ static int check_read_solid(const solid *s, const char *path, int soup, totals *
     for (size_t f = 0; f < s->nf; f++)
         for (uint32_t c = s->face_off[f]; c < s->face_off[f + 1]; c++) {
             size_t n = s->cyc_off[c + 1] - s->cyc_off[c], h = c - s->face_off[f] - 1;
+            int ok = n >= 3 && n <= SOLIDS_MAX_CYCLE;
+            for (uint32_t i = s->cyc_off[c]; ok && i < s->cyc_off[c + 1]; i++)
+                ok = s->cyc[i] < s->nv;
+            if (ok) continue;
+            /* the error: where it is */
             char key[24];
             snprintf(key, sizeof key, "%zu", f);
             const char *k = c == s->face_off[f] ? NULL : key;

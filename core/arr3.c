@@ -63,7 +63,7 @@ static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
     return code;
 }
 
-int a3_grow(void *pp, size_t *cap, size_t need, size_t elem)
+int a3_grow_slow(void *pp, size_t *cap, size_t need, size_t elem)
 {
     void **p = pp;
     if (need <= *cap) return 0;
@@ -240,40 +240,6 @@ static uint64_t hash_g(const int64_t *x)
 {
     return a3_mix64((uint64_t)x[0] * 0x9e3779b97f4a7c15ULL ^ a3_mix64((uint64_t)x[1] + 0x632be5ab) ^
                     ((uint64_t)x[2] << 21 | (uint64_t)x[2] >> 43));
-}
-
-static int vtab_rehash(a3 *A, size_t ncap)
-{
-    uint32_t *t = mem_malloc(ncap * sizeof *t);
-    if (!t) return -1;
-    memset(t, 0xff, ncap * sizeof *t);
-    for (size_t v = 0; v < A->nv; v++) {
-        size_t h = hash_g(A->g + 3 * v) & (ncap - 1);
-        while (t[h] != NONE) h = (h + 1) & (ncap - 1);
-        t[h] = (uint32_t)v;
-    }
-    free(A->vtab);
-    A->vtab = t;
-    A->vcap = ncap;
-    return 0;
-}
-
-/* The vertex at grid point x, made when absent; NONE when out of memory. */
-static uint32_t vertex_at(a3 *A, const int64_t *x)
-{
-    if (2 * (A->nv + 1) > A->vcap && vtab_rehash(A, A->vcap ? 2 * A->vcap : 1024)) return NONE;
-    size_t h = hash_g(x) & (A->vcap - 1);
-    while (A->vtab[h] != NONE) {
-        const int64_t *q = A->g + 3 * (size_t)A->vtab[h];
-        if (q[0] == x[0] && q[1] == x[1] && q[2] == x[2]) return A->vtab[h];
-        h = (h + 1) & (A->vcap - 1);
-    }
-    if (A->nv >= 0x7fffffffu) return NONE;
-    if (a3_grow(&A->g, &A->capv, 3 * (A->nv + 1), sizeof *A->g)) return NONE;
-    uint32_t id = (uint32_t)A->nv++;
-    memcpy(A->g + 3 * (size_t)id, x, 3 * sizeof *x);
-    A->vtab[h] = id;
-    return id;
 }
 
 static uint64_t hash_plane(const plane3 *p)
@@ -832,9 +798,9 @@ static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
  * grid flattens, or one that was flat already) leaves its neighbours meeting along that line
  * with a vertex of one inside an edge of another.  Each such vertex becomes a contact point of
  * the plane of the piece whose edge it lies in, so the plane's arrangement splits that edge
- * there and the surface stays closed.  Pieces pc0 .. npc are the solid's; drop[0..n) the
+ * there and the surface stays closed.  Pieces pc0 .. pc1 are the solid's; drop[0..n) the
  * vertices of its left-out faces (sorted here).  Returns -1 out of memory. */
-static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
+static int mend_dropped(a3 *A, size_t pc0, size_t pc1, uint32_t *drop, size_t n)
 {
     qsort(drop, n, sizeof *drop, a3_cmp_u32);
     size_t m = 0;
@@ -844,7 +810,7 @@ static int mend_dropped(a3 *A, size_t pc0, uint32_t *drop, size_t n)
     if (!in) return -1;
     for (size_t i = 0; i < m; i++) in[drop[i]] = 1;
     int rc = 0;
-    for (size_t pi = pc0; pi < A->npc && !rc; pi++) {
+    for (size_t pi = pc0; pi < pc1 && !rc; pi++) {
         const piece *pc = &A->pc[pi];
         for (uint32_t cy = pc->c0; cy < pc->c0 + pc->nc && !rc; cy++) {
             uint32_t o = A->pc_off[cy], len = A->pc_off[cy + 1] - o;
@@ -962,6 +928,15 @@ static void in_task(void *ctx, size_t item, int worker)
         return;                                                                                    \
     } while (0)
 #define TASK_OOM TASK_FAIL(ARR_ENOMEM, "%s", "out of memory")
+    { /* room for the run's faces as they are (a face split into triangles grows them) */
+        size_t ncy = so->face_off[T->f1] - so->face_off[T->f0];
+        size_t nent = so->cyc_off[so->face_off[T->f1]] - so->cyc_off[so->face_off[T->f0]];
+        if (a3_grow(&B->pc, &B->cappc, T->f1 - T->f0 + 1, sizeof *B->pc) ||
+            a3_grow(&B->pc_off, &B->cappc_off, ncy + 2, sizeof *B->pc_off) ||
+            a3_grow(&B->pcv, &B->cappcv, nent + 1, sizeof *B->pcv) ||
+            a3_grow(&B->in, &B->capin, 2 * nent + 2, sizeof *B->in))
+            TASK_OOM;
+    }
     for (size_t f = T->f0; f < T->f1; f++) {
         uint32_t face = A->solid_face_off[s] + (uint32_t)f;
         size_t nc = 0, ntv = 0;
@@ -1136,6 +1111,15 @@ static void snap_chunk(void *ctx, size_t item, int worker)
     }
 }
 
+/* The points of a chunk of the vertices: point v is vertex v. */
+static void grid_points(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    a3 *A = ctx;
+    size_t i1 = (item + 1) * SNAP_CHUNK < A->nv ? (item + 1) * SNAP_CHUNK : A->nv;
+    for (size_t v = item * SNAP_CHUNK; v < i1; v++) A->pt[v] = xpt_grid(&A->G, (uint32_t)v);
+}
+
 /* The pieces' twins from the check's pairings (twins[s], by input entry of solid s). */
 typedef struct twinjob {
     a3 *A;
@@ -1163,6 +1147,188 @@ static void twin_chunk(void *ctx, size_t item, int worker)
     }
 }
 
+/* ---- equal items, on the threads -------------------------------------------------------- */
+
+/* first[i] = the first item equal to item i (i itself when none before it is), for items
+ * 0 .. n-1 with hashes hash[] (equal items have equal hashes; eq decides among those).  The
+ * items go to FI_PARTS parts by their hash (a stable counting sort, on the threads by chunks)
+ * and each part finds its firsts with a table of its own, on the threads: the result does not
+ * depend on the threads.  -1 out of memory. */
+#define FI_PARTS 256
+#define FI_CHUNK 65536
+typedef struct fijob {
+    size_t n, nchunk;
+    const uint64_t *hash;
+    a3_eq_fn eq;
+    const void *ctx;
+    uint32_t *cnt;  /* [chunk][part]: counts, then where the chunk's items of the part go */
+    uint32_t *idx;  /* the items by part, in order within each */
+    uint32_t *poff; /* FI_PARTS + 1 */
+    uint32_t *first;
+    int rc;
+} fijob;
+
+static void fi_count(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    fijob *j = ctx;
+    size_t i0 = item * FI_CHUNK, i1 = i0 + FI_CHUNK < j->n ? i0 + FI_CHUNK : j->n;
+    uint32_t *cnt = j->cnt + item * FI_PARTS;
+    for (size_t i = i0; i < i1; i++) cnt[j->hash[i] >> 56]++;
+}
+
+static void fi_scatter(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    fijob *j = ctx;
+    size_t i0 = item * FI_CHUNK, i1 = i0 + FI_CHUNK < j->n ? i0 + FI_CHUNK : j->n;
+    uint32_t *at = j->cnt + item * FI_PARTS;
+    for (size_t i = i0; i < i1; i++) j->idx[at[j->hash[i] >> 56]++] = (uint32_t)i;
+}
+
+static void fi_part(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    fijob *j = ctx;
+    uint32_t lo = j->poff[item], hi = j->poff[item + 1];
+    size_t cap = 16;
+    while (cap < 2 * (size_t)(hi - lo)) cap *= 2;
+    uint32_t *t = mem_malloc(cap * sizeof *t);
+    if (!t) {
+        j->rc = -1; /* the same value, whichever worker writes it */
+        return;
+    }
+    memset(t, 0xff, cap * sizeof *t);
+    for (uint32_t k = lo; k < hi; k++) {
+        uint32_t i = j->idx[k];
+        uint64_t h = j->hash[i];
+        for (size_t s = h & (cap - 1);; s = (s + 1) & (cap - 1)) {
+            uint32_t q = t[s];
+            if (q == NONE) {
+                t[s] = j->first[i] = i;
+                break;
+            }
+            if (j->hash[q] == h && j->eq(j->ctx, q, i)) {
+                j->first[i] = q;
+                break;
+            }
+        }
+    }
+    free(t);
+}
+
+int a3_firsts(int threads, size_t n, const uint64_t *hash, a3_eq_fn eq, const void *ctx,
+              uint32_t *first)
+{
+    fijob j = {n, (n + FI_CHUNK - 1) / FI_CHUNK, hash, eq, ctx, NULL, NULL, NULL, first, 0};
+    int rc = -1;
+    j.cnt = mem_calloc(j.nchunk * FI_PARTS + 1, sizeof *j.cnt);
+    j.idx = mem_malloc((n + 1) * sizeof *j.idx);
+    j.poff = mem_malloc((FI_PARTS + 1) * sizeof *j.poff);
+    if (!j.cnt || !j.idx || !j.poff) goto done;
+    par_for(threads, j.nchunk, fi_count, &j);
+    uint32_t at = 0; /* parts in order, each part's chunks in order */
+    for (size_t p = 0; p < FI_PARTS; p++) {
+        j.poff[p] = at;
+        for (size_t c = 0; c < j.nchunk; c++) {
+            uint32_t k = j.cnt[c * FI_PARTS + p];
+            j.cnt[c * FI_PARTS + p] = at;
+            at += k;
+        }
+    }
+    j.poff[FI_PARTS] = at;
+    par_for(threads, j.nchunk, fi_scatter, &j);
+    par_for(threads, FI_PARTS, fi_part, &j);
+    rc = j.rc;
+done:
+    free(j.cnt), free(j.idx), free(j.poff);
+    return rc;
+}
+
+/* One vertex per grid point, numbered in the input's order (the first input vertex on a point
+ * makes it). */
+static int grid_eq(const void *ctx, uint32_t a, uint32_t b)
+{
+    const int64_t *x = (const int64_t *)ctx + 3 * (size_t)a,
+                  *y = (const int64_t *)ctx + 3 * (size_t)b;
+    return x[0] == y[0] && x[1] == y[1] && x[2] == y[2];
+}
+
+typedef struct ghjob {
+    const int64_t *g;
+    uint64_t *hash;
+    size_t n;
+} ghjob;
+
+static void grid_hashes(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const ghjob *j = ctx;
+    size_t i1 = (item + 1) * FI_CHUNK < j->n ? (item + 1) * FI_CHUNK : j->n;
+    for (size_t i = item * FI_CHUNK; i < i1; i++) j->hash[i] = hash_g(j->g + 3 * i);
+}
+
+/* A->g, A->nv and vmap (by input vertex: its vertex) from the input's grid points g. */
+static int dedup_vertices(a3 *A, const int64_t *g, size_t n, uint32_t *vmap)
+{
+    int rc = -1;
+    uint64_t *hash = mem_malloc((n + 1) * sizeof *hash);
+    uint32_t *first = mem_malloc((n + 1) * sizeof *first);
+    if (!hash || !first) goto done;
+    ghjob hj = {g, hash, n};
+    par_for(A->threads, (n + FI_CHUNK - 1) / FI_CHUNK, grid_hashes, &hj);
+    if (a3_firsts(A->threads, n, hash, grid_eq, g, first)) goto done;
+    size_t nv = 0;
+    for (size_t i = 0; i < n; i++) nv += first[i] == i;
+    if (nv > 0x7fffffffu || a3_grow(&A->g, &A->capv, 3 * nv + 3, sizeof *A->g)) goto done;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t f = first[i];
+        if (f == i) {
+            memcpy(A->g + 3 * A->nv, g + 3 * i, 3 * sizeof *g);
+            vmap[i] = (uint32_t)A->nv++;
+        } else {
+            vmap[i] = vmap[f];
+        }
+    }
+    rc = 0;
+done:
+    free(hash), free(first);
+    return rc;
+}
+
+/* The runs' pieces joined in order, each run on a thread at its offsets (at[3 t ..]: its first
+ * piece, cycle and entry). */
+typedef struct joinjob {
+    a3 *A;
+    pbuf *buf;
+    const intask *task;
+    const size_t *at, *eoff;
+    const uint32_t *const *twins;
+    uint32_t *in2pcv;
+} joinjob;
+
+static void join_task(void *ctx, size_t t, int worker)
+{
+    (void)worker;
+    const joinjob *j = ctx;
+    a3 *A = j->A;
+    pbuf *B = &j->buf[t];
+    size_t s = j->task[t].s, pc0 = j->at[3 * t];
+    uint32_t cyc0 = (uint32_t)j->at[3 * t + 1], ent0 = (uint32_t)j->at[3 * t + 2];
+    for (size_t i = 0; i < B->npc; i++) {
+        piece P = B->pc[i];
+        P.c0 += cyc0;
+        A->pc[pc0 + i] = P;
+    }
+    for (size_t c = 0; c < B->npcyc; c++) A->pc_off[cyc0 + c] = B->pc_off[c] + ent0;
+    if (B->npcv) memcpy(A->pcv + ent0, B->pcv, B->npcv * sizeof *A->pcv);
+    for (size_t i = 0; i < B->npcv; i++) A->pcvp[ent0 + i] = SIDE_LAZY, A->ptwin[ent0 + i] = NONE;
+    for (size_t i = 0; j->in2pcv && j->twins[s] && i < B->nin; i++)
+        j->in2pcv[j->eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
+    free(B->pc), free(B->pc_off), free(B->pcv), free(B->in);
+    B->pc = NULL, B->pc_off = B->pcv = B->in = NULL;
+}
+
 A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
                                 char *err, size_t el)
 {
@@ -1175,6 +1341,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     size_t ndrop = 0, capdrop = 0;
     intask *task = NULL;
     pbuf *buf = NULL;
+    size_t *at = NULL;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
             for (int a = 0; a < 3; a++) {
@@ -1246,8 +1413,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         par_for(A->threads, (nvin + SNAP_CHUNK - 1) / SNAP_CHUNK, snap_chunk, &j);
     }
     A3_TICK("in/snap");
-    for (size_t i = 0; i < nvin; i++)
-        if ((vmap[i] = vertex_at(A, gin + 3 * i)) == NONE) goto oom;
+    if (dedup_vertices(A, gin, nvin, vmap)) goto oom;
     free(gin);
     gin = NULL;
     A3_TICK("in/vertex_at");
@@ -1282,35 +1448,32 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         if (!in2pcv) goto oom;
         memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
     }
-    size_t t = 0;
-    for (size_t s = 0; s < ns; s++) {
-        size_t pc0 = A->npc;
-        ndrop = 0;
-        for (; t < ntask && task[t].s == s; t++) {
-            pbuf *B = &buf[t];
-            uint32_t cyc0 = (uint32_t)A->npcyc, ent0 = (uint32_t)A->npcv;
-            for (size_t i = 0; i < B->npc; i++) {
-                piece P = B->pc[i];
-                P.c0 += cyc0;
-                A->pc[A->npc++] = P;
-            }
-            for (size_t c = 0; c < B->npcyc; c++) A->pc_off[A->npcyc++] = B->pc_off[c] + ent0;
-            if (B->npcv) memcpy(A->pcv + A->npcv, B->pcv, B->npcv * sizeof *A->pcv);
-            A->npcv += B->npcv;
-            A->pc_off[A->npcyc] = (uint32_t)A->npcv; /* the last cycle's end */
-            A->split_faces += B->split_faces;
-            for (size_t i = 0; in2pcv && twins[s] && i < B->nin; i++)
-                in2pcv[eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
-            for (size_t i = 0; i < B->ndrop; i++)
-                if (A3_PUSH(drop, ndrop, capdrop, B->drop[i])) goto oom;
-            pbuf_free(B);
-        }
-        if (twins && twins[s]) A->twinned[s] = 1;
-        if (ndrop && mend_dropped(A, pc0, drop, ndrop)) goto oom;
+    at = mem_malloc((3 * ntask + 3) * sizeof *at);
+    if (!at) goto oom;
+    at[0] = at[1] = at[2] = 0;
+    for (size_t t = 0; t < ntask; t++) {
+        at[3 * t + 3] = at[3 * t] + buf[t].npc;
+        at[3 * t + 4] = at[3 * t + 1] + buf[t].npcyc;
+        at[3 * t + 5] = at[3 * t + 2] + buf[t].npcv;
+        A->split_faces += buf[t].split_faces;
     }
+    {
+        joinjob j = {A, buf, task, at, eoff, twins, in2pcv};
+        par_for(A->threads, ntask, join_task, &j);
+    }
+    A->npc = npc, A->npcyc = npcyc, A->npcv = npcv;
     A->pc_off[A->npcyc] = (uint32_t)A->npcv;
+    /* the faces left out, solid by solid: their vertices inside the solid's edges */
+    for (size_t s = 0, t = 0; s < ns; s++) {
+        size_t t0 = t;
+        ndrop = 0;
+        for (; t < ntask && task[t].s == s; t++)
+            for (size_t i = 0; i < buf[t].ndrop; i++)
+                if (A3_PUSH(drop, ndrop, capdrop, buf[t].drop[i])) goto oom;
+        if (twins && twins[s]) A->twinned[s] = 1;
+        if (ndrop && mend_dropped(A, at[3 * t0], at[3 * t], drop, ndrop)) goto oom;
+    }
     A3_TICK("in/join");
-    for (size_t i = 0; i < A->npcv; i++) A->pcvp[i] = SIDE_LAZY, A->ptwin[i] = NONE;
     if (in2pcv) { /* the twins the check found, between entries that went as they are */
         twinjob j = {A, twins, in2pcv, eoff, ns, nein};
         par_for(A->threads, (nein + SNAP_CHUNK - 1) / SNAP_CHUNK, twin_chunk, &j);
@@ -1322,6 +1485,7 @@ fail:
     for (size_t i = 0; buf && i < ntask; i++) pbuf_free(&buf[i]);
     free(buf);
     free(task);
+    free(at);
     free(voff);
     free(eoff);
     free(gin);
@@ -1466,48 +1630,44 @@ static void cls_keys(void *ctx, size_t item, int worker)
 /* Every piece's coplanar class (piece.cls); a class holding pieces of one solid turning both
  * ways (a surface touching itself face to face) has all its pieces reached.  Fills the stats
  * planes and coplanar_groups. */
+static int piece_plane_eq(const void *ctx, uint32_t a, uint32_t b)
+{
+    const a3 *A = ctx;
+    plane3 P, Q;
+    return plane_equal_raw(a3_piece_plane(A, a, &P), a3_piece_plane(A, b, &Q));
+}
+
 A3_STAGE static int stage_classes(a3 *A)
 {
-    size_t n = A->npc, cap = 1024;
-    while (cap < 2 * n + 2) cap *= 2;
-    uint64_t *key = mem_malloc((n + 1) * sizeof *key), *tkey = mem_calloc(cap, sizeof *tkey);
-    uint32_t *tcls = mem_malloc(cap * sizeof *tcls), *first = mem_malloc((n + 1) * sizeof *first);
+    size_t n = A->npc;
+    uint64_t *key = mem_malloc((n + 1) * sizeof *key);
+    uint32_t *first = mem_malloc((n + 1) * sizeof *first); /* by piece: its class's first */
     uint8_t *flag = mem_calloc(n + 1, 1); /* by class: 1 another face, 2 another solid, 4 a wall */
     int8_t *dir = mem_malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
     int rc = -1;
-    if (!key || !tkey || !tcls || !first || !flag || !dir) goto done;
+    if (!key || !first || !flag || !dir) goto done;
     clsjob j = {A, key};
     par_for(A->threads, (n + CLS_CHUNK - 1) / CLS_CHUNK, cls_keys, &j);
+    if (a3_firsts(A->threads, n, key, piece_plane_eq, A, first)) goto done;
     uint32_t ncls = 0;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < n; i++) { /* classes numbered by their first pieces */
         piece *pc = &A->pc[i];
-        size_t h = key[i] & (cap - 1);
-        plane3 P, Q;
-        const plane3 *pp = NULL;
-        for (;; h = (h + 1) & (cap - 1)) {
-            if (!tkey[h]) { /* a new class */
-                tkey[h] = key[i];
-                tcls[h] = ncls;
-                first[ncls] = (uint32_t)i;
-                pc->cls = ncls++;
-                dir[i] = pc->sgn;
-                break;
-            }
-            if (tkey[h] != key[i]) continue;
-            const piece *f = &A->pc[first[tcls[h]]];
-            if (!pp) pp = a3_piece_plane(A, (uint32_t)i, &P);
-            const plane3 *fp = a3_piece_plane(A, first[tcls[h]], &Q);
-            if (!plane_equal_raw(pp, fp)) continue; /* a collision of keys */
-            uint32_t c = tcls[h];
-            pc->cls = c;
-            dir[i] = (int8_t)(pc->sgn * normals_dot_sign(pp->n, fp->n));
-            if (pc->face != f->face) flag[c] |= 1;
-            if (pc->solid != f->solid)
-                flag[c] |= 2;
-            else if (dir[i] != dir[first[c]] && !A->soup)
-                flag[c] |= 4;
-            break;
+        if (first[i] == i) {
+            pc->cls = ncls++;
+            dir[i] = pc->sgn;
+            continue;
         }
+        const piece *f = &A->pc[first[i]];
+        uint32_t c = f->cls;
+        plane3 P, Q;
+        pc->cls = c;
+        dir[i] = (int8_t)(pc->sgn * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
+                                                     a3_piece_plane(A, first[i], &Q)->n));
+        if (pc->face != f->face) flag[c] |= 1;
+        if (pc->solid != f->solid)
+            flag[c] |= 2;
+        else if (dir[i] != dir[first[i]] && !A->soup)
+            flag[c] |= 4;
     }
     A->ncls = ncls;
     /* in a class of several solids, a wall of any of them: its pieces by (class, solid) */
@@ -1538,8 +1698,6 @@ A3_STAGE static int stage_classes(a3 *A)
     rc = 0;
 done:
     free(key);
-    free(tkey);
-    free(tcls);
     free(first);
     free(flag);
     free(dir);
@@ -2608,7 +2766,6 @@ done:
 static void a3_free(a3 *A)
 {
     free(A->g);
-    free(A->vtab);
     free(A->pl);
     free(A->pltab);
     free(A->vpkey);
@@ -2675,8 +2832,9 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     A.solid_face_off = NULL;
     A.G.g = A.g;
     A.G.pl = A.pl;
-    for (size_t v = 0; v < A.nv; v++)
-        if (add_point(&A, xpt_grid(&A.G, (uint32_t)v)) == NONE) goto oom;
+    if (A.nv >= CUT_LOCAL - 1 || a3_grow(&A.pt, &A.cappt, A.nv + 1, sizeof *A.pt)) goto oom;
+    par_for(A.threads, (A.nv + SNAP_CHUNK - 1) / SNAP_CHUNK, grid_points, &A);
+    A.npt = A.nv;
     A3_TICK("points");
     if (stage_classes(&A)) goto oom;
     A3_TICK("classes");

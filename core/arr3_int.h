@@ -97,8 +97,6 @@ typedef struct a3 {
     /* vertices */
     int64_t *g;
     size_t nv, capv;
-    uint32_t *vtab;
-    size_t vcap;
     /* planes (canonical, deduplicated by a hash) */
     plane3 *pl;
     size_t npl, cappl;
@@ -160,7 +158,17 @@ typedef struct a3 {
 
 /* ---- shared tools (arr3.c) ------------------------------------------------------------- */
 
-int a3_grow(void *pp, size_t *cap, size_t need, size_t elem);
+/* *pp (an array of *cap elements of elem bytes) grown to hold need: 0, or -1 out of memory.
+ * The common case, nothing to do, is inline. */
+int a3_grow_slow(void *pp, size_t *cap, size_t need, size_t elem);
+static inline int a3_grow(void *pp, size_t *cap, size_t need, size_t elem)
+{
+    return need <= *cap ? 0 : a3_grow_slow(pp, cap, need, elem);
+}
+/* Are items a and b equal? (a3_firsts) */
+typedef int (*a3_eq_fn)(const void *ctx, uint32_t a, uint32_t b);
+int a3_firsts(int threads, size_t n, const uint64_t *hash, a3_eq_fn eq, const void *ctx,
+              uint32_t *first);
 /* qsort's comparison of uint32_t, ascending. */
 int a3_cmp_u32(const void *pa, const void *pb);
 #define A3_PUSH(arr, n, cap, val)                                                                  \

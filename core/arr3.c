@@ -2500,7 +2500,9 @@ typedef struct patchjob {
     const uint32_t *r_off; /* ranges: pieces r_off[t] .. r_off[t + 1) */
     uint32_t *uf, *lab, *epc;
     uint8_t *rch;
-    uint32_t *np; /* by range: its patches */
+    uint32_t *np; /* by range: its patches, then its first patch (np[nr]: all of them) */
+    uint32_t *nu; /* by range: its pieces in patches, then where the first goes in pp */
+    uint32_t *ppo, *pp, *cur; /* the result; cur: by patch, where its next piece goes */
 } patchjob;
 
 static void patch_range(void *ctx, size_t t, int worker)
@@ -2524,13 +2526,35 @@ static void patch_range(void *ctx, size_t t, int worker)
         }
     }
     for (uint32_t i = p0; i < p1; i++) j->lab[i] = NONE;
+    uint32_t nu = 0;
     for (uint32_t i = p0; i < p1; i++) {
         if (j->rch[i]) continue;
         uint32_t r = a3_uf_find(j->uf, i);
         if (j->lab[r] == NONE) j->lab[r] = np++;
         j->lab[i] = j->lab[r];
+        nu++;
     }
     j->np[t] = np;
+    j->nu[t] = nu;
+}
+
+/* A range's patches listed: ppo[k] for its patches k, their pieces in pp. */
+static void patch_fill(void *ctx, size_t t, int worker)
+{
+    (void)worker;
+    const patchjob *j = ctx;
+    uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], k0 = j->np[t], k1 = j->np[t + 1];
+    for (uint32_t k = k0; k < k1; k++) j->cur[k] = 0;
+    for (uint32_t i = p0; i < p1; i++)
+        if (!j->rch[i]) j->cur[j->lab[i] += k0]++;
+    uint32_t at = j->nu[t];
+    for (uint32_t k = k0; k < k1; k++) {
+        uint32_t c = j->cur[k];
+        j->ppo[k] = j->cur[k] = at;
+        at += c;
+    }
+    for (uint32_t i = p0; i < p1; i++)
+        if (!j->rch[i]) j->pp[j->cur[j->lab[i]]++] = i;
 }
 
 /* The patches: the pieces that nothing reached (nc == 1), linked across their twins (whose
@@ -2545,8 +2569,9 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     uint8_t *rch = mem_malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
     uint32_t *r_off = mem_malloc((4 * (size_t)A->threads + 3) * sizeof *r_off);
     uint32_t *np = mem_calloc(4 * (size_t)A->threads + 3, sizeof *np);
+    uint32_t *nu = mem_calloc(4 * (size_t)A->threads + 3, sizeof *nu), *cur = NULL;
     int rc = -1;
-    if (!uf || !lab || !epc || !rch || !r_off || !np) goto done;
+    if (!uf || !lab || !epc || !rch || !r_off || !np || !nu) goto done;
     /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
     size_t want = npc / (4 * (size_t)A->threads) + 1;
     r_off[nr++] = 0;
@@ -2555,29 +2580,29 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
             nr < 4 * (size_t)A->threads + 1)
             r_off[nr++] = (uint32_t)i;
     r_off[nr] = (uint32_t)npc;
-    patchjob j = {A, r_off, uf, lab, epc, rch, np};
+    patchjob j = {A, r_off, uf, lab, epc, rch, np, nu, NULL, NULL, NULL};
     par_for(A->threads, nr, patch_range, &j);
-    uint32_t total = 0;
+    uint32_t total = 0, inp = 0;
     for (size_t t = 0; t < nr; t++) {
-        uint32_t n = np[t];
-        np[t] = total; /* the range's first patch */
-        total += n;
+        uint32_t n = np[t], m = nu[t];
+        np[t] = total, nu[t] = inp; /* the range's first patch, and its first place in pp */
+        total += n, inp += m;
     }
-    ppo = mem_calloc((size_t)total + 2, sizeof *ppo);
+    np[nr] = total;
+    ppo = mem_malloc(((size_t)total + 2) * sizeof *ppo);
     pp = mem_malloc((npc + 1) * sizeof *pp);
-    if (!ppo || !pp) goto done;
-    for (size_t t = 0; t < nr; t++)
-        for (uint32_t i = r_off[t]; i < r_off[t + 1]; i++)
-            if (!rch[i]) ppo[(lab[i] += np[t]) + 2]++;
-    for (size_t k = 0; k < total; k++) ppo[k + 2] += ppo[k + 1];
-    for (size_t i = 0; i < npc; i++)
-        if (!rch[i]) pp[ppo[lab[i] + 1]++] = (uint32_t)i;
+    cur = mem_malloc(((size_t)total + 1) * sizeof *cur);
+    if (!ppo || !pp || !cur) goto done;
+    j.ppo = ppo, j.pp = pp, j.cur = cur;
+    par_for(A->threads, nr, patch_fill, &j);
+    ppo[total] = inp;
     A->npatch = total;
     *ppo_out = ppo, *pp_out = pp;
     ppo = pp = NULL;
     rc = 0;
 done:
     free(uf), free(lab), free(epc), free(ppo), free(pp), free(rch), free(r_off), free(np);
+    free(nu), free(cur);
     return rc;
 }
 
@@ -2643,6 +2668,7 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
     size_t capmap = 0, nf = 0, ncyc = 0, nent = 0, ncov = 0;
     int rc = -1;
     if (stage_patches(A, &ppo, &pp)) goto done;
+    A3_TICK("m/patches");
     /* sizes first */
     for (size_t i = 0; i < A->npc; i++) {
         const piece *pc = &A->pc[i];
@@ -2678,6 +2704,7 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
         !A->u_off || !A->f_unit || !A->f_out || !A->etwin || !pe2e)
         goto done;
     memset(pe2e, 0xff, (A->npcv + 1) * sizeof *pe2e); /* NONE: not in a patch */
+    A3_TICK("m/alloc");
     /* the patches: their faces, then their entries' twins (a twin in no patch: NONE), on the
      * threads */
     {
@@ -2694,10 +2721,13 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
             A->u_off[k] = ppo[k];
             for (uint32_t i = ppo[k]; i < ppo[k + 1]; i++) A->f_unit[i] = (uint32_t)k;
         }
+        A3_TICK("m/offsets");
         putjob j = {A, pp, ppo, eoff, pe2e, npf, 0};
         par_for(A->threads, (npf + PUT_CHUNK - 1) / PUT_CHUNK, put_chunk, &j);
+        A3_TICK("m/put");
         j.twins = 1;
         par_for(A->threads, (npf + PUT_CHUNK - 1) / PUT_CHUNK, put_chunk, &j);
+        A3_TICK("m/twins");
         free(eoff);
         A->nf = A->ncyc = ncov = npf;
         A->nent = e;

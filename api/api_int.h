@@ -38,12 +38,18 @@ typedef struct api_buf {
     void (*progress)(void *udata, const char *stage, double fraction);
     void *udata;
     unsigned nsections, sections;
+    /* the run's cancel (api_run_opts.cancel, may be NULL): read by api_buf_tick every 1024 rows;
+     * once set the buffer fails (the writers stop writing) and api_buf_finish says canceled */
+    const atomic_int *cancel;
+    int canceled;
 } api_buf;
 
 /* A top-level key of the result begins: "output" progress by the share of the keys written. */
 void api_buf_section(api_buf *b);
-/* Row i of the n of the section being written (cheap: reports every 8192nd). */
-void api_buf_tick(api_buf *b, size_t i, size_t n);
+/* Row i of the n of the section being written (cheap: reports every 8192nd, and reads the
+ * cancel every 1024th); non-zero once the buffer failed (out of memory, or canceled): the
+ * writer may stop its loop, nothing more is written. */
+int api_buf_tick(api_buf *b, size_t i, size_t n);
 #define API_BUF_SINK (1u << 20)
 
 /* Writes what the buffer holds to its sink (no-op without one); failed on a write error. */

@@ -44,12 +44,17 @@ void api_buf_section(api_buf *b)
     b->progress(b->udata, "output", (double)k / (double)(n + 1));
 }
 
-void api_buf_tick(api_buf *b, size_t i, size_t n)
+int api_buf_tick(api_buf *b, size_t i, size_t n)
 {
-    if (!b->progress || (i & 8191) || !n) return;
+    if ((i & 1023) == 0 && b->cancel && !b->canceled &&
+        atomic_load_explicit(b->cancel, memory_order_relaxed))
+        b->canceled = b->failed = 1; /* the writers stop: api_buf_finish says canceled */
+    if (b->failed) return 1;
+    if (!b->progress || (i & 8191) || !n) return 0;
     unsigned ns = b->nsections ? b->nsections : 1, k = b->sections ? b->sections - 1 : 0;
     if (k > ns) k = ns;
     b->progress(b->udata, "output", ((double)k + (double)i / (double)n) / (double)(ns + 1));
+    return 0;
 }
 
 void api_buf_flush(api_buf *b)
@@ -67,6 +72,8 @@ void api_buf_flush(api_buf *b)
 
 int api_buf_finish(api_buf *b, int rc, char **out, size_t *outlen, api_error *err)
 {
+    if ((rc == API_OK || rc == API_ENOMEM) && b->canceled) /* the writers saw a failed buffer */
+        rc = api_fail(err, API_ECANCELED, "canceled");
     if (rc == API_OK) {
         api_buf_putc(b, '\n');
         api_buf_flush(b);
@@ -533,7 +540,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         put_field(b, &first, "V");
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
-            api_buf_tick(b, v, c->nv);
+            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
             api_buf_puts(b, v ? ",[" : "[");
             api_buf_double(b, c->V[2 * v]);
             api_buf_putc(b, ',');
@@ -546,7 +553,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         put_field(b, &first, "EV");
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
-            api_buf_tick(b, e, c->ne);
+            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
             if (e) api_buf_putc(b, ',');
             api_buf_u32_list(b, c->EV + 2 * e, 2);
         }
@@ -557,7 +564,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const uint32_t *v;
-            api_buf_tick(b, f, r.nrows);
+            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
             size_t k = fv_row(&r, f, &v);
             if (f) api_buf_putc(b, ',');
             api_buf_u32_list(b, v, k);
@@ -569,7 +576,7 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t f = 0; f < r.nrows; f++) {
             const int32_t *e;
-            api_buf_tick(b, f, r.nrows);
+            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
             size_t k = fe_row(&r, f, &e);
             api_buf_puts(b, f ? ",[" : "[");
             for (size_t i = 0; i < k; i++) {

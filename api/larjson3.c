@@ -374,7 +374,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         put_key(b, "V");
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
-            api_buf_tick(b, v, c->nv);
+            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
             api_buf_puts(b, v ? ",[" : "[");
             api_buf_double(b, c->V[3 * v]);
             api_buf_putc(b, ',');
@@ -389,7 +389,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         put_key(b, "EV");
         api_buf_putc(b, '[');
         for (size_t e = 0; e < c->ne; e++) {
-            api_buf_tick(b, e, c->ne);
+            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
             if (e) api_buf_putc(b, ',');
             api_buf_u32_list(b, c->EV + 2 * e, 2);
         }
@@ -399,7 +399,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         put_key(b, "FV");
         api_buf_putc(b, '[');
         for (size_t f = 0; f < c->nf; f++) {
-            api_buf_tick(b, f, c->nf);
+            if (api_buf_tick(b, f, c->nf)) break; /* failed, or canceled */
             if (f) api_buf_putc(b, ',');
             put_cycle(b, c, c->fc[c->fc_off[f]]);
         }

@@ -324,6 +324,7 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     b.sink = wr.stream;
     b.progress = wr.progress;
     b.udata = wr.udata;
+    b.cancel = ro->cancel;
     rc = kind->run(req, &wr, &b, err);
 fail:
     if (kind) kind->free(req);

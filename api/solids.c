@@ -671,6 +671,10 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         c.stats.ms_boolean = ms_now() - t_bool;
         c.stats.ms_total += c.stats.ms_boolean;
     }
+    if (ro->cancel && atomic_load(ro->cancel)) {
+        rc = api_fail(err, API_ECANCELED, "canceled");
+        goto out;
+    }
     if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar3_write(out, &c, &fmt, err);
 out:
@@ -805,6 +809,7 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
     b.sink = wr.stream;
     b.progress = wr.progress;
     b.udata = wr.udata;
+    b.cancel = ro->cancel;
     rc = api_solids_run(r, &wr, &b, err);
 out:;
     void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */

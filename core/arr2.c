@@ -38,6 +38,7 @@
 #include "core/num.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/stop.h"
 
 #define MAXW      64 /* most workers */
 #define LEAF_MAX  24 /* bucket size aimed at */
@@ -89,6 +90,8 @@ typedef struct ctx {
     vbuf nearp[MAXW], nears[MAXW]; /* uint32 */
     uint8_t *pinned;               /* npix: the vertex keeps its grid coordinates */
     scratch scr[MAXW];
+    stop_meter meter[MAXW]; /* each worker's cancel meter */
+    stop_meter serial;      /* the calling thread's, in the serial stages */
 } ctx;
 
 static double now_ms(void)
@@ -308,11 +311,12 @@ static int check_range(const ctx *c, char *err, size_t el)
 
 /* ---- intersect ------------------------------------------------------------------------- */
 
-/* For workers: non-zero when the job failed or was cancelled (polled every 64 items). */
-static int worker_stop(ctx *c, size_t item)
+/* For worker w, after `work` units of work (stop.h): non-zero when the job failed or was
+ * cancelled. */
+static int worker_stop(ctx *c, int w, size_t work)
 {
     if (atomic_load_explicit(&c->fail, memory_order_relaxed)) return 1;
-    if ((item & 63) == 0 && cancelled(c)) {
+    if (stop_poll(&c->meter[w], work)) {
         atomic_store(&c->fail, ARR_ECANCELED);
         return 1;
     }
@@ -322,13 +326,13 @@ static int worker_stop(ctx *c, size_t item)
 static void intersect_leaf(void *vc, size_t l, int w)
 {
     ctx *c = vc;
-    if (worker_stop(c, l)) return;
     const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
     size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
     const double *r = c->tree.region + 4 * l;
     vbuf *out = &c->cross[w];
     size_t pairs = 0;
     for (size_t i = 0; i < k; i++) {
+        if (worker_stop(c, w, k - i)) return; /* the pairs of this row */
         const int64_t *bi = c->box + 4 * (size_t)it[i];
         const seg2 *si = &c->seg[it[i]];
         for (size_t j = i + 1; j < k; j++) {
@@ -369,11 +373,12 @@ static void intersect_leaf(void *vc, size_t l, int w)
 static void hotpixel_leaf(void *vc, size_t l, int w)
 {
     ctx *c = vc;
-    if (worker_stop(c, l)) return;
     const uint32_t *it = c->tree.items + c->tree.leaf_off[l];
     size_t k = c->tree.leaf_off[l + 1] - c->tree.leaf_off[l];
     vbuf *out = &c->inc[w];
+    if (worker_stop(c, w, 1)) return;
     for (uint32_t q = c->pl_off[l]; q < c->pl_off[l + 1]; q++) {
+        if (worker_stop(c, w, k)) return; /* this pixel against the leaf's segments */
         uint32_t pid = c->pl_pix[q];
         ipt p = c->pix[pid];
         for (size_t i = 0; i < k; i++) {
@@ -438,12 +443,12 @@ static void sort_keyed(i128 *key, uint32_t *val, size_t n)
 static void split_segments(void *vc, size_t chunk, int w)
 {
     ctx *c = vc;
-    if (worker_stop(c, 0)) return; /* chunks are big: poll on every one */
     size_t s0 = chunk * SEG_CHUNK, s1 = s0 + SEG_CHUNK < c->m ? s0 + SEG_CHUNK : c->m;
     scratch *sc = &c->scr[w];
     vbuf *out = &c->edges[w];
     for (size_t s = s0; s < s1; s++) {
         size_t k = c->sp_off[s + 1] - c->sp_off[s];
+        if (worker_stop(c, w, 4 * k + 1)) return; /* its pixels sorted along it */
         if (k > sc->cap) {
             size_t nc = k * 2;
             i128 *nk = realloc(sc->key, nc * sizeof *nk);
@@ -531,10 +536,10 @@ typedef struct locate_job {
 
 static void locate_chunk(void *vj, size_t chunk, int w)
 {
-    (void)w;
     locate_job *j = vj;
     size_t p0 = chunk * 4096, p1 = p0 + 4096 < j->c->npix ? p0 + 4096 : j->c->npix;
     for (size_t p = p0; p < p1; p++) {
+        if (worker_stop(j->c, w, 16)) return; /* a walk down the tree */
         uint32_t l = box_tree_locate(&j->c->tree, (double)j->c->pix[p].x, (double)j->c->pix[p].y);
         j->kv[p] = (uint64_t)l << 32 | p;
     }
@@ -652,8 +657,8 @@ static void near_chunk(void *vc, size_t chunk, int w)
     ctx *c = vc;
     size_t p0 = chunk * 1024, p1 = p0 + 1024 < c->npix ? p0 + 1024 : c->npix;
     vbuf leaves = {0};
-    if (worker_stop(c, chunk)) return;
     for (size_t pid = p0; pid < p1; pid++) {
+        if (worker_stop(c, w, 64)) break; /* a few leaves' segments */
         ipt p = c->pix[pid];
         double q[4] = {(double)(p.x - NEAR_R), (double)(p.y - NEAR_R), (double)(p.x + NEAR_R),
                        (double)(p.y + NEAR_R)};
@@ -752,7 +757,9 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
         c->pix[np++] = c->seg[i].a;
         c->pix[np++] = c->seg[i].b;
     }
-    if (sort_ipt(c->pix, np)) goto fail;
+    int sr = sort_ipt_stop(c->pix, np, c->o->cancel);
+    if (sr == -2) rc = ARR_ECANCELED;
+    if (sr) goto fail;
     size_t u = 0;
     for (size_t i = 0; i < np; i++)
         if (u == 0 || ipt_cmp(c->pix[u - 1], c->pix[i]) != 0) c->pix[u++] = c->pix[i];
@@ -771,6 +778,8 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     if (!kv) goto fail;
     locate_job lj = {c, kv};
     par_for(c->threads, (c->npix + 4095) / 4096, locate_chunk, &lj);
+    if ((rc = atomic_load(&c->fail))) goto fail;
+    rc = ARR_ENOMEM;
     if (group_by(kv, c->npix, c->tree.nleaves, &c->pl_off, &c->pl_pix)) goto fail;
     free(kv);
     kv = NULL;
@@ -824,14 +833,21 @@ fail:
 
 typedef struct graph {
     size_t nv, ne;
-    ipt *P;         /* nv */
-    uint32_t *src;  /* nv, with input_coords: the first input endpoint on the vertex, or NONE */
-    uint32_t *toff; /* with tags: ne+1 */
-    uint32_t *tag;  /* with tags: each edge's odd tags */
-    uint32_t *EV;   /* 2*ne */
-    uint32_t *off;  /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
-    uint32_t *out;  /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
+    ipt *P;           /* nv */
+    uint32_t *src;    /* nv, with input_coords: the first input endpoint on the vertex, or NONE */
+    uint32_t *toff;   /* with tags: ne+1 */
+    uint32_t *tag;    /* with tags: each edge's odd tags */
+    uint32_t *EV;     /* 2*ne */
+    uint32_t *off;    /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
+    uint32_t *out;    /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
+    stop_meter *stop; /* the cancel, polled by the long loops (may be NULL) */
 } graph;
+
+/* After `work` units of a serial stage: non-zero when the job is cancelled. */
+static int g_stop(const graph *g, size_t work)
+{
+    return g->stop && stop_poll(g->stop, work);
+}
 
 static inline uint32_t he_tail(const graph *g, uint32_t h)
 {
@@ -871,7 +887,8 @@ static int graph_adjacency(graph *g)
 }
 
 /* Iterative biconnected components (Hopcroft–Tarjan).  block[e] gets the block of edge e;
- * returns the number of blocks, or -1 when out of memory.  bsize[b] = edges in block b. */
+ * returns the number of blocks, -1 when out of memory, -2 when cancelled.  bsize[b] = edges in
+ * block b. */
 static long biconnected(const graph *g, uint32_t *block, uint32_t **bsize_out)
 {
     typedef struct frame {
@@ -891,6 +908,10 @@ static long biconnected(const graph *g, uint32_t *block, uint32_t **bsize_out)
         disc[r] = low[r] = ++time;
         st[sp++] = (frame){(uint32_t)r, NONE, g->off[r]};
         while (sp) {
+            if (g_stop(g, 1)) {
+                nb = -2;
+                goto fail;
+            }
             frame *f = &st[sp - 1];
             if (f->it < g->off[f->v + 1]) {
                 uint32_t h = g->out[f->it++], e = h >> 1, w = he_head(g, h);
@@ -940,7 +961,7 @@ fail:
     free(st);
     free(es);
     free(bsize);
-    return -1;
+    return nb == -2 ? -2 : -1;
 }
 
 /* Removes the edges with drop[e] set and the vertices left without edges; keeps the order
@@ -989,12 +1010,13 @@ static inline void he_dir(const graph *g, uint32_t h, int64_t *dx, int64_t *dy)
 
 /* Sorts each vertex's outgoing half-edges counter-clockwise; pos[h] = index of h in its list.
  * Returns -1 if two edges leave a vertex in the same direction (cannot happen after snap
- * rounding; checked rather than assumed). */
+ * rounding; checked rather than assumed), -2 when cancelled. */
 static int sort_around_vertices(const graph *g, uint32_t *pos)
 {
     for (size_t v = 0; v < g->nv; v++) {
         uint32_t *o = g->out + g->off[v];
         size_t d = g->off[v + 1] - g->off[v];
+        if (g_stop(g, d * d + 1)) return -2;
         for (size_t i = 1; i < d; i++) {
             uint32_t h = o[i];
             int64_t hx, hy;
@@ -1082,6 +1104,7 @@ static int walk_faces(const graph *g, const uint32_t *pos, walks *w)
         i128 a2 = 0;
         do {
             if (w->cyc_of[h] != NONE || k >= nh) return ARR_EINTERNAL;
+            if (g_stop(g, 1)) return ARR_ECANCELED;
             w->cyc_of[h] = c;
             w->hes[k++] = h;
             ipt p = g->P[he_tail(g, h)], q = g->P[he_head(g, h)];
@@ -1174,6 +1197,10 @@ static int place_components(const graph *g, const walks *w, const uint32_t *comp
     for (size_t k = 0; k < ncomp; k++) {
         ipt p = g->P[low[k]];
         uint64_t s = (uint64_t)(p.x - minx) / width;
+        if (g_stop(g, soff[s + 1] - soff[s] + 1)) {
+            rc = ARR_ECANCELED;
+            goto out;
+        }
         i128 bn = 0, bd = 0;
         uint32_t be = NONE, bat = NONE;
         for (uint32_t i = soff[s]; i < soff[s + 1]; i++) {
@@ -1328,6 +1355,10 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     out->cyc_off[0] = 0;
     for (size_t cy = 0; cy < w->ncyc; cy++) {
         size_t len = w->hoff[cy + 1] - w->hoff[cy], p0 = np;
+        if (g_stop(g, 4 * len + 1)) {
+            rc = ARR_ECANCELED;
+            goto out;
+        }
         for (size_t i = 0; i < len; i++) walkv[i] = he_tail(g, w->hes[w->hoff[cy] + i]);
         if (c->o->keep_dangling) {
             memcpy(out->cyc + k, walkv, len * sizeof *walkv);
@@ -1374,6 +1405,10 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     for (size_t f = 0; f < nf; f++) {
         out->fe_off[f] = (uint32_t)fe;
         uint32_t nhol = out->hole_off[f + 1] - out->hole_off[f];
+        if (g_stop(g, 8 * (nhol + 1))) {
+            rc = ARR_ECANCELED;
+            goto out;
+        }
         uint32_t fw = pwalk[out->face_cycle[f]];
         for (uint32_t j = 0; j <= nhol; j++) {
             uint32_t p = j == 0 ? out->face_cycle[f] : out->hole_cyc[out->hole_off[f] + j - 1];
@@ -1413,6 +1448,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     block = malloc((g->ne + 1) * sizeof *block);
     if (!block) goto fail;
     long nb = biconnected(g, block, &bsize);
+    if (nb == -2) rc = ARR_ECANCELED;
     if (nb < 0) goto fail;
     size_t blocks = 0;
     drop = calloc(g->ne + 1, 1);
@@ -1433,7 +1469,12 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     /* faces */
     pos = malloc((2 * g->ne + 1) * sizeof *pos);
     if (!pos) goto fail;
-    if (sort_around_vertices(g, pos)) {
+    int sr = sort_around_vertices(g, pos);
+    if (sr == -2) {
+        rc = ARR_ECANCELED;
+        goto fail;
+    }
+    if (sr) {
         rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
         goto fail;
     }
@@ -1453,6 +1494,10 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         comp[r] = (uint32_t)ncomp;
         stack[sp++] = (uint32_t)r;
         while (sp) {
+            if (g_stop(g, 1)) {
+                rc = ARR_ECANCELED;
+                goto fail;
+            }
             uint32_t v = stack[--sp];
             for (uint32_t i = g->off[v]; i < g->off[v + 1]; i++) {
                 uint32_t u = he_head(g, g->out[i]);
@@ -1606,6 +1651,9 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     c->threads = c->o->threads > 0 ? c->o->threads : par_ncpu();
     if (c->threads > MAXW) c->threads = MAXW;
     atomic_init(&c->fail, 0);
+    for (int w = 0; w < MAXW; w++) c->meter[w].flag = c->o->cancel;
+    c->serial.flag = c->o->cancel;
+    g.stop = &c->serial;
     out->stats.input_segments = n;
     if (n > ARR2_MAX_SEGMENTS) {
         rc = seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u", n,

@@ -1414,6 +1414,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     }
     A3_TICK("in/snap");
     if (dedup_vertices(A, gin, nvin, vmap)) goto oom;
+    if (a3_cancelled(A)) goto cancel;
     free(gin);
     gin = NULL;
     A3_TICK("in/vertex_at");
@@ -1429,6 +1430,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         par_for(A->threads, ntask, in_task, &j);
     }
     A3_TICK("in/tasks");
+    if (a3_cancelled(A)) goto cancel;
     size_t npc = 0, npcyc = 0, npcv = 0;
     for (size_t t = 0; t < ntask; t++) {
         if (buf[t].rc != ARR_OK) {
@@ -1479,6 +1481,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         par_for(A->threads, (nein + SNAP_CHUNK - 1) / SNAP_CHUNK, twin_chunk, &j);
     }
     goto fail; /* rc == ARR_OK: just free */
+cancel:
+    rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+    goto fail;
 oom:
     rc = seterr(err, el, ARR_ENOMEM, "out of memory");
 fail:
@@ -1597,6 +1602,7 @@ static void cls_keys(void *ctx, size_t item, int worker)
     const clsjob *j = ctx;
     const a3 *A = j->A;
     size_t p0 = item * CLS_CHUNK, p1 = p0 + CLS_CHUNK < A->npc ? p0 + CLS_CHUNK : A->npc;
+    if (a3_cancelled(A)) return; /* stage_classes sees it too */
     ckey c[CLS_CHUNK];
     uint64_t pre[CLS_CHUNK + 1];
     pre[0] = 1;
@@ -1648,6 +1654,10 @@ A3_STAGE static int stage_classes(a3 *A)
     if (!key || !first || !flag || !dir) goto done;
     clsjob j = {A, key};
     par_for(A->threads, (n + CLS_CHUNK - 1) / CLS_CHUNK, cls_keys, &j);
+    if (a3_cancelled(A)) { /* some chunks may have stopped early */
+        rc = -3;
+        goto done;
+    }
     if (a3_firsts(A->threads, n, key, piece_plane_eq, A, first)) goto done;
     uint32_t ncls = 0;
     for (size_t i = 0; i < n; i++) { /* classes numbered by their first pieces */
@@ -2669,6 +2679,10 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
     int rc = -1;
     if (stage_patches(A, &ppo, &pp)) goto done;
     A3_TICK("m/patches");
+    if (a3_cancelled(A)) {
+        rc = -3;
+        goto done;
+    }
     /* sizes first */
     for (size_t i = 0; i < A->npc; i++) {
         const piece *pc = &A->pc[i];
@@ -2844,7 +2858,7 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     pset ps = {0};
     uint64_t *pairs = NULL;
     size_t np = 0;
-    int rc = ARR_OK;
+    int rc = ARR_OK, r;
     double t0 = now_ms(), t;
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
@@ -2856,6 +2870,7 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     A3_TICK(NULL);
     if ((rc = stage_input(&A, solids, ns, soup ? NULL : twins, err, errlen))) goto fail;
     A3_TICK("input");
+    if (a3_cancelled(&A)) goto cancel;
     a3_progress(&A, "snap", 1);
     out->nsolids = ns;
     out->solid_face_off = A.solid_face_off;
@@ -2866,20 +2881,25 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     par_for(A.threads, (A.nv + SNAP_CHUNK - 1) / SNAP_CHUNK, grid_points, &A);
     A.npt = A.nv;
     A3_TICK("points");
-    if (stage_classes(&A)) goto oom;
+    if ((r = stage_classes(&A)) == -3) goto cancel;
+    if (r) goto oom;
     A3_TICK("classes");
+    if (a3_cancelled(&A)) goto cancel;
     if (stage_twins(&A)) goto oom;
     A3_TICK("twins");
+    if (a3_cancelled(&A)) goto cancel;
     out->stats.split_faces = A.split_faces;
     out->stats.ms_snap = now_ms() - t0;
     t = now_ms();
-    if (a3_pairs(&A, &pairs, &np)) goto oom;
+    if ((r = a3_pairs(&A, &pairs, &np)) == -3) goto cancel;
+    if (r) goto oom;
     A3_TICK("pairs");
+    if (a3_cancelled(&A)) goto cancel;
     out->stats.pairs_tested = np;
     out->stats.ms_pairs = now_ms() - t;
     a3_progress(&A, "pairs", 1);
     t = now_ms();
-    int r = stage_cuts(&A, pairs, np);
+    r = stage_cuts(&A, pairs, np);
     if (r == -3) goto cancel;
     if (r) goto oom;
     free(pairs);
@@ -2894,8 +2914,10 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     t = now_ms();
     if ((rc = a3_planes(&A, err, errlen)) != ARR_OK) goto fail;
     A3_TICK("planes");
+    if (a3_cancelled(&A)) goto cancel;
     size_t npt_before = A.npt;
-    if (merge_planes(&A, &ps)) goto oom;
+    if ((r = merge_planes(&A, &ps)) == -3) goto cancel;
+    if (r) goto oom;
     A3_TICK("merge");
     pset_free(&ps);
     out->stats.points = A.npt - A.nv;

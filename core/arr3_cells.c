@@ -1579,26 +1579,42 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     double *dh = NULL, *dl = NULL;
     int rc = ARR_ENOMEM;
 
+/* Between the stages: a cancel ends the run (each stage is a bounded part of it). */
+#define CELLS_CANCEL_POINT                                                                         \
+    do {                                                                                           \
+        if (a3_cancelled(A)) {                                                                     \
+            rc = ARR_ECANCELED;                                                                    \
+            goto done;                                                                             \
+        }                                                                                          \
+    } while (0)
     if (edges_make(A, &E)) goto done;
     A3_TICK("cells/edges");
+    CELLS_CANCEL_POINT;
     a3_progress(A, "cells", 0.1);
     if ((rc = fans_make(A, &E, out, err, errlen)) != ARR_OK) goto done;
     A3_TICK("cells/fans");
+    CELLS_CANCEL_POINT;
     rc = ARR_ENOMEM;
     if (shells_make(A, &E, &S)) goto done;
     A3_TICK("cells/shells");
+    CELLS_CANCEL_POINT;
     a3_progress(A, "cells", 0.3);
+    rc = ARR_ENOMEM;
     if (!(cu = mem_malloc((S.nsh + 2) * sizeof *cu))) goto done;
     if ((rc = nesting_make(A, &S, cu, err, errlen)) != ARR_OK) goto done;
     A3_TICK("cells/nesting");
+    CELLS_CANCEL_POINT;
     if ((rc = cells_make(A, &S, cu, out, &dh, &dl, err, errlen)) != ARR_OK) goto done;
     A3_TICK("cells/cells");
+    CELLS_CANCEL_POINT;
     cshells_free(&S);
     a3_progress(A, "cells", 0.55);
     rc = ARR_ENOMEM;
     if (output_make(A, &E, dh, dl, out)) goto done;
     A3_TICK("cells/output");
+    CELLS_CANCEL_POINT;
     rc = ARR_OK;
+#undef CELLS_CANCEL_POINT
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
     cedges_free(&E);

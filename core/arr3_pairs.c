@@ -185,6 +185,10 @@ static void build_groups(void *ctx, size_t item, int worker)
     forest *F = ctx;
     size_t g1 = (item + 1) * F->chunk < F->ng ? (item + 1) * F->chunk : F->ng;
     for (size_t g = item * F->chunk; g < g1 && !F->fail; g++) {
+        if (a3_cancelled(F->A)) {
+            F->fail = 3; /* the same value, whichever worker writes it */
+            return;
+        }
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
         uint32_t *ids = F->item + o; /* the pieces o .. o + n, overwritten in leaf order */
         for (uint32_t i = 0; i < n; i++) ids[i] = o + i;
@@ -327,6 +331,10 @@ static void walk_task(void *ctx, size_t item, int worker)
 {
     walkjob *j = ctx;
     if (j->fail) return;
+    if (a3_cancelled(j->F->A)) {
+        j->fail = 3;
+        return;
+    }
     uint64_t t = j->task[item];
     if (walk_pair(j->F, (uint32_t)(t >> 32), (uint32_t)t, &j->out[item], &j->stack[worker]))
         j->fail = 1;
@@ -402,6 +410,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     if (!F.root || !F.node || !F.item || !F.srt) goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
+    if (F.fail == 3) rc = -3;
     if (F.fail) goto done;
     free(F.srt);
     F.srt = NULL;
@@ -425,6 +434,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     j.stack = mem_calloc((size_t)A->threads, sizeof *j.stack);
     if (!j.out || !j.stack) goto done;
     par_for(A->threads, q.n, walk_task, &j);
+    if (j.fail == 3) rc = -3;
     if (j.fail) goto done;
     size_t total = 0;
     for (size_t i = 0; i < q.n; i++) total += j.out[i].n;

@@ -33,6 +33,8 @@
  */
 #include "core/bool2.h"
 #include "core/member.h"
+#include "core/sort.h"
+#include "core/stop.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -117,12 +119,13 @@ static uint32_t find_edge(const lar2 *c, uint32_t u, uint32_t v)
 
 /* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
  * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
-static int stage_sides(const lar2 *c, uint32_t *side, char *err, size_t el)
+static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
 {
     for (size_t i = 0; i < 2 * c->ne; i++) side[i] = NONE;
     size_t nf = c->nf;
     for (size_t f = 0; f <= nf; f++) {
         size_t ncy = f < nf ? 1 + c->hole_off[f + 1] - c->hole_off[f] : c->next;
+        if (stop_poll(stop, 64 * ncy)) return seterr(err, el, ARR_ECANCELED, "cancelled");
         for (size_t j = 0; j < ncy; j++) {
             uint32_t cy = f == nf  ? c->ext_cyc[j]
                           : j == 0 ? c->face_cycle[f]
@@ -178,8 +181,13 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
             nb[aoff[b + 1]] = a, ed[aoff[b + 1]++] = (uint32_t)e;
         }
     int w = member_walk_ex(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad,
-                           po && po->progress ? membership_tick : NULL, (void *)po);
+                           po && po->progress ? membership_tick : NULL, (void *)po,
+                           po ? po->cancel : NULL);
     if (w < 0) goto done;
+    if (w == 2) {
+        rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+        goto done;
+    }
     if (w > 0) {
         if (bad == UINT32_MAX) {
             rc = seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
@@ -291,7 +299,8 @@ static uint32_t he_head(const lar2 *c, uint32_t h)
 /* The result's rings: out->rc_off, rv, re (every ring with the selected side on its left), and
  * ring_grp (the group of each ring). */
 static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *sel,
-                       const uint32_t *grp, uint32_t **ring_grp, char *err, size_t el)
+                       const uint32_t *grp, uint32_t **ring_grp, stop_meter *stop, char *err,
+                       size_t el)
 {
     const lar2 *c = &out->c;
     size_t nb = 0;
@@ -304,6 +313,8 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
     out->re = malloc((nb + 1) * sizeof *out->re);
     *ring_grp = malloc((nb + 1) * sizeof **ring_grp);
     int rc = ARR_ENOMEM;
+    kv *order = NULL;
+    ray *sorted = NULL;
     if (!rays || !next || !done || !out->rc_off || !out->rv || !out->re || !*ring_grp) goto fail;
     size_t nr = 0;
     for (size_t e = 0; e < c->ne; e++) {
@@ -315,7 +326,31 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
         rays[nr++] = (ray){t, g, h, 0, dx, dy};
         rays[nr++] = (ray){d, g, h, 1, -dx, -dy};
     }
-    qsort(rays, nr, sizeof *rays, ray_cmp);
+    /* by (vertex, group) in a radix sort, then each run of rays by angle (runs are short: the
+     * group's boundary edges at one vertex) */
+    order = malloc((nr + 1) * sizeof *order);
+    sorted = malloc((nr + 1) * sizeof *sorted);
+    if (!order || !sorted) goto fail;
+    for (size_t i = 0; i < nr; i++)
+        order[i] = (kv){(uint64_t)rays[i].v << 32 | rays[i].grp, (uint32_t)i};
+    if (sort_kv(order, nr)) goto fail;
+    for (size_t i = 0; i < nr; i++) sorted[i] = rays[order[i].v];
+    free(rays);
+    rays = sorted;
+    sorted = NULL;
+    for (size_t i = 0, j; i < nr; i = j) {
+        for (j = i + 1; j < nr && order[j].k == order[i].k; j++) continue;
+        if (stop_poll(stop, (j - i) * (j - i))) {
+            rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+            goto fail;
+        }
+        for (size_t k = i + 1; k < j; k++) {
+            ray x = rays[k];
+            size_t m = k;
+            for (; m > i && ray_cmp(&rays[m - 1], &x) > 0; m--) rays[m] = rays[m - 1];
+            rays[m] = x;
+        }
+    }
     /* an edge coming in is followed by the next ray of its group counter-clockwise: an edge
      * going out (the rays of one group alternate around a vertex) */
     for (size_t i = 0; i < 2 * c->ne; i++) next[i] = NONE;
@@ -325,9 +360,11 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
         for (size_t k = i; k < j; k++) {
             if (!rays[k].in) continue;
             const ray *o = &rays[k + 1 < j ? k + 1 : i];
-            if (o->in)
-                return seterr(err, el, ARR_EINTERNAL,
-                              "internal: the result's boundary does not alternate at a vertex");
+            if (o->in) {
+                rc = seterr(err, el, ARR_EINTERNAL,
+                            "internal: the result's boundary does not alternate at a vertex");
+                goto fail;
+            }
             next[rays[k].h] = o->h;
         }
     }
@@ -336,6 +373,10 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
     for (size_t e = 0; e < c->ne; e++)
         for (uint32_t h = (uint32_t)(2 * e); h <= 2 * e + 1; h++) {
             if (next[h] == NONE || done[h]) continue;
+            if (stop_poll(stop, 1)) {
+                rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+                goto fail;
+            }
             uint32_t x = h;
             do {
                 if (done[x] || next[x] == NONE || k >= nb) {
@@ -357,6 +398,8 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
 fail:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
     free(rays);
+    free(sorted);
+    free(order);
     free(next);
     free(done);
     return rc;
@@ -479,11 +522,20 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     sel = malloc(nf + 1);
     grp = malloc((nf + 1) * sizeof *grp);
     if (!side || !sel || !grp) goto fail;
-    if ((rc = stage_sides(c, side, err, errlen)) != ARR_OK) goto fail;
-        /* the stages after the arrangement's, each reported at its end */
+    stop_meter stop = {.flag = ao.cancel};
+    if ((rc = stage_sides(c, side, &stop, err, errlen)) != ARR_OK) goto fail;
+    if (ao.cancel && atomic_load(ao.cancel)) {
+        rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");
+        goto fail;
+    }
+    /* the stages after the arrangement's, each reported at its end */
 #define BOOL2_PROGRESS(stage, f)                                                                   \
     do {                                                                                           \
         if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
+        if (ao.cancel && atomic_load(ao.cancel)) {                                                 \
+            rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");                                  \
+            goto fail;                                                                             \
+        }                                                                                          \
     } while (0)
     if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("membership", 1);
@@ -491,7 +543,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if (stage_select(out, op, sel)) goto fail;
     stage_groups(c, side, sel, grp);
     BOOL2_PROGRESS("select", 1);
-    if ((rc = stage_rings(out, side, sel, grp, &ring_grp, err, errlen)) != ARR_OK) goto fail;
+    if ((rc = stage_rings(out, side, sel, grp, &ring_grp, &stop, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("polygons", 0.5);
     if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("polygons", 1);

@@ -85,7 +85,7 @@ static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face
         nb[aoff[b + 1]] = a, el[aoff[b + 1]++] = (uint32_t)u;
     }
     uint32_t bad = UINT32_MAX;
-    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, el, toff, tags, rows, &bad, tick, udata);
+    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, el, toff, tags, rows, &bad, tick, udata, NULL);
     if (bad != UINT32_MAX) *bad_face = c->u_off[bad];
 done:
     free(toff);
@@ -139,7 +139,8 @@ int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
             nb[aoff[minus[f] + 1]] = plus[f], fc[aoff[minus[f] + 1]++] = (uint32_t)f;
             nb[aoff[plus[f] + 1]] = minus[f], fc[aoff[plus[f] + 1]++] = (uint32_t)f;
         }
-    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, fc, toff, tags, rows, bad_face, tick, udata);
+    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, fc, toff, tags, rows, bad_face, tick, udata,
+                        NULL);
 done:
     free(minus);
     free(plus);

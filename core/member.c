@@ -32,13 +32,13 @@ int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
                 const uint32_t *el, const uint32_t *toff, const uint32_t *tags, member_rows *rows,
                 uint32_t *bad_el)
 {
-    return member_walk_ex(n, root, aoff, nb, el, toff, tags, rows, bad_el, NULL, NULL);
+    return member_walk_ex(n, root, aoff, nb, el, toff, tags, rows, bad_el, NULL, NULL, NULL);
 }
 
 int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
                    const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
                    member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
-                   void *udata)
+                   void *udata, const atomic_int *cancel)
 {
     /* rows in the order cells are reached, in one growing buffer */
     size_t *start = malloc((n + 1) * sizeof *start);
@@ -60,6 +60,10 @@ int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t
     while (qh < qt) {
         uint32_t u = queue[qh++];
         if (tick && (qh & 0xffff) == 0) tick(udata, (double)qh / (double)n);
+        if (cancel && (qh & 4095) == 0 && atomic_load_explicit(cancel, memory_order_relaxed)) {
+            rc = 2;
+            goto done;
+        }
         for (uint32_t i = aoff[u]; i < aoff[u + 1]; i++) {
             uint32_t v = nb[i], x = el[i];
             size_t nt = toff[x + 1] - toff[x], most = len[u] + nt;

@@ -14,6 +14,7 @@
 #ifndef CELLAR_MEMBER_H
 #define CELLAR_MEMBER_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -31,11 +32,12 @@ int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
                 const uint32_t *el, const uint32_t *toff, const uint32_t *tags, member_rows *rows,
                 uint32_t *bad_el);
 
-/* The same, calling tick(udata, cells reached / n) every 65 536 cells when tick is not NULL. */
+/* The same, calling tick(udata, cells reached / n) every 65 536 cells when tick is not NULL,
+ * and returning 2 (nothing in rows) once *cancel (read every 4096 cells; may be NULL) is set. */
 int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
                    const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
                    member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
-                   void *udata);
+                   void *udata, const atomic_int *cancel);
 
 void member_rows_free(member_rows *r);
 

@@ -94,6 +94,11 @@ RADIX_SORT(sort_kv, kv, KEY_KV)
 
 int sort_ipt(ipt *a, size_t n)
 {
+    return sort_ipt_stop(a, n, NULL);
+}
+
+int sort_ipt_stop(ipt *a, size_t n, const atomic_int *stop)
+{
     if (n < 2) return 0;
     if (n <= SMALL) { /* by x, then y: the order of the passes below */
         for (size_t i = 1; i < n; i++) {
@@ -113,20 +118,21 @@ int sort_ipt(ipt *a, size_t n)
         return -1;
     }
     ipt *src = a, *dst = tmp;
-    for (unsigned sh = 0; sh < 64; sh += RBITS) {
-        if (pass_ipt_y(src, dst, n, sh, cnt)) {
-            ipt *t = src;
-            src = dst;
-            dst = t;
+    /* by y, then (stable) by x; a stop is read before each pass (a is then some order of its
+     * elements: each pass writes all of them) */
+    for (unsigned p = 0, sh = 0; p < 2; p++, sh = 0)
+        for (; sh < 64; sh += RBITS) {
+            if (stop && atomic_load_explicit(stop, memory_order_relaxed)) {
+                free(tmp);
+                free(cnt);
+                return -2;
+            }
+            if (p == 0 ? pass_ipt_y(src, dst, n, sh, cnt) : pass_ipt_x(src, dst, n, sh, cnt)) {
+                ipt *t = src;
+                src = dst;
+                dst = t;
+            }
         }
-    }
-    for (unsigned sh = 0; sh < 64; sh += RBITS) {
-        if (pass_ipt_x(src, dst, n, sh, cnt)) {
-            ipt *t = src;
-            src = dst;
-            dst = t;
-        }
-    }
     if (src != a) memcpy(a, src, n * sizeof *a);
     free(tmp);
     free(cnt);

@@ -5,6 +5,7 @@
 #ifndef CELLAR_SORT_H
 #define CELLAR_SORT_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -20,5 +21,8 @@ typedef struct kv {
 int sort_kv(kv *a, size_t n);
 /* Lexicographic (x, then y); coordinates must satisfy |c| < 2^62. */
 int sort_ipt(ipt *a, size_t n);
+/* The same, reading *stop (may be NULL) before each of its passes: -2 once it is set (a is then
+ * left in some order). */
+int sort_ipt_stop(ipt *a, size_t n, const atomic_int *stop);
 
 #endif

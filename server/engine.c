@@ -395,6 +395,21 @@ typedef struct renewal {
     run *r;
 } renewal;
 
+/* After a renewal found no job running here under id: is it running elsewhere, or queued
+ * again (the lease was lost)?  Not when it ended meanwhile (its worker finished it between the
+ * list of running jobs and the renewal): that is no loss, and says nothing.  A store error
+ * counts as lost, as the renewal said. */
+static int lease_taken(engine *e, const char *id)
+{
+    char err[256];
+    store_job j = {0};
+    int rc = e->cfg.st->ops->job_get(e->cfg.st, id, &j, err, sizeof err);
+    int taken = rc != STORE_OK || j.state == JOB_QUEUED ||
+                (j.state == JOB_RUNNING && strcmp(j.owner, e->owner) != 0);
+    store_job_clear(&j);
+    return taken;
+}
+
 /* Renews the lease of every job running here and writes its progress; a job asked to stop is
  * told, one no longer ours is marked lost and stopped. */
 static void renew_all(engine *e)
@@ -419,6 +434,7 @@ static void renew_all(engine *e)
             log_kv(LOG_WARN, "store: job_renew failed", "job", rs[i].id, "error", err, NULL);
             continue;
         }
+        if (rc == STORE_NOTFOUND && !lease_taken(e, rs[i].id)) continue; /* it just ended */
         pthread_mutex_lock(&e->lock);
         for (run *r = e->running; r; r = r->next) /* still running (rs[i].r may be gone) */
             if (r == rs[i].r && !strcmp(r->sj.id, rs[i].id)) {

@@ -4,8 +4,9 @@
  * Schema (cellar_meta's 'schema' row is the number of migrations applied; pg_migrations below):
  *   jobs(id PRIMARY KEY, seq, hash, kind, state, created, started, finished, error_status,
  *        error, request bytea, owner, lease_until, attempts, cancel, stage, fraction)
- *        unique index jobs_active_hash(hash) WHERE state IN (0, 1): one job per request in
- *        flight, which submissions join; jobs_queue(created, seq) WHERE state = 0
+ *        unique index jobs_active_hash(hash) WHERE state IN (0, 1) AND NOT cancel: one job
+ *        per request in flight, which submissions join (a job being canceled is none: a new
+ *        submission makes a new job); jobs_queue(created, seq) WHERE state = 0
  *   subs(id PRIMARY KEY, job REFERENCES jobs ON DELETE CASCADE, created, canceled)
  *   results(hash PRIMARY KEY, bytes, created, last_used)
  *   result_chunks(hash, off, body bytea, sha bytea, PRIMARY KEY(hash, off))
@@ -85,6 +86,11 @@ static const char *const pg_migrations[] = {
     " FOR EACH ROW EXECUTE FUNCTION cellar_results_changed();",
     /* 1 -> 2: the job that made each result (X-Cellar-Job of a cache hit) */
     "ALTER TABLE results ADD COLUMN job text;",
+    /* 2 -> 3: a job being canceled (running, its cancel flag set) is no longer the request's
+     * job: a new submission of the request makes a new job beside it instead of joining one
+     * that will end canceled */
+    "DROP INDEX jobs_active_hash;"
+    "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1) AND NOT cancel;",
 };
 #define PG_VERSION ((int)(sizeof pg_migrations / sizeof *pg_migrations))
 
@@ -516,9 +522,11 @@ static int pg_submit_once(pg_conn *c, const store_job *j, size_t queue_max, int 
         goto done;
     }
     /* the job in flight, locked: a cancel of its last submission waits for this join, or
-     * this join sees the job canceled and makes a new one */
-    if (!(r = pg_rows(c, "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) FOR UPDATE", &p,
-                      0, "job_submit", err, errlen)))
+     * this join sees the job canceled (or being canceled) and makes a new one */
+    if (!(r = pg_rows(c,
+                      "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) AND NOT cancel"
+                      " FOR UPDATE",
+                      &p, 0, "job_submit", err, errlen)))
         goto fail;
     int found = PQntuples(r) > 0 && !col_fixed(r, 0, 0, job_id, 33);
     PQclear(r);

@@ -144,6 +144,11 @@ static const char *const sq_migrations[] = {
     "CREATE INDEX jobs_queue ON jobs(created) WHERE state = 0;",
     /* 5 -> 6: the job that made each result (X-Cellar-Job of a cache hit) */
     "ALTER TABLE results ADD COLUMN job TEXT;",
+    /* 6 -> 7: a job being canceled (running, its cancel flag set) is no longer the request's
+     * job: a new submission of the request makes a new job beside it instead of joining one
+     * that will end canceled */
+    "DROP INDEX jobs_active_hash;"
+    "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1) AND cancel = 0;",
 };
 #define SQ_VERSION ((int)(sizeof sq_migrations / sizeof *sq_migrations))
 
@@ -198,8 +203,9 @@ static const char *const sq_sql_text[SQ_NSQL] = {
     [SQ_JOB_GET] = "SELECT id, hash, kind, state, created, started, finished, error_status, error,"
                    " request, (SELECT count(*) FROM subs WHERE job = ?1 AND canceled IS NULL),"
                    " owner, lease_until, attempts, cancel, stage, fraction FROM jobs WHERE id = ?1",
-    /* the queued or running job of a request (through the unique index jobs_active_hash) */
-    [SQ_JOB_ACTIVE] = "SELECT id FROM jobs WHERE hash = ?1 AND state IN (0, 1)",
+    /* the queued or running job of a request that is not being canceled (through the unique
+     * index jobs_active_hash) */
+    [SQ_JOB_ACTIVE] = "SELECT id FROM jobs WHERE hash = ?1 AND state IN (0, 1) AND cancel = 0",
     [SQ_JOB_COUNTS] = "SELECT (SELECT count(*) FROM jobs WHERE state = 0),"
                       " (SELECT count(*) FROM jobs WHERE state = 1)",
     /* the oldest queued job (through jobs_queue), for ?1 until ?3 */

@@ -996,6 +996,43 @@ long long db_ll(const char *path, const char *sql)
     return v;
 }
 
+double srv_cpu_s(const srv *d)
+{
+    char path[64], line[1024];
+    snprintf(path, sizeof path, "/proc/%d/stat", (int)d->pid);
+    FILE *f = d->pid > 0 ? fopen(path, "r") : NULL;
+    if (!f) return -1;
+    size_t n = fread(line, 1, sizeof line - 1, f);
+    fclose(f);
+    line[n] = 0;
+    /* after the command's closing parenthesis: state is field 3, utime 14, stime 15 */
+    const char *p = strrchr(line, ')');
+    unsigned long long ut = 0, st = 0;
+    if (!p ||
+        sscanf(p + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &ut, &st) != 2)
+        return -1;
+    return (double)(ut + st) / (double)sysconf(_SC_CLK_TCK);
+}
+
+double srv_idle_after(const srv *d, double t0, double quiet, double timeout)
+{
+    double last_busy = -1, prev = srv_cpu_s(d), tp = now_s(), quiet_since = tp;
+    if (prev < 0) return -1;
+    while (now_s() < t0 + timeout) {
+        sleep_s(0.05);
+        double c = srv_cpu_s(d), t = now_s();
+        if (c < 0) return -1;
+        if (c - prev >= 0.4 * (t - tp)) { /* a little now and then (the daemon's own threads,
+                                               the clock's ticks of 10 ms) is not busy */
+            last_busy = t;
+            quiet_since = t;
+        }
+        prev = c, tp = t;
+        if (t - quiet_since >= quiet) return last_busy < 0 ? 0 : last_busy - t0;
+    }
+    return -1;
+}
+
 char *metrics_text(srv *d)
 {
     hresp r;

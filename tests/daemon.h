@@ -149,6 +149,13 @@ int job_parse(const hresp *r, jobv *j);
 int submit_(srv *d, const char *body, size_t len, jobv *j, const char *func, int line);
 int wait_state(srv *d, const char *id, const char *want, double timeout, jobv *j);
 long long db_ll(const char *path, const char *sql);
+/* The daemon's CPU time so far (user + system, /proc/PID/stat), seconds; -1 when unreadable. */
+double srv_cpu_s(const srv *d);
+/* Watches the daemon's CPU use in samples of 50 ms until it has not been busy for `quiet` seconds
+ * (or `timeout` passed) and returns the seconds from t0 to the end of its last busy sample
+ * (one in which it used at least 40 % of a core: a worker computing), 0 when none was busy,
+ * -1 when it never went quiet or its CPU time cannot be read. */
+double srv_idle_after(const srv *d, double t0, double quiet, double timeout);
 char *metrics_text(srv *d);
 double mval(const char *text, const char *series);
 double metric(srv *d, const char *series);

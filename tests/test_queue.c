@@ -412,11 +412,31 @@ CONTRACT(queue_cancel_per_submission)
                   STORE_OK &&
               cancel == 1,
           "renew after the cancel: cancel %d", cancel);
+    /* while it stops, another client's same request makes a job of its own: it must not join
+     * one that will end canceled (that client canceled nothing) */
+    char s4[33], s5[33];
+    REQUIRE(submit(b, 4, 400, 13, 0, 0, job, &joined) == STORE_OK, "while stopping: %s", b->err);
+    id_of(s4, 4);
+    CHECK(!joined && !strcmp(job, s4), "joined %d job %s: the request joined the stopping job",
+          joined, job);
+    w = get(b, s4);
+    CHECK(w.state == JOB_QUEUED && w.active_subs == 1 && !w.cancel,
+          "the new job: state %d active %d cancel %d", (int)w.state, w.active_subs, w.cancel);
+    store_job_clear(&w);
+    /* ... which later submissions join, as any job in flight */
+    REQUIRE(submit(b, 5, 400, 14, 0, 0, job, &joined) == STORE_OK && joined && !strcmp(job, s4),
+            "join the new job: joined %d job %s %s", joined, job, b->err);
+    id_of(s5, 5);
     /* a stopped job given back is canceled, not queued */
     CHECK(s->ops->job_release(s, s3, "A", b->err, sizeof b->err) == STORE_OK, "release");
     w = get(b, s3);
     CHECK(w.state == JOB_CANCELED, "released with the cancel flag: %d", (int)w.state);
     store_job_clear(&w);
+    w = get(b, s4);
+    CHECK(w.state == JOB_QUEUED && w.active_subs == 2, "the new job after the release: %d %d",
+          (int)w.state, w.active_subs);
+    store_job_clear(&w);
+    (void)s5;
     CHECK(s->ops->sub_cancel(s, "ffffffffffffffffffffffffffffffff", 1, &changed, &what, b->err,
                              sizeof b->err) == STORE_NOTFOUND,
           "cancel of no submission");

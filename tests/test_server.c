@@ -451,6 +451,108 @@ SERVER_TEST(cancel, "--workers 1 --job-threads 1")
     srv_term(d);
 }
 
+/* A canceled job frees its worker at once, wherever the run is: the daemon's CPU use (both
+ * core threads of the worker computing) ends within a bound of the DELETE derived from this
+ * run's measured speed (slow.secs: the slow job's time; the huge job runs 4-6 times as long,
+ * and a cancel seen only between stages would leave most of it to run). */
+SERVER_TEST(cancel_frees_the_worker_at_once, "--workers 1 --job-threads 2")
+{
+    size_t hlen;
+    const char *huge = huge_body(&hlen);
+    REQUIRE(huge, "no slow requests");
+    double bound = slow.secs / 2 > 1.0 ? slow.secs / 2 : 1.0;
+    /* three cancels, early, midway and late into the run (each a job of its own) */
+    const double at[3] = {0.1, 0.8, 2.0};
+    for (int k = 0; k < 3; k++) {
+        char body[64], *hk = NULL;
+        size_t len = hlen;
+        /* the huge request with a precision of its own: a new job each time */
+        buf b = {0};
+        const char *end = huge + hlen;
+        while (end > huge && (end[-1] == '\n' || end[-1] == '}')) end--;
+        buf_add(&b, huge, (size_t)(end - huge));
+        snprintf(body, sizeof body, ",\"precision\":%de-9}}", 90 + k);
+        buf_add(&b, body, strlen(body));
+        hk = b.p, len = b.n;
+        jobv h, j;
+        REQUIRE(hk && submit(d, hk, len, &h) == 0, "post a long job");
+        CHECK(wait_state(d, h.id, "running", 30 * slowdown(), &j), "not running: %s", j.state);
+        sleep_s(at[k] * slow.secs);
+        char path[128];
+        snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+        hresp r;
+        http_get(d, path, &r);
+        jobv now;
+        const char *stage = r.status == 200 && job_parse(&r, &now) == 0 ? now.state : "?";
+        json_t *jb = jbody(&r);
+        const char *st = jb ? jstr(json_object_get(jb, "progress"), "stage") : NULL;
+        char stage_name[32];
+        snprintf(stage_name, sizeof stage_name, "%s", st ? st : stage);
+        json_decref(jb);
+        hresp_free(&r);
+        double c0 = srv_cpu_s(d), w0 = now_s();
+        sleep_s(0.2);
+        double busy = (srv_cpu_s(d) - c0) / (now_s() - w0);
+        CHECK(busy >= 0.4, "the daemon used %.2f of a core before the DELETE: is it computing?",
+              busy);
+        double t0 = now_s();
+        http_method(d, "DELETE", path, &r);
+        CHECK(r.status == 200, "DELETE: %ld %s", r.status, r.body.p);
+        hresp_free(&r);
+        double idle = srv_idle_after(d, t0, 0.5, 20 * slowdown() + 4 * slow.secs);
+        printf("  (canceled in stage %s after %.1f s, the daemon using %.2f cores: its worker "
+               "was idle %.3f s after the DELETE; bound %.2f s)\n",
+               stage_name, at[k] * slow.secs, busy, idle, bound);
+        CHECK(idle >= 0 && idle < bound,
+              "canceled in stage %s: the worker was busy %.3f s after the DELETE (bound %.2f s)",
+              stage_name, idle, bound);
+        CHECK(wait_state(d, h.id, "canceled", 5 * slowdown(), &j), "after the cancel: %s", j.state);
+        free(hk);
+    }
+    check_no_500(d);
+}
+
+/* A new client's request whose job is being canceled (running, its cancel flag set, its worker
+ * not yet stopped) makes a job of its own instead of joining one that will end canceled: that
+ * client canceled nothing, and never gets the 409 "the job was canceled".  The state is made
+ * in the store directly (a cancel flag its worker has not yet heard of): the worker hears of
+ * it at its lease's next renewal. */
+SERVER_TEST(cancel_stopping_job_not_joined, "--workers 2 --job-threads 1")
+{
+    size_t hlen;
+    const char *huge = huge_body(&hlen);
+    REQUIRE(huge, "no slow requests");
+    jobv h, h2, j;
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "post the long job");
+    REQUIRE(wait_state(d, h.id, "running", 30 * slowdown(), &j), "not running: %s", j.state);
+    char sql[160];
+    snprintf(sql, sizeof sql, "UPDATE jobs SET cancel = 1 WHERE id = '%.32s'", h.id);
+    sqlite3 *db = NULL;
+    int ok = sqlite3_open_v2(d->db, &db, SQLITE_OPEN_READWRITE, NULL) == SQLITE_OK &&
+             sqlite3_busy_timeout(db, 5000) == SQLITE_OK &&
+             sqlite3_exec(db,
+                          "UPDATE subs SET canceled = 1 WHERE job IN (SELECT id FROM jobs "
+                          "WHERE state = 1)",
+                          NULL, NULL, NULL) == SQLITE_OK &&
+             sqlite3_exec(db, sql, NULL, NULL, NULL) == SQLITE_OK;
+    CHECK(ok, "marking the job canceled: %s", db ? sqlite3_errmsg(db) : "");
+    sqlite3_close(db);
+    double coalesced = metric(d, COALESCE);
+    REQUIRE(submit(d, huge, hlen, &h2) == 0, "the same request from another client");
+    CHECK(metric(d, COALESCE) == coalesced, "the request joined the job being canceled");
+    CHECK(wait_state(d, h.id, "canceled", 10 * slowdown(), &j), "the first job: %s", j.state);
+    CHECK(wait_state(d, h2.id, "running", 10 * slowdown(), &j) ||
+              wait_state(d, h2.id, "done", 1, &j),
+          "the second client's job: %s (it must run, not end canceled)", j.state);
+    char path[128];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h2.id);
+    hresp r;
+    http_method(d, "DELETE", path, &r); /* out of the way */
+    CHECK(r.status == 200, "DELETE the second: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    check_no_500(d);
+}
+
 /* Identical submissions share one job, each with its own id: a job is canceled only when every
  * submission of it has been, and a restart keeps count. */
 SERVER_TEST(cancel_per_submission, "--workers 1 --job-threads 1")

@@ -229,7 +229,7 @@ TEST(store_open_creates_schema)
     store *s = f.s;
     struct stat sb;
     CHECK(stat(f.path, &sb) == 0 && S_ISREG(sb.st_mode), "no database file at %s", f.path);
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld, want 6",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 7, "user_version %lld, want 7",
           sql_int(f.path, "PRAGMA user_version"));
     sql_text(f.path, "PRAGMA journal_mode", mode, sizeof mode);
     CHECK(!strcmp(mode, "wal"), "journal_mode %s, want wal", mode);
@@ -517,7 +517,7 @@ TEST(store_schema_versions)
     REQUIRE(f.s, "open of a version-0 database with --init: %s", f.err);
     CHECK(sql_int(f.path, "PRAGMA application_id") == 0x63656c6c, "application_id %lld",
           sql_int(f.path, "PRAGMA application_id"));
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld after migration",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 7, "user_version %lld after migration",
           sql_int(f.path, "PRAGMA user_version"));
     char t[16];
     sql_text(f.path, "SELECT t FROM notes", t, sizeof t);
@@ -1076,8 +1076,12 @@ TEST(store_migrates_version_1)
             "making a version-1 database");
     REQUIRE(fx_open(&f, 0) == 0, "open: %s", f.err);
     store *s = f.s;
-    CHECK(sql_int(f.path, "PRAGMA user_version") == 6, "user_version %lld",
+    CHECK(sql_int(f.path, "PRAGMA user_version") == 7, "user_version %lld",
           sql_int(f.path, "PRAGMA user_version"));
+    /* version 7: a job being canceled leaves the request's one-job-in-flight index */
+    CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name = 'jobs_active_hash'"
+                          " AND sql LIKE '%cancel = 0%'") == 1,
+          "jobs_active_hash still counts jobs being canceled");
     CHECK(sql_int(f.path, "SELECT count(*) FROM sqlite_master WHERE name = 'result_bodies'") == 0,
           "result_bodies left");
     /* every job became its own first submission, canceled with it */

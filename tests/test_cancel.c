@@ -1,0 +1,311 @@
+/* test_cancel.c — a cancel stops a run within a bounded amount of work, in every stage of every
+ * kind of request (api_run_json_ex with api_run_opts.cancel).
+ *
+ * For each kind (lines, polygons, solids) one request whose every stage does real work is run
+ * once to the end (the baseline: its time and the time of each stage, from the progress
+ * callback), then once per stage with the cancel flag set midway through that stage (half its
+ * baseline time after it first reports): the run must end API_ECANCELED, and the time from the flag
+ * to the return (the caller's worker would be idle from then on) must stay below a bound derived
+ * from the same run's baseline: a 25th of the whole run, and at least 50 ms for what is not
+ * work (freeing the run's memory, the threads' join).  A cancel seen only between stages would take
+ * up to a whole stage.  Each check prints the stage's time and the stop's.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "api/api.h"
+#include "tests/check.h"
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* ---- requests ---------------------------------------------------------------------------- */
+
+typedef struct sbuf {
+    char *p;
+    size_t n, cap;
+} sbuf;
+
+static void put(sbuf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(sbuf *b, const char *fmt, ...)
+{
+    va_list ap;
+    for (;;) {
+        va_start(ap, fmt);
+        int k = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
+        va_end(ap);
+        if (k < 0) return;
+        if (b->p && b->n + (size_t)k < b->cap) {
+            b->n += (size_t)k;
+            return;
+        }
+        size_t cap = b->cap ? 2 * b->cap : 1 << 16;
+        while (cap <= b->n + (size_t)k) cap *= 2;
+        char *q = realloc(b->p, cap);
+        if (!q) return;
+        b->p = q;
+        b->cap = cap;
+    }
+}
+
+/* n random segments of the unit square scaled by 1 (long ones): about n^2 / 5 crossings */
+static char *lines_request(size_t n, size_t *len)
+{
+    sbuf b = {0};
+    double *s = test_random_lines(n, 1.0, 25);
+    if (!s) return NULL;
+    put(&b, "{\"kind\":\"lines\",\"lines\":[");
+    for (size_t i = 0; i < n; i++)
+        put(&b, "%s[[%.17g,%.17g],[%.17g,%.17g]]", i ? "," : "", s[4 * i], s[4 * i + 1],
+            s[4 * i + 2], s[4 * i + 3]);
+    put(&b, "]}");
+    free(s);
+    *len = b.n;
+    return b.p;
+}
+
+/* Two combs of k teeth, one turned a quarter: 4 k^2 crossings, (k + 1)^2 pieces of union. */
+static void comb(sbuf *b, int k, int turned)
+{
+    double w = 1.0 / (2 * k);
+    put(b, "[[");
+    /* the spine along x = 0 .. 0.01, the teeth to x = 1 at y in [2 i w, (2 i + 1) w] */
+    for (int i = 0; i < k; i++) {
+        double y0 = 2 * i * w, y1 = y0 + w;
+        double pts[4][2] = {{0.01, y0}, {1, y0}, {1, y1}, {0.01, y1}};
+        for (int q = 0; q < 4; q++) {
+            double x = pts[q][0], y = pts[q][1];
+            put(b, "%s[%.17g,%.17g]", i || q ? "," : "", turned ? y : x, turned ? x : y);
+        }
+    }
+    double top = (2 * k - 1) * w;
+    put(b, ",[%.17g,%.17g],[0,0]]]", turned ? top : 0.0, turned ? 0.0 : top);
+}
+
+static char *polygons_request(int k, size_t *len)
+{
+    sbuf b = {0};
+    put(&b, "{\"kind\":\"polygons\",\"polygons\":[");
+    comb(&b, k, 0);
+    put(&b, ",");
+    comb(&b, k, 1);
+    put(&b, "],\"op\":\"union\"}");
+    *len = b.n;
+    return b.p;
+}
+
+/* A closed box of n x n x n cells' faces on each side (12 n^2 triangles) at corner c, edge a. */
+static void box_solid(sbuf *b, int n, const double *c, double a, int first)
+{
+    put(b, "%s{\"V\":[", first ? "" : ",");
+    /* the grid points of the box's surface, by their integer coordinates 0..n */
+    int m = n + 1, nv = 0;
+    int *id = malloc((size_t)m * m * m * sizeof *id);
+    if (!id) return;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++)
+            for (int k = 0; k < m; k++) {
+                int on = i == 0 || j == 0 || k == 0 || i == n || j == n || k == n;
+                id[(i * m + j) * m + k] = on ? nv : -1;
+                if (on)
+                    put(b, "%s[%.17g,%.17g,%.17g]", nv++ ? "," : "", c[0] + a * i / n,
+                        c[1] + a * j / n, c[2] + a * k / n);
+            }
+    put(b, "],\"FV\":[");
+    int nf = 0;
+    /* each side: axis ax fixed at 0 or n, the other two u, v; outward order */
+    for (int ax = 0; ax < 3; ax++)
+        for (int side = 0; side < 2; side++)
+            for (int u = 0; u < n; u++)
+                for (int v = 0; v < n; v++) {
+                    int q[4][3];
+                    int du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+                    for (int t = 0; t < 4; t++) {
+                        q[t][ax] = side ? n : 0;
+                        q[t][(ax + 1) % 3] = u + du[t];
+                        q[t][(ax + 2) % 3] = v + dv[t];
+                    }
+                    int vid[4];
+                    for (int t = 0; t < 4; t++) vid[t] = id[(q[t][0] * m + q[t][1]) * m + q[t][2]];
+                    /* (ax+1, ax+2) turns about +ax: outward on the far side */
+                    if (side)
+                        put(b, "%s[%d,%d,%d],[%d,%d,%d]", nf ? "," : "", vid[0], vid[1], vid[2],
+                            vid[0], vid[2], vid[3]);
+                    else
+                        put(b, "%s[%d,%d,%d],[%d,%d,%d]", nf ? "," : "", vid[0], vid[2], vid[1],
+                            vid[0], vid[3], vid[2]);
+                    nf += 2;
+                }
+    put(b, "]}");
+    free(id);
+}
+
+static char *solids_request(int n, size_t *len)
+{
+    sbuf b = {0};
+    double c0[3] = {0, 0, 0}, c1[3] = {0.3141592653589793, 0.2718281828459045, 0.1414213562373095};
+    put(&b, "{\"kind\":\"solids\",\"solids\":[");
+    box_solid(&b, n, c0, 1.0, 1);
+    box_solid(&b, n, c1, 1.0, 0);
+    put(&b, "],\"op\":\"intersection\"}");
+    *len = b.n;
+    return b.p;
+}
+
+/* ---- runs -------------------------------------------------------------------------------- */
+
+#define MAXST 16
+
+typedef struct run {
+    const char *kind;
+    atomic_int cancel;
+    const char *stop_at;    /* the stage whose first report starts the count, or NULL */
+    double delay;           /* the flag is set this long after that report (a watcher thread) */
+    _Atomic double t_stage; /* when stop_at first reported (0: not yet) */
+    double t_flag;          /* when the flag was set */
+    atomic_int done;
+    /* the baseline: when each stage first reported */
+    const char *seen[MAXST];
+    double t_seen[MAXST];
+    int nseen;
+} run;
+
+static void on_progress(void *udata, const char *stage, double f)
+{
+    (void)f;
+    run *r = udata;
+    if (r->nseen && !strcmp(r->seen[r->nseen - 1], stage)) return;
+    if (r->nseen < MAXST) {
+        r->seen[r->nseen] = stage;
+        r->t_seen[r->nseen++] = now_s();
+    }
+    if (r->stop_at && !strcmp(stage, r->stop_at) && atomic_load(&r->t_stage) == 0)
+        atomic_store(&r->t_stage, now_s());
+}
+
+/* Sets the flag `delay` seconds after stop_at began (so, for a long stage, while its loops
+ * run, not before they start). */
+static void *watcher(void *arg)
+{
+    run *r = arg;
+    while (!atomic_load(&r->done)) {
+        double t = atomic_load(&r->t_stage);
+        if (t > 0 && now_s() >= t + r->delay) {
+            r->t_flag = now_s();
+            atomic_store(&r->cancel, 1);
+            return NULL;
+        }
+        struct timespec ts = {0, 200000};
+        nanosleep(&ts, NULL);
+    }
+    return NULL;
+}
+
+static int run_once(run *r, const char *body, size_t len, double *secs)
+{
+    api_run_opts ro = {.threads = 2, .cancel = &r->cancel, .progress = on_progress, .udata = r};
+    char *out = NULL;
+    size_t outlen = 0;
+    api_error err;
+    pthread_t w;
+    atomic_init(&r->done, 0);
+    atomic_init(&r->t_stage, 0);
+    int watching = r->stop_at && pthread_create(&w, NULL, watcher, r) == 0;
+    double t0 = now_s();
+    int rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    *secs = now_s() - t0;
+    atomic_store(&r->done, 1);
+    if (watching) pthread_join(w, NULL);
+    free(out);
+    return rc;
+}
+
+/* The baseline, then a cancel at the start of each stage it reported (only, when not NULL, the
+ * stages named in `only`, a space-separated list). */
+static void cancel_stages(const char *kind, const char *body, size_t len, const char *only)
+{
+    run base = {.kind = kind};
+    atomic_init(&base.cancel, 0);
+    double total, t_end;
+    int rc = run_once(&base, body, len, &total);
+    t_end = now_s();
+    REQUIRE(rc == API_OK, "%s: the baseline run failed (%d)", kind, rc);
+    double bound = total / 25 > 0.05 ? total / 25 : 0.05;
+    printf("# %s: the whole run %.3f s; a stop must take under %.3f s\n", kind, total, bound);
+    for (int i = 0; i < base.nseen; i++) {
+        const char *st = base.seen[i];
+        if (only) {
+            const char *at = strstr(only, st);
+            size_t k = strlen(st);
+            if (!at || (at > only && at[-1] != ' ') || (at[k] && at[k] != ' ')) continue;
+        }
+        double dur = (i + 1 < base.nseen ? base.t_seen[i + 1] : t_end) - base.t_seen[i];
+        run r = {.kind = kind, .stop_at = st, .delay = dur / 2};
+        atomic_init(&r.cancel, 0);
+        double secs;
+        rc = run_once(&r, body, len, &secs);
+        double after = r.t_flag > 0 ? now_s() - r.t_flag : -1;
+        (void)secs;
+        if (!atomic_load(&r.cancel)) { /* the stage did not report this time: nothing to see */
+            CHECK(rc == API_OK, "%s: a run without cancel failed (%d)", kind, rc);
+            continue;
+        }
+        printf("# %s: cancel amid %-11s (the stage takes %.3f s): stopped in %.4f s\n", kind, st,
+               dur, after);
+        CHECK(rc == API_ECANCELED || (rc == API_OK && i + 1 == base.nseen),
+              "%s: canceled at %s, the run returned %d", kind, st, rc);
+        CHECK(after < bound,
+              "%s: canceled at %s: stopped %.3f s later (bound %.3f s, the stage "
+              "takes %.3f s)",
+              kind, st, after, bound, dur);
+    }
+}
+
+TEST(cancel_lines_every_stage)
+{
+    size_t len;
+    char *body = lines_request(1500, &len);
+    REQUIRE(body, "no request");
+    cancel_stages("lines", body, len, NULL);
+    free(body);
+}
+
+TEST(cancel_polygons_every_stage)
+{
+    size_t len;
+    char *body = polygons_request(300, &len);
+    REQUIRE(body, "no request");
+    cancel_stages("polygons", body, len, NULL);
+    free(body);
+}
+
+TEST(cancel_solids_every_stage)
+{
+    size_t len;
+    char *body = solids_request(110, &len);
+    REQUIRE(body, "no request");
+    cancel_stages("solids", body, len, NULL);
+    free(body);
+}
+
+/* Long segments that all cross the whole square: the buckets cannot split them apart, so the
+ * intersect stage is a few buckets of thousands of segments each (a cancel polled per bucket,
+ * or every 64th bucket, was never seen there: issue 25's 5000 lines). */
+TEST(cancel_lines_long_segments)
+{
+    size_t len;
+    char *body = lines_request(2500, &len);
+    REQUIRE(body, "no request");
+    cancel_stages("lines", body, len, "intersect split");
+    free(body);
+}

@@ -360,6 +360,29 @@ const char *huge_body(size_t *len)
     return slow.huge;
 }
 
+char *huge_variant(int k, size_t *len)
+{
+    size_t hlen;
+    const char *huge = huge_body(&hlen);
+    *len = 0;
+    if (!huge) return NULL;
+    const char *end = huge + hlen;
+    while (end > huge && (end[-1] == '\n' || end[-1] == '}')) end--; /* the options' "}}" */
+    buf b = {0};
+    buf_add(&b, huge, (size_t)(end - huge));
+    buf_printf(&b, ",\"precision\":%de-9}}", 100 + k);
+    *len = b.n;
+    return b.p;
+}
+
+char *long_lines_body(int k, size_t *len)
+{
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "'%s' gen lines 2500 1.0 %d --options '{\"fields\":[\"stats\"]}'",
+             cli_bin(), 40 + k);
+    return run_capture(cmd, len);
+}
+
 /* 1: identical bytes; 2: equal as JSON once stats.ms is removed from both; 0: different. */
 int same_result(const char *a, size_t alen, const char *b, size_t blen)
 {
@@ -1016,19 +1039,38 @@ double srv_cpu_s(const srv *d)
 
 double srv_idle_after(const srv *d, double t0, double quiet, double timeout)
 {
-    double last_busy = -1, prev = srv_cpu_s(d), tp = now_s(), quiet_since = tp;
-    if (prev < 0) return -1;
+    double idle;
+    return srvs_idle_after(&d, 1, t0, quiet, timeout, &idle) ? -1 : idle;
+}
+
+int srvs_idle_after(const srv *const *d, int n, double t0, double quiet, double timeout,
+                    double *idle)
+{
+    double prev[16], last_busy[16], tp = now_s(), quiet_since = tp;
+    if (n > 16) return -1;
+    for (int i = 0; i < n; i++) {
+        if ((prev[i] = srv_cpu_s(d[i])) < 0) return -1;
+        last_busy[i] = tp; /* not busy from the first sample on: idle by then (a bound) */
+    }
     while (now_s() < t0 + timeout) {
         sleep_s(0.05);
-        double c = srv_cpu_s(d), t = now_s();
-        if (c < 0) return -1;
-        if (c - prev >= 0.4 * (t - tp)) { /* a little now and then (the daemon's own threads,
-                                               the clock's ticks of 10 ms) is not busy */
-            last_busy = t;
-            quiet_since = t;
+        double t = now_s();
+        for (int i = 0; i < n; i++) {
+            double c = srv_cpu_s(d[i]);
+            if (c < 0) return -1;
+            if (c - prev[i] >= 0.4 * (t - tp)) { /* a little now and then (the daemon's own
+                                                     threads, the clock's ticks of 10 ms) is
+                                                     not busy */
+                last_busy[i] = t;
+                quiet_since = t;
+            }
+            prev[i] = c;
         }
-        prev = c, tp = t;
-        if (t - quiet_since >= quiet) return last_busy < 0 ? 0 : last_busy - t0;
+        tp = t;
+        if (t - quiet_since >= quiet) {
+            for (int i = 0; i < n; i++) idle[i] = last_busy[i] - t0;
+            return 0;
+        }
     }
     return -1;
 }

@@ -119,6 +119,13 @@ char *small_body(int k, int stats, size_t *len);
 const char *medium(int k, size_t *len);
 const char *slow_body(int k, size_t *len);
 const char *huge_body(size_t *len);
+/* The huge request with a precision of its own (k e-9 above 1e-7): a distinct job of the same
+ * cost for each k; malloc'd, the caller frees. */
+char *huge_variant(int k, size_t *len);
+/* 2500 random segments as long as the unit square (`gen lines 2500 1.0 40+k`): the buckets
+ * cannot split them apart, so each holds thousands of segments and of crossings (the split
+ * stage runs seconds in a few buckets: issue 25's case); malloc'd, the caller frees. */
+char *long_lines_body(int k, size_t *len);
 int same_result(const char *a, size_t alen, const char *b, size_t blen);
 int free_port(void);
 void log_tail(const srv *d, int lines);
@@ -153,9 +160,13 @@ long long db_ll(const char *path, const char *sql);
 double srv_cpu_s(const srv *d);
 /* Watches the daemon's CPU use in samples of 50 ms until it has not been busy for `quiet` seconds
  * (or `timeout` passed) and returns the seconds from t0 to the end of its last busy sample
- * (one in which it used at least 40 % of a core: a worker computing), 0 when none was busy,
- * -1 when it never went quiet or its CPU time cannot be read. */
+ * (one in which it used at least 40 % of a core: a worker computing), or to the first sample
+ * when none was busy (a bound: it was idle by then); -1 when it never went quiet or its CPU
+ * time cannot be read. */
 double srv_idle_after(const srv *d, double t0, double quiet, double timeout);
+/* The same for n daemons (at most 16) watched together: idle[i] for each; 0, or -1 as above. */
+int srvs_idle_after(const srv *const *d, int n, double t0, double quiet, double timeout,
+                    double *idle);
 char *metrics_text(srv *d);
 double mval(const char *text, const char *series);
 double metric(srv *d, const char *series);

@@ -258,6 +258,85 @@ TEST(cluster_cancel_and_wait_across)
     srv_finish(&b);
 }
 
+/* ---- six long jobs on three daemons, canceled through one: every worker idle at once ---- */
+
+TEST(cluster_cancel_six_workers_idle)
+{
+    char db[256];
+    if (cluster_db(db, sizeof db)) return;
+    srv d[3];
+    int up = 0;
+    for (int i = 0; i < 3; i++) {
+        char flags[96];
+        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name D%d", i);
+        up += srv_open_db(&d[i], db, flags) == 0;
+    }
+    char *body[6] = {0};
+    size_t len[6];
+    int ok = up == 3;
+    size_t hlen;
+    ok = ok && huge_body(&hlen) != NULL; /* slow.secs: this run's measured speed */
+    /* issue 25's jobs: long segments, a few buckets of thousands in the split stage */
+    for (int k = 0; ok && k < 6; k++) ok = (body[k] = long_lines_body(10 + k, &len[k])) != NULL;
+    if (!ok) {
+        for (int i = 0; i < 3; i++) srv_finish(&d[i]);
+        for (int k = 0; k < 6; k++) free(body[k]);
+        REQUIRE(0, "3 daemons and the long requests");
+    }
+    /* a bound from this run's measured speed: the slow job's time, halved, at least 1 s */
+    double bound = slow.secs / 2 > 1.0 ? slow.secs / 2 : 1.0;
+    jobv j[6], t;
+    for (int k = 0; k < 6; k++) CHECK(submit(&d[k % 3], body[k], len[k], &j[k]) == 0, "post %d", k);
+    /* all six running, two on each daemon */
+    double t0 = now_s();
+    int running = 0;
+    while (now_s() < t0 + 60 * slowdown()) {
+        running = 0;
+        for (int k = 0; k < 6; k++) running += wait_state(&d[0], j[k].id, "running", 0, &t);
+        if (running == 6) break;
+        sleep_s(0.05);
+    }
+    CHECK(running == 6, "%d of the 6 jobs running", running);
+    sleep_s(slow.secs / 2); /* well into their runs */
+    for (int i = 0; i < 3; i++) {
+        double c0 = srv_cpu_s(&d[i]), w0 = now_s();
+        sleep_s(0.2);
+        double busy = (srv_cpu_s(&d[i]) - c0) / (now_s() - w0);
+        CHECK(busy >= 0.4, "daemon D%d uses %.2f cores with two jobs running", i, busy);
+    }
+    /* every DELETE through D0 */
+    double t1 = now_s();
+    for (int k = 0; k < 6; k++) {
+        char path[96];
+        hresp r;
+        snprintf(path, sizeof path, "/v1/jobs/%.32s", j[k].id);
+        http_method(&d[0], "DELETE", path, &r);
+        CHECK(r.status == 200, "DELETE %d: %ld %s", k, r.status, r.body.p);
+        hresp_free(&r);
+    }
+    double deleted = now_s() - t1, idles[3] = {-1, -1, -1};
+    const srv *all[3] = {&d[0], &d[1], &d[2]};
+    CHECK(srvs_idle_after(all, 3, t1, 0.5, 10 * slowdown() + 4 * slow.secs, idles) == 0,
+          "the daemons never went quiet");
+    for (int i = 0; i < 3; i++) {
+        double idle = idles[i];
+        printf("  (six DELETEs through D0 in %.2f s: D%d's workers idle %.3f s after the first; "
+               "bound %.2f s)\n",
+               deleted, i, idle, bound);
+        CHECK(idle >= 0 && idle < bound + deleted,
+              "D%d's workers were busy %.3f s after the first DELETE (bound %.2f + %.2f s)", i,
+              idle, bound, deleted);
+    }
+    for (int k = 0; k < 6; k++)
+        CHECK(wait_state(&d[0], j[k].id, "canceled", 5 * slowdown(), &t), "job %d: %s", k, t.state);
+    for (int i = 0; i < 3; i++) {
+        CHECK(!log_contains(&d[i], "lease lost"), "D%d's log says a lease was lost", i);
+        srv_term(&d[i]);
+        srv_finish(&d[i]);
+    }
+    for (int k = 0; k < 6; k++) free(body[k]);
+}
+
 /* ---- SIGKILL: the lease runs out, another daemon finishes the jobs ---- */
 
 TEST(cluster_sigkill_lease)

@@ -454,26 +454,20 @@ SERVER_TEST(cancel, "--workers 1 --job-threads 1")
 /* A canceled job frees its worker at once, wherever the run is: the daemon's CPU use (both
  * core threads of the worker computing) ends within a bound of the DELETE derived from this
  * run's measured speed (slow.secs: the slow job's time; the huge job runs 4-6 times as long,
- * and a cancel seen only between stages would leave most of it to run). */
+ * the jobs of long segments spend seconds in the split stage's few buckets, and a cancel seen
+ * only between stages or buckets would leave most of it to run). */
 SERVER_TEST(cancel_frees_the_worker_at_once, "--workers 1 --job-threads 2")
 {
     size_t hlen;
     const char *huge = huge_body(&hlen);
     REQUIRE(huge, "no slow requests");
     double bound = slow.secs / 2 > 1.0 ? slow.secs / 2 : 1.0;
-    /* three cancels, early, midway and late into the run (each a job of its own) */
-    const double at[3] = {0.1, 0.8, 2.0};
-    for (int k = 0; k < 3; k++) {
-        char body[64], *hk = NULL;
-        size_t len = hlen;
-        /* the huge request with a precision of its own: a new job each time */
-        buf b = {0};
-        const char *end = huge + hlen;
-        while (end > huge && (end[-1] == '\n' || end[-1] == '}')) end--;
-        buf_add(&b, huge, (size_t)(end - huge));
-        snprintf(body, sizeof body, ",\"precision\":%de-9}}", 90 + k);
-        buf_add(&b, body, strlen(body));
-        hk = b.p, len = b.n;
+    /* four cancels, early and midway into the huge job, then into jobs of long segments (a
+     * few buckets of thousands: issue 25's case), each a job of its own */
+    const double at[4] = {0.1, 0.8, 0.3, 0.6};
+    for (int k = 0; k < 4; k++) {
+        size_t len;
+        char *hk = k < 2 ? huge_variant(k, &len) : long_lines_body(k, &len); /* new jobs */
         jobv h, j;
         REQUIRE(hk && submit(d, hk, len, &h) == 0, "post a long job");
         CHECK(wait_state(d, h.id, "running", 30 * slowdown(), &j), "not running: %s", j.state);
@@ -509,6 +503,26 @@ SERVER_TEST(cancel_frees_the_worker_at_once, "--workers 1 --job-threads 2")
         CHECK(wait_state(d, h.id, "canceled", 5 * slowdown(), &j), "after the cancel: %s", j.state);
         free(hk);
     }
+    check_no_500(d);
+}
+
+/* Jobs that end normally, while the leases of the jobs running are renewed every second: the
+ * log never says a lease was lost (a renewal that meets a job its worker has just finished is
+ * no loss).  Medium jobs of 0.1-1 s keep both workers busy over several renewals. */
+SERVER_TEST(normal_jobs_no_lease_lost, "--workers 2 --job-threads 1")
+{
+    jobv j[12], w;
+    int n = 0;
+    for (int k = 0; k < 12; k++) {
+        size_t len;
+        const char *body = medium(k, &len);
+        if (body && submit(d, body, len, &j[n]) == 0) n++;
+    }
+    REQUIRE(n == 12, "posted %d of 12 jobs", n);
+    for (int k = 0; k < n; k++)
+        CHECK(wait_state(d, j[k].id, "done", 60 * slowdown(), &w), "job %d: %s", k, w.state);
+    sleep_s(1.5); /* a renewal after the last ended */
+    CHECK(!log_contains(d, "lease lost"), "the log says a lease was lost on a daemon of its own");
     check_no_500(d);
 }
 

@@ -1610,12 +1610,44 @@ static void http_free(http_server *h)
     free(h);
 }
 
+/* Can a request begin with byte c?  A request line begins with its method, a token (letters,
+ * digits and !#$%&'*+-.^_`|~), and may follow a few empty lines (CR, LF). */
+static int request_first_byte(unsigned char c)
+{
+    return isalnum(c) || (c && strchr("!#$%&'*+-.^_`|~\r\n", c));
+}
+
+/* MHD (0.9.75) takes a line whose first byte is NUL for an empty line before the request line,
+ * skips it and waits for a request line until the header deadline (10 s).  A connection whose
+ * first byte is there as it is accepted (a client sends its request as it connects) and can
+ * begin no request is answered 400 here and shut at once; MHD then finds it closed. */
+static void refuse_bad_start(int fd)
+{
+    unsigned char b;
+    if (recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT) != 1 || request_first_byte(b)) return;
+    static const char body[] =
+        "{\"type\":\"about:blank\",\"title\":\"Bad Request\",\"status\":400,\"detail\":"
+        "\"the request begins with a byte no request line can hold\"}";
+    char msg[512];
+    int n = snprintf(msg, sizeof msg,
+                     "HTTP/1.1 400 Bad Request\r\nConnection: close\r\n"
+                     "Content-Type: application/problem+json\r\nContent-Length: %zu\r\n\r\n%s",
+                     sizeof body - 1, body);
+    if (n > 0 && (size_t)n < sizeof msg)
+        (void)send(fd, msg, (size_t)n, MSG_NOSIGNAL | MSG_DONTWAIT);
+    shutdown(fd, SHUT_RDWR);
+    log_kv(LOG_INFO, "request refused: a first byte no request line can begin with", NULL);
+}
+
 /* MHD_OPTION_NOTIFY_CONNECTION: a sock_ctx for each TCP connection. */
 static void notify_connection(void *cls, struct MHD_Connection *mc, void **socket_context,
                               enum MHD_ConnectionNotificationCode toe)
 {
     http_server *h = cls;
     if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+        const union MHD_ConnectionInfo *fi =
+            MHD_get_connection_info(mc, MHD_CONNECTION_INFO_CONNECTION_FD);
+        if (fi) refuse_bad_start(fi->connect_fd);
         /* NULL (out of memory): no escape check and no deadline for this one */
         sock_ctx *sc = calloc(1, sizeof *sc);
         const union MHD_ConnectionInfo *ci =

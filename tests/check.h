@@ -42,6 +42,11 @@ void test_skip(const char *why);
         }                                                                                          \
     } while (0)
 
+/* How much longer than on a quiet machine things take here and now: a reference work measured
+ * once per process (tests/daemon.c), at least 3 under the sanitizers.  Every time bound of the
+ * suite is a multiple of it, never a fixed number of seconds. */
+double slowdown(void);
+
 /* The test data (tests/data, relative to the repository's top, where tests/run.sh runs). */
 const char *test_data_dir(void);
 /* Reads a whole file into a NUL-terminated buffer the caller frees; NULL on error. */

@@ -3,7 +3,8 @@
  * through libcurl and raw sockets, read its metrics and log, stop it with SIGTERM or SIGKILL;
  * and the request bodies and expected results (from the command-line tool) the tests post.
  * Shared by test_server.c (one daemon on SQLite) and test_cluster.c (several on PostgreSQL).
- * Every wait is a bounded poll whose bound grows 3x under the sanitizers (slowdown()). */
+ * Every wait is a bounded poll whose bound is a multiple of slowdown() (tests/check.h): the
+ * measured pace of this machine now, at least 3x under the sanitizers. */
 #ifndef CELLAR_TESTS_DAEMON_H
 #define CELLAR_TESTS_DAEMON_H
 
@@ -104,7 +105,8 @@ extern struct slow_jobs slow;
 
 double now_s(void);
 void sleep_s(double s);
-double slowdown(void);
+/* The seconds of the reference work slowdown() is measured with (see daemon.c). */
+double pace_s(void);
 const char *build_dir(void);
 const char *cli_bin(void);
 int buf_add(buf *b, const void *data, size_t n);

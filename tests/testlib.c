@@ -4,6 +4,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define MAX_TESTS 512
 
@@ -108,15 +109,19 @@ int main(int argc, char **argv)
         }
         cur_failures = 0;
         cur_skip = NULL;
+        struct timespec t0, t1;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
         tests[i].fn();
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        double secs = (double)(t1.tv_sec - t0.tv_sec) + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-9;
         if (cur_skip && !cur_failures) {
             printf("skip %s: %s\n", tests[i].name, cur_skip);
             skipped++;
         } else if (cur_failures) {
-            printf("FAIL %s (%d failed checks)\n", tests[i].name, cur_failures);
+            printf("FAIL %s (%d failed checks, %.2f s)\n", tests[i].name, cur_failures, secs);
             failed++;
         } else {
-            printf("ok %s\n", tests[i].name);
+            printf("ok %s (%.2f s)\n", tests[i].name, secs);
             passed++;
         }
         fflush(stdout);

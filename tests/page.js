@@ -12,6 +12,10 @@ const path = require('path');
 const { chromium } = require('playwright-core');
 
 const [base, outdir, longJob, bigJob] = process.argv.slice(2);
+// the waits' bounds grow with this machine's measured pace (t_page.sh: CELLAR_PACE, its time for
+// a reference job over a quiet machine's, at least 1)
+const PACE = Math.max(1, Number(process.env.CELLAR_PACE) || 1);
+const T = (ms) => Math.round(ms * PACE);
 const url = base.replace(/\/$/, '');
 let P = 0, F = 0;
 const ok = (name) => { P++; console.log(`ok ${name}`); };
@@ -42,7 +46,7 @@ let page;
 const errors = []; // uncaught exceptions and CSP violations in the page
 
 // Waits for the run after `run0` to end (drawn, error or canceled); returns the state.
-async function settle(run0, timeout = 30000) {
+async function settle(run0, timeout = T(30000)) {
   await page.waitForFunction((r) => window.cellar.run > r && ['drawn', 'error', 'canceled'].includes(window.cellar.state),
     run0, { timeout, polling: 50 });
   return page.evaluate(() => window.cellar.state);
@@ -252,7 +256,7 @@ async function main() {
     for (let f = 0; f < res.FV.length; f++) {
       const p = await page.evaluate((g) => window.cellar.view.facePixel(g), f);
       await page.mouse.move(box.x + p.x, box.y + p.y);
-      await page.waitForFunction((g) => document.getElementById('info').dataset.face === String(g), f, { timeout: 3000, polling: 50 });
+      await page.waitForFunction((g) => document.getElementById('info').dataset.face === String(g), f, { timeout: T(3000), polling: 50 });
       const text = await page.textContent('#info');
       const area = Math.abs([res.FV[f], ...((res.holes || {})[f] || [])].reduce((a, c) => a + shoelace(res.V, c), 0));
       const m = /area ([0-9.e+-]+)/.exec(text);
@@ -273,7 +277,7 @@ async function main() {
     const v0 = await page.evaluate(() => ({ k: window.cellar.view.k, tx: window.cellar.view.tx }));
     await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
     await page.mouse.wheel(0, -400);
-    await page.waitForFunction((k) => window.cellar.view.k > k * 1.5, v0.k, { timeout: 3000, polling: 50 });
+    await page.waitForFunction((k) => window.cellar.view.k > k * 1.5, v0.k, { timeout: T(3000), polling: 50 });
     await page.mouse.down();
     await page.mouse.move(box.x + box.width / 2 + 120, box.y + box.height / 2 + 40, { steps: 4 });
     await page.mouse.up();
@@ -287,7 +291,7 @@ async function main() {
 
   await check('2D explode: every face still drawn, each at its moved place', async () => {
     await slide('#explode', 1.3);
-    await page.waitForFunction(() => window.cellar.view.explode === 1.3, null, { timeout: 5000, polling: 50 });
+    await page.waitForFunction(() => window.cellar.view.explode === 1.3, null, { timeout: T(5000), polling: 50 });
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
     await verifyPicture('floorplan-exploded');
     await page.check('#fnum');
@@ -297,7 +301,7 @@ async function main() {
     await page.uncheck('#fnum');
     await page.uncheck('#vnum');
     await slide('#explode', 1);
-    await page.waitForFunction(() => window.cellar.view.explode === 1, null, { timeout: 5000, polling: 50 });
+    await page.waitForFunction(() => window.cellar.view.explode === 1, null, { timeout: T(5000), polling: 50 });
   });
 
   await check('2D numbers: the face numbers are drawn (the canvas changes only where they go)', async () => {
@@ -471,7 +475,7 @@ async function main() {
     await check(`a bad input shows a readable error: ${name}`, async () => {
       const r0 = await runNow();
       await page.setInputFiles('#file', input.map((f) => ({ name: f.name, mimeType: 'application/octet-stream', buffer: Buffer.from(f.text) })));
-      await page.waitForFunction((r) => window.cellar.state === 'error' || (window.cellar.run > r && ['drawn', 'canceled'].includes(window.cellar.state)), r0, { timeout: 15000, polling: 50 });
+      await page.waitForFunction((r) => window.cellar.state === 'error' || (window.cellar.run > r && ['drawn', 'canceled'].includes(window.cellar.state)), r0, { timeout: T(15000), polling: 50 });
       const t = await errorText();
       if (!test(t)) return `the error says "${t.replace(/\n/g, ' | ')}"`;
       if (outdir && /SVG/.test(name)) await page.screenshot({ path: path.join(outdir, 'error-svg.png') });
@@ -534,7 +538,7 @@ async function main() {
       const panMs = Date.now() - z;
       z = Date.now();
       await page.mouse.move(box.x + box.width / 2 + 5, box.y + box.height / 2 + 5);
-      await page.waitForFunction(() => Number(document.getElementById('info').dataset.face) >= 0, null, { timeout: 5000, polling: 20 });
+      await page.waitForFunction(() => Number(document.getElementById('info').dataset.face) >= 0, null, { timeout: T(5000), polling: 20 });
       const hoverMs = Date.now() - z;
       const hovered = Number(await page.evaluate(() => document.getElementById('info').dataset.face));
       if (!(hovered >= 0 && hovered < res.FV.length)) return `hover: face ${hovered}`;

@@ -89,8 +89,8 @@ static const char *const pg_migrations[] = {
     /* 2 -> 3: a job being canceled (running, its cancel flag set) is no longer the request's
      * job: a new submission of the request makes a new job beside it instead of joining one
      * that will end canceled */
-    "DROP INDEX jobs_active_hash;"
-    "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1) AND NOT cancel;",
+    ("DROP INDEX jobs_active_hash;"
+     "CREATE UNIQUE INDEX jobs_active_hash ON jobs(hash) WHERE state IN (0, 1) AND NOT cancel;"),
 };
 #define PG_VERSION ((int)(sizeof pg_migrations / sizeof *pg_migrations))
 

@@ -1201,6 +1201,10 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
                    &span);
     }
+    if (a3_cancelled(A)) { /* a bounded part of the stage: the cancel is read here */
+        rc = ARR_ECANCELED;
+        goto done;
+    }
     /* each cell's origin: a point of the first face that bounds it (in unit order), on the grid
      * when one is; the double-double cones start from it (a vertex of the cell: the terms are as
      * small as the cell, so a sliver keeps its volume) */
@@ -1237,6 +1241,11 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         }
         voljob j = {A, roff, run};
         par_for(A->threads, nch, vol_chunk, &j);
+        if (a3_cancelled(A)) {
+            free(UC), free(X);
+            rc = ARR_ECANCELED;
+            goto done;
+        }
         for (size_t c = 0; c < nch; c++) {
             size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
             for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
@@ -1431,6 +1440,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]);
     out->fsol = mem_malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
     if (!out->fsol) goto done;
+    A3_TICK("out/points used");
     if (want & ARR3_WANT_FACES) {
         used = mem_malloc((nu + 1) * sizeof *used);
         if (!used) goto done;
@@ -1438,6 +1448,11 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         for (size_t p = 0; p < A->npt; p++)
             if (newid[p] == 0) used[nu++] = (uint32_t)p;
         if (sort_points(A, used, nu)) goto done;
+        A3_TICK("out/sort points");
+        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
+            rc = -3;
+            goto done;
+        }
         for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
         a3_progress(A, "cells", 0.6);
         if (want & ARR3_WANT_COORDS) {
@@ -1448,6 +1463,10 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
                     out->V[3 * i + k] = ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] +
                                          dl[3 * (size_t)used[i] + k]) *
                                         A->step;
+        }
+        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
+            rc = -3;
+            goto done;
         }
         uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
         if (!ev) goto done;
@@ -1473,12 +1492,21 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
         }
         if (sort_kv(ek, ne)) goto done;
+        A3_TICK("out/edges");
+        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
+            rc = -3;
+            goto done;
+        }
         for (size_t i = 0; i < ne; i++) {
             out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
             out->EV[2 * i + 1] = (uint32_t)ek[i].k;
             newe[ek[i].v] = (uint32_t)i;
         }
         a3_progress(A, "cells", 0.7);
+        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
+            rc = -3;
+            goto done;
+        }
         out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
         out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
         out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
@@ -1509,6 +1537,11 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     {
         outjob j = {A, out, newid, newe, E->ent_e};
         par_for(A->threads, (nf + OUT_CHUNK - 1) / OUT_CHUNK, out_faces, &j);
+        A3_TICK("out/faces");
+        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
+            rc = -3;
+            goto done;
+        }
     }
     /* fsol: the room a face with several pieces left unused (NONE) closed up */
     {
@@ -1610,7 +1643,9 @@ int a3_cells(a3 *A, lar3 *out, char *err, size_t errlen)
     cshells_free(&S);
     a3_progress(A, "cells", 0.55);
     rc = ARR_ENOMEM;
-    if (output_make(A, &E, dh, dl, out)) goto done;
+    int om = output_make(A, &E, dh, dl, out);
+    if (om == -3) rc = ARR_ECANCELED;
+    if (om) goto done;
     A3_TICK("cells/output");
     CELLS_CANCEL_POINT;
     rc = ARR_OK;

@@ -17,6 +17,8 @@
 #include <jansson.h>
 #include <microhttpd.h>
 #include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <openssl/evp.h>
 #include <zlib.h>
 #include <pthread.h>
@@ -1619,8 +1621,9 @@ static int request_first_byte(unsigned char c)
 
 /* MHD (0.9.75) takes a line whose first byte is NUL for an empty line before the request line,
  * skips it and waits for a request line until the header deadline (10 s).  A connection whose
- * first byte is there as it is accepted (a client sends its request as it connects) and can
- * begin no request is answered 400 here and shut at once; MHD then finds it closed. */
+ * first byte can begin no request is answered 400 here, as MHD accepts it, and shut at once;
+ * MHD then finds it closed.  The listening socket defers each accept until the connection's
+ * first bytes are in (TCP_DEFER_ACCEPT, up to the header timeout), so they are there to see. */
 static void refuse_bad_start(int fd)
 {
     unsigned char b;
@@ -1788,6 +1791,15 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
         http_free(h);
         return NULL;
     }
+    /* a connection is accepted once its first bytes are in (up to the header timeout), so that
+     * refuse_bad_start sees them as MHD accepts it */
+    const union MHD_DaemonInfo *li = MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_LISTEN_FD);
+    int defer = (int)(cfg->header_timeout > 1 ? cfg->header_timeout : 1);
+    if (li && setsockopt(li->listen_fd, IPPROTO_TCP, TCP_DEFER_ACCEPT, &defer, sizeof defer))
+        log_kv(LOG_WARN,
+               "TCP_DEFER_ACCEPT refused: a bad first byte is seen only when it comes "
+               "with the connection",
+               NULL);
     if (pthread_create(&h->reaper, NULL, reaper_main, h) != 0) {
         snprintf(err, errlen, "cannot start the connection reaper thread");
         MHD_stop_daemon(h->d);

@@ -94,12 +94,13 @@ void solid_free(solid *s)
 
 /* ---- check: messages ------------------------------------------------------------------ */
 
+/* 16 bytes, since the check sorts one per entry of the cycles: its input end vertices are
+ * read back from the cycles (half_a, half_b) where a message or a rare case needs them. */
 typedef struct half {
-    uint64_t key;  /* min << 32 | max of the merged end vertices */
-    uint32_t ent;  /* its entry in the cycles (cyc[ent] is its start) */
-    uint32_t face; /* the face walking it */
-    uint32_t a, b; /* input indices of its ends, in the face's direction */
-    uint32_t fwd;  /* 1 when the face walks it from the smaller merged vertex to the larger */
+    uint64_t key;       /* min << 32 | max of the merged end vertices */
+    uint32_t ent;       /* its entry in the cycles (cyc[ent] is its start) */
+    uint32_t face : 31; /* the face walking it (check_shape: fewer than 2^31 faces) */
+    uint32_t fwd : 1;   /* 1 when the face walks it from the smaller merged vertex to the larger */
 } half;
 
 typedef struct ck {
@@ -164,6 +165,21 @@ static const double *vert(const ck *c, uint32_t v)
     return c->s->V + 3 * (size_t)v;
 }
 
+/* The input vertices half h walks from (a) and to (b): its entry and the next in its cycle. */
+static uint32_t half_a(const ck *c, const half *h)
+{
+    return c->s->cyc[h->ent];
+}
+
+static uint32_t half_b(const ck *c, const half *h)
+{
+    const solid *s = c->s;
+    for (uint32_t k = s->face_off[h->face]; k < s->face_off[h->face + 1]; k++)
+        if (h->ent >= s->cyc_off[k] && h->ent < s->cyc_off[k + 1])
+            return s->cyc[h->ent + 1 < s->cyc_off[k + 1] ? h->ent + 1 : s->cyc_off[k]];
+    return s->cyc[h->ent]; /* not reached: the entry is in one of its face's cycles */
+}
+
 /* ---- check: shape --------------------------------------------------------------------- */
 
 /* The arrays must describe what solid.h says; -1 (with one error) when they do not. */
@@ -174,8 +190,8 @@ static int check_shape(ck *c)
         note(c, 1, SOLID_AT_SOLID, 0, "no faces");
         return -1;
     }
-    if (s->nv > NONE || s->ncyc >= NONE || s->nf > s->ncyc || !s->face_off || !s->cyc_off ||
-        (s->nv && !s->V)) {
+    if (s->nv > NONE || s->ncyc >= NONE || s->nf > s->ncyc || s->nf > 0x7fffffffu || !s->face_off ||
+        !s->cyc_off || (s->nv && !s->V)) {
         note(c, 1, SOLID_AT_SOLID, 0,
              "malformed solid (counts %zu V, %zu faces, %zu cycles, or missing arrays)", s->nv,
              s->nf, s->ncyc);
@@ -608,34 +624,45 @@ static int sort_halves(ck *c)
     return 0;
 }
 
-static int half_idx_cmp(const void *pa, const void *pb)
+/* A half with its input end vertices, lower first, for pair_by_index's sort. */
+typedef struct half_ends {
+    uint32_t lo, hi;
+    half h;
+} half_ends;
+
+static int half_ends_cmp(const void *pa, const void *pb)
 {
-    const half *a = pa, *b = pb;
-    uint32_t a0 = a->a < a->b ? a->a : a->b, a1 = a->a ^ a->b ^ a0;
-    uint32_t b0 = b->a < b->b ? b->a : b->b, b1 = b->a ^ b->b ^ b0;
-    if (a0 != b0) return a0 < b0 ? -1 : 1;
-    if (a1 != b1) return a1 < b1 ? -1 : 1;
-    return (a->face > b->face) - (a->face < b->face);
+    const half_ends *a = pa, *b = pb;
+    if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
+    return (a->h.face > b->h.face) - (a->h.face < b->h.face);
 }
 
 /* The halves he[i..j) share one edge in space (their merged ends).  When their input vertex
  * indices pair them two by two (a surface touching itself, like a mesh with two vertices at one
- * point), lists those pairs and returns 1; else returns 0 (a non-manifold edge). */
+ * point), lists those pairs and returns 1; else returns 0 (a non-manifold edge); -1 out of
+ * memory. */
 static int pair_by_index(ck *c, size_t i, size_t j)
 {
-    qsort(c->he + i, j - i, sizeof *c->he, half_idx_cmp);
-    for (size_t k = i; k < j; k += 2) {
-        const half *x = &c->he[k], *y = &c->he[k + 1];
-        uint32_t x0 = x->a < x->b ? x->a : x->b, y0 = y->a < y->b ? y->a : y->b;
-        if (x0 != y0 || (x->a ^ x->b) != (y->a ^ y->b)) return 0;
-        if (k + 2 < j) {
-            const half *z = &c->he[k + 2];
-            uint32_t z0 = z->a < z->b ? z->a : z->b;
-            if (z0 == x0 && (z->a ^ z->b) == (x->a ^ x->b)) return 0; /* three on one */
-        }
+    half_ends *e = malloc((j - i) * sizeof *e);
+    if (!e) return -1;
+    for (size_t k = i; k < j; k++) {
+        uint32_t a = half_a(c, &c->he[k]), b = half_b(c, &c->he[k]);
+        e[k - i] = (half_ends){a < b ? a : b, a < b ? b : a, c->he[k]};
     }
-    for (size_t k = i; k < j; k += 2) c->pair[c->npair++] = (uint32_t)k;
-    return 1;
+    qsort(e, j - i, sizeof *e, half_ends_cmp);
+    int paired = 1;
+    for (size_t k = 0; k < j - i && paired; k += 2) {
+        if (e[k].lo != e[k + 1].lo || e[k].hi != e[k + 1].hi) paired = 0;
+        if (k + 2 < j - i && e[k + 2].lo == e[k].lo && e[k + 2].hi == e[k].hi)
+            paired = 0; /* three on one */
+    }
+    if (paired) {
+        for (size_t k = i; k < j; k++) c->he[k] = e[k - i].h;
+        for (size_t k = i; k < j; k += 2) c->pair[c->npair++] = (uint32_t)k;
+    }
+    free(e);
+    return paired;
 }
 
 /* Builds and sorts the half-edges, reports open and non-manifold edges, and lists the
@@ -655,38 +682,38 @@ static int check_edges(ck *c, int *bad)
                 uint32_t a = cy[i], b = cy[i + 1 < hi ? i + 1 : lo];
                 uint32_t u = c->merged[a], w = c->merged[b];
                 if (u == w) continue;
-                half *h = &c->he[c->nhe++];
-                h->key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u;
-                h->ent = i;
-                h->face = (uint32_t)f;
-                h->a = a;
-                h->b = b;
-                h->fwd = u < w;
+                c->he[c->nhe++] =
+                    (half){.key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u,
+                           .ent = i,
+                           .face = (uint32_t)f & 0x7fffffffu,
+                           .fwd = u < w};
             }
         }
     if (sort_halves(c)) return -1;
     for (size_t i = 0, j; i < c->nhe; i = j) {
         for (j = i + 1; j < c->nhe && c->he[j].key == c->he[i].key; j++) continue;
         const half *h = &c->he[i];
-        if (j - i > 2 && (j - i) % 2 == 0 && pair_by_index(c, i, j)) {
+        int paired = j - i > 2 && (j - i) % 2 == 0 ? pair_by_index(c, i, j) : 0;
+        if (paired < 0) return -1;
+        if (paired) {
             /* the surface meets itself along this edge in space, but every pair of faces
              * shares its own vertices: a closed surface touching itself, which the
              * arrangement takes as it is */
             note(c, 0, SOLID_AT_FACE, h->face,
                  "edge %u-%u lies on %zu faces: the surface touches itself there (its vertex "
                  "indices pair the faces two by two)",
-                 h->a, h->b, j - i);
+                 half_a(c, h), half_b(c, h), j - i);
             continue;
         }
         if (j - i == 2) {
             c->pair[c->npair++] = (uint32_t)i;
         } else if (j - i == 1) {
-            note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)", h->a,
-                 h->b);
+            note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)",
+                 half_a(c, h), half_b(c, h));
             *bad = 1;
         } else {
-            note(c, 1, SOLID_AT_FACE, h->face, "non-manifold edge %u-%u (used %zu times)", h->a,
-                 h->b, j - i);
+            note(c, 1, SOLID_AT_FACE, h->face, "non-manifold edge %u-%u (used %zu times)",
+                 half_a(c, h), half_b(c, h), j - i);
             *bad = 1;
         }
     }
@@ -712,7 +739,8 @@ static int orient(ck *c, int *bad)
         inconsistent++;
         if (h[0].face == h[1].face) {
             note(c, 1, SOLID_AT_FACE, h->face,
-                 "walks edge %u-%u twice in the same direction (no flip can fix it)", h->a, h->b);
+                 "walks edge %u-%u twice in the same direction (no flip can fix it)", half_a(c, h),
+                 half_b(c, h));
             *bad = 1;
         }
     }
@@ -758,7 +786,7 @@ static int orient(ck *c, int *bad)
                     note(c, 1, SOLID_AT_SOLID, 0,
                          "faces %u and %u: cannot be oriented consistently (edge %u-%u: "
                          "non-orientable, or a hole walked the wrong way)",
-                         f, g, h->a, h->b);
+                         f, g, half_a(c, h), half_b(c, h));
                     conflict = 1;
                     *bad = 1;
                 }
@@ -776,7 +804,8 @@ static int orient(ck *c, int *bad)
         note(c, 0, SOLID_AT_SOLID, 0,
              "orientation inconsistent at %zu edges (first: %u-%u, faces %u and %u): flipped "
              "%zu of %zu faces",
-             inconsistent, h[0].a, h[0].b, h[0].face, h[1].face, flips, nf);
+             inconsistent, half_a(c, h), half_b(c, h), (uint32_t)h[0].face, (uint32_t)h[1].face,
+             flips, nf);
     }
     free(adj_off);
     free(adj);

@@ -80,7 +80,44 @@ static int eisel_lemire(uint64_t w, int q, int neg, double *out)
     return 0;
 }
 
+/* Eight digits at once (coordinates are written with up to 17 significant digits): the bytes
+ * as a little-endian word, less '0' each; then pairs, quadruples and the octet are formed by
+ * one multiply-add each, every lane keeping its low part. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define FF_SWAR 1
+static uint64_t load8(const char *s)
+{
+    uint64_t v;
+    memcpy(&v, s, 8);
+    return v;
+}
+
+/* Are all eight bytes '0' to '9'?  (a byte below '0' borrows in v - '0'; above '9' carries
+ * into bit 7 when 0x46 is added) */
+static int all_digits8(uint64_t v)
+{
+    return (((v - 0x3030303030303030u) | (v + 0x4646464646464646u)) & 0x8080808080808080u) == 0;
+}
+
+static uint64_t value8(uint64_t v)
+{
+    v -= 0x3030303030303030u;                        /* d0 in the low byte */
+    v = (v * 10 + (v >> 8)) & 0x00ff00ff00ff00ffu;   /* 10 d0 + d1, ... */
+    v = (v * 100 + (v >> 16)) & 0x0000ffff0000ffffu; /* four digits a lane */
+    return (v * 10000 + (v >> 32)) & 0xffffffffu;    /* the eight */
+}
+#endif
+
 int ff_parse(const char *p, const char *end, double *out)
+{
+    const char *stop;
+    double v;
+    if (ff_parse_prefix(p, end, &v, &stop) || stop != end) return -1;
+    *out = v;
+    return 0;
+}
+
+int ff_parse_prefix(const char *p, const char *end, double *out, const char **stop)
 {
     const char *s = p;
     int neg = 0;
@@ -89,6 +126,13 @@ int ff_parse(const char *p, const char *end, double *out)
     int nd = 0, q = 0, any = 0, many = 0;
     while (s < end && *s >= '0' && *s <= '9') {
         any = 1;
+#ifdef FF_SWAR
+        if (w && nd <= 11 && end - s >= 8 && all_digits8(load8(s))) {
+            w = w * 100000000u + value8(load8(s));
+            nd += 8, s += 8;
+            continue;
+        }
+#endif
         if (nd < 19) {
             w = w * 10 + (uint64_t)(*s - '0');
             nd += w != 0;
@@ -102,6 +146,13 @@ int ff_parse(const char *p, const char *end, double *out)
         s++;
         while (s < end && *s >= '0' && *s <= '9') {
             any = 1;
+#ifdef FF_SWAR
+            if (w && nd <= 11 && end - s >= 8 && all_digits8(load8(s))) {
+                w = w * 100000000u + value8(load8(s));
+                nd += 8, q -= 8, s += 8;
+                continue;
+            }
+#endif
             if (nd < 19) {
                 w = w * 10 + (uint64_t)(*s - '0');
                 nd += w != 0;
@@ -118,14 +169,15 @@ int ff_parse(const char *p, const char *end, double *out)
         int eneg = 0;
         long ex = 0;
         if (s < end && (*s == '-' || *s == '+')) eneg = *s++ == '-';
-        if (s >= end || *s < '0' || *s > '9') return -1;
+        if (s >= end || *s < '0' || *s > '9') return -1; /* "1e", "1e+": malformed */
         while (s < end && *s >= '0' && *s <= '9') {
             if (ex < 100000) ex = ex * 10 + (*s - '0');
             s++;
         }
         q += (int)(eneg ? -ex : ex);
     }
-    if (s != end) return -1;
+    *stop = s;
+    end = s; /* the number's bytes, for slow() */
     if (w == 0) {
         *out = neg ? -0.0 : 0.0;
         return 0;

@@ -14,4 +14,9 @@
  * is not finite. */
 int ff_parse(const char *p, const char *end, double *out);
 
+/* The same for the longest prefix of [p, end) that has the form above; *stop gets its end.
+ * Returns -1 when no prefix is a number (or it is not finite).  A reader that takes a token
+ * when the byte at *stop separates tokens scans each byte once. */
+int ff_parse_prefix(const char *p, const char *end, double *out, const char **stop);
+
 #endif

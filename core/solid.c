@@ -1069,6 +1069,40 @@ static int parse_number(span tok, double *out)
     return ff_parse(tok.p, tok.end, out);
 }
 
+/* The next token of l as a number, scanning its bytes once: 1 with *x, 0 when no token is
+ * left, -1 when the token is no number (*tok is then the token, for the message). */
+static int next_number(span *l, double *x, span *tok)
+{
+    while (l->p < l->end && is_space(*l->p)) l->p++;
+    if (l->p >= l->end) return 0;
+    const char *stop;
+    if (ff_parse_prefix(l->p, l->end, x, &stop) == 0 && (stop == l->end || is_space(*stop)) &&
+        stop - l->p <= NUMBER_MAX) {
+        l->p = stop;
+        return 1;
+    }
+    next_token(l, tok);
+    return -1;
+}
+
+/* The next token of l as an index (digits only, at most 18), scanning its bytes once: 1 with
+ * *v, 0 when no token is left, -1 when the token is no index (*tok is then the token). */
+static int next_index(span *l, int64_t *v, span *tok)
+{
+    while (l->p < l->end && is_space(*l->p)) l->p++;
+    if (l->p >= l->end) return 0;
+    const char *p = l->p, *e = l->end;
+    int64_t x = 0;
+    while (p < e && *p >= '0' && *p <= '9' && p - l->p < 18) x = x * 10 + (*p++ - '0');
+    if (p > l->p && (p == e || is_space(*p))) {
+        l->p = p;
+        *v = x;
+        return 1;
+    }
+    next_token(l, tok);
+    return -1;
+}
+
 /* An optionally signed integer with at most 18 digits: 0, or -1. */
 static int parse_int(const char *p, const char *end, int64_t *out)
 {
@@ -1110,14 +1144,14 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
 
 static int build_vertex(build *b, const double *x)
 {
-    if (grow((void **)&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
+    if (b->nv >= b->capv && grow((void **)&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
     memcpy(b->V + 3 * b->nv++, x, 3 * sizeof *x);
     return 0;
 }
 
 static int build_index(build *b, uint32_t v)
 {
-    if (grow((void **)&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
+    if (b->ni >= b->capi && grow((void **)&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
     b->idx[b->ni++] = v;
     return 0;
 }
@@ -1125,7 +1159,8 @@ static int build_index(build *b, uint32_t v)
 /* Closes the face whose indices were appended since the last one. */
 static int build_face(build *b)
 {
-    if (grow((void **)&b->off, &b->capf, b->nf + 2, sizeof *b->off)) return -1;
+    if (b->nf + 2 > b->capf && grow((void **)&b->off, &b->capf, b->nf + 2, sizeof *b->off))
+        return -1;
     if (b->nf == 0) b->off[0] = 0;
     b->off[++b->nf] = (uint32_t)b->ni;
     return 0;
@@ -1281,8 +1316,12 @@ fail:
 static int next_data_line(text *t, span *l)
 {
     while (next_line(t, l)) {
-        span probe = *l, tok;
-        if (next_token(&probe, &tok)) return 1;
+        const char *q = l->p;
+        while (q < l->end && is_space(*q)) q++;
+        if (q < l->end) {
+            l->p = q; /* the separators before the first token: nothing */
+            return 1;
+        }
     }
     return 0;
 }
@@ -1353,9 +1392,9 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
             goto fail;
         }
         double x[3], extra;
-        int n = 0;
-        for (; next_token(&l, &tok); n++)
-            if (parse_number(tok, n < 3 ? &x[n] : &extra)) {
+        int n = 0, r;
+        for (; (r = next_number(&l, n < 3 ? &x[n] : &extra, &tok)) != 0; n++)
+            if (r < 0) {
                 read_error(err, errlen, t.line, "malformed number '%s'",
                            tok_show(tok, show, sizeof show));
                 goto fail;
@@ -1380,12 +1419,19 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
             goto fail;
         }
         for (int64_t i = 0; i < k; i++) {
-            if (!next_token(&l, &tok)) {
+            span at = l;
+            int r = next_index(&l, &v, &tok);
+            if (r == 0) {
                 read_error(err, errlen, t.line, "the face announces %lld vertices, %lld given",
                            (long long)k, (long long)i);
                 goto fail;
             }
-            if (parse_int(tok.p, tok.end, &v) || v < 0 || v >= (int64_t)nv) {
+            if (r < 0) { /* "+1", "-0": an integer still; anything else is not */
+                l = at;
+                next_token(&l, &tok);
+                if (parse_int(tok.p, tok.end, &v)) v = -1;
+            }
+            if (v < 0 || v >= (int64_t)nv) {
                 read_error(err, errlen, t.line, "vertex index '%s' out of range (%zu vertices)",
                            tok_show(tok, show, sizeof show), nv);
                 goto fail;

@@ -1168,13 +1168,19 @@ TEST(off_syntax)
         "1 1 0 1 0 0 1 0 0 -1\n0 0 1 1 0 0 1 0 0 1\n1 0 1 1 0 0 1 0 0 1\n"
         "0 1 1 1 0 0 1 0 0 1\n1 1 1 1 0 0 1 0 0 1\n"
         "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n",
+        /* numbers with signs, exponents and long fractions; signed indices; NUL as a
+         * separator */
+        "OFF\n8 6 0\n+0 0 0e5\n1.000000000000000000 0 0\n0 10000000000e-10 0\n1 1 0\n"
+        "0 0 .1e1\n1. 0 1\n0 1 1\n1 1 1\n"
+        "4 +0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 -0 4 6 2\n4 1 3 7 +5\0",
     };
     solid c;
     char err[200];
     REQUIRE(solid_read_off(CUBE_OFF, strlen(CUBE_OFF), &c, err, sizeof err) == 0, "%s", err);
     for (size_t i = 0; i < sizeof forms / sizeof *forms; i++) {
         solid s;
-        REQUIRE(solid_read_off(forms[i], strlen(forms[i]), &s, err, sizeof err) == 0,
+        size_t len = strlen(forms[i]) + (i == 3); /* the last form ends with a NUL */
+        REQUIRE(solid_read_off(forms[i], len, &s, err, sizeof err) == 0,
                 "form %zu: %s", i, err);
         CHECK(s.nv == 8 && s.nf == 6 && !memcmp(s.V, c.V, sizeof(double[24])) &&
                   !memcmp(s.cyc, c.cyc, sizeof(uint32_t[24])),
@@ -1221,12 +1227,19 @@ TEST(off_errors_name_the_line)
     OFF_FAILS("3 0 1 2 1 1 1 1 1\n", "line 6: after the 3 indices of a face only a colour may "
                                      "follow, not '1'");
     OFF_FAILS("3 0 1 2 red\n", "only a colour may follow, not 'red'");
+    /* an index is read in one pass: a token that only begins with digits is named whole */
+    OFF_FAILS("3 0 1 2x\n", "line 6: vertex index '2x' out of range (3 vertices)");
+    OFF_FAILS("3 0 1 1234567890123456789\n", "vertex index '1234567890123456789' out of range");
     OFF_FAILS("3 0 1 2\n3 0 1 2\n", "line 7: data after the last of the 1 faces");
     OFF_FAILS("# a comment long enough to pass the size test\n",
               "line 6: the file ends after 0 of 1 faces");
     OFF_FAILS("", "line 2: 3 vertices and 1 faces announced, but only 18 bytes follow");
 #undef OFF_FAILS
     off_fails("OFF\n3 1 0\n0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n", "line 4: malformed number 'x'");
+    off_fails("OFF\n3 1 0\n0 0 0\n1 0 1.25e3q\n0 1 0\n3 0 1 2\n",
+              "line 4: malformed number '1.25e3q'");
+    off_fails("OFF\n3 1 0\n0 0 0\n1 0 0.123456789012x\n0 1 0\n3 0 1 2\n",
+              "line 4: malformed number '0.123456789012x'");
     off_fails("OFF\n3 1 0\n0 0 0\n1 0 # a comment to pass the size test\n0 1 0\n3 0 1 2\n",
               "line 4: a vertex has 3 coordinates, this one 2");
     off_fails("OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0 # a comment long enough to pass the size test\n",
@@ -1461,7 +1474,22 @@ TEST(fastfloat_is_strtod)
         "1-1",
         "",
         "00000000000000000000001",
-        "1.000000000000000000000000000000000000000000000000000000000000000000000001"};
+        "1.000000000000000000000000000000000000000000000000000000000000000000000001",
+        /* eight digits at a time: every position of a byte that is no digit, runs that end
+         * inside a word, a word after leading zeros */
+        "12345678.87654321",
+        "1.2345678x",
+        "1.23456/89",
+        "1.234567:9",
+        "1.2345678901234567",
+        "91.234567890123456",
+        "912345678901.2345678",
+        "0.000000012345678901234567",
+        "00000000123456789.99999999",
+        "9.99999999999999999999",
+        "1.2345678e-7",
+        "19999999.99999999e3",
+        "1 2345678"};
     size_t bad = 0, n = 0;
     for (size_t i = 0; i < sizeof hard / sizeof *hard; i++, n++) ff_agree(hard[i], &bad);
     uint64_t s = 24;

@@ -1180,8 +1180,7 @@ TEST(off_syntax)
     for (size_t i = 0; i < sizeof forms / sizeof *forms; i++) {
         solid s;
         size_t len = strlen(forms[i]) + (i == 3); /* the last form ends with a NUL */
-        REQUIRE(solid_read_off(forms[i], len, &s, err, sizeof err) == 0,
-                "form %zu: %s", i, err);
+        REQUIRE(solid_read_off(forms[i], len, &s, err, sizeof err) == 0, "form %zu: %s", i, err);
         CHECK(s.nv == 8 && s.nf == 6 && !memcmp(s.V, c.V, sizeof(double[24])) &&
                   !memcmp(s.cyc, c.cyc, sizeof(uint32_t[24])),
               "form %zu is not the cube", i);
@@ -1474,24 +1473,25 @@ TEST(fastfloat_is_strtod)
         "1-1",
         "",
         "00000000000000000000001",
-        "1.000000000000000000000000000000000000000000000000000000000000000000000001",
-        /* eight digits at a time: every position of a byte that is no digit, runs that end
-         * inside a word, a word after leading zeros */
-        "12345678.87654321",
-        "1.2345678x",
-        "1.23456/89",
-        "1.234567:9",
-        "1.2345678901234567",
-        "91.234567890123456",
-        "912345678901.2345678",
-        "0.000000012345678901234567",
-        "00000000123456789.99999999",
-        "9.99999999999999999999",
-        "1.2345678e-7",
-        "19999999.99999999e3",
-        "1 2345678"};
+        "1.000000000000000000000000000000000000000000000000000000000000000000000001"};
+    /* eight digits at a time: every position of a byte that is no digit, runs that end inside
+     * a word, a word after leading zeros */
+    static const char *octets[] = {"12345678.87654321",
+                                   "1.2345678x",
+                                   "1.23456/89",
+                                   "1.234567:9",
+                                   "1.2345678901234567",
+                                   "91.234567890123456",
+                                   "912345678901.2345678",
+                                   "0.000000012345678901234567",
+                                   "00000000123456789.99999999",
+                                   "9.99999999999999999999",
+                                   "1.2345678e-7",
+                                   "19999999.99999999e3",
+                                   "1 2345678"};
     size_t bad = 0, n = 0;
     for (size_t i = 0; i < sizeof hard / sizeof *hard; i++, n++) ff_agree(hard[i], &bad);
+    for (size_t i = 0; i < sizeof octets / sizeof *octets; i++, n++) ff_agree(octets[i], &bad);
     uint64_t s = 24;
     char buf[96];
     for (int i = 0; i < 200000; i++, n++) {

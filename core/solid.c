@@ -1243,9 +1243,9 @@ int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t er
         if (!next_token(&l, &tok)) continue;
         if (tok_is(tok, "v")) {
             double x[3], w;
-            int n = 0;
-            for (; next_token(&l, &tok); n++) {
-                if (parse_number(tok, n < 3 ? &x[n] : &w)) {
+            int n = 0, r;
+            for (; (r = next_number(&l, n < 3 ? &x[n] : &w, &tok)) != 0; n++) {
+                if (r < 0) {
                     read_error(err, errlen, t.line, "malformed number '%s'",
                                tok_show(tok, show, sizeof show));
                     goto fail;

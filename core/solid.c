@@ -1033,11 +1033,17 @@ static int is_space(char ch)
     return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\f' || ch == '\v' || ch == '\0';
 }
 
+/* Skips the separators at the start of l; 0 when nothing is left. */
+static inline int skip_space(span *l)
+{
+    while (l->p < l->end && is_space(*l->p)) l->p++;
+    return l->p < l->end;
+}
+
 /* Takes the next whitespace-separated token of l; 0 when none is left. */
 static int next_token(span *l, span *tok)
 {
-    while (l->p < l->end && is_space(*l->p)) l->p++;
-    if (l->p >= l->end) return 0;
+    if (!skip_space(l)) return 0;
     tok->p = l->p;
     while (l->p < l->end && !is_space(*l->p)) l->p++;
     tok->end = l->p;
@@ -1073,8 +1079,7 @@ static int parse_number(span tok, double *out)
  * left, -1 when the token is no number (*tok is then the token, for the message). */
 static int next_number(span *l, double *x, span *tok)
 {
-    while (l->p < l->end && is_space(*l->p)) l->p++;
-    if (l->p >= l->end) return 0;
+    if (!skip_space(l)) return 0;
     const char *stop;
     if (ff_parse_prefix(l->p, l->end, x, &stop) == 0 && (stop == l->end || is_space(*stop)) &&
         stop - l->p <= NUMBER_MAX) {
@@ -1089,8 +1094,7 @@ static int next_number(span *l, double *x, span *tok)
  * *v, 0 when no token is left, -1 when the token is no index (*tok is then the token). */
 static int next_index(span *l, int64_t *v, span *tok)
 {
-    while (l->p < l->end && is_space(*l->p)) l->p++;
-    if (l->p >= l->end) return 0;
+    if (!skip_space(l)) return 0;
     const char *p = l->p, *e = l->end;
     int64_t x = 0;
     while (p < e && *p >= '0' && *p <= '9' && p - l->p < 18) x = x * 10 + (*p++ - '0');
@@ -1315,14 +1319,8 @@ fail:
 /* Takes the next line holding a token; 0 at the end of the text. */
 static int next_data_line(text *t, span *l)
 {
-    while (next_line(t, l)) {
-        const char *q = l->p;
-        while (q < l->end && is_space(*q)) q++;
-        if (q < l->end) {
-            l->p = q; /* the separators before the first token: nothing */
-            return 1;
-        }
-    }
+    while (next_line(t, l))
+        if (skip_space(l)) return 1; /* the separators before the first token: nothing */
     return 0;
 }
 
@@ -1419,18 +1417,14 @@ int solid_read_off(const char *txt, size_t len, solid *out, char *err, size_t er
             goto fail;
         }
         for (int64_t i = 0; i < k; i++) {
-            span at = l;
             int r = next_index(&l, &v, &tok);
             if (r == 0) {
                 read_error(err, errlen, t.line, "the face announces %lld vertices, %lld given",
                            (long long)k, (long long)i);
                 goto fail;
             }
-            if (r < 0) { /* "+1", "-0": an integer still; anything else is not */
-                l = at;
-                next_token(&l, &tok);
-                if (parse_int(tok.p, tok.end, &v)) v = -1;
-            }
+            if (r < 0 && parse_int(tok.p, tok.end, &v)) /* "+1", "-0": an integer still */
+                v = -1;
             if (v < 0 || v >= (int64_t)nv) {
                 read_error(err, errlen, t.line, "vertex index '%s' out of range (%zu vertices)",
                            tok_show(tok, show, sizeof show), nv);

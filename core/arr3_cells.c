@@ -1420,6 +1420,14 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
     kv *ek = NULL;
     int rc = -1;
+/* Between the bounded parts of the output: a cancel ends it (-3). */
+#define OUTPUT_CANCEL_POINT                                                                        \
+    do {                                                                                           \
+        if (a3_cancelled(A)) {                                                                     \
+            rc = -3;                                                                               \
+            goto done;                                                                             \
+        }                                                                                          \
+    } while (0)
     if (!newid) goto done;
     /* the points the faces use, and the edges inside the patches: one a twin pair */
     for (size_t p = 0; p < A->npt; p++) newid[p] = NONE;
@@ -1449,10 +1457,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             if (newid[p] == 0) used[nu++] = (uint32_t)p;
         if (sort_points(A, used, nu)) goto done;
         A3_TICK("out/sort points");
-        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
-            rc = -3;
-            goto done;
-        }
+        OUTPUT_CANCEL_POINT;
         for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
         a3_progress(A, "cells", 0.6);
         if (want & ARR3_WANT_COORDS) {
@@ -1464,10 +1469,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
                                          dl[3 * (size_t)used[i] + k]) *
                                         A->step;
         }
-        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
-            rc = -3;
-            goto done;
-        }
+        OUTPUT_CANCEL_POINT;
         uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
         if (!ev) goto done;
         E->ev = ev;
@@ -1493,20 +1495,14 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         }
         if (sort_kv(ek, ne)) goto done;
         A3_TICK("out/edges");
-        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
-            rc = -3;
-            goto done;
-        }
+        OUTPUT_CANCEL_POINT;
         for (size_t i = 0; i < ne; i++) {
             out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
             out->EV[2 * i + 1] = (uint32_t)ek[i].k;
             newe[ek[i].v] = (uint32_t)i;
         }
         a3_progress(A, "cells", 0.7);
-        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
-            rc = -3;
-            goto done;
-        }
+        OUTPUT_CANCEL_POINT;
         out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
         out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
         out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
@@ -1538,10 +1534,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         outjob j = {A, out, newid, newe, E->ent_e};
         par_for(A->threads, (nf + OUT_CHUNK - 1) / OUT_CHUNK, out_faces, &j);
         A3_TICK("out/faces");
-        if (a3_cancelled(A)) { /* a bounded part of the output: the cancel is read here */
-            rc = -3;
-            goto done;
-        }
+        OUTPUT_CANCEL_POINT;
     }
     /* fsol: the room a face with several pieces left unused (NONE) closed up */
     {
@@ -1599,6 +1592,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     out->stats.nf = out->nf;
     out->stats.nc = out->nc;
     rc = 0;
+#undef OUTPUT_CANCEL_POINT
 done:
     free(newid), free(used), free(newe), free(ek);
     return rc;

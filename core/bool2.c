@@ -522,21 +522,23 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     sel = malloc(nf + 1);
     grp = malloc((nf + 1) * sizeof *grp);
     if (!side || !sel || !grp) goto fail;
-    stop_meter stop = {.flag = ao.cancel};
-    if ((rc = stage_sides(c, side, &stop, err, errlen)) != ARR_OK) goto fail;
-    if (ao.cancel && atomic_load(ao.cancel)) {
-        rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");
-        goto fail;
-    }
-    /* the stages after the arrangement's, each reported at its end */
-#define BOOL2_PROGRESS(stage, f)                                                                   \
+        /* the stages after the arrangement's, a cancel read between them and each stage's end
+         * reported */
+#define BOOL2_CANCEL_POINT                                                                         \
     do {                                                                                           \
-        if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
         if (ao.cancel && atomic_load(ao.cancel)) {                                                 \
             rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");                                  \
             goto fail;                                                                             \
         }                                                                                          \
     } while (0)
+#define BOOL2_PROGRESS(stage, f)                                                                   \
+    do {                                                                                           \
+        if (ao.progress) ao.progress(ao.udata, stage, f);                                          \
+        BOOL2_CANCEL_POINT;                                                                        \
+    } while (0)
+    stop_meter stop = {.flag = ao.cancel};
+    if ((rc = stage_sides(c, side, &stop, err, errlen)) != ARR_OK) goto fail;
+    BOOL2_CANCEL_POINT;
     if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("membership", 1);
     rc = ARR_ENOMEM;
@@ -548,6 +550,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("polygons", 1);
 #undef BOOL2_PROGRESS
+#undef BOOL2_CANCEL_POINT
     free(side);
     free(sel);
     free(grp);

@@ -93,8 +93,9 @@ static void comb(sbuf *b, int k, int turned)
     put(b, ",[%.17g,%.17g],[0,0]]]", turned ? top : 0.0, turned ? 0.0 : top);
 }
 
-static char *polygons_request(int k, size_t *len)
+static char *polygons_request(size_t teeth, size_t *len)
 {
+    int k = (int)teeth;
     sbuf b = {0};
     put(&b, "{\"kind\":\"polygons\",\"polygons\":[");
     comb(&b, k, 0);
@@ -151,8 +152,9 @@ static void box_solid(sbuf *b, int n, const double *c, double a, int first)
     free(id);
 }
 
-static char *solids_request(int n, size_t *len)
+static char *solids_request(size_t cells, size_t *len)
 {
+    int n = (int)cells;
     sbuf b = {0};
     double c0[3] = {0, 0, 0}, c1[3] = {0.3141592653589793, 0.2718281828459045, 0.1414213562373095};
     put(&b, "{\"kind\":\"solids\",\"solids\":[");
@@ -273,31 +275,29 @@ static void cancel_stages(const char *kind, const char *body, size_t len, const 
     }
 }
 
-TEST(cancel_lines_every_stage)
+/* A request of `kind` made by make(size), canceled midway into each of its stages. */
+static void cancel_every_stage(const char *kind, char *(*make)(size_t, size_t *), size_t size)
 {
     size_t len;
-    char *body = lines_request(1500, &len);
-    REQUIRE(body, "no request");
-    cancel_stages("lines", body, len, NULL, 0.5);
+    char *body = make(size, &len);
+    REQUIRE(body, "%s: no request", kind);
+    cancel_stages(kind, body, len, NULL, 0.5);
     free(body);
+}
+
+TEST(cancel_lines_every_stage)
+{
+    cancel_every_stage("lines", lines_request, 1500);
 }
 
 TEST(cancel_polygons_every_stage)
 {
-    size_t len;
-    char *body = polygons_request(300, &len);
-    REQUIRE(body, "no request");
-    cancel_stages("polygons", body, len, NULL, 0.5);
-    free(body);
+    cancel_every_stage("polygons", polygons_request, 300);
 }
 
 TEST(cancel_solids_every_stage)
 {
-    size_t len;
-    char *body = solids_request(110, &len);
-    REQUIRE(body, "no request");
-    cancel_stages("solids", body, len, NULL, 0.5);
-    free(body);
+    cancel_every_stage("solids", solids_request, 110);
 }
 
 /* Long segments that all cross the whole square: the buckets cannot split them apart, so the

@@ -67,6 +67,19 @@ static void finish_all(srv *d, int n)
     }
 }
 
+/* Starts n daemons on the database db with `flags` and the names NAME0 .. NAME(n-1) (name the
+ * prefix); returns how many started. */
+static int open_named(srv *d, int n, const char *db, const char *flags, const char *name)
+{
+    int up = 0;
+    for (int i = 0; i < n; i++) {
+        char f[160];
+        snprintf(f, sizeof f, "%s --name %s%d", flags, name, i);
+        up += srv_open_db(&d[i], db, f) == 0;
+    }
+    return up;
+}
+
 /* POSTs body through d without waiting: 202, or 200 when another daemon took and ended the
  * job at once; the submission's id in id (33 bytes).  0, or -1. */
 static int post_job(srv *d, const char *body, size_t len, char *id)
@@ -90,12 +103,7 @@ TEST(cluster_round_robin_runs_once)
     char db[256];
     if (cluster_db(db, sizeof db)) return;
     srv d[3];
-    int up = 0;
-    for (int i = 0; i < 3; i++) {
-        char flags[128];
-        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name d%d --queue 1000", i);
-        up += srv_open_db(&d[i], db, flags) == 0;
-    }
+    int up = open_named(d, 3, db, "--workers 2 --job-threads 1 --queue 1000", "d");
     if (up < 3) {
         finish_all(d, 3);
         REQUIRE(0, "3 daemons on PostgreSQL: %d started", up);
@@ -154,12 +162,7 @@ TEST(cluster_single_flight)
     char db[256];
     if (cluster_db(db, sizeof db)) return;
     srv d[3];
-    int up = 0;
-    for (int i = 0; i < 3; i++) {
-        char flags[128];
-        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name s%d", i);
-        up += srv_open_db(&d[i], db, flags) == 0;
-    }
+    int up = open_named(d, 3, db, "--workers 2 --job-threads 1", "s");
     size_t len;
     const char *body = slow_body(5, &len);
     if (up < 3 || !body) {
@@ -265,12 +268,7 @@ TEST(cluster_cancel_six_workers_idle)
     char db[256];
     if (cluster_db(db, sizeof db)) return;
     srv d[3];
-    int up = 0;
-    for (int i = 0; i < 3; i++) {
-        char flags[96];
-        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name D%d", i);
-        up += srv_open_db(&d[i], db, flags) == 0;
-    }
+    int up = open_named(d, 3, db, "--workers 2 --job-threads 1", "D");
     char *body[6] = {0};
     size_t len[6];
     int ok = up == 3;
@@ -279,7 +277,7 @@ TEST(cluster_cancel_six_workers_idle)
     /* issue 25's jobs: long segments, a few buckets of thousands in the split stage */
     for (int k = 0; ok && k < 6; k++) ok = (body[k] = long_lines_body(10 + k, &len[k])) != NULL;
     if (!ok) {
-        for (int i = 0; i < 3; i++) srv_finish(&d[i]);
+        finish_all(d, 3);
         for (int k = 0; k < 6; k++) free(body[k]);
         REQUIRE(0, "3 daemons and the long requests");
     }
@@ -434,12 +432,7 @@ TEST(cluster_database_restart)
     char db[256];
     if (cluster_db(db, sizeof db)) return;
     srv d[2];
-    int up = 0;
-    for (int i = 0; i < 2; i++) {
-        char flags[128];
-        snprintf(flags, sizeof flags, "--workers 2 --job-threads 1 --name r%d --queue 1000", i);
-        up += srv_open_db(&d[i], db, flags) == 0;
-    }
+    int up = open_named(d, 2, db, "--workers 2 --job-threads 1 --queue 1000", "r");
     if (up < 2) {
         finish_all(d, 2);
         REQUIRE(0, "2 daemons");
@@ -574,12 +567,7 @@ TEST(cluster_behind_nginx)
     }
     if (cluster_db(db, sizeof db)) return;
     srv d[2];
-    int up = 0;
-    for (int i = 0; i < 2; i++) {
-        char flags[128];
-        snprintf(flags, sizeof flags, "--workers 1 --job-threads 1 --name n%d --max-per-ip 0", i);
-        up += srv_open_db(&d[i], db, flags) == 0;
-    }
+    int up = open_named(d, 2, db, "--workers 1 --job-threads 1 --max-per-ip 0", "n");
     char dir[64] = "/tmp/cellar-test-nginx-XXXXXX";
     int port = free_port();
     if (up < 2 || !mkdtemp(dir) || nginx_up(dir, port, d[0].port, d[1].port)) {

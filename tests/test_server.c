@@ -486,8 +486,7 @@ SERVER_TEST(cancel_frees_the_worker_at_once, "--workers 1 --job-threads 2")
             while (!there && now_s() < until) {
                 http_get(d, path, &r);
                 json_t *o = jbody(&r), *pr = json_object_get(o, "progress");
-                const char *sn = jstr(pr, "stage");
-                there = sn && !strcmp(sn, "split") &&
+                there = !strcmp(jstr(pr, "stage"), "split") &&
                         json_number_value(json_object_get(pr, "fraction")) >= at[k];
                 int ended = !o || strcmp(jstr(o, "state"), "running") != 0;
                 json_decref(o);

@@ -1139,7 +1139,7 @@ static void twin_chunk(void *ctx, size_t item, int worker)
         while (j->eoff[s + 1] <= i) s++;
         const uint32_t *tw = j->twins[s];
         uint32_t x = j->in2pcv[i];
-        if (!tw || x == NONE) continue;
+        if (!tw || x == NONE || !j->A->twinned[s]) continue;
         size_t sent = j->eoff[s + 1] - j->eoff[s];
         uint32_t t = tw[i - j->eoff[s]];
         if (t != NONE && t < sent && j->in2pcv[j->eoff[s] + t] != NONE)
@@ -1469,10 +1469,16 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     for (size_t s = 0, t = 0; s < ns; s++) {
         size_t t0 = t;
         ndrop = 0;
-        for (; t < ntask && task[t].s == s; t++)
+        size_t split = 0;
+        for (; t < ntask && task[t].s == s; t++) {
+            split += buf[t].split_faces;
             for (size_t i = 0; i < buf[t].ndrop; i++)
                 if (A3_PUSH(drop, ndrop, capdrop, buf[t].drop[i])) goto oom;
-        if (twins && twins[s]) A->twinned[s] = 1;
+        }
+        /* the check paired the input's edges; a face split into triangles has edges of its own
+         * (and its input edges in other entries): such a solid's twins all come from its
+         * pieces (stage_twins), so that its patches reach across the split faces */
+        if (twins && twins[s] && !split) A->twinned[s] = 1;
         if (ndrop && mend_dropped(A, at[3 * t0], at[3 * t], drop, ndrop)) goto oom;
     }
     A3_TICK("in/join");
@@ -2607,6 +2613,7 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     par_for(A->threads, nr, patch_fill, &j);
     ppo[total] = inp;
     A->npatch = total;
+    A->st->patches = total;
     *ppo_out = ppo, *pp_out = pp;
     ppo = pp = NULL;
     rc = 0;

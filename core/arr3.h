@@ -77,6 +77,7 @@ typedef struct arr3_stats {
     size_t pairs_tested;    /* candidate piece pairs (of different solids, boxes meeting) */
     size_t pairs_meeting;   /* of those, pairs whose pieces meet (cut, contact, coplanar overlap) */
     size_t faces_reached;   /* pieces that go through a plane arrangement (the rest kept whole) */
+    size_t patches;         /* edge-connected runs of the pieces kept whole, each decided once */
     size_t cuts;            /* segments where pieces of different solids meet */
     size_t points;          /* vertices made by the arrangement (implicit, exact) */
     size_t nv, ne, nf, nc;  /* result counts (nc: bounded cells) */

@@ -1042,18 +1042,22 @@ static void vol_chunk(void *ctx, size_t item, int worker)
             if (m < 3) continue;
             while (t < m && A->ent[o + t] < A->nv) t++; /* point ids below nv: the vertices */
             if (t < m) continue;                        /* in double-double, per cell */
-            /* |coordinates| <= 2^29 + 1: each cross product component below 2^60 */
+            /* |coordinates| <= 2^29 + 1: each cross product component below 2^60, so a run of
+             * four of them sums in 64 bits before it joins S */
             i128 C = 0, S[3] = {0, 0, 0};
             const int64_t *p0 = A->g + 3 * (size_t)A->ent[o], *q = p0;
+            int64_t s0 = 0, s1 = 0, s2 = 0;
             for (t = 1; t <= m; t++) {
                 const int64_t *p = t < m ? A->g + 3 * (size_t)A->ent[o + t] : p0;
                 int64_t c0 = q[1] * p[2] - q[2] * p[1];
                 int64_t c1 = q[2] * p[0] - q[0] * p[2];
                 int64_t c2 = q[0] * p[1] - q[1] * p[0];
-                S[0] += c0, S[1] += c1, S[2] += c2;
+                s0 += c0, s1 += c1, s2 += c2;
+                if ((t & 3) == 0) S[0] += s0, S[1] += s1, S[2] += s2, s0 = s1 = s2 = 0;
                 if (t >= 2 && t < m) C += (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
                 q = p;
             }
+            S[0] += s0, S[1] += s1, S[2] += s2;
             if (neg) C = -C, S[0] = -S[0], S[1] = -S[1], S[2] = -S[2];
             r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
         }

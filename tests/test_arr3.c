@@ -11,6 +11,7 @@
 #include "core/solid.h"
 #include "tests/check.h"
 #include "tests/lar_check.h"
+#include "tests/shapes.h"
 
 static const uint32_t cube_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
                                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
@@ -371,6 +372,138 @@ static int fivecubes_reference(double *vol)
     free(text);
     qsort(vol, (size_t)n, sizeof *vol, cmp_double);
     return n == 26 ? 0 : -1;
+}
+
+/* A closed mesh of k x k quads on each side of a cube, pushed out to a lumpy sphere (radius
+ * 1 + 0.08 sin(3x) cos(2y) sin(z) at each corner, coordinates on the grid of 2^-20): its quads
+ * are not planar.  With tri, each quad is given as the two triangles the arrangement would make
+ * of it: the diagonal whose triangles' normals agree best. */
+static solid lumpy_quads(int k, int tri)
+{
+    int n1 = k + 1;
+    size_t nv = 6 * (size_t)n1 * (size_t)n1;
+    double *V = malloc(3 * nv * sizeof *V);
+    int *F = malloc((6 * (size_t)k * (size_t)k * 8 + 1) * sizeof *F);
+    size_t nf = 0;
+    for (int side = 0; side < 6; side++) {
+        int ax = side / 2, sg = side % 2 ? 1 : -1;
+        for (int i = 0; i <= k; i++)
+            for (int j = 0; j <= k; j++) {
+                double c[3];
+                c[ax] = sg;
+                c[(ax + 1) % 3] = -1 + 2.0 * i / k;
+                c[(ax + 2) % 3] = -1 + 2.0 * j / k;
+                double r = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+                double rr = 1 + 0.08 * sin(3 * c[0]) * cos(2 * c[1]) * sin(c[2]);
+                double *v = V + 3 * ((size_t)(side * n1 + i) * n1 + j);
+                for (int a = 0; a < 3; a++) v[a] = ldexp(round(ldexp(c[a] / r * rr, 20)), -20);
+            }
+        for (int i = 0; i < k; i++)
+            for (int j = 0; j < k; j++) {
+                int q[4] = {(side * n1 + i) * n1 + j, (side * n1 + i + 1) * n1 + j,
+                            (side * n1 + i + 1) * n1 + j + 1, (side * n1 + i) * n1 + j + 1};
+                if (sg < 0) {
+                    int t = q[1];
+                    q[1] = q[3], q[3] = t;
+                }
+                if (!tri) {
+                    for (int t = 0; t < 4; t++) F[nf++] = q[t];
+                    F[nf++] = -1;
+                    continue;
+                }
+                double dot[2];
+                for (int a = 0; a < 2; a++) {
+                    double nrm[2][3];
+                    for (int h = 0; h < 2; h++) {
+                        const double *p0 = V + 3 * q[(a + 2 * h) % 4],
+                                     *p1 = V + 3 * q[(a + 2 * h + 1) % 4],
+                                     *p2 = V + 3 * q[(a + 2 * h + 2) % 4];
+                        double u[3], w[3];
+                        for (int d = 0; d < 3; d++) u[d] = p1[d] - p0[d], w[d] = p2[d] - p0[d];
+                        nrm[h][0] = u[1] * w[2] - u[2] * w[1];
+                        nrm[h][1] = u[2] * w[0] - u[0] * w[2];
+                        nrm[h][2] = u[0] * w[1] - u[1] * w[0];
+                    }
+                    dot[a] = nrm[0][0] * nrm[1][0] + nrm[0][1] * nrm[1][1] + nrm[0][2] * nrm[1][2];
+                }
+                int a = dot[0] > dot[1] ? 0 : 1;
+                int t6[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
+                for (int t = 0; t < 6; t++) {
+                    F[nf++] = t6[t];
+                    if (t % 3 == 2) F[nf++] = -1;
+                }
+            }
+    }
+    F[nf] = -2;
+    solid s = shape_poly(V, nv, F);
+    free(V), free(F);
+    return s;
+}
+
+/* run3 with the check's pairing of each solid's edges, as the API runs it. */
+static int run3_checked(solid *s, size_t n, double precision, lar3 *out, long *euler)
+{
+    uint32_t *tw[8] = {0};
+    int rc = -1;
+    memset(out, 0, sizeof *out);
+    for (size_t i = 0; i < n && i < 8; i++) {
+        solid_report r;
+        tw[i] = malloc((s[i].cyc_off[s[i].ncyc] + 1) * sizeof *tw[i]);
+        if (!tw[i] || solid_check_nocopy(&s[i], precision, "s", &r, NULL, tw[i])) {
+            test_fail(__FILE__, __func__, __LINE__, "solid %zu: the check failed", i);
+            goto done;
+        }
+    }
+    arr3_opts o = {0};
+    o.precision = precision;
+    char err[256], msg[256];
+    if ((rc = arr3_build_ex(s, n, 0, (const uint32_t *const *)tw, &o, out, err, sizeof err))) {
+        test_fail(__FILE__, __func__, __LINE__, "arr3_build_ex: %d %s", rc, err);
+        goto done;
+    }
+    if ((rc = lar3_check(out, 3 * precision, euler, msg, sizeof msg))) {
+        test_fail(__FILE__, __func__, __LINE__, "lar3_check: %s", msg);
+        lar3_free(out);
+    }
+done:
+    for (size_t i = 0; i < n && i < 8; i++) free(tw[i]);
+    return rc;
+}
+
+/* Faces split into triangles keep their patches: the untouched part of a mesh of quads that are
+ * not planar is walked as one patch (not one patch a triangle), and the complex is the one of
+ * the same mesh given as those triangles. */
+TEST(split_quads_stay_in_patches)
+{
+    lar3 c[2];
+    long eu[2];
+    int ok[2];
+    for (int tri = 0; tri < 2; tri++) {
+        solid s[2] = {lumpy_quads(12, tri), box(0.3, 0.3, 0.3, 2, 2, 2)};
+        ok[tri] = !run3_checked(s, 2, 0x1p-20, &c[tri], &eu[tri]);
+        free_all(s, 2);
+    }
+    if (ok[0] && ok[1]) {
+        printf("# lumpy quads: V %zu E %zu F %zu C %zu, %zu split, %zu patches\n", c[0].nv, c[0].ne,
+               c[0].nf, c[0].nc, c[0].stats.split_faces, c[0].stats.patches);
+        CHECK(c[0].stats.split_faces == 6 * 12 * 12, "%zu quads split", c[0].stats.split_faces);
+        CHECK(c[0].stats.faces_reached > 0 && c[0].stats.faces_reached < 200, "%zu reached",
+              c[0].stats.faces_reached);
+        CHECK(c[0].stats.patches >= 1 && c[0].stats.patches <= 4,
+              "%zu patches (one a triangle: %zu)", c[0].stats.patches,
+              2 * c[0].stats.split_faces - c[0].stats.faces_reached);
+        CHECK(c[0].stats.patches == c[1].stats.patches, "patches %zu, as triangles %zu",
+              c[0].stats.patches, c[1].stats.patches);
+        CHECK(c[0].nv == c[1].nv && c[0].ne == c[1].ne && c[0].nf == c[1].nf && c[0].nc == c[1].nc,
+              "V %zu E %zu F %zu C %zu, as triangles V %zu E %zu F %zu C %zu", c[0].nv, c[0].ne,
+              c[0].nf, c[0].nc, c[1].nv, c[1].ne, c[1].nf, c[1].nc);
+        CHECK(c[0].nc == 3 && eu[0] == eu[1], "C %zu, euler %ld / %ld", c[0].nc, eu[0], eu[1]);
+        for (size_t k = 0; k < c[0].nc && k < c[1].nc; k++)
+            CHECK(fabs(c[0].cvol[k] - c[1].cvol[k]) <= 1e-12 * fabs(c[1].cvol[k]),
+                  "cell %zu: volume %.17g, as triangles %.17g", k, c[0].cvol[k], c[1].cvol[k]);
+    }
+    for (int tri = 0; tri < 2; tri++)
+        if (ok[tri]) lar3_free(&c[tri]);
 }
 
 TEST(five_cubes_of_the_seeds)

@@ -849,6 +849,7 @@ typedef struct pbuf {
     /* scratch */
     uint32_t *tv, **cyc, *inlo, *tri;
     size_t *len, captv, capcyc, capinlo, captri, caplen;
+    A3_PAD;
 } pbuf;
 
 static void pbuf_free(pbuf *B)
@@ -1909,6 +1910,7 @@ typedef struct cutwork {
     size_t niv[2], capiv[2];
     int8_t *sd;
     size_t capsd;
+    A3_PAD;
 } cutwork;
 
 /* A chunk's output. */
@@ -1924,6 +1926,7 @@ typedef struct cutout {
     size_t nmet, capmet;
     size_t npairs; /* pairs that meet */
     int rc;        /* 0, -1 out of memory, -3 cancelled */
+    A3_PAD;
 } cutout;
 
 typedef struct cutjob {

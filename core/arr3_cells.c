@@ -1032,10 +1032,19 @@ static void vol_chunk(void *ctx, size_t item, int worker)
     const voljob *j = ctx;
     const a3 *A = j->A;
     size_t f0 = item * VOL_CHUNK, f1 = f0 + VOL_CHUNK < A->nf ? f0 + VOL_CHUNK : A->nf;
-    uint32_t u0 = A->f_unit[f0];
+    uint32_t u0 = A->f_unit[f0], cur = u0;
+    /* the sums of the current unit's run stay here, and go to the shared array when the unit
+     * changes: neighbouring chunks' runs share cache lines there (writing them face by face
+     * made two threads slower than one) */
+    volrun acc = {0, {0, 0, 0}};
     for (size_t f = f0; f < f1; f++) {
         uint32_t u = A->f_unit[f];
-        volrun *r = &j->run[j->roff[item] + (u - u0)];
+        if (u != cur) {
+            j->run[j->roff[item] + (cur - u0)] = acc;
+            acc = (volrun){0, {0, 0, 0}};
+            cur = u;
+        }
+        volrun *r = &acc;
         int neg = u < A->npatch && !A->f_out[f];
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
@@ -1062,6 +1071,7 @@ static void vol_chunk(void *ctx, size_t item, int worker)
             r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
         }
     }
+    j->run[j->roff[item] + (cur - u0)] = acc;
 }
 
 /* Six times the cone from org over the cycle's fan, in double-double. */

@@ -37,6 +37,14 @@ void a3_prof(const char *name);
 #else
 #define A3_TICK(name) ((void)0)
 #endif
+
+/* The last member of a struct kept in an array by worker or by task (a worker's scratch, a
+ * task's output): 64 bytes of nothing, so that no cache line holds two neighbours' members.
+ * Without it two workers writing their own counters write one line between them, which
+ * ping-pongs between the cores on every write (the 3D volumes ran slower on two threads than
+ * on one). */
+#define A3_PAD char a3_pad_[64]
+
 /* The side plane of an edge between two input vertices whose plane needs no arrangement: not
  * made (nor added to the planes) unless asked for, by a3_side(). */
 #define SIDE_LAZY (NONE - 2)

@@ -213,6 +213,7 @@ static void build_groups(void *ctx, size_t item, int worker)
 typedef struct out64 {
     uint64_t *v;
     size_t n, cap;
+    A3_PAD;
 } out64;
 
 static int push64(out64 *o, uint64_t x)

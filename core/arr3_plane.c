@@ -114,6 +114,7 @@ typedef struct pwork {
     uint8_t *reached; /* by piece of the plane: goes through the arrangement */
     size_t capreached;
     int fail;
+    A3_PAD;
 } pwork;
 
 #define GROW(w, arr, need) a3_grow(&(w)->arr, &(w)->cap##arr, (need), sizeof *(w)->arr)

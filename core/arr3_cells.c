@@ -1049,6 +1049,27 @@ static void vol_chunk(void *ctx, size_t item, int worker)
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
             if (m < 3) continue;
+            if (m ==
+                3) { /* a triangle, the common case: C = det(p0, p1, p2), S = (p1-p0)x(p2-p0) */
+                uint32_t e0 = A->ent[o], e1 = A->ent[o + 1], e2 = A->ent[o + 2];
+                if ((e0 | e1 | e2) >= A->nv && (e0 >= A->nv || e1 >= A->nv || e2 >= A->nv))
+                    continue; /* a made point: in double-double, per cell */
+                const int64_t *p0 = A->g + 3 * (size_t)e0, *p1 = A->g + 3 * (size_t)e1,
+                              *p2 = A->g + 3 * (size_t)e2;
+                /* |coordinates| <= 2^29 + 1: each component of p1 x p2 below 2^60, and of the
+                 * differences (below 2^31) their cross product below 2^63 */
+                int64_t c0 = p1[1] * p2[2] - p1[2] * p2[1];
+                int64_t c1 = p1[2] * p2[0] - p1[0] * p2[2];
+                int64_t c2 = p1[0] * p2[1] - p1[1] * p2[0];
+                i128 C = (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
+                int64_t u0 = p1[0] - p0[0], u1 = p1[1] - p0[1], u2 = p1[2] - p0[2];
+                int64_t v0 = p2[0] - p0[0], v1 = p2[1] - p0[1], v2 = p2[2] - p0[2];
+                i128 S0 = (i128)u1 * v2 - (i128)u2 * v1, S1 = (i128)u2 * v0 - (i128)u0 * v2,
+                     S2 = (i128)u0 * v1 - (i128)u1 * v0;
+                if (neg) C = -C, S0 = -S0, S1 = -S1, S2 = -S2;
+                r->C += C, r->S[0] += S0, r->S[1] += S1, r->S[2] += S2;
+                continue;
+            }
             while (t < m && A->ent[o + t] < A->nv) t++; /* point ids below nv: the vertices */
             if (t < m) continue;                        /* in double-double, per cell */
             /* |coordinates| <= 2^29 + 1: each cross product component below 2^60, so a run of

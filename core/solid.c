@@ -597,29 +597,56 @@ static int check_faces(ck *c)
 
 /* ---- check: edges --------------------------------------------------------------------- */
 
-/* Sorts the half-edges by key, stably (so those of one edge stay in face order): a counting sort
- * by the lower merged vertex, then each vertex's few halves by the higher one (insertion). */
-static int sort_halves(ck *c)
+/* The half-edges (every entry whose two merged ends differ), sorted by key, stably (so those of
+ * one edge stay in face order): a counting sort by the lower merged vertex that writes each
+ * half straight to its place (a first pass counts, a second places), then each vertex's few
+ * halves by the higher one (insertion).  -1 out of memory. */
+static int build_halves(ck *c)
 {
-    size_t n = c->nhe, nv = c->s->nv;
-    half *tmp = mem_malloc((n ? n : 1) * sizeof *tmp);
+    const solid *s = c->s;
+    const uint32_t *cy = s->cyc;
+    size_t nv = s->nv, n = 0;
     uint32_t *pos = mem_calloc(nv + 2, sizeof *pos);
-    if (!tmp || !pos) {
-        free(tmp), free(pos);
+    if (!pos) return -1;
+    for (size_t k = 0; k < s->ncyc; k++) {
+        uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
+        for (uint32_t i = lo; i < hi; i++) {
+            uint32_t u = c->merged[cy[i]], w = c->merged[cy[i + 1 < hi ? i + 1 : lo]];
+            if (u == w) continue;
+            pos[(u < w ? u : w) + 1]++;
+            n++;
+        }
+    }
+    for (size_t v = 0; v < nv; v++) pos[v + 1] += pos[v];
+    c->he = mem_malloc((n ? n : 1) * sizeof *c->he);
+    if (!c->he) {
+        free(pos);
         return -1;
     }
-    for (size_t i = 0; i < n; i++) pos[(c->he[i].key >> 32) + 2]++;
-    for (size_t v = 0; v < nv; v++) pos[v + 2] += pos[v + 1];
-    for (size_t i = 0; i < n; i++) tmp[pos[(c->he[i].key >> 32) + 1]++] = c->he[i];
-    for (size_t v = 0; v < nv; v++)
-        for (uint32_t i = pos[v] + 1; i < pos[v + 1]; i++) {
-            half x = tmp[i];
-            uint32_t j = i;
-            for (; j > pos[v] && tmp[j - 1].key > x.key; j--) tmp[j] = tmp[j - 1];
-            tmp[j] = x;
+    for (size_t f = 0; f < s->nf; f++)
+        for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
+            uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
+            for (uint32_t i = lo; i < hi; i++) {
+                uint32_t u = c->merged[cy[i]], w = c->merged[cy[i + 1 < hi ? i + 1 : lo]];
+                if (u == w) continue;
+                c->he[pos[u < w ? u : w]++] =
+                    (half){.key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u,
+                           .ent = i,
+                           .face = (uint32_t)f & 0x7fffffffu,
+                           .fwd = u < w};
+            }
         }
-    free(c->he);
-    c->he = tmp;
+    c->nhe = n;
+    /* pos[v] is now where vertex v's run ends (the next one's start) */
+    for (size_t v = 0; v < nv; v++) {
+        uint32_t r0 = v ? pos[v - 1] : 0, r1 = pos[v];
+        for (uint32_t i = r0 + 1; i < r1; i++) {
+            half x = c->he[i];
+            uint32_t j = i;
+            for (; j > r0 && c->he[j - 1].key > x.key; j--) c->he[j] = c->he[j - 1];
+            c->he[j] = x;
+        }
+    }
     free(pos);
     return 0;
 }
@@ -669,27 +696,9 @@ static int pair_by_index(ck *c, size_t i, size_t j)
  * manifold ones in c->pair.  Returns -1 out of memory; *bad is set on any error reported. */
 static int check_edges(ck *c, int *bad)
 {
-    const solid *s = c->s;
-    const uint32_t *cy = s->cyc;
-    size_t total = s->cyc_off[s->ncyc];
-    c->he = mem_malloc((total ? total : 1) * sizeof *c->he);
+    size_t total = c->s->cyc_off[c->s->ncyc];
     c->pair = mem_malloc((total / 2 + 1) * sizeof *c->pair);
-    if (!c->he || !c->pair) return -1;
-    for (size_t f = 0; f < s->nf; f++)
-        for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
-            uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
-            for (uint32_t i = lo; i < hi; i++) {
-                uint32_t a = cy[i], b = cy[i + 1 < hi ? i + 1 : lo];
-                uint32_t u = c->merged[a], w = c->merged[b];
-                if (u == w) continue;
-                c->he[c->nhe++] =
-                    (half){.key = u < w ? (uint64_t)u << 32 | w : (uint64_t)w << 32 | u,
-                           .ent = i,
-                           .face = (uint32_t)f & 0x7fffffffu,
-                           .fwd = u < w};
-            }
-        }
-    if (sort_halves(c)) return -1;
+    if (!c->pair || build_halves(c)) return -1;
     for (size_t i = 0, j; i < c->nhe; i = j) {
         for (j = i + 1; j < c->nhe && c->he[j].key == c->he[i].key; j++) continue;
         const half *h = &c->he[i];

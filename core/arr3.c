@@ -844,7 +844,9 @@ typedef struct pbuf {
     uint32_t *drop; /* vertices of faces left out (mend_dropped) */
     size_t ndrop, capdrop;
     size_t split_faces;
-    int rc; /* ARR_OK, or the run's first error (msg) */
+    int direct; /* pc, pc_off and pcv are the run's own place in a3's arrays (its faces as they
+                   are: cappc etc. the room there), not arrays of its own */
+    int rc;     /* ARR_OK, or the run's first error (msg) */
     char msg[256];
     /* scratch */
     uint32_t *tv, **cyc, *inlo, *tri;
@@ -854,9 +856,30 @@ typedef struct pbuf {
 
 static void pbuf_free(pbuf *B)
 {
-    free(B->pc), free(B->pc_off), free(B->pcv), free(B->in), free(B->drop);
+    if (!B->direct) free(B->pc), free(B->pc_off), free(B->pcv);
+    free(B->in), free(B->drop);
     free(B->tv), free(B->cyc), free(B->inlo), free(B->tri), free(B->len);
     memset(B, 0, sizeof *B);
+}
+
+/* A run writing in place (direct) that needs more room than its faces as they are (a face split
+ * into triangles) goes on in arrays of its own, with what it wrote copied.  -1 out of memory. */
+static int pbuf_own(pbuf *B)
+{
+    size_t cp = 2 * B->cappc + 16, cc = 2 * B->cappc_off + 16, ce = 2 * B->cappcv + 16;
+    piece *pc = mem_malloc(cp * sizeof *pc);
+    uint32_t *off = mem_malloc(cc * sizeof *off), *v = mem_malloc(ce * sizeof *v);
+    if (!pc || !off || !v) {
+        free(pc), free(off), free(v);
+        return -1;
+    }
+    if (B->npc) memcpy(pc, B->pc, B->npc * sizeof *pc);
+    if (B->npcyc) memcpy(off, B->pc_off, B->npcyc * sizeof *off);
+    if (B->npcv) memcpy(v, B->pcv, B->npcv * sizeof *v);
+    B->pc = pc, B->pc_off = off, B->pcv = v;
+    B->cappc = cp, B->cappc_off = cc, B->cappcv = ce;
+    B->direct = 0;
+    return 0;
 }
 
 /* Adds a piece with the given cycles (vertex lists), anchor vertices av (their raw plane's
@@ -873,15 +896,20 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
                (int8_t)sgn,  nc > 1};
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
-    if (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
-        a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv))
+    if (B->direct &&
+        (B->npc + 1 > B->cappc || B->npcyc + nc > B->cappc_off || B->npcv + total > B->cappcv) &&
+        pbuf_own(B))
         return -1;
+    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
+                       a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv)))
+        return -1;
+    int k1 = k == 2 ? 0 : k + 1, k2 = k == 0 ? 2 : k - 1;
     for (size_t c = 0; c < nc; c++) {
         B->pc_off[B->npcyc++] = (uint32_t)B->npcv;
         for (size_t i = 0; i < len[c]; i++) {
-            uint32_t v = cyc[c][i], w = cyc[c][(i + 1) % len[c]];
+            uint32_t v = cyc[c][i], w = cyc[c][i + 1 < len[c] ? i + 1 : 0];
             const int64_t *gv = A->g + 3 * (size_t)v, *gw = A->g + 3 * (size_t)w;
-            if (gv[(k + 1) % 3] == gw[(k + 1) % 3] && gv[(k + 2) % 3] == gw[(k + 2) % 3]) return -2;
+            if (gv[k1] == gw[k1] && gv[k2] == gw[k2]) return -2;
             B->pcv[B->npcv++] = v;
             for (int a = 0; a < 3; a++) {
                 int32_t x = (int32_t)gv[a];
@@ -889,6 +917,10 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
                 if (x > P.box[3 + a]) P.box[3 + a] = x;
             }
         }
+    }
+    if (B->direct) {
+        B->pc[B->npc++] = P; /* room checked above */
+        return 0;
     }
     return A3_PUSH(B->pc, B->npc, B->cappc, P);
 }
@@ -904,7 +936,9 @@ typedef struct injob {
     const uint32_t *vmap; /* by input vertex of all solids (voff): its vertex */
     const size_t *voff;
     const intask *task;
-    pbuf *buf; /* by task */
+    pbuf *buf;           /* by task */
+    const size_t *place; /* by task, when the runs write in place: its first piece, cycle and
+                            entry in a3's arrays were every face as it is (3 a task); or NULL */
 } injob;
 
 #define IN_CHUNK 16384 /* faces a task */
@@ -932,11 +966,18 @@ static void in_task(void *ctx, size_t item, int worker)
     { /* room for the run's faces as they are (a face split into triangles grows them) */
         size_t ncy = so->face_off[T->f1] - so->face_off[T->f0];
         size_t nent = so->cyc_off[so->face_off[T->f1]] - so->cyc_off[so->face_off[T->f0]];
-        if (a3_grow(&B->pc, &B->cappc, T->f1 - T->f0 + 1, sizeof *B->pc) ||
-            a3_grow(&B->pc_off, &B->cappc_off, ncy + 2, sizeof *B->pc_off) ||
-            a3_grow(&B->pcv, &B->cappcv, nent + 1, sizeof *B->pcv) ||
-            a3_grow(&B->in, &B->capin, 2 * nent + 2, sizeof *B->in))
+        if (j->place) { /* in place: no copy to make, no second array to fault in */
+            const size_t *at = j->place + 3 * item;
+            B->direct = 1;
+            B->pc = A->pc + at[0], B->cappc = T->f1 - T->f0;
+            B->pc_off = A->pc_off + at[1], B->cappc_off = ncy;
+            B->pcv = A->pcv + at[2], B->cappcv = nent;
+        } else if (a3_grow(&B->pc, &B->cappc, T->f1 - T->f0 + 1, sizeof *B->pc) ||
+                   a3_grow(&B->pc_off, &B->cappc_off, ncy + 2, sizeof *B->pc_off) ||
+                   a3_grow(&B->pcv, &B->cappcv, nent + 1, sizeof *B->pcv)) {
             TASK_OOM;
+        }
+        if (a3_grow(&B->in, &B->capin, 2 * nent + 2, sizeof *B->in)) TASK_OOM;
     }
     for (size_t f = T->f0; f < T->f1; f++) {
         uint32_t face = A->solid_face_off[s] + (uint32_t)f;
@@ -1306,6 +1347,7 @@ typedef struct joinjob {
     const size_t *at, *eoff;
     const uint32_t *const *twins;
     uint32_t *in2pcv;
+    int inplace; /* every run wrote in place, where the join puts it: only numbers to shift */
 } joinjob;
 
 static void join_task(void *ctx, size_t t, int worker)
@@ -1316,25 +1358,32 @@ static void join_task(void *ctx, size_t t, int worker)
     pbuf *B = &j->buf[t];
     size_t s = j->task[t].s, pc0 = j->at[3 * t];
     uint32_t cyc0 = (uint32_t)j->at[3 * t + 1], ent0 = (uint32_t)j->at[3 * t + 2];
-    for (size_t i = 0; i < B->npc; i++) {
-        piece P = B->pc[i];
-        P.c0 += cyc0;
-        A->pc[pc0 + i] = P;
+    if (j->inplace) {
+        for (size_t i = 0; i < B->npc; i++) A->pc[pc0 + i].c0 += cyc0;
+        for (size_t c = 0; c < B->npcyc; c++) A->pc_off[cyc0 + c] += ent0;
+    } else {
+        for (size_t i = 0; i < B->npc; i++) {
+            piece P = B->pc[i];
+            P.c0 += cyc0;
+            A->pc[pc0 + i] = P;
+        }
+        for (size_t c = 0; c < B->npcyc; c++) A->pc_off[cyc0 + c] = B->pc_off[c] + ent0;
+        if (B->npcv) memcpy(A->pcv + ent0, B->pcv, B->npcv * sizeof *A->pcv);
     }
-    for (size_t c = 0; c < B->npcyc; c++) A->pc_off[cyc0 + c] = B->pc_off[c] + ent0;
-    if (B->npcv) memcpy(A->pcv + ent0, B->pcv, B->npcv * sizeof *A->pcv);
     for (size_t i = 0; i < B->npcv; i++) A->pcvp[ent0 + i] = SIDE_LAZY, A->ptwin[ent0 + i] = NONE;
     for (size_t i = 0; j->in2pcv && j->twins[s] && i < B->nin; i++)
         j->in2pcv[j->eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
-    free(B->pc), free(B->pc_off), free(B->pcv), free(B->in);
+    if (!B->direct) free(B->pc), free(B->pc_off), free(B->pcv);
+    free(B->in);
     B->pc = NULL, B->pc_off = B->pcv = B->in = NULL;
+    B->direct = 0;
 }
 
 A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
                                 char *err, size_t el)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
-    size_t nfaces = 0, nvin = 0, nein = 0, ntask = 0;
+    size_t nfaces = 0, nvin = 0, nein = 0, ntask = 0, ncyin = 0;
     int rc = ARR_OK;
     size_t *voff = NULL, *eoff = NULL;
     int64_t *gin = NULL;
@@ -1342,7 +1391,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     size_t ndrop = 0, capdrop = 0;
     intask *task = NULL;
     pbuf *buf = NULL;
-    size_t *at = NULL;
+    size_t *at = NULL, *place = NULL;
+    piece *old_pc = NULL;
+    uint32_t *old_off = NULL, *old_pcv = NULL;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
             for (int a = 0; a < 3; a++) {
@@ -1356,6 +1407,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         nfaces += solids[s].nf;
         nvin += solids[s].nv;
         nein += solids[s].cyc_off[solids[s].ncyc];
+        ncyin += solids[s].ncyc;
         ntask += (solids[s].nf + IN_CHUNK - 1) / IN_CHUNK;
     }
     A->st->input_solids = ns;
@@ -1419,15 +1471,30 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     free(gin);
     gin = NULL;
     A3_TICK("in/vertex_at");
-    /* the faces into pieces, a run of faces a task on the threads, joined in order */
+    /* the faces into pieces, a run of faces a task on the threads, joined in order.  Each run
+     * writes in place, where its faces as they are go (the common case: then the join only
+     * shifts numbers); a run that needs more room goes on in arrays of its own, and the join
+     * copies every run to new arrays */
     ntask = 0;
     for (size_t s = 0; s < ns; s++)
         for (size_t f0 = 0; f0 < solids[s].nf; f0 += IN_CHUNK)
             task[ntask++] =
                 (intask){(uint32_t)s, (uint32_t)f0,
                          (uint32_t)(f0 + IN_CHUNK < solids[s].nf ? f0 + IN_CHUNK : solids[s].nf)};
+    place = mem_malloc((3 * ntask + 3) * sizeof *place);
+    if (!place || a3_grow(&A->pc, &A->cappc, nfaces + 1, sizeof *A->pc) ||
+        a3_grow(&A->pc_off, &A->cappc_off, ncyin + 2, sizeof *A->pc_off) ||
+        a3_grow(&A->pcv, &A->cappcv, nein + 1, sizeof *A->pcv))
+        goto oom;
+    for (size_t t = 0, cy0 = 0, s = 0; t < ntask; t++) {
+        const solid *so = &solids[task[t].s];
+        for (; s < task[t].s; s++) cy0 += solids[s].ncyc;
+        place[3 * t] = A->solid_face_off[task[t].s] + task[t].f0;
+        place[3 * t + 1] = cy0 + so->face_off[task[t].f0];
+        place[3 * t + 2] = eoff[task[t].s] + so->cyc_off[so->face_off[task[t].f0]];
+    }
     {
-        injob j = {A, solids, vmap, voff, task, buf};
+        injob j = {A, solids, vmap, voff, task, buf, place};
         par_for(A->threads, ntask, in_task, &j);
     }
     A3_TICK("in/tasks");
@@ -1440,6 +1507,22 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         }
         npc += buf[t].npc, npcyc += buf[t].npcyc, npcv += buf[t].npcv;
     }
+    at = mem_malloc((3 * ntask + 3) * sizeof *at);
+    if (!at) goto oom;
+    at[0] = at[1] = at[2] = 0;
+    int inplace = 1;
+    for (size_t t = 0; t < ntask; t++) {
+        at[3 * t + 3] = at[3 * t] + buf[t].npc;
+        at[3 * t + 4] = at[3 * t + 1] + buf[t].npcyc;
+        at[3 * t + 5] = at[3 * t + 2] + buf[t].npcv;
+        A->split_faces += buf[t].split_faces;
+        if (!buf[t].direct || memcmp(at + 3 * t, place + 3 * t, 3 * sizeof *at)) inplace = 0;
+    }
+    if (!inplace) { /* the runs' pieces (in place or their own) to new arrays */
+        old_pc = A->pc, old_off = A->pc_off, old_pcv = A->pcv;
+        A->pc = NULL, A->pc_off = A->pcv = NULL;
+        A->cappc = A->cappc_off = A->cappcv = 0;
+    }
     if (a3_grow(&A->pc, &A->cappc, npc + 1, sizeof *A->pc) ||
         a3_grow(&A->pc_off, &A->cappc_off, npcyc + 2, sizeof *A->pc_off) ||
         a3_grow(&A->pcv, &A->cappcv, npcv + 1, sizeof *A->pcv) ||
@@ -1451,19 +1534,12 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         if (!in2pcv) goto oom;
         memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
     }
-    at = mem_malloc((3 * ntask + 3) * sizeof *at);
-    if (!at) goto oom;
-    at[0] = at[1] = at[2] = 0;
-    for (size_t t = 0; t < ntask; t++) {
-        at[3 * t + 3] = at[3 * t] + buf[t].npc;
-        at[3 * t + 4] = at[3 * t + 1] + buf[t].npcyc;
-        at[3 * t + 5] = at[3 * t + 2] + buf[t].npcv;
-        A->split_faces += buf[t].split_faces;
-    }
     {
-        joinjob j = {A, buf, task, at, eoff, twins, in2pcv};
+        joinjob j = {A, buf, task, at, eoff, twins, in2pcv, inplace};
         par_for(A->threads, ntask, join_task, &j);
     }
+    free(old_pc), free(old_off), free(old_pcv);
+    old_pc = NULL, old_off = old_pcv = NULL;
     A->npc = npc, A->npcyc = npcyc, A->npcv = npcv;
     A->pc_off[A->npcyc] = (uint32_t)A->npcv;
     /* the faces left out, solid by solid: their vertices inside the solid's edges */
@@ -1498,6 +1574,8 @@ fail:
     free(buf);
     free(task);
     free(at);
+    free(place);
+    free(old_pc), free(old_off), free(old_pcv);
     free(voff);
     free(eoff);
     free(gin);

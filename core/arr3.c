@@ -148,7 +148,15 @@ static uint64_t cell_key(int64_t x, int64_t y, int64_t z)
 
 void pset_clear(pset *s, uint32_t base)
 {
-    if (s->key && s->n) memset(s->key, 0, s->cap * sizeof *s->key);
+    if (s->cap > 256 && 16 * s->n < s->cap) {
+        /* a table grown by one large plane, now used for small ones: clearing all of it for
+         * each of them cost more than the planes (fandisk: 7 % of a run); the next add makes a
+         * small one */
+        free(s->key), free(s->head);
+        s->key = NULL, s->head = NULL, s->cap = 0;
+    } else if (s->key && s->n) {
+        memset(s->key, 0, s->cap * sizeof *s->key);
+    }
     s->n = 0;
     s->base = base;
 }
@@ -2327,10 +2335,17 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         if (piece_plane_id(A, pi) || add_contact(A, A->pc[pi].plane, A->dcp[i].p)) goto done;
         A->pc[pi].reached = 1;
     }
-    /* every reached piece has its canonical plane */
+    /* every reached piece has its canonical plane; the reached pieces listed, and the
+     * others' entries counted (merge_planes), so that no later stage scans every piece */
+    A->nrl = 0, A->unreached_ent = 0;
     for (size_t i = 0; i < A->npc; i++) {
-        if (!A->pc[i].reached) continue;
-        if (piece_plane_id(A, (uint32_t)i)) goto done;
+        const piece *pc = &A->pc[i];
+        if (!pc->reached) {
+            A->unreached_ent += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
+            continue;
+        }
+        if (piece_plane_id(A, (uint32_t)i) || A3_PUSH(A->rl, A->nrl, A->caprl, (uint32_t)i))
+            goto done;
         A->st->faces_reached++;
     }
     A->G.pl = A->pl;
@@ -2444,13 +2459,11 @@ A3_STAGE static int plane_inputs(a3 *A)
 {
     /* reached pieces by plane (the others are faces as they are: merge_planes) */
     A->pp_off = mem_calloc(A->npl + 2, sizeof *A->pp_off);
-    A->pp = mem_malloc((A->npc + 1) * sizeof *A->pp);
+    A->pp = mem_malloc((A->nrl + 1) * sizeof *A->pp);
     if (!A->pp_off || !A->pp) return -1;
-    for (size_t i = 0; i < A->npc; i++)
-        if (A->pc[i].reached) A->pp_off[A->pc[i].plane + 2]++;
+    for (size_t k = 0; k < A->nrl; k++) A->pp_off[A->pc[A->rl[k]].plane + 2]++;
     for (size_t p = 0; p < A->npl; p++) A->pp_off[p + 2] += A->pp_off[p + 1];
-    for (size_t i = 0; i < A->npc; i++)
-        if (A->pc[i].reached) A->pp[A->pp_off[A->pc[i].plane + 1]++] = (uint32_t)i;
+    for (size_t k = 0; k < A->nrl; k++) A->pp[A->pp_off[A->pc[A->rl[k]].plane + 1]++] = A->rl[k];
     /* cuts by plane (order kept: deterministic) */
     cseg *cs = mem_malloc((A->ncs + 1) * sizeof *cs);
     if (!cs ||
@@ -2771,13 +2784,9 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
         rc = -3;
         goto done;
     }
-    /* sizes first */
-    for (size_t i = 0; i < A->npc; i++) {
-        const piece *pc = &A->pc[i];
-        if (pc->reached) continue;
-        nf++, ncyc++, ncov++;
-        nent += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
-    }
+    /* sizes first: the pieces nothing reached (one cycle each), counted by stage_cuts */
+    nf = ncyc = ncov = A->npc - A->nrl;
+    nent = A->unreached_ent;
     for (size_t p = 0; p < A->npl; p++) {
         const pfaces *F = &A->pf[p];
         uint32_t nd = F->trivial ? A->pp_off[p + 1] - A->pp_off[p] : F->ndirect;
@@ -2908,6 +2917,7 @@ static void a3_free(a3 *A)
     free(A->pcv);
     free(A->pcvp);
     free(A->ptwin);
+    free(A->rl);
     free(A->twinned);
     free(A->solid_face_off);
     free(A->pt);

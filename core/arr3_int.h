@@ -123,6 +123,8 @@ typedef struct a3 {
     uint32_t *ptwin; /* by entry: the entry of another piece of the same solid walking its edge
                         the other way, the edge's only other one in that solid; NONE if none */
     size_t npcv, cappcv, cappcvp, capptwin;
+    uint32_t *rl; /* the reached pieces, ascending (stage_cuts, once no piece is reached later) */
+    size_t nrl, caprl, unreached_ent; /* and the entries of the others, one cycle each */
     uint8_t *twinned; /* by solid: its entries' twins came with the input (arr3_build_ex) */
     size_t nfaces;    /* input faces */
     uint32_t *solid_face_off;

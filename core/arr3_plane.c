@@ -160,7 +160,14 @@ static uint32_t lp_global(pwork *w, uint32_t gid)
 
 static void lp_reset(pwork *w)
 {
-    if (w->htab && w->nhused) memset(w->htab, 0xff, w->hcap * sizeof *w->htab);
+    if (w->hcap > 256 && 16 * w->nhused < w->hcap) {
+        /* grown by one large plane, now used for small ones: a small table again, rather than
+         * clearing all of it for each (pset_clear's rule) */
+        free(w->htab);
+        w->htab = NULL, w->hcap = 0;
+    } else if (w->htab && w->nhused) {
+        memset(w->htab, 0xff, w->hcap * sizeof *w->htab);
+    }
     w->nhused = 0;
     w->nlp = 0;
 }

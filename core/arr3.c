@@ -2632,7 +2632,8 @@ static void patch_range(void *ctx, size_t t, int worker)
         const piece *pc = &A->pc[i];
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
             uint32_t t2 = A->ptwin[x];
-            if (t2 != NONE && !j->rch[j->epc[t2]]) a3_uf_union(j->uf, i, j->epc[t2]);
+            /* each twin pair once (twins are mutual): from its lower entry */
+            if (t2 != NONE && t2 > x && !j->rch[j->epc[t2]]) a3_uf_union(j->uf, i, j->epc[t2]);
         }
     }
     for (uint32_t i = p0; i < p1; i++) j->lab[i] = NONE;
@@ -2754,7 +2755,8 @@ static void put_chunk(void *ctx, size_t item, int worker)
         uint32_t *ent = A->ent + e0, *side = A->side + e0;
         const uint32_t *v = A->pcv + o, *vp = A->pcvp + o;
         for (uint32_t t = 0; t < n; t++) {
-            uint32_t k = rev ? (2 * n - 2 - t) % n : t; /* entry t goes to k */
+            /* entry t goes to k: reversed, (2n - 2 - t) mod n */
+            uint32_t k = !rev ? t : t + 2 <= n ? n - 2 - t : n - 1;
             j->pe2e[o + t] = e0 + k;
         }
         if (!rev) {
@@ -2763,7 +2765,7 @@ static void put_chunk(void *ctx, size_t item, int worker)
         } else {
             for (uint32_t t = 0; t < n; t++) {
                 ent[t] = v[n - 1 - t];
-                side[t] = vp[(2 * n - 2 - t) % n];
+                side[t] = vp[t + 2 <= n ? n - 2 - t : n - 1];
             }
         }
     }

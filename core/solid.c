@@ -111,7 +111,7 @@ typedef struct ck {
     int faces_only;   /* a face soup: no closedness, any orientation */
     uint32_t *merged; /* nv: the merged vertex of each input vertex */
     int64_t *g;       /* 3 * nv: the grid point of each input vertex */
-    double *area;     /* nf: area of the outer cycle */
+    double area;      /* the faces' outer cycles' areas, summed in face order */
     half *he;         /* half-edges, sorted by key */
     size_t nhe;
     uint32_t *pair; /* npair: index in he of the first of the two halves of a manifold edge */
@@ -491,7 +491,7 @@ static int check_face_grid(ck *c, size_t f, gface *q)
     return 0;
 }
 
-/* Degenerate cycles, zero area, planarity; fills c->area.  Appends nothing to the topology:
+/* Degenerate cycles, zero area, planarity; sums c->area.  Appends nothing to the topology:
  * a bad face still has its edges, so what it does to its neighbours is reported too. */
 static int check_faces(ck *c)
 {
@@ -499,11 +499,9 @@ static int check_faces(ck *c)
     const uint32_t *cy = s->cyc;
     gface q = {0};
     int rc = 0;
-    c->area = mem_malloc(s->nf * sizeof *c->area);
-    if (!c->area) return -1;
+    c->area = 0;
     for (size_t f = 0; f < s->nf && rc == 0; f++) {
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
-        c->area[f] = 0;
         int degenerate = 0;
         if (k1 - k0 == 1 && (cycle_distinct(c, k0) < 3 || collinear_on_grid(c, k0))) {
             /* a face without holes that the grid flattens onto a line (or a point): it bounds
@@ -523,7 +521,7 @@ static int check_faces(ck *c)
             sub3(b, a, u);
             sub3(d, a, w);
             cross3(u, w, n);
-            c->area[f] = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
+            c->area += sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
             continue;
         }
         for (size_t k = k0; k < k1; k++)
@@ -557,7 +555,7 @@ static int check_faces(ck *c)
         double diag = sqrt((bmax[0] - bmin[0]) * (bmax[0] - bmin[0]) +
                            (bmax[1] - bmin[1]) * (bmax[1] - bmin[1]) +
                            (bmax[2] - bmin[2]) * (bmax[2] - bmin[2]));
-        c->area[f] = len / 2;
+        c->area += len / 2;
         if (!(len > 0) && k1 - k0 > 1) {
             /* a face with holes whose outer cycle is flat in doubles (the grid test above
              * only takes faces without holes) */
@@ -861,11 +859,10 @@ static int check_volume(ck *c)
         }
     }
     double ref[3] = {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
-    double vol6 = 0, area = 0;
+    double vol6 = 0, area = c->area;
     for (size_t f = 0; f < s->nf; f++) {
         double v = face_volume6(c, f, ref);
         vol6 += c->flip[f] ? -v : v;
-        area += c->area[f];
     }
     double vol = vol6 / 6;
     if (!(fabs(vol) > c->p * area / 2)) {
@@ -987,7 +984,6 @@ oom:
 done:
     free(c.merged);
     free(c.g);
-    free(c.area);
     free(c.he);
     free(c.pair);
     free(c.flip);

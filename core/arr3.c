@@ -1356,6 +1356,8 @@ typedef struct joinjob {
     const uint32_t *const *twins;
     uint32_t *in2pcv;
     int inplace; /* every run wrote in place, where the join puts it: only numbers to shift */
+    const uint8_t *ident; /* by solid: its entries are its input entries (every face as it is,
+                             in place): the check's twins are the pieces' own, shifted */
 } joinjob;
 
 static void join_task(void *ctx, size_t t, int worker)
@@ -1378,8 +1380,18 @@ static void join_task(void *ctx, size_t t, int worker)
         for (size_t c = 0; c < B->npcyc; c++) A->pc_off[cyc0 + c] = B->pc_off[c] + ent0;
         if (B->npcv) memcpy(A->pcv + ent0, B->pcv, B->npcv * sizeof *A->pcv);
     }
-    for (size_t i = 0; i < B->npcv; i++) A->pcvp[ent0 + i] = SIDE_LAZY, A->ptwin[ent0 + i] = NONE;
-    for (size_t i = 0; j->in2pcv && j->twins[s] && i < B->nin; i++)
+    for (size_t i = 0; i < B->npcv; i++) A->pcvp[ent0 + i] = SIDE_LAZY;
+    if (j->ident[s]) {
+        const uint32_t *tw = j->twins[s];
+        size_t e0 = j->eoff[s], sent = j->eoff[s + 1] - e0;
+        for (size_t i = 0; i < B->npcv; i++) {
+            uint32_t x = tw[ent0 + i - e0];
+            A->ptwin[ent0 + i] = x < sent ? (uint32_t)(e0 + x) : NONE;
+        }
+    } else {
+        for (size_t i = 0; i < B->npcv; i++) A->ptwin[ent0 + i] = NONE;
+    }
+    for (size_t i = 0; j->in2pcv && j->twins[s] && !j->ident[s] && i < B->nin; i++)
         j->in2pcv[j->eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
     if (!B->direct) free(B->pc), free(B->pc_off), free(B->pcv);
     free(B->in);
@@ -1396,6 +1408,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     size_t *voff = NULL, *eoff = NULL;
     int64_t *gin = NULL;
     uint32_t *vmap = NULL, *in2pcv = NULL, *drop = NULL;
+    uint8_t *ident = NULL;
     size_t ndrop = 0, capdrop = 0;
     intask *task = NULL;
     pbuf *buf = NULL;
@@ -1537,13 +1550,37 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         a3_grow(&A->pcvp, &A->cappcvp, npcv + 1, sizeof *A->pcvp) ||
         a3_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
         goto oom;
-    if (twins) {
+    /* by solid: the check's twins are taken (no split face), and its entries are its input's */
+    ident = mem_calloc(ns + 1, 1);
+    if (!ident) goto oom;
+    int need_map = 0;
+    for (size_t s = 0, t = 0; s < ns; s++) {
+        size_t split = 0;
+        int asis = inplace;
+        for (; t < ntask && task[t].s == s; t++) {
+            const solid *so = &solids[s];
+            size_t ncy = so->face_off[task[t].f1] - so->face_off[task[t].f0];
+            size_t nent =
+                so->cyc_off[so->face_off[task[t].f1]] - so->cyc_off[so->face_off[task[t].f0]];
+            split += buf[t].split_faces;
+            if (buf[t].npc != task[t].f1 - task[t].f0 || buf[t].npcyc != ncy ||
+                buf[t].npcv != nent || buf[t].nin != nent || buf[t].ndrop)
+                asis = 0;
+        }
+        /* the check paired the input's edges; a face split into triangles has edges of its own
+         * (and its input edges in other entries): such a solid's twins all come from its
+         * pieces (stage_twins), so that its patches reach across the split faces */
+        if (twins && twins[s] && !split) A->twinned[s] = 1;
+        ident[s] = A->twinned[s] && asis;
+        need_map |= A->twinned[s] && !asis;
+    }
+    if (need_map) {
         in2pcv = mem_malloc((nein + 1) * sizeof *in2pcv);
         if (!in2pcv) goto oom;
         memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
     }
     {
-        joinjob j = {A, buf, task, at, eoff, twins, in2pcv, inplace};
+        joinjob j = {A, buf, task, at, eoff, twins, in2pcv, inplace, ident};
         par_for(A->threads, ntask, join_task, &j);
     }
     free(old_pc), free(old_off), free(old_pcv);
@@ -1554,16 +1591,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     for (size_t s = 0, t = 0; s < ns; s++) {
         size_t t0 = t;
         ndrop = 0;
-        size_t split = 0;
-        for (; t < ntask && task[t].s == s; t++) {
-            split += buf[t].split_faces;
+        for (; t < ntask && task[t].s == s; t++)
             for (size_t i = 0; i < buf[t].ndrop; i++)
                 if (A3_PUSH(drop, ndrop, capdrop, buf[t].drop[i])) goto oom;
-        }
-        /* the check paired the input's edges; a face split into triangles has edges of its own
-         * (and its input edges in other entries): such a solid's twins all come from its
-         * pieces (stage_twins), so that its patches reach across the split faces */
-        if (twins && twins[s] && !split) A->twinned[s] = 1;
         if (ndrop && mend_dropped(A, at[3 * t0], at[3 * t], drop, ndrop)) goto oom;
     }
     A3_TICK("in/join");
@@ -1589,6 +1619,7 @@ fail:
     free(gin);
     free(vmap);
     free(in2pcv);
+    free(ident);
     free(drop);
     return rc;
 }

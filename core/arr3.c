@@ -1646,13 +1646,19 @@ static uint64_t mp_red(u128 x)
     return r >= MP ? r - MP : r;
 }
 
+/* a * b mod p for a, b < p: the product is below 2^122, one fold and one subtraction */
 static uint64_t mp_mul(uint64_t a, uint64_t b)
 {
-    return mp_red((u128)a * b);
+    u128 x = (u128)a * b;
+    uint64_t r = ((uint64_t)x & MP) + (uint64_t)(x >> 61);
+    r = (r & MP) + (r >> 61);
+    return r >= MP ? r - MP : r;
 }
 
 static uint64_t mp_of(i128 x)
 {
+    if (x >= 0 && x < (i128)MP) return (uint64_t)x; /* a normal's component, mostly */
+    if (x < 0 && x > -(i128)MP) return MP - (uint64_t)-x;
     uint64_t r = mp_red(x < 0 ? (u128)0 - (u128)x : (u128)x);
     return x < 0 && r ? MP - r : r;
 }

@@ -1096,7 +1096,8 @@ static int next_number(span *l, double *x, span *tok)
 }
 
 /* The next token of l as an index (digits only, at most 18), scanning its bytes once: 1 with
- * *v, 0 when no token is left, -1 when the token is no index (*tok is then the token). */
+ * *v, 0 when no token is left, -1 when the token is no index.  *tok is the token (for a
+ * message) whenever there is one. */
 static int next_index(span *l, int64_t *v, span *tok)
 {
     if (!skip_space(l)) return 0;
@@ -1104,6 +1105,7 @@ static int next_index(span *l, int64_t *v, span *tok)
     int64_t x = 0;
     while (p < e && *p >= '0' && *p <= '9' && p - l->p < 18) x = x * 10 + (*p++ - '0');
     if (p > l->p && (p == e || is_space(*p))) {
+        *tok = (span){l->p, p};
         l->p = p;
         *v = x;
         return 1;

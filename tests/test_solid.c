@@ -1220,6 +1220,8 @@ TEST(off_errors_name_the_line)
 #define OFF_FAILS(line, want) (snprintf(t, sizeof t, "%s%s", tri, line), off_fails(t, want))
     OFF_FAILS("3 0 1 3\n", "line 6: vertex index '3' out of range (3 vertices)");
     OFF_FAILS("3 0 1 -1\n", "line 6: vertex index '-1' out of range");
+    /* the index itself is named, not the token before it (the face's count was) */
+    OFF_FAILS("3 0 1 7\n", "line 6: vertex index '7' out of range (3 vertices)");
     OFF_FAILS("2 0 1 # short\n",
               "line 6: a face starts with its vertex count (3 to 1000000), not '2'");
     OFF_FAILS("4 0 1 2\n", "line 6: the face announces 4 vertices, 3 given");

@@ -148,10 +148,7 @@ static uint64_t cell_key(int64_t x, int64_t y, int64_t z)
 
 void pset_clear(pset *s, uint32_t base)
 {
-    if (s->cap > 256 && 16 * s->n < s->cap) {
-        /* a table grown by one large plane, now used for small ones: clearing all of it for
-         * each of them cost more than the planes (fandisk: 7 % of a run); the next add makes a
-         * small one */
+    if (a3_table_oversized(s->cap, s->n)) {
         free(s->key), free(s->head);
         s->key = NULL, s->head = NULL, s->cap = 0;
     } else if (s->key && s->n) {
@@ -945,8 +942,8 @@ typedef struct injob {
     const size_t *voff;
     const intask *task;
     pbuf *buf;           /* by task */
-    const size_t *place; /* by task, when the runs write in place: its first piece, cycle and
-                            entry in a3's arrays were every face as it is (3 a task); or NULL */
+    const size_t *place; /* by task: its first piece, cycle and entry in a3's arrays were every
+                            face as it is (3 a task, and the totals after the last) */
 } injob;
 
 #define IN_CHUNK 16384 /* faces a task */
@@ -974,17 +971,12 @@ static void in_task(void *ctx, size_t item, int worker)
     { /* room for the run's faces as they are (a face split into triangles grows them) */
         size_t ncy = so->face_off[T->f1] - so->face_off[T->f0];
         size_t nent = so->cyc_off[so->face_off[T->f1]] - so->cyc_off[so->face_off[T->f0]];
-        if (j->place) { /* in place: no copy to make, no second array to fault in */
-            const size_t *at = j->place + 3 * item;
-            B->direct = 1;
-            B->pc = A->pc + at[0], B->cappc = T->f1 - T->f0;
-            B->pc_off = A->pc_off + at[1], B->cappc_off = ncy;
-            B->pcv = A->pcv + at[2], B->cappcv = nent;
-        } else if (a3_grow(&B->pc, &B->cappc, T->f1 - T->f0 + 1, sizeof *B->pc) ||
-                   a3_grow(&B->pc_off, &B->cappc_off, ncy + 2, sizeof *B->pc_off) ||
-                   a3_grow(&B->pcv, &B->cappcv, nent + 1, sizeof *B->pcv)) {
-            TASK_OOM;
-        }
+        /* in place: no copy to make, no second array to fault in (pbuf_own if it needs more) */
+        const size_t *at = j->place + 3 * item;
+        B->direct = 1;
+        B->pc = A->pc + at[0], B->cappc = T->f1 - T->f0;
+        B->pc_off = A->pc_off + at[1], B->cappc_off = ncy;
+        B->pcv = A->pcv + at[2], B->cappcv = nent;
         if (a3_grow(&B->in, &B->capin, 2 * nent + 2, sizeof *B->in)) TASK_OOM;
     }
     for (size_t f = T->f0; f < T->f1; f++) {
@@ -1514,6 +1506,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         place[3 * t + 1] = cy0 + so->face_off[task[t].f0];
         place[3 * t + 2] = eoff[task[t].s] + so->cyc_off[so->face_off[task[t].f0]];
     }
+    place[3 * ntask] = nfaces, place[3 * ntask + 1] = ncyin, place[3 * ntask + 2] = nein;
     {
         injob j = {A, solids, vmap, voff, task, buf, place};
         par_for(A->threads, ntask, in_task, &j);
@@ -1537,7 +1530,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         at[3 * t + 4] = at[3 * t + 1] + buf[t].npcyc;
         at[3 * t + 5] = at[3 * t + 2] + buf[t].npcv;
         A->split_faces += buf[t].split_faces;
-        if (!buf[t].direct || memcmp(at + 3 * t, place + 3 * t, 3 * sizeof *at)) inplace = 0;
+        if (!buf[t].direct || memcmp(at + 3 * t + 3, place + 3 * t + 3, 3 * sizeof *at))
+            inplace = 0; /* every run wrote exactly its faces as they are */
     }
     if (!inplace) { /* the runs' pieces (in place or their own) to new arrays */
         old_pc = A->pc, old_off = A->pc_off, old_pcv = A->pcv;
@@ -1558,14 +1552,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         size_t split = 0;
         int asis = inplace;
         for (; t < ntask && task[t].s == s; t++) {
-            const solid *so = &solids[s];
-            size_t ncy = so->face_off[task[t].f1] - so->face_off[task[t].f0];
-            size_t nent =
-                so->cyc_off[so->face_off[task[t].f1]] - so->cyc_off[so->face_off[task[t].f0]];
             split += buf[t].split_faces;
-            if (buf[t].npc != task[t].f1 - task[t].f0 || buf[t].npcyc != ncy ||
-                buf[t].npcv != nent || buf[t].nin != nent || buf[t].ndrop)
-                asis = 0;
+            /* in place, its counts are its input's: every entry went as it is? */
+            if (buf[t].nin != place[3 * t + 5] - place[3 * t + 2] || buf[t].ndrop) asis = 0;
         }
         /* the check paired the input's edges; a face split into triangles has edges of its own
          * (and its input edges in other entries): such a solid's twins all come from its

@@ -1044,16 +1044,16 @@ static void vol_chunk(void *ctx, size_t item, int worker)
             acc = (volrun){0, {0, 0, 0}};
             cur = u;
         }
-        volrun *r = &acc;
         int neg = u < A->npatch && !A->f_out[f];
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
             if (m < 3) continue;
-            if (m ==
-                3) { /* a triangle, the common case: C = det(p0, p1, p2), S = (p1-p0)x(p2-p0) */
+            /* point ids below nv are the vertices; a cycle with a made point is summed in
+             * double-double, per cell.  A triangle, the common case, in closed form:
+             * C = det(p0, p1, p2), S = (p1 - p0) x (p2 - p0) */
+            if (m == 3) {
                 uint32_t e0 = A->ent[o], e1 = A->ent[o + 1], e2 = A->ent[o + 2];
-                if ((e0 | e1 | e2) >= A->nv && (e0 >= A->nv || e1 >= A->nv || e2 >= A->nv))
-                    continue; /* a made point: in double-double, per cell */
+                if (e0 >= A->nv || e1 >= A->nv || e2 >= A->nv) continue;
                 const int64_t *p0 = A->g + 3 * (size_t)e0, *p1 = A->g + 3 * (size_t)e1,
                               *p2 = A->g + 3 * (size_t)e2;
                 /* |coordinates| <= 2^29 + 1: each component of p1 x p2 below 2^60, and of the
@@ -1067,29 +1067,25 @@ static void vol_chunk(void *ctx, size_t item, int worker)
                 i128 S0 = (i128)u1 * v2 - (i128)u2 * v1, S1 = (i128)u2 * v0 - (i128)u0 * v2,
                      S2 = (i128)u0 * v1 - (i128)u1 * v0;
                 if (neg) C = -C, S0 = -S0, S1 = -S1, S2 = -S2;
-                r->C += C, r->S[0] += S0, r->S[1] += S1, r->S[2] += S2;
+                acc.C += C, acc.S[0] += S0, acc.S[1] += S1, acc.S[2] += S2;
                 continue;
             }
-            while (t < m && A->ent[o + t] < A->nv) t++; /* point ids below nv: the vertices */
-            if (t < m) continue;                        /* in double-double, per cell */
-            /* |coordinates| <= 2^29 + 1: each cross product component below 2^60, so a run of
-             * four of them sums in 64 bits before it joins S */
+            while (t < m && A->ent[o + t] < A->nv) t++;
+            if (t < m) continue;
+            /* |coordinates| <= 2^29 + 1: each cross product component below 2^60 */
             i128 C = 0, S[3] = {0, 0, 0};
             const int64_t *p0 = A->g + 3 * (size_t)A->ent[o], *q = p0;
-            int64_t s0 = 0, s1 = 0, s2 = 0;
             for (t = 1; t <= m; t++) {
                 const int64_t *p = t < m ? A->g + 3 * (size_t)A->ent[o + t] : p0;
                 int64_t c0 = q[1] * p[2] - q[2] * p[1];
                 int64_t c1 = q[2] * p[0] - q[0] * p[2];
                 int64_t c2 = q[0] * p[1] - q[1] * p[0];
-                s0 += c0, s1 += c1, s2 += c2;
-                if ((t & 3) == 0) S[0] += s0, S[1] += s1, S[2] += s2, s0 = s1 = s2 = 0;
+                S[0] += c0, S[1] += c1, S[2] += c2;
                 if (t >= 2 && t < m) C += (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
                 q = p;
             }
-            S[0] += s0, S[1] += s1, S[2] += s2;
             if (neg) C = -C, S[0] = -S[0], S[1] = -S[1], S[2] = -S[2];
-            r->C += C, r->S[0] += S[0], r->S[1] += S[1], r->S[2] += S[2];
+            acc.C += C, acc.S[0] += S[0], acc.S[1] += S[1], acc.S[2] += S[2];
         }
     }
     j->run[j->roff[item] + (cur - u0)] = acc;

@@ -160,9 +160,7 @@ static uint32_t lp_global(pwork *w, uint32_t gid)
 
 static void lp_reset(pwork *w)
 {
-    if (w->hcap > 256 && 16 * w->nhused < w->hcap) {
-        /* grown by one large plane, now used for small ones: a small table again, rather than
-         * clearing all of it for each (pset_clear's rule) */
+    if (a3_table_oversized(w->hcap, w->nhused)) {
         free(w->htab);
         w->htab = NULL, w->hcap = 0;
     } else if (w->htab && w->nhused) {

@@ -38,6 +38,8 @@ const char *const api_field_names[API_NFIELDS] = {"V",     "EV",       "FV",    
 
 void api_buf_section(api_buf *b)
 {
+    if (b->cancel && !b->canceled && atomic_load_explicit(b->cancel, memory_order_relaxed))
+        b->canceled = b->failed = 1; /* as api_buf_tick: a section may have no long loop */
     if (!b->progress) return;
     unsigned n = b->nsections ? b->nsections : 1, k = b->sections < n ? b->sections : n;
     b->sections++;
@@ -72,7 +74,10 @@ void api_buf_flush(api_buf *b)
 
 int api_buf_finish(api_buf *b, int rc, char **out, size_t *outlen, api_error *err)
 {
-    if ((rc == API_OK || rc == API_ENOMEM) && b->canceled) /* the writers saw a failed buffer */
+    /* the writers saw a failed buffer; or the cancel came after their last look (a run canceled
+     * before it returns is canceled, whatever part of the output was written) */
+    if ((rc == API_OK || rc == API_ENOMEM) &&
+        (b->canceled || (b->cancel && atomic_load_explicit(b->cancel, memory_order_relaxed))))
         rc = api_fail(err, API_ECANCELED, "canceled");
     if (rc == API_OK) {
         api_buf_putc(b, '\n');

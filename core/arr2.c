@@ -1599,9 +1599,10 @@ static void ctx_free(ctx *c)
         free(c->cross[w].p);
         free(c->inc[w].p);
         free(c->edges[w].p);
+        free(c->etags[w].p);
         free(c->scr[w].key);
         free(c->scr[w].val);
-        c->cross[w] = c->inc[w] = c->edges[w] = (vbuf){0};
+        c->cross[w] = c->inc[w] = c->edges[w] = c->etags[w] = (vbuf){0};
         c->scr[w] = (scratch){0};
     }
 }

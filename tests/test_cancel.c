@@ -10,6 +10,11 @@
  * for what is not work (freeing the run's memory, the threads' join; the sanitizers make the
  * serial sorts of the output far slower than the rest).  A cancel seen only between stages would
  * take up to a whole stage.  Each check prints the stage's time and the stop's.
+ *
+ * cancel_at_each_report sets the flag from inside the progress callback, at points spread over
+ * every stage: each way out of each stage is taken whatever the machine's speed, and under the
+ * sanitizers nothing may leak on any of them (the split stage's edge tags did, found by CI's
+ * timing-driven runs once in a while).
  */
 #include <math.h>
 #include <pthread.h>
@@ -314,4 +319,97 @@ TEST(cancel_lines_long_segments)
     cancel_stages("lines", body, len, "intersect split", 0.5);
     cancel_stages("lines", body, len, "split", 0.15); /* among the hot pixels' buckets */
     free(body);
+}
+
+/* ---- a cancel at each progress report ------------------------------------------------------ */
+
+/* The cancel set from inside the progress callback at its first report of stage `at` with a
+ * fraction of at least `f`: at that very point of the run, whatever the machine's speed, so
+ * that every stage's and every part's way out is taken (under the sanitizers, nothing it
+ * allocated may leak).  The baseline (at NULL) records each report's stage and fraction. */
+#define MAXREP 100000
+typedef struct at_report {
+    atomic_int cancel;
+    const char *at; /* the stage and fraction to cancel at */
+    double at_f;
+    int seen, hit;   /* reports seen; whether the cancel was set */
+    const char **st; /* the baseline's: each report's stage and fraction */
+    double *f;
+} at_report;
+
+static void cancel_on_report(void *udata, const char *stage, double f)
+{
+    at_report *a = udata;
+    if (a->st && a->seen < MAXREP) {
+        a->st[a->seen] = stage;
+        a->f[a->seen] = f;
+    }
+    a->seen++;
+    if (a->hit || !a->at || strcmp(stage, a->at) || f < a->at_f) return;
+    a->hit = 1;
+    atomic_store(&a->cancel, 1);
+}
+
+static void cancel_each_report(const char *kind, char *(*make)(size_t, size_t *), size_t size)
+{
+    size_t len;
+    char *body = make(size, &len);
+    const char **st = malloc(MAXREP * sizeof *st);
+    double *fr = malloc(MAXREP * sizeof *fr);
+    REQUIRE(body && st && fr, "%s: no request", kind);
+    at_report base = {.st = st, .f = fr};
+    atomic_init(&base.cancel, 0);
+    api_run_opts ro = {
+        .threads = 2, .cancel = &base.cancel, .progress = cancel_on_report, .udata = &base};
+    char *out = NULL;
+    size_t outlen = 0;
+    api_error err;
+    int rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+    free(out);
+    CHECK(rc == API_OK && base.seen > 2, "%s: the baseline returned %d after %d reports", kind, rc,
+          base.seen);
+    /* in each run of reports of one stage, its first and the first in each twelfth of the
+     * stage's span of fractions (a stage's loop reports hundreds of times when it is long, and
+     * its parts may report unevenly) */
+    int canceled = 0, tried = 0, nrep = base.seen < MAXREP ? base.seen : MAXREP;
+    for (int n = 0, r0 = 0; n < nrep && rc == API_OK; n++) {
+        if (n == 0 || strcmp(st[n], st[n - 1])) r0 = n;
+        int r1 = r0;
+        while (r1 < nrep && !strcmp(st[r1], st[r0])) r1++;
+        double f0 = fr[r0], span = fr[r1 - 1] - f0;
+        if (n > r0 &&
+            (span <= 0 || (int)(12 * (fr[n] - f0) / span) == (int)(12 * (fr[n - 1] - f0) / span)))
+            continue;
+        at_report a = {.at = st[n], .at_f = fr[n]};
+        atomic_init(&a.cancel, 0);
+        ro.cancel = &a.cancel;
+        ro.udata = &a;
+        out = NULL;
+        tried++;
+        rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
+        free(out);
+        /* after the last report ("output" at 1) there is nothing left to stop; a parallel
+         * loop's reports vary from run to run (thread 0 reports the work done), so the point
+         * may not come again */
+        if (rc == API_ECANCELED) {
+            canceled++;
+            rc = API_OK;
+        } else
+            CHECK(rc == API_OK && (n == nrep - 1 || !a.hit),
+                  "%s: canceled at %s %.4f (report %d of %d): returned %d (%s)", kind, st[n], fr[n],
+                  n, a.seen, rc, err.msg);
+    }
+    printf("# %s: %d reports, a cancel at %d of them, %d runs canceled\n", kind, base.seen, tried,
+           canceled);
+    CHECK(canceled > 0, "%s: no run was canceled", kind);
+    free(st);
+    free(fr);
+    free(body);
+}
+
+TEST(cancel_at_each_report)
+{
+    cancel_each_report("lines", lines_request, 300);
+    cancel_each_report("polygons", polygons_request, 200);
+    cancel_each_report("solids", solids_request, 12);
 }

@@ -112,11 +112,14 @@ typedef struct ck {
     uint32_t *merged; /* nv: the merged vertex of each input vertex */
     int64_t *g;       /* 3 * nv: the grid point of each input vertex */
     double area;      /* the faces' outer cycles' areas, summed in face order */
+    double ref[3];    /* the centre of the vertices' box (check_shape) */
+    double vol6;      /* six times the volume about ref, every face as given (check_faces) */
     half *he;         /* half-edges, sorted by key */
     size_t nhe;
     uint32_t *pair; /* npair: index in he of the first of the two halves of a manifold edge */
     size_t npair;
     signed char *flip; /* nf: 1 when the fixed copy reverses the face */
+    size_t flips;      /* how many (orient) */
 } ck;
 
 /* Records a message: error or warning, about the whole solid (at SOLID_AT_SOLID), face `index`
@@ -225,8 +228,13 @@ static int check_shape(ck *c)
                 bad = 1;
                 break;
             }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < s->nv; v++) {
         const double *x = vert(c, (uint32_t)v);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = x[a] < lo[a] ? x[a] : lo[a];
+            hi[a] = x[a] > hi[a] ? x[a] : hi[a];
+        }
         for (int a = 0; a < 3; a++)
             if (!isfinite(x[a])) {
                 note(c, 1, SOLID_AT_VERTEX, v, "coordinate %d is not finite", a);
@@ -239,6 +247,7 @@ static int check_shape(ck *c)
                 break;
             }
     }
+    for (int a = 0; a < 3; a++) c->ref[a] = (lo[a] + hi[a]) / 2;
     return bad ? -1 : 0;
 }
 
@@ -491,7 +500,26 @@ static int check_face_grid(ck *c, size_t f, gface *q)
     return 0;
 }
 
-/* Degenerate cycles, zero area, planarity; sums c->area.  Appends nothing to the topology:
+static double face_volume6(const ck *c, size_t f, const double *ref)
+{
+    const solid *s = c->s;
+    double sum = 0;
+    for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
+        uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
+        double a[3], b[3], d[3], t[3];
+        if (hi - lo < 3) continue; /* reported as degenerate; no volume */
+        sub3(vert(c, s->cyc[lo]), ref, a);
+        for (uint32_t i = lo + 1; i + 1 < hi; i++) {
+            sub3(vert(c, s->cyc[i]), ref, b);
+            sub3(vert(c, s->cyc[i + 1]), ref, d);
+            cross3(b, d, t);
+            sum += a[0] * t[0] + a[1] * t[1] + a[2] * t[2];
+        }
+    }
+    return sum;
+}
+
+/* Degenerate cycles, zero area, planarity; sums c->area and c->vol6.  Appends nothing to the topology:
  * a bad face still has its edges, so what it does to its neighbours is reported too. */
 static int check_faces(ck *c)
 {
@@ -499,10 +527,22 @@ static int check_faces(ck *c)
     const uint32_t *cy = s->cyc;
     gface q = {0};
     int rc = 0;
-    c->area = 0;
+    const double *ref = c->ref;
+    c->area = c->vol6 = 0;
     for (size_t f = 0; f < s->nf && rc == 0; f++) {
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
         int degenerate = 0;
+        if (k1 - k0 == 1 && s->cyc_off[k0 + 1] - s->cyc_off[k0] == 3) { /* face_volume6's */
+            const uint32_t *t = cy + s->cyc_off[k0];
+            double a[3], b[3], d[3], n[3];
+            sub3(vert(c, t[0]), ref, a);
+            sub3(vert(c, t[1]), ref, b);
+            sub3(vert(c, t[2]), ref, d);
+            cross3(b, d, n);
+            c->vol6 += a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+        } else {
+            c->vol6 += face_volume6(c, f, ref);
+        }
         if (k1 - k0 == 1 && (cycle_distinct(c, k0) < 3 || collinear_on_grid(c, k0))) {
             /* a face without holes that the grid flattens onto a line (or a point): it bounds
              * nothing, and the arrangement leaves it out, splitting its neighbours' edges at
@@ -806,6 +846,7 @@ static int orient(ck *c, int *bad)
         }
         flips += comp_flips;
     }
+    c->flips = flips;
     if (!*bad && flips) {
         const half *h = &c->he[c->pair[first]];
         note(c, 0, SOLID_AT_SOLID, 0,
@@ -827,42 +868,18 @@ fail:
 
 /* ---- check: volume -------------------------------------------------------------------- */
 
-static double face_volume6(const ck *c, size_t f, const double *ref)
+/* Signed volume under c->flip (check_faces's sum when no face is flipped); flips everything
+ * when negative.  -1 when degenerate. */
+static int check_volume(ck *c, int flipped)
 {
     const solid *s = c->s;
-    double sum = 0;
-    for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
-        uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
-        double a[3], b[3], d[3], t[3];
-        if (hi - lo < 3) continue; /* reported as degenerate; no volume */
-        sub3(vert(c, s->cyc[lo]), ref, a);
-        for (uint32_t i = lo + 1; i + 1 < hi; i++) {
-            sub3(vert(c, s->cyc[i]), ref, b);
-            sub3(vert(c, s->cyc[i + 1]), ref, d);
-            cross3(b, d, t);
-            sum += a[0] * t[0] + a[1] * t[1] + a[2] * t[2];
+    double vol6 = c->vol6, area = c->area;
+    if (flipped) {
+        vol6 = 0;
+        for (size_t f = 0; f < s->nf; f++) {
+            double v = face_volume6(c, f, c->ref);
+            vol6 += c->flip[f] ? -v : v;
         }
-    }
-    return sum;
-}
-
-/* Signed volume under c->flip; flips everything when negative.  -1 when degenerate. */
-static int check_volume(ck *c)
-{
-    const solid *s = c->s;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < s->cyc_off[s->ncyc]; i++) {
-        const double *x = vert(c, s->cyc[i]);
-        for (int a = 0; a < 3; a++) {
-            lo[a] = x[a] < lo[a] ? x[a] : lo[a];
-            hi[a] = x[a] > hi[a] ? x[a] : hi[a];
-        }
-    }
-    double ref[3] = {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
-    double vol6 = 0, area = c->area;
-    for (size_t f = 0; f < s->nf; f++) {
-        double v = face_volume6(c, f, ref);
-        vol6 += c->flip[f] ? -v : v;
     }
     double vol = vol6 / 6;
     if (!(fabs(vol) > c->p * area / 2)) {
@@ -973,7 +990,7 @@ static int check(const solid *s, double precision, const char *label, solid_repo
     if (check_edges(&c, &bad)) goto oom;
     if (bad) goto done;
     if (orient(&c, &bad)) goto oom;
-    if (bad || check_volume(&c)) goto done;
+    if (bad || check_volume(&c, c.flips != 0)) goto done;
     if (c.rep->errors == 0 && fixed && (copy_unchanged || c.rep->flipped_faces) &&
         make_fixed(&c, fixed))
         goto oom;

@@ -1779,36 +1779,39 @@ A3_STAGE static int stage_classes(a3 *A)
     }
     if (a3_firsts(A->threads, n, key, piece_plane_eq, A, first)) goto done;
     uint32_t ncls = 0;
-    for (size_t i = 0; i < n; i++) { /* classes numbered by their first pieces */
+    /* classes numbered by their first pieces; first[i] becomes piece i's class (the passes
+     * below read it there, not in the pieces' 64-byte records) */
+    for (size_t i = 0; i < n; i++) {
         piece *pc = &A->pc[i];
         if (first[i] == i) {
-            pc->cls = ncls++;
+            pc->cls = first[i] = ncls++;
             dir[i] = pc->sgn;
             continue;
         }
-        const piece *f = &A->pc[first[i]];
+        uint32_t fi = first[i];
+        const piece *f = &A->pc[fi];
         uint32_t c = f->cls;
         plane3 P, Q;
-        pc->cls = c;
+        pc->cls = first[i] = c;
         dir[i] = (int8_t)(pc->sgn * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
-                                                     a3_piece_plane(A, first[i], &Q)->n));
+                                                     a3_piece_plane(A, fi, &Q)->n));
         if (pc->face != f->face) flag[c] |= 1;
         if (pc->solid != f->solid)
             flag[c] |= 2;
-        else if (dir[i] != dir[first[i]] && !A->soup)
+        else if (dir[i] != dir[fi] && !A->soup)
             flag[c] |= 4;
     }
     A->ncls = ncls;
     /* in a class of several solids, a wall of any of them: its pieces by (class, solid) */
     size_t nm = 0;
-    for (size_t i = 0; i < n; i++) nm += (flag[A->pc[i].cls] & 2) != 0;
+    for (size_t i = 0; i < n; i++) nm += (flag[first[i]] & 2) != 0;
     if (nm && !A->soup) {
         kv *m = mem_malloc(nm * sizeof *m);
         if (!m) goto done;
         nm = 0;
         for (size_t i = 0; i < n; i++)
-            if (flag[A->pc[i].cls] & 2)
-                m[nm++] = (kv){(uint64_t)A->pc[i].cls << 32 | A->pc[i].solid, (uint32_t)i};
+            if (flag[first[i]] & 2)
+                m[nm++] = (kv){(uint64_t)first[i] << 32 | A->pc[i].solid, (uint32_t)i};
         if (sort_kv(m, nm)) {
             free(m);
             goto done;
@@ -1821,7 +1824,7 @@ A3_STAGE static int stage_classes(a3 *A)
     size_t groups = 0;
     for (uint32_t c = 0; c < ncls; c++) groups += flag[c] & 1;
     for (size_t i = 0; i < n; i++)
-        if (flag[A->pc[i].cls] & 4) A->pc[i].reached = 1;
+        if (flag[first[i]] & 4) A->pc[i].reached = 1;
     A->st->planes = ncls;
     A->st->coplanar_groups = groups;
     rc = 0;

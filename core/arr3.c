@@ -930,6 +930,37 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
     return A3_PUSH(B->pc, B->npc, B->cappc, P);
 }
 
+/* add_piece's work for a triangle of three points apart, not flat: none of its edges is a
+ * point in the projection along its normal's axis (the normal would lie in that plane), so
+ * add_piece's test has nothing to find. */
+static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *t)
+{
+    if (B->direct &&
+        (B->npc + 1 > B->cappc || B->npcyc + 1 > B->cappc_off || B->npcv + 3 > B->cappcv) &&
+        pbuf_own(B))
+        return -1;
+    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + 2, sizeof *B->pc_off) ||
+                       a3_grow(&B->pcv, &B->cappcv, B->npcv + 3, sizeof *B->pcv)))
+        return -1;
+    const int64_t *g0 = A->g + 3 * (size_t)t[0], *g1 = A->g + 3 * (size_t)t[1],
+                  *g2 = A->g + 3 * (size_t)t[2];
+    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, NONE, {0}, 1, 0};
+    for (int a = 0; a < 3; a++) {
+        int32_t x = (int32_t)g0[a], y = (int32_t)g1[a], z = (int32_t)g2[a];
+        int32_t lo = x < y ? x : y, hi = x < y ? y : x;
+        P.box[a] = lo < z ? lo : z;
+        P.box[3 + a] = hi > z ? hi : z;
+    }
+    B->pc_off[B->npcyc++] = (uint32_t)B->npcv;
+    memcpy(B->pcv + B->npcv, t, 3 * sizeof *t);
+    B->npcv += 3;
+    if (B->direct) {
+        B->pc[B->npc++] = P; /* room checked above */
+        return 0;
+    }
+    return A3_PUSH(B->pc, B->npc, B->cappc, P);
+}
+
 /* A run of faces of one solid: stage_input's tasks. */
 typedef struct intask {
     uint32_t s, f0, f1; /* solid, faces f0 .. f1 */
@@ -984,6 +1015,24 @@ static void in_task(void *ctx, size_t item, int worker)
         size_t nc = 0, ntv = 0;
         int gone = 0;
         size_t ncy = so->face_off[f + 1] - so->face_off[f];
+        if (ncy == 1) { /* a triangle of three points apart, not flat: as the loop below */
+            uint32_t i0 = so->cyc_off[so->face_off[f]];
+            if (so->cyc_off[so->face_off[f] + 1] - i0 == 3 && so->cyc[i0] < so->nv &&
+                so->cyc[i0 + 1] < so->nv && so->cyc[i0 + 2] < so->nv) {
+                uint32_t t[3] = {map[so->cyc[i0]], map[so->cyc[i0 + 1]], map[so->cyc[i0 + 2]]};
+                int64_t n[3];
+                if (t[0] != t[1] && t[1] != t[2] && t[2] != t[0] &&
+                    !grid_normal(A->g + 3 * (size_t)t[0], A->g + 3 * (size_t)t[1],
+                                 A->g + 3 * (size_t)t[2], n)) {
+                    uint32_t base = (uint32_t)B->npcv;
+                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t)) TASK_OOM;
+                    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + 3), sizeof *B->in)) TASK_OOM;
+                    for (uint32_t k = 0; k < 3; k++)
+                        B->in[2 * B->nin] = i0 + k, B->in[2 * B->nin++ + 1] = base + k;
+                    continue;
+                }
+            }
+        }
         if (a3_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
             a3_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
             a3_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo))

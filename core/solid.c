@@ -519,8 +519,8 @@ static double face_volume6(const ck *c, size_t f, const double *ref)
     return sum;
 }
 
-/* Degenerate cycles, zero area, planarity; sums c->area and c->vol6.  Appends nothing to the topology:
- * a bad face still has its edges, so what it does to its neighbours is reported too. */
+/* Degenerate cycles, zero area, planarity; sums c->area and c->vol6.  Appends nothing to the
+ * topology: a bad face still has its edges, so what it does to its neighbours is reported too. */
 static int check_faces(ck *c)
 {
     const solid *s = c->s;

@@ -354,6 +354,24 @@ static int collinear_on_grid(const ck *c, size_t k)
     return 1;
 }
 
+/* collinear_on_grid for a triangle of three distinct grid points t. */
+static int tri_collinear_on_grid(const ck *c, const uint32_t *t)
+{
+    const int64_t *g0 = c->g + 3 * (size_t)t[0], *g1 = c->g + 3 * (size_t)t[1],
+                  *g2 = c->g + 3 * (size_t)t[2];
+    int64_t d[3], e[3];
+    for (int a = 0; a < 3; a++) {
+        d[a] = g1[a] - g0[a];
+        e[a] = g2[a] - g0[a];
+        if (d[a] > ((int64_t)1 << 61) || d[a] < -((int64_t)1 << 61) || e[a] > ((int64_t)1 << 61) ||
+            e[a] < -((int64_t)1 << 61))
+            return 0; /* too far */
+    }
+    return (__int128)d[1] * e[2] == (__int128)d[2] * e[1] &&
+           (__int128)d[2] * e[0] == (__int128)d[0] * e[2] &&
+           (__int128)d[0] * e[1] == (__int128)d[1] * e[0];
+}
+
 /* ---- check: a face on the grid (core/facecheck.h) ----------------------------------------- */
 
 /* The cycles of one face as the 3D pipeline sees them: merged vertices, without a step between
@@ -532,14 +550,26 @@ static int check_faces(ck *c)
     for (size_t f = 0; f < s->nf && rc == 0; f++) {
         size_t k0 = s->face_off[f], k1 = s->face_off[f + 1];
         int degenerate = 0;
-        if (k1 - k0 == 1 && s->cyc_off[k0 + 1] - s->cyc_off[k0] == 3) { /* face_volume6's */
+        if (k1 - k0 == 1 && s->cyc_off[k0 + 1] - s->cyc_off[k0] == 3) {
+            /* a triangle: its volume as face_volume6 sums it; three points apart that are not
+             * on one line of the grid (collinear_on_grid's test, unrolled) make it planar, and
+             * its area is all there is to find */
             const uint32_t *t = cy + s->cyc_off[k0];
+            const double *x0 = vert(c, t[0]), *x1 = vert(c, t[1]), *x2 = vert(c, t[2]);
             double a[3], b[3], d[3], n[3];
-            sub3(vert(c, t[0]), ref, a);
-            sub3(vert(c, t[1]), ref, b);
-            sub3(vert(c, t[2]), ref, d);
+            sub3(x0, ref, a);
+            sub3(x1, ref, b);
+            sub3(x2, ref, d);
             cross3(b, d, n);
             c->vol6 += a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+            uint32_t m0 = c->merged[t[0]], m1 = c->merged[t[1]], m2 = c->merged[t[2]];
+            if (m0 != m1 && m1 != m2 && m0 != m2 && !tri_collinear_on_grid(c, t)) {
+                sub3(x1, x0, a);
+                sub3(x2, x0, b);
+                cross3(a, b, n);
+                c->area += sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
+                continue;
+            }
         } else {
             c->vol6 += face_volume6(c, f, ref);
         }
@@ -551,17 +581,6 @@ static int check_faces(ck *c)
                  cycle_distinct(c, k0) < 3 ? "fewer than 3 distinct vertices"
                                            : "its vertices on one line");
             c->rep->degenerate_faces++;
-            continue;
-        }
-        if (k1 - k0 == 1 && s->cyc_off[k0 + 1] - s->cyc_off[k0] == 3) {
-            /* a triangle, not flat on the grid: planar; its area, and nothing more to check */
-            const double *a = vert(c, cy[s->cyc_off[k0]]), *b = vert(c, cy[s->cyc_off[k0] + 1]),
-                         *d = vert(c, cy[s->cyc_off[k0] + 2]);
-            double u[3], w[3], n[3];
-            sub3(b, a, u);
-            sub3(d, a, w);
-            cross3(u, w, n);
-            c->area += sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
             continue;
         }
         for (size_t k = k0; k < k1; k++)

@@ -21,6 +21,7 @@
  */
 #include "core/arr3_int.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -58,24 +59,25 @@ static void box_join(int32_t *r, const int32_t *a, const int32_t *b)
     }
 }
 
-/* 21 bits of x spread to every third bit (callers give 10). */
-static uint64_t spread3(uint64_t x)
+/* The 10 bits of x spread to every third bit (bit i to bit 3 i): a table, made once. */
+static uint32_t spread_tab[1024];
+static pthread_once_t spread_once = PTHREAD_ONCE_INIT;
+
+static void spread_init(void)
 {
-    x &= 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffULL;
-    x = (x | x << 16) & 0x1f0000ff0000ffULL;
-    x = (x | x << 8) & 0x100f00f00f00f00fULL;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-    x = (x | x << 2) & 0x1249249249249249ULL;
-    return x;
+    for (uint32_t x = 0; x < 1024; x++) {
+        uint32_t r = 0;
+        for (int i = 0; i < 10; i++) r |= (x >> i & 1u) << (3 * i);
+        spread_tab[x] = r;
+    }
 }
 
 /* ---- building ---------------------------------------------------------------------------- */
 
 typedef struct builder {
-    const int32_t *(*boxof)(const void *ctx, uint32_t id);
-    const void *ctx;
-    const kv *srt; /* (code, id) sorted by code */
+    const int32_t (*bx)[6]; /* the items' boxes, by index */
+    const kv *srt;          /* (code, index) sorted by code */
+    uint32_t base;          /* item index i is id base + i */
     bvh *t;
 } builder;
 
@@ -87,10 +89,10 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
     if (hi - lo <= BVH_LEAF) {
         n->a = (uint32_t)lo;
         n->b = (uint32_t)(hi - lo) | LEAFBIT;
-        memcpy(n->box, B->boxof(B->ctx, B->srt[lo].v), sizeof n->box);
+        memcpy(n->box, B->bx[B->srt[lo].v], sizeof n->box);
         for (size_t i = lo; i < hi; i++) {
-            B->t->item[i] = B->srt[i].v;
-            if (i > lo) box_join(n->box, n->box, B->boxof(B->ctx, B->srt[i].v));
+            B->t->item[i] = B->base + B->srt[i].v;
+            if (i > lo) box_join(n->box, n->box, B->bx[B->srt[i].v]);
         }
         return;
     }
@@ -118,14 +120,16 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
     box_join(n->box, B->t->node[ca].box, B->t->node[cb].box);
 }
 
-/* The tree over ids[0..n) (n >= 1) into t, whose arrays have room for 2n nodes and n items.
- * srt is scratch for n entries.  Returns -1 out of memory. */
+/* The tree over the ids base .. base + n (n >= 1) into t, whose arrays have room for 2n nodes
+ * and n items.  srt and bx are scratch for n entries (bx: the boxes, read once through boxof
+ * and then in order).  Returns -1 out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
-                      const uint32_t *ids, size_t n, kv *srt, bvh *t)
+                      uint32_t base, size_t n, kv *srt, int32_t (*bx)[6], bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
-        const int32_t *b = boxof(ctx, ids[i]);
+        const int32_t *b = boxof(ctx, base + (uint32_t)i);
+        memcpy(bx[i], b, sizeof bx[i]);
         for (int k = 0; k < 3; k++) {
             int64_t c = (int64_t)b[k] + b[3 + k];
             if (c < lo[k]) lo[k] = c;
@@ -139,15 +143,17 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         sh[k] = 0;
         while ((ext >> sh[k]) >= ((uint64_t)1 << 10)) sh[k]++;
     }
+    pthread_once(&spread_once, spread_init);
     for (size_t i = 0; i < n; i++) {
-        const int32_t *b = boxof(ctx, ids[i]);
+        const int32_t *b = bx[i];
         uint64_t code = 0;
         for (int k = 0; k < 3; k++)
-            code |= spread3((uint64_t)((int64_t)b[k] + b[3 + k] - lo[k]) >> sh[k]) << (2 - k);
-        srt[i] = (kv){code, ids[i]};
+            code |= (uint64_t)spread_tab[(uint64_t)((int64_t)b[k] + b[3 + k] - lo[k]) >> sh[k]]
+                    << (2 - k);
+        srt[i] = (kv){code, (uint32_t)i};
     }
     if (sort_kv(srt, n)) return -1;
-    builder B = {boxof, ctx, srt, t};
+    builder B = {(const int32_t(*)[6])bx, srt, base, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
     return 0;
@@ -163,7 +169,8 @@ typedef struct forest {
     bnode *node;     /* every group's nodes: group g's from 2 g_off[g] */
     uint32_t *item;  /* every group's items: group g's at g_off[g] .. */
     kv *srt;
-    size_t chunk; /* groups a task */
+    int32_t (*bx)[6]; /* build_tree's scratch, by piece */
+    size_t chunk;     /* groups a task */
     int fail;
 } forest;
 
@@ -190,10 +197,8 @@ static void build_groups(void *ctx, size_t item, int worker)
             return;
         }
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
-        uint32_t *ids = F->item + o; /* the pieces o .. o + n, overwritten in leaf order */
-        for (uint32_t i = 0; i < n; i++) ids[i] = o + i;
-        bvh t = {F->node + 2 * (size_t)o, ids, 0};
-        if (build_tree(piece_box, F->A, ids, n, F->srt + o, &t)) {
+        bvh t = {F->node + 2 * (size_t)o, F->item + o, 0}; /* the pieces o .. o + n */
+        if (build_tree(piece_box, F->A, o, n, F->srt + o, F->bx + o, &t)) {
             F->fail = 1;
             return;
         }
@@ -383,10 +388,9 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
-    uint32_t *gids = NULL;
     kv *tsrt = NULL;
     walkjob j = {&F, NULL, NULL, NULL, 0};
     int rc = -1;
@@ -408,21 +412,20 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.node = mem_malloc(2 * n * sizeof *F.node); /* pages of unused room are never touched */
     F.item = mem_malloc(n * sizeof *F.item);
     F.srt = mem_malloc(n * sizeof *F.srt);
-    if (!F.root || !F.node || !F.item || !F.srt) goto done;
+    F.bx = mem_malloc(n * sizeof *F.bx);
+    if (!F.root || !F.node || !F.item || !F.srt || !F.bx) goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
     if (F.fail == 3) rc = -3;
     if (F.fail) goto done;
     free(F.srt);
     F.srt = NULL;
-    /* the top tree over the groups, walked against itself */
-    gids = mem_malloc(F.ng * sizeof *gids);
+    /* the top tree over the groups, walked against itself (F.bx has room for its boxes) */
     tsrt = mem_malloc(F.ng * sizeof *tsrt);
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
-    if (!gids || !tsrt || !T.node || !T.item) goto done;
-    for (size_t g = 0; g < F.ng; g++) gids[g] = (uint32_t)g;
-    if (build_tree(group_box, &F, gids, F.ng, tsrt, &T)) goto done;
+    if (!tsrt || !T.node || !T.item) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, tsrt, F.bx, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;
@@ -459,7 +462,6 @@ done:
     free(q.v);
     free(gp.v);
     free(stack.v);
-    free(gids);
     free(tsrt);
     free(T.node);
     free(T.item);
@@ -468,5 +470,6 @@ done:
     free(F.node);
     free(F.item);
     free(F.srt);
+    free(F.bx);
     return rc;
 }

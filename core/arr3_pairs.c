@@ -29,7 +29,7 @@
 #include "core/par.h"
 #include "core/sort.h"
 
-#define BVH_LEAF 4
+#define BVH_LEAF 8
 #define LEAFBIT  0x80000000u
 
 /* A node: the box of everything below it; an inner node's children a and b, or a leaf's items

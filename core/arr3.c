@@ -2837,7 +2837,10 @@ static void put_chunk(void *ctx, size_t item, int worker)
             uint32_t k = !rev ? t : t + 2 <= n ? n - 2 - t : n - 1;
             j->pe2e[o + t] = e0 + k;
         }
-        if (!rev) {
+        if (n == 3 && !rev) { /* a triangle: no call for twelve bytes */
+            ent[0] = v[0], ent[1] = v[1], ent[2] = v[2];
+            side[0] = vp[0], side[1] = vp[1], side[2] = vp[2];
+        } else if (!rev) {
             memcpy(ent, v, n * sizeof *ent);
             memcpy(side, vp, n * sizeof *side);
         } else {

@@ -2347,6 +2347,72 @@ static uint32_t merged_id(const uint32_t *map, uint32_t p)
     return p & CUT_LOCAL ? map[p & ~CUT_LOCAL] : p;
 }
 
+/* pair_planes' work: the canonical planes of pieces pcs[i], made on the threads. */
+typedef struct ppjob {
+    const a3 *A;
+    const uint32_t *pcs;
+    plane3 *P;
+    int8_t *flip;
+    size_t n;
+    int fail;
+} ppjob;
+
+#define PP_CHUNK 1024
+static void pp_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    ppjob *j = ctx;
+    size_t i0 = item * PP_CHUNK, i1 = i0 + PP_CHUNK < j->n ? i0 + PP_CHUNK : j->n;
+    for (size_t i = i0; i < i1; i++) {
+        const piece *pc = &j->A->pc[j->pcs[i]];
+        const int64_t *g = j->A->g;
+        if (plane_through(g + 3 * (size_t)pc->av[0], g + 3 * (size_t)pc->av[1],
+                          g + 3 * (size_t)pc->av[2], &j->P[i])) {
+            j->fail = 1; /* not reached: the anchors span a plane */
+            continue;
+        }
+        j->flip[i] = (int8_t)plane_canon(&j->P[i]);
+    }
+}
+
+/* piece_plane_id for both pieces of every pair, in pair order: the pieces without a plane
+ * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then numbered in
+ * the list's order.  -1 out of memory (or a piece without a plane). */
+#define PLANE_LISTED (NONE - 1)
+static int pair_planes(a3 *A, const uint64_t *pairs, size_t np)
+{
+    uint32_t *pcs = NULL;
+    size_t n = 0, cap = 0;
+    int rc = -1;
+    for (size_t k = 0; k < 2 * np; k++) {
+        uint32_t pi = k & 1 ? (uint32_t)pairs[k / 2] : (uint32_t)(pairs[k / 2] >> 32);
+        if (A->pc[pi].plane != NONE) continue;
+        if (A3_PUSH(pcs, n, cap, pi)) goto done;
+        A->pc[pi].plane = PLANE_LISTED;
+    }
+    ppjob j = {A, pcs, mem_malloc((n + 1) * sizeof *j.P), mem_malloc(n + 1), n, 0};
+    if (j.P && j.flip) {
+        par_for(A->threads, (n + PP_CHUNK - 1) / PP_CHUNK, pp_chunk, &j);
+        rc = j.fail ? -1 : 0;
+        for (size_t i = 0; i < n && rc == 0; i++) {
+            piece *pc = &A->pc[pcs[i]];
+            uint32_t id = plane_id(A, &j.P[i]);
+            if (id == NONE) {
+                rc = -1;
+                break;
+            }
+            pc->plane = id;
+            pc->sgn = (int8_t)(pc->sgn * j.flip[i]);
+        }
+    }
+    free(j.P), free(j.flip);
+done:
+    for (size_t i = 0; i < n; i++) /* on failure: none left marked */
+        if (A->pc[pcs[i]].plane == PLANE_LISTED) A->pc[pcs[i]].plane = NONE;
+    free(pcs);
+    return rc;
+}
+
 A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
     size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
@@ -2361,11 +2427,9 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
     size_t capmap = 0;
     int rc = -1;
     if (!j.w || !j.o) goto done;
-    /* the pairs' pieces need their canonical planes (in pair order: the ids do not depend on
-     * the threads) */
-    for (size_t k = 0; k < np; k++)
-        if (piece_plane_id(A, (uint32_t)(pairs[k] >> 32)) || piece_plane_id(A, (uint32_t)pairs[k]))
-            goto done;
+    /* the pairs' pieces need their canonical planes, numbered in pair order (the ids do not
+     * depend on the threads): the planes made on the threads, then numbered */
+    if (pair_planes(A, pairs, np)) goto done;
     A->G.pl = A->pl;
     par_for(A->threads, nch, cut_chunk, &j);
     for (size_t ch = 0; ch < nch; ch++)

@@ -2526,9 +2526,8 @@ A3_STAGE static int dedup_cut_points(a3 *A, pset *ps)
      * the same place is one of a reached piece's own: any other piece holding it meets that one
      * there (a pair, a contact), or, of the same solid, shares it as a vertex.  So only those
      * vertices go into the set, not all of them. */
-    for (size_t pi = 0; pi < A->npc; pi++) {
-        const piece *pc = &A->pc[pi];
-        if (!pc->reached) continue;
+    for (size_t r = 0; r < A->nrl; r++) { /* the reached pieces (stage_cuts's list) */
+        const piece *pc = &A->pc[A->rl[r]];
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++)
             near[A->pcv[x]] = 1;
     }

@@ -846,6 +846,8 @@ typedef struct pbuf {
     uint32_t *in; /* pairs (input entry of the solid, own entry) of the faces that went as they
                      are: where the check's pairing goes */
     size_t nin, capin;
+    int lazy;       /* the nin pairs are (in0 + k, k), not written (in_lazy_end writes them) */
+    uint32_t in0;   /* the run's first input entry */
     uint32_t *drop; /* vertices of faces left out (mend_dropped) */
     size_t ndrop, capdrop;
     size_t split_faces;
@@ -979,6 +981,18 @@ typedef struct injob {
 
 #define IN_CHUNK 16384 /* faces a task */
 
+/* Writes out the pairs a run kept implicit (every entry so far went as it is, in order), and
+ * ends that.  -1 out of memory. */
+static int in_lazy_end(pbuf *B)
+{
+    if (!B->lazy) return 0;
+    B->lazy = 0;
+    if (a3_grow(&B->in, &B->capin, 2 * B->nin + 8, sizeof *B->in)) return -1;
+    for (size_t k = 0; k < B->nin; k++)
+        B->in[2 * k] = B->in0 + (uint32_t)k, B->in[2 * k + 1] = (uint32_t)k;
+    return 0;
+}
+
 /* The faces of one task into its pbuf: each face's vertices, without repeats; a face whose
  * vertices lie in one plane on the grid a piece as it is (its entries recorded for the check's
  * pairing when none was dropped), one that does not split into triangles. */
@@ -1008,7 +1022,9 @@ static void in_task(void *ctx, size_t item, int worker)
         B->pc = A->pc + at[0], B->cappc = T->f1 - T->f0;
         B->pc_off = A->pc_off + at[1], B->cappc_off = ncy;
         B->pcv = A->pcv + at[2], B->cappcv = nent;
-        if (a3_grow(&B->in, &B->capin, 2 * nent + 2, sizeof *B->in)) TASK_OOM;
+        /* while every entry goes as it is, in order, the pairs are implicit */
+        B->lazy = 1;
+        B->in0 = so->cyc_off[so->face_off[T->f0]];
     }
     for (size_t f = T->f0; f < T->f1; f++) {
         uint32_t face = A->solid_face_off[s] + (uint32_t)f;
@@ -1026,7 +1042,13 @@ static void in_task(void *ctx, size_t item, int worker)
                                  A->g + 3 * (size_t)t[2], n)) {
                     uint32_t base = (uint32_t)B->npcv;
                     if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t)) TASK_OOM;
-                    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + 3), sizeof *B->in)) TASK_OOM;
+                    if (B->lazy && B->nin == base && i0 - B->in0 == base) {
+                        B->nin += 3;
+                        continue;
+                    }
+                    if (in_lazy_end(B) ||
+                        a3_grow(&B->in, &B->capin, 2 * (B->nin + 3), sizeof *B->in))
+                        TASK_OOM;
                     for (uint32_t k = 0; k < 3; k++)
                         B->in[2 * B->nin] = i0 + k, B->in[2 * B->nin++ + 1] = base + k;
                     continue;
@@ -1110,12 +1132,19 @@ static void in_task(void *ctx, size_t item, int worker)
                 if (r == -1) TASK_OOM;
                 TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
             }
-            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++)
-                for (uint32_t t = 0; inlo[c] != NONE && t < len[c]; t++)
+            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++) {
+                if (inlo[c] == NONE) continue;
+                if (B->lazy && B->nin == base && inlo[c] - B->in0 == base) {
+                    B->nin += len[c]; /* still in order: implicit */
+                    continue;
+                }
+                if (in_lazy_end(B)) TASK_OOM;
+                for (uint32_t t = 0; t < len[c]; t++)
                     if (a3_grow(&B->in, &B->capin, 2 * (B->nin + 1), sizeof *B->in))
                         TASK_OOM;
                     else
                         B->in[2 * B->nin] = inlo[c] + t, B->in[2 * B->nin++ + 1] = base + t;
+            }
             continue;
         }
         /* not planar on the grid: triangles, each with its own exact plane */
@@ -1433,7 +1462,10 @@ static void join_task(void *ctx, size_t t, int worker)
         for (size_t i = 0; i < B->npcv; i++) A->ptwin[ent0 + i] = NONE;
     }
     for (size_t i = 0; j->in2pcv && j->twins[s] && !j->ident[s] && i < B->nin; i++)
-        j->in2pcv[j->eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
+        if (B->lazy) /* the pairs in_task kept implicit */
+            j->in2pcv[j->eoff[s] + B->in0 + i] = (uint32_t)i + ent0;
+        else
+            j->in2pcv[j->eoff[s] + B->in[2 * i]] = B->in[2 * i + 1] + ent0;
     if (!B->direct) free(B->pc), free(B->pc_off), free(B->pcv);
     free(B->in);
     B->pc = NULL, B->pc_off = B->pcv = B->in = NULL;

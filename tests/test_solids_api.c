@@ -1215,6 +1215,24 @@ TEST(core_flat_faces_left_out)
     const json_t *vols = json_object_get(json_object_get(r, "stats"), "volumes");
     CHECK(stat_of(r, "C") == 1 && fabs(json_number_value(json_array_get(vols, 0)) - 1) < 1e-15,
           "C %lld volume %g", stat_of(r, "C"), json_number_value(json_array_get(vols, 0)));
+    long long f_mid = stat_of(r, "F"), e_mid = stat_of(r, "E");
+    json_decref(r);
+    /* the flat face last, after every face that went as it is: the input's pairs of the run are
+     * still implicit when the check's edge pairing is mapped onto the pieces (same cube) */
+    r = run_ok(SOLIDS("{\"V\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1],"
+                      "[0.5,0.5,1]],\"FV\":[[0,3,2,1],[4,5,6],[8,6,7,4],[0,1,5,4],"
+                      "[1,2,6,5],[2,3,7,6],[3,0,4,7],[4,6,8]]}"));
+    REQUIRE(r, "no result");
+    w = json_object_get(json_object_get(r, "stats"), "warnings");
+    CHECK(json_array_size(w) == 1 && strncmp(json_string_value(json_array_get(w, 0)),
+                                             "solids[0].FV[7]: degenerate on the grid", 39) == 0,
+          "warning %s", json_string_value(json_array_get(w, 0)));
+    vols = json_object_get(json_object_get(r, "stats"), "volumes");
+    CHECK(stat_of(r, "C") == 1 && fabs(json_number_value(json_array_get(vols, 0)) - 1) < 1e-15 &&
+              stat_of(r, "F") == f_mid && stat_of(r, "E") == e_mid,
+          "C %lld volume %g F %lld E %lld (%lld %lld with the flat face in the middle)",
+          stat_of(r, "C"), json_number_value(json_array_get(vols, 0)), stat_of(r, "F"),
+          stat_of(r, "E"), f_mid, e_mid);
     json_decref(r);
 }
 

@@ -1186,6 +1186,30 @@ TEST(core_orientation_fixed_with_warning)
     json_decref(r);
 }
 
+/* The unit cube whose top has the flat triangle 4 6 8 (8 = [0.5,0.5,1]) among the faces fv,
+ * that one at index flat: one warning for it, one cell of volume 1; *fe its F and E. */
+static void flat_top_cube(const char *fv, int flat, long long *fe)
+{
+    char body[512], want[64];
+    snprintf(body, sizeof body,
+             SOLIDS("{\"V\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1],"
+                    "[0.5,0.5,1]],\"FV\":[%s]}"),
+             fv);
+    snprintf(want, sizeof want, "solids[0].FV[%d]: degenerate on the grid", flat);
+    fe[0] = fe[1] = -1;
+    json_t *r = run_ok(body);
+    REQUIRE(r, "no result");
+    const json_t *w = json_object_get(json_object_get(r, "stats"), "warnings");
+    CHECK(json_array_size(w) == 1 &&
+              strncmp(json_string_value(json_array_get(w, 0)), want, strlen(want)) == 0,
+          "warning %s", json_string_value(json_array_get(w, 0)));
+    const json_t *vols = json_object_get(json_object_get(r, "stats"), "volumes");
+    CHECK(stat_of(r, "C") == 1 && fabs(json_number_value(json_array_get(vols, 0)) - 1) < 1e-15,
+          "C %lld volume %g", stat_of(r, "C"), json_number_value(json_array_get(vols, 0)));
+    fe[0] = stat_of(r, "F"), fe[1] = stat_of(r, "E");
+    json_decref(r);
+}
+
 /* CORE: faces that the grid flattens are left out with a warning, in a soup and in a solid (a
  * cube whose top has a flat triangle along its diagonal: the same cube). */
 TEST(core_flat_faces_left_out)
@@ -1204,36 +1228,17 @@ TEST(core_flat_faces_left_out)
     json_decref(r);
     /* the top 4 5 6 7 as triangles 4 5 6 and 4 6 7 with the flat 4 6 8 between (8 = middle
      * of 4-6, a vertex of 4 6 7 only: 4 8 6 7) */
-    r = run_ok(SOLIDS("{\"V\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1],"
-                      "[0.5,0.5,1]],\"FV\":[[0,3,2,1],[4,5,6],[4,6,8],[8,6,7,4],[0,1,5,4],"
-                      "[1,2,6,5],[2,3,7,6],[3,0,4,7]]}"));
-    REQUIRE(r, "no result");
-    w = json_object_get(json_object_get(r, "stats"), "warnings");
-    CHECK(json_array_size(w) == 1 && strncmp(json_string_value(json_array_get(w, 0)),
-                                             "solids[0].FV[2]: degenerate on the grid", 39) == 0,
-          "warning %s", json_string_value(json_array_get(w, 0)));
-    const json_t *vols = json_object_get(json_object_get(r, "stats"), "volumes");
-    CHECK(stat_of(r, "C") == 1 && fabs(json_number_value(json_array_get(vols, 0)) - 1) < 1e-15,
-          "C %lld volume %g", stat_of(r, "C"), json_number_value(json_array_get(vols, 0)));
-    long long f_mid = stat_of(r, "F"), e_mid = stat_of(r, "E");
-    json_decref(r);
+    long long fe_mid[2];
+    flat_top_cube("[0,3,2,1],[4,5,6],[4,6,8],[8,6,7,4],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]", 2,
+                  fe_mid);
     /* the flat face last, after every face that went as it is: the input's pairs of the run are
-     * still implicit when the check's edge pairing is mapped onto the pieces (same cube) */
-    r = run_ok(SOLIDS("{\"V\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1],"
-                      "[0.5,0.5,1]],\"FV\":[[0,3,2,1],[4,5,6],[8,6,7,4],[0,1,5,4],"
-                      "[1,2,6,5],[2,3,7,6],[3,0,4,7],[4,6,8]]}"));
-    REQUIRE(r, "no result");
-    w = json_object_get(json_object_get(r, "stats"), "warnings");
-    CHECK(json_array_size(w) == 1 && strncmp(json_string_value(json_array_get(w, 0)),
-                                             "solids[0].FV[7]: degenerate on the grid", 39) == 0,
-          "warning %s", json_string_value(json_array_get(w, 0)));
-    vols = json_object_get(json_object_get(r, "stats"), "volumes");
-    CHECK(stat_of(r, "C") == 1 && fabs(json_number_value(json_array_get(vols, 0)) - 1) < 1e-15 &&
-              stat_of(r, "F") == f_mid && stat_of(r, "E") == e_mid,
-          "C %lld volume %g F %lld E %lld (%lld %lld with the flat face in the middle)",
-          stat_of(r, "C"), json_number_value(json_array_get(vols, 0)), stat_of(r, "F"),
-          stat_of(r, "E"), f_mid, e_mid);
-    json_decref(r);
+     * still implicit when the check's edge pairing is mapped onto the pieces (the same cube) */
+    long long fe_last[2];
+    flat_top_cube("[0,3,2,1],[4,5,6],[8,6,7,4],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7],[4,6,8]", 7,
+                  fe_last);
+    CHECK(fe_last[0] == fe_mid[0] && fe_last[1] == fe_mid[1],
+          "F %lld E %lld with the flat face last, %lld %lld in the middle", fe_last[0], fe_last[1],
+          fe_mid[0], fe_mid[1]);
 }
 
 /* CORE: a face soup of one square: one face, no cell; and the fields option. */

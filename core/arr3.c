@@ -846,7 +846,7 @@ typedef struct pbuf {
     uint32_t *in; /* pairs (input entry of the solid, own entry) of the faces that went as they
                      are: where the check's pairing goes */
     size_t nin, capin;
-    int lazy;       /* the nin pairs are (in0 + k, k), not written (in_lazy_end writes them) */
+    int lazy;       /* the nin pairs are (in0 + k, k), not written (in_pairs) */
     uint32_t in0;   /* the run's first input entry */
     uint32_t *drop; /* vertices of faces left out (mend_dropped) */
     size_t ndrop, capdrop;
@@ -889,6 +889,30 @@ static int pbuf_own(pbuf *B)
     return 0;
 }
 
+/* Room in B for one more piece of nc cycles and total entries: in place, its own arrays once
+ * the run outgrows its place (pbuf_own).  -1 out of memory. */
+static inline int pbuf_room(pbuf *B, size_t nc, size_t total)
+{
+    if (B->direct &&
+        (B->npc + 1 > B->cappc || B->npcyc + nc > B->cappc_off || B->npcv + total > B->cappcv) &&
+        pbuf_own(B))
+        return -1;
+    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
+                       a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv)))
+        return -1;
+    return 0;
+}
+
+/* Appends piece P (its cycles written, pbuf_room's room).  -1 out of memory. */
+static inline int pbuf_push(pbuf *B, const piece *P)
+{
+    if (B->direct) {
+        B->pc[B->npc++] = *P; /* room checked by pbuf_room */
+        return 0;
+    }
+    return A3_PUSH(B->pc, B->npc, B->cappc, *P);
+}
+
 /* Adds a piece with the given cycles (vertex lists), anchor vertices av (their raw plane's
  * normal has its largest component on axis k) and orientation sgn about that plane; the
  * vertical planes of its edges are left to stage_sides, its canonical plane to whoever needs
@@ -903,13 +927,7 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
                (int8_t)sgn,  nc > 1};
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
-    if (B->direct &&
-        (B->npc + 1 > B->cappc || B->npcyc + nc > B->cappc_off || B->npcv + total > B->cappcv) &&
-        pbuf_own(B))
-        return -1;
-    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
-                       a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv)))
-        return -1;
+    if (pbuf_room(B, nc, total)) return -1;
     int k1 = k == 2 ? 0 : k + 1, k2 = k == 0 ? 2 : k - 1;
     for (size_t c = 0; c < nc; c++) {
         B->pc_off[B->npcyc++] = (uint32_t)B->npcv;
@@ -925,11 +943,7 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
             }
         }
     }
-    if (B->direct) {
-        B->pc[B->npc++] = P; /* room checked above */
-        return 0;
-    }
-    return A3_PUSH(B->pc, B->npc, B->cappc, P);
+    return pbuf_push(B, &P);
 }
 
 /* add_piece's work for a triangle of three points apart, not flat: none of its edges is a
@@ -937,13 +951,7 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
  * add_piece's test has nothing to find. */
 static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *t)
 {
-    if (B->direct &&
-        (B->npc + 1 > B->cappc || B->npcyc + 1 > B->cappc_off || B->npcv + 3 > B->cappcv) &&
-        pbuf_own(B))
-        return -1;
-    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + 2, sizeof *B->pc_off) ||
-                       a3_grow(&B->pcv, &B->cappcv, B->npcv + 3, sizeof *B->pcv)))
-        return -1;
+    if (pbuf_room(B, 1, 3)) return -1;
     const int64_t *g0 = A->g + 3 * (size_t)t[0], *g1 = A->g + 3 * (size_t)t[1],
                   *g2 = A->g + 3 * (size_t)t[2];
     piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, NONE, {0}, 1, 0};
@@ -956,11 +964,7 @@ static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const ui
     B->pc_off[B->npcyc++] = (uint32_t)B->npcv;
     memcpy(B->pcv + B->npcv, t, 3 * sizeof *t);
     B->npcv += 3;
-    if (B->direct) {
-        B->pc[B->npc++] = P; /* room checked above */
-        return 0;
-    }
-    return A3_PUSH(B->pc, B->npc, B->cappc, P);
+    return pbuf_push(B, &P);
 }
 
 /* A run of faces of one solid: stage_input's tasks. */
@@ -981,15 +985,23 @@ typedef struct injob {
 
 #define IN_CHUNK 16384 /* faces a task */
 
-/* Writes out the pairs a run kept implicit (every entry so far went as it is, in order), and
- * ends that.  -1 out of memory. */
-static int in_lazy_end(pbuf *B)
+/* Records the pairs (input entry in + t, own entry base + t), t < n, of a cycle that went as
+ * it is.  While every entry so far did, in order, the pairs stay implicit ((in0 + k, k): the
+ * usual run writes none); the first that breaks the order writes them out.  -1 out of
+ * memory. */
+static inline int in_pairs(pbuf *B, uint32_t in, uint32_t base, uint32_t n)
 {
-    if (!B->lazy) return 0;
-    B->lazy = 0;
-    if (a3_grow(&B->in, &B->capin, 2 * B->nin + 8, sizeof *B->in)) return -1;
-    for (size_t k = 0; k < B->nin; k++)
-        B->in[2 * k] = B->in0 + (uint32_t)k, B->in[2 * k + 1] = (uint32_t)k;
+    if (B->lazy && B->nin == base && in - B->in0 == base) {
+        B->nin += n;
+        return 0;
+    }
+    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + n), sizeof *B->in)) return -1;
+    if (B->lazy) {
+        B->lazy = 0;
+        for (size_t k = 0; k < B->nin; k++)
+            B->in[2 * k] = B->in0 + (uint32_t)k, B->in[2 * k + 1] = (uint32_t)k;
+    }
+    for (uint32_t t = 0; t < n; t++) B->in[2 * B->nin] = in + t, B->in[2 * B->nin++ + 1] = base + t;
     return 0;
 }
 
@@ -1041,16 +1053,9 @@ static void in_task(void *ctx, size_t item, int worker)
                     !grid_normal(A->g + 3 * (size_t)t[0], A->g + 3 * (size_t)t[1],
                                  A->g + 3 * (size_t)t[2], n)) {
                     uint32_t base = (uint32_t)B->npcv;
-                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t)) TASK_OOM;
-                    if (B->lazy && B->nin == base && i0 - B->in0 == base) {
-                        B->nin += 3;
-                        continue;
-                    }
-                    if (in_lazy_end(B) ||
-                        a3_grow(&B->in, &B->capin, 2 * (B->nin + 3), sizeof *B->in))
+                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t) ||
+                        in_pairs(B, i0, base, 3))
                         TASK_OOM;
-                    for (uint32_t k = 0; k < 3; k++)
-                        B->in[2 * B->nin] = i0 + k, B->in[2 * B->nin++ + 1] = base + k;
                     continue;
                 }
             }
@@ -1132,19 +1137,8 @@ static void in_task(void *ctx, size_t item, int worker)
                 if (r == -1) TASK_OOM;
                 TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
             }
-            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++) {
-                if (inlo[c] == NONE) continue;
-                if (B->lazy && B->nin == base && inlo[c] - B->in0 == base) {
-                    B->nin += len[c]; /* still in order: implicit */
-                    continue;
-                }
-                if (in_lazy_end(B)) TASK_OOM;
-                for (uint32_t t = 0; t < len[c]; t++)
-                    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + 1), sizeof *B->in))
-                        TASK_OOM;
-                    else
-                        B->in[2 * B->nin] = inlo[c] + t, B->in[2 * B->nin++ + 1] = base + t;
-            }
+            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++)
+                if (inlo[c] != NONE && in_pairs(B, inlo[c], base, (uint32_t)len[c])) TASK_OOM;
             continue;
         }
         /* not planar on the grid: triangles, each with its own exact plane */
@@ -1983,6 +1977,28 @@ done:
     return rc;
 }
 
+/* The canonical plane through piece pc's anchors into *P, and *flip: -1 when it turns the
+ * other way than their raw plane, else 1.  -1 when they span none (not reached). */
+static int piece_canon_plane(const a3 *A, const piece *pc, plane3 *P, int8_t *flip)
+{
+    if (plane_through(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
+                      A->g + 3 * (size_t)pc->av[2], P))
+        return -1;
+    *flip = (int8_t)plane_canon(P);
+    return 0;
+}
+
+/* Piece pc takes canonical plane P (flip from piece_canon_plane): its id, and its sgn turned
+ * to that plane's normal.  -1 out of memory. */
+static int piece_take_plane(a3 *A, piece *pc, plane3 *P, int8_t flip)
+{
+    uint32_t id = plane_id(A, P);
+    if (id == NONE) return -1;
+    pc->plane = id;
+    pc->sgn = (int8_t)(pc->sgn * flip);
+    return 0;
+}
+
 /* Gives piece pi its canonical plane (once), turning its sgn to that plane's normal.  Returns
  * -1 out of memory. */
 static int piece_plane_id(a3 *A, uint32_t pi)
@@ -1990,15 +2006,8 @@ static int piece_plane_id(a3 *A, uint32_t pi)
     piece *pc = &A->pc[pi];
     if (pc->plane != NONE) return 0;
     plane3 P;
-    if (plane_through(A->g + 3 * (size_t)pc->av[0], A->g + 3 * (size_t)pc->av[1],
-                      A->g + 3 * (size_t)pc->av[2], &P))
-        return -1; /* not reached: the anchors span a plane */
-    int flip = plane_canon(&P);
-    uint32_t id = plane_id(A, &P);
-    if (id == NONE) return -1;
-    pc->plane = id;
-    pc->sgn = (int8_t)(pc->sgn * flip);
-    return 0;
+    int8_t flip;
+    return piece_canon_plane(A, pc, &P, &flip) || piece_take_plane(A, pc, &P, flip) ? -1 : 0;
 }
 
 const plane3 *a3_piece_plane(const a3 *A, uint32_t pi, plane3 *tmp)
@@ -2379,7 +2388,7 @@ static uint32_t merged_id(const uint32_t *map, uint32_t p)
     return p & CUT_LOCAL ? map[p & ~CUT_LOCAL] : p;
 }
 
-/* pair_planes' work: the canonical planes of pieces pcs[i], made on the threads. */
+/* pair_planes' work: piece_canon_plane of pieces pcs[i], on the threads. */
 typedef struct ppjob {
     const a3 *A;
     const uint32_t *pcs;
@@ -2395,53 +2404,41 @@ static void pp_chunk(void *ctx, size_t item, int worker)
     (void)worker;
     ppjob *j = ctx;
     size_t i0 = item * PP_CHUNK, i1 = i0 + PP_CHUNK < j->n ? i0 + PP_CHUNK : j->n;
-    for (size_t i = i0; i < i1; i++) {
-        const piece *pc = &j->A->pc[j->pcs[i]];
-        const int64_t *g = j->A->g;
-        if (plane_through(g + 3 * (size_t)pc->av[0], g + 3 * (size_t)pc->av[1],
-                          g + 3 * (size_t)pc->av[2], &j->P[i])) {
-            j->fail = 1; /* not reached: the anchors span a plane */
-            continue;
-        }
-        j->flip[i] = (int8_t)plane_canon(&j->P[i]);
-    }
+    for (size_t i = i0; i < i1; i++)
+        if (piece_canon_plane(j->A, &j->A->pc[j->pcs[i]], &j->P[i], &j->flip[i]))
+            j->fail = 1; /* the same value, whichever worker writes it */
 }
 
 /* piece_plane_id for both pieces of every pair, in pair order: the pieces without a plane
- * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then numbered in
- * the list's order.  -1 out of memory (or a piece without a plane). */
+ * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then taken in the
+ * list's order (so the ids are piece_plane_id's).  -1 out of memory (or a piece without a
+ * plane). */
 #define PLANE_LISTED (NONE - 1)
 static int pair_planes(a3 *A, const uint64_t *pairs, size_t np)
 {
+    ppjob j = {A, NULL, NULL, NULL, 0, 0};
     uint32_t *pcs = NULL;
-    size_t n = 0, cap = 0;
+    size_t cap = 0;
     int rc = -1;
     for (size_t k = 0; k < 2 * np; k++) {
         uint32_t pi = k & 1 ? (uint32_t)pairs[k / 2] : (uint32_t)(pairs[k / 2] >> 32);
         if (A->pc[pi].plane != NONE) continue;
-        if (A3_PUSH(pcs, n, cap, pi)) goto done;
+        if (A3_PUSH(pcs, j.n, cap, pi)) goto done;
         A->pc[pi].plane = PLANE_LISTED;
     }
-    ppjob j = {A, pcs, mem_malloc((n + 1) * sizeof *j.P), mem_malloc(n + 1), n, 0};
-    if (j.P && j.flip) {
-        par_for(A->threads, (n + PP_CHUNK - 1) / PP_CHUNK, pp_chunk, &j);
-        rc = j.fail ? -1 : 0;
-        for (size_t i = 0; i < n && rc == 0; i++) {
-            piece *pc = &A->pc[pcs[i]];
-            uint32_t id = plane_id(A, &j.P[i]);
-            if (id == NONE) {
-                rc = -1;
-                break;
-            }
-            pc->plane = id;
-            pc->sgn = (int8_t)(pc->sgn * j.flip[i]);
-        }
-    }
-    free(j.P), free(j.flip);
+    j.pcs = pcs;
+    j.P = mem_malloc((j.n + 1) * sizeof *j.P);
+    j.flip = mem_malloc(j.n + 1);
+    if (!j.P || !j.flip) goto done;
+    par_for(A->threads, (j.n + PP_CHUNK - 1) / PP_CHUNK, pp_chunk, &j);
+    if (j.fail) goto done;
+    for (size_t i = 0; i < j.n; i++)
+        if (piece_take_plane(A, &A->pc[pcs[i]], &j.P[i], j.flip[i])) goto done;
+    rc = 0;
 done:
-    for (size_t i = 0; i < n; i++) /* on failure: none left marked */
+    for (size_t i = 0; i < j.n; i++) /* on failure: none left marked */
         if (A->pc[pcs[i]].plane == PLANE_LISTED) A->pc[pcs[i]].plane = NONE;
-    free(pcs);
+    free(pcs), free(j.P), free(j.flip);
     return rc;
 }
 

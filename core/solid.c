@@ -887,13 +887,13 @@ fail:
 
 /* ---- check: volume -------------------------------------------------------------------- */
 
-/* Signed volume under c->flip (check_faces's sum when no face is flipped); flips everything
- * when negative.  -1 when degenerate. */
-static int check_volume(ck *c, int flipped)
+/* Signed volume under c->flip (check_faces's sum when orient flipped no face); flips
+ * everything when negative.  -1 when degenerate. */
+static int check_volume(ck *c)
 {
     const solid *s = c->s;
     double vol6 = c->vol6, area = c->area;
-    if (flipped) {
+    if (c->flips) {
         vol6 = 0;
         for (size_t f = 0; f < s->nf; f++) {
             double v = face_volume6(c, f, c->ref);
@@ -1009,7 +1009,7 @@ static int check(const solid *s, double precision, const char *label, solid_repo
     if (check_edges(&c, &bad)) goto oom;
     if (bad) goto done;
     if (orient(&c, &bad)) goto oom;
-    if (bad || check_volume(&c, c.flips != 0)) goto done;
+    if (bad || check_volume(&c)) goto done;
     if (c.rep->errors == 0 && fixed && (copy_unchanged || c.rep->flipped_faces) &&
         make_fixed(&c, fixed))
         goto oom;

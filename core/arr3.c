@@ -923,8 +923,8 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
     piece P = {solid,        face,
                NONE,         (uint32_t)B->npcyc,
                (uint32_t)nc, {av[0], av[1], av[2]},
-               NONE,         {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
-               (int8_t)sgn,  nc > 1};
+               {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
+               (int8_t)sgn,  nc > 1, {0}};
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
     if (pbuf_room(B, nc, total)) return -1;
@@ -954,7 +954,7 @@ static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const ui
     if (pbuf_room(B, 1, 3)) return -1;
     const int64_t *g0 = A->g + 3 * (size_t)t[0], *g1 = A->g + 3 * (size_t)t[1],
                   *g2 = A->g + 3 * (size_t)t[2];
-    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, NONE, {0}, 1, 0};
+    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, {0}, 1, 0, {0}};
     for (int a = 0; a < 3; a++) {
         int32_t x = (int32_t)g0[a], y = (int32_t)g1[a], z = (int32_t)g2[a];
         int32_t lo = x < y ? x : y, hi = x < y ? y : x;
@@ -1745,20 +1745,32 @@ typedef struct ckey {
     int k;
 } ckey;
 
+/* x mod p for a normal's component (|x| < 2^63: x >> 61 is at most 3, one fold suffices) */
+static inline uint64_t mp_of64(int64_t x)
+{
+    uint64_t u = x < 0 ? 0 - (uint64_t)x : (uint64_t)x, r = (u & MP) + (u >> 61);
+    r = r >= MP ? r - MP : r;
+    return x < 0 && r ? MP - r : r;
+}
+
 static void ckey_start(const plane3 *P, ckey *c)
 {
     int k = P->n[0] ? 0 : P->n[1] ? 1 : 2;
     c->k = k;
-    c->nk = mp_of(P->n[k]);
-    c->r[0] = mp_of(P->n[(k + 1) % 3]);
-    c->r[1] = mp_of(P->n[(k + 2) % 3]);
+    c->nk = mp_of64(P->n[k]);
+    c->r[0] = mp_of64(P->n[k == 2 ? 0 : k + 1]);
+    c->r[1] = mp_of64(P->n[k == 0 ? 2 : k - 1]);
     c->r[2] = mp_of(P->d);
 }
 
+/* The key from the three residues divided by n_k: one mix of their odd multiples (a collision
+ * only costs an exact comparison). */
 static uint64_t ckey_hash(const ckey *c, uint64_t inv)
 {
-    uint64_t h = a3_mix64((uint64_t)c->k + 0x51ed27);
-    for (int i = 0; i < 3; i++) h = a3_mix64(h ^ mp_mul(c->r[i], inv));
+    uint64_t h = mp_mul(c->r[0], inv) * 0x9e3779b97f4a7c15ULL;
+    h ^= mp_mul(c->r[1], inv) * 0xc2b2ae3d27d4eb4fULL;
+    h ^= (mp_mul(c->r[2], inv) + (uint64_t)c->k) * 0x165667b19e3779f9ULL;
+    h = a3_mix64(h);
     return h ? h : 1;
 }
 
@@ -1787,6 +1799,7 @@ static int normals_dot_sign(const int64_t *a, const int64_t *b)
 typedef struct clsjob {
     const a3 *A;
     uint64_t *key;
+    int8_t *dir; /* by piece: its sgn (made relative to its class's normal later) */
 } clsjob;
 
 /* The keys of one chunk of pieces. */
@@ -1804,6 +1817,7 @@ static void cls_keys(void *ctx, size_t item, int worker)
         plane3 P;
         const piece *pc = &A->pc[i];
         const int64_t *g0 = A->g + 3 * (size_t)pc->av[0];
+        j->dir[i] = pc->sgn;
         grid_normal(g0, A->g + 3 * (size_t)pc->av[1], A->g + 3 * (size_t)pc->av[2], P.n);
         P.d = -((i128)P.n[0] * g0[0] + (i128)P.n[1] * g0[1] + (i128)P.n[2] * g0[2]);
         ckey_start(&P, &c[i - p0]);
@@ -1827,7 +1841,7 @@ static void cls_keys(void *ctx, size_t item, int worker)
     }
 }
 
-/* Every piece's coplanar class (piece.cls); a class holding pieces of one solid turning both
+/* Every piece's coplanar class; a class holding pieces of one solid turning both
  * ways (a surface touching itself face to face) has all its pieces reached.  Fills the stats
  * planes and coplanar_groups. */
 static int piece_plane_eq(const void *ctx, uint32_t a, uint32_t b)
@@ -1846,7 +1860,7 @@ A3_STAGE static int stage_classes(a3 *A)
     int8_t *dir = mem_malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
     int rc = -1;
     if (!key || !first || !flag || !dir) goto done;
-    clsjob j = {A, key};
+    clsjob j = {A, key, dir};
     par_for(A->threads, (n + CLS_CHUNK - 1) / CLS_CHUNK, cls_keys, &j);
     if (a3_cancelled(A)) { /* some chunks may have stopped early */
         rc = -3;
@@ -1854,21 +1868,20 @@ A3_STAGE static int stage_classes(a3 *A)
     }
     if (a3_firsts(A->threads, n, key, piece_plane_eq, A, first)) goto done;
     uint32_t ncls = 0;
-    /* classes numbered by their first pieces; first[i] becomes piece i's class (the passes
-     * below read it there, not in the pieces' 64-byte records) */
+    /* classes numbered by their first pieces; first[i] becomes piece i's class (a class's
+     * first piece comes before its others, so first[first[i]] is already the class).  Only a
+     * piece that is not its class's first reads the pieces' 64-byte records. */
     for (size_t i = 0; i < n; i++) {
-        piece *pc = &A->pc[i];
         if (first[i] == i) {
-            pc->cls = first[i] = ncls++;
-            dir[i] = pc->sgn;
+            first[i] = ncls++;
             continue;
         }
         uint32_t fi = first[i];
-        const piece *f = &A->pc[fi];
-        uint32_t c = f->cls;
+        const piece *pc = &A->pc[i], *f = &A->pc[fi];
+        uint32_t c = first[fi];
         plane3 P, Q;
-        pc->cls = first[i] = c;
-        dir[i] = (int8_t)(pc->sgn * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
+        first[i] = c;
+        dir[i] = (int8_t)(dir[i] * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
                                                      a3_piece_plane(A, fi, &Q)->n));
         if (pc->face != f->face) flag[c] |= 1;
         if (pc->solid != f->solid)
@@ -1892,8 +1905,7 @@ A3_STAGE static int stage_classes(a3 *A)
             goto done;
         }
         for (size_t i = 1; i < nm; i++)
-            if (m[i].k == m[i - 1].k && dir[m[i].v] != dir[m[i - 1].v])
-                flag[A->pc[m[i].v].cls] |= 4;
+            if (m[i].k == m[i - 1].k && dir[m[i].v] != dir[m[i - 1].v]) flag[m[i].k >> 32] |= 4;
         free(m);
     }
     size_t groups = 0;

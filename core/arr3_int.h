@@ -66,14 +66,16 @@ typedef struct piece {
     uint32_t c0, nc; /* cycles pc_off[c0 .. c0 + nc) */
     uint32_t av[3];  /* three of its vertices spanning its plane: the anchor plane is the raw
                         plane through them (plane_through_raw) */
-    uint32_t cls;    /* its coplanar class: pieces in one plane, whatever its representation */
     int32_t box[6];  /* lo xyz, hi xyz (grid coordinates fit 32 bits) */
     int8_t sgn;      /* +1: the order of its outer cycle turns about the normal of its plane
                         (the canonical one once it has it, else the anchor plane's); for a solid
                         that normal then points out of it.  -1: the other way */
     uint8_t reached; /* goes through its plane's arrangement (a cut, a contact, a coplanar
                         piece of another solid, holes, or a surface touching itself there) */
+    uint8_t pad_[6]; /* to 64 bytes: an index times a power of two, a piece in one cache line
+                        wherever the array starts on one */
 } piece;
+_Static_assert(sizeof(piece) == 64, "a piece is 64 bytes");
 
 typedef struct cseg {
     uint32_t plane, p0, p1, side;

@@ -920,11 +920,16 @@ static inline int pbuf_push(pbuf *B, const piece *P)
 static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *av, int k,
                      int sgn, uint32_t **cyc, const size_t *len, size_t nc)
 {
-    piece P = {solid,        face,
-               NONE,         (uint32_t)B->npcyc,
-               (uint32_t)nc, {av[0], av[1], av[2]},
+    piece P = {solid,
+               face,
+               NONE,
+               (uint32_t)B->npcyc,
+               (uint32_t)nc,
+               {av[0], av[1], av[2]},
                {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
-               (int8_t)sgn,  nc > 1, {0}};
+               (int8_t)sgn,
+               nc > 1,
+               {0}};
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
     if (pbuf_room(B, nc, total)) return -1;
@@ -1882,7 +1887,7 @@ A3_STAGE static int stage_classes(a3 *A)
         plane3 P, Q;
         first[i] = c;
         dir[i] = (int8_t)(dir[i] * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
-                                                     a3_piece_plane(A, fi, &Q)->n));
+                                                    a3_piece_plane(A, fi, &Q)->n));
         if (pc->face != f->face) flag[c] |= 1;
         if (pc->solid != f->solid)
             flag[c] |= 2;

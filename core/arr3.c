@@ -1471,6 +1471,18 @@ static void join_task(void *ctx, size_t t, int worker)
     B->direct = 0;
 }
 
+/* The grid step for finite coordinates within lo .. hi (no coordinate: lo > hi): the rule of
+ * arr3_grid_step on their largest extent. */
+static int bounds_step(const double *lo, const double *hi, double precision, double *step,
+                       char *err, size_t errlen)
+{
+    double ext = 0;
+    for (int a = 0; a < 3; a++)
+        if (hi[a] >= lo[a] && hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
+    if (!isfinite(ext)) ext = DBL_MAX;
+    return arr3_grid_step(ext, precision, step, err, errlen);
+}
+
 A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
                                 char *err, size_t el)
 {
@@ -1531,7 +1543,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     if (!nfaces) return ARR_OK;
     double step;
     A3_TICK("in/bounds");
-    if ((rc = arr3_solids_step(solids, ns, A->o->precision, &step, err, el)) != ARR_OK) return rc;
+    /* arr3_solids_step's rule, on the bounds just taken */
+    if ((rc = bounds_step(lo, hi, A->o->precision, &step, err, el)) != ARR_OK) return rc;
     A->step = step;
     A->st->precision = step;
     for (int a = 0; a < 3; a++)
@@ -2083,7 +2096,6 @@ int arr3_solids_step(const solid *s, size_t n, double precision, double *step, c
                      size_t errlen)
 {
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
-    double ext = 0;
     for (size_t i = 0; i < n; i++)
         for (size_t v = 0; v < s[i].nv; v++)
             for (int a = 0; a < 3; a++) {
@@ -2092,10 +2104,7 @@ int arr3_solids_step(const solid *s, size_t n, double precision, double *step, c
                 if (x < lo[a]) lo[a] = x;
                 if (x > hi[a]) hi[a] = x;
             }
-    for (int a = 0; a < 3; a++)
-        if (hi[a] >= lo[a] && hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
-    if (!isfinite(ext)) ext = DBL_MAX;
-    return arr3_grid_step(ext, precision, step, err, errlen);
+    return bounds_step(lo, hi, precision, step, err, errlen);
 }
 
 /* ------------------------------------------------------------------ pairs */
@@ -2870,13 +2879,24 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     uint32_t *nu = mem_calloc(4 * (size_t)A->threads + 3, sizeof *nu), *cur = NULL;
     int rc = -1;
     if (!uf || !lab || !epc || !rch || !r_off || !np || !nu) goto done;
-    /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
+    /* ranges of about npc / (4 threads) pieces, cut where a solid starts (the pieces come
+     * solid by solid: the first piece of a later solid is found by bisection) */
     size_t want = npc / (4 * (size_t)A->threads) + 1;
     r_off[nr++] = 0;
-    for (size_t i = 1; i < npc; i++)
-        if (i - r_off[nr - 1] >= want && A->pc[i].solid != A->pc[i - 1].solid &&
-            nr < 4 * (size_t)A->threads + 1)
-            r_off[nr++] = (uint32_t)i;
+    while (nr < 4 * (size_t)A->threads + 1) {
+        size_t lo = r_off[nr - 1] + want, hi = npc;
+        if (lo >= npc) break;
+        uint32_t s = A->pc[lo - 1].solid;
+        while (lo < hi) { /* the first piece from lo on of a solid after s */
+            size_t mid = lo + (hi - lo) / 2;
+            if (A->pc[mid].solid == s)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        if (lo >= npc) break;
+        r_off[nr++] = (uint32_t)lo;
+    }
     r_off[nr] = (uint32_t)npc;
     patchjob j = {A, r_off, uf, lab, epc, rch, np, nu, NULL, NULL, NULL};
     par_for(A->threads, nr, patch_range, &j);

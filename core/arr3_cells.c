@@ -627,23 +627,26 @@ static void cedges_free(cedges *E)
     memset(E, 0, sizeof *E);
 }
 
-/* Stage "edges".  Returns -1 out of memory. */
-A3_STAGE static int edges_make(const a3 *A, cedges *E)
+/* The entries whose edges are not inside a patch (those are made with the output), in chunks of
+ * faces on the threads: a chunk writes them from its own first entry on (there are no more of
+ * them than its entries), and their count; edges_make closes the gaps in chunk order. */
+#define EDGE_CHUNK 8192 /* faces */
+typedef struct edgejob {
+    const a3 *A;
+    uint32_t *xs, *xf, *lo_e, *hi_e; /* by entry: the entry, its face, its edge's two ends */
+    uint32_t *ent_e;
+    uint32_t *cnt; /* by chunk */
+} edgejob;
+
+static void edge_scan(void *ctx, size_t item, int worker)
 {
-    size_t npt = A->npt, nent = A->nent, nf = A->nf;
-    uint32_t *pos = mem_calloc(npt + 2, sizeof *pos), *xs = mem_malloc((nent + 1) * sizeof *xs);
-    uint32_t *lo_e = mem_malloc((nent + 1) * sizeof *lo_e),
-             *hi_e = mem_malloc((nent + 1) * sizeof *hi_e);
-    uint32_t *xf = mem_malloc((nent + 1) * sizeof *xf);
-    uint32_t *sk = NULL, *sx = NULL;
-    int rc = -1;
-    E->ent_e = mem_malloc((nent + 1) * sizeof *E->ent_e);
-    if (!pos || !xs || !lo_e || !hi_e || !xf || !E->ent_e) goto done;
-    memset(E->ent_e, 0xff, (nent + 1) * sizeof *E->ent_e);
-    /* the entries whose edges are not inside a patch (those are made with the output), by
-     * their edge's lower end */
-    size_t m = 0;
-    for (size_t f = 0; f < nf; f++)
+    (void)worker;
+    const edgejob *j = ctx;
+    const a3 *A = j->A;
+    size_t f0 = item * EDGE_CHUNK, f1 = f0 + EDGE_CHUNK < A->nf ? f0 + EDGE_CHUNK : A->nf;
+    uint32_t at = A->cyc_off[A->f_cyc[f0]], m = at;
+    memset(j->ent_e + at, 0xff, (A->cyc_off[A->f_cyc[f1]] - at) * sizeof *j->ent_e);
+    for (size_t f = f0; f < f1; f++)
         for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
             uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
             if (n < 2) continue;
@@ -652,11 +655,42 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
                 if (A->etwin[x] != NONE) continue;
                 uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
                 uint32_t lo = a < b ? a : b;
-                xs[m] = x, xf[m] = (uint32_t)f, lo_e[m] = lo, hi_e[m] = a ^ b ^ lo;
-                pos[lo + 2]++;
+                j->xs[m] = x, j->xf[m] = (uint32_t)f, j->lo_e[m] = lo, j->hi_e[m] = a ^ b ^ lo;
                 m++;
             }
         }
+    j->cnt[item] = m - at;
+}
+
+/* Stage "edges".  Returns -1 out of memory. */
+A3_STAGE static int edges_make(const a3 *A, cedges *E)
+{
+    size_t npt = A->npt, nent = A->nent, nf = A->nf, nch = (nf + EDGE_CHUNK - 1) / EDGE_CHUNK;
+    uint32_t *pos = mem_calloc(npt + 2, sizeof *pos), *xs = mem_malloc((nent + 1) * sizeof *xs);
+    uint32_t *lo_e = mem_malloc((nent + 1) * sizeof *lo_e),
+             *hi_e = mem_malloc((nent + 1) * sizeof *hi_e);
+    uint32_t *xf = mem_malloc((nent + 1) * sizeof *xf), *cnt = mem_malloc((nch + 1) * sizeof *cnt);
+    uint32_t *sk = NULL, *sx = NULL;
+    int rc = -1;
+    E->ent_e = mem_malloc((nent + 1) * sizeof *E->ent_e);
+    if (!pos || !xs || !lo_e || !hi_e || !xf || !cnt || !E->ent_e) goto done;
+    E->ent_e[nent] = NONE;
+    edgejob ej = {A, xs, xf, lo_e, hi_e, E->ent_e, cnt};
+    par_for(A->threads, nch, edge_scan, &ej);
+    /* the chunks' entries joined in order (so the entries of an edge come in face order), by
+     * their edge's lower end */
+    size_t m = 0;
+    for (size_t ch = 0; ch < nch; ch++) {
+        uint32_t at = A->cyc_off[A->f_cyc[ch * EDGE_CHUNK]], c = cnt[ch];
+        if (at != m) {
+            memmove(xs + m, xs + at, c * sizeof *xs);
+            memmove(xf + m, xf + at, c * sizeof *xf);
+            memmove(lo_e + m, lo_e + at, c * sizeof *lo_e);
+            memmove(hi_e + m, hi_e + at, c * sizeof *hi_e);
+        }
+        for (size_t i = m; i < m + c; i++) pos[lo_e[i] + 2]++;
+        m += c;
+    }
     for (size_t p = 0; p < npt; p++) pos[p + 2] += pos[p + 1];
     sk = mem_malloc((m + 1) * sizeof *sk);
     sx = mem_malloc((m + 1) * sizeof *sx);
@@ -701,7 +735,7 @@ A3_STAGE static int edges_make(const a3 *A, cedges *E)
     E->ne = ne;
     rc = 0;
 done:
-    free(pos), free(xs), free(lo_e), free(hi_e), free(xf), free(sk), free(sx);
+    free(pos), free(xs), free(lo_e), free(hi_e), free(xf), free(cnt), free(sk), free(sx);
     return rc;
 }
 

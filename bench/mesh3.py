@@ -4,7 +4,7 @@ Manifold's (npm manifold-3d, bench/manifold_bool.mjs) and CGAL's (corefinement, 
 on the real meshes (part a) and on one of them refined up to millions of triangles (part b).
 
 Usage: python3 bench/mesh3.py BUILD_DIR [--part a|b|all] [--sizes 10000,40000,...]
-           [--meshes bunny,fandisk,...] [--threads T] [--repeat 3] [--timeout 900] [--no-cgal]
+           [--meshes bunny,fandisk,...] [--threads T] [--repeat 5] [--timeout 900] [--no-cgal]
 (make bench runs it after the other drivers; BENCH_MESH3_ARGS="..." passes it arguments).
 Needs BUILD_DIR/cellar, BUILD_DIR/tests/ref/cgal_bool (make bench builds both), python3 and
 GNU /usr/bin/time; Manifold needs node and bench/node_modules/manifold-3d (npm ci --prefix
@@ -41,7 +41,7 @@ Programs (one at a time, each on the same two OFF files, each under /usr/bin/tim
   CGAL      cgal_bool --op OP A.off B.off (Epeck, PMP corefinement); its figure is "ms" (the
             Boolean only, after reading, checking and triangulating) and "area" is the area of
             the result's boundary.
-A run whose process takes under 2 s is repeated (--repeat times in all, default 3) and the run
+A run whose process takes under 2 s is repeated (--repeat times in all, default 5) and the run
 with the smallest figure kept (the machine is noisy; as bench/lib.sh does); every column of a
 row comes from the runs of this invocation, never from a cache.  Volumes are compared with
 CGAL's: rel = |v - CGAL's| / |CGAL's|; agree "yes" within 1e-9 relative, "snap" within
@@ -755,7 +755,7 @@ def main():
                     " .off, comma-separated; default all but cow)")
     ap.add_argument("--threads", type=int, default=1,
                     help="cellar's threads (part a; part b runs this and twice this)")
-    ap.add_argument("--repeat", type=int, default=3,
+    ap.add_argument("--repeat", type=int, default=5,
                     help="runs of a process under 2 s (the smallest figure kept)")
     ap.add_argument("--timeout", type=int, default=900, help="seconds a run may take")
     ap.add_argument("--no-cgal", action="store_true",

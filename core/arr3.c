@@ -121,6 +121,20 @@ uint32_t a3_uf_find(uint32_t *p, uint32_t x)
     return x;
 }
 
+size_t a3_solid_end(const a3 *A, size_t i)
+{
+    size_t lo = i + 1, hi = A->npc;
+    uint32_t s = A->pc[i].solid;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (A->pc[mid].solid == s)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
 {
     a = a3_uf_find(p, a);
@@ -2468,6 +2482,32 @@ done:
     return rc;
 }
 
+/* The reached pieces of a chunk of pieces, listed from the chunk's own place in list (its
+ * count in cnt[2 chunk]), and the entries of the others (cnt[2 chunk + 1]). */
+#define RCH_CHUNK 16384
+typedef struct rchjob {
+    const a3 *A;
+    uint32_t *list;
+    size_t *cnt;
+} rchjob;
+
+static void reached_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const rchjob *j = ctx;
+    const a3 *A = j->A;
+    size_t i0 = item * RCH_CHUNK, i1 = i0 + RCH_CHUNK < A->npc ? i0 + RCH_CHUNK : A->npc, m = 0,
+           e = 0;
+    for (size_t i = i0; i < i1; i++) {
+        const piece *pc = &A->pc[i];
+        if (!pc->reached)
+            e += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
+        else
+            j->list[i0 + m++] = (uint32_t)i;
+    }
+    j->cnt[2 * item] = m, j->cnt[2 * item + 1] = e;
+}
+
 A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
     size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
@@ -2532,18 +2572,31 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         if (piece_plane_id(A, pi) || add_contact(A, A->pc[pi].plane, A->dcp[i].p)) goto done;
         A->pc[pi].reached = 1;
     }
-    /* every reached piece has its canonical plane; the reached pieces listed, and the
-     * others' entries counted (merge_planes), so that no later stage scans every piece */
+    /* every reached piece has its canonical plane (in piece order); the reached pieces listed,
+     * and the others' entries counted (merge_planes), so that no later stage scans every
+     * piece.  The scan on the threads; the planes in order here */
     A->nrl = 0, A->unreached_ent = 0;
-    for (size_t i = 0; i < A->npc; i++) {
-        const piece *pc = &A->pc[i];
-        if (!pc->reached) {
-            A->unreached_ent += A->pc_off[pc->c0 + 1] - A->pc_off[pc->c0];
-            continue;
-        }
-        if (piece_plane_id(A, (uint32_t)i) || A3_PUSH(A->rl, A->nrl, A->caprl, (uint32_t)i))
+    {
+        size_t nrch = (A->npc + RCH_CHUNK - 1) / RCH_CHUNK;
+        rchjob rj = {A, malloc((A->npc + 1) * sizeof *rj.list),
+                     malloc((2 * nrch + 1) * sizeof *rj.cnt)};
+        if (!rj.list || !rj.cnt) {
+            free(rj.list), free(rj.cnt);
             goto done;
-        A->st->faces_reached++;
+        }
+        par_for(A->threads, nrch, reached_chunk, &rj);
+        for (size_t ch = 0; ch < nrch; ch++) {
+            A->unreached_ent += rj.cnt[2 * ch + 1];
+            for (size_t k = 0; k < rj.cnt[2 * ch]; k++) {
+                uint32_t i = rj.list[ch * RCH_CHUNK + k];
+                if (piece_plane_id(A, i) || A3_PUSH(A->rl, A->nrl, A->caprl, i)) {
+                    free(rj.list), free(rj.cnt);
+                    goto done;
+                }
+            }
+        }
+        A->st->faces_reached += A->nrl;
+        free(rj.list), free(rj.cnt);
     }
     A->G.pl = A->pl;
     rc = 0;
@@ -2879,23 +2932,13 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     uint32_t *nu = mem_calloc(4 * (size_t)A->threads + 3, sizeof *nu), *cur = NULL;
     int rc = -1;
     if (!uf || !lab || !epc || !rch || !r_off || !np || !nu) goto done;
-    /* ranges of about npc / (4 threads) pieces, cut where a solid starts (the pieces come
-     * solid by solid: the first piece of a later solid is found by bisection) */
+    /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
     size_t want = npc / (4 * (size_t)A->threads) + 1;
     r_off[nr++] = 0;
-    while (nr < 4 * (size_t)A->threads + 1) {
-        size_t lo = r_off[nr - 1] + want, hi = npc;
-        if (lo >= npc) break;
-        uint32_t s = A->pc[lo - 1].solid;
-        while (lo < hi) { /* the first piece from lo on of a solid after s */
-            size_t mid = lo + (hi - lo) / 2;
-            if (A->pc[mid].solid == s)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        if (lo >= npc) break;
-        r_off[nr++] = (uint32_t)lo;
+    while (nr < 4 * (size_t)A->threads + 1 && r_off[nr - 1] + want < npc) {
+        size_t at = a3_solid_end(A, r_off[nr - 1] + want - 1);
+        if (at >= npc) break;
+        r_off[nr++] = (uint32_t)at;
     }
     r_off[nr] = (uint32_t)npc;
     patchjob j = {A, r_off, uf, lab, epc, rch, np, nu, NULL, NULL, NULL};

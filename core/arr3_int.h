@@ -195,6 +195,9 @@ int a3_cmp_u32(const void *pa, const void *pb);
 #define A3_PUSH(arr, n, cap, val)                                                                  \
     (a3_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
 uint64_t a3_mix64(uint64_t x);
+/* The first piece after piece i of another solid (A->npc if none): the pieces come solid by
+ * solid, so it is found by bisection. */
+size_t a3_solid_end(const a3 *A, size_t i);
 int a3_cancelled(const a3 *A);
 void a3_progress(const a3 *A, const char *stage, double f);
 

@@ -398,11 +398,11 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     *nout = 0;
     size_t n = A->npc;
     if (n == 0) return 0;
-    /* groups: runs of one solid (the pieces come solid by solid) */
+    /* groups: runs of one solid (the pieces come solid by solid: each run's end is found by
+     * bisection, not by reading every piece) */
     F.g_off = mem_malloc((n + 1) * sizeof *F.g_off);
     if (!F.g_off) goto done;
-    for (size_t i = 0; i < n; i++)
-        if (i == 0 || A->pc[i].solid != A->pc[i - 1].solid) F.g_off[F.ng++] = (uint32_t)i;
+    for (size_t i = 0; i < n; i = a3_solid_end(A, i)) F.g_off[F.ng++] = (uint32_t)i;
     F.g_off[F.ng] = (uint32_t)n;
     if (F.ng < 2) {
         rc = 0; /* one solid: nothing to pair */

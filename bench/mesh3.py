@@ -42,7 +42,9 @@ Programs (one at a time, each on the same two OFF files, each under /usr/bin/tim
             Boolean only, after reading, checking and triangulating) and "area" is the area of
             the result's boundary.
 A run whose process takes under 2 s is repeated (--repeat times in all, default 5) and the run
-with the smallest figure kept (the machine is noisy; as bench/lib.sh does); every column of a
+with the smallest figure kept (the machine is noisy; as bench/lib.sh does); the runs of cellar
+and Manifold's warm op for one row take turns, so that both meet the same moments of the
+machine; every column of a
 row comes from the runs of this invocation, never from a cache.  Volumes are compared with
 CGAL's: rel = |v - CGAL's| / |CGAL's|; agree "yes" within 1e-9 relative, "snap" within
 precision * area (cellar's grid step, stats.precision, times the area of CGAL's result: how
@@ -161,27 +163,41 @@ def best_of(name, cmd, parse, workdir, repeat, limit):
     """Runs cmd (repeat times in all while a process takes under 2 s, as bench/lib.sh) and
     returns the Run with the smallest figure; parse(stdout path) gives (figure, data) or raises
     BadOutput.  A failure or a timeout ends the repeats and is reported on stderr."""
+    return best_of_each([(name, cmd, parse)], workdir, repeat, limit)[0]
+
+
+def best_of_each(progs, workdir, repeat, limit):
+    """best_of for each (name, cmd, parse) of progs, their runs taken in turn (the first
+    program, the second, ..., then again), so that the programs compared in a row meet the
+    same moments of a noisy machine.  A program stops repeating after a run of 2 s or more, a
+    failure or a timeout; the others go on.  Returns their Runs in order."""
     path = os.path.join(workdir, "out")
-    best = None
+    best = [None] * len(progs)
+    done = [False] * len(progs)
     for _ in range(max(1, repeat)):
-        rc, wall, mib = run_once(cmd, path, limit)
-        if rc == 124 or wall >= limit:
-            note("%s timed out after %d s" % (name, limit))
-            return Run("timeout")
-        try:
-            if rc != 0:
-                raise BadOutput(exit_text(rc))
-            fig, data = parse(path)
-        except (BadOutput, OSError, ValueError, KeyError, TypeError) as e:
-            with open(path + ".err", "rb") as f:
-                err = f.read(600).decode("utf-8", "replace")
-            note("%s failed (%s):\n%s" % (name, e, err.rstrip()))
-            return Run("failed")
-        fig = wall * 1000 if fig is None else fig      # no figure of its own: the wall time
-        if best is None or fig < best.fig:
-            best = Run("ok", fig, wall, mib, data)
-        if wall >= 2:
-            break
+        for i, (name, cmd, parse) in enumerate(progs):
+            if done[i]:
+                continue
+            rc, wall, mib = run_once(cmd, path, limit)
+            if rc == 124 or wall >= limit:
+                note("%s timed out after %d s" % (name, limit))
+                best[i], done[i] = Run("timeout"), True
+                continue
+            try:
+                if rc != 0:
+                    raise BadOutput(exit_text(rc))
+                fig, data = parse(path)
+            except (BadOutput, OSError, ValueError, KeyError, TypeError) as e:
+                with open(path + ".err", "rb") as f:
+                    err = f.read(600).decode("utf-8", "replace")
+                note("%s failed (%s):\n%s" % (name, e, err.rstrip()))
+                best[i], done[i] = Run("failed"), True
+                continue
+            fig = wall * 1000 if fig is None else fig  # no figure of its own: the wall time
+            if best[i] is None or fig < best[i].fig:
+                best[i] = Run("ok", fig, wall, mib, data)
+            if wall >= 2:
+                done[i] = True
     for suffix in ("", ".err", ".time"):            # cellar's output can be hundreds of MB
         try:
             os.unlink(path + suffix)
@@ -299,11 +315,20 @@ class Programs:
                     "%H:%M:%SZ", time.gmtime(now[0] / 1e9)) if now else "?"))
             note("%s was rebuilt during the run" % self.cellar)
 
-    def run_cellar(self, label, files, op, threads):
-        return best_of("cellar --threads %d (%s)" % (threads, label),
-                       [self.cellar, "--threads", str(threads), "--quiet", "solids"] + files +
-                       ["--op", op, "--options", OPTS],
-                       parse_cellar, self.workdir, self.repeat, self.limit)
+    def cellar_prog(self, label, files, op, threads):
+        return ("cellar --threads %d (%s)" % (threads, label),
+                [self.cellar, "--threads", str(threads), "--quiet", "solids"] + files +
+                ["--op", op, "--options", OPTS], parse_cellar)
+
+    def run_with_mf(self, label, files, op, threads):
+        """cellar on each of threads and Manifold (warm), their runs in turn (best_of_each):
+        the Runs of cellar in the order of threads, then Manifold's."""
+        progs = [self.cellar_prog(label, files, op, t) for t in threads]
+        if not self.mf_why:
+            progs.append(("manifold (%s)" % label, ["node", MF, "--warm", "--op", op] + files,
+                          parse_mf))
+        runs = best_of_each(progs, self.workdir, self.repeat, self.limit)
+        return runs if not self.mf_why else runs + [Run("skipped")]
 
     def run_cgal(self, label, files, op):
         if not self.use_cgal:
@@ -530,11 +555,13 @@ def header_common(progs, threads_note):
         out("             Boolean only (after reading, checking and triangulating).")
     else:
         out("  CGAL     = not run (--no-cgal): no volume check; its columns show -.")
-    out("  A process under 2 s runs %d time(s), the smallest ms kept; failed / timeout: the run"
+    out("  A process under 2 s runs %d time(s), the smallest ms kept (cellar's runs and"
         % progs.repeat)
-    out("  failed or took over %d s.  rel = |volume - CGAL's| / CGAL's; agr(ee): yes within"
+    out("  Manifold's take turns, so that both meet the same moments of the machine); failed /")
+    out("  timeout: the run failed or took over %d s.  rel = |volume - CGAL's| / CGAL's;"
         % progs.limit)
-    out("  1e-9 relative, snap within cellar's precision * the area of CGAL's result, else NO.")
+    out("  agr(ee): yes within 1e-9 relative, snap within cellar's precision * the area of")
+    out("  CGAL's result, else NO.")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -570,8 +597,7 @@ def part_a(progs, cache, meshes, threads):
                     out(table_row(W, (mesh, scene, op, "no input")))
                     ratios[scene].append(None)
                     continue
-                cel = progs.run_cellar(label, files, op, threads)
-                mf = progs.run_mf(label, files, op)
+                cel, mf = progs.run_with_mf(label, files, op, [threads])
                 cg = progs.run_cgal(label, files, op)
                 progs.rebuilt()
                 bad = ["%s %s" % (who, run.state) for run, who in ((cel, "cellar"), (cg, "CGAL"))
@@ -653,9 +679,7 @@ def part_b(progs, cache, sizes, threads):
                 rows.append((n, op, None))
                 continue
             label = "%s %s" % (name, op)
-            c1 = progs.run_cellar(label, files, op, threads)
-            c2 = progs.run_cellar(label, files, op, t2)
-            mf = progs.run_mf(label, files, op)
+            c1, c2, mf = progs.run_with_mf(label, files, op, [threads, t2])
             mf1 = progs.run_mf(label, files, op, warm=False)
             cg = progs.run_cgal(label, files, op)
             progs.rebuilt()

@@ -44,7 +44,8 @@ Programs (one at a time, each on the same two OFF files, each under /usr/bin/tim
 A run whose process takes under 2 s is repeated (--repeat times in all, default 5) and the run
 with the smallest figure kept (the machine is noisy; as bench/lib.sh does); the runs of cellar
 and Manifold's warm op for one row take turns, so that both meet the same moments of the
-machine; every column of a
+machine, and are repeated while a run takes under 60 s (--repeat-under), so that the large
+sizes' figures are not single samples; every column of a
 row comes from the runs of this invocation, never from a cache.  Volumes are compared with
 CGAL's: rel = |v - CGAL's| / |CGAL's|; agree "yes" within 1e-9 relative, "snap" within
 precision * area (cellar's grid step, stats.precision, times the area of CGAL's result: how
@@ -166,11 +167,11 @@ def best_of(name, cmd, parse, workdir, repeat, limit):
     return best_of_each([(name, cmd, parse)], workdir, repeat, limit)[0]
 
 
-def best_of_each(progs, workdir, repeat, limit):
+def best_of_each(progs, workdir, repeat, limit, under=2.0):
     """best_of for each (name, cmd, parse) of progs, their runs taken in turn (the first
     program, the second, ..., then again), so that the programs compared in a row meet the
-    same moments of a noisy machine.  A program stops repeating after a run of 2 s or more, a
-    failure or a timeout; the others go on.  Returns their Runs in order."""
+    same moments of a noisy machine.  A program stops repeating after a run of `under` seconds
+    or more, a failure or a timeout; the others go on.  Returns their Runs in order."""
     path = os.path.join(workdir, "out")
     best = [None] * len(progs)
     done = [False] * len(progs)
@@ -196,7 +197,7 @@ def best_of_each(progs, workdir, repeat, limit):
             fig = wall * 1000 if fig is None else fig  # no figure of its own: the wall time
             if best[i] is None or fig < best[i].fig:
                 best[i] = Run("ok", fig, wall, mib, data)
-            if wall >= 2:
+            if wall >= under:
                 done[i] = True
     for suffix in ("", ".err", ".time"):            # cellar's output can be hundreds of MB
         try:
@@ -292,6 +293,7 @@ class Programs:
         self.cellar = os.path.join(build, "cellar")
         self.cgal = os.path.join(build, "tests", "ref", "cgal_bool")
         self.repeat, self.limit, self.workdir = args.repeat, args.timeout, workdir
+        self.repeat_under = args.repeat_under
         self.use_cgal = not args.no_cgal
         self.mf_why = manifold_missing()
         self.cellar_id = self.binary_id()
@@ -327,7 +329,7 @@ class Programs:
         if not self.mf_why:
             progs.append(("manifold (%s)" % label, ["node", MF, "--warm", "--op", op] + files,
                           parse_mf))
-        runs = best_of_each(progs, self.workdir, self.repeat, self.limit)
+        runs = best_of_each(progs, self.workdir, self.repeat, self.limit, self.repeat_under)
         return runs if not self.mf_why else runs + [Run("skipped")]
 
     def run_cgal(self, label, files, op):
@@ -557,7 +559,8 @@ def header_common(progs, threads_note):
         out("  CGAL     = not run (--no-cgal): no volume check; its columns show -.")
     out("  A process under 2 s runs %d time(s), the smallest ms kept (cellar's runs and"
         % progs.repeat)
-    out("  Manifold's take turns, so that both meet the same moments of the machine); failed /")
+    out("  Manifold's take turns, so that both meet the same moments of the machine, and repeat")
+    out("  while a run takes under %g s); failed /" % progs.repeat_under)
     out("  timeout: the run failed or took over %d s.  rel = |volume - CGAL's| / CGAL's;"
         % progs.limit)
     out("  agr(ee): yes within 1e-9 relative, snap within cellar's precision * the area of")
@@ -781,12 +784,15 @@ def main():
                     help="cellar's threads (part a; part b runs this and twice this)")
     ap.add_argument("--repeat", type=int, default=5,
                     help="runs of a process under 2 s (the smallest figure kept)")
+    ap.add_argument("--repeat-under", type=float, default=60,
+                    help="cellar's and Manifold's runs of a row are repeated while a run takes "
+                    "under this many seconds (default 60; CGAL's and the others: 2)")
     ap.add_argument("--timeout", type=int, default=900, help="seconds a run may take")
     ap.add_argument("--no-cgal", action="store_true",
                     help="do not run CGAL (no volume check, no input check)")
     args = ap.parse_args()
-    if args.threads < 1 or args.repeat < 1 or args.timeout < 1:
-        ap.error("--threads, --repeat and --timeout must be at least 1")
+    if args.threads < 1 or args.repeat < 1 or args.timeout < 1 or not args.repeat_under > 0:
+        ap.error("--threads, --repeat and --timeout must be at least 1, --repeat-under above 0")
 
     all_meshes = sorted(f[:-4] for f in os.listdir(REAL) if f.endswith(".off"))
     meshes = args.meshes.split(",") if args.meshes else all_meshes

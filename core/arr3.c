@@ -121,6 +121,17 @@ uint32_t a3_uf_find(uint32_t *p, uint32_t x)
     return x;
 }
 
+void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
+{
+    a = a3_uf_find(p, a);
+    b = a3_uf_find(p, b);
+    if (a == b) return;
+    if (a < b)
+        p[b] = a;
+    else
+        p[a] = b;
+}
+
 size_t a3_solid_end(const a3 *A, size_t i)
 {
     size_t lo = i + 1, hi = A->npc;
@@ -133,17 +144,6 @@ size_t a3_solid_end(const a3 *A, size_t i)
             hi = mid;
     }
     return lo;
-}
-
-void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
-{
-    a = a3_uf_find(p, a);
-    b = a3_uf_find(p, b);
-    if (a == b) return;
-    if (a < b)
-        p[b] = a;
-    else
-        p[a] = b;
 }
 
 /* ------------------------------------------------------------------ point sets */
@@ -2508,6 +2508,32 @@ static void reached_chunk(void *ctx, size_t item, int worker)
     j->cnt[2 * item] = m, j->cnt[2 * item + 1] = e;
 }
 
+/* Every reached piece gets its canonical plane (in piece order) and goes into A->rl; the
+ * others' entries are counted (merge_planes), so that no later stage scans every piece.  The
+ * scan runs on the threads, the planes are made here in order.  -1 out of memory. */
+static int list_reached(a3 *A)
+{
+    size_t nrch = (A->npc + RCH_CHUNK - 1) / RCH_CHUNK;
+    rchjob rj = {A, malloc((A->npc + 1) * sizeof *rj.list),
+                 malloc((2 * nrch + 1) * sizeof *rj.cnt)};
+    int rc = -1;
+    A->nrl = 0, A->unreached_ent = 0;
+    if (!rj.list || !rj.cnt) goto done;
+    par_for(A->threads, nrch, reached_chunk, &rj);
+    for (size_t ch = 0; ch < nrch; ch++) {
+        A->unreached_ent += rj.cnt[2 * ch + 1];
+        for (size_t k = 0; k < rj.cnt[2 * ch]; k++) {
+            uint32_t i = rj.list[ch * RCH_CHUNK + k];
+            if (piece_plane_id(A, i) || A3_PUSH(A->rl, A->nrl, A->caprl, i)) goto done;
+        }
+    }
+    A->st->faces_reached += A->nrl;
+    rc = 0;
+done:
+    free(rj.list), free(rj.cnt);
+    return rc;
+}
+
 A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
 {
     size_t nch = (np + CUT_CHUNK - 1) / CUT_CHUNK;
@@ -2572,32 +2598,7 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         if (piece_plane_id(A, pi) || add_contact(A, A->pc[pi].plane, A->dcp[i].p)) goto done;
         A->pc[pi].reached = 1;
     }
-    /* every reached piece has its canonical plane (in piece order); the reached pieces listed,
-     * and the others' entries counted (merge_planes), so that no later stage scans every
-     * piece.  The scan on the threads; the planes in order here */
-    A->nrl = 0, A->unreached_ent = 0;
-    {
-        size_t nrch = (A->npc + RCH_CHUNK - 1) / RCH_CHUNK;
-        rchjob rj = {A, malloc((A->npc + 1) * sizeof *rj.list),
-                     malloc((2 * nrch + 1) * sizeof *rj.cnt)};
-        if (!rj.list || !rj.cnt) {
-            free(rj.list), free(rj.cnt);
-            goto done;
-        }
-        par_for(A->threads, nrch, reached_chunk, &rj);
-        for (size_t ch = 0; ch < nrch; ch++) {
-            A->unreached_ent += rj.cnt[2 * ch + 1];
-            for (size_t k = 0; k < rj.cnt[2 * ch]; k++) {
-                uint32_t i = rj.list[ch * RCH_CHUNK + k];
-                if (piece_plane_id(A, i) || A3_PUSH(A->rl, A->nrl, A->caprl, i)) {
-                    free(rj.list), free(rj.cnt);
-                    goto done;
-                }
-            }
-        }
-        A->st->faces_reached += A->nrl;
-        free(rj.list), free(rj.cnt);
-    }
+    if (list_reached(A)) goto done;
     A->G.pl = A->pl;
     rc = 0;
 done:

@@ -322,13 +322,19 @@ class Programs:
                 [self.cellar, "--threads", str(threads), "--quiet", "solids"] + files +
                 ["--op", op, "--options", OPTS], parse_cellar)
 
+    def mf_prog(self, label, files, op, warm):
+        """Manifold with --warm (figure ms_warm) or, warm=False, once per process (only its
+        wall time and peak RSS are used)."""
+        return ("manifold%s (%s)" % ("" if warm else " (once)", label),
+                ["node", MF] + (["--warm"] if warm else []) + ["--op", op] + files,
+                parse_mf if warm else parse_wall)
+
     def run_with_mf(self, label, files, op, threads):
         """cellar on each of threads and Manifold (warm), their runs in turn (best_of_each):
         the Runs of cellar in the order of threads, then Manifold's."""
         progs = [self.cellar_prog(label, files, op, t) for t in threads]
         if not self.mf_why:
-            progs.append(("manifold (%s)" % label, ["node", MF, "--warm", "--op", op] + files,
-                          parse_mf))
+            progs.append(self.mf_prog(label, files, op, True))
         runs = best_of_each(progs, self.workdir, self.repeat, self.limit, self.repeat_under)
         return runs if not self.mf_why else runs + [Run("skipped")]
 
@@ -338,14 +344,11 @@ class Programs:
         return best_of("cgal_bool (%s)" % label, [self.cgal, "--op", op] + files, parse_cgal,
                        self.workdir, self.repeat, self.limit)
 
-    def run_mf(self, label, files, op, warm=True):
-        """Manifold with --warm (figure ms_warm) or, warm=False, once per process (only its
-        wall time and peak RSS are used)."""
+    def run_mf_once(self, label, files, op):
+        """Manifold once per process, for its wall time and peak RSS."""
         if self.mf_why:
             return Run("skipped")
-        return best_of("manifold%s (%s)" % ("" if warm else " (once)", label),
-                       ["node", MF] + (["--warm"] if warm else []) + ["--op", op] + files,
-                       parse_mf if warm else parse_wall, self.workdir, self.repeat,
+        return best_of(*self.mf_prog(label, files, op, False), self.workdir, self.repeat,
                        self.limit)
 
 
@@ -683,7 +686,7 @@ def part_b(progs, cache, sizes, threads):
                 continue
             label = "%s %s" % (name, op)
             c1, c2, mf = progs.run_with_mf(label, files, op, [threads, t2])
-            mf1 = progs.run_mf(label, files, op, warm=False)
+            mf1 = progs.run_mf_once(label, files, op)
             cg = progs.run_cgal(label, files, op)
             progs.rebuilt()
             bad = ["%s %s" % (who, run.state) for run, who in

@@ -33,6 +33,32 @@
 const char *const api_field3_names[API_NFIELDS3] = {"V",  "EV", "FV",       "FE",    "holes",
                                                     "CF", "CV", "exterior", "stats", "operators"};
 
+/* "membership": the solids each cell lies in (api_put_membership), or, when some cell winds
+ * about a solid other than once (a surface that passes through itself, overlaps itself or
+ * turns inward), each cell's winding numbers: "indices" the solids of a non-zero one, "data"
+ * the numbers (a compressed sparse row matrix of cells x solids, as scipy reads it). */
+static void put_membership3(api_buf *b, const lar3 *c, const member_rows *m)
+{
+    int plain = 1;
+    for (size_t i = 0; m->wind && i < m->off[c->nc] && plain; i++) plain = m->wind[i] == 1;
+    if (plain) {
+        api_put_membership(b, c->nc, c->nsolids, m->off, m->idx);
+        return;
+    }
+    api_buf_section(b);
+    api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
+    api_buf_u64(b, c->nc);
+    api_buf_putc(b, ',');
+    api_buf_u64(b, c->nsolids);
+    api_buf_puts(b, "],\"indptr\":");
+    api_buf_u32_list(b, m->off, c->nc + 1);
+    api_buf_puts(b, ",\"indices\":");
+    api_buf_u32_list(b, m->idx, m->off[c->nc]);
+    api_buf_puts(b, ",\"data\":");
+    api_buf_i32_list(b, m->wind, m->off[c->nc]);
+    api_buf_putc(b, '}');
+}
+
 /* ---- checks ---------------------------------------------------------------------------------- */
 
 /* off[0..n] is a non-decreasing offset array (NULL allowed when n == 0); its end in *end. */
@@ -452,8 +478,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         rc = put_operators(b, c, err);
         if (rc != API_OK) return rc;
     }
-    if (fmt->membership)
-        api_put_membership(b, c->nc, c->nsolids, fmt->membership->off, fmt->membership->idx);
+    if (fmt->membership) put_membership3(b, c, fmt->membership);
     if (fmt->result) put_result(b, c, fmt->result, fl);
     if (fl & API_F3_STATS) {
         put_key(b, "stats");

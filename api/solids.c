@@ -78,6 +78,7 @@ typedef struct solids_req {
     unsigned fields;  /* API_F3_* */
     int has_op;       /* the request gave "op" */
     bool_expr op;     /* its program (api/boolop.c) */
+    int fill;         /* options.fill: BOOL3_FILL_* */
 } solids_req;
 
 typedef struct totals {
@@ -140,10 +141,21 @@ static int parse_options(const json_t *o, solids_req *r, api_error *err)
         } else if (strcmp(key, "fields") == 0) {
             int rc = parse_fields(v, &r->fields, err);
             if (rc != API_OK) return rc;
+        } else if (strcmp(key, "fill") == 0) {
+            const char *f = json_is_string(v) ? json_string_value(v) : "";
+            if (strcmp(f, "positive") == 0)
+                r->fill = BOOL3_FILL_POSITIVE;
+            else if (strcmp(f, "nonzero") == 0)
+                r->fill = BOOL3_FILL_NONZERO;
+            else if (strcmp(f, "odd") == 0)
+                r->fill = BOOL3_FILL_ODD;
+            else
+                return api_fail(err, API_EINVALID,
+                                "options.fill: expected \"positive\", \"nonzero\" or \"odd\"");
         } else {
             return api_fail(err, API_EINVALID,
-                            "options.%.64s: unknown option (expected precision, operators or "
-                            "fields)",
+                            "options.%.64s: unknown option (expected precision, operators, "
+                            "fields or fill)",
                             key);
         }
     }
@@ -662,7 +674,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
                                   bad_face);
             goto out;
         }
-        if (bool3_select(&c, &mem, &r->op, &res)) {
+        if (bool3_select_fill(&c, &mem, &r->op, r->fill, &res)) {
             rc = api_fail(err, API_ENOMEM, "out of memory");
             goto out;
         }

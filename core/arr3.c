@@ -931,8 +931,8 @@ static inline int pbuf_push(pbuf *B, const piece *P)
  * normal has its largest component on axis k) and orientation sgn about that plane; the
  * vertical planes of its edges are left to stage_sides, its canonical plane to whoever needs
  * it (piece_plane_id).  -1 out of memory, -2 an edge along axis k (not in the plane). */
-static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *av, int k,
-                     int sgn, uint32_t **cyc, const size_t *len, size_t nc)
+static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *av,
+                     const int64_t *n, int sgn, uint32_t **cyc, const size_t *len, size_t nc)
 {
     piece P = {solid,
                face,
@@ -943,7 +943,11 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
                {INT32_MAX, INT32_MAX, INT32_MAX, INT32_MIN, INT32_MIN, INT32_MIN},
                (int8_t)sgn,
                nc > 1,
+               0,
+               0,
                {0}};
+    int k = normal_axis(n);
+    P.cls = a3_chart_class(n, sgn, &P.cmask);
     size_t total = 0;
     for (size_t c = 0; c < nc; c++) total += len[c];
     if (pbuf_room(B, nc, total)) return -1;
@@ -968,12 +972,15 @@ static int add_piece(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const 
 /* add_piece's work for a triangle of three points apart, not flat: none of its edges is a
  * point in the projection along its normal's axis (the normal would lie in that plane), so
  * add_piece's test has nothing to find. */
-static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *t)
+static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const uint32_t *t,
+                   const int64_t *n)
 {
     if (pbuf_room(B, 1, 3)) return -1;
     const int64_t *g0 = A->g + 3 * (size_t)t[0], *g1 = A->g + 3 * (size_t)t[1],
                   *g2 = A->g + 3 * (size_t)t[2];
-    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, {0}, 1, 0, {0}};
+    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, {0}, 1, 0, 0, 0,
+               {0}};
+    P.cls = a3_chart_class(n, 1, &P.cmask);
     for (int a = 0; a < 3; a++) {
         int32_t x = (int32_t)g0[a], y = (int32_t)g1[a], z = (int32_t)g2[a];
         int32_t lo = x < y ? x : y, hi = x < y ? y : x;
@@ -1072,7 +1079,7 @@ static void in_task(void *ctx, size_t item, int worker)
                     !grid_normal(A->g + 3 * (size_t)t[0], A->g + 3 * (size_t)t[1],
                                  A->g + 3 * (size_t)t[2], n)) {
                     uint32_t base = (uint32_t)B->npcv;
-                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t) ||
+                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t, n) ||
                         in_pairs(B, i0, base, 3))
                         TASK_OOM;
                     continue;
@@ -1152,7 +1159,7 @@ static void in_task(void *ctx, size_t item, int worker)
                           ? 1
                           : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
             uint32_t base = (uint32_t)B->npcv;
-            if ((r = add_piece(A, B, sol, face, av, k, sgn, cyc, len, nc))) {
+            if ((r = add_piece(A, B, sol, face, av, p.n, sgn, cyc, len, nc))) {
                 if (r == -1) TASK_OOM;
                 TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
             }
@@ -1210,7 +1217,7 @@ static void in_task(void *ctx, size_t item, int worker)
                         if (A3_PUSH(B->drop, B->ndrop, B->capdrop, tc[q])) TASK_OOM;
                 continue;
             }
-            if ((r = add_piece(A, B, sol, face, tc, normal_axis(tp.n), 1, &tc, &tl, 1))) {
+            if ((r = add_piece(A, B, sol, face, tc, tp.n, 1, &tc, &tl, 1))) {
                 if (r == -1) TASK_OOM;
                 TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
             }
@@ -2170,6 +2177,10 @@ typedef struct cutout {
     uint32_t *met; /* pieces of the pairs that meet */
     size_t nmet, capmet;
     size_t npairs; /* pairs that meet */
+    uint64_t *self; /* the pairs of one solid that meet (cross, or overlap in a plane) */
+    size_t nself, capself;
+    uint32_t *fold; /* planes where pieces of one solid overlap: arranged whole */
+    size_t nfold, capfold;
     int rc;        /* 0, -1 out of memory, -3 cancelled */
     A3_PAD;
 } cutout;
@@ -2352,14 +2363,40 @@ static int chunk_contact(cutout *o, uint32_t plane, uint32_t p)
 
 /* One pair of pieces: the stretches where both lie on the line of their planes are cuts of both
  * planes (a single point: a contact). */
+/* Of a pair of one solid's pieces a, b, is the stretch from point p to point q (p == q: the
+ * point) where they meet as neighbouring faces do: a vertex of both, or an edge of both? */
+static int shared_part(const a3 *A, uint32_t a, uint32_t b, uint32_t p, uint32_t q)
+{
+    const piece *P = &A->pc[a], *Q = &A->pc[b];
+    if ((p | q) & CUT_LOCAL || p >= A->nv || q >= A->nv) return 0; /* a made point */
+    if (p == q) return a3_piece_vertex(A, P, p) && a3_piece_vertex(A, Q, p);
+    return a3_piece_edge(A, P, p, q) && a3_piece_edge(A, Q, p, q);
+}
+
+/* A pair that meets: both pieces reached; a pair of one solid listed (its surface passes
+ * through itself there). */
+static int pair_met(const a3 *A, cutout *o, uint32_t a, uint32_t b)
+{
+    o->npairs++;
+    if (A->pc[a].solid == A->pc[b].solid &&
+        A3_PUSH(o->self, o->nself, o->capself, (uint64_t)a << 32 | b))
+        return -1;
+    return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
+                                                                                            : 0;
+}
+
 static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
 {
     uint32_t pa = A->pc[a].plane, pb = A->pc[b].plane;
     size_t ncs = o->ncs, ncp = o->ncp;
-    if (pa == pb) /* coplanar, boxes meeting: both go through their plane's arrangement */
-        return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b)
-                   ? -1
-                   : (o->npairs++, 0);
+    int self = A->pc[a].solid == A->pc[b].solid;
+    if (pa == pb) { /* coplanar, boxes meeting: both go through their plane's arrangement */
+        if (!self) return pair_met(A, o, a, b);
+        /* of one solid: only where they overlap or touch elsewhere than as neighbours, and
+         * then the plane is arranged whole (its pieces are no longer apart) */
+        if (a3_flat_apart(A, a, b)) return 0;
+        return A3_PUSH(o->fold, o->nfold, o->capfold, pa) ? -1 : pair_met(A, o, a, b);
+    }
     i128 d[3];
     cross_ll(A->pl[pa].n, A->pl[pb].n, d);
     if (!d[0] && !d[1] && !d[2]) return 0; /* parallel planes */
@@ -2380,7 +2417,9 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
         uint32_t lo = cmp_on(A, o, a0, b0, ax) >= 0 ? a0 : b0;
         uint32_t hi = cmp_on(A, o, a1, b1, ax) <= 0 ? a1 : b1;
         int c = cmp_on(A, o, lo, hi, ax);
-        if (c < 0) {
+        if (self && c <= 0 && shared_part(A, a, b, lo, c ? hi : lo)) {
+            /* where neighbours meet: nothing to cut */
+        } else if (c < 0) {
             if (add_cut(o, pa, lo, hi, pb) || add_cut(o, pb, lo, hi, pa)) return -1;
         } else if (c == 0) {
             if (chunk_contact(o, pa, lo) || chunk_contact(o, pb, lo)) return -1;
@@ -2391,9 +2430,7 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
             j++;
     }
     if (o->ncs == ncs && o->ncp == ncp) return 0;
-    o->npairs++;
-    return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
-                                                                                            : 0;
+    return pair_met(A, o, a, b);
 }
 
 static void cut_chunk(void *ctx, size_t item, int worker)
@@ -2415,6 +2452,8 @@ static void cut_chunk(void *ctx, size_t item, int worker)
 
 static void cutout_free(cutout *o)
 {
+    free(o->self);
+    free(o->fold);
     free(o->met);
     free(o->pt);
     free(o->lt.id);
@@ -2460,12 +2499,17 @@ static int pair_planes(a3 *A, const uint64_t *pairs, size_t np)
     uint32_t *pcs = NULL;
     size_t cap = 0;
     int rc = -1;
-    for (size_t k = 0; k < 2 * np; k++) {
-        uint32_t pi = k & 1 ? (uint32_t)pairs[k / 2] : (uint32_t)(pairs[k / 2] >> 32);
-        if (A->pc[pi].plane != NONE) continue;
-        if (A3_PUSH(pcs, j.n, cap, pi)) goto done;
-        A->pc[pi].plane = PLANE_LISTED;
-    }
+    /* the pairs of two solids first, then those of one (a surface that may cross itself): so
+     * a clean surface's planes are numbered as they would be without the latter */
+    for (int self = 0; self < 2; self++)
+        for (size_t k = 0; k < 2 * np; k++) {
+            uint64_t pr = pairs[k / 2];
+            if ((A->pc[pr >> 32].solid == A->pc[(uint32_t)pr].solid) != self) continue;
+            uint32_t pi = k & 1 ? (uint32_t)pr : (uint32_t)(pr >> 32);
+            if (A->pc[pi].plane != NONE) continue;
+            if (A3_PUSH(pcs, j.n, cap, pi)) goto done;
+            A->pc[pi].plane = PLANE_LISTED;
+        }
     j.pcs = pcs;
     j.P = mem_malloc((j.n + 1) * sizeof *j.P);
     j.flip = mem_malloc(j.n + 1);
@@ -2589,6 +2633,10 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         for (size_t i = 0; i < o->ncp; i++)
             if (add_contact(A, o->cp[i].plane, merged_id(map, o->cp[i].p))) goto done;
         for (size_t i = 0; i < o->nmet; i++) A->pc[o->met[i]].reached = 1;
+        for (size_t i = 0; i < o->nself; i++)
+            if (A3_PUSH(A->selfp, A->nselfp, A->capselfp, o->self[i])) goto done;
+        for (size_t i = 0; i < o->nfold; i++)
+            if (A3_PUSH(A->fold, A->nfold, A->capfold, o->fold[i])) goto done;
         A->st->pairs_meeting += o->npairs;
         cutout_free(o);
     }
@@ -2597,6 +2645,13 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         uint32_t pi = A->dcp[i].plane;
         if (piece_plane_id(A, pi) || add_contact(A, A->pc[pi].plane, A->dcp[i].p)) goto done;
         A->pc[pi].reached = 1;
+    }
+    if (A->nfold) { /* ascending, each once */
+        qsort(A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32);
+        size_t m = 1;
+        for (size_t i = 1; i < A->nfold; i++)
+            if (A->fold[i] != A->fold[m - 1]) A->fold[m++] = A->fold[i];
+        A->nfold = m;
     }
     if (list_reached(A)) goto done;
     A->G.pl = A->pl;
@@ -2740,9 +2795,15 @@ A3_STAGE static int plane_inputs(a3 *A)
     return 0;
 }
 
+int a3_plane_fold(const a3 *A, uint32_t P)
+{
+    return A->nfold && bsearch(&P, A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32) != NULL;
+}
+
 int a3_plane_simple(const a3 *A, uint32_t P)
 {
     if (A->cs_off[P + 1] != A->cs_off[P] || A->cp_off[P + 1] != A->cp_off[P]) return 0;
+    if (a3_plane_fold(A, P)) return 0;
     if (A->pp_off[P + 1] == A->pp_off[P]) return 1;
     const piece *p0 = &A->pc[A->pp[A->pp_off[P]]];
     for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
@@ -3169,6 +3230,8 @@ static void a3_free(a3 *A)
     free(A->vpval);
     free(A->pc);
     free(A->dcp);
+    free(A->selfp);
+    free(A->fold);
     free(A->pc_off);
     free(A->pcv);
     free(A->pcvp);
@@ -3323,6 +3386,7 @@ void lar3_free(lar3 *c)
     free(c->solid_face_off);
     free(c->fsol_off);
     free(c->fsol);
+    free(c->fwind);
     free(c->u_off);
     free(c->ucell);
     free(c->frev);

@@ -104,10 +104,14 @@ typedef struct lar3 {
     uint32_t *fe_off;   /* nf+1 */
     int32_t *fe;        /* signed edges of each face (+: walked from EV[0] to EV[1]) */
     uint32_t *fsrc;     /* nf: the input face (index over all solids' faces) it lies on */
-    uint32_t *fsol_off; /* nf+1: the solids whose surface holds face f (an odd number of their
-                           faces do): fsol[fsol_off[f] .. fsol_off[f+1]), ascending; crossing f
-                           goes into or out of exactly these solids */
+    uint32_t *fsol_off; /* nf+1: the solids whose surface holds face f, counted with the way
+                           their faces turn: fsol[fsol_off[f] .. fsol_off[f+1]), ascending;
+                           crossing f changes the winding numbers of exactly these solids */
     uint32_t *fsol;
+    int32_t *fwind; /* by fsol entry: the solid's faces over f, each +1 when its outward normal
+                       is f's normal, -1 when it is the opposite, summed (never 0); crossing f
+                       the way its normal points changes that solid's winding number by
+                       -fwind (a clean solid's faces: +1 each, leaving it) */
     size_t ncyc;
     uint32_t *cyc_off; /* ncyc+1 */
     uint32_t *cyc;     /* vertex ids */

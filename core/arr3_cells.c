@@ -120,19 +120,20 @@ static int fan_cmp(const void *pa, const void *pb, void *vx)
     return (a->f > b->f) - (a->f < b->f);
 }
 
-/* For solids: around an edge, each solid's winding number in the wedges between consecutive
- * faces is 0 or 1 (outside or inside).  Face f (walking the edge s = +-1) has its side s toward
- * the next wedge counter-clockwise; a piece covering it, of outward orientation g about f's
- * normal, enters its solid toward the next wedge when s != g (+1) and leaves it when s == g
- * (-1).  Two pieces of one solid on one face turning opposite ways (a surface touching itself
- * face to face: an inner wall) add up to 0.  A solid whose winding about the edge takes more
- * than two values, or does not come back to where it started, passes through itself along this
- * edge: an input that intersects itself (or that the grid makes so), reported with where. */
+/* For solids: around an edge, each solid's winding number changes face by face.  Face f
+ * (walking the edge s = +-1) has its side s toward the next wedge counter-clockwise; a piece
+ * covering it, of outward orientation g about f's normal, enters its solid toward the next
+ * wedge when s != g (+1) and leaves it when s == g (-1).  Two pieces of one solid on one face
+ * turning opposite ways (a surface touching itself face to face: an inner wall) add up to 0.
+ * Its surface closed, every solid comes back around the edge to the winding number it started
+ * with (a surface passing through itself there has been cut into faces meeting at the edge,
+ * and may wind 2 or more, or below 0, between them); one that does not is reported with where
+ * (a bug: the check found every surface closed). */
 typedef struct fanside {
     uint32_t solid;
-    int w, lo, hi; /* winding after the last face, relative to the first wedge; its range */
-    int dw;        /* of the current face */
-    size_t face;   /* the face dw belongs to */
+    int w;       /* winding after the last face, relative to the first wedge */
+    int dw;      /* of the current face */
+    size_t face; /* the face dw belongs to */
 } fanside;
 
 static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, const lar3 *out,
@@ -146,9 +147,6 @@ static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, 
             if (st[j].face + 1 != k || !st[j].dw) continue;
             st[j].w += st[j].dw;
             st[j].dw = 0;
-            if (st[j].w < st[j].lo) st[j].lo = st[j].w;
-            if (st[j].w > st[j].hi) st[j].hi = st[j].w;
-            if (st[j].hi - st[j].lo > 1) goto bad;
         }
         if (k == n) break;
         uint32_t f = F[k].f;
@@ -158,7 +156,7 @@ static int fan_check(const a3 *A, const inc *F, size_t n, const uint32_t *ends, 
             while (j < ns && st[j].solid != pc->solid) j++;
             if (j == ns) {
                 if (ns == sizeof st / sizeof *st) continue; /* only in a pile of 8 solids */
-                st[ns] = (fanside){pc->solid, 0, 0, 0, 0, k};
+                st[ns] = (fanside){pc->solid, 0, 0, k};
                 ns++;
             }
             st[j].dw += F[k].s != pc->sgn ? 1 : -1;
@@ -172,14 +170,14 @@ bad : {
     const piece *pc = &A->pc[A->cov[A->f_cov[F[0].f]]];
     const xpt *a = &A->pt[ends[0]], *b = &A->pt[ends[1]];
     snprintf(err, errlen,
-             "solids[%u]: face %u: the surface passes through itself along the edge (%.9g, %.9g, "
-             "%.9g)-(%.9g, %.9g, %.9g): the solid intersects itself on the grid of step %g",
+             "solids[%u]: face %u: the surface is not closed about the edge (%.9g, %.9g, "
+             "%.9g)-(%.9g, %.9g, %.9g) on the grid of step %g (a bug: please report it)",
              pc->solid, pc->face - out->solid_face_off[pc->solid],
              ((double)A->oi[0] + a->x[0]) * A->step, ((double)A->oi[1] + a->x[1]) * A->step,
              ((double)A->oi[2] + a->x[2]) * A->step, ((double)A->oi[0] + b->x[0]) * A->step,
              ((double)A->oi[1] + b->x[1]) * A->step, ((double)A->oi[2] + b->x[2]) * A->step,
              A->step);
-    return ARR_EINVAL;
+    return ARR_EINTERNAL;
 }
 }
 
@@ -1422,8 +1420,8 @@ typedef struct outjob {
     const uint32_t *newid, *newe, *ent_e;
 } outjob;
 
-/* One chunk of faces written: FN, fsrc, FE, fsol (the solids covering f an odd number of times,
- * ascending), fc; fsol_off and fe_off are known. */
+/* One chunk of faces written: FN, fsrc, FE, fsol and fwind (the solids whose faces over f do
+ * not cancel, ascending, and their sums), fc; fsol_off and fe_off are known. */
 static void out_faces(void *ctx, size_t item, int worker)
 {
     (void)worker;
@@ -1454,24 +1452,32 @@ static void out_faces(void *ctx, size_t item, int worker)
         }
         uint32_t s0 = out->fsol_off[f], c0 = A->f_cov[f], c1 = A->f_cov[f + 1];
         if (c1 - c0 == 1) {
-            out->fsol[s0] = A->pc[A->cov[c0]].solid;
+            const piece *pc = &A->pc[A->cov[c0]];
+            out->fsol[s0] = pc->solid;
+            out->fwind[s0] = pc->sgn; /* the piece's outward normal about f's (fan_check) */
             continue;
         }
-        /* several pieces: the solids an odd number of times, ascending (at most a few) */
+        /* several pieces: each solid's pieces' turnings summed, the solids of a non-zero sum
+         * ascending (at most a few) */
         uint32_t nfs = s0;
         for (uint32_t i = c0; i < c1; i++) {
-            uint32_t so = A->pc[A->cov[i]].solid, q = s0;
+            const piece *pc = &A->pc[A->cov[i]];
+            uint32_t so = pc->solid, q = s0;
             while (q < nfs && out->fsol[q] < so) q++;
-            if (q < nfs && out->fsol[q] == so) { /* even: out */
-                memmove(out->fsol + q, out->fsol + q + 1, (nfs - q - 1) * sizeof *out->fsol);
-                nfs--;
+            if (q < nfs && out->fsol[q] == so) {
+                out->fwind[q] += pc->sgn;
                 continue;
             }
             memmove(out->fsol + q + 1, out->fsol + q, (nfs - q) * sizeof *out->fsol);
+            memmove(out->fwind + q + 1, out->fwind + q, (nfs - q) * sizeof *out->fwind);
             out->fsol[q] = so;
+            out->fwind[q] = pc->sgn;
             nfs++;
         }
-        for (uint32_t q = nfs; q < out->fsol_off[f + 1]; q++) out->fsol[q] = NONE; /* gap */
+        uint32_t w = s0;
+        for (uint32_t q = s0; q < nfs; q++) /* the sums of 0 out (a wall: both ways) */
+            if (out->fwind[q]) out->fsol[w] = out->fsol[q], out->fwind[w++] = out->fwind[q];
+        for (uint32_t q = w; q < out->fsol_off[f + 1]; q++) out->fsol[q] = NONE; /* gap */
     }
 }
 
@@ -1512,7 +1518,8 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     for (size_t f = 0; f < nf; f++)
         out->fsol_off[f + 1] = out->fsol_off[f] + (A->f_cov[f + 1] - A->f_cov[f]);
     out->fsol = mem_malloc((out->fsol_off[nf] + 1) * sizeof *out->fsol);
-    if (!out->fsol) goto done;
+    out->fwind = mem_malloc((out->fsol_off[nf] + 1) * sizeof *out->fwind);
+    if (!out->fsol || !out->fwind) goto done;
     A3_TICK("out/points used");
     if (want & ARR3_WANT_FACES) {
         used = mem_malloc((nu + 1) * sizeof *used);
@@ -1608,7 +1615,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
             uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
             out->fsol_off[f] = w;
             for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
-                out->fsol[w++] = out->fsol[i];
+                out->fsol[w] = out->fsol[i], out->fwind[w++] = out->fwind[i];
         }
         out->fsol_off[nf] = w;
     }

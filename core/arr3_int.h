@@ -72,7 +72,11 @@ typedef struct piece {
                         that normal then points out of it.  -1: the other way */
     uint8_t reached; /* goes through its plane's arrangement (a cut, a contact, a coplanar
                         piece of another solid, holes, or a surface touching itself there) */
-    uint8_t pad_[6]; /* to 64 bytes: an index times a power of two, a piece in one cache line
+    uint8_t cls;     /* its chart class (arr3_pairs.c): 2 k, plus 1 when it turns counter-
+                        clockwise about axis k, the axis of its normal's largest component */
+    uint8_t cmask;   /* bit 2 k + 1 (2 k) when it turns counter-clockwise (clockwise) about
+                        axis k, for each axis its plane is not parallel to */
+    uint8_t pad_[4]; /* to 64 bytes: an index times a power of two, a piece in one cache line
                         wherever the array starts on one */
 } piece;
 _Static_assert(sizeof(piece) == 64, "a piece is 64 bytes");
@@ -142,6 +146,11 @@ typedef struct a3 {
     size_t nsolids;
     size_t split_faces; /* input faces split into triangles */
     uint32_t ncls;      /* coplanar classes of the pieces */
+    uint64_t *selfp;    /* the pairs of one solid's pieces that meet (a surface passing through
+                           itself), ascending */
+    size_t nselfp, capselfp;
+    uint32_t *fold; /* planes where pieces of one solid overlap (arranged whole), ascending */
+    size_t nfold, capfold;
     cpt *dcp;           /* contacts of left-out faces: (piece, point), given to the piece's
                            plane once it has one */
     size_t ndcp, capdcp;
@@ -241,6 +250,8 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
  * pieces of one solid turning one way)?  Such a plane's pieces skip the plane arrangement and
  * their edges' side planes are made only when asked for (SIDE_LAZY). */
 int a3_plane_simple(const a3 *A, uint32_t P);
+/* Do pieces of one solid overlap in plane P (A->fold)?  Then all its pieces are arranged. */
+int a3_plane_fold(const a3 *A, uint32_t P);
 
 /* The side plane of the edge from point a to point b of a face on plane FP with side entry S:
  * A->pl[S], or, for S == SIDE_LAZY (a and b input vertices), that vertical plane made in *tmp.
@@ -262,6 +273,30 @@ void a3_face_normal(const a3 *A, uint32_t f, int64_t *n);
  * (lower id << 32 | higher id), sorted (arr3_pairs.c: a bounding-volume hierarchy per solid).
  * Returns 0, or -1 out of memory. */
 int a3_pairs(const a3 *A, uint64_t **out, size_t *nout);
+
+/* The chart class of a piece whose outer cycle turns sgn about normal n (piece.cls), and in
+ * *mask its piece.cmask. */
+static inline uint8_t a3_chart_class(const int64_t *n, int sgn, uint8_t *mask)
+{
+    int k = 0;
+    *mask = 0;
+    for (int t = 0; t < 3; t++) {
+        int64_t a = n[t] < 0 ? -n[t] : n[t], b = n[k] < 0 ? -n[k] : n[k];
+        if (a > b) k = t;
+        if (n[t]) *mask |= (uint8_t)(1u << (2 * t + ((n[t] > 0) == (sgn > 0))));
+    }
+    return (uint8_t)(2 * k + ((n[k] > 0) == (sgn > 0)));
+}
+
+/* Pairs of pieces of one solid (arr3_pairs.c).  Is vertex v on the outer cycle of piece P?  Is
+ * {a, b} an edge of it? */
+int a3_piece_vertex(const a3 *A, const piece *P, uint32_t v);
+int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b);
+/* Pieces p and q of one solid on one canonical plane: do they meet only in the vertices and
+ * edges they share, lying on the two sides of each shared edge (as neighbouring faces of one
+ * flat stretch of a surface do)?  Exact; 0 also for pieces with holes or of many edges (then
+ * their plane is arranged whole). */
+int a3_flat_apart(const a3 *A, uint32_t p, uint32_t q);
 
 /* ---- the stages ------------------------------------------------------------------------ */
 

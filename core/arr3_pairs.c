@@ -24,6 +24,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdio.h>
 
 #include "core/mem.h"
 #include "core/par.h"
@@ -76,16 +77,47 @@ static void spread_init(void)
 
 typedef struct builder {
     const int32_t (*bx)[6]; /* the items' boxes, by index */
-    const kv *srt;          /* (code, index) sorted by code */
+    kv *srt;                /* (code, index) sorted by code */
     uint32_t base;          /* item index i is id base + i */
+    const uint32_t *chart;  /* by id: a leaf holds one value of it only (NULL: no matter) */
     bvh *t;
 } builder;
 
+/* Of a run srt[lo .. hi) that would make a leaf, the items of the first one's chart moved to
+ * the front (in order): how many they are. */
+static size_t chart_front(builder *B, size_t lo, size_t hi)
+{
+    uint32_t c = B->chart[B->base + B->srt[lo].v];
+    kv keep[BVH_LEAF];
+    size_t nf = lo, nk = 0;
+    for (size_t i = lo; i < hi; i++) {
+        if (B->chart[B->base + B->srt[i].v] == c)
+            B->srt[nf++] = B->srt[i];
+        else
+            keep[nk++] = B->srt[i];
+    }
+    memcpy(B->srt + nf, keep, nk * sizeof *keep);
+    return nf - lo;
+}
+
 /* The node over srt[lo .. hi) at t->node[at]; returns 0.  Nodes are allocated in preorder from
- * t->nnode (room for 2 (hi - lo) was made). */
+ * t->nnode (room for 2 (hi - lo) was made).  With charts, a run that would make a leaf of
+ * pieces of several charts is cut by chart instead, so that a pair of leaves either lies in
+ * one chart or needs its pairs looked at. */
 static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
 {
     bnode *n = &B->t->node[at];
+    size_t first = hi - lo;
+    if (hi - lo <= BVH_LEAF && B->chart) first = chart_front(B, lo, hi);
+    if (first < hi - lo) {
+        uint32_t ca = (uint32_t)B->t->nnode++, cb = (uint32_t)B->t->nnode++;
+        build_node(B, ca, lo, lo + first);
+        build_node(B, cb, lo + first, hi);
+        n = &B->t->node[at];
+        n->a = ca, n->b = cb;
+        box_join(n->box, B->t->node[ca].box, B->t->node[cb].box);
+        return;
+    }
     if (hi - lo <= BVH_LEAF) {
         n->a = (uint32_t)lo;
         n->b = (uint32_t)(hi - lo) | LEAFBIT;
@@ -121,10 +153,12 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
 }
 
 /* The tree over the ids base .. base + n (n >= 1) into t, whose arrays have room for 2n nodes
- * and n items.  srt and bx are scratch for n entries (bx: the boxes, read once through boxof
- * and then in order).  Returns -1 out of memory. */
+ * and n items (its leaves each of one chart when chart, by id, is not NULL).  srt and bx are
+ * scratch for n entries (bx: the boxes, read once through boxof and then in order).  Returns -1
+ * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
-                      uint32_t base, size_t n, kv *srt, int32_t (*bx)[6], bvh *t)
+                      uint32_t base, size_t n, const uint32_t *chart, kv *srt, int32_t (*bx)[6],
+                      bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -153,7 +187,7 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         srt[i] = (kv){code, (uint32_t)i};
     }
     if (sort_kv(srt, n)) return -1;
-    builder B = {(const int32_t(*)[6])bx, srt, base, t};
+    builder B = {(const int32_t(*)[6])bx, srt, base, chart, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
     return 0;
@@ -165,6 +199,8 @@ typedef struct forest {
     const a3 *A;
     size_t ng;
     uint32_t *g_off; /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
+    const uint32_t *chart; /* by piece: its flat chart, or NONE (solids only; else NULL) */
+    uint32_t *nchart;      /* by node: the flat chart of every piece below it, or NONE */
     uint32_t *root;  /* ng: its tree's root in node[] */
     bnode *node;     /* every group's nodes: group g's from 2 g_off[g] */
     uint32_t *item;  /* every group's items: group g's at g_off[g] .. */
@@ -198,7 +234,7 @@ static void build_groups(void *ctx, size_t item, int worker)
         }
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
         bvh t = {F->node + 2 * (size_t)o, F->item + o, 0}; /* the pieces o .. o + n */
-        if (build_tree(piece_box, F->A, o, n, F->srt + o, F->bx + o, &t)) {
+        if (build_tree(piece_box, F->A, o, n, F->chart, F->srt + o, F->bx + o, &t)) {
             F->fail = 1;
             return;
         }
@@ -210,6 +246,19 @@ static void build_groups(void *ctx, size_t item, int worker)
             else
                 nd->a += 2 * o, nd->b += 2 * o;
         }
+        if (F->chart) /* children come after their parents: the nodes bottom up */
+            for (size_t i = t.nnode; i-- > 0;) {
+                const bnode *nd = &t.node[i];
+                uint32_t c;
+                if (nd->b & LEAFBIT) {
+                    c = F->chart[F->item[nd->a]];
+                    for (uint32_t k = nd->a + 1; k < nd->a + (nd->b & ~LEAFBIT); k++)
+                        if (F->chart[F->item[k]] != c) c = NONE;
+                } else {
+                    c = F->nchart[nd->a] == F->nchart[nd->b] ? F->nchart[nd->a] : NONE;
+                }
+                F->nchart[2 * (size_t)o + i] = c;
+            }
     }
 }
 
@@ -236,14 +285,786 @@ static int64_t extent(const bnode *n)
     return (int64_t)n->box[3] - n->box[0] + n->box[4] - n->box[1] + n->box[5] - n->box[2];
 }
 
-/* Item pairs of two leaves of group trees, boxes meeting: piece pairs of different solids. */
+/* ---- pairs of one solid ----------------------------------------------------------------- */
+
+int a3_piece_vertex(const a3 *A, const piece *P, uint32_t v)
+{
+    for (uint32_t x = A->pc_off[P->c0]; x < A->pc_off[P->c0 + 1]; x++)
+        if (A->pcv[x] == v) return 1;
+    return 0;
+}
+
+int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b)
+{
+    uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t u = A->pcv[o + t], w = A->pcv[o + (t + 1 < n ? t + 1 : 0)];
+        if ((u == a && w == b) || (u == b && w == a)) return 1;
+    }
+    return 0;
+}
+
+/* Does Q lie on one side of P's anchor plane but for vertices and edges of P?  Then Q meets
+ * that plane, and so P, only in P's own vertices and edges: the two meet as the neighbouring
+ * faces of a surface do (Q is planar: on one closed side of the plane, it meets it only in its
+ * boundary, the vertices on it and the edges between two of them).  1: so it does; -1: Q lies
+ * in P's plane; 0: neither. */
+static int beside(const a3 *A, const piece *P, const piece *Q)
+{
+    const int64_t *a = A->g + 3 * (size_t)P->av[0], *b = A->g + 3 * (size_t)P->av[1],
+                  *c = A->g + 3 * (size_t)P->av[2];
+    int64_t u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+            v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    i128 n[3] = {(i128)u[1] * v[2] - (i128)u[2] * v[1], (i128)u[2] * v[0] - (i128)u[0] * v[2],
+                 (i128)u[0] * v[1] - (i128)u[1] * v[0]};
+    uint32_t o = A->pc_off[Q->c0], m = A->pc_off[Q->c0 + 1] - o;
+    int side = 0, other = 0; /* other: Q touches the plane elsewhere than in P's vertices, edges */
+    uint8_t on[2] = {0, 0};   /* the first vertex on the plane, the one before */
+    for (uint32_t t = 0; t < m; t++) {
+        uint32_t w = A->pcv[o + t];
+        const int64_t *x = A->g + 3 * (size_t)w;
+        /* |n| < 2^63, |x - a| < 2^32: the sum fits 128 bits */
+        i128 s = n[0] * (x[0] - a[0]) + n[1] * (x[1] - a[1]) + n[2] * (x[2] - a[2]);
+        int sg = (s > 0) - (s < 0);
+        if (sg) {
+            if (side && sg != side) return 0;
+            side = sg;
+            on[1] = 0;
+            continue;
+        }
+        if (!a3_piece_vertex(A, P, w) || (on[1] && !a3_piece_edge(A, P, A->pcv[o + t - 1], w)))
+            other = 1;
+        if (t == 0) on[0] = 1;
+        on[1] = 1;
+    }
+    if (!side) return -1;
+    if (on[0] && on[1] && !a3_piece_edge(A, P, A->pcv[o + m - 1], A->pcv[o])) other = 1;
+    return !other;
+}
+
+/* A triangle's corner at u: its two other vertices a, b in its turning order. */
+static int corner(const a3 *A, const piece *P, uint32_t u, uint32_t *a, uint32_t *b)
+{
+    const uint32_t *v = A->pcv + A->pc_off[P->c0];
+    for (int t = 0; t < 3; t++)
+        if (v[t] == u) {
+            *a = v[(t + 1) % 3], *b = v[(t + 2) % 3];
+            return 1;
+        }
+    return 0;
+}
+
+static void cross_at(const int64_t *u, const int64_t *a, const int64_t *b, i128 *n)
+{
+    int64_t x[3] = {a[0] - u[0], a[1] - u[1], a[2] - u[2]},
+            y[3] = {b[0] - u[0], b[1] - u[1], b[2] - u[2]};
+    n[0] = (i128)x[1] * y[2] - (i128)x[2] * y[1];
+    n[1] = (i128)x[2] * y[0] - (i128)x[0] * y[2];
+    n[2] = (i128)x[0] * y[1] - (i128)x[1] * y[0];
+}
+
+static int side_of(const i128 *n, const int64_t *u, const int64_t *x)
+{
+    i128 s = n[0] * (x[0] - u[0]) + n[1] * (x[1] - u[1]) + n[2] * (x[2] - u[2]);
+    return (s > 0) - (s < 0);
+}
+
+/* Two triangles sharing only vertex u, each crossing the other's plane: both meet the line L of
+ * the two planes in a segment from u.  With nP = (a - u) x (b - u), nQ likewise and L directed
+ * along nP x nQ, P's segment runs forward when a lies above Q's plane and b below (a - u and
+ * b - u turn about nP on either side of L), backward when the other way; Q's the other way
+ * round.  Segments running opposite ways meet only in u.  1: so they do. */
+static int corners_apart(const a3 *A, const piece *P, const piece *Q, uint32_t u)
+{
+    uint32_t a, b, c, d;
+    if (!corner(A, P, u, &a, &b) || !corner(A, Q, u, &c, &d)) return 0;
+    const int64_t *g = A->g, *pu = g + 3 * (size_t)u;
+    i128 nP[3], nQ[3];
+    cross_at(pu, g + 3 * (size_t)a, g + 3 * (size_t)b, nP);
+    cross_at(pu, g + 3 * (size_t)c, g + 3 * (size_t)d, nQ);
+    int sa = side_of(nQ, pu, g + 3 * (size_t)a), sb = side_of(nQ, pu, g + 3 * (size_t)b);
+    int sc = side_of(nP, pu, g + 3 * (size_t)c), sd = side_of(nP, pu, g + 3 * (size_t)d);
+    int dp = sa > 0 && sb < 0 ? 1 : sa < 0 && sb > 0 ? -1 : 0;
+    int dq = sc > 0 && sd < 0 ? -1 : sc < 0 && sd > 0 ? 1 : 0;
+    return dp && dq && dp != dq;
+}
+
+/* Do pieces p and q of one solid certainly meet only in vertices and edges they share (as
+ * every two neighbouring faces of a surface do)?  Decided here for almost every pair of a clean
+ * surface, by the sides of one piece's vertices about the other's plane; a pair left undecided
+ * (0) goes to the cuts, which decide it exactly. */
+static int self_apart(const a3 *A, uint32_t p, uint32_t q)
+{
+    const piece *P = &A->pc[p], *Q = &A->pc[q];
+    if (P->nc != 1 || Q->nc != 1) return 0;
+    int r = beside(A, P, Q);
+    if (r < 0) return a3_flat_apart(A, p, q);
+    if (r || beside(A, Q, P) == 1) return 1;
+    uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
+    uint32_t qo = A->pc_off[Q->c0], qn = A->pc_off[Q->c0 + 1] - qo;
+    if (n != 3 || qn != 3) return 0;
+    uint32_t shared = 0, u = NONE;
+    for (uint32_t t = 0; t < 3; t++)
+        if (a3_piece_vertex(A, Q, A->pcv[o + t])) shared++, u = A->pcv[o + t];
+    return shared == 1 && corners_apart(A, P, Q, u);
+}
+
+/* Coordinates of vertex v projected along axis k, times two (so that a midpoint is exact). */
+static void proj2x(const a3 *A, uint32_t v, int k, int64_t *u)
+{
+    const int64_t *p = A->g + 3 * (size_t)v;
+    u[0] = 2 * p[(k + 1) % 3];
+    u[1] = 2 * p[(k + 2) % 3];
+}
+
+static int orient2x(const int64_t *a, const int64_t *b, const int64_t *c)
+{
+    i128 x = (i128)(b[0] - a[0]) * (c[1] - a[1]) - (i128)(b[1] - a[1]) * (c[0] - a[0]);
+    return (x > 0) - (x < 0);
+}
+
+/* Do the closed edges ab and cd (vertex ids, projected along k) meet anywhere but in an end
+ * they share? */
+static int edges_meet(const a3 *A, int k, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    int64_t pa[2], pb[2], pc[2], pd[2];
+    proj2x(A, a, k, pa), proj2x(A, b, k, pb), proj2x(A, c, k, pc), proj2x(A, d, k, pd);
+    if (a == c || a == d || b == c || b == d) { /* one shared end: beyond it only along it */
+        const int64_t *o = a == c || a == d ? pa : pb, *x = a == c || a == d ? pb : pa,
+                      *y = c == a || c == b ? pd : pc;
+        if (orient2x(o, x, y)) return 0;
+        return (i128)(x[0] - o[0]) * (y[0] - o[0]) + (i128)(x[1] - o[1]) * (y[1] - o[1]) > 0;
+    }
+    int o1 = orient2x(pa, pb, pc), o2 = orient2x(pa, pb, pd);
+    int o3 = orient2x(pc, pd, pa), o4 = orient2x(pc, pd, pb);
+    if (o1 * o2 > 0 || o3 * o4 > 0) return 0;
+    if (o1 || o2 || o3 || o4) return 1;
+    for (int t = 0; t < 2; t++) { /* on one line: do the spans overlap? */
+        int64_t l0 = pa[t] < pb[t] ? pa[t] : pb[t], h0 = pa[t] < pb[t] ? pb[t] : pa[t];
+        int64_t l1 = pc[t] < pd[t] ? pc[t] : pd[t], h1 = pc[t] < pd[t] ? pd[t] : pc[t];
+        if (h0 < l1 || h1 < l0) return 0;
+    }
+    return 1;
+}
+
+/* Is the midpoint of vertices a, b strictly inside the outer cycle of X (projected along k)?
+ * The caller knows it is on no edge of X: -1 if it is found on the line of one anyway. */
+static int mid_inside(const a3 *A, int k, uint32_t a, uint32_t b, const piece *X)
+{
+    int64_t pa[2], pb[2], m[2];
+    proj2x(A, a, k, pa), proj2x(A, b, k, pb);
+    m[0] = (pa[0] + pb[0]) / 2, m[1] = (pa[1] + pb[1]) / 2;
+    uint32_t o = A->pc_off[X->c0], n = A->pc_off[X->c0 + 1] - o;
+    int in = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        int64_t p[2], q[2];
+        proj2x(A, A->pcv[o + t], k, p);
+        proj2x(A, A->pcv[o + (t + 1 < n ? t + 1 : 0)], k, q);
+        if ((p[1] > m[1]) == (q[1] > m[1])) continue;
+        int c = orient2x(p, q, m);
+        if (!c) return -1;
+        if (q[1] > p[1] ? c > 0 : c < 0) in ^= 1;
+    }
+    return in;
+}
+
+/* Coplanar pieces of one solid: is every edge of one that is no edge of the other outside it? */
+static int mids_outside(const a3 *A, int k, const piece *P, const piece *Q)
+{
+    uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t a = A->pcv[o + t], b = A->pcv[o + (t + 1 < n ? t + 1 : 0)];
+        if (!a3_piece_edge(A, Q, a, b) && mid_inside(A, k, a, b, Q)) return 0;
+    }
+    return 1;
+}
+
+int a3_flat_apart(const a3 *A, uint32_t p, uint32_t q)
+{
+    const piece *P = &A->pc[p], *Q = &A->pc[q];
+    if (P->nc != 1 || Q->nc != 1) return 0;
+    uint32_t po = A->pc_off[P->c0], pn = A->pc_off[P->c0 + 1] - po;
+    uint32_t qo = A->pc_off[Q->c0], qn = A->pc_off[Q->c0 + 1] - qo;
+    if ((uint64_t)pn * qn > 4096) return 0; /* left to the plane's arrangement */
+    /* each piece's turning in the projection along k: its sign about its own plane (canonical
+     * or anchor), times the sign of that plane's normal along k */
+    plane3 tp, tq;
+    const plane3 *pl = a3_piece_plane(A, p, &tp), *ql = a3_piece_plane(A, q, &tq);
+    int k = 0;
+    for (int a = 1; a < 3; a++)
+        if ((pl->n[a] < 0 ? -pl->n[a] : pl->n[a]) > (pl->n[k] < 0 ? -pl->n[k] : pl->n[k])) k = a;
+    int oP = P->sgn * (pl->n[k] > 0 ? 1 : -1), oQ = Q->sgn * (ql->n[k] > 0 ? 1 : -1);
+    const uint32_t *pv = A->pcv + po, *qv = A->pcv + qo;
+    for (uint32_t i = 0; i < pn; i++) {
+        uint32_t a = pv[i], b = pv[i + 1 < pn ? i + 1 : 0];
+        for (uint32_t j = 0; j < qn; j++) {
+            uint32_t c = qv[j], d = qv[j + 1 < qn ? j + 1 : 0];
+            if ((a == c && b == d) || (a == d && b == c)) {
+                /* a shared edge: the insides of the two on its two sides */
+                if (oP == (a == c ? oQ : -oQ)) return 0;
+                continue;
+            }
+            if (edges_meet(A, k, a, b, c, d)) return 0;
+        }
+    }
+    return mids_outside(A, k, P, Q) && mids_outside(A, k, Q, P);
+}
+
+/* ---- charts: where a solid's surface lies flat --------------------------------------------
+ *
+ * A solid's pieces fall into charts: the pieces whose anchor normals have their largest
+ * component on one axis k with one sign (so each turns one way, sigma, when projected along k),
+ * joined across the twin edges between two such pieces.  A chart's projection along k counts
+ * how many of its pieces cover a point, with sign sigma: that count is the winding number about
+ * the point of the chart's boundary, the entries whose twin is not in the chart (the twin
+ * entries, one edge walked both ways, cancel).  When that boundary is a set of simple closed
+ * polygons, apart from one another, exactly one of them turning the way sigma does, the count
+ * is at most 1 everywhere: no two pieces of the chart overlap, nor touch but in vertices and
+ * edges they share (a vertex of one inside an edge of the other would leave the count 2 on one
+ * side of that edge).  Such a chart is *flat*, and its pieces are never paired with each other:
+ * on a clean surface nearly every chart is, so the pairs of one solid cost only along the
+ * charts' boundaries and where a surface really meets itself. */
+
+#define CHART_WORK 64 /* edge pairs a boundary edge may cost its chart's check, beyond 4096 */
+
+typedef struct chartjob {
+    const a3 *A;
+    const uint32_t *s_off; /* by solid: its first piece; ns + 1 */
+    uint32_t *of;          /* by piece: its chart, numbered within its solid */
+    uint32_t *nch;         /* by solid: its charts */
+    uint8_t **flat;        /* by solid: by chart, 1 when flat */
+    int fail;
+} chartjob;
+
+typedef struct bedge {
+    uint32_t a, b; /* vertex ids, a to b */
+} bedge;
+
+static int bedge_cmp(const void *x, const void *y)
+{
+    uint32_t a = ((const bedge *)x)->a, b = ((const bedge *)y)->a;
+    return (a > b) - (a < b);
+}
+
+typedef struct bseg {
+    int64_t lo[2], hi[2]; /* projected box, coordinates times two */
+    uint32_t a, b;
+} bseg;
+
+static int bseg_cmp(const void *x, const void *y)
+{
+    int64_t a = ((const bseg *)x)->lo[0], b = ((const bseg *)y)->lo[0];
+    return (a > b) - (a < b);
+}
+
+/* Turning clockwise (sigma > 0) or counter-clockwise (sigma < 0) from direction f, the class
+ * of direction d: 0 along f, then 1, 2 (opposite f), 3; within 1 and 3 by cross products. */
+static int turn_class(const int64_t *f, const int64_t *d, int sigma)
+{
+    i128 c = ((i128)f[0] * d[1] - (i128)f[1] * d[0]) * -sigma;
+    i128 t = (i128)f[0] * d[0] + (i128)f[1] * d[1];
+    return c > 0 ? 1 : c < 0 ? 3 : t > 0 ? 0 : 2;
+}
+
+/* Turning from f the way sigma says, is d1 met before d2 (1)? */
+static int turns_before(const int64_t *f, const int64_t *d1, const int64_t *d2, int sigma)
+{
+    int c1 = turn_class(f, d1, sigma), c2 = turn_class(f, d2, sigma);
+    if (c1 != c2) return c1 < c2;
+    i128 x = ((i128)d1[0] * d2[1] - (i128)d1[1] * d2[0]) * -sigma;
+    return x > 0;
+}
+
+static void dir2(const a3 *A, int k, uint32_t from, uint32_t to, int64_t *d)
+{
+    const int64_t *p = A->g + 3 * (size_t)from, *q = A->g + 3 * (size_t)to;
+    d[0] = q[(k + 1) % 3] - p[(k + 1) % 3];
+    d[1] = q[(k + 2) % 3] - p[(k + 2) % 3];
+}
+
+/* Is the chart with boundary edges e[0 .. n) (projected along k, its pieces turning sigma)
+ * flat?  Its boundary is cut into simple loops: walked edge by edge (at a vertex it passes more
+ * than once, where the chart touches itself, going on along the edge going out that bounds the
+ * same wedge of the chart: the first met turning from the way it came in, clockwise when
+ * sigma > 0, as the chart lies on each edge's left), a loop is cut off wherever the walk comes
+ * back to a vertex on it.  The count of pieces over a point is the sum of the loops' winding
+ * numbers about it, 0 or 1 for a simple loop turning the way sigma does, 0 or -1 for one turning
+ * the other way: flat when exactly one loop turns sigma's way and no two edges meet but in an
+ * end they share.  e is sorted here, its b top bit used; seg and on (each edge's place on the
+ * walk) are scratch for n. */
+#define TAKEN 0x80000000u
+static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *seg,
+                      uint32_t *on)
+{
+    if (n < 3) return 0;
+    qsort(e, n, sizeof *e, bedge_cmp);
+    for (size_t i = 0; i < n; i++) on[i] = NONE;
+    uint32_t *path = (uint32_t *)seg; /* the walk's edges (seg is not in use yet) */
+    int positive = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (e[i].b & TAKEN) continue;
+        size_t top = 0, at = i;
+        for (;;) {
+            uint32_t b = e[at].b & ~TAKEN;
+            e[at].b |= TAKEN;
+            on[at] = (uint32_t)top;
+            path[top++] = (uint32_t)at;
+            /* the edges going out of b: a run in e */
+            bedge key = {b, 0};
+            const bedge *hit = bsearch(&key, e, n, sizeof *e, bedge_cmp);
+            if (!hit) return 0; /* the boundary does not close (a bug upstream) */
+            size_t r0 = (size_t)(hit - e), r1 = r0 + 1;
+            while (r0 > 0 && e[r0 - 1].a == b) r0--;
+            while (r1 < n && e[r1].a == b) r1++;
+            for (size_t r = r0; r < r1; r++) {
+                if (on[r] == NONE) continue;
+                /* back at b: the walk from there is a loop */
+                i128 area = 0;
+                for (size_t t = on[r]; t < top; t++) {
+                    const int64_t *p = A->g + 3 * (size_t)e[path[t]].a,
+                                  *q = A->g + 3 * (size_t)(e[path[t]].b & ~TAKEN);
+                    area += (i128)p[(k + 1) % 3] * q[(k + 2) % 3] -
+                            (i128)p[(k + 2) % 3] * q[(k + 1) % 3];
+                    on[path[t]] = NONE;
+                }
+                int sg = (area > 0) - (area < 0);
+                if (!sg) return 0;
+                if (sg == sigma && ++positive > 1) return 0;
+                break;
+            }
+            /* the loop just cut off began with the edge out of b found above: the walk goes
+             * back to where it was before it */
+            while (top && on[path[top - 1]] == NONE) top--;
+            if (!top) break;
+            size_t next = SIZE_MAX;
+            int64_t f[2], d1[2], d2[2];
+            dir2(A, k, b, e[path[top - 1]].a, f); /* back along the edge that came in */
+            for (size_t r = r0; r < r1; r++) {
+                if (e[r].b & TAKEN) continue;
+                if (next == SIZE_MAX) {
+                    next = r;
+                    dir2(A, k, b, e[r].b, d1);
+                    continue;
+                }
+                dir2(A, k, b, e[r].b, d2);
+                if (turns_before(f, d2, d1, sigma)) next = r, d1[0] = d2[0], d1[1] = d2[1];
+            }
+            if (next == SIZE_MAX) return 0;
+            at = next;
+        }
+    }
+    if (positive != 1) return 0;
+    /* no two edges meet but in an end they share: a sweep along the first projected
+     * coordinate */
+    for (size_t i = 0; i < n; i++) {
+        uint32_t a = e[i].a, b = e[i].b & ~TAKEN;
+        const int64_t *p = A->g + 3 * (size_t)a, *q = A->g + 3 * (size_t)b;
+        for (int t = 0; t < 2; t++) {
+            int64_t x = p[(k + 1 + t) % 3], y = q[(k + 1 + t) % 3];
+            seg[i].lo[t] = x < y ? x : y, seg[i].hi[t] = x < y ? y : x;
+        }
+        seg[i].a = a, seg[i].b = b;
+    }
+    qsort(seg, n, sizeof *seg, bseg_cmp);
+    size_t budget = 4096 + CHART_WORK * n;
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n && seg[j].lo[0] <= seg[i].hi[0]; j++) {
+            if (!budget--) return 0;
+            if (seg[j].lo[1] > seg[i].hi[1] || seg[j].hi[1] < seg[i].lo[1]) continue;
+            if (edges_meet(A, k, seg[i].a, seg[i].b, seg[j].a, seg[j].b)) return 0;
+        }
+    return 1;
+}
+
+/* Room for n boundary edges in a solid's scratch for chart_flat. */
+typedef struct flatwork {
+    bedge *e;
+    bseg *seg;
+    uint32_t *on;
+    size_t cap;
+} flatwork;
+
+static int flatwork_room(flatwork *w, size_t n)
+{
+    if (n < w->cap) return 0;
+    size_t c = w->cap ? 2 * w->cap : 1024;
+    while (c <= n) c *= 2;
+    bedge *e = realloc(w->e, c * sizeof *e);
+    if (e) w->e = e;
+    bseg *sg = realloc(w->seg, c * sizeof *sg);
+    if (sg) w->seg = sg;
+    uint32_t *on = realloc(w->on, c * sizeof *on);
+    if (on) w->on = on;
+    if (!e || !sg || !on) return -1;
+    w->cap = c;
+    return 0;
+}
+
+/* One solid's charts being made: its pieces s0 .. s0 + n (local ids 0 .. n), its entries
+ * e0 .. e1.  Only the small arrays below are read piece by piece, never the 64-byte pieces. */
+typedef struct solchart {
+    const a3 *A;
+    uint32_t s0, n, e0, e1;
+    int tri;       /* every piece a triangle: piece i's entries are e0 + 3 i .. e0 + 3 i + 3 */
+    uint32_t *pe;  /* n + 1: piece i's entries pe[i] .. pe[i + 1) (NULL when tri) */
+    uint32_t *ep;  /* by entry - e0: its piece (NULL when tri) */
+    uint8_t *one;  /* by piece: one cycle (NULL when tri) */
+    uint8_t *cls;  /* by piece: its class (piece.cls, or a neighbour's) */
+    uint32_t *uf, *grp, *of, *cnt; /* by piece; cnt: n + 2 */
+    uint32_t stamp, m; /* the last set's stamp (grp), the charts made */
+    uint8_t *flat;     /* by chart */
+    size_t capflat;
+    flatwork w;
+} solchart;
+
+#define CHART_SPLITS 3  /* cuts into slabs of a chart that is not flat, at most */
+#define CHART_SLABS  8  /* slabs a cut makes */
+#define CHART_SMALL  64 /* pieces of a chart not halved further */
+
+static inline uint32_t piece_of(const solchart *C, uint32_t x)
+{
+    return C->tri ? (x - C->e0) / 3 : C->ep[x - C->e0];
+}
+
+static inline uint32_t ent_lo(const solchart *C, uint32_t i)
+{
+    return C->tri ? C->e0 + 3 * i : C->pe[i];
+}
+
+static inline uint32_t ent_hi(const solchart *C, uint32_t i)
+{
+    return C->tri ? C->e0 + 3 * i + 3 : C->pe[i + 1];
+}
+
+/* The entry after x in its cycle (x of local piece i). */
+static inline uint32_t ent_next(const solchart *C, uint32_t i, uint32_t x)
+{
+    if (C->tri || C->one[i]) {
+        uint32_t lo = ent_lo(C, i), hi = ent_hi(C, i);
+        return x + 1 < hi ? x + 1 : lo;
+    }
+    const a3 *A = C->A;
+    uint32_t cy = A->pc[C->s0 + i].c0;
+    while (A->pc_off[cy + 1] <= x) cy++;
+    return x + 1 < A->pc_off[cy + 1] ? x + 1 : A->pc_off[cy];
+}
+
+/* The twin of entry x as a local piece in the solid, or NONE. */
+static inline uint32_t twin_piece(const solchart *C, uint32_t x)
+{
+    uint32_t y = C->A->ptwin[x];
+    return y == NONE || y < C->e0 || y >= C->e1 ? NONE : piece_of(C, y);
+}
+
+/* The set of pieces list[0 .. n) (stamped alike in grp), flat?  -1 out of memory. */
+static int set_flat(solchart *C, const uint32_t *list, uint32_t n)
+{
+    const a3 *A = C->A;
+    uint32_t st = C->grp[list[0]];
+    size_t nb = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t i = list[t];
+        for (uint32_t x = ent_lo(C, i); x < ent_hi(C, i); x++) {
+            uint32_t q = twin_piece(C, x);
+            if (q != NONE && C->grp[q] == st) continue;
+            if (flatwork_room(&C->w, nb)) return -1;
+            C->w.e[nb++] = (bedge){A->pcv[x], A->pcv[ent_next(C, i, x)]};
+        }
+    }
+    uint32_t cl = C->cls[list[0]];
+    return chart_flat(A, C->w.e, nb, (int)(cl / 2), cl & 1 ? 1 : -1, C->w.seg, C->w.on);
+}
+
+static int settle(solchart *C, uint32_t *list, uint32_t n, int depth);
+
+/* The pieces list[0 .. n), stamped alike in grp, cut into their parts joined across twins
+ * (a counting sort by part), each settled. */
+static int settle_parts(solchart *C, uint32_t *list, uint32_t n, int depth)
+{
+    uint32_t st = C->grp[list[0]], np = 0;
+    for (uint32_t t = 0; t < n; t++) C->uf[list[t]] = list[t];
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t i = list[t];
+        for (uint32_t x = ent_lo(C, i); x < ent_hi(C, i); x++) {
+            uint32_t q = twin_piece(C, x);
+            if (q != NONE && q > i && C->grp[q] == st) a3_uf_union(C->uf, i, q);
+        }
+    }
+    /* parts numbered by their first pieces in list; cnt[] counts them */
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t i = list[t], r = a3_uf_find(C->uf, i);
+        if (r == i) C->grp[i] = np++; /* a root: its part's number (grp is re-stamped below) */
+    }
+    uint32_t *part = mem_malloc(((size_t)n + 1) * sizeof *part);
+    uint32_t *off = mem_calloc((size_t)np + 2, sizeof *off);
+    int rc = -1;
+    if (!part || !off) goto done;
+    for (uint32_t t = 0; t < n; t++) {
+        part[t] = C->grp[a3_uf_find(C->uf, list[t])];
+        off[part[t] + 2]++;
+    }
+    for (uint32_t k = 0; k < np; k++) off[k + 2] += off[k + 1];
+    uint32_t *tmp = (uint32_t *)C->cnt; /* n + 2 room */
+    for (uint32_t t = 0; t < n; t++) tmp[off[part[t] + 1]++] = list[t];
+    memcpy(list, tmp, n * sizeof *list);
+    free(part);
+    part = NULL;
+    for (uint32_t k = 0; k < np; k++) {
+        uint32_t a = off[k], b = off[k + 1];
+        C->stamp++;
+        for (uint32_t t = a; t < b; t++) C->grp[list[t]] = C->stamp;
+    }
+    for (uint32_t k = 0; k < np; k++)
+        if (settle(C, list + off[k], off[k + 1] - off[k], depth)) goto done;
+    rc = 0;
+done:
+    free(part), free(off);
+    return rc;
+}
+
+/* One set of pieces, joined across twins and stamped alike: a chart if flat (or small, or cut
+ * enough), else cut into slabs of as many pieces along its projection axis (a chart that is
+ * not flat mostly lies over itself, as a bridge over its bank) and each slab's parts settled. */
+static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
+{
+    int f = n < 2 ? 1 : set_flat(C, list, n);
+    if (f < 0) return -1;
+    if (!f && depth < CHART_SPLITS && n > CHART_SMALL) {
+        const a3 *A = C->A;
+        int k = (int)(C->cls[list[0]] / 2);
+        kv *srt = mem_malloc(((size_t)n + 1) * sizeof *srt);
+        if (!srt) return -1;
+        for (uint32_t t = 0; t < n; t++) {
+            const int32_t *b = A->pc[C->s0 + list[t]].box;
+            srt[t] = (kv){(uint64_t)((int64_t)b[k] + b[3 + k] + ((int64_t)1 << 33)), list[t]};
+        }
+        int rc = sort_kv(srt, n);
+        for (uint32_t t = 0; t < n; t++) list[t] = srt[t].v;
+        free(srt);
+        if (rc) return -1;
+        /* CHART_SLABS slabs of as many pieces, each stamped, then each one's parts */
+        uint32_t at[CHART_SLABS + 1];
+        for (uint32_t t = 0; t <= CHART_SLABS; t++) at[t] = (uint32_t)((uint64_t)n * t / CHART_SLABS);
+        for (uint32_t sl = 0; sl < CHART_SLABS; sl++) {
+            C->stamp++;
+            for (uint32_t t = at[sl]; t < at[sl + 1]; t++) C->grp[list[t]] = C->stamp;
+        }
+        for (uint32_t sl = 0; sl < CHART_SLABS; sl++)
+            if (at[sl + 1] > at[sl] &&
+                settle_parts(C, list + at[sl], at[sl + 1] - at[sl], depth + 1))
+                return -1;
+        return 0;
+    }
+    if (a3_grow(&C->flat, &C->capflat, (size_t)C->m + 1, 1)) return -1;
+    C->flat[C->m] = (uint8_t)f;
+    for (uint32_t t = 0; t < n; t++) C->of[list[t]] = C->m;
+    C->m++;
+    return 0;
+}
+
+/* One solid's charts (of[], nch, flat): each piece's class (that of its largest normal
+ * component; a piece whose class no neighbour across a twin has, a tilt of the surface's
+ * noise, takes the class of the first neighbour it may join, as it turns that way about that
+ * axis too: else it would be a chart of its own, and its neighbours' charts would gain a
+ * boundary), the parts of each class joined across twins, each part's boundary (the entries
+ * whose twins lie in another class) checked by chart_flat, and a part that is not flat settled
+ * (halved until its parts are). */
+static int solid_charts(const chartjob *j, size_t sol)
+{
+    const a3 *A = j->A;
+    solchart C = {0};
+    uint32_t s0 = j->s_off[sol], n = j->s_off[sol + 1] - s0;
+    uint32_t *list = NULL, *boff = NULL, *bx = NULL;
+    uint8_t *mask = NULL;
+    int rc = -1;
+    C.A = A, C.s0 = s0, C.n = n, C.of = j->of + s0;
+    C.e0 = A->pc_off[A->pc[s0].c0];
+    C.e1 = A->pc_off[A->pc[s0 + n - 1].c0 + A->pc[s0 + n - 1].nc];
+    C.tri = (size_t)C.e1 - C.e0 == 3 * (size_t)n; /* 3 entries or more a piece: all 3 */
+    C.cls = mem_malloc((size_t)n + 1);
+    mask = mem_malloc((size_t)n + 1);
+    C.uf = mem_malloc(((size_t)n + 1) * sizeof *C.uf);
+    C.grp = mem_malloc(((size_t)n + 1) * sizeof *C.grp);
+    C.cnt = mem_malloc(((size_t)n + 2) * sizeof *C.cnt);
+    if (!C.cls || !mask || !C.uf || !C.grp || !C.cnt) goto done;
+    if (!C.tri) {
+        C.pe = mem_malloc(((size_t)n + 1) * sizeof *C.pe);
+        C.ep = mem_malloc(((size_t)C.e1 - C.e0 + 1) * sizeof *C.ep);
+        C.one = mem_malloc((size_t)n + 1);
+        if (!C.pe || !C.ep || !C.one) goto done;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        const piece *P = &A->pc[s0 + i];
+        if (!C.tri) {
+            C.pe[i] = A->pc_off[P->c0];
+            C.one[i] = P->nc == 1;
+            for (uint32_t x = C.pe[i]; x < A->pc_off[P->c0 + P->nc]; x++) C.ep[x - C.e0] = i;
+        }
+        C.cls[i] = P->cls, mask[i] = P->cmask;
+    }
+    if (!C.tri) C.pe[n] = C.e1;
+    for (uint32_t i = 0; i < n; i++) { /* a lone class joins a neighbour's (bits 4..6, flag 8) */
+        uint32_t alone = 1, join = NONE;
+        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i) && alone; x++) {
+            uint32_t q = twin_piece(&C, x);
+            if (q == NONE) continue;
+            uint32_t cq = C.cls[q] & 7u; /* its class before this pass */
+            if (cq == (C.cls[i] & 7u))
+                alone = 0;
+            else if (join == NONE && (mask[i] >> cq & 1))
+                join = cq;
+        }
+        if (alone && join != NONE) C.cls[i] = (uint8_t)(C.cls[i] | 8u | join << 4);
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        C.cls[i] = C.cls[i] & 8 ? (uint8_t)(C.cls[i] >> 4) : (uint8_t)(C.cls[i] & 7);
+        C.uf[i] = i;
+    }
+    /* the parts: pieces of a class joined across twins; the boundary entries counted */
+    size_t nb = 0;
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
+            uint32_t q = twin_piece(&C, x);
+            if (q == NONE || C.cls[q] != C.cls[i])
+                nb++;
+            else if (q > i)
+                a3_uf_union(C.uf, i, q);
+        }
+    for (uint32_t i = 0; i < n; i++) { /* numbered by their first pieces */
+        uint32_t r = a3_uf_find(C.uf, i);
+        C.of[i] = r == i ? C.m++ : C.of[r];
+    }
+    /* each part's boundary edges (a counting sort by part), checked */
+    boff = mem_calloc((size_t)C.m + 2, sizeof *boff);
+    bx = mem_malloc((nb + 1) * sizeof *bx);
+    C.flat = mem_malloc((size_t)C.m + 1);
+    C.capflat = (size_t)C.m + 1;
+    if (!boff || !bx || !C.flat) goto done;
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
+            uint32_t q = twin_piece(&C, x);
+            if (q == NONE || C.cls[q] != C.cls[i]) boff[C.of[i] + 2]++;
+        }
+    for (uint32_t c = 0; c < C.m; c++) boff[c + 2] += boff[c + 1];
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
+            uint32_t q = twin_piece(&C, x);
+            if (q == NONE || C.cls[q] != C.cls[i]) bx[boff[C.of[i] + 1]++] = x;
+        }
+    uint32_t m0 = C.m, bad = 0;
+    for (uint32_t c = 0; c < m0; c++) {
+        uint32_t b0 = boff[c], b1 = boff[c + 1];
+        if (flatwork_room(&C.w, b1 - b0)) goto done;
+        for (uint32_t t = b0; t < b1; t++) {
+            uint32_t x = bx[t], i = piece_of(&C, x);
+            C.w.e[t - b0] = (bedge){A->pcv[x], A->pcv[ent_next(&C, i, x)]};
+        }
+        /* a part of one piece (no boundary edge shared within it) is flat */
+        C.flat[c] = b1 - b0 == 0 ? 1 : 0;
+        if (!C.flat[c]) {
+            uint32_t cl = C.cls[piece_of(&C, bx[b0])];
+            C.flat[c] = (uint8_t)chart_flat(A, C.w.e, b1 - b0, (int)(cl / 2), cl & 1 ? 1 : -1,
+                                            C.w.seg, C.w.on);
+        }
+        bad += !C.flat[c];
+    }
+    if (bad) { /* the parts that are not flat settled: their pieces listed part by part */
+        list = mem_malloc(((size_t)n + 1) * sizeof *list);
+        uint32_t *at = mem_calloc((size_t)m0 + 2, sizeof *at);
+        if (!list || !at) {
+            free(at);
+            goto done;
+        }
+        for (uint32_t i = 0; i < n; i++) at[C.of[i] + 2]++;
+        for (uint32_t c = 0; c < m0; c++) at[c + 2] += at[c + 1];
+        for (uint32_t i = 0; i < n; i++) list[at[C.of[i] + 1]++] = i;
+        C.stamp = 1;
+        for (uint32_t i = 0; i < n; i++) C.grp[i] = 0;
+        int r = 0;
+        for (uint32_t c = 0; c < m0 && !r; c++) {
+            if (C.flat[c]) continue;
+            uint32_t a = at[c], b = at[c + 1];
+            C.stamp++;
+            for (uint32_t t = a; t < b; t++) C.grp[list[t]] = C.stamp;
+            r = settle(&C, list + a, b - a, 0); /* its parts become new charts */
+        }
+        free(at);
+        if (r) goto done;
+    }
+    j->nch[sol] = C.m;
+    j->flat[sol] = C.flat;
+    C.flat = NULL;
+    rc = 0;
+done:
+    free(C.cls), free(mask), free(C.uf), free(C.grp), free(C.cnt), free(C.flat), free(list);
+    free(C.pe), free(C.ep), free(C.one), free(boff), free(bx);
+    free(C.w.e), free(C.w.seg), free(C.w.on);
+    return rc;
+}
+
+static void charts_task(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    chartjob *j = ctx;
+    if (j->fail) return;
+    if (a3_cancelled(j->A)) {
+        j->fail = 3;
+        return;
+    }
+    if (solid_charts(j, item)) j->fail = 1;
+}
+
+/* Every piece's flat chart (*chartp, by piece: an id, or NONE when its chart is not flat).
+ * -1 out of memory, -3 cancelled. */
+static int make_charts(const a3 *A, uint32_t **chartp)
+{
+    size_t n = A->npc, ns = 0;
+    uint32_t *s_off = mem_malloc((n + 2) * sizeof *s_off);
+    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, 0};
+    int rc = -1;
+    if (!s_off || !j.of) goto done;
+    for (size_t i = 0; i < n; i = a3_solid_end(A, i)) s_off[ns++] = (uint32_t)i;
+    s_off[ns] = (uint32_t)n;
+    j.nch = mem_calloc(n + 1, sizeof *j.nch); /* ns <= n */
+    j.flat = mem_calloc(n + 1, sizeof *j.flat);
+    if (!j.nch || !j.flat) goto done;
+    par_for(A->threads, ns, charts_task, &j);
+    if (j.fail) {
+        rc = j.fail == 3 ? -3 : -1;
+        goto done;
+    }
+    uint32_t base = 0;
+    for (size_t s = 0; s < ns; s++) {
+        for (uint32_t i = s_off[s]; i < s_off[s + 1]; i++)
+            j.of[i] = j.flat[s][j.of[i]] ? base + j.of[i] : NONE;
+        base += j.nch[s];
+    }
+    *chartp = j.of;
+    j.of = NULL;
+    rc = 0;
+done:
+    for (size_t s = 0; j.flat && s < ns; s++) free(j.flat[s]);
+    free(j.flat), free(j.nch), free(j.of), free(s_off);
+    return rc;
+}
+
+/* Are all the pieces below nodes x and y in one flat chart? */
+static int same_flat(const forest *F, uint32_t x, uint32_t y)
+{
+    return F->nchart && F->nchart[x] != NONE && F->nchart[x] == F->nchart[y];
+}
+
+/* Item pairs of two leaves of group trees (or of one leaf with itself), boxes meeting: piece
+ * pairs of different solids, and of one solid where they may cross (self_apart). */
 static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
 {
     const a3 *A = F->A;
     for (uint32_t i = x->a; i < x->a + (x->b & ~LEAFBIT); i++)
-        for (uint32_t j = y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
+        for (uint32_t j = x == y ? i + 1 : y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
             uint32_t p = F->item[i], q = F->item[j];
-            if (A->pc[p].solid == A->pc[q].solid || !box_meet(A->pc[p].box, A->pc[q].box)) continue;
+            if (F->chart && F->chart[p] != NONE && F->chart[p] == F->chart[q]) continue;
+            if (!box_meet(A->pc[p].box, A->pc[q].box)) continue;
+            if (A->pc[p].solid == A->pc[q].solid && (A->soup || self_apart(A, p, q))) continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
         }
     return 0;
@@ -257,6 +1078,16 @@ static int walk_pair(const forest *F, uint32_t x, uint32_t y, out64 *o, out64 *s
     while (stack->n) {
         uint64_t s = stack->v[--stack->n];
         const bnode *a = &F->node[s >> 32], *b = &F->node[(uint32_t)s];
+        if (same_flat(F, (uint32_t)(s >> 32), (uint32_t)s)) continue;
+        if (a == b) { /* a node against itself: its children each, and against each other */
+            if (is_leaf(a)) {
+                if (leaf_pairs(F, a, a, o)) return -1;
+            } else if (push64(stack, (uint64_t)a->a << 32 | a->a) ||
+                       push64(stack, (uint64_t)a->b << 32 | a->b) ||
+                       push64(stack, (uint64_t)a->a << 32 | a->b))
+                return -1;
+            continue;
+        }
         if (!box_meet(a->box, b->box)) continue;
         int la = is_leaf(a), lb = is_leaf(b);
         if (la && lb) {
@@ -358,6 +1189,18 @@ static int split_tasks(const forest *F, out64 *q, size_t want)
             uint64_t s = q->v[i];
             const bnode *a = &F->node[s >> 32], *b = &F->node[(uint32_t)s];
             int la = is_leaf(a), lb = is_leaf(b);
+            if (same_flat(F, (uint32_t)(s >> 32), (uint32_t)s)) continue;
+            if (a == b) {
+                if (!la) {
+                    grew = 1;
+                    if (push64(&nx, (uint64_t)a->a << 32 | a->a) ||
+                        push64(&nx, (uint64_t)a->b << 32 | a->b) ||
+                        push64(&nx, (uint64_t)a->a << 32 | a->b))
+                        goto fail;
+                } else if (push64(&nx, s))
+                    goto fail;
+                continue;
+            }
             if (!box_meet(a->box, b->box)) continue;
             if (la && lb) {
                 if (push64(&nx, s)) goto fail;
@@ -388,7 +1231,8 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    uint32_t *chart = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
     kv *tsrt = NULL;
@@ -404,10 +1248,21 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     if (!F.g_off) goto done;
     for (size_t i = 0; i < n; i = a3_solid_end(A, i)) F.g_off[F.ng++] = (uint32_t)i;
     F.g_off[F.ng] = (uint32_t)n;
-    if (F.ng < 2) {
-        rc = 0; /* one solid: nothing to pair */
+    if (A->soup && F.ng < 2) {
+        rc = 0; /* one face: nothing to pair */
         goto done;
     }
+    if (!A->soup) { /* the solids' flat charts, whose pieces are never paired together */
+        if ((rc = make_charts(A, &chart)) != 0) {
+            if (rc != -3) rc = -1;
+            goto done;
+        }
+        F.chart = chart;
+        F.nchart = mem_malloc(2 * n * sizeof *F.nchart);
+        if (!F.nchart) goto done;
+    }
+    rc = -1;
+    A3_TICK("p/charts");
     F.root = mem_malloc(F.ng * sizeof *F.root);
     F.node = mem_malloc(2 * n * sizeof *F.node); /* pages of unused room are never touched */
     F.item = mem_malloc(n * sizeof *F.item);
@@ -420,18 +1275,23 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     if (F.fail) goto done;
     free(F.srt);
     F.srt = NULL;
+    A3_TICK("p/trees");
     /* the top tree over the groups, walked against itself (F.bx has room for its boxes) */
     tsrt = mem_malloc(F.ng * sizeof *tsrt);
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
     if (!tsrt || !T.node || !T.item) goto done;
-    if (build_tree(group_box, &F, 0, F.ng, tsrt, F.bx, &T)) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, NULL, tsrt, F.bx, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;
     for (size_t i = 0; i < gp.n; i++)
         if (push64(&q, (uint64_t)F.root[gp.v[i] >> 32] << 32 | F.root[(uint32_t)gp.v[i]]))
             goto done;
+    if (!A->soup) /* each solid against itself, but for its flat charts */
+        for (size_t g = 0; g < F.ng; g++)
+            if (push64(&q, (uint64_t)F.root[g] << 32 | F.root[g])) goto done;
+    A3_TICK("p/top");
     if (split_tasks(&F, &q, (size_t)A->threads * 64)) goto done;
     j.task = q.v;
     j.out = mem_calloc(q.n + 1, sizeof *j.out);
@@ -440,6 +1300,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     par_for(A->threads, q.n, walk_task, &j);
     if (j.fail == 3) rc = -3;
     if (j.fail) goto done;
+    A3_TICK("p/walk");
     size_t total = 0;
     for (size_t i = 0; i < q.n; i++) total += j.out[i].n;
     all.v = mem_malloc((total + 1) * sizeof *all.v);
@@ -466,6 +1327,8 @@ done:
     free(T.node);
     free(T.item);
     free(F.g_off);
+    free(chart);
+    free(F.nchart);
     free(F.root);
     free(F.node);
     free(F.item);

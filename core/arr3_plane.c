@@ -831,6 +831,7 @@ static int reached_pieces(pwork *w, pfaces *F)
     memset(w->reached, 1, m);
     if (!m) return 0;
     const piece *p0 = &A->pc[A->pp[o]];
+    if (a3_plane_fold(A, P)) return 0; /* pieces of one solid overlap: all reached */
     for (uint32_t i = 0; i < m; i++) {
         const piece *pc = &A->pc[A->pp[o + i]];
         if (pc->solid != p0->solid || pc->sgn != p0->sgn) return 0; /* all reached */

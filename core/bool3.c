@@ -42,9 +42,63 @@ int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
 
 /* The walk over the units (lar3.u_off): a unit's faces separate the same two cells and have the
  * same solids, so the walk crosses units, not faces. */
+/* The walk over the units with winding numbers (lar3.fwind): a unit's first side is
+ * ucell[2u + 1], its second ucell[2u]; crossing from the first to the second goes along its
+ * first face's normal unless that face is reversed (frev), and changes each solid's winding
+ * number by -fwind along the normal. */
+static int membership_wind(const lar3 *c, member_rows *rows, uint32_t *bad_face,
+                           void (*tick)(void *udata, double f), void *udata)
+{
+    size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
+    uint32_t *toff = mem_malloc((nu + 2) * sizeof *toff);
+    uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
+    int32_t *dw = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *dw);
+    uint32_t *aoff = mem_calloc(nn + 2, sizeof *aoff);
+    uint32_t *nb = mem_malloc((2 * nu + 1) * sizeof *nb),
+             *el = mem_malloc((2 * nu + 1) * sizeof *el);
+    int8_t *dir = mem_malloc(2 * nu + 1);
+    int rc = -1;
+    *bad_face = UINT32_MAX;
+    memset(rows, 0, sizeof *rows);
+    if (!toff || !tags || !dw || !aoff || !nb || !el || !dir) goto done;
+    toff[0] = 0;
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t w = toff[u], f = c->u_off[u];
+        if (f < c->u_off[u + 1])
+            for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
+                if (c->fsol[j] < ns) {
+                    tags[w] = c->fsol[j]; /* ascending, each once (arr3) */
+                    dw[w++] = c->frev[f] ? c->fwind[j] : -c->fwind[j];
+                }
+        toff[u + 1] = w;
+    }
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t a = c->ucell[2 * u], b = c->ucell[2 * u + 1];
+        if (a > nc || b > nc) goto done;
+        if (a != b) aoff[a + 2]++, aoff[b + 2]++;
+    }
+    for (size_t k = 0; k < nn; k++) aoff[k + 2] += aoff[k + 1];
+    for (size_t u = 0; u < nu; u++) {
+        uint32_t second = c->ucell[2 * u], first = c->ucell[2 * u + 1];
+        if (first == second) continue;
+        nb[aoff[first + 1]] = second, el[aoff[first + 1]] = (uint32_t)u;
+        dir[aoff[first + 1]++] = 1;
+        nb[aoff[second + 1]] = first, el[aoff[second + 1]] = (uint32_t)u;
+        dir[aoff[second + 1]++] = -1;
+    }
+    uint32_t bad = UINT32_MAX;
+    rc = member_walk_wind(nn, (uint32_t)nc, aoff, nb, el, dir, toff, tags, dw, rows, &bad, tick,
+                          udata, NULL);
+    if (bad != UINT32_MAX) *bad_face = c->u_off[bad];
+done:
+    free(toff), free(tags), free(dw), free(aoff), free(nb), free(el), free(dir);
+    return rc;
+}
+
 static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face,
                             void (*tick)(void *udata, double f), void *udata)
 {
+    if (c->fwind && c->frev) return membership_wind(c, rows, bad_face, tick, udata);
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
     uint32_t *toff = mem_malloc((nu + 2) * sizeof *toff);
     uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
@@ -152,16 +206,32 @@ done:
     return rc;
 }
 
+int bool3_inside(int32_t w, int fill)
+{
+    return fill == BOOL3_FILL_NONZERO ? w != 0 : fill == BOOL3_FILL_ODD ? (w & 1) != 0 : w > 0;
+}
+
 int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r)
+{
+    return bool3_select_fill(c, rows, e, BOOL3_FILL_POSITIVE, r);
+}
+
+int bool3_select_fill(const lar3 *c, const member_rows *rows, const bool_expr *e, int fill,
+                      bool3_result *r)
 {
     size_t nc = c->nc;
     uint8_t *sel = mem_calloc(nc + 1, 1);
+    size_t most = 0;
+    for (size_t k = 0; k < nc; k++)
+        if (rows->off[k + 1] - rows->off[k] > most) most = rows->off[k + 1] - rows->off[k];
+    uint32_t *inside = mem_malloc((most + 1) * sizeof *inside);
     uint32_t *minus = mem_malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = mem_malloc((c->nf + 1) * sizeof *plus);
     bool_tree t = {0};
     int rc = -1, tree = 0;
     memset(r, 0, sizeof *r);
-    if (!sel || !minus || !plus || (!(c->u_off && c->ucell) && face_sides(c, minus, plus)))
+    if (!sel || !inside || !minus || !plus ||
+        (!(c->u_off && c->ucell) && face_sides(c, minus, plus)))
         goto done;
     if (bool_tree_build(e, c->nsolids, &t)) goto done;
     tree = 1;
@@ -169,8 +239,15 @@ int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, boo
     r->faces = mem_malloc((c->nf + 1) * sizeof *r->faces);
     if (!r->cells || !r->faces) goto done;
     for (size_t k = 0; k < nc; k++) {
-        sel[k] =
-            (uint8_t)bool_tree_eval(&t, rows->idx + rows->off[k], rows->off[k + 1] - rows->off[k]);
+        const uint32_t *in = rows->idx + rows->off[k];
+        size_t nin = rows->off[k + 1] - rows->off[k];
+        if (rows->wind) { /* the solids the cell is inside of, by the fill rule */
+            size_t m = 0;
+            for (size_t i = 0; i < nin; i++)
+                if (bool3_inside(rows->wind[rows->off[k] + i], fill)) inside[m++] = in[i];
+            in = inside, nin = m;
+        }
+        sel[k] = (uint8_t)bool_tree_eval(&t, in, nin);
         if (sel[k]) {
             r->cells[r->ncells++] = (uint32_t)k;
             r->volume += c->cvol[k];
@@ -197,6 +274,7 @@ done:
     if (rc) bool3_result_free(r);
     if (tree) bool_tree_free(&t);
     free(sel);
+    free(inside);
     free(minus);
     free(plus);
     return rc;

@@ -1,11 +1,14 @@
 /* bool3.h — Boolean chains of a 3D arrangement (issue "Boolean chains"): which input solids
  * each cell lies in, and the cells and boundary of any Boolean expression of the solids.
  *
- * Membership is exact and needs no ray: the exterior cell lies in no solid, and crossing a face
- * goes into or out of exactly the solids whose surface holds that face (lar3.fsol: the input
- * faces covering it, by a point strictly inside the face, counted modulo 2 per solid).  A walk
- * over the cells through their faces, from the exterior, so gives every cell's membership; a
- * cell reached twice with two different memberships would be a broken complex, and is reported.
+ * Membership is exact and needs no ray: every solid's winding number is 0 in the exterior cell,
+ * and crossing a face changes the winding numbers of the solids whose surface holds it by
+ * their faces over it, counted with the way they turn (lar3.fsol, lar3.fwind).  A walk over
+ * the cells through their faces, from the exterior, so gives every cell's winding numbers; a
+ * cell reached twice with two different rows would be a broken complex, and is reported.  A
+ * cell lies in a solid by a fill rule on its winding number (positive by default, as a solid
+ * turned outward winds 1 inside; nonzero; odd).  Without fwind (a lar3 made by hand) the
+ * faces' solids are toggled (the parity rule).
  * This is the parity test along a path of cells instead of along a ray: it never meets an edge
  * or a vertex, since it crosses faces only, each at a point of its interior.
  *
@@ -42,9 +45,16 @@ typedef struct bool3_result {
     double volume;  /* of the selected cells */
 } bool3_result;
 
+/* The fill rules: where a solid's inside is, by its winding number w. */
+enum { BOOL3_FILL_POSITIVE = 0 /* w > 0 */, BOOL3_FILL_NONZERO /* w != 0 */, BOOL3_FILL_ODD };
+int bool3_inside(int32_t w, int fill);
+
 /* The cells where e (checked for c->nsolids inputs) is 1, and their boundary.  0 or -1
- * (out of memory; *r then empty). */
+ * (out of memory; *r then empty).  With winding numbers in rows (rows->wind), a cell is in a
+ * solid by the positive rule; bool3_select_fill takes the rule. */
 int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r);
+int bool3_select_fill(const lar3 *c, const member_rows *rows, const bool_expr *e, int fill,
+                      bool3_result *r);
 
 void bool3_result_free(bool3_result *r);
 

@@ -21,6 +21,8 @@
 typedef struct member_rows {
     uint32_t *off; /* n + 1: the row of cell k is idx[off[k] .. off[k+1]), ascending */
     uint32_t *idx;
+    int32_t *wind; /* NULL, or with member_walk_wind: the winding number of each idx entry
+                      (never 0: an input the cell's winding number is 0 for is not listed) */
 } member_rows;
 
 /* The walk over n cells from cell root (its row empty).  Cell u's neighbours are
@@ -38,6 +40,18 @@ int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t
                    const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
                    member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
                    void *udata, const atomic_int *cancel);
+
+/* The walk with winding numbers (issue "every surface by winding number"): crossing element
+ * x from the cell on its first side to the one on its second changes the winding number of
+ * input tags[i] by dw[i] (toff[x] <= i < toff[x + 1], tags ascending, each once); dir[i]
+ * (by neighbour entry, as nb and el) is +1 when cell u sees its neighbour across el[i] on that
+ * element's second side, -1 on its first.  A cell's row lists the inputs of non-zero winding
+ * number, ascending, with those numbers in rows->wind.  Returns as member_walk_ex. */
+int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                     const uint32_t *el, const int8_t *dir, const uint32_t *toff,
+                     const uint32_t *tags, const int32_t *dw, member_rows *rows,
+                     uint32_t *bad_el, void (*tick)(void *udata, double f), void *udata,
+                     const atomic_int *cancel);
 
 void member_rows_free(member_rows *r);
 

@@ -128,7 +128,8 @@ STRESS ?= 1000
 BOOL2_STRESS ?= 20
 stress: deps
 	@$(MAKE) --no-print-directory tests
-	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d test_torture
+	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d test_torture \
+	    test_winding3d t_winding3d
 	@CELLAR_STRESS=$(BOOL2_STRESS) tests/run.sh $(BUILD) test_bool2_geos
 
 bench: deps

@@ -636,7 +636,6 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "check", 1);
     ms_check = ms_now() - t_check;
-    warn_finish(w);
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
     else {
@@ -655,6 +654,20 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
+    for (size_t k = 0; k < c.nselfx; k++) { /* the surfaces that pass through themselves */
+        const arr3_selfx *x = &c.selfx[k];
+        w->total++;
+        if (w->n < SOLIDS_MAX_WARNINGS - 1) {
+            snprintf(w->msg[w->n], WARN_LEN,
+                     "solids[%u]: the surface passes through itself: %zu pair%s of its faces "
+                     "cross or overlap, the first faces %u and %u near (%.9g, %.9g, %.9g)",
+                     x->solid, x->pairs, x->pairs == 1 ? "" : "s", x->fa, x->fb, x->at[0],
+                     x->at[1], x->at[2]);
+            w->ptr[w->n] = w->msg[w->n];
+            w->n++;
+        }
+    }
+    warn_finish(w);
     if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
     c.stats.ms_check = ms_check;
     c.stats.ms_total += ms_check;

@@ -7,10 +7,12 @@
  *                                    the same for the request {"kind":"svg","svg":<the file>,
  *                                    "options":{...}} (the flags set options; --options gives
  *                                    the others)
- *   cellar solids A.obj B.off ... [--faces] [--precision X] [--options JSON]
+ *   cellar solids A.obj B.off ... [--faces] [--groups] [--precision X] [--options JSON]
  *                                    the same for the request {"kind":"solids","solids":[...]}
  *                                    of the solids read from the files (.obj or .off by the
- *                                    extension, "-": standard input as OBJ), or with --faces
+ *                                    extension, "-": standard input as OBJ; a solid per object
+ *                                    "o" of an OBJ file, and with --groups per group "g"), or
+ *                                    with --faces
  *                                    {"kind":"solids","faces":{...}}: all their faces as one
  *                                    soup; --format obj writes the cells as a Wavefront OBJ
  *   cellar gen lines N SCALING SEED  N random segments, as the seeds' randomLines(N, scaling)
@@ -69,12 +71,15 @@ static const char usage_text[] =
     "             [--keep-dangling] [--flatten-tolerance X] [--options JSON]\n"
     "                                  the complex of an SVG drawing (\"-\": standard input):\n"
     "                                  runs {\"kind\":\"svg\",\"svg\":...,\"options\":...}\n"
-    "  cellar solids A.obj B.off ... [--faces] [--precision X] [--op OP] [--options JSON]\n"
-    "                                  the arrangement of the solids in the files (Wavefront\n"
+    "  cellar solids A.obj B.off ... [--faces] [--groups] [--precision X] [--op OP]\n"
+    "               [--options JSON]   the arrangement of the solids in the files (Wavefront\n"
     "                                  OBJ or OFF by the extension, \"-\": OBJ on standard "
     "input),\n"
-    "                                  each a closed surface: runs {\"kind\":\"solids\",\n"
-    "                                  \"solids\":[...]}; --faces: all their faces as one soup\n"
+    "                                  each a closed surface (it may pass through itself): a\n"
+    "                                  solid per OFF file and per object \"o\" of an OBJ file\n"
+    "                                  (--groups: per group \"g\" too); runs {\"kind\":\n"
+    "                                  \"solids\",\"solids\":[...]}; --faces: all their faces\n"
+    "                                  as one soup\n"
     "\n"
     "options:\n"
     "  --threads N       worker threads of the core (default 0: one per CPU)\n"
@@ -556,6 +561,7 @@ typedef struct svg_flags {
     double precision, tolerance; /* 0: not given */
     const char *first;           /* the first svg-only flag given (for "is for svg" errors) */
     int faces;                   /* solids --faces */
+    int groups;                  /* solids --groups: each "g" of an OBJ file a solid too */
     const char *op;              /* solids --op: a name, or a JSON expression tree */
 } svg_flags;
 
@@ -712,8 +718,9 @@ static int solid_format(const char *path)
 static int solids_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
                           int threads, const out_format *of)
 {
-    size_t n = npos > 1 ? (size_t)npos - 1 : 0, blen = 0, outlen;
+    size_t n = npos > 1 ? (size_t)npos - 1 : 0, nfiles = n, blen = 0, outlen, cap = 0;
     solid *sv = NULL;
+    size_t *from = NULL; /* by solid: the file it comes from */
     char *body = NULL, *out = NULL, rerr[256];
     json_t *opts = NULL, *op = NULL;
     json_error_t je;
@@ -741,24 +748,39 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         fprintf(stderr, "cellar: out of memory\n");
         goto out;
     }
-    sv = calloc(n, sizeof *sv);
-    if (!sv) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
-    for (size_t i = 0; i < n; i++) {
+    /* a solid per OFF file, and per object of an OBJ file ("o"; with --groups "g" too) */
+    n = 0;
+    for (size_t i = 0; i < nfiles; i++) {
         const char *path = pos[i + 1];
-        size_t len;
+        size_t len, np = 1;
         char *text = read_all(path, &len);
+        solid one, *parts = &one;
         int r;
         if (!text) goto out;
-        r = solid_format(path) == 2 ? solid_read_off(text, len, &sv[i], rerr, sizeof rerr)
-                                    : solid_read_obj(text, len, &sv[i], rerr, sizeof rerr);
+        r = solid_format(path) == 2
+                ? solid_read_off(text, len, &one, rerr, sizeof rerr)
+                : solid_read_obj_parts(text, len, fl->groups, &parts, &np, rerr, sizeof rerr);
         free(text);
         if (r != 0) {
             fprintf(stderr, "cellar: %s: %s\n", strcmp(path, "-") ? path : "standard input", rerr);
             goto out;
         }
+        if (n + np > cap) {
+            size_t c = 2 * (n + np) + 4;
+            solid *x = realloc(sv, c * sizeof *x);
+            size_t *y = x ? realloc(from, c * sizeof *y) : NULL;
+            if (x) sv = x;
+            if (y) from = y;
+            if (!x || !y) {
+                for (size_t k = 0; k < np; k++) solid_free(&parts[k]);
+                if (parts != &one) free(parts);
+                fprintf(stderr, "cellar: out of memory\n");
+                goto out;
+            }
+            cap = c;
+        }
+        for (size_t k = 0; k < np; k++) sv[n] = parts[k], from[n++] = i;
+        if (parts != &one) free(parts);
     }
     if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
         op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
@@ -827,7 +849,7 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         /* name the file of "solids[i]..." too */
         if (sscanf(err.msg, "solids[%zu]%n", &i, &k) == 1 && k > 0 && i < n)
             fprintf(stderr, "cellar: %s (solids[%zu] is %s)\n", err.msg, i,
-                    strcmp(pos[i + 1], "-") ? pos[i + 1] : "standard input");
+                    strcmp(pos[from[i] + 1], "-") ? pos[from[i] + 1] : "standard input");
         else
             fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
@@ -839,6 +861,7 @@ out:
     free(out);
     for (size_t i = 0; sv && i < n; i++) solid_free(&sv[i]);
     free(sv);
+    free(from);
     json_decref(op);
     json_decref(opts);
     return rc;
@@ -905,6 +928,10 @@ int main(int argc, char **argv)
         }
         if (strcmp(a, "--faces") == 0) {
             fl.faces = 1;
+            continue;
+        }
+        if (strcmp(a, "--groups") == 0) {
+            fl.groups = 1;
             continue;
         }
         if (strcmp(a, "--quiet") == 0 || strcmp(a, "--progress") == 0) {
@@ -990,6 +1017,8 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for the svg and solids commands", "--precision");
     } else if (fl.faces && strcmp(cmd, "solids") != 0) {
         rc = usage_error("%s is for the solids command", "--faces");
+    } else if (fl.groups && strcmp(cmd, "solids") != 0) {
+        rc = usage_error("%s is for the solids command", "--groups");
     } else if (of.first && of.kind != 1) {
         rc = usage_error("%s is for --format svg", of.first);
     } else if (of.cells && of.kind != 2) {

@@ -2178,7 +2178,8 @@ typedef struct cutout {
     size_t nmet, capmet;
     size_t npairs; /* pairs that meet */
     uint64_t *self; /* the pairs of one solid that meet (cross, or overlap in a plane) */
-    size_t nself, capself;
+    uint32_t *selfpt; /* by such pair: a point where they meet (NONE: overlapping in a plane) */
+    size_t nself, capself, capselfpt;
     uint32_t *fold; /* planes where pieces of one solid overlap: arranged whole */
     size_t nfold, capfold;
     int rc;        /* 0, -1 out of memory, -3 cancelled */
@@ -2375,12 +2376,16 @@ static int shared_part(const a3 *A, uint32_t a, uint32_t b, uint32_t p, uint32_t
 
 /* A pair that meets: both pieces reached; a pair of one solid listed (its surface passes
  * through itself there). */
-static int pair_met(const a3 *A, cutout *o, uint32_t a, uint32_t b)
+static int pair_met(const a3 *A, cutout *o, uint32_t a, uint32_t b, uint32_t at)
 {
     o->npairs++;
-    if (A->pc[a].solid == A->pc[b].solid &&
-        A3_PUSH(o->self, o->nself, o->capself, (uint64_t)a << 32 | b))
-        return -1;
+    if (A->pc[a].solid == A->pc[b].solid) {
+        size_t n = o->nself;
+        if (A3_PUSH(o->self, o->nself, o->capself, (uint64_t)a << 32 | b) ||
+            a3_grow(&o->selfpt, &o->capselfpt, n + 1, sizeof *o->selfpt))
+            return -1;
+        o->selfpt[n] = at;
+    }
     return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
                                                                                             : 0;
 }
@@ -2391,11 +2396,11 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
     size_t ncs = o->ncs, ncp = o->ncp;
     int self = A->pc[a].solid == A->pc[b].solid;
     if (pa == pb) { /* coplanar, boxes meeting: both go through their plane's arrangement */
-        if (!self) return pair_met(A, o, a, b);
+        if (!self) return pair_met(A, o, a, b, NONE);
         /* of one solid: only where they overlap or touch elsewhere than as neighbours, and
          * then the plane is arranged whole (its pieces are no longer apart) */
         if (a3_flat_apart(A, a, b)) return 0;
-        return A3_PUSH(o->fold, o->nfold, o->capfold, pa) ? -1 : pair_met(A, o, a, b);
+        return A3_PUSH(o->fold, o->nfold, o->capfold, pa) ? -1 : pair_met(A, o, a, b, NONE);
     }
     i128 d[3];
     cross_ll(A->pl[pa].n, A->pl[pb].n, d);
@@ -2430,7 +2435,7 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
             j++;
     }
     if (o->ncs == ncs && o->ncp == ncp) return 0;
-    return pair_met(A, o, a, b);
+    return pair_met(A, o, a, b, o->ncs > ncs ? o->cs[ncs].p0 : o->cp[ncp].p);
 }
 
 static void cut_chunk(void *ctx, size_t item, int worker)
@@ -2453,6 +2458,7 @@ static void cut_chunk(void *ctx, size_t item, int worker)
 static void cutout_free(cutout *o)
 {
     free(o->self);
+    free(o->selfpt);
     free(o->fold);
     free(o->met);
     free(o->pt);
@@ -2614,6 +2620,9 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         }
         for (size_t i = 0; i < o->ncp; i++)
             if (o->cp[i].p & CUT_LOCAL) map[o->cp[i].p & ~CUT_LOCAL] = 0;
+        for (size_t i = 0; i < o->nself; i++)
+            if (o->selfpt[i] != NONE && (o->selfpt[i] & CUT_LOCAL))
+                map[o->selfpt[i] & ~CUT_LOCAL] = 0;
         for (size_t i = 0; i < o->npt; i++) {
             if (map[i] == NONE) continue;
             const xpt *p = &o->pt[i];
@@ -2633,8 +2642,13 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         for (size_t i = 0; i < o->ncp; i++)
             if (add_contact(A, o->cp[i].plane, merged_id(map, o->cp[i].p))) goto done;
         for (size_t i = 0; i < o->nmet; i++) A->pc[o->met[i]].reached = 1;
-        for (size_t i = 0; i < o->nself; i++)
-            if (A3_PUSH(A->selfp, A->nselfp, A->capselfp, o->self[i])) goto done;
+        for (size_t i = 0; i < o->nself; i++) {
+            size_t k = A->nselfp;
+            if (A3_PUSH(A->selfp, A->nselfp, A->capselfp, o->self[i]) ||
+                a3_grow(&A->selfpt, &A->capselfpt, k + 1, sizeof *A->selfpt))
+                goto done;
+            A->selfpt[k] = o->selfpt[i] == NONE ? NONE : merged_id(map, o->selfpt[i]);
+        }
         for (size_t i = 0; i < o->nfold; i++)
             if (A3_PUSH(A->fold, A->nfold, A->capfold, o->fold[i])) goto done;
         A->st->pairs_meeting += o->npairs;
@@ -3231,6 +3245,7 @@ static void a3_free(a3 *A)
     free(A->pc);
     free(A->dcp);
     free(A->selfp);
+    free(A->selfpt);
     free(A->fold);
     free(A->pc_off);
     free(A->pcv);
@@ -3259,6 +3274,41 @@ static void a3_free(a3 *A)
     free(A->f_unit);
     free(A->f_out);
     free(A->etwin);
+}
+
+/* The solids whose surfaces pass through themselves, from the pairs of one solid that met
+ * (their order is the pairs', so the first is the same on any number of threads).  -1 out of
+ * memory. */
+static int self_report(const a3 *A, lar3 *out)
+{
+    for (size_t i = 0; i < A->nselfp; i++) {
+        uint32_t a = (uint32_t)(A->selfp[i] >> 32), b = (uint32_t)A->selfp[i];
+        uint32_t s = A->pc[a].solid;
+        size_t k = 0;
+        while (k < out->nselfx && out->selfx[k].solid != s) k++;
+        if (k < out->nselfx) {
+            out->selfx[k].pairs++;
+            continue;
+        }
+        arr3_selfx *x = realloc(out->selfx, (k + 1) * sizeof *x);
+        if (!x) return -1;
+        out->selfx = x;
+        x += k;
+        x->solid = s, x->pairs = 1;
+        x->fa = A->pc[a].face - out->solid_face_off[s];
+        x->fb = A->pc[b].face - out->solid_face_off[s];
+        uint32_t p = A->selfpt[i];
+        if (p == NONE) p = A->pcv[A->pc_off[A->pc[a].c0]]; /* overlapping: a vertex of one */
+        for (int t = 0; t < 3; t++) x->at[t] = ((double)A->oi[t] + A->pt[p].x[t]) * A->step;
+        out->nselfx = k + 1;
+    }
+    /* ascending by solid */
+    for (size_t i = 1; i < out->nselfx; i++)
+        for (size_t j = i; j > 0 && out->selfx[j - 1].solid > out->selfx[j].solid; j--) {
+            arr3_selfx t = out->selfx[j];
+            out->selfx[j] = out->selfx[j - 1], out->selfx[j - 1] = t;
+        }
+    return 0;
 }
 
 int arr3_build(const solid *solids, size_t ns, int soup, const arr3_opts *opts, lar3 *out,
@@ -3321,6 +3371,7 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     if (r) goto oom;
     free(pairs);
     pairs = NULL;
+    if (A.nselfp && self_report(&A, out)) goto oom;
     out->stats.cuts = A.ncs / 2;
     A3_TICK("cuts");
     if (dedup_cut_points(&A, &ps) || plane_inputs(&A) || stage_sides(&A)) goto oom;
@@ -3387,6 +3438,7 @@ void lar3_free(lar3 *c)
     free(c->fsol_off);
     free(c->fsol);
     free(c->fwind);
+    free(c->selfx);
     free(c->u_off);
     free(c->ucell);
     free(c->frev);

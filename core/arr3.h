@@ -89,6 +89,15 @@ typedef struct arr3_stats {
     double ms_total;   /* the arrangement; callers add their check and Boolean */
 } arr3_stats;
 
+/* A solid whose surface passes through itself (or overlaps itself): how many pairs of its
+ * pieces cross or overlap, the first pair's input faces (indices within the solid) and a point
+ * where they meet. */
+typedef struct arr3_selfx {
+    uint32_t solid, fa, fb;
+    size_t pairs;
+    double at[3];
+} arr3_selfx;
+
 /* The 3-complex.  Face f's cycles are fc[fc_off[f] .. fc_off[f+1]), the first its outer cycle
  * (counter-clockwise seen from the tip of its normal), the others holes (clockwise); cycle c is
  * cyc[cyc_off[c] .. cyc_off[c+1]).  Signed indices are ±(i+1). */
@@ -135,6 +144,8 @@ typedef struct lar3 {
     uint32_t *u_off; /* nunit + 1 */
     uint32_t *ucell; /* 2 nunit */
     uint8_t *frev;   /* nf */
+    arr3_selfx *selfx; /* the solids that pass through themselves, ascending */
+    size_t nselfx;
     arr3_stats stats;
 } lar3;
 

@@ -147,8 +147,9 @@ typedef struct a3 {
     size_t split_faces; /* input faces split into triangles */
     uint32_t ncls;      /* coplanar classes of the pieces */
     uint64_t *selfp;    /* the pairs of one solid's pieces that meet (a surface passing through
-                           itself), ascending */
-    size_t nselfp, capselfp;
+                           itself), in pair order */
+    uint32_t *selfpt;   /* by such pair: a point where they meet, or NONE (overlapping) */
+    size_t nselfp, capselfp, capselfpt;
     uint32_t *fold; /* planes where pieces of one solid overlap (arranged whole), ascending */
     size_t nfold, capfold;
     cpt *dcp;           /* contacts of left-out faces: (piece, point), given to the piece's

@@ -887,6 +887,59 @@ fail:
 
 /* ---- check: volume -------------------------------------------------------------------- */
 
+/* The area of face f's outer cycle (its Newell normal's length, halved). */
+static double outer_area(const ck *c, size_t f)
+{
+    const solid *s = c->s;
+    uint32_t lo = s->cyc_off[s->face_off[f]], hi = s->cyc_off[s->face_off[f] + 1];
+    const double *o = vert(c, s->cyc[lo]);
+    double n[3] = {0, 0, 0};
+    for (uint32_t i = lo; i < hi; i++) {
+        const double *x = vert(c, s->cyc[i]), *y = vert(c, s->cyc[i + 1 < hi ? i + 1 : lo]);
+        double dx[3], dy[3], t[3];
+        sub3(x, o, dx);
+        sub3(y, o, dy);
+        cross3(dx, dy, t);
+        for (int a = 0; a < 3; a++) n[a] += t[a];
+    }
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
+}
+
+/* Is some part of the surface (faces joined across paired edges) thicker than the precision,
+ * its own volume under c->flip against its area?  (A solid whose parts' volumes cancel, one
+ * turned inside out beside another, is no flat solid: its winding numbers are -1 and 1.)
+ * -1 out of memory. */
+static int some_part_thick(const ck *c)
+{
+    const solid *s = c->s;
+    size_t nf = s->nf;
+    uint32_t *uf = mem_malloc((nf + 1) * sizeof *uf);
+    double *vol = mem_calloc(nf + 1, sizeof *vol), *area = mem_calloc(nf + 1, sizeof *area);
+    int rc = -1;
+    if (!uf || !vol || !area) goto done;
+    for (size_t f = 0; f < nf; f++) uf[f] = (uint32_t)f;
+    for (size_t e = 0; e < c->npair; e++) {
+        const half *h = &c->he[c->pair[e]];
+        uint32_t a = h[0].face, b = h[1].face;
+        while (uf[a] != a) a = uf[a] = uf[uf[a]];
+        while (uf[b] != b) b = uf[b] = uf[uf[b]];
+        if (a != b) uf[a > b ? a : b] = a < b ? a : b;
+    }
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t r = (uint32_t)f;
+        while (uf[r] != r) r = uf[r];
+        double v = face_volume6(c, f, c->ref) / 6;
+        vol[r] += c->flip && c->flip[f] ? -v : v;
+        area[r] += outer_area(c, f);
+    }
+    rc = 0;
+    for (size_t f = 0; f < nf && !rc; f++)
+        if (uf[f] == f && area[f] > 0 && fabs(vol[f]) > c->p * area[f] / 2) rc = 1;
+done:
+    free(uf), free(vol), free(area);
+    return rc;
+}
+
 /* Signed volume under c->flip (check_faces's sum when orient flipped no face); flips
  * everything when negative.  -1 when degenerate. */
 static int check_volume(ck *c)
@@ -901,7 +954,7 @@ static int check_volume(ck *c)
         }
     }
     double vol = vol6 / 6;
-    if (!(fabs(vol) > c->p * area / 2)) {
+    if (!(fabs(vol) > c->p * area / 2) && some_part_thick(c) != 1) {
         note(c, 1, SOLID_AT_SOLID, 0,
              "degenerate: volume %.3g for area %.3g (thinner than the precision %g)", vol, area,
              c->p);
@@ -1277,12 +1330,16 @@ static int obj_ref(span tok, int64_t *a)
     return parse_int(s1 + 1, tok.end, &ignored);
 }
 
-int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t errlen)
+/* solid_read_obj's reader; with starts, the first face of every object ("o"), and of every
+ * group ("g") when groups, goes into *starts (ascending, each once, 0 not listed). */
+static int read_obj(const char *txt, size_t len, int groups, uint32_t **starts, size_t *nstarts,
+                    solid *out, char *err, size_t errlen)
 {
     text t = {txt, txt + len, 0};
     build b = {0};
     span l, tok;
     char show[32];
+    size_t capst = 0;
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
     if (!txt && len) return read_error(err, errlen, 0, "no text");
@@ -1345,8 +1402,17 @@ int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t er
                 goto fail;
             }
             if (build_face(&b)) goto oom;
+        } else if (starts && (tok_is(tok, "o") || (groups && tok_is(tok, "g"))) && b.nf &&
+                   (!*nstarts || (*starts)[*nstarts - 1] != b.nf)) {
+            if (*nstarts >= capst) {
+                size_t c = capst ? 2 * capst : 16;
+                uint32_t *x = realloc(*starts, c * sizeof *x);
+                if (!x) goto oom;
+                *starts = x, capst = c;
+            }
+            (*starts)[(*nstarts)++] = (uint32_t)b.nf;
         }
-        /* anything else (vt, vn, vp, o, g, s, usemtl, mtllib, l, p, ...) is not geometry */
+        /* anything else (vt, vn, vp, s, usemtl, mtllib, l, p, ...) is not geometry */
     }
     if (build_finish(&b, out)) goto oom;
     return 0;
@@ -1354,6 +1420,83 @@ oom:
     read_error(err, errlen, t.line, "out of memory");
 fail:
     build_free(&b);
+    return -1;
+}
+
+int solid_read_obj(const char *txt, size_t len, solid *out, char *err, size_t errlen)
+{
+    return read_obj(txt, len, 0, NULL, NULL, out, err, errlen);
+}
+
+/* Faces f0 .. f1 of s as a solid of their own, with the vertices they use (in order of first
+ * use).  -1 out of memory. */
+static int solid_part(const solid *s, uint32_t f0, uint32_t f1, uint32_t *map, solid *out)
+{
+    uint32_t c0 = s->face_off[f0], c1 = s->face_off[f1];
+    uint32_t i0 = s->cyc_off[c0], i1 = s->cyc_off[c1];
+    memset(out, 0, sizeof *out);
+    out->nf = f1 - f0, out->ncyc = c1 - c0;
+    out->face_off = malloc((out->nf + 1) * sizeof *out->face_off);
+    out->cyc_off = malloc((out->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = malloc(((size_t)i1 - i0 + 1) * sizeof *out->cyc);
+    out->V = malloc(3 * ((size_t)i1 - i0 + 1) * sizeof *out->V);
+    if (!out->face_off || !out->cyc_off || !out->cyc || !out->V) {
+        solid_free(out);
+        return -1;
+    }
+    for (uint32_t f = f0; f <= f1; f++) out->face_off[f - f0] = s->face_off[f] - c0;
+    for (uint32_t c = c0; c <= c1; c++) out->cyc_off[c - c0] = s->cyc_off[c] - i0;
+    for (uint32_t i = i0; i < i1; i++) {
+        uint32_t v = s->cyc[i];
+        if (map[v] == UINT32_MAX) {
+            map[v] = (uint32_t)out->nv;
+            memcpy(out->V + 3 * out->nv++, s->V + 3 * (size_t)v, 3 * sizeof *out->V);
+        }
+        out->cyc[i - i0] = map[v];
+    }
+    for (uint32_t i = i0; i < i1; i++) map[s->cyc[i]] = UINT32_MAX; /* for the next part */
+    return 0;
+}
+
+int solid_read_obj_parts(const char *txt, size_t len, int groups, solid **parts, size_t *nparts,
+                         char *err, size_t errlen)
+{
+    solid whole;
+    uint32_t *starts = NULL, *map = NULL;
+    size_t ns = 0;
+    *parts = NULL, *nparts = 0;
+    int rc = read_obj(txt, len, groups, &starts, &ns, &whole, err, errlen);
+    if (rc) {
+        free(starts);
+        return rc;
+    }
+    if (ns && starts[ns - 1] == whole.nf) ns--; /* an object with no face at the end */
+    *parts = calloc(ns + 1, sizeof **parts);
+    if (!*parts) goto oom;
+    if (ns == 0) { /* one object: the solid as read */
+        (*parts)[0] = whole;
+        *nparts = 1;
+        free(starts);
+        return 0;
+    }
+    map = malloc((whole.nv + 1) * sizeof *map);
+    if (!map) goto oom;
+    memset(map, 0xff, (whole.nv + 1) * sizeof *map);
+    for (size_t k = 0; k <= ns; k++) {
+        uint32_t f0 = k ? starts[k - 1] : 0, f1 = k < ns ? starts[k] : (uint32_t)whole.nf;
+        if (solid_part(&whole, f0, f1, map, &(*parts)[*nparts])) goto oom;
+        (*nparts)++;
+    }
+    free(map), free(starts);
+    solid_free(&whole);
+    return 0;
+oom:
+    if (err && errlen) snprintf(err, errlen, "out of memory");
+    for (size_t k = 0; *parts && k < *nparts; k++) solid_free(&(*parts)[k]);
+    free(*parts);
+    *parts = NULL, *nparts = 0;
+    free(map), free(starts);
+    solid_free(&whole);
     return -1;
 }
 

@@ -100,4 +100,11 @@ int solid_check_faces(const solid *s, double precision, const char *label, solid
 int solid_read_obj(const char *text, size_t len, solid *out, char *err, size_t errlen);
 int solid_read_off(const char *text, size_t len, solid *out, char *err, size_t errlen);
 
+/* An OBJ file's objects as solids: each "o" (and, with groups, each "g") that has faces is a
+ * solid with the vertices its faces use (in order of first use); a file of one object is one
+ * solid, as solid_read_obj reads it.  *parts (malloc'd, *nparts >= 1 solids) is the caller's to
+ * free (solid_free each, then free).  Returns 0, or -1 with a message in err. */
+int solid_read_obj_parts(const char *text, size_t len, int groups, solid **parts,
+                         size_t *nparts, char *err, size_t errlen);
+
 #endif

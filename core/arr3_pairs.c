@@ -80,6 +80,7 @@ typedef struct builder {
     kv *srt;                /* (code, index) sorted by code */
     uint32_t base;          /* item index i is id base + i */
     const uint32_t *chart;  /* by id: a leaf holds one value of it only (NULL: no matter) */
+    int32_t (*ibox)[6];     /* NULL, or the items' boxes in item order, at the tree's items */
     bvh *t;
 } builder;
 
@@ -124,6 +125,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
         memcpy(n->box, B->bx[B->srt[lo].v], sizeof n->box);
         for (size_t i = lo; i < hi; i++) {
             B->t->item[i] = B->base + B->srt[i].v;
+            if (B->ibox) memcpy(B->ibox[i], B->bx[B->srt[i].v], sizeof *B->ibox);
             if (i > lo) box_join(n->box, n->box, B->bx[B->srt[i].v]);
         }
         return;
@@ -158,7 +160,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
  * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
                       uint32_t base, size_t n, const uint32_t *chart, kv *srt, int32_t (*bx)[6],
-                      bvh *t)
+                      int32_t (*ibox)[6], bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -187,7 +189,7 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         srt[i] = (kv){code, (uint32_t)i};
     }
     if (sort_kv(srt, n)) return -1;
-    builder B = {(const int32_t(*)[6])bx, srt, base, chart, t};
+    builder B = {(const int32_t(*)[6])bx, srt, base, chart, ibox, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
     return 0;
@@ -201,6 +203,8 @@ typedef struct forest {
     uint32_t *g_off; /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
     const uint32_t *chart; /* by piece: its flat chart, or NONE (solids only; else NULL) */
     uint32_t *nchart;      /* by node: the flat chart of every piece below it, or NONE */
+    uint32_t *ichart;      /* by item: its piece's chart (solids only) */
+    int32_t (*ibox)[6];    /* by item: its piece's box */
     uint32_t *root;  /* ng: its tree's root in node[] */
     bnode *node;     /* every group's nodes: group g's from 2 g_off[g] */
     uint32_t *item;  /* every group's items: group g's at g_off[g] .. */
@@ -234,7 +238,8 @@ static void build_groups(void *ctx, size_t item, int worker)
         }
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
         bvh t = {F->node + 2 * (size_t)o, F->item + o, 0}; /* the pieces o .. o + n */
-        if (build_tree(piece_box, F->A, o, n, F->chart, F->srt + o, F->bx + o, &t)) {
+        if (build_tree(piece_box, F->A, o, n, F->chart, F->srt + o, F->bx + o, F->ibox + o,
+                       &t)) {
             F->fail = 1;
             return;
         }
@@ -246,14 +251,16 @@ static void build_groups(void *ctx, size_t item, int worker)
             else
                 nd->a += 2 * o, nd->b += 2 * o;
         }
+        if (F->chart) /* the items' charts in item order */
+            for (uint32_t k = o; k < o + n; k++) F->ichart[k] = F->chart[F->item[k]];
         if (F->chart) /* children come after their parents: the nodes bottom up */
             for (size_t i = t.nnode; i-- > 0;) {
                 const bnode *nd = &t.node[i];
                 uint32_t c;
                 if (nd->b & LEAFBIT) {
-                    c = F->chart[F->item[nd->a]];
+                    c = F->ichart[nd->a];
                     for (uint32_t k = nd->a + 1; k < nd->a + (nd->b & ~LEAFBIT); k++)
-                        if (F->chart[F->item[k]] != c) c = NONE;
+                        if (F->ichart[k] != c) c = NONE;
                 } else {
                     c = F->nchart[nd->a] == F->nchart[nd->b] ? F->nchart[nd->a] : NONE;
                 }
@@ -711,6 +718,7 @@ typedef struct solchart {
     uint8_t *one;  /* by piece: one cycle (NULL when tri) */
     uint8_t *cls;  /* by piece: its class (piece.cls, or a neighbour's) */
     uint32_t *uf, *grp, *of, *cnt; /* by piece; cnt: n + 2 */
+    uint32_t *tp;                  /* by entry - e0: its twin's piece, or NONE */
     uint32_t stamp, m; /* the last set's stamp (grp), the charts made */
     uint8_t *flat;     /* by chart */
     size_t capflat;
@@ -752,8 +760,7 @@ static inline uint32_t ent_next(const solchart *C, uint32_t i, uint32_t x)
 /* The twin of entry x as a local piece in the solid, or NONE. */
 static inline uint32_t twin_piece(const solchart *C, uint32_t x)
 {
-    uint32_t y = C->A->ptwin[x];
-    return y == NONE || y < C->e0 || y >= C->e1 ? NONE : piece_of(C, y);
+    return C->tp[x - C->e0];
 }
 
 /* The set of pieces list[0 .. n) (stamped alike in grp), flat?  -1 out of memory. */
@@ -903,54 +910,76 @@ static int solid_charts(const chartjob *j, size_t sol)
         C.cls[i] = P->cls, mask[i] = P->cmask;
     }
     if (!C.tri) C.pe[n] = C.e1;
-    for (uint32_t i = 0; i < n; i++) { /* a lone class joins a neighbour's (bits 4..6, flag 8) */
-        uint32_t alone = 1, join = NONE;
-        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i) && alone; x++) {
-            uint32_t q = twin_piece(&C, x);
+    /* each entry's twin's piece, once: the passes below read it in order (and the hot loops
+     * keep their arrays in locals: stores through the byte arrays would make the compiler
+     * read C's fields again) */
+    const uint32_t e0 = C.e0, e1 = C.e1, *ep = C.ep, *pe = C.pe, *ptwin = A->ptwin;
+    const int tri = C.tri;
+    uint32_t *tp = C.tp = mem_malloc(((size_t)e1 - e0 + 1) * sizeof *tp);
+    uint8_t *cls = C.cls;
+    uint32_t *uf = C.uf, *of = C.of;
+    if (!tp) goto done;
+    for (uint32_t x = e0; x < e1; x++) {
+        uint32_t y = ptwin[x];
+        tp[x - e0] = y == NONE || y < e0 || y >= e1 ? NONE : tri ? (y - e0) / 3 : ep[y - e0];
+    }
+    for (uint32_t i = 0, x = e0; i < n; i++) { /* a lone class joins a neighbour's (bits 4..6,
+                                                 flag 8) */
+        uint32_t hi = tri ? x + 3 : pe[i + 1], alone = 1, join = NONE, ci = cls[i] & 7u;
+        for (; x < hi; x++) {
+            uint32_t q = tp[x - e0];
             if (q == NONE) continue;
-            uint32_t cq = C.cls[q] & 7u; /* its class before this pass */
-            if (cq == (C.cls[i] & 7u))
+            uint32_t cq = cls[q] & 7u; /* its class before this pass */
+            if (cq == ci)
                 alone = 0;
             else if (join == NONE && (mask[i] >> cq & 1))
                 join = cq;
         }
-        if (alone && join != NONE) C.cls[i] = (uint8_t)(C.cls[i] | 8u | join << 4);
+        if (alone && join != NONE) cls[i] = (uint8_t)(cls[i] | 8u | join << 4);
     }
     for (uint32_t i = 0; i < n; i++) {
-        C.cls[i] = C.cls[i] & 8 ? (uint8_t)(C.cls[i] >> 4) : (uint8_t)(C.cls[i] & 7);
-        C.uf[i] = i;
+        cls[i] = cls[i] & 8 ? (uint8_t)(cls[i] >> 4) : (uint8_t)(cls[i] & 7);
+        uf[i] = i;
     }
-    /* the parts: pieces of a class joined across twins; the boundary entries counted */
+    /* the parts: pieces of a class joined across twins; the boundary entries listed */
     size_t nb = 0;
-    for (uint32_t i = 0; i < n; i++)
-        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
-            uint32_t q = twin_piece(&C, x);
-            if (q == NONE || C.cls[q] != C.cls[i])
+    for (uint32_t i = 0, x = e0; i < n; i++) {
+        uint32_t hi = tri ? x + 3 : pe[i + 1];
+        for (; x < hi; x++) {
+            uint32_t q = tp[x - e0];
+            if (q == NONE || cls[q] != cls[i])
                 nb++;
             else if (q > i)
-                a3_uf_union(C.uf, i, q);
+                a3_uf_union(uf, i, q);
         }
-    for (uint32_t i = 0; i < n; i++) { /* numbered by their first pieces */
-        uint32_t r = a3_uf_find(C.uf, i);
-        C.of[i] = r == i ? C.m++ : C.of[r];
     }
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; i++) { /* numbered by their first pieces */
+        uint32_t r = a3_uf_find(uf, i);
+        of[i] = r == i ? m++ : of[r];
+    }
+    C.m = m;
     /* each part's boundary edges (a counting sort by part), checked */
-    boff = mem_calloc((size_t)C.m + 2, sizeof *boff);
+    boff = mem_calloc((size_t)m + 2, sizeof *boff);
     bx = mem_malloc((nb + 1) * sizeof *bx);
-    C.flat = mem_malloc((size_t)C.m + 1);
-    C.capflat = (size_t)C.m + 1;
+    C.flat = mem_malloc((size_t)m + 1);
+    C.capflat = (size_t)m + 1;
     if (!boff || !bx || !C.flat) goto done;
-    for (uint32_t i = 0; i < n; i++)
-        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
-            uint32_t q = twin_piece(&C, x);
-            if (q == NONE || C.cls[q] != C.cls[i]) boff[C.of[i] + 2]++;
+    for (uint32_t i = 0, x = e0; i < n; i++) {
+        uint32_t hi = tri ? x + 3 : pe[i + 1];
+        for (; x < hi; x++) {
+            uint32_t q = tp[x - e0];
+            if (q == NONE || cls[q] != cls[i]) boff[of[i] + 2]++;
         }
-    for (uint32_t c = 0; c < C.m; c++) boff[c + 2] += boff[c + 1];
-    for (uint32_t i = 0; i < n; i++)
-        for (uint32_t x = ent_lo(&C, i); x < ent_hi(&C, i); x++) {
-            uint32_t q = twin_piece(&C, x);
-            if (q == NONE || C.cls[q] != C.cls[i]) bx[boff[C.of[i] + 1]++] = x;
+    }
+    for (uint32_t c = 0; c < m; c++) boff[c + 2] += boff[c + 1];
+    for (uint32_t i = 0, x = e0; i < n; i++) {
+        uint32_t hi = tri ? x + 3 : pe[i + 1];
+        for (; x < hi; x++) {
+            uint32_t q = tp[x - e0];
+            if (q == NONE || cls[q] != cls[i]) bx[boff[of[i] + 1]++] = x;
         }
+    }
     uint32_t m0 = C.m, bad = 0;
     for (uint32_t c = 0; c < m0; c++) {
         uint32_t b0 = boff[c], b1 = boff[c + 1];
@@ -997,7 +1026,7 @@ static int solid_charts(const chartjob *j, size_t sol)
     rc = 0;
 done:
     free(C.cls), free(mask), free(C.uf), free(C.grp), free(C.cnt), free(C.flat), free(list);
-    free(C.pe), free(C.ep), free(C.one), free(boff), free(bx);
+    free(C.pe), free(C.ep), free(C.one), free(C.tp), free(boff), free(bx);
     free(C.w.e), free(C.w.seg), free(C.w.on);
     return rc;
 }
@@ -1059,12 +1088,15 @@ static int same_flat(const forest *F, uint32_t x, uint32_t y)
 static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
 {
     const a3 *A = F->A;
+    /* the items' boxes and charts in item order: no piece is read for a pair apart */
+    int self = !A->soup && A->pc[F->item[x->a]].solid == A->pc[F->item[y->a]].solid;
     for (uint32_t i = x->a; i < x->a + (x->b & ~LEAFBIT); i++)
         for (uint32_t j = x == y ? i + 1 : y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
+            if (self && F->ichart[i] != NONE && F->ichart[i] == F->ichart[j]) continue;
+            if (!box_meet(F->ibox[i], F->ibox[j])) continue;
             uint32_t p = F->item[i], q = F->item[j];
-            if (F->chart && F->chart[p] != NONE && F->chart[p] == F->chart[q]) continue;
-            if (!box_meet(A->pc[p].box, A->pc[q].box)) continue;
-            if (A->pc[p].solid == A->pc[q].solid && (A->soup || self_apart(A, p, q))) continue;
+            if (A->soup ? A->pc[p].solid == A->pc[q].solid : self && self_apart(A, p, q))
+                continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
         }
     return 0;
@@ -1231,7 +1263,7 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
     uint32_t *chart = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
@@ -1268,7 +1300,10 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.item = mem_malloc(n * sizeof *F.item);
     F.srt = mem_malloc(n * sizeof *F.srt);
     F.bx = mem_malloc(n * sizeof *F.bx);
-    if (!F.root || !F.node || !F.item || !F.srt || !F.bx) goto done;
+    F.ibox = mem_malloc(n * sizeof *F.ibox);
+    if (!A->soup) F.ichart = mem_malloc(n * sizeof *F.ichart);
+    if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox || (!A->soup && !F.ichart))
+        goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
     if (F.fail == 3) rc = -3;
@@ -1281,7 +1316,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
     if (!tsrt || !T.node || !T.item) goto done;
-    if (build_tree(group_box, &F, 0, F.ng, NULL, tsrt, F.bx, &T)) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, NULL, tsrt, F.bx, NULL, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;
@@ -1329,6 +1364,8 @@ done:
     free(F.g_off);
     free(chart);
     free(F.nchart);
+    free(F.ichart);
+    free(F.ibox);
     free(F.root);
     free(F.node);
     free(F.item);

@@ -2399,8 +2399,17 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
         if (!self) return pair_met(A, o, a, b, NONE);
         /* of one solid: only where they overlap or touch elsewhere than as neighbours, and
          * then the plane is arranged whole (its pieces are no longer apart) */
-        if (a3_flat_apart(A, a, b)) return 0;
-        return A3_PUSH(o->fold, o->nfold, o->capfold, pa) ? -1 : pair_met(A, o, a, b, NONE);
+        int apart = a3_flat_apart(A, a, b);
+        if (apart == 1) return 0;
+        if (A3_PUSH(o->fold, o->nfold, o->capfold, pa)) return -1;
+        if (apart == 2) { /* touching only: arranged, not a surface passing through itself */
+            o->npairs++;
+            return A3_PUSH(o->met, o->nmet, o->capmet, a) ||
+                           A3_PUSH(o->met, o->nmet, o->capmet, b)
+                       ? -1
+                       : 0;
+        }
+        return pair_met(A, o, a, b, NONE);
     }
     i128 d[3];
     cross_ll(A->pl[pa].n, A->pl[pb].n, d);
@@ -2435,6 +2444,12 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
             j++;
     }
     if (o->ncs == ncs && o->ncp == ncp) return 0;
+    if (self && o->ncs == ncs) { /* only touching at points: not passing through itself */
+        o->npairs++;
+        return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b)
+                   ? -1
+                   : 0;
+    }
     return pair_met(A, o, a, b, o->ncs > ncs ? o->cs[ncs].p0 : o->cp[ncp].p);
 }
 

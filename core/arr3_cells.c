@@ -1196,18 +1196,27 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         }
     for (size_t f = 0; f < nf; f++)
         out->frev[f] = (uint8_t)(A->f_unit[f] < A->npatch && !A->f_out[f]);
-    /* closed solids: every face separates its solids' inside from their outside, so its two
-     * sides lie in two cells; one cell on both sides means a surface that passes through
-     * itself (an input that intersects itself, or that the grid makes so) */
+    /* closed solids: a face across which some solid's winding number changes has two cells
+     * on its sides; one cell on both sides is only for a face whose solids' faces cancel (a
+     * surface touching itself face to face inside itself, as a tube whose two end caps meet):
+     * else the arrangement is broken */
     for (size_t u = 0; u < A->nunit && !A->soup; u++) {
         uint32_t f = A->u_off[u]; /* a unit's faces share its two sides */
         if (cellof[fshell(A, S, f, 0)] != cellof[fshell(A, S, f, 1)]) continue;
+        int cancel = 1;
+        for (uint32_t i = A->f_cov[f]; i < A->f_cov[f + 1] && cancel; i++) {
+            int w = 0;
+            for (uint32_t k = A->f_cov[f]; k < A->f_cov[f + 1]; k++)
+                if (A->pc[A->cov[k]].solid == A->pc[A->cov[i]].solid) w += A->pc[A->cov[k]].sgn;
+            cancel = w == 0;
+        }
+        if (cancel) continue;
         const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
         const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
-        rc = ARR_EINVAL;
+        rc = ARR_EINTERNAL;
         snprintf(err, errlen,
-                 "solids[%u]: face %u: the surface passes through itself near (%.9g, %.9g, %.9g): "
-                 "the solid intersects itself on the grid of step %g",
+                 "solids[%u]: face %u: one cell on both sides near (%.9g, %.9g, %.9g) on the "
+                 "grid of step %g (a bug: please report it)",
                  pc->solid, pc->face - out->solid_face_off[pc->solid],
                  ((double)A->oi[0] + x->x[0]) * A->step, ((double)A->oi[1] + x->x[1]) * A->step,
                  ((double)A->oi[2] + x->x[2]) * A->step, A->step);

@@ -293,10 +293,11 @@ static inline uint8_t a3_chart_class(const int64_t *n, int sgn, uint8_t *mask)
  * {a, b} an edge of it? */
 int a3_piece_vertex(const a3 *A, const piece *P, uint32_t v);
 int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b);
-/* Pieces p and q of one solid on one canonical plane: do they meet only in the vertices and
- * edges they share, lying on the two sides of each shared edge (as neighbouring faces of one
- * flat stretch of a surface do)?  Exact; 0 also for pieces with holes or of many edges (then
- * their plane is arranged whole). */
+/* Pieces p and q of one solid in one plane: 1 when they meet only in the vertices and edges
+ * they share, lying on the two sides of each shared edge (as neighbouring faces of one flat
+ * stretch of a surface do); 2 when they also touch elsewhere on their boundaries (a vertex of
+ * one inside an edge of the other, edges along one line), 0 when they overlap (or have holes
+ * or many edges).  Exact.  Their plane is arranged whole unless 1. */
 int a3_flat_apart(const a3 *A, uint32_t p, uint32_t q);
 
 /* ---- the stages ------------------------------------------------------------------------ */

@@ -21,6 +21,7 @@
  */
 #include "core/arr3_int.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -311,6 +312,29 @@ int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b)
     return 0;
 }
 
+/* The sign of det(b - a, c - a, d - a) for grid points: in doubles with an error bound (the
+ * differences, below 2^32, are exact), exactly in 128 bits when the bound cannot decide. */
+static int orient3g(const int64_t *a, const int64_t *b, const int64_t *c, const int64_t *d)
+{
+    int64_t u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+            v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
+            w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    double u0 = (double)u[0], u1 = (double)u[1], u2 = (double)u[2];
+    double v0 = (double)v[0], v1 = (double)v[1], v2 = (double)v[2];
+    double w0 = (double)w[0], w1 = (double)w[1], w2 = (double)w[2];
+    double a0 = v1 * w2, b0 = v2 * w1, a1 = v2 * w0, b1 = v0 * w2, a2 = v0 * w1, b2 = v1 * w0;
+    double det = u0 * (a0 - b0) + u1 * (a1 - b1) + u2 * (a2 - b2);
+    double perm = fabs(u0) * (fabs(a0) + fabs(b0)) + fabs(u1) * (fabs(a1) + fabs(b1)) +
+                  fabs(u2) * (fabs(a2) + fabs(b2));
+    double bound = 0x1p-50 * perm; /* Shewchuk's (7 + 56 eps) eps, rounded up */
+    if (det > bound) return 1;
+    if (det < -bound) return -1;
+    i128 n0 = (i128)v[1] * w[2] - (i128)v[2] * w[1], n1 = (i128)v[2] * w[0] - (i128)v[0] * w[2],
+         n2 = (i128)v[0] * w[1] - (i128)v[1] * w[0];
+    i128 e = n0 * u[0] + n1 * u[1] + n2 * u[2]; /* |n| < 2^65, |u| < 2^32 */
+    return (e > 0) - (e < 0);
+}
+
 /* Does Q lie on one side of P's anchor plane but for vertices and edges of P?  Then Q meets
  * that plane, and so P, only in P's own vertices and edges: the two meet as the neighbouring
  * faces of a surface do (Q is planar: on one closed side of the plane, it meets it only in its
@@ -320,19 +344,12 @@ static int beside(const a3 *A, const piece *P, const piece *Q)
 {
     const int64_t *a = A->g + 3 * (size_t)P->av[0], *b = A->g + 3 * (size_t)P->av[1],
                   *c = A->g + 3 * (size_t)P->av[2];
-    int64_t u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
-            v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    i128 n[3] = {(i128)u[1] * v[2] - (i128)u[2] * v[1], (i128)u[2] * v[0] - (i128)u[0] * v[2],
-                 (i128)u[0] * v[1] - (i128)u[1] * v[0]};
     uint32_t o = A->pc_off[Q->c0], m = A->pc_off[Q->c0 + 1] - o;
     int side = 0, other = 0; /* other: Q touches the plane elsewhere than in P's vertices, edges */
     uint8_t on[2] = {0, 0};   /* the first vertex on the plane, the one before */
     for (uint32_t t = 0; t < m; t++) {
         uint32_t w = A->pcv[o + t];
-        const int64_t *x = A->g + 3 * (size_t)w;
-        /* |n| < 2^63, |x - a| < 2^32: the sum fits 128 bits */
-        i128 s = n[0] * (x[0] - a[0]) + n[1] * (x[1] - a[1]) + n[2] * (x[2] - a[2]);
-        int sg = (s > 0) - (s < 0);
+        int sg = orient3g(a, b, c, A->g + 3 * (size_t)w);
         if (sg) {
             if (side && sg != side) return 0;
             side = sg;
@@ -361,21 +378,6 @@ static int corner(const a3 *A, const piece *P, uint32_t u, uint32_t *a, uint32_t
     return 0;
 }
 
-static void cross_at(const int64_t *u, const int64_t *a, const int64_t *b, i128 *n)
-{
-    int64_t x[3] = {a[0] - u[0], a[1] - u[1], a[2] - u[2]},
-            y[3] = {b[0] - u[0], b[1] - u[1], b[2] - u[2]};
-    n[0] = (i128)x[1] * y[2] - (i128)x[2] * y[1];
-    n[1] = (i128)x[2] * y[0] - (i128)x[0] * y[2];
-    n[2] = (i128)x[0] * y[1] - (i128)x[1] * y[0];
-}
-
-static int side_of(const i128 *n, const int64_t *u, const int64_t *x)
-{
-    i128 s = n[0] * (x[0] - u[0]) + n[1] * (x[1] - u[1]) + n[2] * (x[2] - u[2]);
-    return (s > 0) - (s < 0);
-}
-
 /* Two triangles sharing only vertex u, each crossing the other's plane: both meet the line L of
  * the two planes in a segment from u.  With nP = (a - u) x (b - u), nQ likewise and L directed
  * along nP x nQ, P's segment runs forward when a lies above Q's plane and b below (a - u and
@@ -385,12 +387,10 @@ static int corners_apart(const a3 *A, const piece *P, const piece *Q, uint32_t u
 {
     uint32_t a, b, c, d;
     if (!corner(A, P, u, &a, &b) || !corner(A, Q, u, &c, &d)) return 0;
-    const int64_t *g = A->g, *pu = g + 3 * (size_t)u;
-    i128 nP[3], nQ[3];
-    cross_at(pu, g + 3 * (size_t)a, g + 3 * (size_t)b, nP);
-    cross_at(pu, g + 3 * (size_t)c, g + 3 * (size_t)d, nQ);
-    int sa = side_of(nQ, pu, g + 3 * (size_t)a), sb = side_of(nQ, pu, g + 3 * (size_t)b);
-    int sc = side_of(nP, pu, g + 3 * (size_t)c), sd = side_of(nP, pu, g + 3 * (size_t)d);
+    const int64_t *g = A->g, *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a,
+                  *pb = g + 3 * (size_t)b, *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
+    int sa = orient3g(pu, pc, pd, pa), sb = orient3g(pu, pc, pd, pb);
+    int sc = orient3g(pu, pa, pb, pc), sd = orient3g(pu, pa, pb, pd);
     int dp = sa > 0 && sb < 0 ? 1 : sa < 0 && sb > 0 ? -1 : 0;
     int dq = sc > 0 && sd < 0 ? -1 : sc < 0 && sd > 0 ? 1 : 0;
     return dp && dq && dp != dq;
@@ -405,7 +405,7 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
     const piece *P = &A->pc[p], *Q = &A->pc[q];
     if (P->nc != 1 || Q->nc != 1) return 0;
     int r = beside(A, P, Q);
-    if (r < 0) return a3_flat_apart(A, p, q);
+    if (r < 0) return a3_flat_apart(A, p, q) == 1;
     if (r || beside(A, Q, P) == 1) return 1;
     uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
     uint32_t qo = A->pc_off[Q->c0], qn = A->pc_off[Q->c0 + 1] - qo;
@@ -431,27 +431,40 @@ static int orient2x(const int64_t *a, const int64_t *b, const int64_t *c)
 }
 
 /* Do the closed edges ab and cd (vertex ids, projected along k) meet anywhere but in an end
- * they share? */
-static int edges_meet(const a3 *A, int k, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+ * they share?  0 no; EDGES_CROSS where their insides cross; EDGES_ALONG where they overlap on
+ * one line (*same: running the same way); EDGES_TOUCH where an end of one lies on the other. */
+enum { EDGES_APART = 0, EDGES_CROSS, EDGES_ALONG, EDGES_TOUCH };
+static int edges_meet(const a3 *A, int k, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
+                      int *same)
 {
     int64_t pa[2], pb[2], pc[2], pd[2];
     proj2x(A, a, k, pa), proj2x(A, b, k, pb), proj2x(A, c, k, pc), proj2x(A, d, k, pd);
+    *same = (i128)(pb[0] - pa[0]) * (pd[0] - pc[0]) + (i128)(pb[1] - pa[1]) * (pd[1] - pc[1]) > 0;
     if (a == c || a == d || b == c || b == d) { /* one shared end: beyond it only along it */
         const int64_t *o = a == c || a == d ? pa : pb, *x = a == c || a == d ? pb : pa,
                       *y = c == a || c == b ? pd : pc;
-        if (orient2x(o, x, y)) return 0;
-        return (i128)(x[0] - o[0]) * (y[0] - o[0]) + (i128)(x[1] - o[1]) * (y[1] - o[1]) > 0;
+        if (orient2x(o, x, y)) return EDGES_APART;
+        return (i128)(x[0] - o[0]) * (y[0] - o[0]) + (i128)(x[1] - o[1]) * (y[1] - o[1]) > 0
+                   ? EDGES_ALONG
+                   : EDGES_APART;
     }
     int o1 = orient2x(pa, pb, pc), o2 = orient2x(pa, pb, pd);
     int o3 = orient2x(pc, pd, pa), o4 = orient2x(pc, pd, pb);
-    if (o1 * o2 > 0 || o3 * o4 > 0) return 0;
-    if (o1 || o2 || o3 || o4) return 1;
+    if (o1 * o2 > 0 || o3 * o4 > 0) return EDGES_APART;
+    if (o1 * o2 < 0 && o3 * o4 < 0) return EDGES_CROSS;
+    if (o1 || o2 || o3 || o4) return EDGES_TOUCH;
     for (int t = 0; t < 2; t++) { /* on one line: do the spans overlap? */
         int64_t l0 = pa[t] < pb[t] ? pa[t] : pb[t], h0 = pa[t] < pb[t] ? pb[t] : pa[t];
         int64_t l1 = pc[t] < pd[t] ? pc[t] : pd[t], h1 = pc[t] < pd[t] ? pd[t] : pc[t];
-        if (h0 < l1 || h1 < l0) return 0;
+        if (h0 < l1 || h1 < l0) return EDGES_APART;
     }
-    return 1;
+    /* on one line, touching at a point or overlapping */
+    for (int t = 0; t < 2; t++) {
+        int64_t l0 = pa[t] < pb[t] ? pa[t] : pb[t], h0 = pa[t] < pb[t] ? pb[t] : pa[t];
+        int64_t l1 = pc[t] < pd[t] ? pc[t] : pd[t], h1 = pc[t] < pd[t] ? pd[t] : pc[t];
+        if (h0 == l1 || h1 == l0) return EDGES_TOUCH;
+    }
+    return EDGES_ALONG;
 }
 
 /* Is the midpoint of vertices a, b strictly inside the outer cycle of X (projected along k)?
@@ -475,12 +488,14 @@ static int mid_inside(const a3 *A, int k, uint32_t a, uint32_t b, const piece *X
     return in;
 }
 
-/* Coplanar pieces of one solid: is every edge of one that is no edge of the other outside it? */
-static int mids_outside(const a3 *A, int k, const piece *P, const piece *Q)
+/* Coplanar pieces of one solid: is every edge of one that is no edge of the other, and runs
+ * along none of its edges (bit t of along: edge t of P does), outside it? */
+static int mids_outside(const a3 *A, int k, const piece *P, const piece *Q, uint64_t along)
 {
     uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
     for (uint32_t t = 0; t < n; t++) {
         uint32_t a = A->pcv[o + t], b = A->pcv[o + (t + 1 < n ? t + 1 : 0)];
+        if (t < 64 && (along >> t & 1)) continue;
         if (!a3_piece_edge(A, Q, a, b) && mid_inside(A, k, a, b, Q)) return 0;
     }
     return 1;
@@ -492,7 +507,7 @@ int a3_flat_apart(const a3 *A, uint32_t p, uint32_t q)
     if (P->nc != 1 || Q->nc != 1) return 0;
     uint32_t po = A->pc_off[P->c0], pn = A->pc_off[P->c0 + 1] - po;
     uint32_t qo = A->pc_off[Q->c0], qn = A->pc_off[Q->c0 + 1] - qo;
-    if ((uint64_t)pn * qn > 4096) return 0; /* left to the plane's arrangement */
+    if ((uint64_t)pn * qn > 4096 || pn > 64 || qn > 64) return 0; /* for the arrangement */
     /* each piece's turning in the projection along k: its sign about its own plane (canonical
      * or anchor), times the sign of that plane's normal along k */
     plane3 tp, tq;
@@ -502,19 +517,35 @@ int a3_flat_apart(const a3 *A, uint32_t p, uint32_t q)
         if ((pl->n[a] < 0 ? -pl->n[a] : pl->n[a]) > (pl->n[k] < 0 ? -pl->n[k] : pl->n[k])) k = a;
     int oP = P->sgn * (pl->n[k] > 0 ? 1 : -1), oQ = Q->sgn * (ql->n[k] > 0 ? 1 : -1);
     const uint32_t *pv = A->pcv + po, *qv = A->pcv + qo;
+    uint64_t alongP = 0, alongQ = 0; /* the edges that run along an edge of the other */
+    int touch = 0;
     for (uint32_t i = 0; i < pn; i++) {
         uint32_t a = pv[i], b = pv[i + 1 < pn ? i + 1 : 0];
         for (uint32_t j = 0; j < qn; j++) {
             uint32_t c = qv[j], d = qv[j + 1 < qn ? j + 1 : 0];
+            int same;
             if ((a == c && b == d) || (a == d && b == c)) {
                 /* a shared edge: the insides of the two on its two sides */
                 if (oP == (a == c ? oQ : -oQ)) return 0;
                 continue;
             }
-            if (edges_meet(A, k, a, b, c, d)) return 0;
+            switch (edges_meet(A, k, a, b, c, d, &same)) {
+            case EDGES_CROSS:
+                return 0;
+            case EDGES_ALONG: /* on one line: the insides on its two sides, or they overlap */
+                if (oP == (same ? oQ : -oQ)) return 0;
+                alongP |= 1ull << i, alongQ |= 1ull << j, touch = 1;
+                break;
+            case EDGES_TOUCH:
+                touch = 1;
+                break;
+            default:
+                break;
+            }
         }
     }
-    return mids_outside(A, k, P, Q) && mids_outside(A, k, Q, P);
+    if (!mids_outside(A, k, P, Q, alongP) || !mids_outside(A, k, Q, P, alongQ)) return 0;
+    return touch ? 2 : 1;
 }
 
 /* ---- charts: where a solid's surface lies flat --------------------------------------------
@@ -678,7 +709,8 @@ static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *s
         for (size_t j = i + 1; j < n && seg[j].lo[0] <= seg[i].hi[0]; j++) {
             if (!budget--) return 0;
             if (seg[j].lo[1] > seg[i].hi[1] || seg[j].hi[1] < seg[i].lo[1]) continue;
-            if (edges_meet(A, k, seg[i].a, seg[i].b, seg[j].a, seg[j].b)) return 0;
+            int same;
+            if (edges_meet(A, k, seg[i].a, seg[i].b, seg[j].a, seg[j].b, &same)) return 0;
         }
     return 1;
 }

@@ -771,8 +771,19 @@ static int check_edges(ck *c, int *bad)
                  half_a(c, h), half_b(c, h), j - i);
             continue;
         }
+        size_t fwd = 0;
+        for (size_t k = i; k < j; k++) fwd += c->he[k].fwd;
         if (j - i == 2) {
             c->pair[c->npair++] = (uint32_t)i;
+        } else if (j - i > 2 && 2 * fwd == j - i) {
+            /* as many faces walk it one way as the other: the surface is closed there in the
+             * sense of winding numbers (parts touching along it, a surface given twice, one
+             * passing through itself along it); its faces are not paired, the arrangement
+             * orders them about the edge */
+            note(c, 0, SOLID_AT_FACE, h->face,
+                 "edge %u-%u lies on %zu faces, %zu walking it each way: the surface touches or "
+                 "overlaps itself there",
+                 half_a(c, h), half_b(c, h), j - i, fwd);
         } else if (j - i == 1) {
             note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)",
                  half_a(c, h), half_b(c, h));
@@ -960,7 +971,7 @@ static int check_volume(ck *c)
              c->p);
         return -1;
     }
-    if (vol < 0) {
+    if (vol < 0 && fabs(vol) > c->p * area / 2) { /* not when parts cancel (some_part_thick) */
         note(c, 0, SOLID_AT_SOLID, 0, "inward oriented (volume %.6g): every face flipped", vol);
         for (size_t f = 0; f < s->nf; f++) c->flip[f] ^= 1;
         vol = -vol;

@@ -171,7 +171,7 @@ static const err_case err_cases[] = {
      "faces.FV[0][1]: expected a vertex index, an integer from 0 to 0", NULL},
     /* options */
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":{\"colour\":1}}", 422,
-     "options.colour: unknown option (expected precision, operators or fields)", NULL},
+     "options.colour: unknown option (expected precision, operators, fields or fill)", NULL},
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":{\"keep_dangling\":true}}", 422,
      "options.keep_dangling: unknown option", NULL},
     {"{\"kind\":\"solids\",\"solids\":[],\"options\":[]}", 422, "options: expected an object",

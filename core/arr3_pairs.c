@@ -312,26 +312,15 @@ int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b)
     return 0;
 }
 
-/* The sign of det(b - a, c - a, d - a) for grid points: in doubles with an error bound (the
- * differences, below 2^32, are exact), exactly in 128 bits when the bound cannot decide. */
+/* The sign of det(b - a, c - a, d - a) for grid points, exactly: coordinates below 2^30 make
+ * differences below 2^31, the cross product fit 64 bits (as grid_normal's) and the product
+ * 128. */
 static int orient3g(const int64_t *a, const int64_t *b, const int64_t *c, const int64_t *d)
 {
-    int64_t u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
-            v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
-            w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-    double u0 = (double)u[0], u1 = (double)u[1], u2 = (double)u[2];
-    double v0 = (double)v[0], v1 = (double)v[1], v2 = (double)v[2];
-    double w0 = (double)w[0], w1 = (double)w[1], w2 = (double)w[2];
-    double a0 = v1 * w2, b0 = v2 * w1, a1 = v2 * w0, b1 = v0 * w2, a2 = v0 * w1, b2 = v1 * w0;
-    double det = u0 * (a0 - b0) + u1 * (a1 - b1) + u2 * (a2 - b2);
-    double perm = fabs(u0) * (fabs(a0) + fabs(b0)) + fabs(u1) * (fabs(a1) + fabs(b1)) +
-                  fabs(u2) * (fabs(a2) + fabs(b2));
-    double bound = 0x1p-50 * perm; /* Shewchuk's (7 + 56 eps) eps, rounded up */
-    if (det > bound) return 1;
-    if (det < -bound) return -1;
-    i128 n0 = (i128)v[1] * w[2] - (i128)v[2] * w[1], n1 = (i128)v[2] * w[0] - (i128)v[0] * w[2],
-         n2 = (i128)v[0] * w[1] - (i128)v[1] * w[0];
-    i128 e = n0 * u[0] + n1 * u[1] + n2 * u[2]; /* |n| < 2^65, |u| < 2^32 */
+    int64_t v0 = c[0] - a[0], v1 = c[1] - a[1], v2 = c[2] - a[2];
+    int64_t w0 = d[0] - a[0], w1 = d[1] - a[1], w2 = d[2] - a[2];
+    i128 e = (i128)(v1 * w2 - v2 * w1) * (b[0] - a[0]) + (i128)(v2 * w0 - v0 * w2) * (b[1] - a[1]) +
+             (i128)(v0 * w1 - v1 * w0) * (b[2] - a[2]);
     return (e > 0) - (e < 0);
 }
 
@@ -344,12 +333,20 @@ static int beside(const a3 *A, const piece *P, const piece *Q)
 {
     const int64_t *a = A->g + 3 * (size_t)P->av[0], *b = A->g + 3 * (size_t)P->av[1],
                   *c = A->g + 3 * (size_t)P->av[2];
+    /* the anchor normal fits 64 bits (grid coordinates below 2^30: grid_normal) */
+    int64_t u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+            v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    int64_t n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0]};
     uint32_t o = A->pc_off[Q->c0], m = A->pc_off[Q->c0 + 1] - o;
     int side = 0, other = 0; /* other: Q touches the plane elsewhere than in P's vertices, edges */
     uint8_t on[2] = {0, 0};   /* the first vertex on the plane, the one before */
     for (uint32_t t = 0; t < m; t++) {
         uint32_t w = A->pcv[o + t];
-        int sg = orient3g(a, b, c, A->g + 3 * (size_t)w);
+        const int64_t *x = A->g + 3 * (size_t)w;
+        i128 d = (i128)n[0] * (x[0] - a[0]) + (i128)n[1] * (x[1] - a[1]) +
+                 (i128)n[2] * (x[2] - a[2]);
+        int sg = (d > 0) - (d < 0);
         if (sg) {
             if (side && sg != side) return 0;
             side = sg;
@@ -378,23 +375,6 @@ static int corner(const a3 *A, const piece *P, uint32_t u, uint32_t *a, uint32_t
     return 0;
 }
 
-/* Two triangles sharing only vertex u, each crossing the other's plane: both meet the line L of
- * the two planes in a segment from u.  With nP = (a - u) x (b - u), nQ likewise and L directed
- * along nP x nQ, P's segment runs forward when a lies above Q's plane and b below (a - u and
- * b - u turn about nP on either side of L), backward when the other way; Q's the other way
- * round.  Segments running opposite ways meet only in u.  1: so they do. */
-static int corners_apart(const a3 *A, const piece *P, const piece *Q, uint32_t u)
-{
-    uint32_t a, b, c, d;
-    if (!corner(A, P, u, &a, &b) || !corner(A, Q, u, &c, &d)) return 0;
-    const int64_t *g = A->g, *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a,
-                  *pb = g + 3 * (size_t)b, *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
-    int sa = orient3g(pu, pc, pd, pa), sb = orient3g(pu, pc, pd, pb);
-    int sc = orient3g(pu, pa, pb, pc), sd = orient3g(pu, pa, pb, pd);
-    int dp = sa > 0 && sb < 0 ? 1 : sa < 0 && sb > 0 ? -1 : 0;
-    int dq = sc > 0 && sd < 0 ? -1 : sc < 0 && sd > 0 ? 1 : 0;
-    return dp && dq && dp != dq;
-}
 
 /* Do pieces p and q of one solid certainly meet only in vertices and edges they share (as
  * every two neighbouring faces of a surface do)?  Decided here for almost every pair of a clean
@@ -404,16 +384,51 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
 {
     const piece *P = &A->pc[p], *Q = &A->pc[q];
     if (P->nc != 1 || Q->nc != 1) return 0;
+    uint32_t po = A->pc_off[P->c0], qo = A->pc_off[Q->c0];
+    if (A->pc_off[P->c0 + 1] - po == 3 && A->pc_off[Q->c0 + 1] - qo == 3) {
+        /* two triangles (most pairs): by their shared vertices */
+        const uint32_t *pv = A->pcv + po, *qv = A->pcv + qo;
+        uint32_t shared = 0, ins = 0, inq = 0; /* bit t: P's vertex t (Q's) is shared */
+        for (int t = 0; t < 3; t++)
+            for (int r = 0; r < 3; r++)
+                if (pv[t] == qv[r]) shared++, ins |= 1u << t, inq |= 1u << r;
+        const int64_t *g = A->g;
+        if (shared == 2) { /* an edge: apart unless in one plane */
+            int x = ins == 6 ? 0 : ins == 5 ? 1 : 2, y = inq == 6 ? 0 : inq == 5 ? 1 : 2;
+            if (orient3g(g + 3 * (size_t)pv[(x + 1) % 3], g + 3 * (size_t)pv[(x + 2) % 3],
+                         g + 3 * (size_t)pv[x], g + 3 * (size_t)qv[y]))
+                return 1;
+            return a3_flat_apart(A, p, q) == 1;
+        }
+        if (shared == 1) {
+            /* only vertex u: each triangle meets the other's plane in u alone (then apart), or
+             * both meet the line L of the two planes in a segment from u.  With nP = (a - u) x
+             * (b - u), nQ likewise and L directed along nP x nQ, P's segment runs forward when
+             * a lies above Q's plane and b below (a - u and b - u turn about nP on either side
+             * of L), backward when the other way; Q's the other way round.  Segments running
+             * opposite ways meet only in u. */
+            uint32_t u = NONE;
+            for (int t = 0; t < 3; t++)
+                if (ins >> t & 1) u = pv[t];
+            uint32_t a, b, c, d;
+            corner(A, P, u, &a, &b);
+            corner(A, Q, u, &c, &d);
+            const int64_t *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a,
+                          *pb = g + 3 * (size_t)b, *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
+            int sc = orient3g(pu, pa, pb, pc), sd = orient3g(pu, pa, pb, pd);
+            if (sc && sc == sd) return 1; /* Q beside P's plane but for u */
+            int sa = orient3g(pu, pc, pd, pa), sb = orient3g(pu, pc, pd, pb);
+            if (sa && sa == sb) return 1;
+            if (!sa && !sb && !sc && !sd) return a3_flat_apart(A, p, q) == 1;
+            int dp = sa > 0 && sb < 0 ? 1 : sa < 0 && sb > 0 ? -1 : 0;
+            int dq = sc > 0 && sd < 0 ? -1 : sc < 0 && sd > 0 ? 1 : 0;
+            return dp && dq && dp != dq; /* their segments on the planes' line run apart */
+        }
+        if (shared == 3) return 0;
+    }
     int r = beside(A, P, Q);
     if (r < 0) return a3_flat_apart(A, p, q) == 1;
-    if (r || beside(A, Q, P) == 1) return 1;
-    uint32_t o = A->pc_off[P->c0], n = A->pc_off[P->c0 + 1] - o;
-    uint32_t qo = A->pc_off[Q->c0], qn = A->pc_off[Q->c0 + 1] - qo;
-    if (n != 3 || qn != 3) return 0;
-    uint32_t shared = 0, u = NONE;
-    for (uint32_t t = 0; t < 3; t++)
-        if (a3_piece_vertex(A, Q, A->pcv[o + t])) shared++, u = A->pcv[o + t];
-    return shared == 1 && corners_apart(A, P, Q, u);
+    return r || beside(A, Q, P) == 1;
 }
 
 /* Coordinates of vertex v projected along axis k, times two (so that a midpoint is exact). */
@@ -1135,35 +1150,41 @@ static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
 }
 
 /* The node pairs below (x, y) of the group trees (boxes meeting), walked to the leaves. */
+/* Is the node pair (x, y) worth a visit: not inside one flat chart, and (two nodes) their
+ * boxes meeting?  Asked before a pair is pushed. */
+static inline int worth(const forest *F, uint32_t x, uint32_t y)
+{
+    return !same_flat(F, x, y) && (x == y || box_meet(F->node[x].box, F->node[y].box));
+}
+
+static inline int push_if(const forest *F, out64 *stack, uint32_t x, uint32_t y)
+{
+    return worth(F, x, y) ? push64(stack, (uint64_t)x << 32 | y) : 0;
+}
+
 static int walk_pair(const forest *F, uint32_t x, uint32_t y, out64 *o, out64 *stack)
 {
     stack->n = 0;
-    if (push64(stack, (uint64_t)x << 32 | y)) return -1;
+    if (push_if(F, stack, x, y)) return -1;
     while (stack->n) {
         uint64_t s = stack->v[--stack->n];
-        const bnode *a = &F->node[s >> 32], *b = &F->node[(uint32_t)s];
-        if (same_flat(F, (uint32_t)(s >> 32), (uint32_t)s)) continue;
+        uint32_t xi = (uint32_t)(s >> 32), yi = (uint32_t)s;
+        const bnode *a = &F->node[xi], *b = &F->node[yi];
         if (a == b) { /* a node against itself: its children each, and against each other */
             if (is_leaf(a)) {
                 if (leaf_pairs(F, a, a, o)) return -1;
-            } else if (push64(stack, (uint64_t)a->a << 32 | a->a) ||
-                       push64(stack, (uint64_t)a->b << 32 | a->b) ||
-                       push64(stack, (uint64_t)a->a << 32 | a->b))
+            } else if (push_if(F, stack, a->a, a->a) || push_if(F, stack, a->b, a->b) ||
+                       push_if(F, stack, a->a, a->b))
                 return -1;
             continue;
         }
-        if (!box_meet(a->box, b->box)) continue;
         int la = is_leaf(a), lb = is_leaf(b);
         if (la && lb) {
             if (leaf_pairs(F, a, b, o)) return -1;
         } else if (la || (!lb && extent(b) > extent(a))) {
-            if (push64(stack, (s & ~(uint64_t)UINT32_MAX) | b->a) ||
-                push64(stack, (s & ~(uint64_t)UINT32_MAX) | b->b))
-                return -1;
+            if (push_if(F, stack, xi, b->a) || push_if(F, stack, xi, b->b)) return -1;
         } else {
-            if (push64(stack, (uint64_t)a->a << 32 | (uint32_t)s) ||
-                push64(stack, (uint64_t)a->b << 32 | (uint32_t)s))
-                return -1;
+            if (push_if(F, stack, a->a, yi) || push_if(F, stack, a->b, yi)) return -1;
         }
     }
     return 0;

@@ -120,6 +120,9 @@ typedef struct ck {
     size_t npair;
     signed char *flip; /* nf: 1 when the fixed copy reverses the face */
     size_t flips;      /* how many (orient) */
+    uint32_t *multi;   /* nmulti: the first half of each edge on more than 2 faces taken unpaired
+                          (check_edges), its last in he: until the key changes */
+    size_t nmulti, capmulti;
 } ck;
 
 /* Records a message: error or warning, about the whole solid (at SOLID_AT_SOLID), face `index`
@@ -784,6 +787,13 @@ static int check_edges(ck *c, int *bad)
                  "edge %u-%u lies on %zu faces, %zu walking it each way: the surface touches or "
                  "overlaps itself there",
                  half_a(c, h), half_b(c, h), j - i, fwd);
+            if (c->nmulti == c->capmulti) {
+                size_t cap = c->capmulti ? 2 * c->capmulti : 64;
+                uint32_t *m = realloc(c->multi, cap * sizeof *m);
+                if (!m) return -1;
+                c->multi = m, c->capmulti = cap;
+            }
+            c->multi[c->nmulti++] = (uint32_t)i;
         } else if (j - i == 1) {
             note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)",
                  half_a(c, h), half_b(c, h));
@@ -894,6 +904,27 @@ fail:
     free(adj);
     free(queue);
     return -1;
+}
+
+/* The edges on more than 2 faces, taken unpaired because as many faces walked them each way:
+ * still so once orient has flipped faces?  Else the surface is not closed there (reported).
+ * Returns 1 when one is not. */
+static int multi_still_closed(ck *c)
+{
+    for (size_t m = 0; m < c->nmulti; m++) {
+        size_t i = c->multi[m], j = i, fwd = 0;
+        for (; j < c->nhe && c->he[j].key == c->he[i].key; j++)
+            fwd += (size_t)(c->he[j].fwd ^ (c->flip[c->he[j].face] & 1));
+        if (2 * fwd != j - i) {
+            const half *h = &c->he[i];
+            note(c, 1, SOLID_AT_FACE, h->face,
+                 "edge %u-%u lies on %zu faces, %zu walking it one way once their orientation is "
+                 "made consistent: the surface is not closed there",
+                 half_a(c, h), half_b(c, h), j - i, fwd);
+            return 1;
+        }
+    }
+    return 0;
 }
 
 /* ---- check: volume -------------------------------------------------------------------- */
@@ -1073,7 +1104,7 @@ static int check(const solid *s, double precision, const char *label, solid_repo
     if (check_edges(&c, &bad)) goto oom;
     if (bad) goto done;
     if (orient(&c, &bad)) goto oom;
-    if (bad || check_volume(&c)) goto done;
+    if (bad || multi_still_closed(&c) || check_volume(&c)) goto done;
     if (c.rep->errors == 0 && fixed && (copy_unchanged || c.rep->flipped_faces) &&
         make_fixed(&c, fixed))
         goto oom;
@@ -1087,6 +1118,7 @@ done:
     free(c.he);
     free(c.pair);
     free(c.flip);
+    free(c.multi);
     if (c.rep->errors && fixed) solid_free(fixed);
     return c.rep->errors ? -1 : 0;
 }

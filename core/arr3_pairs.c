@@ -881,7 +881,9 @@ done:
  * not flat mostly lies over itself, as a bridge over its bank) and each slab's parts settled. */
 static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
 {
-    int f = n < 2 ? 1 : set_flat(C, list, n);
+    /* depth < 0: known not to be flat (solid_charts found so) */
+    int f = depth < 0 ? 0 : n < 2 ? 1 : set_flat(C, list, n);
+    if (depth < 0) depth = 0;
     if (f < 0) return -1;
     if (!f && depth < CHART_SPLITS && n > CHART_SMALL) {
         const a3 *A = C->A;
@@ -947,57 +949,61 @@ static int solid_charts(const chartjob *j, size_t sol)
         C.one = mem_malloc((size_t)n + 1);
         if (!C.pe || !C.ep || !C.one) goto done;
     }
+    const uint32_t e0 = C.e0, e1 = C.e1, *ptwin = A->ptwin;
+    const int tri = C.tri;
+    uint8_t *cls = C.cls, *cls0 = mask; /* cls0: the classes as input (piece.cls), by piece */
+    uint32_t *uf = C.uf, *of = C.of, *ep = C.ep, *pe = C.pe;
     for (uint32_t i = 0; i < n; i++) {
         const piece *P = &A->pc[s0 + i];
-        if (!C.tri) {
-            C.pe[i] = A->pc_off[P->c0];
+        if (!tri) {
+            pe[i] = A->pc_off[P->c0];
             C.one[i] = P->nc == 1;
-            for (uint32_t x = C.pe[i]; x < A->pc_off[P->c0 + P->nc]; x++) C.ep[x - C.e0] = i;
+            for (uint32_t x = pe[i]; x < A->pc_off[P->c0 + P->nc]; x++) ep[x - e0] = i;
         }
-        C.cls[i] = P->cls, mask[i] = P->cmask;
+        cls0[i] = P->cls;
     }
-    if (!C.tri) C.pe[n] = C.e1;
-    /* each entry's twin's piece, once: the passes below read it in order (and the hot loops
-     * keep their arrays in locals: stores through the byte arrays would make the compiler
-     * read C's fields again) */
-    const uint32_t e0 = C.e0, e1 = C.e1, *ep = C.ep, *pe = C.pe, *ptwin = A->ptwin;
-    const int tri = C.tri;
+    if (!tri) pe[n] = e1;
+    /* one pass: each entry's twin's piece (tp, read by the passes after), and a piece whose
+     * class no neighbour across a twin has takes the first neighbour's it may join (it turns
+     * that way about that axis too, piece.cmask) (the hot loops keep their arrays in locals:
+     * stores through the byte arrays would make the compiler read C's fields again) */
     uint32_t *tp = C.tp = mem_malloc(((size_t)e1 - e0 + 1) * sizeof *tp);
-    uint8_t *cls = C.cls;
-    uint32_t *uf = C.uf, *of = C.of;
     if (!tp) goto done;
-    for (uint32_t x = e0; x < e1; x++) {
-        uint32_t y = ptwin[x];
-        tp[x - e0] = y == NONE || y < e0 || y >= e1 ? NONE : tri ? (y - e0) / 3 : ep[y - e0];
-    }
-    for (uint32_t i = 0, x = e0; i < n; i++) { /* a lone class joins a neighbour's (bits 4..6,
-                                                 flag 8) */
-        uint32_t hi = tri ? x + 3 : pe[i + 1], alone = 1, join = NONE, ci = cls[i] & 7u;
+    for (uint32_t i = 0, x = e0; i < n; i++) {
+        uint32_t hi = tri ? x + 3 : pe[i + 1], alone = 1, join = NONE, ci = cls0[i];
         for (; x < hi; x++) {
-            uint32_t q = tp[x - e0];
+            uint32_t y = ptwin[x],
+                     q = y == NONE || y < e0 || y >= e1 ? NONE : tri ? (y - e0) / 3 : ep[y - e0];
+            tp[x - e0] = q;
             if (q == NONE) continue;
-            uint32_t cq = cls[q] & 7u; /* its class before this pass */
+            uint32_t cq = cls0[q];
             if (cq == ci)
                 alone = 0;
-            else if (join == NONE && (mask[i] >> cq & 1))
+            else if (join == NONE && (A->pc[s0 + i].cmask >> cq & 1))
                 join = cq;
         }
-        if (alone && join != NONE) cls[i] = (uint8_t)(cls[i] | 8u | join << 4);
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        cls[i] = cls[i] & 8 ? (uint8_t)(cls[i] >> 4) : (uint8_t)(cls[i] & 7);
+        cls[i] = (uint8_t)(alone && join != NONE ? join : ci);
         uf[i] = i;
     }
-    /* the parts: pieces of a class joined across twins; the boundary entries listed */
-    size_t nb = 0;
+    /* one pass: the parts (pieces of a class joined across twins), the boundary entries listed
+     * (and their parts counted once the parts are numbered) */
+    size_t nb = 0, capb = 1024;
+    bx = mem_malloc(capb * sizeof *bx);
+    if (!bx) goto done;
     for (uint32_t i = 0, x = e0; i < n; i++) {
         uint32_t hi = tri ? x + 3 : pe[i + 1];
         for (; x < hi; x++) {
             uint32_t q = tp[x - e0];
-            if (q == NONE || cls[q] != cls[i])
-                nb++;
-            else if (q > i)
-                a3_uf_union(uf, i, q);
+            if (q != NONE && cls[q] == cls[i]) {
+                if (q > i) a3_uf_union(uf, i, q);
+                continue;
+            }
+            if (nb == capb) {
+                uint32_t *b = realloc(bx, 2 * capb * sizeof *b);
+                if (!b) goto done;
+                bx = b, capb *= 2;
+            }
+            bx[nb++] = x;
         }
     }
     uint32_t m = 0;
@@ -1006,27 +1012,20 @@ static int solid_charts(const chartjob *j, size_t sol)
         of[i] = r == i ? m++ : of[r];
     }
     C.m = m;
-    /* each part's boundary edges (a counting sort by part), checked */
+    /* each part's boundary edges (a counting sort of the list by part), checked */
+    uint32_t *sorted = mem_malloc((nb + 1) * sizeof *sorted);
     boff = mem_calloc((size_t)m + 2, sizeof *boff);
-    bx = mem_malloc((nb + 1) * sizeof *bx);
     C.flat = mem_malloc((size_t)m + 1);
     C.capflat = (size_t)m + 1;
-    if (!boff || !bx || !C.flat) goto done;
-    for (uint32_t i = 0, x = e0; i < n; i++) {
-        uint32_t hi = tri ? x + 3 : pe[i + 1];
-        for (; x < hi; x++) {
-            uint32_t q = tp[x - e0];
-            if (q == NONE || cls[q] != cls[i]) boff[of[i] + 2]++;
-        }
+    if (!sorted || !boff || !C.flat) {
+        free(sorted);
+        goto done;
     }
+    for (size_t t = 0; t < nb; t++) boff[of[piece_of(&C, bx[t])] + 2]++;
     for (uint32_t c = 0; c < m; c++) boff[c + 2] += boff[c + 1];
-    for (uint32_t i = 0, x = e0; i < n; i++) {
-        uint32_t hi = tri ? x + 3 : pe[i + 1];
-        for (; x < hi; x++) {
-            uint32_t q = tp[x - e0];
-            if (q == NONE || cls[q] != cls[i]) bx[boff[of[i] + 1]++] = x;
-        }
-    }
+    for (size_t t = 0; t < nb; t++) sorted[boff[of[piece_of(&C, bx[t])] + 1]++] = bx[t];
+    free(bx);
+    bx = sorted;
     uint32_t m0 = C.m, bad = 0;
     for (uint32_t c = 0; c < m0; c++) {
         uint32_t b0 = boff[c], b1 = boff[c + 1];
@@ -1062,7 +1061,7 @@ static int solid_charts(const chartjob *j, size_t sol)
             uint32_t a = at[c], b = at[c + 1];
             C.stamp++;
             for (uint32_t t = a; t < b; t++) C.grp[list[t]] = C.stamp;
-            r = settle(&C, list + a, b - a, 0); /* its parts become new charts */
+            r = settle(&C, list + a, b - a, -1); /* its parts become new charts */
         }
         free(at);
         if (r) goto done;

@@ -91,7 +91,7 @@ typedef struct arr3_stats {
 
 /* A solid whose surface passes through itself (or overlaps itself): how many pairs of its
  * pieces cross or overlap, the first pair's input faces (indices within the solid) and a point
- * where they meet. */
+ * where they meet (of two overlapping in one plane: a vertex of the first). */
 typedef struct arr3_selfx {
     uint32_t solid, fa, fb;
     size_t pairs;

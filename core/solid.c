@@ -799,8 +799,10 @@ static int check_edges(ck *c, int *bad)
                  half_a(c, h), half_b(c, h));
             *bad = 1;
         } else {
-            note(c, 1, SOLID_AT_FACE, h->face, "non-manifold edge %u-%u (used %zu times)",
-                 half_a(c, h), half_b(c, h), j - i);
+            note(c, 1, SOLID_AT_FACE, h->face,
+                 "non-manifold edge %u-%u (used %zu times, %zu walking it one way and %zu the "
+                 "other: the surface is not closed there)",
+                 half_a(c, h), half_b(c, h), j - i, fwd, j - i - fwd);
             *bad = 1;
         }
     }

@@ -318,7 +318,7 @@ TEST(non_manifold_duplicated_face_and_shared_edge)
     solid s = make(&CUBE_V[0][0], 8, F, n);
     solid_report r;
     CHECK(solid_check(&s, 1e-3, "dup", &r, NULL) == -1, "duplicated face accepted");
-    CHECK(r.errors == 4 && has_msg(&r, "non-manifold edge") && has_msg(&r, "(used 3 times)"),
+    CHECK(r.errors == 4 && has_msg(&r, "non-manifold edge") && has_msg(&r, "(used 3 times,"),
           "%zu errors: %s", r.errors, r.msg[0]);
     print_report("duplicated top", &r);
     solid_free(&s);
@@ -430,12 +430,13 @@ TEST(fewer_than_three_distinct_vertices_after_merging)
     int tri[] = {0, 8, 1, -2};
     memcpy(F + n, tri, sizeof tri);
     s = make(&V[0][0], 9, F, n + 4);
-    /* a warning (the face is left out), and here an error too: the triangle's edge 8-1 is the
-     * cube's edge 0-1 on the grid, which is then on three faces */
-    CHECK(solid_check(&s, 1e-3, "thin", &r, NULL) == -1 &&
+    /* a warning (the face is left out), and another: the triangle's edge 8-1 is the cube's
+     * edge 0-1 on the grid, and 1-0 its own too, so that edge is on 4 faces walked twice each
+     * way (a surface touching itself), taken */
+    CHECK(solid_check(&s, 1e-3, "thin", &r, NULL) == 0 &&
               has_msg(&r, "thin: face 6: degenerate on the grid of step 0.001 (fewer than 3 "
                           "distinct vertices): left out") &&
-              has_msg(&r, "non-manifold edge"),
+              has_msg(&r, "walking it each way"),
           "%zu errors: %s", r.errors, r.msg[0]);
     print_report("collapsed triangle", &r);
     solid_free(&s);
@@ -1306,9 +1307,11 @@ static char *obj_group(const char *text, int g)
     return out;
 }
 
-/* Reads an arrangement's OBJ: as one soup, where every triangle comes twice, so each edge of
- * the triangulated complex is one non-manifold error (nedges of them), then cell by cell;
- * returns the bounded cells' total volume and sets *exterior. */
+/* Reads an arrangement's OBJ: as one solid, where every triangle comes twice (once for each
+ * cell beside it), so each edge of the triangulated complex lies on 4 or more faces: taken when
+ * as many walk it each way (cells turned alike: nedges 0), else one error an edge whose faces
+ * do not balance (nedges of them, cells turned inward); then cell by cell; returns the bounded
+ * cells' total volume and sets *exterior. */
 static double arrangement_cells(const char *name, size_t nv, size_t nf, size_t nedges, int ncells,
                                 double precision, double *exterior)
 {
@@ -1330,11 +1333,16 @@ static double arrangement_cells(const char *name, size_t nv, size_t nf, size_t n
     CHECK(s.nv == nv && s.nf == nf && s.ncyc == nf && s.cyc_off[nf] == 3 * nf,
           "%s: %zu V %zu F, want %zu %zu", name, s.nv, s.nf, nv, nf);
     solid_report r;
-    CHECK(solid_check(&s, precision, name, &r, NULL) == -1 && r.errors == nedges &&
-              has_msg(&r, "non-manifold edge") && !has_msg(&r, "open surface"),
-          "%s as one soup: %zu errors: %s", name, r.errors, r.msg[0]);
-    printf("  %s as one soup: %zu V, %zu faces, %zu errors (first: %s)\n", name, s.nv, s.nf,
-           r.errors, r.msg[0]);
+    int rc1 = solid_check(&s, precision, name, &r, NULL);
+    if (nedges)
+        CHECK(rc1 == -1 && r.errors == nedges && has_msg(&r, "non-manifold edge") &&
+                  !has_msg(&r, "open surface"),
+              "%s as one solid: %zu errors: %s", name, r.errors, r.msg[0]);
+    else
+        CHECK(rc1 == 0 && r.errors == 0 && has_msg(&r, "walking it each way"),
+              "%s as one solid: %zu errors: %s", name, r.errors, r.msg[0]);
+    printf("  %s as one solid: %zu V, %zu faces, %zu errors (first message: %s)\n", name, s.nv,
+           s.nf, r.errors, r.msg[0]);
     solid_free(&s);
     double sum = 0;
     size_t faces = 0, flipped = 0, inward = 0;
@@ -1377,8 +1385,8 @@ static double arrangement_cells(const char *name, size_t nv, size_t nf, size_t n
 
 TEST(two_cubes_arrangement_cells)
 {
-    /* 34 edges of the complex, plus 44 triangles - 18 faces diagonals */
-    double ext, sum = arrangement_cells("two_cubes.obj", 20, 88, 60, 4, 1e-7, &ext);
+    /* every cell turned outward: each edge's faces balance */
+    double ext, sum = arrangement_cells("two_cubes.obj", 20, 88, 0, 4, 1e-7, &ext);
     /* two unit cubes, the second turned pi/3 about z and moved up by 1/2: the union is 2 minus
      * the overlap, a prism of height 1/2 over the square and turned square's intersection,
      * whose area is tan(pi/12) = 2 - sqrt(3); the file's coordinates have 6 decimals */
@@ -1388,9 +1396,8 @@ TEST(two_cubes_arrangement_cells)
 
 TEST(fivecubes_arrangement_cells)
 {
-    /* 268 edges, plus 476 - 157 diagonals, plus one more for each of the 2 faces with a hole
-     * (n vertices, h holes: n + 2h - 2 triangles, n + 3h - 3 diagonals) */
-    double ext, sum = arrangement_cells("fivecubes.obj", 137, 952, 589, 27, 1e-7, &ext);
+    /* 10 cells turned inward: the 150 edges where their faces meet others' do not balance */
+    double ext, sum = arrangement_cells("fivecubes.obj", 137, 952, 150, 27, 1e-7, &ext);
     CHECK(fabs(sum - ext) < 1e-12 && sum > 0, "bounded %.17g exterior %.17g", sum, ext);
 }
 

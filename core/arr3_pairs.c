@@ -160,8 +160,8 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
  * scratch for n entries (bx: the boxes, read once through boxof and then in order).  Returns -1
  * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
-                      uint32_t base, size_t n, const uint32_t *chart, kv *srt, int32_t (*bx)[6],
-                      int32_t (*ibox)[6], bvh *t)
+                      uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first,
+                      kv *srt, int32_t (*bx)[6], int32_t (*ibox)[6], bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -187,6 +187,7 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         for (int k = 0; k < 3; k++)
             code |= (uint64_t)spread_tab[(uint64_t)((int64_t)b[k] + b[3 + k] - lo[k]) >> sh[k]]
                     << (2 - k);
+        if (first) code |= (uint64_t)first[base + i] << 30;
         srt[i] = (kv){code, (uint32_t)i};
     }
     if (sort_kv(srt, n)) return -1;
@@ -203,6 +204,7 @@ typedef struct forest {
     size_t ng;
     uint32_t *g_off; /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
     const uint32_t *chart; /* by piece: its flat chart, or NONE (solids only; else NULL) */
+    const uint8_t *pclass; /* by piece: its chart's class, 7 when not flat (solids only) */
     uint32_t *nchart;      /* by node: the flat chart of every piece below it, or NONE */
     uint32_t *ichart;      /* by item: its piece's chart (solids only) */
     int32_t (*ibox)[6];    /* by item: its piece's box */
@@ -239,8 +241,8 @@ static void build_groups(void *ctx, size_t item, int worker)
         }
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
         bvh t = {F->node + 2 * (size_t)o, F->item + o, 0}; /* the pieces o .. o + n */
-        if (build_tree(piece_box, F->A, o, n, F->chart, F->srt + o, F->bx + o, F->ibox + o,
-                       &t)) {
+        if (build_tree(piece_box, F->A, o, n, F->chart, F->pclass, F->srt + o, F->bx + o,
+                       F->ibox + o, &t)) {
             F->fail = 1;
             return;
         }
@@ -586,6 +588,7 @@ typedef struct chartjob {
     uint32_t *of;          /* by piece: its chart, numbered within its solid */
     uint32_t *nch;         /* by solid: its charts */
     uint8_t **flat;        /* by solid: by chart, 1 when flat */
+    uint8_t *pclass;       /* by piece: its chart's class */
     int fail;
 } chartjob;
 
@@ -1066,6 +1069,7 @@ static int solid_charts(const chartjob *j, size_t sol)
         free(at);
         if (r) goto done;
     }
+    for (uint32_t i = 0; i < n; i++) j->pclass[s0 + i] = C.cls[i];
     j->nch[sol] = C.m;
     j->flat[sol] = C.flat;
     C.flat = NULL;
@@ -1091,13 +1095,14 @@ static void charts_task(void *ctx, size_t item, int worker)
 
 /* Every piece's flat chart (*chartp, by piece: an id, or NONE when its chart is not flat).
  * -1 out of memory, -3 cancelled. */
-static int make_charts(const a3 *A, uint32_t **chartp)
+static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp)
 {
     size_t n = A->npc, ns = 0;
     uint32_t *s_off = mem_malloc((n + 2) * sizeof *s_off);
-    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, 0};
+    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, NULL, 0};
+    j.pclass = *classp = mem_malloc(n + 1);
     int rc = -1;
-    if (!s_off || !j.of) goto done;
+    if (!s_off || !j.of || !j.pclass) goto done;
     for (size_t i = 0; i < n; i = a3_solid_end(A, i)) s_off[ns++] = (uint32_t)i;
     s_off[ns] = (uint32_t)n;
     j.nch = mem_calloc(n + 1, sizeof *j.nch); /* ns <= n */
@@ -1111,7 +1116,8 @@ static int make_charts(const a3 *A, uint32_t **chartp)
     uint32_t base = 0;
     for (size_t s = 0; s < ns; s++) {
         for (uint32_t i = s_off[s]; i < s_off[s + 1]; i++)
-            j.of[i] = j.flat[s][j.of[i]] ? base + j.of[i] : NONE;
+            if (!j.flat[s][j.of[i]]) j.of[i] = NONE, j.pclass[i] = 7;
+            else j.of[i] += base;
         base += j.nch[s];
     }
     *chartp = j.of;
@@ -1315,8 +1321,9 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
     uint32_t *chart = NULL;
+    uint8_t *pclass = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
     kv *tsrt = NULL;
@@ -1337,11 +1344,12 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
         goto done;
     }
     if (!A->soup) { /* the solids' flat charts, whose pieces are never paired together */
-        if ((rc = make_charts(A, &chart)) != 0) {
+        if ((rc = make_charts(A, &chart, &pclass)) != 0) {
             if (rc != -3) rc = -1;
             goto done;
         }
         F.chart = chart;
+        F.pclass = pclass;
         F.nchart = mem_malloc(2 * n * sizeof *F.nchart);
         if (!F.nchart) goto done;
     }
@@ -1368,7 +1376,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
     if (!tsrt || !T.node || !T.item) goto done;
-    if (build_tree(group_box, &F, 0, F.ng, NULL, tsrt, F.bx, NULL, &T)) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, NULL, NULL, tsrt, F.bx, NULL, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;
@@ -1415,6 +1423,7 @@ done:
     free(T.item);
     free(F.g_off);
     free(chart);
+    free(pclass);
     free(F.nchart);
     free(F.ichart);
     free(F.ibox);

@@ -661,8 +661,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
             snprintf(w->msg[w->n], WARN_LEN,
                      "solids[%u]: the surface passes through itself: %zu pair%s of its faces "
                      "cross or overlap, the first faces %u and %u near (%.9g, %.9g, %.9g)",
-                     x->solid, x->pairs, x->pairs == 1 ? "" : "s", x->fa, x->fb, x->at[0],
-                     x->at[1], x->at[2]);
+                     x->solid, x->pairs, x->pairs == 1 ? "" : "s", x->fa, x->fb, x->at[0], x->at[1],
+                     x->at[2]);
             w->ptr[w->n] = w->msg[w->n];
             w->n++;
         }

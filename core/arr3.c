@@ -978,8 +978,7 @@ static int add_tri(const a3 *A, pbuf *B, uint32_t solid, uint32_t face, const ui
     if (pbuf_room(B, 1, 3)) return -1;
     const int64_t *g0 = A->g + 3 * (size_t)t[0], *g1 = A->g + 3 * (size_t)t[1],
                   *g2 = A->g + 3 * (size_t)t[2];
-    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, {0}, 1, 0, 0, 0,
-               {0}};
+    piece P = {solid, face, NONE, (uint32_t)B->npcyc, 1, {t[0], t[1], t[2]}, {0}, 1, 0, 0, 0, {0}};
     P.cls = a3_chart_class(n, 1, &P.cmask);
     for (int a = 0; a < 3; a++) {
         int32_t x = (int32_t)g0[a], y = (int32_t)g1[a], z = (int32_t)g2[a];
@@ -2176,13 +2175,13 @@ typedef struct cutout {
     size_t ncp, capcp;
     uint32_t *met; /* pieces of the pairs that meet */
     size_t nmet, capmet;
-    size_t npairs; /* pairs that meet */
-    uint64_t *self; /* the pairs of one solid that meet (cross, or overlap in a plane) */
+    size_t npairs;    /* pairs that meet */
+    uint64_t *self;   /* the pairs of one solid that meet (cross, or overlap in a plane) */
     uint32_t *selfpt; /* by such pair: a point where they meet (NONE: overlapping in a plane) */
     size_t nself, capself, capselfpt;
     uint32_t *fold; /* planes where pieces of one solid overlap: arranged whole */
     size_t nfold, capfold;
-    int rc;        /* 0, -1 out of memory, -3 cancelled */
+    int rc; /* 0, -1 out of memory, -3 cancelled */
     A3_PAD;
 } cutout;
 
@@ -2404,8 +2403,7 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
         if (A3_PUSH(o->fold, o->nfold, o->capfold, pa)) return -1;
         if (apart == 2) { /* touching only: arranged, not a surface passing through itself */
             o->npairs++;
-            return A3_PUSH(o->met, o->nmet, o->capmet, a) ||
-                           A3_PUSH(o->met, o->nmet, o->capmet, b)
+            return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b)
                        ? -1
                        : 0;
         }
@@ -2446,9 +2444,8 @@ static int cut_pair(const a3 *A, cutout *o, cutwork *w, uint32_t a, uint32_t b)
     if (o->ncs == ncs && o->ncp == ncp) return 0;
     if (self && o->ncs == ncs) { /* only touching at points: not passing through itself */
         o->npairs++;
-        return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b)
-                   ? -1
-                   : 0;
+        return A3_PUSH(o->met, o->nmet, o->capmet, a) || A3_PUSH(o->met, o->nmet, o->capmet, b) ? -1
+                                                                                                : 0;
     }
     return pair_met(A, o, a, b, o->ncs > ncs ? o->cs[ncs].p0 : o->cp[ncp].p);
 }

@@ -141,9 +141,9 @@ typedef struct lar3 {
      * for one whose frev is 1); nc for the exterior.  The faces of a unit have the same solids
      * (fsol). */
     size_t nunit;
-    uint32_t *u_off; /* nunit + 1 */
-    uint32_t *ucell; /* 2 nunit */
-    uint8_t *frev;   /* nf */
+    uint32_t *u_off;   /* nunit + 1 */
+    uint32_t *ucell;   /* 2 nunit */
+    uint8_t *frev;     /* nf */
     arr3_selfx *selfx; /* the solids that pass through themselves, ascending */
     size_t nselfx;
     arr3_stats stats;

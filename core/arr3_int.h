@@ -152,8 +152,8 @@ typedef struct a3 {
     size_t nselfp, capselfp, capselfpt;
     uint32_t *fold; /* planes where pieces of one solid overlap (arranged whole), ascending */
     size_t nfold, capfold;
-    cpt *dcp;           /* contacts of left-out faces: (piece, point), given to the piece's
-                           plane once it has one */
+    cpt *dcp; /* contacts of left-out faces: (piece, point), given to the piece's
+                 plane once it has one */
     size_t ndcp, capdcp;
     /* points */
     xpt *pt;

@@ -160,8 +160,8 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
  * scratch for n entries (bx: the boxes, read once through boxof and then in order).  Returns -1
  * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
-                      uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first,
-                      kv *srt, int32_t (*bx)[6], int32_t (*ibox)[6], bvh *t)
+                      uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first, kv *srt,
+                      int32_t (*bx)[6], int32_t (*ibox)[6], bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -202,15 +202,15 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
 typedef struct forest {
     const a3 *A;
     size_t ng;
-    uint32_t *g_off; /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
+    uint32_t *g_off;       /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
     const uint32_t *chart; /* by piece: its flat chart, or NONE (solids only; else NULL) */
     const uint8_t *pclass; /* by piece: its chart's class, 7 when not flat (solids only) */
     uint32_t *nchart;      /* by node: the flat chart of every piece below it, or NONE */
     uint32_t *ichart;      /* by item: its piece's chart (solids only) */
     int32_t (*ibox)[6];    /* by item: its piece's box */
-    uint32_t *root;  /* ng: its tree's root in node[] */
-    bnode *node;     /* every group's nodes: group g's from 2 g_off[g] */
-    uint32_t *item;  /* every group's items: group g's at g_off[g] .. */
+    uint32_t *root;        /* ng: its tree's root in node[] */
+    bnode *node;           /* every group's nodes: group g's from 2 g_off[g] */
+    uint32_t *item;        /* every group's items: group g's at g_off[g] .. */
     kv *srt;
     int32_t (*bx)[6]; /* build_tree's scratch, by piece */
     size_t chunk;     /* groups a task */
@@ -342,12 +342,12 @@ static int beside(const a3 *A, const piece *P, const piece *Q)
                     u[0] * v[1] - u[1] * v[0]};
     uint32_t o = A->pc_off[Q->c0], m = A->pc_off[Q->c0 + 1] - o;
     int side = 0, other = 0; /* other: Q touches the plane elsewhere than in P's vertices, edges */
-    uint8_t on[2] = {0, 0};   /* the first vertex on the plane, the one before */
+    uint8_t on[2] = {0, 0};  /* the first vertex on the plane, the one before */
     for (uint32_t t = 0; t < m; t++) {
         uint32_t w = A->pcv[o + t];
         const int64_t *x = A->g + 3 * (size_t)w;
-        i128 d = (i128)n[0] * (x[0] - a[0]) + (i128)n[1] * (x[1] - a[1]) +
-                 (i128)n[2] * (x[2] - a[2]);
+        i128 d =
+            (i128)n[0] * (x[0] - a[0]) + (i128)n[1] * (x[1] - a[1]) + (i128)n[2] * (x[2] - a[2]);
         int sg = (d > 0) - (d < 0);
         if (sg) {
             if (side && sg != side) return 0;
@@ -376,7 +376,6 @@ static int corner(const a3 *A, const piece *P, uint32_t u, uint32_t *a, uint32_t
         }
     return 0;
 }
-
 
 /* Do pieces p and q of one solid certainly meet only in vertices and edges they share (as
  * every two neighbouring faces of a surface do)?  Decided here for almost every pair of a clean
@@ -415,8 +414,8 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
             uint32_t a, b, c, d;
             corner(A, P, u, &a, &b);
             corner(A, Q, u, &c, &d);
-            const int64_t *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a,
-                          *pb = g + 3 * (size_t)b, *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
+            const int64_t *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a, *pb = g + 3 * (size_t)b,
+                          *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
             int sc = orient3g(pu, pa, pb, pc), sd = orient3g(pu, pa, pb, pd);
             if (sc && sc == sd) return 1; /* Q beside P's plane but for u */
             int sa = orient3g(pu, pc, pd, pa), sb = orient3g(pu, pc, pd, pb);
@@ -451,8 +450,7 @@ static int orient2x(const int64_t *a, const int64_t *b, const int64_t *c)
  * they share?  0 no; EDGES_CROSS where their insides cross; EDGES_ALONG where they overlap on
  * one line (*same: running the same way); EDGES_TOUCH where an end of one lies on the other. */
 enum { EDGES_APART = 0, EDGES_CROSS, EDGES_ALONG, EDGES_TOUCH };
-static int edges_meet(const a3 *A, int k, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
-                      int *same)
+static int edges_meet(const a3 *A, int k, uint32_t a, uint32_t b, uint32_t c, uint32_t d, int *same)
 {
     int64_t pa[2], pb[2], pc[2], pd[2];
     proj2x(A, a, k, pa), proj2x(A, b, k, pb), proj2x(A, c, k, pc), proj2x(A, d, k, pd);
@@ -649,8 +647,7 @@ static void dir2(const a3 *A, int k, uint32_t from, uint32_t to, int64_t *d)
  * end they share.  e is sorted here, its b top bit used; seg and on (each edge's place on the
  * walk) are scratch for n. */
 #define TAKEN 0x80000000u
-static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *seg,
-                      uint32_t *on)
+static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *seg, uint32_t *on)
 {
     if (n < 3) return 0;
     qsort(e, n, sizeof *e, bedge_cmp);
@@ -762,15 +759,15 @@ static int flatwork_room(flatwork *w, size_t n)
 typedef struct solchart {
     const a3 *A;
     uint32_t s0, n, e0, e1;
-    int tri;       /* every piece a triangle: piece i's entries are e0 + 3 i .. e0 + 3 i + 3 */
-    uint32_t *pe;  /* n + 1: piece i's entries pe[i] .. pe[i + 1) (NULL when tri) */
-    uint32_t *ep;  /* by entry - e0: its piece (NULL when tri) */
-    uint8_t *one;  /* by piece: one cycle (NULL when tri) */
-    uint8_t *cls;  /* by piece: its class (piece.cls, or a neighbour's) */
+    int tri;      /* every piece a triangle: piece i's entries are e0 + 3 i .. e0 + 3 i + 3 */
+    uint32_t *pe; /* n + 1: piece i's entries pe[i] .. pe[i + 1) (NULL when tri) */
+    uint32_t *ep; /* by entry - e0: its piece (NULL when tri) */
+    uint8_t *one; /* by piece: one cycle (NULL when tri) */
+    uint8_t *cls; /* by piece: its class (piece.cls, or a neighbour's) */
     uint32_t *uf, *grp, *of, *cnt; /* by piece; cnt: n + 2 */
     uint32_t *tp;                  /* by entry - e0: its twin's piece, or NONE */
-    uint32_t stamp, m; /* the last set's stamp (grp), the charts made */
-    uint8_t *flat;     /* by chart */
+    uint32_t stamp, m;             /* the last set's stamp (grp), the charts made */
+    uint8_t *flat;                 /* by chart */
     size_t capflat;
     flatwork w;
 } solchart;
@@ -903,7 +900,8 @@ static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
         if (rc) return -1;
         /* CHART_SLABS slabs of as many pieces, each stamped, then each one's parts */
         uint32_t at[CHART_SLABS + 1];
-        for (uint32_t t = 0; t <= CHART_SLABS; t++) at[t] = (uint32_t)((uint64_t)n * t / CHART_SLABS);
+        for (uint32_t t = 0; t <= CHART_SLABS; t++)
+            at[t] = (uint32_t)((uint64_t)n * t / CHART_SLABS);
         for (uint32_t sl = 0; sl < CHART_SLABS; sl++) {
             C->stamp++;
             for (uint32_t t = at[sl]; t < at[sl + 1]; t++) C->grp[list[t]] = C->stamp;
@@ -975,8 +973,9 @@ static int solid_charts(const chartjob *j, size_t sol)
     for (uint32_t i = 0, x = e0; i < n; i++) {
         uint32_t hi = tri ? x + 3 : pe[i + 1], alone = 1, join = NONE, ci = cls0[i];
         for (; x < hi; x++) {
-            uint32_t y = ptwin[x],
-                     q = y == NONE || y < e0 || y >= e1 ? NONE : tri ? (y - e0) / 3 : ep[y - e0];
+            uint32_t y = ptwin[x], q = y == NONE || y < e0 || y >= e1 ? NONE
+                                       : tri                          ? (y - e0) / 3
+                                                                      : ep[y - e0];
             tp[x - e0] = q;
             if (q == NONE) continue;
             uint32_t cq = cls0[q];
@@ -1116,8 +1115,10 @@ static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp)
     uint32_t base = 0;
     for (size_t s = 0; s < ns; s++) {
         for (uint32_t i = s_off[s]; i < s_off[s + 1]; i++)
-            if (!j.flat[s][j.of[i]]) j.of[i] = NONE, j.pclass[i] = 7;
-            else j.of[i] += base;
+            if (!j.flat[s][j.of[i]])
+                j.of[i] = NONE, j.pclass[i] = 7;
+            else
+                j.of[i] += base;
         base += j.nch[s];
     }
     *chartp = j.of;
@@ -1147,8 +1148,7 @@ static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
             if (self && F->ichart[i] != NONE && F->ichart[i] == F->ichart[j]) continue;
             if (!box_meet(F->ibox[i], F->ibox[j])) continue;
             uint32_t p = F->item[i], q = F->item[j];
-            if (A->soup ? A->pc[p].solid == A->pc[q].solid : self && self_apart(A, p, q))
-                continue;
+            if (A->soup ? A->pc[p].solid == A->pc[q].solid : self && self_apart(A, p, q)) continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
         }
     return 0;

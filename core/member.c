@@ -146,9 +146,8 @@ static size_t wsum(const uint32_t *ai, const int32_t *aw, size_t na, const uint3
 
 int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
                      const uint32_t *el, const int8_t *dir, const uint32_t *toff,
-                     const uint32_t *tags, const int32_t *dw, member_rows *rows,
-                     uint32_t *bad_el, void (*tick)(void *udata, double f), void *udata,
-                     const atomic_int *cancel)
+                     const uint32_t *tags, const int32_t *dw, member_rows *rows, uint32_t *bad_el,
+                     void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel)
 {
     /* rows in the order cells are reached, in one growing buffer */
     size_t *start = malloc((n + 1) * sizeof *start);
@@ -188,8 +187,8 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
                 if (b) tw = b;
                 if (!a || !b) goto done;
             }
-            size_t k = wsum(buf + start[u], bw + start[u], len[u], tags + toff[x], dw + toff[x],
-                            nt, dir[i], ti, tw);
+            size_t k = wsum(buf + start[u], bw + start[u], len[u], tags + toff[x], dw + toff[x], nt,
+                            dir[i], ti, tw);
             if (seen[v]) {
                 if (k != len[v] || memcmp(ti, buf + start[v], k * sizeof *ti) ||
                     memcmp(tw, bw + start[v], k * sizeof *tw)) {

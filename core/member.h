@@ -49,9 +49,8 @@ int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t
  * number, ascending, with those numbers in rows->wind.  Returns as member_walk_ex. */
 int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
                      const uint32_t *el, const int8_t *dir, const uint32_t *toff,
-                     const uint32_t *tags, const int32_t *dw, member_rows *rows,
-                     uint32_t *bad_el, void (*tick)(void *udata, double f), void *udata,
-                     const atomic_int *cancel);
+                     const uint32_t *tags, const int32_t *dw, member_rows *rows, uint32_t *bad_el,
+                     void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel);
 
 void member_rows_free(member_rows *r);
 

@@ -104,7 +104,7 @@ int solid_read_off(const char *text, size_t len, solid *out, char *err, size_t e
  * solid with the vertices its faces use (in order of first use); a file of one object is one
  * solid, as solid_read_obj reads it.  *parts (malloc'd, *nparts >= 1 solids) is the caller's to
  * free (solid_free each, then free).  Returns 0, or -1 with a message in err. */
-int solid_read_obj_parts(const char *text, size_t len, int groups, solid **parts,
-                         size_t *nparts, char *err, size_t errlen);
+int solid_read_obj_parts(const char *text, size_t len, int groups, solid **parts, size_t *nparts,
+                         char *err, size_t errlen);
 
 #endif

@@ -68,8 +68,7 @@ static solid cube_rt(double s, const double *u, double a, const double *t)
 static solid merged(const solid *s, size_t n)
 {
     solid m = {0};
-    for (size_t i = 0; i < n; i++)
-        m.nv += s[i].nv, m.nf += s[i].nf, m.ncyc += s[i].ncyc;
+    for (size_t i = 0; i < n; i++) m.nv += s[i].nv, m.nf += s[i].nf, m.ncyc += s[i].ncyc;
     size_t ni = 0;
     for (size_t i = 0; i < n; i++) ni += s[i].cyc_off[s[i].ncyc];
     m.V = malloc(3 * m.nv * sizeof *m.V + 1);
@@ -350,7 +349,8 @@ TEST(merged_cubes_wind_as_many_times_as_cubes_hold_them)
         uint32_t bad;
         if (!run_one(&s, &a, &ma) && !run3(p, n, &b) && !bool3_membership(&b, &mb, &bad)) {
             double *x = malloc(2 * (a.nc + b.nc + 1) * sizeof *x), *y = x + 2 * a.nc;
-            for (size_t k = 0; k < a.nc; k++) x[2 * k] = a.cvol[k], x[2 * k + 1] = wind_of(&ma, k, 0);
+            for (size_t k = 0; k < a.nc; k++)
+                x[2 * k] = a.cvol[k], x[2 * k + 1] = wind_of(&ma, k, 0);
             for (size_t k = 0; k < b.nc; k++)
                 y[2 * k] = b.cvol[k], y[2 * k + 1] = mb.off[k + 1] - mb.off[k];
             qsort(x, a.nc, 2 * sizeof *x, cmp_dd);
@@ -371,5 +371,3 @@ TEST(merged_cubes_wind_as_many_times_as_cubes_hold_them)
         free(p);
     }
 }
-
-

@@ -1726,241 +1726,6 @@ fail:
     return rc;
 }
 
-/* ------------------------------------------------------------------ coplanar classes
- *
- * Which pieces lie in one plane is asked of every piece (a plane of two solids, or of two pieces
- * of one solid turning opposite ways, needs an arrangement), but most pieces never need their
- * canonical plane (the gcd that reduces it is the costly part).  So the classes come from a key
- * that every representation of a plane shares without reducing it: modulo the prime
- * p = 2^61 - 1, with k the first non-zero component of the raw normal (the same for every
- * multiple), the residues of n_i / n_k and d / n_k.  Proportional planes have equal keys; the
- * inverses are taken for a chunk of pieces at once (Montgomery's trick: one exponentiation and
- * three products a piece).  Equal keys are then confirmed exactly against the class's first
- * piece, so a collision of keys can only cost time.  A normal whose n_k is a multiple of p
- * (|n_k| < 2^62 leaves p and 2p) gets a key from its reduced plane instead. */
-
-#define MP ((UINT64_C(1) << 61) - 1)
-
-static uint64_t mp_red(u128 x)
-{
-    uint64_t r = (uint64_t)(x & MP) + (uint64_t)((x >> 61) & MP) + (uint64_t)(x >> 122);
-    r = (r & MP) + (r >> 61);
-    return r >= MP ? r - MP : r;
-}
-
-/* a * b mod p for a, b < p: the product is below 2^122, one fold and one subtraction */
-static uint64_t mp_mul(uint64_t a, uint64_t b)
-{
-    u128 x = (u128)a * b;
-    uint64_t r = ((uint64_t)x & MP) + (uint64_t)(x >> 61);
-    r = (r & MP) + (r >> 61);
-    return r >= MP ? r - MP : r;
-}
-
-static uint64_t mp_of(i128 x)
-{
-    if (x >= 0 && x < (i128)MP) return (uint64_t)x; /* a normal's component, mostly */
-    if (x < 0 && x > -(i128)MP) return MP - (uint64_t)-x;
-    uint64_t r = mp_red(x < 0 ? (u128)0 - (u128)x : (u128)x);
-    return x < 0 && r ? MP - r : r;
-}
-
-static uint64_t mp_inv(uint64_t a)
-{
-    uint64_t r = 1, e = MP - 2;
-    while (e) {
-        if (e & 1) r = mp_mul(r, a);
-        a = mp_mul(a, a);
-        e >>= 1;
-    }
-    return r;
-}
-
-/* The class key of raw plane P (see above); 0 is never returned. */
-typedef struct ckey {
-    uint64_t r[3]; /* the residues of the two other components and of d (before division) */
-    uint64_t nk;   /* n_k mod p (0: no inverse: keyed by the reduced plane) */
-    int k;
-} ckey;
-
-/* x mod p for a normal's component (|x| < 2^63: x >> 61 is at most 3, one fold suffices) */
-static inline uint64_t mp_of64(int64_t x)
-{
-    uint64_t u = x < 0 ? 0 - (uint64_t)x : (uint64_t)x, r = (u & MP) + (u >> 61);
-    r = r >= MP ? r - MP : r;
-    return x < 0 && r ? MP - r : r;
-}
-
-static void ckey_start(const plane3 *P, ckey *c)
-{
-    int k = P->n[0] ? 0 : P->n[1] ? 1 : 2;
-    c->k = k;
-    c->nk = mp_of64(P->n[k]);
-    c->r[0] = mp_of64(P->n[k == 2 ? 0 : k + 1]);
-    c->r[1] = mp_of64(P->n[k == 0 ? 2 : k - 1]);
-    c->r[2] = mp_of(P->d);
-}
-
-/* The key from the three residues divided by n_k: one mix of their odd multiples (a collision
- * only costs an exact comparison). */
-static uint64_t ckey_hash(const ckey *c, uint64_t inv)
-{
-    uint64_t h = mp_mul(c->r[0], inv) * 0x9e3779b97f4a7c15ULL;
-    h ^= mp_mul(c->r[1], inv) * 0xc2b2ae3d27d4eb4fULL;
-    h ^= (mp_mul(c->r[2], inv) + (uint64_t)c->k) * 0x165667b19e3779f9ULL;
-    h = a3_mix64(h);
-    return h ? h : 1;
-}
-
-/* Are raw planes P and Q the same plane (either orientation)? */
-static int plane_equal_raw(const plane3 *P, const plane3 *Q)
-{
-    i128 c0 = (i128)P->n[1] * Q->n[2] - (i128)P->n[2] * Q->n[1];
-    i128 c1 = (i128)P->n[2] * Q->n[0] - (i128)P->n[0] * Q->n[2];
-    i128 c2 = (i128)P->n[0] * Q->n[1] - (i128)P->n[1] * Q->n[0];
-    if (c0 || c1 || c2) return 0;
-    int k = P->n[0] ? 0 : P->n[1] ? 1 : 2;
-    xint a, b;
-    xi_mul_i128(&a, P->d, Q->n[k]);
-    xi_mul_i128(&b, Q->d, P->n[k]);
-    return xi_cmp(&a, &b) == 0;
-}
-
-/* Sign of the dot product of two normals (|n_i| < 2^62: each product below 2^124). */
-static int normals_dot_sign(const int64_t *a, const int64_t *b)
-{
-    i128 d = (i128)a[0] * b[0] + (i128)a[1] * b[1] + (i128)a[2] * b[2];
-    return (d > 0) - (d < 0);
-}
-
-#define CLS_CHUNK 1024
-typedef struct clsjob {
-    const a3 *A;
-    uint64_t *key;
-    int8_t *dir; /* by piece: its sgn (made relative to its class's normal later) */
-} clsjob;
-
-/* The keys of one chunk of pieces. */
-static void cls_keys(void *ctx, size_t item, int worker)
-{
-    (void)worker;
-    const clsjob *j = ctx;
-    const a3 *A = j->A;
-    size_t p0 = item * CLS_CHUNK, p1 = p0 + CLS_CHUNK < A->npc ? p0 + CLS_CHUNK : A->npc;
-    if (a3_cancelled(A)) return; /* stage_classes sees it too */
-    ckey c[CLS_CHUNK];
-    uint64_t pre[CLS_CHUNK + 1];
-    pre[0] = 1;
-    for (size_t i = p0; i < p1; i++) {
-        plane3 P;
-        const piece *pc = &A->pc[i];
-        const int64_t *g0 = A->g + 3 * (size_t)pc->av[0];
-        j->dir[i] = pc->sgn;
-        grid_normal(g0, A->g + 3 * (size_t)pc->av[1], A->g + 3 * (size_t)pc->av[2], P.n);
-        P.d = -((i128)P.n[0] * g0[0] + (i128)P.n[1] * g0[1] + (i128)P.n[2] * g0[2]);
-        ckey_start(&P, &c[i - p0]);
-        if (!c[i - p0].nk) { /* no inverse modulo p: the reduced plane's own hash */
-            plane_reduce(&P);
-            plane_canon(&P);
-            uint64_t h = a3_mix64((uint64_t)P.n[0] ^ 0x7f4a7c15ULL);
-            h = a3_mix64(h ^ (uint64_t)P.n[1]);
-            h = a3_mix64(h ^ (uint64_t)P.n[2]);
-            h = a3_mix64(h ^ (uint64_t)P.d ^ (uint64_t)((u128)P.d >> 64));
-            j->key[i] = h ? h : 1;
-        }
-        pre[i - p0 + 1] = c[i - p0].nk ? mp_mul(pre[i - p0], c[i - p0].nk) : pre[i - p0];
-    }
-    uint64_t inv = mp_inv(pre[p1 - p0]); /* of the product of every n_k */
-    for (size_t i = p1; i-- > p0;) {
-        if (!c[i - p0].nk) continue;
-        uint64_t ik = mp_mul(inv, pre[i - p0]); /* 1 / n_k */
-        inv = mp_mul(inv, c[i - p0].nk);        /* 1 / (product of those before) */
-        j->key[i] = ckey_hash(&c[i - p0], ik);
-    }
-}
-
-/* Every piece's coplanar class; a class holding pieces of one solid turning both
- * ways (a surface touching itself face to face) has all its pieces reached.  Fills the stats
- * planes and coplanar_groups. */
-static int piece_plane_eq(const void *ctx, uint32_t a, uint32_t b)
-{
-    const a3 *A = ctx;
-    plane3 P, Q;
-    return plane_equal_raw(a3_piece_plane(A, a, &P), a3_piece_plane(A, b, &Q));
-}
-
-A3_STAGE static int stage_classes(a3 *A)
-{
-    size_t n = A->npc;
-    uint64_t *key = mem_malloc((n + 1) * sizeof *key);
-    uint32_t *first = mem_malloc((n + 1) * sizeof *first); /* by piece: its class's first */
-    uint8_t *flag = mem_calloc(n + 1, 1); /* by class: 1 another face, 2 another solid, 4 a wall */
-    int8_t *dir = mem_malloc(n + 1);      /* by piece: its outer cycle about its class's normal */
-    int rc = -1;
-    if (!key || !first || !flag || !dir) goto done;
-    clsjob j = {A, key, dir};
-    par_for(A->threads, (n + CLS_CHUNK - 1) / CLS_CHUNK, cls_keys, &j);
-    if (a3_cancelled(A)) { /* some chunks may have stopped early */
-        rc = -3;
-        goto done;
-    }
-    if (a3_firsts(A->threads, n, key, piece_plane_eq, A, first)) goto done;
-    uint32_t ncls = 0;
-    /* classes numbered by their first pieces; first[i] becomes piece i's class (a class's
-     * first piece comes before its others, so first[first[i]] is already the class).  Only a
-     * piece that is not its class's first reads the pieces' 64-byte records. */
-    for (size_t i = 0; i < n; i++) {
-        if (first[i] == i) {
-            first[i] = ncls++;
-            continue;
-        }
-        uint32_t fi = first[i];
-        const piece *pc = &A->pc[i], *f = &A->pc[fi];
-        uint32_t c = first[fi];
-        plane3 P, Q;
-        first[i] = c;
-        dir[i] = (int8_t)(dir[i] * normals_dot_sign(a3_piece_plane(A, (uint32_t)i, &P)->n,
-                                                    a3_piece_plane(A, fi, &Q)->n));
-        if (pc->face != f->face) flag[c] |= 1;
-        if (pc->solid != f->solid)
-            flag[c] |= 2;
-        else if (dir[i] != dir[fi] && !A->soup)
-            flag[c] |= 4;
-    }
-    A->ncls = ncls;
-    /* in a class of several solids, a wall of any of them: its pieces by (class, solid) */
-    size_t nm = 0;
-    for (size_t i = 0; i < n; i++) nm += (flag[first[i]] & 2) != 0;
-    if (nm && !A->soup) {
-        kv *m = mem_malloc(nm * sizeof *m);
-        if (!m) goto done;
-        nm = 0;
-        for (size_t i = 0; i < n; i++)
-            if (flag[first[i]] & 2)
-                m[nm++] = (kv){(uint64_t)first[i] << 32 | A->pc[i].solid, (uint32_t)i};
-        if (sort_kv(m, nm)) {
-            free(m);
-            goto done;
-        }
-        for (size_t i = 1; i < nm; i++)
-            if (m[i].k == m[i - 1].k && dir[m[i].v] != dir[m[i - 1].v]) flag[m[i].k >> 32] |= 4;
-        free(m);
-    }
-    size_t groups = 0;
-    for (uint32_t c = 0; c < ncls; c++) groups += flag[c] & 1;
-    for (size_t i = 0; i < n; i++)
-        if (flag[first[i]] & 4) A->pc[i].reached = 1;
-    A->st->planes = ncls;
-    A->st->coplanar_groups = groups;
-    rc = 0;
-done:
-    free(key);
-    free(first);
-    free(flag);
-    free(dir);
-    return rc;
-}
-
 /* Every entry's twin (a3.ptwin): the entries sorted by their edge's lower vertex (a counting
  * sort), then by (higher vertex, solid), stably; a run of exactly two entries of one solid
  * walking the edge opposite ways are each other's twins.  None in a soup.  -1 out of memory. */
@@ -2795,6 +2560,17 @@ A3_STAGE static int plane_inputs(a3 *A)
     for (size_t k = 0; k < A->nrl; k++) A->pp_off[A->pc[A->rl[k]].plane + 2]++;
     for (size_t p = 0; p < A->npl; p++) A->pp_off[p + 2] += A->pp_off[p + 1];
     for (size_t k = 0; k < A->nrl; k++) A->pp[A->pp_off[A->pc[A->rl[k]].plane + 1]++] = A->rl[k];
+    /* the planes arranged, and those holding pieces of more than one input face */
+    for (size_t p = 0; p < A->npl; p++) {
+        uint32_t a = A->pp_off[p], b = A->pp_off[p + 1];
+        if (a == b) continue;
+        A->st->planes++;
+        for (uint32_t k = a + 1; k < b; k++)
+            if (A->pc[A->pp[k]].face != A->pc[A->pp[a]].face) {
+                A->st->coplanar_groups++;
+                break;
+            }
+    }
     /* cuts by plane (order kept: deterministic) */
     cseg *cs = mem_malloc((A->ncs + 1) * sizeof *cs);
     if (!cs ||
@@ -3360,10 +3136,6 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     par_for(A.threads, (A.nv + SNAP_CHUNK - 1) / SNAP_CHUNK, grid_points, &A);
     A.npt = A.nv;
     A3_TICK("points");
-    if ((r = stage_classes(&A)) == -3) goto cancel;
-    if (r) goto oom;
-    A3_TICK("classes");
-    if (a3_cancelled(&A)) goto cancel;
     if (stage_twins(&A)) goto oom;
     A3_TICK("twins");
     if (a3_cancelled(&A)) goto cancel;

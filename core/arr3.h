@@ -71,8 +71,8 @@ enum {
 
 typedef struct arr3_stats {
     size_t input_solids, input_faces;
-    size_t planes;          /* exact planes holding pieces */
-    size_t coplanar_groups; /* planes holding pieces of more than one input face */
+    size_t planes;          /* exact planes arranged (holding pieces that meet others) */
+    size_t coplanar_groups; /* of those, planes holding pieces of more than one input face */
     size_t split_faces;     /* input faces not planar on the grid, split into triangles */
     size_t pairs_tested;    /* candidate piece pairs (of different solids, boxes meeting) */
     size_t pairs_meeting;   /* of those, pairs whose pieces meet (cut, contact, coplanar overlap) */

@@ -145,7 +145,6 @@ typedef struct a3 {
     uint32_t *solid_face_off;
     size_t nsolids;
     size_t split_faces; /* input faces split into triangles */
-    uint32_t ncls;      /* coplanar classes of the pieces */
     uint64_t *selfp;    /* the pairs of one solid's pieces that meet (a surface passing through
                            itself), in pair order */
     uint32_t *selfpt;   /* by such pair: a point where they meet, or NONE (overlapping) */

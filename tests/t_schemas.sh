@@ -142,7 +142,7 @@ SQUARE='"V":[[0,0],[0,1],[1,0],[1,1]],"EV":[[0,1],[0,2],[1,3],[2,3]],"FV":[[1,0,
 CSR1='{"shape":[2,1],"indptr":[0,1,2],"indices":[0,0],"data":[-1,1]}'
 CSR0='{"shape":[1,0],"indptr":[0,0],"indices":[],"data":[]}'
 CUBE3='"V":[[0,0,0],[0,0,1],[0,1,0],[0,1,1],[1,0,0],[1,0,1],[1,1,0],[1,1,1]],"EV":[[0,1],[0,2],[0,4],[1,3],[1,5],[2,3],[2,6],[3,7],[4,5],[4,6],[5,7],[6,7]],"FV":[[2,6,4,0],[3,1,5,7],[4,5,1,0],[5,4,6,7],[6,2,3,7],[1,3,2,0]],"FE":[[7,-10,-3,2],[-4,5,11,-8],[9,-5,-1,3],[-9,10,12,-11],[-7,6,8,-12],[4,-6,-2,1]],"holes":{},"CF":[[1,2,3,4,5,6]],"CV":[[0,1,2,3,4,5,6,7]],"exterior":[-6,-5,-4,-3,-2,-1]'
-STATS3='{"input_solids":1,"input_faces":6,"planes":6,"coplanar_groups":0,"pairs_tested":0,"pairs_meeting":0,"faces_reached":0,"patches":1,"split_faces":0,"cuts":0,"points":0,"V":8,"E":12,"F":6,"C":1,"shells":2,"components":1,"precision":1.4901161193847656e-08,"ms":{"check":0.01,"snap":0.03,"pairs":0.01,"cuts":0.005,"faces":0.35,"cells":0.02,"boolean":0,"total":0.43},"volumes":[1],"warnings":["solids[0]: inward oriented (volume -1): every face flipped"]}'
+STATS3='{"input_solids":1,"input_faces":6,"planes":0,"coplanar_groups":0,"pairs_tested":0,"pairs_meeting":0,"faces_reached":0,"patches":1,"split_faces":0,"cuts":0,"points":0,"V":8,"E":12,"F":6,"C":1,"shells":2,"components":1,"precision":1.4901161193847656e-08,"ms":{"check":0.01,"snap":0.03,"pairs":0.01,"cuts":0.005,"faces":0.35,"cells":0.02,"boolean":0,"total":0.43},"volumes":[1],"warnings":["solids[0]: inward oriented (volume -1): every face flipped"]}'
 STATS=$(sed -n 's/.*"stats":\({.*}\)}$/\1/p' "$T/cases/orthogonal.result.json")
 check "a stats object to build documents from" test -n "$STATS"
 

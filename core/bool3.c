@@ -41,18 +41,19 @@ int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
 }
 
 /* The walk over the units (lar3.u_off): a unit's faces separate the same two cells and have the
- * same solids, so the walk crosses units, not faces. */
-/* The walk over the units with winding numbers (lar3.fwind): a unit's first side is
- * ucell[2u + 1], its second ucell[2u]; crossing from the first to the second goes along its
- * first face's normal unless that face is reversed (frev), and changes each solid's winding
- * number by -fwind along the normal. */
-static int membership_wind(const lar3 *c, member_rows *rows, uint32_t *bad_face,
-                           void (*tick)(void *udata, double f), void *udata)
+ * same solids, so the walk crosses units, not faces.  With winding numbers (lar3.fwind), a
+ * unit's first side is ucell[2u + 1], its second ucell[2u]; crossing from the first to the
+ * second goes along its first face's normal unless that face is reversed (frev), and changes
+ * each solid's winding number by -fwind along the normal.  Without, a unit's solids are
+ * toggled. */
+static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face,
+                            void (*tick)(void *udata, double f), void *udata)
 {
+    int wind = c->fwind && c->frev;
     size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
     uint32_t *toff = mem_malloc((nu + 2) * sizeof *toff);
     uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
-    int32_t *dw = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *dw);
+    int32_t *dw = wind ? mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *dw) : NULL;
     uint32_t *aoff = mem_calloc(nn + 2, sizeof *aoff);
     uint32_t *nb = mem_malloc((2 * nu + 1) * sizeof *nb),
              *el = mem_malloc((2 * nu + 1) * sizeof *el);
@@ -60,62 +61,22 @@ static int membership_wind(const lar3 *c, member_rows *rows, uint32_t *bad_face,
     int rc = -1;
     *bad_face = UINT32_MAX;
     memset(rows, 0, sizeof *rows);
-    if (!toff || !tags || !dw || !aoff || !nb || !el || !dir) goto done;
-    toff[0] = 0;
-    for (size_t u = 0; u < nu; u++) {
-        uint32_t w = toff[u], f = c->u_off[u];
-        if (f < c->u_off[u + 1])
-            for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
-                if (c->fsol[j] < ns) {
-                    tags[w] = c->fsol[j]; /* ascending, each once (arr3) */
-                    dw[w++] = c->frev[f] ? c->fwind[j] : -c->fwind[j];
-                }
-        toff[u + 1] = w;
-    }
-    for (size_t u = 0; u < nu; u++) {
-        uint32_t a = c->ucell[2 * u], b = c->ucell[2 * u + 1];
-        if (a > nc || b > nc) goto done;
-        if (a != b) aoff[a + 2]++, aoff[b + 2]++;
-    }
-    for (size_t k = 0; k < nn; k++) aoff[k + 2] += aoff[k + 1];
-    for (size_t u = 0; u < nu; u++) {
-        uint32_t second = c->ucell[2 * u], first = c->ucell[2 * u + 1];
-        if (first == second) continue;
-        nb[aoff[first + 1]] = second, el[aoff[first + 1]] = (uint32_t)u;
-        dir[aoff[first + 1]++] = 1;
-        nb[aoff[second + 1]] = first, el[aoff[second + 1]] = (uint32_t)u;
-        dir[aoff[second + 1]++] = -1;
-    }
-    uint32_t bad = UINT32_MAX;
-    rc = member_walk_wind(nn, (uint32_t)nc, aoff, nb, el, dir, toff, tags, dw, rows, &bad, tick,
-                          udata, NULL);
-    if (bad != UINT32_MAX) *bad_face = c->u_off[bad];
-done:
-    free(toff), free(tags), free(dw), free(aoff), free(nb), free(el), free(dir);
-    return rc;
-}
-
-static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face,
-                            void (*tick)(void *udata, double f), void *udata)
-{
-    if (c->fwind && c->frev) return membership_wind(c, rows, bad_face, tick, udata);
-    size_t ns = c->nsolids, nc = c->nc, nn = nc + 1, nu = c->nunit;
-    uint32_t *toff = mem_malloc((nu + 2) * sizeof *toff);
-    uint32_t *tags = mem_malloc((c->fsol_off[c->nf] + 1) * sizeof *tags);
-    uint32_t *aoff = mem_calloc(nn + 2, sizeof *aoff);
-    uint32_t *nb = mem_malloc((2 * nu + 1) * sizeof *nb),
-             *el = mem_malloc((2 * nu + 1) * sizeof *el);
-    int rc = -1;
-    *bad_face = UINT32_MAX;
-    memset(rows, 0, sizeof *rows);
-    if (!toff || !tags || !aoff || !nb || !el) goto done;
-    /* each unit's solids (those of its first face), sorted, counted modulo 2 */
+    if (!toff || !tags || (wind && !dw) || !aoff || !nb || !el || !dir) goto done;
+    /* each unit's solids (those of its first face): with their changes of winding number
+     * (ascending, each once: arr3), or sorted and counted modulo 2 */
     toff[0] = 0;
     for (size_t u = 0; u < nu; u++) {
         uint32_t w = toff[u], n = 0, f = c->u_off[u];
         if (f < c->u_off[u + 1])
             for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
-                if (c->fsol[j] < ns) tags[w + n++] = c->fsol[j];
+                if (c->fsol[j] < ns) {
+                    if (wind) dw[w + n] = c->frev[f] ? c->fwind[j] : -c->fwind[j];
+                    tags[w + n++] = c->fsol[j];
+                }
+        if (wind) {
+            toff[u + 1] = w + n;
+            continue;
+        }
         qsort(tags + w, n, sizeof *tags, cmp_u32);
         uint32_t k = 0;
         for (uint32_t i = 0; i < n;) {
@@ -133,20 +94,21 @@ static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face
     }
     for (size_t k = 0; k < nn; k++) aoff[k + 2] += aoff[k + 1];
     for (size_t u = 0; u < nu; u++) {
-        uint32_t a = c->ucell[2 * u], b = c->ucell[2 * u + 1];
-        if (a == b) continue;
-        nb[aoff[a + 1]] = b, el[aoff[a + 1]++] = (uint32_t)u;
-        nb[aoff[b + 1]] = a, el[aoff[b + 1]++] = (uint32_t)u;
+        uint32_t second = c->ucell[2 * u], first = c->ucell[2 * u + 1];
+        if (first == second) continue;
+        nb[aoff[second + 1]] = first, el[aoff[second + 1]] = (uint32_t)u;
+        dir[aoff[second + 1]++] = -1;
+        nb[aoff[first + 1]] = second, el[aoff[first + 1]] = (uint32_t)u;
+        dir[aoff[first + 1]++] = 1;
     }
     uint32_t bad = UINT32_MAX;
-    rc = member_walk_ex(nn, (uint32_t)nc, aoff, nb, el, toff, tags, rows, &bad, tick, udata, NULL);
+    rc = wind ? member_walk_wind(nn, (uint32_t)nc, aoff, nb, el, dir, toff, tags, dw, rows, &bad,
+                                 tick, udata, NULL)
+              : member_walk_ex(nn, (uint32_t)nc, aoff, nb, el, toff, tags, rows, &bad, tick, udata,
+                               NULL);
     if (bad != UINT32_MAX) *bad_face = c->u_off[bad];
 done:
-    free(toff);
-    free(tags);
-    free(aoff);
-    free(nb);
-    free(el);
+    free(toff), free(tags), free(dw), free(aoff), free(nb), free(el), free(dir);
     return rc;
 }
 

@@ -36,93 +36,6 @@ int member_walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
     return member_walk_ex(n, root, aoff, nb, el, toff, tags, rows, bad_el, NULL, NULL, NULL);
 }
 
-int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
-                   const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
-                   member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
-                   void *udata, const atomic_int *cancel)
-{
-    /* rows in the order cells are reached, in one growing buffer */
-    size_t *start = malloc((n + 1) * sizeof *start);
-    uint32_t *len = malloc((n + 1) * sizeof *len), *queue = malloc((n + 1) * sizeof *queue);
-    uint8_t *seen = calloc(n + 1, 1);
-    uint32_t *buf = NULL, *tmp = NULL;
-    size_t cap = 1024, used = 0, tcap = 64;
-    int rc = -1;
-    memset(rows, 0, sizeof *rows);
-    *bad_el = UINT32_MAX;
-    buf = malloc(cap * sizeof *buf);
-    tmp = malloc(tcap * sizeof *tmp);
-    if (!start || !len || !queue || !seen || !buf || !tmp) goto done;
-    size_t qh = 0, qt = 0;
-    queue[qt++] = root;
-    seen[root] = 1;
-    start[root] = 0;
-    len[root] = 0;
-    while (qh < qt) {
-        uint32_t u = queue[qh++];
-        if (tick && (qh & 0xffff) == 0) tick(udata, (double)qh / (double)n);
-        if (cancel && (qh & 4095) == 0 && atomic_load_explicit(cancel, memory_order_relaxed)) {
-            rc = 2;
-            goto done;
-        }
-        for (uint32_t i = aoff[u]; i < aoff[u + 1]; i++) {
-            uint32_t v = nb[i], x = el[i];
-            size_t nt = toff[x + 1] - toff[x], most = len[u] + nt;
-            if (most > tcap) {
-                while (tcap < most) tcap *= 2;
-                uint32_t *t = realloc(tmp, tcap * sizeof *t);
-                if (!t) goto done;
-                tmp = t;
-            }
-            size_t k = symdiff(buf + start[u], len[u], tags + toff[x], nt, tmp);
-            if (seen[v]) {
-                if (k != len[v] || memcmp(tmp, buf + start[v], k * sizeof *tmp)) {
-                    *bad_el = x;
-                    rc = 1;
-                    goto done;
-                }
-                continue;
-            }
-            if (used + k > UINT32_MAX) goto done; /* the rows' offsets are 32 bits */
-            if (used + k > cap) {
-                while (cap < used + k) cap *= 2;
-                uint32_t *b = realloc(buf, cap * sizeof *b);
-                if (!b) goto done;
-                buf = b;
-            }
-            memcpy(buf + used, tmp, k * sizeof *tmp);
-            start[v] = used;
-            len[v] = (uint32_t)k;
-            used += k;
-            seen[v] = 1;
-            queue[qt++] = v;
-        }
-    }
-    if (qt != n) {
-        rc = 1;
-        goto done;
-    }
-    /* compressed sparse rows in cell order */
-    rows->off = malloc((n + 1) * sizeof *rows->off);
-    rows->idx = malloc((used + 1) * sizeof *rows->idx);
-    if (!rows->off || !rows->idx) goto done;
-    rows->off[0] = 0;
-    for (size_t c = 0; c < n; c++) {
-        memcpy(rows->idx + rows->off[c], buf + start[c], len[c] * sizeof *buf);
-        rows->off[c + 1] = rows->off[c] + len[c];
-    }
-    rc = 0;
-done:
-    if (rc) member_rows_free(rows);
-    free(start);
-    free(len);
-    free(queue);
-    free(seen);
-    free(buf);
-    free(tmp);
-    return rc;
-}
-
 /* out = a + sign * b over sorted (input, winding) lists, zeros left out; returns its length. */
 static size_t wsum(const uint32_t *ai, const int32_t *aw, size_t na, const uint32_t *bi,
                    const int32_t *bw, size_t nb, int sign, uint32_t *oi, int32_t *ow)
@@ -144,26 +57,25 @@ static size_t wsum(const uint32_t *ai, const int32_t *aw, size_t na, const uint3
     return k;
 }
 
-int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
-                     const uint32_t *el, const int8_t *dir, const uint32_t *toff,
-                     const uint32_t *tags, const int32_t *dw, member_rows *rows, uint32_t *bad_el,
-                     void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel)
+/* The walk of member_walk_ex (dw NULL: each element's inputs toggled) and member_walk_wind
+ * (dw: their winding numbers changed by dw, with the sign dir gives). */
+static int walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                const uint32_t *el, const int8_t *dir, const uint32_t *toff, const uint32_t *tags,
+                const int32_t *dw, member_rows *rows, uint32_t *bad_el,
+                void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel)
 {
-    /* rows in the order cells are reached, in one growing buffer */
+    /* rows in the order cells are reached, in one growing buffer (bw: their winding numbers,
+     * with dw); a neighbour's row is made in ti (tw) */
     size_t *start = malloc((n + 1) * sizeof *start);
     uint32_t *len = malloc((n + 1) * sizeof *len), *queue = malloc((n + 1) * sizeof *queue);
     uint8_t *seen = calloc(n + 1, 1);
-    uint32_t *buf = NULL, *ti = NULL;
-    int32_t *bw = NULL, *tw = NULL;
     size_t cap = 1024, used = 0, tcap = 64;
+    uint32_t *buf = malloc(cap * sizeof *buf), *ti = malloc(tcap * sizeof *ti);
+    int32_t *bw = dw ? malloc(cap * sizeof *bw) : NULL, *tw = dw ? malloc(tcap * sizeof *tw) : NULL;
     int rc = -1;
     memset(rows, 0, sizeof *rows);
     *bad_el = UINT32_MAX;
-    buf = malloc(cap * sizeof *buf);
-    bw = malloc(cap * sizeof *bw);
-    ti = malloc(tcap * sizeof *ti);
-    tw = malloc(tcap * sizeof *tw);
-    if (!start || !len || !queue || !seen || !buf || !bw || !ti || !tw) goto done;
+    if (!start || !len || !queue || !seen || !buf || !ti || (dw && (!bw || !tw))) goto done;
     size_t qh = 0, qt = 0;
     queue[qt++] = root;
     seen[root] = 1;
@@ -183,15 +95,16 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
                 while (tcap < most) tcap *= 2;
                 uint32_t *a = realloc(ti, tcap * sizeof *a);
                 if (a) ti = a;
-                int32_t *b = realloc(tw, tcap * sizeof *b);
+                int32_t *b = dw ? realloc(tw, tcap * sizeof *b) : NULL;
                 if (b) tw = b;
-                if (!a || !b) goto done;
+                if (!a || (dw && !b)) goto done;
             }
-            size_t k = wsum(buf + start[u], bw + start[u], len[u], tags + toff[x], dw + toff[x], nt,
-                            dir[i], ti, tw);
+            size_t k = dw ? wsum(buf + start[u], bw + start[u], len[u], tags + toff[x],
+                                 dw + toff[x], nt, dir[i], ti, tw)
+                          : symdiff(buf + start[u], len[u], tags + toff[x], nt, ti);
             if (seen[v]) {
                 if (k != len[v] || memcmp(ti, buf + start[v], k * sizeof *ti) ||
-                    memcmp(tw, bw + start[v], k * sizeof *tw)) {
+                    (dw && memcmp(tw, bw + start[v], k * sizeof *tw))) {
                     *bad_el = x;
                     rc = 1;
                     goto done;
@@ -203,12 +116,12 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
                 while (cap < used + k) cap *= 2;
                 uint32_t *a = realloc(buf, cap * sizeof *a);
                 if (a) buf = a;
-                int32_t *b = realloc(bw, cap * sizeof *b);
+                int32_t *b = dw ? realloc(bw, cap * sizeof *b) : NULL;
                 if (b) bw = b;
-                if (!a || !b) goto done;
+                if (!a || (dw && !b)) goto done;
             }
             memcpy(buf + used, ti, k * sizeof *ti);
-            memcpy(bw + used, tw, k * sizeof *tw);
+            if (dw) memcpy(bw + used, tw, k * sizeof *tw);
             start[v] = used;
             len[v] = (uint32_t)k;
             used += k;
@@ -220,14 +133,15 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
         rc = 1;
         goto done;
     }
+    /* compressed sparse rows in cell order */
     rows->off = malloc((n + 1) * sizeof *rows->off);
     rows->idx = malloc((used + 1) * sizeof *rows->idx);
-    rows->wind = malloc((used + 1) * sizeof *rows->wind);
-    if (!rows->off || !rows->idx || !rows->wind) goto done;
+    if (dw) rows->wind = malloc((used + 1) * sizeof *rows->wind);
+    if (!rows->off || !rows->idx || (dw && !rows->wind)) goto done;
     rows->off[0] = 0;
     for (size_t c = 0; c < n; c++) {
         memcpy(rows->idx + rows->off[c], buf + start[c], len[c] * sizeof *buf);
-        memcpy(rows->wind + rows->off[c], bw + start[c], len[c] * sizeof *bw);
+        if (dw) memcpy(rows->wind + rows->off[c], bw + start[c], len[c] * sizeof *bw);
         rows->off[c + 1] = rows->off[c] + len[c];
     }
     rc = 0;
@@ -235,4 +149,21 @@ done:
     if (rc) member_rows_free(rows);
     free(start), free(len), free(queue), free(seen), free(buf), free(bw), free(ti), free(tw);
     return rc;
+}
+
+int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                   const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
+                   member_rows *rows, uint32_t *bad_el, void (*tick)(void *udata, double f),
+                   void *udata, const atomic_int *cancel)
+{
+    return walk(n, root, aoff, nb, el, NULL, toff, tags, NULL, rows, bad_el, tick, udata, cancel);
+}
+
+int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                     const uint32_t *el, const int8_t *dir, const uint32_t *toff,
+                     const uint32_t *tags, const int32_t *dw, member_rows *rows,
+                     uint32_t *bad_el, void (*tick)(void *udata, double f), void *udata,
+                     const atomic_int *cancel)
+{
+    return walk(n, root, aoff, nb, el, dir, toff, tags, dw, rows, bad_el, tick, udata, cancel);
 }

@@ -14,54 +14,30 @@
 #include "core/solid.h"
 #include "tests/check.h"
 #include "tests/lar_check.h"
+#include "tests/shapes.h"
 
-static const uint32_t cube_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                                          {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
-/* The hexahedron of 8 corners (bit 0: x side, bit 1: y, bit 2: z), outward, or inward when
- * inward is set. */
-static solid hexa(const double c[8][3], int inward)
-{
-    solid s = {0};
-    s.nv = 8, s.nf = 6, s.ncyc = 6;
-    s.V = malloc(24 * sizeof *s.V);
-    s.face_off = malloc(7 * sizeof *s.face_off);
-    s.cyc_off = malloc(7 * sizeof *s.cyc_off);
-    s.cyc = malloc(24 * sizeof *s.cyc);
-    for (int i = 0; i < 8; i++) memcpy(s.V + 3 * i, c[i], 3 * sizeof(double));
-    for (int f = 0; f <= 6; f++) s.face_off[f] = (uint32_t)f, s.cyc_off[f] = (uint32_t)(4 * f);
-    for (int f = 0; f < 6; f++)
-        for (int i = 0; i < 4; i++) s.cyc[4 * f + i] = cube_faces[f][inward ? 3 - i : i];
-    return s;
-}
-
+/* The box [x0, x1] x [y0, y1] x [z0, z1] (shape_box), turned inward when inward is set (every
+ * cycle reversed: shape_poly would turn it out again). */
 static solid box(double x0, double y0, double z0, double x1, double y1, double z1, int inward)
 {
-    double c[8][3];
-    for (int i = 0; i < 8; i++) {
-        c[i][0] = i & 1 ? x1 : x0;
-        c[i][1] = i & 2 ? y1 : y0;
-        c[i][2] = i & 4 ? z1 : z0;
-    }
-    return hexa(c, inward);
+    double lo[3] = {x0, y0, z0}, hi[3] = {x1, y1, z1};
+    solid s = shape_box(lo, hi);
+    for (size_t c = 0; inward && c < s.ncyc; c++)
+        for (uint32_t a = s.cyc_off[c], b = s.cyc_off[c + 1] - 1; a < b; a++, b--) {
+            uint32_t t = s.cyc[a];
+            s.cyc[a] = s.cyc[b], s.cyc[b] = t;
+        }
+    return s;
 }
 
 /* A cube of side s turned by angle a about unit axis u, moved by t. */
 static solid cube_rt(double s, const double *u, double a, const double *t)
 {
-    double c[8][3], R[3][3], cs = cos(a), sn = sin(a), C = 1 - cs;
-    R[0][0] = cs + u[0] * u[0] * C, R[0][1] = u[0] * u[1] * C - u[2] * sn;
-    R[0][2] = u[0] * u[2] * C + u[1] * sn;
-    R[1][0] = u[1] * u[0] * C + u[2] * sn, R[1][1] = cs + u[1] * u[1] * C;
-    R[1][2] = u[1] * u[2] * C - u[0] * sn;
-    R[2][0] = u[2] * u[0] * C - u[1] * sn, R[2][1] = u[2] * u[1] * C + u[0] * sn;
-    R[2][2] = cs + u[2] * u[2] * C;
-    for (int i = 0; i < 8; i++) {
-        double p[3] = {i & 1 ? s : 0, i & 2 ? s : 0, i & 4 ? s : 0};
-        for (int k = 0; k < 3; k++)
-            c[i][k] = R[k][0] * p[0] + R[k][1] * p[1] + R[k][2] * p[2] + t[k];
-    }
-    return hexa(c, 0);
+    double R[3][3];
+    solid c = box(0, 0, 0, s, s, s, 0);
+    shape_rotation(u, a, R);
+    shape_transform(&c, R, t);
+    return c;
 }
 
 /* The solids s[0 .. n) as one solid (their vertices and faces one after another). */
@@ -123,22 +99,6 @@ static double wind_volume(const lar3 *c, const member_rows *m, uint32_t j)
     return v;
 }
 
-static double signed_volume(const solid *s)
-{
-    double v = 0;
-    for (size_t f = 0; f < s->nf; f++) {
-        uint32_t lo = s->cyc_off[s->face_off[f]], hi = s->cyc_off[s->face_off[f] + 1];
-        const double *a = s->V + 3 * (size_t)s->cyc[lo];
-        for (uint32_t i = lo + 1; i + 1 < hi; i++) {
-            const double *b = s->V + 3 * (size_t)s->cyc[i], *c = s->V + 3 * (size_t)s->cyc[i + 1];
-            v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-                  a[2] * (b[0] * c[1] - b[1] * c[0])) /
-                 6;
-        }
-    }
-    return v;
-}
-
 /* Runs one solid s, checks the invariants and the windings' volume; fills *c and *m. */
 static int run_one(const solid *s, lar3 *c, member_rows *m)
 {
@@ -149,7 +109,7 @@ static int run_one(const solid *s, lar3 *c, member_rows *m)
         test_fail(__FILE__, __func__, __LINE__, "membership failed at face %u", bad);
         return -1;
     }
-    double w = wind_volume(c, m, 0), sv = signed_volume(s);
+    double w = wind_volume(c, m, 0), sv = shape_volume(s);
     if (fabs(w - sv) > 1e-6 * (1 + fabs(sv))) {
         test_fail(__FILE__, __func__, __LINE__, "sum of winding x volume %.12g, surface %.12g", w,
                   sv);
@@ -291,7 +251,7 @@ TEST(pentagram_prism)
 TEST(an_open_surface_given_twice_is_refused)
 {
     solid b = box(0, 0, 0, 1, 1, 1, 0), s = b;
-    /* faces 0 .. 4 (no top) twice, on the same vertices */
+    /* faces 0 .. 4 (shape_hexa's: the top is the last) twice, on the same vertices */
     s.nf = s.ncyc = 10;
     s.face_off = malloc(11 * sizeof *s.face_off);
     s.cyc_off = malloc(11 * sizeof *s.cyc_off);

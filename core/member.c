@@ -161,9 +161,8 @@ int member_walk_ex(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t
 
 int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
                      const uint32_t *el, const int8_t *dir, const uint32_t *toff,
-                     const uint32_t *tags, const int32_t *dw, member_rows *rows,
-                     uint32_t *bad_el, void (*tick)(void *udata, double f), void *udata,
-                     const atomic_int *cancel)
+                     const uint32_t *tags, const int32_t *dw, member_rows *rows, uint32_t *bad_el,
+                     void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel)
 {
     return walk(n, root, aoff, nb, el, dir, toff, tags, dw, rows, bad_el, tick, udata, cancel);
 }

@@ -37,6 +37,7 @@ import sys
 import tempfile
 
 from tally import fail, ok, summary
+from offio import read_off
 
 B = sys.argv[1]
 CEL = os.path.join(B, "cellar")
@@ -46,21 +47,6 @@ REAL = os.path.join(HERE, "data/mesh/real")
 CASES = os.path.join(HERE, "data/solids-cases")
 STRESS = int(os.environ.get("CELLAR_STRESS", "0") or 0)
 WORST = [0.0, ""]  # worst |ours - reference| / bound
-
-
-def read_off(path):
-    d = [t for line in open(path) for t in line.split("#")[0].split()]
-    nv, nf = int(d[1]), int(d[2])
-    q = 4
-    V, Fc = [], []
-    for _ in range(nv):
-        V.append([float(d[q]), float(d[q + 1]), float(d[q + 2])])
-        q += 3
-    for _ in range(nf):
-        n = int(d[q])
-        Fc.append([int(x) for x in d[q + 1:q + 1 + n]])
-        q += 1 + n
-    return V, Fc
 
 
 def write_off(path, V, Fc):

@@ -71,6 +71,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from tally import fail, ok, summary  # noqa: E402
+from offio import read_off  # noqa: E402
 
 if len(sys.argv) > 1:
     CEL = os.path.join(sys.argv[1], "cellar")
@@ -88,21 +89,6 @@ WORST = [0.0, ""]  # worst |ours - reference| / bound
 
 
 # ---- meshes -------------------------------------------------------------------------------
-
-def read_off(path):
-    d = [t for line in open(path) for t in line.split("#")[0].split()]
-    nv, nf = int(d[1]), int(d[2])
-    q = 4
-    V, Fc = [], []
-    for _ in range(nv):
-        V.append([float(d[q]), float(d[q + 1]), float(d[q + 2])])
-        q += 3
-    for _ in range(nf):
-        n = int(d[q])
-        Fc.append([int(x) for x in d[q + 1:q + 1 + n]])
-        q += 1 + n
-    return V, Fc
-
 
 def write_off(path, V, Fc):
     with open(path, "w") as f:

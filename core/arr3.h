@@ -8,7 +8,8 @@
  * the result is written.
  *   1. pieces: a face whose snapped vertices lie exactly in one plane is one piece; a face that
  *      does not is split into triangles, each with its own exact plane (stats.split_faces);
- *   2. pairs: a box-kd-tree of the pieces' boxes gives the pairs of pieces of different solids;
+ *   2. pairs: a bounding-volume hierarchy of the pieces' boxes gives the pairs of pieces of
+ *      different solids, and of one solid where its surface may pass through itself;
  *   3. cuts: for each pair, where the two pieces meet on the line of their planes, exactly:
  *      segments (crossings, and contacts along an edge) and single points (a vertex on a face,
  *      edges crossing), given to both planes, so every contact becomes part of the complex;

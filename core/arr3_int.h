@@ -13,9 +13,10 @@
  *   plane   an exact integer plane, canonical (reduced, first non-zero normal component > 0),
  *           so that two pieces are coplanar exactly when their plane ids are equal.
  *   point   an xpt (core/pred.h); ids below nv are the vertices (GRID).
- *   cut     a segment where two pieces of different solids meet, on the line where their planes
- *           meet: it is given to both planes, each with the other as its side plane.  A point
- *           where they only touch is a contact point, given to both planes too.
+ *   cut     a segment where two pieces meet (of different solids, or of one solid that passes
+ *           through itself there), on the line where their planes meet: it is given to both
+ *           planes, each with the other as its side plane.  A point where they only touch is a
+ *           contact point, given to both planes too.
  */
 #ifndef CELLAR_ARR3_INT_H
 #define CELLAR_ARR3_INT_H
@@ -269,9 +270,10 @@ const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp);
 /* Its normal only (as a3_face_plane's), into n[3]: no offset, no doubles. */
 void a3_face_normal(const a3 *A, uint32_t f, int64_t *n);
 
-/* The candidate pairs: pieces of different solids whose closed boxes meet, each pair once as
- * (lower id << 32 | higher id), sorted (arr3_pairs.c: a bounding-volume hierarchy per solid).
- * Returns 0, or -1 out of memory. */
+/* The candidate pairs: pieces of different solids whose closed boxes meet, and pieces of one
+ * solid whose boxes meet and that self_apart could not tell apart, each pair once as (lower id
+ * << 32 | higher id), sorted (arr3_pairs.c: a bounding-volume hierarchy per solid).  Returns
+ * 0, -1 out of memory, or -3 cancelled. */
 int a3_pairs(const a3 *A, uint64_t **out, size_t *nout);
 
 /* The chart class of a piece whose outer cycle turns sgn about normal n (piece.cls), and in

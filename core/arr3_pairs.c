@@ -1,5 +1,6 @@
 /* arr3_pairs.c — the candidate pairs of the 3D arrangement (stage 2 of arr3.h): the pieces of
- * different solids whose closed boxes meet.
+ * different solids whose closed boxes meet, and the pieces of one solid whose boxes meet and
+ * that may cross (a surface passing through itself: the charts below, and self_apart).
  *
  * A bounding-volume hierarchy per solid, and one over the solids.  A solid's pieces are sorted
  * by the Morton code of their boxes' centres (63 bits: 21 per axis, over the solid's own box)
@@ -12,7 +13,9 @@
  * against itself gives the pairs of solids whose boxes meet, and each such pair's trees are
  * walked against each other (the larger node's children first), so the work grows with the
  * node pairs whose boxes meet, not with the pieces: the parts of two surfaces far from each
- * other are left at the first nodes that separate them.  In a face soup each face is a solid.
+ * other are left at the first nodes that separate them.  Each solid's tree is walked against
+ * itself too, skipping the node pairs inside one flat chart.  In a face soup each face is a
+ * solid (and nothing is walked against itself).
  *
  * Threads: the trees are built on par_for() (a solid each, in chunks), and the walks of the
  * solid pairs are cut into tasks (node pairs, breadth first, until there are enough of them)

@@ -14,8 +14,9 @@
  * walked against each other (the larger node's children first), so the work grows with the
  * node pairs whose boxes meet, not with the pieces: the parts of two surfaces far from each
  * other are left at the first nodes that separate them.  Each solid's tree is walked against
- * itself too, skipping the node pairs inside one flat chart.  In a face soup each face is a
- * solid (and nothing is walked against itself).
+ * itself too, skipping the node pairs inside one flat chart; along the charts' boundaries most
+ * pairs it meets share a vertex whose star is certified (stars, below), settled by vertex ids.
+ * In a face soup each face is a solid (and nothing is walked against itself).
  *
  * Threads: the trees are built on par_for() (a solid each, in chunks), and the walks of the
  * solid pairs are cut into tasks (node pairs, breadth first, until there are enough of them)
@@ -28,6 +29,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdatomic.h>
 #include <stdio.h>
 
 #include "core/mem.h"
@@ -50,10 +52,12 @@ typedef struct bvh {
     size_t nnode;
 } bvh;
 
-static int box_meet(const int32_t *a, const int32_t *b)
+/* Branch-free: most boxes a walk compares do not meet, in no pattern a branch predictor
+ * learns, and six branches mispredicted cost more than six comparisons. */
+static inline int box_meet(const int32_t *a, const int32_t *b)
 {
-    return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] &&
-           b[2] <= a[5];
+    return (a[0] <= b[3]) & (b[0] <= a[3]) & (a[1] <= b[4]) & (b[1] <= a[4]) & (a[2] <= b[5]) &
+           (b[2] <= a[5]);
 }
 
 static void box_join(int32_t *r, const int32_t *a, const int32_t *b)
@@ -205,15 +209,16 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
 typedef struct forest {
     const a3 *A;
     size_t ng;
-    uint32_t *g_off;       /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
-    const uint32_t *chart; /* by piece: its flat chart, or NONE (solids only; else NULL) */
-    const uint8_t *pclass; /* by piece: its chart's class, 7 when not flat (solids only) */
-    uint32_t *nchart;      /* by node: the flat chart of every piece below it, or NONE */
-    uint32_t *ichart;      /* by item: its piece's chart (solids only) */
-    int32_t (*ibox)[6];    /* by item: its piece's box */
-    uint32_t *root;        /* ng: its tree's root in node[] */
-    bnode *node;           /* every group's nodes: group g's from 2 g_off[g] */
-    uint32_t *item;        /* every group's items: group g's at g_off[g] .. */
+    uint32_t *g_off;           /* ng + 1: group g holds pieces g_off[g] .. g_off[g + 1) */
+    const uint32_t *chart;     /* by piece: its flat chart, or NONE (solids only; else NULL) */
+    const uint8_t *pclass;     /* by piece: its chart's class, 7 when not flat (solids only) */
+    uint32_t *nchart;          /* by node: the flat chart of every piece below it, or NONE */
+    int32_t (*ibox)[6];        /* by item: its piece's box */
+    uint32_t (*itri)[3];       /* by item: a triangle's vertices, or NONE (solids only) */
+    const atomic_uchar *vcert; /* by vertex: 1 when its star is certified (star_cert) */
+    uint32_t *root;            /* ng: its tree's root in node[] */
+    bnode *node;               /* every group's nodes: group g's from 2 g_off[g] */
+    uint32_t *item;            /* every group's items: group g's at g_off[g] .. */
     kv *srt;
     int32_t (*bx)[6]; /* build_tree's scratch, by piece */
     size_t chunk;     /* groups a task */
@@ -257,19 +262,23 @@ static void build_groups(void *ctx, size_t item, int worker)
             else
                 nd->a += 2 * o, nd->b += 2 * o;
         }
-        if (F->chart) /* the items' charts in item order */
-            for (uint32_t k = o; k < o + n; k++) F->ichart[k] = F->chart[F->item[k]];
+        if (F->itri) /* the items' vertices, when triangles, in item order */
+            for (uint32_t k = o; k < o + n; k++) {
+                const piece *P = &F->A->pc[F->item[k]];
+                uint32_t c = P->c0;
+                if (P->nc == 1 && F->A->pc_off[c + 1] - F->A->pc_off[c] == 3)
+                    memcpy(F->itri[k], F->A->pcv + F->A->pc_off[c], sizeof *F->itri);
+                else
+                    F->itri[k][0] = F->itri[k][1] = F->itri[k][2] = NONE;
+            }
         if (F->chart) /* children come after their parents: the nodes bottom up */
             for (size_t i = t.nnode; i-- > 0;) {
                 const bnode *nd = &t.node[i];
                 uint32_t c;
-                if (nd->b & LEAFBIT) {
-                    c = F->ichart[nd->a];
-                    for (uint32_t k = nd->a + 1; k < nd->a + (nd->b & ~LEAFBIT); k++)
-                        if (F->ichart[k] != c) c = NONE;
-                } else {
+                if (nd->b & LEAFBIT) /* a leaf's pieces are of one chart (chart_front) */
+                    c = F->chart[F->item[nd->a]];
+                else
                     c = F->nchart[nd->a] == F->nchart[nd->b] ? F->nchart[nd->a] : NONE;
-                }
                 F->nchart[2 * (size_t)o + i] = c;
             }
     }
@@ -590,6 +599,8 @@ typedef struct chartjob {
     uint32_t *nch;         /* by solid: its charts */
     uint8_t **flat;        /* by solid: by chart, 1 when flat */
     uint8_t *pclass;       /* by piece: its chart's class */
+    const uint32_t *deg;   /* by vertex: the pieces' corners at it, all solids' */
+    atomic_uchar *vcert;   /* by vertex: 1 when its star is certified, 2 when not (star_cert) */
     int fail;
 } chartjob;
 
@@ -597,22 +608,10 @@ typedef struct bedge {
     uint32_t a, b; /* vertex ids, a to b */
 } bedge;
 
-static int bedge_cmp(const void *x, const void *y)
-{
-    uint32_t a = ((const bedge *)x)->a, b = ((const bedge *)y)->a;
-    return (a > b) - (a < b);
-}
-
 typedef struct bseg {
     int64_t lo[2], hi[2]; /* projected box, coordinates times two */
     uint32_t a, b;
 } bseg;
-
-static int bseg_cmp(const void *x, const void *y)
-{
-    int64_t a = ((const bseg *)x)->lo[0], b = ((const bseg *)y)->lo[0];
-    return (a > b) - (a < b);
-}
 
 /* Turning clockwise (sigma > 0) or counter-clockwise (sigma < 0) from direction f, the class
  * of direction d: 0 along f, then 1, 2 (opposite f), 3; within 1 and 3 by cross products. */
@@ -650,10 +649,14 @@ static void dir2(const a3 *A, int k, uint32_t from, uint32_t to, int64_t *d)
  * end they share.  e is sorted here, its b top bit used; seg and on (each edge's place on the
  * walk) are scratch for n. */
 #define TAKEN 0x80000000u
-static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *seg, uint32_t *on)
+static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *seg, uint32_t *on,
+                      kv *ks)
 {
     if (n < 3) return 0;
-    qsort(e, n, sizeof *e, bedge_cmp);
+    uint64_t *u = (uint64_t *)ks; /* e sorted by a (then b), through ks (not in use yet) */
+    for (size_t i = 0; i < n; i++) u[i] = (uint64_t)e[i].a << 32 | e[i].b;
+    if (sort_u64(u, n)) return 0; /* out of memory: taken as not flat */
+    for (size_t i = 0; i < n; i++) e[i] = (bedge){(uint32_t)(u[i] >> 32), (uint32_t)u[i]};
     for (size_t i = 0; i < n; i++) on[i] = NONE;
     uint32_t *path = (uint32_t *)seg; /* the walk's edges (seg is not in use yet) */
     int positive = 0;
@@ -665,12 +668,17 @@ static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *s
             e[at].b |= TAKEN;
             on[at] = (uint32_t)top;
             path[top++] = (uint32_t)at;
-            /* the edges going out of b: a run in e */
-            bedge key = {b, 0};
-            const bedge *hit = bsearch(&key, e, n, sizeof *e, bedge_cmp);
-            if (!hit) return 0; /* the boundary does not close (a bug upstream) */
-            size_t r0 = (size_t)(hit - e), r1 = r0 + 1;
-            while (r0 > 0 && e[r0 - 1].a == b) r0--;
+            /* the edges going out of b: a run in e, from the first whose a is not below b */
+            size_t r0 = 0, r1 = n;
+            while (r0 < r1) {
+                size_t mid = r0 + (r1 - r0) / 2;
+                if (e[mid].a < b)
+                    r0 = mid + 1;
+                else
+                    r1 = mid;
+            }
+            if (r0 == n || e[r0].a != b) return 0; /* the boundary does not close (a bug) */
+            r1 = r0 + 1;
             while (r1 < n && e[r1].a == b) r1++;
             for (size_t r = r0; r < r1; r++) {
                 if (on[r] == NONE) continue;
@@ -720,16 +728,20 @@ static int chart_flat(const a3 *A, bedge *e, size_t n, int k, int sigma, bseg *s
             seg[i].lo[t] = x < y ? x : y, seg[i].hi[t] = x < y ? y : x;
         }
         seg[i].a = a, seg[i].b = b;
+        ks[i] = (kv){(uint64_t)(seg[i].lo[0] + ((int64_t)1 << 62)), (uint32_t)i};
     }
-    qsort(seg, n, sizeof *seg, bseg_cmp);
+    if (sort_kv(ks, n)) return 0;
     size_t budget = 4096 + CHART_WORK * n;
-    for (size_t i = 0; i < n; i++)
-        for (size_t j = i + 1; j < n && seg[j].lo[0] <= seg[i].hi[0]; j++) {
+    for (size_t i = 0; i < n; i++) {
+        const bseg *si = &seg[ks[i].v];
+        for (size_t j = i + 1; j < n && seg[ks[j].v].lo[0] <= si->hi[0]; j++) {
+            const bseg *sj = &seg[ks[j].v];
             if (!budget--) return 0;
-            if (seg[j].lo[1] > seg[i].hi[1] || seg[j].hi[1] < seg[i].lo[1]) continue;
+            if (sj->lo[1] > si->hi[1] || sj->hi[1] < si->lo[1]) continue;
             int same;
-            if (edges_meet(A, k, seg[i].a, seg[i].b, seg[j].a, seg[j].b, &same)) return 0;
+            if (edges_meet(A, k, si->a, si->b, sj->a, sj->b, &same)) return 0;
         }
+    }
     return 1;
 }
 
@@ -738,6 +750,7 @@ typedef struct flatwork {
     bedge *e;
     bseg *seg;
     uint32_t *on;
+    kv *ks;
     size_t cap;
 } flatwork;
 
@@ -752,7 +765,9 @@ static int flatwork_room(flatwork *w, size_t n)
     if (sg) w->seg = sg;
     uint32_t *on = realloc(w->on, c * sizeof *on);
     if (on) w->on = on;
-    if (!e || !sg || !on) return -1;
+    kv *ks = realloc(w->ks, c * sizeof *ks);
+    if (ks) w->ks = ks;
+    if (!e || !sg || !on || !ks) return -1;
     w->cap = c;
     return 0;
 }
@@ -768,7 +783,6 @@ typedef struct solchart {
     uint8_t *one; /* by piece: one cycle (NULL when tri) */
     uint8_t *cls; /* by piece: its class (piece.cls, or a neighbour's) */
     uint32_t *uf, *grp, *of, *cnt; /* by piece; cnt: n + 2 */
-    uint32_t *tp;                  /* by entry - e0: its twin's piece, or NONE */
     uint32_t stamp, m;             /* the last set's stamp (grp), the charts made */
     uint8_t *flat;                 /* by chart */
     size_t capflat;
@@ -810,7 +824,31 @@ static inline uint32_t ent_next(const solchart *C, uint32_t i, uint32_t x)
 /* The twin of entry x as a local piece in the solid, or NONE. */
 static inline uint32_t twin_piece(const solchart *C, uint32_t x)
 {
-    return C->tp[x - C->e0];
+    uint32_t y = C->A->ptwin[x];
+    return y == NONE || y < C->e0 || y >= C->e1 ? NONE : piece_of(C, y);
+}
+
+/* Does no neighbour of local piece i across a twin share its class (cls0)? */
+static int lone(const solchart *C, const uint8_t *cls0, uint32_t i)
+{
+    for (uint32_t x = ent_lo(C, i); x < ent_hi(C, i); x++) {
+        uint32_t q = twin_piece(C, x);
+        if (q != NONE && cls0[q] == cls0[i]) return 0;
+    }
+    return 1;
+}
+
+/* Is local piece i lone, with a neighbour whose class it may join (cm: piece.cmask)? */
+static int lone_joins(const solchart *C, const uint8_t *cls0, const uint8_t *cm, uint32_t i)
+{
+    int join = 0;
+    for (uint32_t x = ent_lo(C, i); x < ent_hi(C, i); x++) {
+        uint32_t q = twin_piece(C, x);
+        if (q == NONE) continue;
+        if (cls0[q] == cls0[i]) return 0;
+        if (cm[i] >> cls0[q] & 1) join = 1;
+    }
+    return join;
 }
 
 /* The set of pieces list[0 .. n) (stamped alike in grp), flat?  -1 out of memory. */
@@ -829,7 +867,7 @@ static int set_flat(solchart *C, const uint32_t *list, uint32_t n)
         }
     }
     uint32_t cl = C->cls[list[0]];
-    return chart_flat(A, C->w.e, nb, (int)(cl / 2), cl & 1 ? 1 : -1, C->w.seg, C->w.on);
+    return chart_flat(A, C->w.e, nb, (int)(cl / 2), cl & 1 ? 1 : -1, C->w.seg, C->w.on, C->w.ks);
 }
 
 static int settle(solchart *C, uint32_t *list, uint32_t n, int depth);
@@ -891,20 +929,28 @@ static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
     if (!f && depth < CHART_SPLITS && n > CHART_SMALL) {
         const a3 *A = C->A;
         int k = (int)(C->cls[list[0]] / 2);
-        kv *srt = mem_malloc(((size_t)n + 1) * sizeof *srt);
-        if (!srt) return -1;
+        /* CHART_SLABS slabs of equal width along k, by the pieces' box centres (a counting
+         * sort, through cnt), each stamped, then each one's parts */
+        int64_t lo = INT64_MAX, hi = INT64_MIN;
         for (uint32_t t = 0; t < n; t++) {
             const int32_t *b = A->pc[C->s0 + list[t]].box;
-            srt[t] = (kv){(uint64_t)((int64_t)b[k] + b[3 + k] + ((int64_t)1 << 33)), list[t]};
+            int64_t c = (int64_t)b[k] + b[3 + k];
+            lo = c < lo ? c : lo, hi = c > hi ? c : hi;
         }
-        int rc = sort_kv(srt, n);
-        for (uint32_t t = 0; t < n; t++) list[t] = srt[t].v;
-        free(srt);
-        if (rc) return -1;
-        /* CHART_SLABS slabs of as many pieces, each stamped, then each one's parts */
-        uint32_t at[CHART_SLABS + 1];
-        for (uint32_t t = 0; t <= CHART_SLABS; t++)
-            at[t] = (uint32_t)((uint64_t)n * t / CHART_SLABS);
+        uint32_t at[CHART_SLABS + 2] = {0};
+        uint8_t *slab = mem_malloc((size_t)n + 1);
+        if (!slab) return -1;
+        for (uint32_t t = 0; t < n; t++) {
+            const int32_t *b = A->pc[C->s0 + list[t]].box;
+            int64_t c = (int64_t)b[k] + b[3 + k];
+            slab[t] = (uint8_t)((double)(c - lo) * CHART_SLABS / ((double)(hi - lo) + 1));
+            at[slab[t] + 2]++;
+        }
+        for (uint32_t sl = 0; sl < CHART_SLABS; sl++) at[sl + 2] += at[sl + 1];
+        uint32_t *tmp = C->cnt; /* n + 2 room */
+        for (uint32_t t = 0; t < n; t++) tmp[at[slab[t] + 1]++] = list[t];
+        memcpy(list, tmp, n * sizeof *list);
+        free(slab);
         for (uint32_t sl = 0; sl < CHART_SLABS; sl++) {
             C->stamp++;
             for (uint32_t t = at[sl]; t < at[sl + 1]; t++) C->grp[list[t]] = C->stamp;
@@ -920,6 +966,72 @@ static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
     for (uint32_t t = 0; t < n; t++) C->of[list[t]] = C->m;
     C->m++;
     return 0;
+}
+
+/* ---- stars: where a surface is one fan about a vertex ---------------------------------------
+ *
+ * Nearly every pair of one solid's pieces that the walk meets across two charts is a pair of
+ * triangles sharing a vertex u on the charts' boundary.  When the triangles about u (its star)
+ * form one closed fan that projects along some axis without folding, no two of them meet but in
+ * what they share: the star is certified, and such a pair is settled by the vertex ids, without
+ * reading the pieces.  The fan is walked across twins from a corner at u until it closes; it
+ * must hold every corner at u there is (deg: of any solid, so that u is no vertex of a second
+ * fan); along an axis k on which every triangle of it turns one way (piece.cmask), the ray from
+ * u along the first projected axis lies in exactly one corner, taken half-open: the fan turns
+ * once about u.  Exact: signs of coordinate differences. */
+
+/* Does the ray from the origin along (1, 0) lie in the corner swept from a to b counter-
+ * clockwise (a included, b not; a corner of less than half a turn)? */
+static inline int ray_in(int64_t ax, int64_t ay, int64_t by)
+{
+    return (ay < 0 || (ay == 0 && ax > 0)) && by > 0;
+}
+
+/* Is the star of vertex u, entry x of local piece i starting at it, one fan of triangles turning
+ * once along an axis? */
+static int star_one(const solchart *C, const uint8_t *cm, const uint32_t *deg, uint32_t u,
+                    uint32_t i, uint32_t x)
+{
+    const a3 *A = C->A;
+    if (!C->tri) return 0;
+    /* the fan: from x (u to a) on, the entry into u before it (b to u), its twin (u to b) next */
+    uint32_t n = 0, y = x, p = i, mask = 0x3f;
+    do {
+        mask &= cm[p];
+        uint32_t lo = C->e0 + 3 * p, in = y == lo ? y + 2 : y - 1, t = A->ptwin[in];
+        if (t == NONE || t < C->e0 || t >= C->e1 || ++n > deg[u]) return 0;
+        y = t, p = (t - C->e0) / 3;
+    } while (y != x);
+    if (n != deg[u] || !mask) return 0;
+    int k = 0;
+    while (!(mask >> (2 * k) & 3)) k++;
+    int ccw = mask >> (2 * k + 1) & 1, ci = (k + 1) % 3, cj = (k + 2) % 3;
+    const int64_t *g = A->g, *pu = g + 3 * (size_t)u;
+    uint32_t hits = 0;
+    y = x, p = i;
+    do {
+        uint32_t lo = C->e0 + 3 * p, in = y == lo ? y + 2 : y - 1,
+                 nx = y + 1 == lo + 3 ? lo : y + 1;
+        const int64_t *pa = g + 3 * (size_t)A->pcv[nx], *pb = g + 3 * (size_t)A->pcv[in];
+        int64_t ax = pa[ci] - pu[ci], ay = pa[cj] - pu[cj], bx = pb[ci] - pu[ci],
+                by = pb[cj] - pu[cj];
+        hits += ccw ? ray_in(ax, ay, by) : ray_in(bx, by, ay);
+        y = A->ptwin[in], p = (y - C->e0) / 3;
+    } while (y != x && hits < 2);
+    return hits == 1;
+}
+
+/* Settles vcert[u] for the vertex u entry x of local piece i starts at: 1 when its star is
+ * certified (star_one), else 2.  Solids are settled in parallel: a vertex whose star another
+ * solid shares is refused by each (its fan holds fewer corners than deg), and only the one
+ * solid holding all of a star writes a 1 (relaxed atomics: the values are final once written,
+ * and read after the tasks end). */
+static void star_cert(const solchart *C, const uint8_t *cm, const uint32_t *deg,
+                      atomic_uchar *vcert, uint32_t i, uint32_t x)
+{
+    uint32_t u = C->A->pcv[x];
+    if (atomic_load_explicit(&vcert[u], memory_order_relaxed)) return;
+    atomic_store_explicit(&vcert[u], star_one(C, cm, deg, u, i, x) ? 1 : 2, memory_order_relaxed);
 }
 
 /* One solid's charts (of[], nch, flat): each piece's class (that of its largest normal
@@ -942,7 +1054,7 @@ static int solid_charts(const chartjob *j, size_t sol)
     C.e1 = A->pc_off[A->pc[s0 + n - 1].c0 + A->pc[s0 + n - 1].nc];
     C.tri = (size_t)C.e1 - C.e0 == 3 * (size_t)n; /* 3 entries or more a piece: all 3 */
     C.cls = mem_malloc((size_t)n + 1);
-    mask = mem_malloc((size_t)n + 1);
+    mask = mem_malloc(2 * (size_t)n + 1);
     C.uf = mem_malloc(((size_t)n + 1) * sizeof *C.uf);
     C.grp = mem_malloc(((size_t)n + 1) * sizeof *C.grp);
     C.cnt = mem_malloc(((size_t)n + 2) * sizeof *C.cnt);
@@ -955,7 +1067,7 @@ static int solid_charts(const chartjob *j, size_t sol)
     }
     const uint32_t e0 = C.e0, e1 = C.e1, *ptwin = A->ptwin;
     const int tri = C.tri;
-    uint8_t *cls = C.cls, *cls0 = mask; /* cls0: the classes as input (piece.cls), by piece */
+    uint8_t *cls = C.cls, *cls0 = mask, *cm = mask + n; /* piece.cls, piece.cmask by piece */
     uint32_t *uf = C.uf, *of = C.of, *ep = C.ep, *pe = C.pe;
     for (uint32_t i = 0; i < n; i++) {
         const piece *P = &A->pc[s0 + i];
@@ -964,87 +1076,74 @@ static int solid_charts(const chartjob *j, size_t sol)
             C.one[i] = P->nc == 1;
             for (uint32_t x = pe[i]; x < A->pc_off[P->c0 + P->nc]; x++) ep[x - e0] = i;
         }
-        cls0[i] = P->cls;
+        cls0[i] = P->cls, cm[i] = P->cmask, of[i] = NONE;
     }
     if (!tri) pe[n] = e1;
-    /* one pass: each entry's twin's piece (tp, read by the passes after), and a piece whose
-     * class no neighbour across a twin has takes the first neighbour's it may join (it turns
-     * that way about that axis too, piece.cmask) (the hot loops keep their arrays in locals:
-     * stores through the byte arrays would make the compiler read C's fields again) */
-    uint32_t *tp = C.tp = mem_malloc(((size_t)e1 - e0 + 1) * sizeof *tp);
-    if (!tp) goto done;
-    for (uint32_t i = 0, x = e0; i < n; i++) {
-        uint32_t hi = tri ? x + 3 : pe[i + 1], alone = 1, join = NONE, ci = cls0[i];
-        for (; x < hi; x++) {
-            uint32_t y = ptwin[x], q = y == NONE || y < e0 || y >= e1 ? NONE
-                                       : tri                          ? (y - e0) / 3
-                                                                      : ep[y - e0];
-            tp[x - e0] = q;
-            if (q == NONE) continue;
-            uint32_t cq = cls0[q];
-            if (cq == ci)
-                alone = 0;
-            else if (join == NONE && (A->pc[s0 + i].cmask >> cq & 1))
-                join = cq;
-        }
-        cls[i] = (uint8_t)(alone && join != NONE ? join : ci);
-        uf[i] = i;
-    }
-    /* one pass: the parts (pieces of a class joined across twins), the boundary entries listed
-     * (and their parts counted once the parts are numbered) */
-    size_t nb = 0, capb = 1024;
+    /* the charts grown one by one from a seed (uf is the stack): across twins to the pieces of
+     * the seed's class, and to a piece of another class that no neighbour shares (a tilt of
+     * the surface's noise) when it turns that way about that axis too (piece.cmask): else it
+     * would be a chart of its own, and its neighbours' charts would gain a boundary.  Such a
+     * piece is no seed while a neighbour's chart may take it.  An entry is looked at once, as
+     * its piece is taken: its twin taken too, or in the chart already, or it is on the chart's
+     * boundary (listed, chart by chart: boff). */
+    size_t nb = 0, capb = 1024, capo = 64;
     bx = mem_malloc(capb * sizeof *bx);
-    if (!bx) goto done;
-    for (uint32_t i = 0, x = e0; i < n; i++) {
-        uint32_t hi = tri ? x + 3 : pe[i + 1];
-        for (; x < hi; x++) {
-            uint32_t q = tp[x - e0];
-            if (q != NONE && cls[q] == cls[i]) {
-                if (q > i) a3_uf_union(uf, i, q);
-                continue;
-            }
-            if (nb == capb) {
-                uint32_t *b = realloc(bx, 2 * capb * sizeof *b);
-                if (!b) goto done;
-                bx = b, capb *= 2;
-            }
-            bx[nb++] = x;
-        }
-    }
+    boff = mem_malloc(capo * sizeof *boff);
+    if (!bx || !boff) goto done;
     uint32_t m = 0;
-    for (uint32_t i = 0; i < n; i++) { /* numbered by their first pieces */
-        uint32_t r = a3_uf_find(uf, i);
-        of[i] = r == i ? m++ : of[r];
-    }
+    for (int round = 0; round < 2; round++)
+        for (uint32_t s = 0; s < n; s++) {
+            if (of[s] != NONE || (round == 0 && lone_joins(&C, cls0, cm, s))) continue;
+            uint32_t d = cls0[s], top = 0;
+            if (a3_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
+            boff[m] = (uint32_t)nb;
+            of[s] = m, cls[s] = (uint8_t)d, uf[top++] = s;
+            while (top) {
+                uint32_t i = uf[--top], hi = tri ? e0 + 3 * i + 3 : pe[i + 1];
+                for (uint32_t x = tri ? e0 + 3 * i : pe[i]; x < hi; x++) {
+                    uint32_t y = ptwin[x], q = y == NONE || y < e0 || y >= e1 ? NONE
+                                               : tri                          ? (y - e0) / 3
+                                                                              : ep[y - e0];
+                    if (q != NONE) {
+                        if (of[q] == m) continue;
+                        if (of[q] == NONE &&
+                            (cls0[q] == d || (cm[q] >> d & 1 && lone(&C, cls0, q)))) {
+                            of[q] = m, cls[q] = (uint8_t)d, uf[top++] = q;
+                            continue;
+                        }
+                    }
+                    if (nb == capb) {
+                        uint32_t *nbx = mem_realloc(bx, 2 * capb * sizeof *nbx);
+                        if (!nbx) goto done;
+                        bx = nbx, capb *= 2;
+                    }
+                    bx[nb++] = x;
+                }
+            }
+            m++;
+        }
+    if (a3_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
+    boff[m] = (uint32_t)nb;
     C.m = m;
-    /* each part's boundary edges (a counting sort of the list by part), checked */
-    uint32_t *sorted = mem_malloc((nb + 1) * sizeof *sorted);
-    boff = mem_calloc((size_t)m + 2, sizeof *boff);
     C.flat = mem_malloc((size_t)m + 1);
     C.capflat = (size_t)m + 1;
-    if (!sorted || !boff || !C.flat) {
-        free(sorted);
-        goto done;
-    }
-    for (size_t t = 0; t < nb; t++) boff[of[piece_of(&C, bx[t])] + 2]++;
-    for (uint32_t c = 0; c < m; c++) boff[c + 2] += boff[c + 1];
-    for (size_t t = 0; t < nb; t++) sorted[boff[of[piece_of(&C, bx[t])] + 1]++] = bx[t];
-    free(bx);
-    bx = sorted;
+    if (!C.flat) goto done;
     uint32_t m0 = C.m, bad = 0;
     for (uint32_t c = 0; c < m0; c++) {
         uint32_t b0 = boff[c], b1 = boff[c + 1];
         if (flatwork_room(&C.w, b1 - b0)) goto done;
         for (uint32_t t = b0; t < b1; t++) {
-            uint32_t x = bx[t], i = piece_of(&C, x);
-            C.w.e[t - b0] = (bedge){A->pcv[x], A->pcv[ent_next(&C, i, x)]};
+            uint32_t x = bx[t], i = piece_of(&C, x), nx = ent_next(&C, i, x);
+            C.w.e[t - b0] = (bedge){A->pcv[x], A->pcv[nx]};
+            star_cert(&C, cm, j->deg, j->vcert, i, x); /* both ends: on the boundary */
+            star_cert(&C, cm, j->deg, j->vcert, i, nx);
         }
         /* a part of one piece (no boundary edge shared within it) is flat */
         C.flat[c] = b1 - b0 == 0 ? 1 : 0;
         if (!C.flat[c]) {
             uint32_t cl = C.cls[piece_of(&C, bx[b0])];
             C.flat[c] = (uint8_t)chart_flat(A, C.w.e, b1 - b0, (int)(cl / 2), cl & 1 ? 1 : -1,
-                                            C.w.seg, C.w.on);
+                                            C.w.seg, C.w.on, C.w.ks);
         }
         bad += !C.flat[c];
     }
@@ -1078,8 +1177,8 @@ static int solid_charts(const chartjob *j, size_t sol)
     rc = 0;
 done:
     free(C.cls), free(mask), free(C.uf), free(C.grp), free(C.cnt), free(C.flat), free(list);
-    free(C.pe), free(C.ep), free(C.one), free(C.tp), free(boff), free(bx);
-    free(C.w.e), free(C.w.seg), free(C.w.on);
+    free(C.pe), free(C.ep), free(C.one), free(boff), free(bx);
+    free(C.w.e), free(C.w.seg), free(C.w.on), free(C.w.ks);
     return rc;
 }
 
@@ -1097,11 +1196,11 @@ static void charts_task(void *ctx, size_t item, int worker)
 
 /* Every piece's flat chart (*chartp, by piece: an id, or NONE when its chart is not flat).
  * -1 out of memory, -3 cancelled. */
-static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp)
+static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp, atomic_uchar *vcert)
 {
     size_t n = A->npc, ns = 0;
     uint32_t *s_off = mem_malloc((n + 2) * sizeof *s_off);
-    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, NULL, 0};
+    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, NULL, NULL, vcert, 0};
     j.pclass = *classp = mem_malloc(n + 1);
     int rc = -1;
     if (!s_off || !j.of || !j.pclass) goto done;
@@ -1109,7 +1208,10 @@ static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp)
     s_off[ns] = (uint32_t)n;
     j.nch = mem_calloc(n + 1, sizeof *j.nch); /* ns <= n */
     j.flat = mem_calloc(n + 1, sizeof *j.flat);
-    if (!j.nch || !j.flat) goto done;
+    uint32_t *deg = mem_calloc(A->nv + 1, sizeof *deg);
+    j.deg = deg;
+    if (!j.nch || !j.flat || !deg) goto done;
+    for (size_t x = 0; x < A->pc_off[A->npcyc]; x++) deg[A->pcv[x]]++;
     par_for(A->threads, ns, charts_task, &j);
     if (j.fail) {
         rc = j.fail == 3 ? -3 : -1;
@@ -1129,7 +1231,7 @@ static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp)
     rc = 0;
 done:
     for (size_t s = 0; j.flat && s < ns; s++) free(j.flat[s]);
-    free(j.flat), free(j.nch), free(j.of), free(s_off);
+    free(j.flat), free(j.nch), free(j.of), free(s_off), free((void *)j.deg);
     return rc;
 }
 
@@ -1139,19 +1241,34 @@ static int same_flat(const forest *F, uint32_t x, uint32_t y)
     return F->nchart && F->nchart[x] != NONE && F->nchart[x] == F->nchart[y];
 }
 
+/* Do the triangles of items i and j (of one solid) share a vertex whose star is certified
+ * (star_certs)?  Then they meet only in what they share. */
+static inline int star_apart(const forest *F, uint32_t i, uint32_t j)
+{
+    const uint32_t *a = F->itri[i], *b = F->itri[j];
+    if (a[0] == NONE || b[0] == NONE) return 0;
+    for (int t = 0; t < 3; t++)
+        if ((a[t] == b[0] || a[t] == b[1] || a[t] == b[2]) &&
+            atomic_load_explicit(&F->vcert[a[t]], memory_order_relaxed) == 1)
+            return 1;
+    return 0;
+}
+
 /* Item pairs of two leaves of group trees (or of one leaf with itself), boxes meeting: piece
  * pairs of different solids, and of one solid where they may cross (self_apart). */
 static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
 {
     const a3 *A = F->A;
-    /* the items' boxes and charts in item order: no piece is read for a pair apart */
+    /* the items' boxes in item order: no piece is read for a pair apart (a leaf's pieces are of
+     * one chart, and two leaves of one flat chart are never walked: worth) */
     int self = !A->soup && A->pc[F->item[x->a]].solid == A->pc[F->item[y->a]].solid;
     for (uint32_t i = x->a; i < x->a + (x->b & ~LEAFBIT); i++)
         for (uint32_t j = x == y ? i + 1 : y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
-            if (self && F->ichart[i] != NONE && F->ichart[i] == F->ichart[j]) continue;
             if (!box_meet(F->ibox[i], F->ibox[j])) continue;
             uint32_t p = F->item[i], q = F->item[j];
-            if (A->soup ? A->pc[p].solid == A->pc[q].solid : self && self_apart(A, p, q)) continue;
+            if (A->soup ? A->pc[p].solid == A->pc[q].solid
+                        : self && (star_apart(F, i, j) || self_apart(A, p, q)))
+                continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
         }
     return 0;
@@ -1324,9 +1441,10 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
     uint32_t *chart = NULL;
     uint8_t *pclass = NULL;
+    atomic_uchar *vcert = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
     kv *tsrt = NULL;
@@ -1347,7 +1465,9 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
         goto done;
     }
     if (!A->soup) { /* the solids' flat charts, whose pieces are never paired together */
-        if ((rc = make_charts(A, &chart, &pclass)) != 0) {
+        vcert = mem_calloc(A->nv + 1, sizeof *vcert);
+        if (!vcert) goto done;
+        if ((rc = make_charts(A, &chart, &pclass, vcert)) != 0) {
             if (rc != -3) rc = -1;
             goto done;
         }
@@ -1364,9 +1484,12 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.srt = mem_malloc(n * sizeof *F.srt);
     F.bx = mem_malloc(n * sizeof *F.bx);
     F.ibox = mem_malloc(n * sizeof *F.ibox);
-    if (!A->soup) F.ichart = mem_malloc(n * sizeof *F.ichart);
-    if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox || (!A->soup && !F.ichart))
-        goto done;
+    if (!A->soup) {
+        F.itri = mem_malloc(n * sizeof *F.itri);
+        if (!F.itri) goto done;
+        F.vcert = vcert;
+    }
+    if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox) goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
     if (F.fail == 3) rc = -3;
@@ -1428,8 +1551,9 @@ done:
     free(chart);
     free(pclass);
     free(F.nchart);
-    free(F.ichart);
     free(F.ibox);
+    free(F.itri);
+    free((void *)vcert);
     free(F.root);
     free(F.node);
     free(F.item);

@@ -81,6 +81,11 @@ void api_buf_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
  * csr_matrix((ones, indices, indptr), shape). */
 void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
                         const uint32_t *idx);
+/* The same with winding numbers (wind may be NULL: as above): wind[i] is the winding number of
+ * entry i; when one is not 1 they are written as "data" (scipy: csr_matrix((data, indices,
+ * indptr), shape)). */
+void api_put_membership_w(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
+                          const uint32_t *idx, const int32_t *wind);
 
 static inline void api_buf_putc(api_buf *b, char c)
 {

@@ -354,6 +354,14 @@ void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n)
 void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
                         const uint32_t *idx)
 {
+    api_put_membership_w(b, nrows, ninputs, off, idx, NULL);
+}
+
+void api_put_membership_w(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
+                          const uint32_t *idx, const int32_t *wind)
+{
+    int plain = 1;
+    for (size_t i = 0; wind && i < off[nrows] && plain; i++) plain = wind[i] == 1;
     api_buf_section(b);
     api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
     api_buf_u64(b, nrows);
@@ -363,6 +371,10 @@ void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t
     api_buf_u32_list(b, off, nrows + 1);
     api_buf_puts(b, ",\"indices\":");
     api_buf_u32_list(b, idx, off[nrows]);
+    if (!plain) {
+        api_buf_puts(b, ",\"data\":");
+        api_buf_i32_list(b, wind, off[nrows]);
+    }
     api_buf_putc(b, '}');
 }
 

@@ -39,24 +39,7 @@ const char *const api_field3_names[API_NFIELDS3] = {"V",  "EV", "FV",       "FE"
  * the numbers (a compressed sparse row matrix of cells x solids, as scipy reads it). */
 static void put_membership3(api_buf *b, const lar3 *c, const member_rows *m)
 {
-    int plain = 1;
-    for (size_t i = 0; m->wind && i < m->off[c->nc] && plain; i++) plain = m->wind[i] == 1;
-    if (plain) {
-        api_put_membership(b, c->nc, c->nsolids, m->off, m->idx);
-        return;
-    }
-    api_buf_section(b);
-    api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
-    api_buf_u64(b, c->nc);
-    api_buf_putc(b, ',');
-    api_buf_u64(b, c->nsolids);
-    api_buf_puts(b, "],\"indptr\":");
-    api_buf_u32_list(b, m->off, c->nc + 1);
-    api_buf_puts(b, ",\"indices\":");
-    api_buf_u32_list(b, m->idx, m->off[c->nc]);
-    api_buf_puts(b, ",\"data\":");
-    api_buf_i32_list(b, m->wind, m->off[c->nc]);
-    api_buf_putc(b, '}');
+    api_put_membership_w(b, c->nc, c->nsolids, m->off, m->idx, m->wind);
 }
 
 /* ---- checks ---------------------------------------------------------------------------------- */

@@ -7,10 +7,12 @@
  * closed implicitly, any orientation: the even-odd rule over a polygon's rings decides), or a
  * GeoJSON Polygon, MultiPolygon or Feature object, or a WKT string (POLYGON, MULTIPOLYGON);
  * "polygons" may also be a GeoJSON FeatureCollection, one input per feature.  The
- * options are those of "lines" (api_lar2_option()).  The answer is the LAR JSON of the
- * arrangement of all ring edges (api_lar2_write()) with two more members:
+ * options are those of "lines" (api_lar2_option()) and "fill" (parse_options).  The answer is
+ * the LAR JSON of the arrangement of all ring edges (api_lar2_write()) with two more members:
  *   "membership": the polygons each bounded face (FV's rows) lies in, as compressed sparse
- *                 rows {"format":"csr","shape":[F, N],"indptr":[...],"indices":[...]};
+ *                 rows {"format":"csr","shape":[F, N],"indptr":[...],"indices":[...]}; under
+ *                 the fill rules "nonzero" and "positive" the polygons of non-zero winding
+ *                 number, with "data": [their winding numbers] when one is not 1;
  *   "result": {"cells": [selected faces], "FV": [outer cycle of each result polygon, CCW],
  *              "FE": [signed edges of each result polygon, outer cycle then holes],
  *              "holes": {"q": [[hole cycle, CW], ...]}, "area": total area}.
@@ -34,6 +36,7 @@ typedef struct polygons_req {
     double *xy;         /* owned, 2 per point */
     bool_expr op;       /* owned, checked for npoly inputs */
     api_lar2_opts opt;
+    int fill; /* options.fill: BOOL2_FILL_* */
 } polygons_req;
 
 void api_polygons_free(void *parsed)
@@ -45,6 +48,43 @@ void api_polygons_free(void *parsed)
     free(r->xy);
     bool_expr_free(&r->op);
     free(r);
+}
+
+/* options: those of "lines" (api_lar2_option) and "fill": "odd" (the default), "nonzero" or
+ * "positive", the rule that says where a polygon's inside is by its rings' winding number. */
+static int parse_options(const json_t *o, polygons_req *r, api_error *err)
+{
+    const char *key;
+    json_t *v;
+    r->opt = (api_lar2_opts){.fields = API_F_DEFAULT};
+    r->fill = BOOL2_FILL_ODD;
+    if (!o) return API_OK;
+    if (!json_is_object(o)) return api_fail(err, API_EINVALID, "options: expected an object");
+    json_object_foreach((json_t *)o, key, v)
+    {
+        if (strcmp(key, "fill") == 0) {
+            const char *f = json_string_value(v);
+            if (f && strcmp(f, "odd") == 0)
+                r->fill = BOOL2_FILL_ODD;
+            else if (f && strcmp(f, "nonzero") == 0)
+                r->fill = BOOL2_FILL_NONZERO;
+            else if (f && strcmp(f, "positive") == 0)
+                r->fill = BOOL2_FILL_POSITIVE;
+            else
+                return api_fail(err, API_EINVALID,
+                                "options.fill: expected \"odd\", \"nonzero\" or \"positive\"");
+            continue;
+        }
+        int rc = api_lar2_option(key, v, &r->opt, err);
+        if (rc == API_NOT_MINE)
+            return api_fail(err, API_EINVALID,
+                            "options.%.64s: unknown option (expected precision, keep_dangling, "
+                            "exterior_last, operators, fields or fill)",
+                            key);
+        if (rc != API_OK) return rc;
+    }
+    if (r->opt.operators) r->opt.fields |= API_F_OPERATORS;
+    return API_OK;
 }
 
 /* ---- reading the polygons: native rings, GeoJSON geometries, WKT --------------------------- */
@@ -468,7 +508,7 @@ int api_polygons_parse(const json_t *req, void **parsed, api_error *err)
     }
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
-    rc = api_lar2_options(json_object_get(req, "options"), &r->opt, err);
+    rc = parse_options(json_object_get(req, "options"), r, err);
     if (rc != API_OK) goto fail;
     rc = parse_polygons(json_object_get(req, "polygons"), r, err);
     if (rc != API_OK) goto fail;
@@ -491,7 +531,7 @@ fail:
 static void put_bool2(api_buf *b, const void *udata)
 {
     const bool2_result *r = udata;
-    api_put_membership(b, r->c.nf, r->ninputs, r->mem_off, r->mem);
+    api_put_membership_w(b, r->c.nf, r->ninputs, r->mem_off, r->mem, r->memw);
     api_buf_section(b);
     api_buf_puts(b, ",\"result\":{\"cells\":");
     api_buf_u32_list(b, r->cells, r->ncells);
@@ -545,7 +585,7 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
                     .cancel = ro->cancel,
                     .progress = ro->progress,
                     .udata = ro->udata};
-    bool2_input in = {r->npoly, r->poly_off, r->ring_off, r->xy};
+    bool2_input in = {r->npoly, r->poly_off, r->ring_off, r->xy, r->fill};
     bool2_result res = {0};
     char core_msg[API_ERRMAX] = "";
     int rc = bool2_build(&in, &r->op, &ao, &res, core_msg, sizeof core_msg);

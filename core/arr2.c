@@ -46,8 +46,9 @@
 #define SEG_CHUNK 512 /* segments per work item in the split stage */
 
 typedef struct seg2 {
-    ipt a, b;    /* a < b lexicographically */
-    uint32_t id; /* the input segment */
+    ipt a, b;     /* a < b lexicographically */
+    uint32_t id;  /* the input segment */
+    uint32_t rev; /* 1 when the input ran from b to a */
 } seg2;
 
 typedef struct vbuf {
@@ -288,6 +289,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
         c->seg[m].a = k < 0 ? a : b;
         c->seg[m].b = k < 0 ? b : a;
         c->seg[m].id = (uint32_t)i;
+        c->seg[m].rev = k > 0;
         m++;
     }
     c->m = m;
@@ -481,7 +483,11 @@ static void split_segments(void *vc, size_t chunk, int w)
                 return;
             }
             uint32_t *t = tb->p, tag = c->o->tags[sg->id];
-            for (size_t i = 0; i + 1 < k; i++) t[tb->n++] = tag;
+            if (c->o->signed_tags) /* the tag, and whether the input runs down the edge */
+                for (size_t i = 0; i + 1 < k; i++)
+                    t[tb->n++] = tag << 1 | ((sc->val[i] > sc->val[i + 1]) ^ sg->rev);
+            else
+                for (size_t i = 0; i + 1 < k; i++) t[tb->n++] = tag;
         }
         uint64_t *e = out->p;
         for (size_t i = 0; i + 1 < k; i++) {
@@ -550,7 +556,7 @@ static void locate_chunk(void *vj, size_t chunk, int w)
  * skipped.  Then makes the edges unique in place (*nu of them) and gives each the tags that lie
  * on it an odd number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
 static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint32_t **toff,
-                         uint32_t **tags)
+                         uint32_t **tags, int32_t **tw)
 {
     uint64_t *kb = malloc((n ? n : 1) * sizeof *kb);
     uint32_t *tb = malloc((n ? n : 1) * sizeof *tb);
@@ -583,13 +589,22 @@ static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint3
     off = malloc((n + 1) * sizeof *off);
     tg = malloc((n ? n : 1) * sizeof *tg);
     if (!off || !tg) goto fail;
+    int32_t *w = NULL;
+    if (tw && !(w = *tw = malloc((n ? n : 1) * sizeof *w))) goto fail;
     size_t u = 0, nt = 0;
     for (size_t i = 0; i < n;) {
         size_t j = i;
         while (j < n && ks[j] == ks[i]) j++;
         off[u] = (uint32_t)nt;
-        for (size_t a = i; a < j;) { /* runs of one tag: kept when odd */
+        for (size_t a = i; a < j;) { /* runs of one tag: kept when odd (signed: non-zero) */
             size_t b = a;
+            if (w) { /* tag << 1 | down: the ups first, then the downs */
+                int64_t sum = 0;
+                while (b < j && ts[b] >> 1 == ts[a] >> 1) sum += ts[b] & 1 ? -1 : 1, b++;
+                if (sum) w[nt] = (int32_t)sum, tg[nt++] = ts[a] >> 1;
+                a = b;
+                continue;
+            }
             while (b < j && ts[b] == ts[a]) b++;
             if ((b - a) & 1) tg[nt++] = ts[a];
             a = b;
@@ -609,6 +624,7 @@ fail:
     free(tb);
     free(off);
     free(tg);
+    if (tw) free(*tw), *tw = NULL;
     return -1;
 }
 
@@ -713,7 +729,8 @@ static int pin_crowded(ctx *c)
 
 /* From the snapped segments to a sorted, duplicate-free edge list over the hot pixels. */
 static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_out,
-                       uint32_t **toff_out, uint32_t **tags_out, char *err, size_t el)
+                       uint32_t **toff_out, uint32_t **tags_out, int32_t **tw_out, char *err,
+                       size_t el)
 {
     int rc = ARR_ENOMEM;
     uint64_t *kv = NULL, *inc = NULL, *ev = NULL;
@@ -807,7 +824,9 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     if (c->o->tags) {
         size_t nt;
         et = gather(c->etags, c->threads, sizeof(uint32_t), &nt);
-        if (!et || nt != nev || unique_tagged(ev, et, nev, &k, toff_out, tags_out)) goto fail;
+        if (!et || nt != nev ||
+            unique_tagged(ev, et, nev, &k, toff_out, tags_out, c->o->signed_tags ? tw_out : NULL))
+            goto fail;
         free(et);
         et = NULL;
     } else {
@@ -836,7 +855,8 @@ typedef struct graph {
     ipt *P;           /* nv */
     uint32_t *src;    /* nv, with input_coords: the first input endpoint on the vertex, or NONE */
     uint32_t *toff;   /* with tags: ne+1 */
-    uint32_t *tag;    /* with tags: each edge's odd tags */
+    uint32_t *tag;    /* with tags: each edge's odd tags (signed_tags: non-zero) */
+    int32_t *tw;      /* with signed_tags: each tag's signed count */
     uint32_t *EV;     /* 2*ne */
     uint32_t *off;    /* nv+1: outgoing half-edges of v are out[off[v]..off[v+1]) */
     uint32_t *out;    /* half-edge ids: 2e leaves EV[2e], 2e+1 leaves EV[2e+1] */
@@ -864,6 +884,7 @@ static void graph_free(graph *g)
     free(g->src);
     free(g->toff);
     free(g->tag);
+    free(g->tw);
     free(g->EV);
     free(g->off);
     free(g->out);
@@ -980,7 +1001,10 @@ static int graph_prune(graph *g, const uint8_t *drop)
         if (g->toff) { /* a dropped edge is a bridge: its tags are even (rings are closed) */
             uint32_t t0 = g->toff[e], t1 = g->toff[e + 1];
             g->toff[ne] = (uint32_t)nt;
-            for (uint32_t t = t0; t < t1; t++) g->tag[nt++] = g->tag[t];
+            for (uint32_t t = t0; t < t1; t++) {
+                if (g->tw) g->tw[nt] = g->tw[t];
+                g->tag[nt++] = g->tag[t];
+            }
         }
         ne++;
     }
@@ -1350,7 +1374,9 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     if (g->toff) {
         out->etag_off = g->toff;
         out->etag = g->tag;
+        out->etagw = g->tw;
         ((graph *)g)->toff = ((graph *)g)->tag = NULL; /* handed over */
+        ((graph *)g)->tw = NULL;
     }
     out->cyc_off[0] = 0;
     for (size_t cy = 0; cy < w->ncyc; cy++) {
@@ -1667,9 +1693,11 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     out->stats.ms_snap = now_ms() - t0;
     progress(c, "snap", 1);
     uint32_t *toff = NULL, *tags = NULL;
-    if ((rc = stage_split(c, &out->stats, &ev, &nev, &toff, &tags, err, errlen))) goto fail;
+    int32_t *tw = NULL;
+    if ((rc = stage_split(c, &out->stats, &ev, &nev, &toff, &tags, &tw, err, errlen))) goto fail;
     g.toff = toff;
     g.tag = tags;
+    g.tw = tw;
     if (cancelled(c)) {
         rc = ARR_ECANCELED;
         goto fail;
@@ -1723,6 +1751,7 @@ void lar2_free(lar2 *c)
     free(c->VG);
     free(c->etag_off);
     free(c->etag);
+    free(c->etagw);
     free(c->EV);
     free(c->face_cycle);
     free(c->hole_off);

@@ -46,6 +46,12 @@ typedef struct arr2_opts {
      * so that crossing an edge changes exactly the inputs whose tags it lists (the 2D Booleans
      * need nothing else). */
     const uint32_t *tags;
+    /* With tags, non-zero: each edge lists the tags whose segments lie on it with a non-zero
+     * signed count, the segments running EV[2e] -> EV[2e+1] counted +1, the other way -1
+     * (lar2.etagw), so that crossing an edge from its right to its left changes each listed
+     * input's winding number by that count (the fill rules; tags below 2^31).  Its parity is
+     * the even-odd rule's. */
+    int signed_tags;
     /* Non-zero: a vertex that an input endpoint snapped to is written with that endpoint's
      * input coordinates (the first such endpoint in input order: segment i's start is 2i, its
      * end 2i+1); only the other vertices (crossings) are grid values.  Zero: all are grid
@@ -92,7 +98,9 @@ typedef struct lar2 {
     int64_t *VG;        /* 2*nv: the vertices' grid coordinates (V = (origin + VG) * step, or the
                            input's coordinates with input_coords); exact predicates use these */
     uint32_t *etag_off; /* with opts.tags: ne+1, edge e's tags are etag[etag_off[e]..] */
-    uint32_t *etag;     /* ascending, each an input tag lying on e an odd number of times */
+    uint32_t *etag;     /* ascending, each an input tag lying on e an odd number of times
+                           (with signed_tags: with a non-zero signed count) */
+    int32_t *etagw;     /* with signed_tags: the signed count of each etag entry */
     arr2_stats stats;
 } lar2;
 

@@ -64,6 +64,7 @@ void bool2_free(bool2_result *r)
     lar2_free(&r->c);
     free(r->mem_off);
     free(r->mem);
+    free(r->memw);
     free(r->cells);
     free(r->rc_off);
     free(r->rv);
@@ -168,21 +169,29 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
     size_t nf = c->nf, nn = nf + 1;
     uint32_t *aoff = calloc(nn + 2, sizeof *aoff), *nb = malloc((2 * c->ne + 1) * sizeof *nb);
     uint32_t *ed = malloc((2 * c->ne + 1) * sizeof *ed), bad = UINT32_MAX;
+    int8_t *dir = c->etagw ? malloc(2 * c->ne + 1) : NULL;
     member_rows rows;
     int rc = ARR_ENOMEM;
-    if (!aoff || !nb || !ed) goto done;
+    if (!aoff || !nb || !ed || (c->etagw && !dir)) goto done;
     for (size_t e = 0; e < c->ne; e++)
         if (side[2 * e] != side[2 * e + 1]) aoff[side[2 * e] + 2]++, aoff[side[2 * e + 1] + 2]++;
     for (size_t f = 0; f < nn; f++) aoff[f + 2] += aoff[f + 1];
+    /* with winding numbers an edge's first side is its right (side[2e + 1]): crossing from
+     * there to its left adds its signed counts (a ring turning counter-clockwise holds what
+     * lies on its left) */
     for (size_t e = 0; e < c->ne; e++)
         if (side[2 * e] != side[2 * e + 1]) {
             uint32_t a = side[2 * e], b = side[2 * e + 1];
+            if (dir) dir[aoff[a + 1]] = -1, dir[aoff[b + 1]] = 1;
             nb[aoff[a + 1]] = b, ed[aoff[a + 1]++] = (uint32_t)e;
             nb[aoff[b + 1]] = a, ed[aoff[b + 1]++] = (uint32_t)e;
         }
-    int w = member_walk_ex(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad,
-                           po && po->progress ? membership_tick : NULL, (void *)po,
-                           po ? po->cancel : NULL);
+    void (*tick)(void *, double) = po && po->progress ? membership_tick : NULL;
+    const atomic_int *cancel = po ? po->cancel : NULL;
+    int w = dir ? member_walk_wind(nn, (uint32_t)nf, aoff, nb, ed, dir, c->etag_off, c->etag,
+                                   c->etagw, &rows, &bad, tick, (void *)po, cancel)
+                : member_walk_ex(nn, (uint32_t)nf, aoff, nb, ed, c->etag_off, c->etag, &rows, &bad,
+                                 tick, (void *)po, cancel);
     if (w < 0) goto done;
     if (w == 2) {
         rc = seterr(err, el, ARR_ECANCELED, "cancelled");
@@ -202,12 +211,14 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
     }
     out->mem_off = rows.off;
     out->mem = rows.idx;
+    out->memw = rows.wind;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
     free(aoff);
     free(nb);
     free(ed);
+    free(dir);
     return rc;
 }
 
@@ -224,24 +235,44 @@ static uint32_t uf_find(uint32_t *p, uint32_t x)
 
 /* sel[f] for the nf + 1 faces (EXT never selected); out->cells.  The expression is evaluated on
  * each face's sparse row (bool_tree). */
-static int stage_select(bool2_result *out, const bool_expr *op, uint8_t *sel)
+static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint8_t *sel)
 {
-    size_t nf = out->c.nf;
+    size_t nf = out->c.nf, most = 0;
     bool_tree t;
-    if (bool_tree_build(op, out->ninputs, &t)) return -1;
+    for (size_t f = 0; f < nf; f++)
+        if (out->mem_off[f + 1] - out->mem_off[f] > most)
+            most = out->mem_off[f + 1] - out->mem_off[f];
+    uint32_t *in = out->memw ? malloc((most + 1) * sizeof *in) : NULL; /* a row's insides */
+    if ((out->memw && !in) || bool_tree_build(op, out->ninputs, &t)) {
+        free(in);
+        return -1;
+    }
     out->cells = malloc((nf + 1) * sizeof *out->cells);
     if (!out->cells) {
         bool_tree_free(&t);
+        free(in);
         return -1;
     }
     out->ncells = 0;
     for (size_t f = 0; f < nf; f++) {
         const uint32_t *row = out->mem + out->mem_off[f];
-        sel[f] = (uint8_t)bool_tree_eval(&t, row, out->mem_off[f + 1] - out->mem_off[f]);
+        size_t n = out->mem_off[f + 1] - out->mem_off[f];
+        if (out->memw) { /* the polygons whose winding number here the fill rule takes */
+            const int32_t *w = out->memw + out->mem_off[f];
+            size_t k = 0;
+            for (size_t i = 0; i < n; i++)
+                if (fill == BOOL2_FILL_POSITIVE  ? w[i] > 0
+                    : fill == BOOL2_FILL_NONZERO ? 1
+                                                 : w[i] & 1)
+                    in[k++] = row[i];
+            row = in, n = k;
+        }
+        sel[f] = (uint8_t)bool_tree_eval(&t, row, n);
         if (sel[f]) out->cells[out->ncells++] = (uint32_t)f;
     }
     sel[nf] = 0;
     bool_tree_free(&t);
+    free(in);
     return 0;
 }
 
@@ -509,6 +540,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if (stage_segments(in, &seg, &tag, &n)) goto fail;
     arr2_opts ao = opts ? *opts : defaults;
     ao.tags = tag;
+    ao.signed_tags = in->fill != BOOL2_FILL_ODD;
     ao.input_coords = 1;
     if ((rc = arr2_build(seg, n, &ao, &out->c, err, errlen)) != ARR_OK) goto fail;
     free(seg);
@@ -542,7 +574,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("membership", 1);
     rc = ARR_ENOMEM;
-    if (stage_select(out, op, sel)) goto fail;
+    if (stage_select(out, op, in->fill, sel)) goto fail;
     stage_groups(c, side, sel, grp);
     BOOL2_PROGRESS("select", 1);
     if ((rc = stage_rings(out, side, sel, grp, &ring_grp, &stop, err, errlen)) != ARR_OK) goto fail;

@@ -26,9 +26,15 @@
 
 #define BOOL2_MAX_INPUTS 500000u /* input polygons (the expression holds at most 10^6 codes) */
 
+/* Where a polygon's inside is, by the winding number w of its rings about a point: odd w (the
+ * even-odd rule, the default: ring roles and orientations are free), w != 0, or w > 0 (rings
+ * counter-clockwise around what they hold, holes clockwise, as GeoJSON's right-hand rule and
+ * SVG's nonzero fill mean them). */
+enum { BOOL2_FILL_ODD = 0, BOOL2_FILL_NONZERO, BOOL2_FILL_POSITIVE };
+
 /* The input polygons, in CSR form (all borrowed):
  *   polygon p has rings poly_off[p] .. poly_off[p+1]) (first the outer boundary, then holes;
- *   an even-odd rule over all rings is what counts, so ring roles and orientations are free);
+ *   the fill rule over all rings is what counts);
  *   ring r has points xy[2*ring_off[r] .. 2*ring_off[r+1]) (x, y), closed implicitly (a last
  *   point equal to the first is allowed and adds nothing). */
 typedef struct bool2_input {
@@ -36,6 +42,7 @@ typedef struct bool2_input {
     const uint32_t *poly_off; /* npoly+1 */
     const uint32_t *ring_off; /* nrings+1, nrings = poly_off[npoly] */
     const double *xy;         /* 2 * ring_off[nrings] */
+    int fill;                 /* BOOL2_FILL_* */
 } bool2_input;
 
 /* The arrangement, its membership table and the selected region. */
@@ -43,8 +50,11 @@ typedef struct bool2_result {
     lar2 c;         /* the arrangement of all ring edges */
     size_t ninputs; /* polygons */
     /* face f lies in the polygons mem[mem_off[f] .. mem_off[f+1]), ascending (c.nf + 1 rows:
-     * the last, empty, is the unbounded face); compressed sparse rows, never faces x inputs */
+     * the last, empty, is the unbounded face); compressed sparse rows, never faces x inputs.
+     * Under the even-odd rule a row lists the polygons of odd winding number; under the others
+     * those of non-zero winding number, memw then holding the numbers. */
     uint32_t *mem_off, *mem;
+    int32_t *memw; /* NULL under the even-odd rule */
     size_t ncells;
     uint32_t *cells; /* ncells selected faces, ascending */
     double area;     /* the area the result polygons enclose, from their written coordinates */

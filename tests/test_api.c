@@ -119,6 +119,19 @@ static const err_case err_cases[] = {
      "options.fields[1]: expected one of"},
     {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":\"V\"}}", 422,
      "options.fields: expected an array"},
+    {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+     "\"options\":{\"fill\":\"even\"}}",
+     422, "options.fill: expected \"odd\", \"nonzero\" or \"positive\""},
+    {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+     "\"options\":{\"fill\":1}}",
+     422, "options.fill: expected"},
+    {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"op\":\"union\","
+     "\"options\":{\"foo\":1}}",
+     422,
+     "options.foo: unknown option (expected precision, keep_dangling, exterior_last, "
+     "operators, fields or fill)"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fill\":\"odd\"}}", 422,
+     "options.fill: unknown option"},
 };
 
 TEST(parse_errors_have_status_and_path)

@@ -47,22 +47,27 @@ static void pb_rect(pb *b, double x0, double y0, double x1, double y1)
     pb_ring(b, r, 4);
 }
 
-static bool2_input pb_input(const pb *b)
+static bool2_input pb_input(const pb *b, int fill)
 {
-    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy};
+    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy, fill};
 }
 
-/* Runs a named operation; returns the status, result in *r. */
-static int run_named(const pb *b, const char *name, bool2_result *r)
+/* Runs a named operation under a fill rule; returns the status, result in *r. */
+static int run_fill(const pb *b, const char *name, int fill, bool2_result *r)
 {
     bool_expr e;
     char err[256];
-    bool2_input in = pb_input(b);
+    bool2_input in = pb_input(b, fill);
     if (bool_expr_named(name, b->np, &e) || bool_expr_check(&e, b->np)) return -1;
     int rc = bool2_build(&in, &e, &(arr2_opts){.threads = 1}, r, err, sizeof err);
     if (rc) fprintf(stderr, "bool2_build: %s\n", err);
     bool_expr_free(&e);
     return rc;
+}
+
+static int run_named(const pb *b, const char *name, bool2_result *r)
+{
+    return run_fill(b, name, BOOL2_FILL_ODD, r);
 }
 
 /* The result's invariants: cycles closed and consistent with EV, outer cycles CCW and holes
@@ -144,6 +149,42 @@ TEST(bool2_two_squares)
         CHECK(both == 1, "%s: %zu faces in both inputs", want[t].op, both);
         CHECK(r.mem_off[r.c.nf + 1] == r.mem_off[r.c.nf], "%s: the unbounded face in an input",
               want[t].op);
+        bool2_free(&r);
+    }
+}
+
+/* Fill rules: polygon 0 two squares overlapping in a unit square (winding 2 there), polygon 1 a
+ * unit square turning clockwise (winding -1). */
+TEST(bool2_fill_rules)
+{
+    pb b = {0};
+    pb_rect(&b, 0, 0, 2, 2);
+    pb_rect(&b, 1, 1, 3, 3);
+    pb_end(&b);
+    double cw[8] = {4, 0, 4, 1, 5, 1, 5, 0};
+    pb_ring(&b, cw, 4);
+    pb_end(&b);
+    static const int fills[] = {BOOL2_FILL_ODD, BOOL2_FILL_NONZERO, BOOL2_FILL_POSITIVE};
+    static const double area[] = {7, 8, 7};
+    for (int t = 0; t < 3; t++) {
+        bool2_result r;
+        REQUIRE(run_fill(&b, "union", fills[t], &r) == ARR_OK, "fill %d failed", fills[t]);
+        CHECK(fabs(r.area - area[t]) < 1e-12, "fill %d: area %g, want %g", fills[t], r.area,
+              area[t]);
+        CHECK((r.memw != NULL) == (t > 0), "fill %d: winding numbers %s", fills[t],
+              r.memw ? "given" : "not given");
+        int two = 0, minus = 0;
+        for (size_t f = 0; f < r.c.nf; f++)
+            for (uint32_t k = r.mem_off[f]; k < r.mem_off[f + 1]; k++) {
+                int32_t w = r.memw ? r.memw[k] : 1;
+                two += r.mem[k] == 0 && w == 2;
+                minus += r.mem[k] == 1 && w == -1;
+                CHECK(w != 0, "fill %d: face %zu lists polygon %u with winding 0", fills[t], f,
+                      r.mem[k]);
+            }
+        CHECK(two == (t > 0) && minus == (t > 0), "fill %d: %d faces winding 2, %d winding -1",
+              fills[t], two, minus);
+        check_result("fill", &r);
         bool2_free(&r);
     }
 }
@@ -666,7 +707,7 @@ TEST(bool2_many_operands)
             poly_off[q + 1] = (uint32_t)(q + 1);
             ring_off[q + 1] = (uint32_t)(4 * (q + 1));
         }
-    bool2_input in = {n, poly_off, ring_off, xy};
+    bool2_input in = {n, poly_off, ring_off, xy, BOOL2_FILL_ODD};
     static const char *const ops[] = {"union", "xor", "intersection"};
     static const double want[] = {1600, 1600, 0};
     for (int t = 0; t < 3; t++) {
@@ -712,7 +753,7 @@ TEST(bool2_many_operands)
         GEOSGeometry *u = GEOSUnaryUnion_r(h, coll);
         double ga = -1;
         if (u) GEOSArea_r(h, u, &ga);
-        bool2_input in2 = {m, poly_off, ring_off, xy};
+        bool2_input in2 = {m, poly_off, ring_off, xy, BOOL2_FILL_ODD};
         bool_expr e;
         bool2_result r;
         char err[256];

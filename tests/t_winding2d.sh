@@ -1,0 +1,33 @@
+#!/bin/sh
+# t_winding2d.sh — the 2D polygons' fill rules "odd", "nonzero" and "positive" (issue 26): two
+# squares overlapping in one polygon, holes turning either way, a clockwise square, a pentagram,
+# a Boolean of such polygons, and random star rings (some clockwise, some on a lattice, some far
+# from the origin).  Every face's winding numbers against the rings' own about a point inside
+# it, each polygon's sum of area * winding against its rings' signed area, and the result's
+# area against GEOS's polygonize of the ring lines.  See tests/winding2d.py.
+# CELLAR_STRESS=N: N seeds per random family.
+set -u
+cd "$(dirname "$0")/.." || exit 1
+. tests/lib.sh
+export CELLAR_BUILD="${CELLAR_BUILD:-build}"
+export CELLAR_BIN="${CELLAR_BIN:-$CELLAR_BUILD/cellar}"
+case $CELLAR_BIN in /*) ;; *) CELLAR_BIN="$(pwd)/$CELLAR_BIN" ;; esac
+[ -x "$CELLAR_BIN" ] || give_up "$CELLAR_BIN is not built"
+# python3 with shapely: the one on PATH, else Debian's (python3-shapely)
+PY=${PYTHON:-python3}
+if ! $PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null; then
+    PY=/usr/bin/python3
+fi
+$PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null ||
+    give_up "python3 with shapely is needed: apt-get install python3-shapely (make deps)"
+# the script prints a check per line and the summary last; a crash leaves no summary: one failure
+$PY tests/winding2d.py >"$T/out" 2>"$T/err"
+rc=$?
+grep -v -E '^[0-9]+ passed, [0-9]+ failed' "$T/out"
+last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$T/out" | tail -n 1)
+if [ -z "$last" ]; then
+    tail -n 5 "$T/err"
+    give_up "tests/winding2d.py exited $rc without a summary line"
+fi
+echo "$last"
+[ "$rc" -eq 0 ]

@@ -214,6 +214,7 @@ typedef struct forest {
     const uint8_t *pclass;     /* by piece: its chart's class, 7 when not flat (solids only) */
     uint32_t *nchart;          /* by node: the flat chart of every piece below it, or NONE */
     int32_t (*ibox)[6];        /* by item: its piece's box */
+    uint32_t *isol;            /* by item: its piece's solid */
     uint32_t (*itri)[3];       /* by item: a triangle's vertices, or NONE (solids only) */
     const atomic_uchar *vcert; /* by vertex: 1 when its star is certified (star_cert) */
     uint32_t *root;            /* ng: its tree's root in node[] */
@@ -262,6 +263,10 @@ static void build_groups(void *ctx, size_t item, int worker)
             else
                 nd->a += 2 * o, nd->b += 2 * o;
         }
+        if (F->A->soup) /* the items' solids: a face soup's differ within a group */
+            for (uint32_t k = o; k < o + n; k++) F->isol[k] = F->A->pc[F->item[k]].solid;
+        else
+            for (uint32_t k = o, sol = F->A->pc[o].solid; k < o + n; k++) F->isol[k] = sol;
         if (F->itri) /* the items' vertices, when triangles, in item order */
             for (uint32_t k = o; k < o + n; k++) {
                 const piece *P = &F->A->pc[F->item[k]];
@@ -1261,12 +1266,28 @@ static int leaf_pairs(const forest *F, const bnode *x, const bnode *y, out64 *o)
     const a3 *A = F->A;
     /* the items' boxes in item order: no piece is read for a pair apart (a leaf's pieces are of
      * one chart, and two leaves of one flat chart are never walked: worth) */
-    int self = !A->soup && A->pc[F->item[x->a]].solid == A->pc[F->item[y->a]].solid;
-    for (uint32_t i = x->a; i < x->a + (x->b & ~LEAFBIT); i++)
-        for (uint32_t j = x == y ? i + 1 : y->a; j < y->a + (y->b & ~LEAFBIT); j++) {
+    int self = !A->soup && F->isol[x->a] == F->isol[y->a];
+    uint32_t nx = x->b & ~LEAFBIT, ny = y->b & ~LEAFBIT, xs[BVH_LEAF], ys[BVH_LEAF];
+    if (x == y) {
+        for (uint32_t t = 0; t < nx; t++) xs[t] = ys[t] = x->a + t;
+    } else { /* only the items meeting the other leaf's box can meet its items */
+        uint32_t kx = 0, ky = 0;
+        for (uint32_t t = 0; t < nx; t++) {
+            xs[kx] = x->a + t;
+            kx += (uint32_t)box_meet(F->ibox[x->a + t], y->box);
+        }
+        for (uint32_t t = 0; t < ny; t++) {
+            ys[ky] = y->a + t;
+            ky += (uint32_t)box_meet(F->ibox[y->a + t], x->box);
+        }
+        nx = kx, ny = ky;
+    }
+    for (uint32_t s = 0; s < nx; s++)
+        for (uint32_t r = x == y ? s + 1 : 0; r < ny; r++) {
+            uint32_t i = xs[s], j = ys[r];
             if (!box_meet(F->ibox[i], F->ibox[j])) continue;
             uint32_t p = F->item[i], q = F->item[j];
-            if (A->soup ? A->pc[p].solid == A->pc[q].solid
+            if (A->soup ? F->isol[i] == F->isol[j]
                         : self && (star_apart(F, i, j) || self_apart(A, p, q)))
                 continue;
             if (push64(o, p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p)) return -1;
@@ -1441,7 +1462,8 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    forest F = {A,    0,    NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                NULL, NULL, NULL, NULL, NULL, NULL, 0,    0};
     uint32_t *chart = NULL;
     uint8_t *pclass = NULL;
     atomic_uchar *vcert = NULL;
@@ -1484,6 +1506,8 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.srt = mem_malloc(n * sizeof *F.srt);
     F.bx = mem_malloc(n * sizeof *F.bx);
     F.ibox = mem_malloc(n * sizeof *F.ibox);
+    F.isol = mem_malloc(n * sizeof *F.isol);
+    if (!F.isol) goto done;
     if (!A->soup) {
         F.itri = mem_malloc(n * sizeof *F.itri);
         if (!F.itri) goto done;
@@ -1552,6 +1576,7 @@ done:
     free(pclass);
     free(F.nchart);
     free(F.ibox);
+    free(F.isol);
     free(F.itri);
     free((void *)vcert);
     free(F.root);

@@ -38,8 +38,13 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
 /* Below this many elements an insertion sort beats the passes' fixed cost (a histogram of
  * 2^RBITS counts each): the 3D core sorts many tiny arrangements. */
 #define SMALL 48
+/* Below this many a merge sort does (runs of SMALL sorted by insertion, merged pairwise): the
+ * passes' histograms, NDIG * 2^RBITS counts zeroed and summed, cost more than n log n
+ * comparisons up to about here (the charts' boundaries: hundreds of sorts of hundreds). */
+#define MEDIUM 1024
 
-/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, else the passes.  The
+/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, merging below MEDIUM,
+ * else the passes.  The
  * histograms of every digit are counted in one read of the data; a digit that every key shares
  * costs no pass. */
 #define NDIG ((64 + RBITS - 1) / RBITS)
@@ -57,6 +62,34 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
             return 0;                                                                              \
         }                                                                                          \
         T *tmp = malloc(n * sizeof *tmp);                                                          \
+        if (tmp && n <= MEDIUM) {                                                                  \
+            for (size_t r = 0; r < n; r += SMALL) { /* runs by insertion */                        \
+                size_t e = r + SMALL < n ? r + SMALL : n;                                          \
+                for (size_t i = r + 1; i < e; i++) {                                               \
+                    T x = a[i];                                                                    \
+                    size_t j = i;                                                                  \
+                    for (; j > r && KEY(a[j - 1]) > KEY(x); j--) a[j] = a[j - 1];                  \
+                    a[j] = x;                                                                      \
+                }                                                                                  \
+            }                                                                                      \
+            T *src = a, *dst = tmp;                                                                \
+            for (size_t w = SMALL; w < n; w *= 2) { /* stable: ties from the left run first */     \
+                for (size_t lo = 0; lo < n; lo += 2 * w) {                                         \
+                    size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;    \
+                    size_t i = lo, j = mid, k = lo;                                                \
+                    while (i < mid && j < hi)                                                      \
+                        dst[k++] = KEY(src[j]) < KEY(src[i]) ? src[j++] : src[i++];                \
+                    while (i < mid) dst[k++] = src[i++];                                           \
+                    while (j < hi) dst[k++] = src[j++];                                            \
+                }                                                                                  \
+                T *t = src;                                                                        \
+                src = dst;                                                                         \
+                dst = t;                                                                           \
+            }                                                                                      \
+            if (src != a) memcpy(a, src, n * sizeof *a);                                           \
+            free(tmp);                                                                             \
+            return 0;                                                                              \
+        }                                                                                          \
         size_t *cnt = calloc(NDIG * RSIZE, sizeof *cnt);                                           \
         if (!tmp || !cnt) {                                                                        \
             free(tmp);                                                                             \

@@ -8,6 +8,7 @@
 
 #include "core/arr2.h"
 #include "core/num.h"
+#include "core/sort.h"
 #include "tests/check.h"
 #include "tests/lar_check.h"
 
@@ -46,6 +47,44 @@ static size_t add_square(double *s, size_t n, double x, double y, double side)
 
 static const double ORTHO[8][4] = {{0, 0, 6, 0}, {0, 4, 10, 4}, {0, 0, 0, 4},   {3, 0, 3, 4},
                                    {6, 0, 6, 8}, {3, 2, 6, 2},  {10, 0, 10, 8}, {0, 8, 10, 8}};
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* sort_u64 and sort_kv at every size regime (insertion, merging, radix passes), keys from a
+ * few values (ties: sort_kv must keep their order) to the full 64 bits, against qsort. */
+TEST(sorts_against_qsort)
+{
+    static const size_t sizes[] = {0, 1, 2, 47, 48, 49, 95, 97, 500, 1023, 1024, 1025, 3000};
+    uint64_t st = 77;
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++)
+        for (int spread = 0; spread < 3; spread++) {
+            size_t n = sizes[si];
+            uint64_t *a = malloc((n + 1) * sizeof *a), *b = malloc((n + 1) * sizeof *b);
+            kv *k = malloc((n + 1) * sizeof *k);
+            REQUIRE(a && b && k, "memory");
+            for (size_t i = 0; i < n; i++) {
+                double r = test_rnd(&st);
+                a[i] = spread == 0   ? (uint64_t)(r * 5)
+                       : spread == 1 ? (uint64_t)(r * 1e9)
+                                     : (uint64_t)(r * 18446744073709549568.0);
+                b[i] = a[i];
+                k[i] = (kv){a[i], (uint32_t)i};
+            }
+            qsort(b, n, sizeof *b, cmp_u64);
+            CHECK(sort_u64(a, n) == 0 && sort_kv(k, n) == 0, "n %zu: out of memory", n);
+            size_t bad = 0;
+            for (size_t i = 0; i < n; i++) {
+                bad += a[i] != b[i] || k[i].k != b[i];
+                bad += i > 0 && k[i].k == k[i - 1].k && k[i].v < k[i - 1].v; /* stable */
+            }
+            CHECK(bad == 0, "n %zu spread %d: %zu misplaced", n, spread, bad);
+            free(a), free(b), free(k);
+        }
+}
 
 TEST(orthogonal_example_seeds)
 {

@@ -999,31 +999,30 @@ static int star_one(const solchart *C, const uint8_t *cm, const uint32_t *deg, u
 {
     const a3 *A = C->A;
     if (!C->tri) return 0;
-    /* the fan: from x (u to a) on, the entry into u before it (b to u), its twin (u to b) next */
-    uint32_t n = 0, y = x, p = i, mask = 0x3f;
-    do {
-        mask &= cm[p];
-        uint32_t lo = C->e0 + 3 * p, in = y == lo ? y + 2 : y - 1, t = A->ptwin[in];
-        if (t == NONE || t < C->e0 || t >= C->e1 || ++n > deg[u]) return 0;
-        y = t, p = (t - C->e0) / 3;
-    } while (y != x);
-    if (n != deg[u] || !mask) return 0;
-    int k = 0;
-    while (!(mask >> (2 * k) & 3)) k++;
-    int ccw = mask >> (2 * k + 1) & 1, ci = (k + 1) % 3, cj = (k + 2) % 3;
     const int64_t *g = A->g, *pu = g + 3 * (size_t)u;
-    uint32_t hits = 0;
-    y = x, p = i;
-    do {
-        uint32_t lo = C->e0 + 3 * p, in = y == lo ? y + 2 : y - 1,
-                 nx = y + 1 == lo + 3 ? lo : y + 1;
-        const int64_t *pa = g + 3 * (size_t)A->pcv[nx], *pb = g + 3 * (size_t)A->pcv[in];
-        int64_t ax = pa[ci] - pu[ci], ay = pa[cj] - pu[cj], bx = pb[ci] - pu[ci],
-                by = pb[cj] - pu[cj];
-        hits += ccw ? ray_in(ax, ay, by) : ray_in(bx, by, ay);
-        y = A->ptwin[in], p = (y - C->e0) / 3;
-    } while (y != x && hits < 2);
-    return hits == 1;
+    /* one walk counts the corners, the axes all turn one way about (mask) and the ray's hits
+     * along axis k, first that of x's chart (at a boundary between two charts' classes the
+     * fan's triangles mostly turn one way about both axes); another axis costs a second walk */
+    int k = C->cls[i] / 2;
+    for (int attempt = 0; attempt < 2; attempt++) {
+        uint32_t n = 0, y = x, p = i, mask = 0x3f, hits = 0;
+        int ci = (k + 1) % 3, cj = (k + 2) % 3;
+        do {
+            mask &= cm[p];
+            uint32_t lo = C->e0 + 3 * p, in = y == lo ? y + 2 : y - 1,
+                     nx = y + 1 == lo + 3 ? lo : y + 1, t = A->ptwin[in];
+            const int64_t *pa = g + 3 * (size_t)A->pcv[nx], *pb = g + 3 * (size_t)A->pcv[in];
+            int64_t ax = pa[ci] - pu[ci], ay = pa[cj] - pu[cj], bx = pb[ci] - pu[ci],
+                    by = pb[cj] - pu[cj];
+            hits += cm[p] >> (2 * k + 1) & 1 ? ray_in(ax, ay, by) : ray_in(bx, by, ay);
+            if (t == NONE || t < C->e0 || t >= C->e1 || ++n > deg[u]) return 0;
+            y = t, p = (t - C->e0) / 3;
+        } while (y != x);
+        if (n != deg[u] || !mask) return 0;
+        if (mask >> (2 * k) & 3) return hits == 1;
+        for (k = 0; !(mask >> (2 * k) & 3); k++) continue;
+    }
+    return 0;
 }
 
 /* Settles vcert[u] for the vertex u entry x of local piece i starts at: 1 when its star is

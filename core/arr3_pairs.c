@@ -267,15 +267,23 @@ static void build_groups(void *ctx, size_t item, int worker)
             for (uint32_t k = o; k < o + n; k++) F->isol[k] = F->A->pc[F->item[k]].solid;
         else
             for (uint32_t k = o, sol = F->A->pc[o].solid; k < o + n; k++) F->isol[k] = sol;
-        if (F->itri) /* the items' vertices, when triangles, in item order */
-            for (uint32_t k = o; k < o + n; k++) {
-                const piece *P = &F->A->pc[F->item[k]];
-                uint32_t c = P->c0;
-                if (P->nc == 1 && F->A->pc_off[c + 1] - F->A->pc_off[c] == 3)
-                    memcpy(F->itri[k], F->A->pcv + F->A->pc_off[c], sizeof *F->itri);
-                else
-                    F->itri[k][0] = F->itri[k][1] = F->itri[k][2] = NONE;
-            }
+        if (F->itri) { /* the items' vertices, when triangles, in item order */
+            const a3 *A = F->A;
+            const piece *L = &A->pc[o + n - 1];
+            uint32_t e0 = A->pc_off[A->pc[o].c0], e1 = A->pc_off[L->c0 + L->nc];
+            if ((size_t)e1 - e0 == 3 * (size_t)n) /* all triangles: piece o + i at e0 + 3 i */
+                for (uint32_t k = o; k < o + n; k++)
+                    memcpy(F->itri[k], A->pcv + e0 + 3 * (size_t)(F->item[k] - o), sizeof *F->itri);
+            else
+                for (uint32_t k = o; k < o + n; k++) {
+                    const piece *P = &A->pc[F->item[k]];
+                    uint32_t c = P->c0;
+                    if (P->nc == 1 && A->pc_off[c + 1] - A->pc_off[c] == 3)
+                        memcpy(F->itri[k], A->pcv + A->pc_off[c], sizeof *F->itri);
+                    else
+                        F->itri[k][0] = F->itri[k][1] = F->itri[k][2] = NONE;
+                }
+        }
         if (F->chart) /* children come after their parents: the nodes bottom up */
             for (size_t i = t.nnode; i-- > 0;) {
                 const bnode *nd = &t.node[i];

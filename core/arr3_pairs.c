@@ -84,82 +84,90 @@ static void spread_init(void)
 /* ---- building ---------------------------------------------------------------------------- */
 
 typedef struct builder {
-    const int32_t (*bx)[6]; /* the items' boxes, by index */
-    kv *srt;                /* (code, index) sorted by code */
-    uint32_t base;          /* item index i is id base + i */
-    const uint32_t *chart;  /* by id: a leaf holds one value of it only (NULL: no matter) */
-    int32_t (*ibox)[6];     /* NULL, or the items' boxes in item order, at the tree's items */
+    const int32_t (*box)[6]; /* the items' boxes in sorted order (srt's) */
+    kv *srt;                 /* (code, index) sorted by code */
+    uint32_t base;           /* item index i is id base + i; the tree's items and nodes are
+                                numbered from base and 2 base (ids over all the trees) */
+    uint32_t *ch;            /* NULL, or the items' charts in sorted order: a leaf holds one */
+    uint32_t *nchart;        /* with ch: by node id, the flat chart of all below, or NONE */
     bvh *t;
 } builder;
 
 /* Of a run srt[lo .. hi) that would make a leaf, the items of the first one's chart moved to
- * the front (in order): how many they are. */
+ * the front (in order, their boxes and charts with them): how many they are. */
 static size_t chart_front(builder *B, size_t lo, size_t hi)
 {
-    uint32_t c = B->chart[B->base + B->srt[lo].v];
+    uint32_t c = B->ch[lo];
     kv keep[BVH_LEAF];
+    int32_t kbox[BVH_LEAF][6];
+    uint32_t kch[BVH_LEAF];
+    int32_t(*box)[6] = (int32_t(*)[6])B->box;
     size_t nf = lo, nk = 0;
     for (size_t i = lo; i < hi; i++) {
-        if (B->chart[B->base + B->srt[i].v] == c)
-            B->srt[nf++] = B->srt[i];
-        else
-            keep[nk++] = B->srt[i];
+        if (B->ch[i] == c) {
+            B->srt[nf] = B->srt[i], B->ch[nf] = B->ch[i];
+            memmove(box[nf], box[i], sizeof *box);
+            nf++;
+        } else {
+            keep[nk] = B->srt[i], kch[nk] = B->ch[i];
+            memcpy(kbox[nk], box[i], sizeof *kbox);
+            nk++;
+        }
     }
     memcpy(B->srt + nf, keep, nk * sizeof *keep);
+    memcpy(B->ch + nf, kch, nk * sizeof *kch);
+    memcpy(box + nf, kbox, nk * sizeof *kbox);
     return nf - lo;
 }
 
 /* The node over srt[lo .. hi) at t->node[at]; returns 0.  Nodes are allocated in preorder from
  * t->nnode (room for 2 (hi - lo) was made).  With charts, a run that would make a leaf of
  * pieces of several charts is cut by chart instead, so that a pair of leaves either lies in
- * one chart or needs its pairs looked at. */
+ * one chart or needs its pairs looked at.  Everything is read in sorted order (box, ch). */
 static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
 {
     bnode *n = &B->t->node[at];
-    size_t first = hi - lo;
-    if (hi - lo <= BVH_LEAF && B->chart) first = chart_front(B, lo, hi);
-    if (first < hi - lo) {
-        uint32_t ca = (uint32_t)B->t->nnode++, cb = (uint32_t)B->t->nnode++;
-        build_node(B, ca, lo, lo + first);
-        build_node(B, cb, lo + first, hi);
-        n = &B->t->node[at];
-        n->a = ca, n->b = cb;
-        box_join(n->box, B->t->node[ca].box, B->t->node[cb].box);
-        return;
-    }
-    if (hi - lo <= BVH_LEAF) {
-        n->a = (uint32_t)lo;
+    size_t first = hi - lo, nb = 2 * (size_t)B->base;
+    if (hi - lo <= BVH_LEAF && B->ch) first = chart_front(B, lo, hi);
+    if (hi - lo <= BVH_LEAF && first == hi - lo) {
+        n->a = (uint32_t)(B->base + lo);
         n->b = (uint32_t)(hi - lo) | LEAFBIT;
-        memcpy(n->box, B->bx[B->srt[lo].v], sizeof n->box);
+        memcpy(n->box, B->box[lo], sizeof n->box);
         for (size_t i = lo; i < hi; i++) {
             B->t->item[i] = B->base + B->srt[i].v;
-            if (B->ibox) memcpy(B->ibox[i], B->bx[B->srt[i].v], sizeof *B->ibox);
-            if (i > lo) box_join(n->box, n->box, B->bx[B->srt[i].v]);
+            if (i > lo) box_join(n->box, n->box, B->box[i]);
         }
+        if (B->ch) B->nchart[nb + at] = B->ch[lo];
         return;
     }
-    uint64_t c0 = B->srt[lo].k, c1 = B->srt[hi - 1].k;
-    size_t mid;
-    if (c0 == c1) {
-        mid = lo + (hi - lo) / 2;
-    } else {
-        int bit = 63 - __builtin_clzll(c0 ^ c1);
-        size_t l = lo, r = hi - 1; /* the first code with the bit set lies in (l, r] */
-        while (r - l > 1) {
-            size_t m = l + (r - l) / 2;
-            if (B->srt[m].k >> bit & 1)
-                r = m;
-            else
-                l = m;
+    size_t mid = lo + first; /* a leaf's run cut by chart */
+    if (first == hi - lo) {
+        uint64_t c0 = B->srt[lo].k, c1 = B->srt[hi - 1].k;
+        if (c0 == c1) {
+            mid = lo + (hi - lo) / 2;
+        } else {
+            int bit = 63 - __builtin_clzll(c0 ^ c1);
+            size_t l = lo, r = hi - 1; /* the first code with the bit set lies in (l, r] */
+            while (r - l > 1) {
+                size_t m = l + (r - l) / 2;
+                if (B->srt[m].k >> bit & 1)
+                    r = m;
+                else
+                    l = m;
+            }
+            mid = r;
         }
-        mid = r;
     }
     uint32_t ca = (uint32_t)B->t->nnode++, cb = (uint32_t)B->t->nnode++;
     build_node(B, ca, lo, mid);
     build_node(B, cb, mid, hi);
     n = &B->t->node[at];
-    n->a = ca, n->b = cb;
+    n->a = (uint32_t)(nb + ca), n->b = (uint32_t)(nb + cb);
     box_join(n->box, B->t->node[ca].box, B->t->node[cb].box);
+    if (B->ch) { /* children are built first: the nodes' charts bottom up */
+        uint32_t x = B->nchart[nb + ca], y = B->nchart[nb + cb];
+        B->nchart[nb + at] = x == y ? x : NONE;
+    }
 }
 
 /* The tree over the ids base .. base + n (n >= 1) into t, whose arrays have room for 2n nodes
@@ -168,7 +176,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
  * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
                       uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first, kv *srt,
-                      int32_t (*bx)[6], int32_t (*ibox)[6], bvh *t)
+                      int32_t (*bx)[6], int32_t (*ibox)[6], uint32_t *nchart, bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -198,9 +206,20 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         srt[i] = (kv){code, (uint32_t)i};
     }
     if (sort_kv(srt, n)) return -1;
-    builder B = {(const int32_t(*)[6])bx, srt, base, chart, ibox, t};
+    /* the boxes (into ibox, the items' boxes in item order; else back into bx) and the charts
+     * gathered in sorted order in tight loops, whose independent loads the processor overlaps,
+     * not one by one down the recursion */
+    int32_t(*sb)[6] = ibox;
+    if (!sb && !(sb = malloc((n ? n : 1) * sizeof *sb))) return -1;
+    for (size_t i = 0; i < n; i++) memcpy(sb[i], bx[srt[i].v], sizeof *sb);
+    if (!ibox) memcpy(bx, sb, n * sizeof *bx), free(sb), sb = bx;
+    uint32_t *ch = NULL; /* in bx, free now when ibox holds the boxes */
+    if (chart && !(ch = ibox ? (uint32_t *)bx : malloc((n ? n : 1) * sizeof *ch))) return -1;
+    for (size_t i = 0; ch && i < n; i++) ch[i] = chart[base + srt[i].v];
+    builder B = {(const int32_t(*)[6])sb, srt, base, ch, nchart, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
+    if (ch && !ibox) free(ch);
     return 0;
 }
 
@@ -251,19 +270,12 @@ static void build_groups(void *ctx, size_t item, int worker)
         uint32_t o = F->g_off[g], n = F->g_off[g + 1] - o;
         bvh t = {F->node + 2 * (size_t)o, F->item + o, 0}; /* the pieces o .. o + n */
         if (build_tree(piece_box, F->A, o, n, F->chart, F->pclass, F->srt + o, F->bx + o,
-                       F->ibox + o, &t)) {
+                       F->ibox + o, F->nchart, &t)) {
             F->fail = 1;
             return;
         }
-        F->root[g] = 2 * o; /* node ids are global: offset by the group's start */
-        for (size_t i = 0; i < t.nnode; i++) {
-            bnode *nd = &t.node[i];
-            if (nd->b & LEAFBIT)
-                nd->a += o;
-            else
-                nd->a += 2 * o, nd->b += 2 * o;
-        }
-        if (F->A->soup) /* the items' solids: a face soup's differ within a group */
+        F->root[g] = 2 * o; /* node ids are global: from the group's start */
+        if (F->A->soup)     /* the items' solids: a face soup's differ within a group */
             for (uint32_t k = o; k < o + n; k++) F->isol[k] = F->A->pc[F->item[k]].solid;
         else
             for (uint32_t k = o, sol = F->A->pc[o].solid; k < o + n; k++) F->isol[k] = sol;
@@ -284,16 +296,6 @@ static void build_groups(void *ctx, size_t item, int worker)
                         F->itri[k][0] = F->itri[k][1] = F->itri[k][2] = NONE;
                 }
         }
-        if (F->chart) /* children come after their parents: the nodes bottom up */
-            for (size_t i = t.nnode; i-- > 0;) {
-                const bnode *nd = &t.node[i];
-                uint32_t c;
-                if (nd->b & LEAFBIT) /* a leaf's pieces are of one chart (chart_front) */
-                    c = F->chart[F->item[nd->a]];
-                else
-                    c = F->nchart[nd->a] == F->nchart[nd->b] ? F->nchart[nd->a] : NONE;
-                F->nchart[2 * (size_t)o + i] = c;
-            }
     }
 }
 
@@ -1533,7 +1535,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
     if (!tsrt || !T.node || !T.item) goto done;
-    if (build_tree(group_box, &F, 0, F.ng, NULL, NULL, tsrt, F.bx, NULL, &T)) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, NULL, NULL, tsrt, F.bx, NULL, NULL, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;

@@ -52,18 +52,8 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
     int NAME(T *a, size_t n)                                                                       \
     {                                                                                              \
         if (n < 2) return 0;                                                                       \
-        if (n <= SMALL) {                                                                          \
-            for (size_t i = 1; i < n; i++) {                                                       \
-                T x = a[i];                                                                        \
-                size_t j = i;                                                                      \
-                for (; j > 0 && KEY(a[j - 1]) > KEY(x); j--) a[j] = a[j - 1];                      \
-                a[j] = x;                                                                          \
-            }                                                                                      \
-            return 0;                                                                              \
-        }                                                                                          \
-        T *tmp = malloc(n * sizeof *tmp);                                                          \
-        if (tmp && n <= MEDIUM) {                                                                  \
-            for (size_t r = 0; r < n; r += SMALL) { /* runs by insertion */                        \
+        if (n <= MEDIUM) { /* runs of SMALL by insertion (all of it below SMALL) */                \
+            for (size_t r = 0; r < n; r += SMALL) {                                                \
                 size_t e = r + SMALL < n ? r + SMALL : n;                                          \
                 for (size_t i = r + 1; i < e; i++) {                                               \
                     T x = a[i];                                                                    \
@@ -72,8 +62,13 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
                     a[j] = x;                                                                      \
                 }                                                                                  \
             }                                                                                      \
-            T *src = a, *dst = tmp;                                                                \
-            for (size_t w = SMALL; w < n; w *= 2) { /* stable: ties from the left run first */     \
+            if (n <= SMALL) return 0;                                                              \
+        }                                                                                          \
+        T *tmp = malloc(n * sizeof *tmp), *src = a, *dst = tmp;                                    \
+        size_t *cnt = NULL;                                                                        \
+        if (tmp && n <= MEDIUM) {                                                                  \
+            /* the runs merged pairwise, stable: ties from the left run first */                   \
+            for (size_t w = SMALL; w < n; w *= 2) {                                                \
                 for (size_t lo = 0; lo < n; lo += 2 * w) {                                         \
                     size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;    \
                     size_t i = lo, j = mid, k = lo;                                                \
@@ -86,11 +81,9 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
                 src = dst;                                                                         \
                 dst = t;                                                                           \
             }                                                                                      \
-            if (src != a) memcpy(a, src, n * sizeof *a);                                           \
-            free(tmp);                                                                             \
-            return 0;                                                                              \
+            goto done;                                                                             \
         }                                                                                          \
-        size_t *cnt = calloc(NDIG * RSIZE, sizeof *cnt);                                           \
+        cnt = calloc(NDIG * RSIZE, sizeof *cnt);                                                   \
         if (!tmp || !cnt) {                                                                        \
             free(tmp);                                                                             \
             free(cnt);                                                                             \
@@ -101,7 +94,6 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
             for (unsigned d = 0; d < NDIG; d++)                                                    \
                 cnt[d * RSIZE + ((k >> (d * RBITS)) & (RSIZE - 1))]++;                             \
         }                                                                                          \
-        T *src = a, *dst = tmp;                                                                    \
         for (unsigned d = 0; d < NDIG; d++) {                                                      \
             size_t *c = cnt + d * RSIZE, s = 0;                                                    \
             unsigned sh = d * RBITS;                                                               \
@@ -116,6 +108,7 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
             src = dst;                                                                             \
             dst = t;                                                                               \
         }                                                                                          \
+    done:                                                                                          \
         if (src != a) memcpy(a, src, n * sizeof *a);                                               \
         free(tmp);                                                                                 \
         free(cnt);                                                                                 \

@@ -7,6 +7,9 @@
 #                               exits WANT, else prints what it got
 #   finish                      prints "N passed, N failed" and exits non-zero on a failure
 #   give_up WHY                 a test that cannot run: one failure, WHY, and exit
+#   run_py PY SCRIPT ARGS...    runs a Python test that prints its checks and a summary line
+#                               last (tests/tally.py), passes its lines on and exits with it;
+#                               a crash leaves no summary: one failure, with its stderr's end
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT INT TERM
 P=0
@@ -35,4 +38,19 @@ give_up() {
     echo "FAIL $1"
     echo "0 passed, 1 failed"
     exit 1
+}
+run_py() {
+    py=$1
+    shift
+    "$py" "$@" >"$T/py.out" 2>"$T/py.err"
+    rc=$?
+    grep -v -E '^[0-9]+ passed, [0-9]+ failed' "$T/py.out"
+    last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$T/py.out" | tail -n 1)
+    if [ -z "$last" ]; then
+        tail -n 5 "$T/py.err"
+        give_up "$1 exited $rc without a summary line"
+    fi
+    echo "$last"
+    [ "$rc" -eq 0 ]
+    exit $?
 }

@@ -20,14 +20,4 @@ if ! $PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null; then
 fi
 $PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null ||
     give_up "python3 with shapely is needed: apt-get install python3-shapely (make deps)"
-# the script prints a check per line and the summary last; a crash leaves no summary: one failure
-$PY tests/winding2d.py >"$T/out" 2>"$T/err"
-rc=$?
-grep -v -E '^[0-9]+ passed, [0-9]+ failed' "$T/out"
-last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$T/out" | tail -n 1)
-if [ -z "$last" ]; then
-    tail -n 5 "$T/err"
-    give_up "tests/winding2d.py exited $rc without a summary line"
-fi
-echo "$last"
-[ "$rc" -eq 0 ]
+run_py $PY tests/winding2d.py

@@ -13,14 +13,4 @@ cd "$(dirname "$0")/.." || exit 1
 export CELLAR_BUILD="${CELLAR_BUILD:-build}"
 export CELLAR_BIN="${CELLAR_BIN:-$CELLAR_BUILD/cellar}"
 [ -x "$CELLAR_BIN" ] || give_up "$CELLAR_BIN is not built"
-# the script prints a check per line and the summary last; a crash leaves no summary: one failure
-"${PYTHON:-python3}" tests/winding3d.py >"$T/out" 2>"$T/err"
-rc=$?
-grep -v -E '^[0-9]+ passed, [0-9]+ failed' "$T/out"
-last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$T/out" | tail -n 1)
-if [ -z "$last" ]; then
-    tail -n 5 "$T/err"
-    give_up "tests/winding3d.py exited $rc without a summary line"
-fi
-echo "$last"
-[ "$rc" -eq 0 ]
+run_py "${PYTHON:-python3}" tests/winding3d.py

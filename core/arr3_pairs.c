@@ -3,17 +3,17 @@
  * that may cross (a surface passing through itself: the charts below, and self_apart).
  *
  * A bounding-volume hierarchy per solid, and one over the solids.  A solid's pieces are sorted
- * by the Morton code of their boxes' centres (63 bits: 21 per axis, over the solid's own box)
- * and the sorted run is split at the highest bit in which its first and last codes differ (in
- * the middle when they are equal), down to leaves of at most BVH_LEAF pieces; every node keeps
- * the box of what lies below it.  So a tree always splits, whatever the shape of the input (a
- * shell inside its mesh, long thin faces, many faces in one plane: a kd-tree that stops where a
- * split does not separate its boxes compares every pair of a large bucket there), and it has
- * depth at most 63 + log2(n).  The solids' root boxes get a tree of their own; walking it
- * against itself gives the pairs of solids whose boxes meet, and each such pair's trees are
- * walked against each other (the larger node's children first), so the work grows with the
- * node pairs whose boxes meet, not with the pieces: the parts of two surfaces far from each
- * other are left at the first nodes that separate them.  Each solid's tree is walked against
+ * by their chart class and the Morton code of their boxes' centres (a 32-bit key: 29 bits of
+ * code over the solid's own box), and the sorted run is split at the highest bit in which its
+ * first and last keys differ (in the middle when they are equal), down to leaves of at most
+ * BVH_LEAF pieces; every node keeps the box of what lies below it.  So a tree always splits,
+ * whatever the shape of the input (a shell inside its mesh, long thin faces, many faces in one
+ * plane: a kd-tree that stops where a split does not separate its boxes compares every pair of a
+ * large bucket there), and it has depth at most 32 + log2(n).  The solids' root boxes get a tree of
+ * their own; walking it against itself gives the pairs of solids whose boxes meet, and each such
+ * pair's trees are walked against each other (the larger node's children first), so the work grows
+ * with the node pairs whose boxes meet, not with the pieces: the parts of two surfaces far from
+ * each other are left at the first nodes that separate them.  Each solid's tree is walked against
  * itself too, skipping the node pairs inside one flat chart; along the charts' boundaries most
  * pairs it meets share a vertex whose star is certified (stars, below), settled by vertex ids.
  * In a face soup each face is a solid (and nothing is walked against itself).
@@ -85,7 +85,7 @@ static void spread_init(void)
 
 typedef struct builder {
     const int32_t (*box)[6]; /* the items' boxes in sorted order (srt's) */
-    kv *srt;                 /* (code, index) sorted by code */
+    uint64_t *srt;           /* code << 32 | index, sorted by code */
     uint32_t base;           /* item index i is id base + i; the tree's items and nodes are
                                 numbered from base and 2 base (ids over all the trees) */
     uint32_t *ch;            /* NULL, or the items' charts in sorted order: a leaf holds one */
@@ -98,7 +98,7 @@ typedef struct builder {
 static size_t chart_front(builder *B, size_t lo, size_t hi)
 {
     uint32_t c = B->ch[lo];
-    kv keep[BVH_LEAF];
+    uint64_t keep[BVH_LEAF];
     int32_t kbox[BVH_LEAF][6];
     uint32_t kch[BVH_LEAF];
     int32_t(*box)[6] = (int32_t(*)[6])B->box;
@@ -134,7 +134,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
         n->b = (uint32_t)(hi - lo) | LEAFBIT;
         memcpy(n->box, B->box[lo], sizeof n->box);
         for (size_t i = lo; i < hi; i++) {
-            B->t->item[i] = B->base + B->srt[i].v;
+            B->t->item[i] = B->base + (uint32_t)B->srt[i];
             if (i > lo) box_join(n->box, n->box, B->box[i]);
         }
         if (B->ch) B->nchart[nb + at] = B->ch[lo];
@@ -142,7 +142,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
     }
     size_t mid = lo + first; /* a leaf's run cut by chart */
     if (first == hi - lo) {
-        uint64_t c0 = B->srt[lo].k, c1 = B->srt[hi - 1].k;
+        uint64_t c0 = B->srt[lo] >> 32, c1 = B->srt[hi - 1] >> 32;
         if (c0 == c1) {
             mid = lo + (hi - lo) / 2;
         } else {
@@ -150,7 +150,7 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
             size_t l = lo, r = hi - 1; /* the first code with the bit set lies in (l, r] */
             while (r - l > 1) {
                 size_t m = l + (r - l) / 2;
-                if (B->srt[m].k >> bit & 1)
+                if (B->srt[m] >> 32 >> bit & 1)
                     r = m;
                 else
                     l = m;
@@ -175,8 +175,8 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
  * scratch for n entries (bx: the boxes, read once through boxof and then in order).  Returns -1
  * out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
-                      uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first, kv *srt,
-                      int32_t (*bx)[6], int32_t (*ibox)[6], uint32_t *nchart, bvh *t)
+                      uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first,
+                      uint64_t *srt, int32_t (*bx)[6], int32_t (*ibox)[6], uint32_t *nchart, bvh *t)
 {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i = 0; i < n; i++) {
@@ -189,8 +189,8 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         }
     }
     int sh[3];
-    for (int k = 0; k < 3; k++) { /* the centres' spread down to 10 bits (a 30-bit code: three
-                                   * passes of the radix sort; equal codes split in the middle) */
+    for (int k = 0; k < 3; k++) { /* the centres' spread down to 10 bits (a 30-bit code, its
+                                   * last bit dropped; equal codes split in the middle) */
         uint64_t ext = (uint64_t)(hi[k] - lo[k]);
         sh[k] = 0;
         while ((ext >> sh[k]) >= ((uint64_t)1 << 10)) sh[k]++;
@@ -202,20 +202,21 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         for (int k = 0; k < 3; k++)
             code |= (uint64_t)spread_tab[(uint64_t)((int64_t)b[k] + b[3 + k] - lo[k]) >> sh[k]]
                     << (2 - k);
-        if (first) code |= (uint64_t)first[base + i] << 30;
-        srt[i] = (kv){code, (uint32_t)i};
+        code >>= 1; /* 29 bits, and the class above them: keys of 32 bits */
+        if (first) code |= (uint64_t)first[base + i] << 29;
+        srt[i] = code << 32 | (uint32_t)i;
     }
-    if (sort_kv(srt, n)) return -1;
+    if (sort_u64_hi32(srt, n)) return -1; /* records of 8 bytes: half the radix passes' traffic */
     /* the boxes (into ibox, the items' boxes in item order; else back into bx) and the charts
      * gathered in sorted order in tight loops, whose independent loads the processor overlaps,
      * not one by one down the recursion */
     int32_t(*sb)[6] = ibox;
     if (!sb && !(sb = malloc((n ? n : 1) * sizeof *sb))) return -1;
-    for (size_t i = 0; i < n; i++) memcpy(sb[i], bx[srt[i].v], sizeof *sb);
+    for (size_t i = 0; i < n; i++) memcpy(sb[i], bx[(uint32_t)srt[i]], sizeof *sb);
     if (!ibox) memcpy(bx, sb, n * sizeof *bx), free(sb), sb = bx;
     uint32_t *ch = NULL; /* in bx, free now when ibox holds the boxes */
     if (chart && !(ch = ibox ? (uint32_t *)bx : malloc((n ? n : 1) * sizeof *ch))) return -1;
-    for (size_t i = 0; ch && i < n; i++) ch[i] = chart[base + srt[i].v];
+    for (size_t i = 0; ch && i < n; i++) ch[i] = chart[base + (uint32_t)srt[i]];
     builder B = {(const int32_t(*)[6])sb, srt, base, ch, nchart, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
@@ -239,7 +240,7 @@ typedef struct forest {
     uint32_t *root;            /* ng: its tree's root in node[] */
     bnode *node;               /* every group's nodes: group g's from 2 g_off[g] */
     uint32_t *item;            /* every group's items: group g's at g_off[g] .. */
-    kv *srt;
+    uint64_t *srt;
     int32_t (*bx)[6]; /* build_tree's scratch, by piece */
     size_t chunk;     /* groups a task */
     int fail;
@@ -1478,7 +1479,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     atomic_uchar *vcert = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
-    kv *tsrt = NULL;
+    uint64_t *tsrt = NULL;
     walkjob j = {&F, NULL, NULL, NULL, 0};
     int rc = -1;
     *outp = NULL;

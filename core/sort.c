@@ -27,6 +27,7 @@
     }
 
 #define KEY_U64(e)   (e)
+#define KEY_HI32(e)  ((e) >> 32)
 #define KEY_IPT_X(e) ((uint64_t)(e).x ^ (UINT64_C(1) << 63))
 #define KEY_IPT_Y(e) ((uint64_t)(e).y ^ (UINT64_C(1) << 63))
 #define KEY_KV(e)    ((e).k)
@@ -116,6 +117,7 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
     }
 
 RADIX_SORT(sort_u64, uint64_t, KEY_U64)
+RADIX_SORT(sort_u64_hi32, uint64_t, KEY_HI32)
 RADIX_SORT(sort_kv, kv, KEY_KV)
 
 int sort_ipt(ipt *a, size_t n)

@@ -12,6 +12,8 @@
 #include "core/num.h"
 
 int sort_u64(uint64_t *a, size_t n);
+/* By the high 32 bits only, stable (the low bits, an index, keep their order among equals). */
+int sort_u64_hi32(uint64_t *a, size_t n);
 /* A key and the value it carries (an index), sorted by key; stable: equal keys keep their
  * order. */
 typedef struct kv {

@@ -54,8 +54,8 @@ static int cmp_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* sort_u64 and sort_kv at every size regime (insertion, merging, radix passes), keys from a
- * few values (ties: sort_kv must keep their order) to the full 64 bits, against qsort. */
+/* sort_u64, sort_kv and sort_u64_hi32 at every size regime (insertion, merging, radix passes), keys
+ * from a few values (ties: sort_kv must keep their order) to the full 64 bits, against qsort. */
 TEST(sorts_against_qsort)
 {
     static const size_t sizes[] = {0, 1, 2, 47, 48, 49, 95, 97, 500, 1023, 1024, 1025, 3000};
@@ -82,6 +82,19 @@ TEST(sorts_against_qsort)
                 bad += i > 0 && k[i].k == k[i - 1].k && k[i].v < k[i - 1].v; /* stable */
             }
             CHECK(bad == 0, "n %zu spread %d: %zu misplaced", n, spread, bad);
+            /* sort_u64_hi32: by the high half only, stable (the low half an index) */
+            for (size_t i = 0; i < n; i++) a[i] = (uint64_t)(uint32_t)(k[i].k >> 7) << 32 | i;
+            for (size_t i = n; i > 1; i--) { /* shuffled, the low halves still their places */
+                size_t j = (size_t)(test_rnd(&st) * (double)i);
+                uint64_t t = a[i - 1] >> 32;
+                a[i - 1] = (a[j] >> 32) << 32 | (i - 1), a[j] = t << 32 | j;
+            }
+            CHECK(sort_u64_hi32(a, n) == 0, "n %zu: out of memory", n);
+            bad = 0;
+            for (size_t i = 1; i < n; i++)
+                bad += a[i] >> 32 < a[i - 1] >> 32 ||
+                       (a[i] >> 32 == a[i - 1] >> 32 && (uint32_t)a[i] < (uint32_t)a[i - 1]);
+            CHECK(bad == 0, "hi32: n %zu spread %d: %zu out of order", n, spread, bad);
             free(a), free(b), free(k);
         }
 }

@@ -237,42 +237,30 @@ static uint32_t uf_find(uint32_t *p, uint32_t x)
  * each face's sparse row (bool_tree). */
 static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint8_t *sel)
 {
-    size_t nf = out->c.nf, most = 0;
+    size_t nf = out->c.nf;
+    member_rows m = {out->mem_off, out->mem, out->memw}; /* a view: owned by out */
     bool_tree t;
-    for (size_t f = 0; f < nf; f++)
-        if (out->mem_off[f + 1] - out->mem_off[f] > most)
-            most = out->mem_off[f + 1] - out->mem_off[f];
-    uint32_t *in = out->memw ? malloc((most + 1) * sizeof *in) : NULL; /* a row's insides */
-    if ((out->memw && !in) || bool_tree_build(op, out->ninputs, &t)) {
-        free(in);
+    uint32_t *buf = out->memw ? malloc((member_row_most(&m, nf) + 1) * sizeof *buf) : NULL;
+    if ((out->memw && !buf) || bool_tree_build(op, out->ninputs, &t)) {
+        free(buf);
         return -1;
     }
     out->cells = malloc((nf + 1) * sizeof *out->cells);
     if (!out->cells) {
         bool_tree_free(&t);
-        free(in);
+        free(buf);
         return -1;
     }
     out->ncells = 0;
     for (size_t f = 0; f < nf; f++) {
-        const uint32_t *row = out->mem + out->mem_off[f];
-        size_t n = out->mem_off[f + 1] - out->mem_off[f];
-        if (out->memw) { /* the polygons whose winding number here the fill rule takes */
-            const int32_t *w = out->memw + out->mem_off[f];
-            size_t k = 0;
-            for (size_t i = 0; i < n; i++)
-                if (fill == BOOL2_FILL_POSITIVE  ? w[i] > 0
-                    : fill == BOOL2_FILL_NONZERO ? 1
-                                                 : w[i] & 1)
-                    in[k++] = row[i];
-            row = in, n = k;
-        }
+        const uint32_t *row; /* the polygons the face lies in, by the fill rule */
+        size_t n = member_row_inside(&m, f, fill, buf, &row);
         sel[f] = (uint8_t)bool_tree_eval(&t, row, n);
         if (sel[f]) out->cells[out->ncells++] = (uint32_t)f;
     }
     sel[nf] = 0;
     bool_tree_free(&t);
-    free(in);
+    free(buf);
     return 0;
 }
 

@@ -23,14 +23,19 @@
 
 #include "core/arr2.h"
 #include "core/boolexpr.h"
+#include "core/member.h"
 
 #define BOOL2_MAX_INPUTS 500000u /* input polygons (the expression holds at most 10^6 codes) */
 
-/* Where a polygon's inside is, by the winding number w of its rings about a point: odd w (the
- * even-odd rule, the default: ring roles and orientations are free), w != 0, or w > 0 (rings
- * counter-clockwise around what they hold, holes clockwise, as GeoJSON's right-hand rule and
- * SVG's nonzero fill mean them). */
-enum { BOOL2_FILL_ODD = 0, BOOL2_FILL_NONZERO, BOOL2_FILL_POSITIVE };
+/* Where a polygon's inside is, by the winding number w of its rings about a point (member.h's
+ * rules): odd w (the even-odd rule, the API's default: ring roles and orientations are free),
+ * w != 0, or w > 0 (rings counter-clockwise around what they hold, holes clockwise, as
+ * GeoJSON's right-hand rule and SVG's nonzero fill mean them). */
+enum {
+    BOOL2_FILL_ODD = MEMBER_FILL_ODD,
+    BOOL2_FILL_NONZERO = MEMBER_FILL_NONZERO,
+    BOOL2_FILL_POSITIVE = MEMBER_FILL_POSITIVE
+};
 
 /* The input polygons, in CSR form (all borrowed):
  *   polygon p has rings poly_off[p] .. poly_off[p+1]) (first the outer boundary, then holes;
@@ -42,7 +47,7 @@ typedef struct bool2_input {
     const uint32_t *poly_off; /* npoly+1 */
     const uint32_t *ring_off; /* nrings+1, nrings = poly_off[npoly] */
     const double *xy;         /* 2 * ring_off[nrings] */
-    int fill;                 /* BOOL2_FILL_* */
+    int fill;                 /* BOOL2_FILL_* (named: 0 is not the even-odd rule) */
 } bool2_input;
 
 /* The arrangement, its membership table and the selected region. */

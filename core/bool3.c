@@ -168,11 +168,6 @@ done:
     return rc;
 }
 
-int bool3_inside(int32_t w, int fill)
-{
-    return fill == BOOL3_FILL_NONZERO ? w != 0 : fill == BOOL3_FILL_ODD ? (w & 1) != 0 : w > 0;
-}
-
 int bool3_select(const lar3 *c, const member_rows *rows, const bool_expr *e, bool3_result *r)
 {
     return bool3_select_fill(c, rows, e, BOOL3_FILL_POSITIVE, r);
@@ -183,10 +178,7 @@ int bool3_select_fill(const lar3 *c, const member_rows *rows, const bool_expr *e
 {
     size_t nc = c->nc;
     uint8_t *sel = mem_calloc(nc + 1, 1);
-    size_t most = 0;
-    for (size_t k = 0; k < nc; k++)
-        if (rows->off[k + 1] - rows->off[k] > most) most = rows->off[k + 1] - rows->off[k];
-    uint32_t *inside = mem_malloc((most + 1) * sizeof *inside);
+    uint32_t *inside = mem_malloc((member_row_most(rows, nc) + 1) * sizeof *inside);
     uint32_t *minus = mem_malloc((c->nf + 1) * sizeof *minus);
     uint32_t *plus = mem_malloc((c->nf + 1) * sizeof *plus);
     bool_tree t = {0};
@@ -201,14 +193,8 @@ int bool3_select_fill(const lar3 *c, const member_rows *rows, const bool_expr *e
     r->faces = mem_malloc((c->nf + 1) * sizeof *r->faces);
     if (!r->cells || !r->faces) goto done;
     for (size_t k = 0; k < nc; k++) {
-        const uint32_t *in = rows->idx + rows->off[k];
-        size_t nin = rows->off[k + 1] - rows->off[k];
-        if (rows->wind) { /* the solids the cell is inside of, by the fill rule */
-            size_t m = 0;
-            for (size_t i = 0; i < nin; i++)
-                if (bool3_inside(rows->wind[rows->off[k] + i], fill)) inside[m++] = in[i];
-            in = inside, nin = m;
-        }
+        const uint32_t *in; /* the solids the cell is inside of, by the fill rule */
+        size_t nin = member_row_inside(rows, k, fill, inside, &in);
         sel[k] = (uint8_t)bool_tree_eval(&t, in, nin);
         if (sel[k]) {
             r->cells[r->ncells++] = (uint32_t)k;

@@ -45,9 +45,12 @@ typedef struct bool3_result {
     double volume;  /* of the selected cells */
 } bool3_result;
 
-/* The fill rules: where a solid's inside is, by its winding number w. */
-enum { BOOL3_FILL_POSITIVE = 0 /* w > 0 */, BOOL3_FILL_NONZERO /* w != 0 */, BOOL3_FILL_ODD };
-int bool3_inside(int32_t w, int fill);
+/* The fill rules: where a solid's inside is, by its winding number w (member.h's). */
+enum {
+    BOOL3_FILL_POSITIVE = MEMBER_FILL_POSITIVE,
+    BOOL3_FILL_NONZERO = MEMBER_FILL_NONZERO,
+    BOOL3_FILL_ODD = MEMBER_FILL_ODD
+};
 
 /* The cells where e (checked for c->nsolids inputs) is 1, and their boundary.  0 or -1
  * (out of memory; *r then empty).  With winding numbers in rows (rows->wind), a cell is in a

@@ -12,6 +12,32 @@ void member_rows_free(member_rows *r)
     memset(r, 0, sizeof *r);
 }
 
+int member_inside(int32_t w, int fill)
+{
+    return fill == MEMBER_FILL_NONZERO ? w != 0 : fill == MEMBER_FILL_ODD ? (w & 1) != 0 : w > 0;
+}
+
+size_t member_row_most(const member_rows *r, size_t n)
+{
+    size_t most = 0;
+    for (size_t k = 0; k < n; k++)
+        if (r->off[k + 1] - r->off[k] > most) most = r->off[k + 1] - r->off[k];
+    return most;
+}
+
+size_t member_row_inside(const member_rows *r, size_t k, int fill, uint32_t *buf,
+                         const uint32_t **row)
+{
+    const uint32_t *in = r->idx + r->off[k];
+    size_t n = r->off[k + 1] - r->off[k], m = 0;
+    *row = in;
+    if (!r->wind) return n;
+    for (size_t i = 0; i < n; i++)
+        if (member_inside(r->wind[r->off[k] + i], fill)) buf[m++] = in[i];
+    *row = buf;
+    return m;
+}
+
 /* out = a xor b (sorted, each once); returns its length. */
 static size_t symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
 {

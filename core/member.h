@@ -54,4 +54,16 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
 
 void member_rows_free(member_rows *r);
 
+/* The fill rules (2D and 3D alike): where a cell lies in an input, by the input's winding
+ * number w about it. */
+enum { MEMBER_FILL_POSITIVE = 0 /* w > 0 */, MEMBER_FILL_NONZERO /* w != 0 */, MEMBER_FILL_ODD };
+int member_inside(int32_t w, int fill);
+/* The longest of the first n rows (room for member_row_inside's buf). */
+size_t member_row_most(const member_rows *r, size_t n);
+/* The inputs cell k lies in by fill: with winding numbers (r->wind) those of its row the rule
+ * takes, written to buf (room for the row) and *row = buf; without, *row is its row (the inputs
+ * of odd crossings).  Returns how many. */
+size_t member_row_inside(const member_rows *r, size_t k, int fill, uint32_t *buf,
+                         const uint32_t **row);
+
 #endif

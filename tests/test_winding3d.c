@@ -123,7 +123,7 @@ static double filled(const lar3 *c, const member_rows *m, int fill)
 {
     double v = 0;
     for (size_t k = 0; k < c->nc; k++)
-        if (bool3_inside(wind_of(m, k, 0), fill)) v += c->cvol[k];
+        if (member_inside(wind_of(m, k, 0), fill)) v += c->cvol[k];
     return v;
 }
 

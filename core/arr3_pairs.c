@@ -171,9 +171,10 @@ static void build_node(builder *B, uint32_t at, size_t lo, size_t hi)
 }
 
 /* The tree over the ids base .. base + n (n >= 1) into t, whose arrays have room for 2n nodes
- * and n items (its leaves each of one chart when chart, by id, is not NULL).  srt and bx are
- * scratch for n entries (bx: the boxes, read once through boxof and then in order).  Returns -1
- * out of memory. */
+ * and n items (its leaves each of one chart when chart, by id, is not NULL; the nodes' flat
+ * charts then into nchart, by node id).  ibox gets the items' boxes in item order; srt and bx
+ * are scratch for n entries (bx: the boxes, read once through boxof and then in order).
+ * Returns -1 out of memory. */
 static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const void *ctx,
                       uint32_t base, size_t n, const uint32_t *chart, const uint8_t *first,
                       uint64_t *srt, int32_t (*bx)[6], int32_t (*ibox)[6], uint32_t *nchart, bvh *t)
@@ -207,20 +208,15 @@ static int build_tree(const int32_t *(*boxof)(const void *, uint32_t), const voi
         srt[i] = code << 32 | (uint32_t)i;
     }
     if (sort_u64_hi32(srt, n)) return -1; /* records of 8 bytes: half the radix passes' traffic */
-    /* the boxes (into ibox, the items' boxes in item order; else back into bx) and the charts
-     * gathered in sorted order in tight loops, whose independent loads the processor overlaps,
-     * not one by one down the recursion */
-    int32_t(*sb)[6] = ibox;
-    if (!sb && !(sb = malloc((n ? n : 1) * sizeof *sb))) return -1;
-    for (size_t i = 0; i < n; i++) memcpy(sb[i], bx[(uint32_t)srt[i]], sizeof *sb);
-    if (!ibox) memcpy(bx, sb, n * sizeof *bx), free(sb), sb = bx;
-    uint32_t *ch = NULL; /* in bx, free now when ibox holds the boxes */
-    if (chart && !(ch = ibox ? (uint32_t *)bx : malloc((n ? n : 1) * sizeof *ch))) return -1;
+    /* the boxes (into ibox) and the charts (into bx, free then) gathered in sorted order in
+     * tight loops, whose independent loads the processor overlaps, not one by one down the
+     * recursion */
+    for (size_t i = 0; i < n; i++) memcpy(ibox[i], bx[(uint32_t)srt[i]], sizeof *ibox);
+    uint32_t *ch = chart ? (uint32_t *)bx : NULL;
     for (size_t i = 0; ch && i < n; i++) ch[i] = chart[base + (uint32_t)srt[i]];
-    builder B = {(const int32_t(*)[6])sb, srt, base, ch, nchart, t};
+    builder B = {(const int32_t(*)[6])ibox, srt, base, ch, nchart, t};
     t->nnode = 1;
     build_node(&B, 0, 0, n);
-    if (ch && !ibox) free(ch);
     return 0;
 }
 
@@ -245,6 +241,16 @@ typedef struct forest {
     size_t chunk;     /* groups a task */
     int fail;
 } forest;
+
+/* The entries of the pieces s0 .. s0 + n (n >= 1) of one solid: *e0 .. *e1.  1 when every
+ * piece is a triangle (exactly 3 entries a piece, as each has 3 or more): piece s0 + i then has
+ * the entries *e0 + 3 i .. *e0 + 3 i + 3. */
+static int solid_entries(const a3 *A, uint32_t s0, uint32_t n, uint32_t *e0, uint32_t *e1)
+{
+    const piece *L = &A->pc[s0 + n - 1];
+    *e0 = A->pc_off[A->pc[s0].c0], *e1 = A->pc_off[L->c0 + L->nc];
+    return (size_t)*e1 - *e0 == 3 * (size_t)n;
+}
 
 static const int32_t *piece_box(const void *ctx, uint32_t id)
 {
@@ -282,9 +288,8 @@ static void build_groups(void *ctx, size_t item, int worker)
             for (uint32_t k = o, sol = F->A->pc[o].solid; k < o + n; k++) F->isol[k] = sol;
         if (F->itri) { /* the items' vertices, when triangles, in item order */
             const a3 *A = F->A;
-            const piece *L = &A->pc[o + n - 1];
-            uint32_t e0 = A->pc_off[A->pc[o].c0], e1 = A->pc_off[L->c0 + L->nc];
-            if ((size_t)e1 - e0 == 3 * (size_t)n) /* all triangles: piece o + i at e0 + 3 i */
+            uint32_t e0, e1;
+            if (solid_entries(A, o, n, &e0, &e1)) /* all triangles: piece o + i at e0 + 3 i */
                 for (uint32_t k = o; k < o + n; k++)
                     memcpy(F->itri[k], A->pcv + e0 + 3 * (size_t)(F->item[k] - o), sizeof *F->itri);
             else
@@ -1065,9 +1070,7 @@ static int solid_charts(const chartjob *j, size_t sol)
     uint8_t *mask = NULL;
     int rc = -1;
     C.A = A, C.s0 = s0, C.n = n, C.of = j->of + s0;
-    C.e0 = A->pc_off[A->pc[s0].c0];
-    C.e1 = A->pc_off[A->pc[s0 + n - 1].c0 + A->pc[s0 + n - 1].nc];
-    C.tri = (size_t)C.e1 - C.e0 == 3 * (size_t)n; /* 3 entries or more a piece: all 3 */
+    C.tri = solid_entries(A, s0, n, &C.e0, &C.e1);
     C.cls = mem_malloc((size_t)n + 1);
     mask = mem_malloc(2 * (size_t)n + 1);
     C.uf = mem_malloc(((size_t)n + 1) * sizeof *C.uf);
@@ -1215,7 +1218,7 @@ static int make_charts(const a3 *A, uint32_t **chartp, uint8_t **classp, atomic_
 {
     size_t n = A->npc, ns = 0;
     uint32_t *s_off = mem_malloc((n + 2) * sizeof *s_off);
-    chartjob j = {A, s_off, mem_malloc((n + 1) * sizeof *j.of), NULL, NULL, NULL, NULL, vcert, 0};
+    chartjob j = {.A = A, .s_off = s_off, .of = mem_malloc((n + 1) * sizeof *j.of), .vcert = vcert};
     j.pclass = *classp = mem_malloc(n + 1);
     int rc = -1;
     if (!s_off || !j.of || !j.pclass) goto done;
@@ -1257,7 +1260,7 @@ static int same_flat(const forest *F, uint32_t x, uint32_t y)
 }
 
 /* Do the triangles of items i and j (of one solid) share a vertex whose star is certified
- * (star_certs)?  Then they meet only in what they share. */
+ * (star_cert)?  Then they meet only in what they share. */
 static inline int star_apart(const forest *F, uint32_t i, uint32_t j)
 {
     const uint32_t *a = F->itri[i], *b = F->itri[j];
@@ -1472,14 +1475,14 @@ fail:
 
 int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
 {
-    forest F = {A,    0,    NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                NULL, NULL, NULL, NULL, NULL, NULL, 0,    0};
+    forest F = {.A = A};
     uint32_t *chart = NULL;
     uint8_t *pclass = NULL;
     atomic_uchar *vcert = NULL;
     bvh T = {0};
     out64 gp = {0}, stack = {0}, q = {0}, all = {0};
     uint64_t *tsrt = NULL;
+    int32_t(*tbox)[6] = NULL;
     walkjob j = {&F, NULL, NULL, NULL, 0};
     int rc = -1;
     *outp = NULL;
@@ -1533,10 +1536,11 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     A3_TICK("p/trees");
     /* the top tree over the groups, walked against itself (F.bx has room for its boxes) */
     tsrt = mem_malloc(F.ng * sizeof *tsrt);
+    tbox = mem_malloc(F.ng * sizeof *tbox);
     T.node = mem_malloc(2 * F.ng * sizeof *T.node);
     T.item = mem_malloc(F.ng * sizeof *T.item);
-    if (!tsrt || !T.node || !T.item) goto done;
-    if (build_tree(group_box, &F, 0, F.ng, NULL, NULL, tsrt, F.bx, NULL, NULL, &T)) goto done;
+    if (!tsrt || !tbox || !T.node || !T.item) goto done;
+    if (build_tree(group_box, &F, 0, F.ng, NULL, NULL, tsrt, F.bx, tbox, NULL, &T)) goto done;
     if (top_pairs(&F, &T, &gp, &stack)) goto done;
     /* the group pairs' root pairs, split into tasks, walked on the threads */
     if (gp.n > 1 && sort_u64(gp.v, gp.n)) goto done;
@@ -1579,6 +1583,7 @@ done:
     free(gp.v);
     free(stack.v);
     free(tsrt);
+    free(tbox);
     free(T.node);
     free(T.item);
     free(F.g_off);

@@ -72,6 +72,9 @@ import os
 import random
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from offio import read_off  # noqa: E402  (tests/offio.py: one OFF reader for tests and bench)
+
 # Faces of the cube whose corner (i, j, k) in {0,1}^3 is index 4 i + 2 j + k, outward.
 CUBE_FV = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
 # Faces of a positively oriented tetrahedron 0, 1, 2, 3 (det(v1-v0, v2-v0, v3-v0) > 0), outward.
@@ -187,23 +190,6 @@ def larcubes(path):
             F.append(c)
         out.append((W, F))
     return out
-
-
-def read_off(path):
-    d = [t for line in open(path) for t in line.split("#")[0].split()]
-    if not d or not d[0].endswith("OFF"):
-        raise ValueError("%s: not an OFF file" % path)
-    nv, nf = int(d[1]), int(d[2])
-    q = 4
-    V, F = [], []
-    for _ in range(nv):
-        V.append([float(d[q]), float(d[q + 1]), float(d[q + 2])])
-        q += 3
-    for _ in range(nf):
-        n = int(d[q])
-        F.append([int(x) for x in d[q + 1:q + 1 + n]])
-        q += 1 + n
-    return V, F
 
 
 def mesh(path, scene):

@@ -271,6 +271,10 @@ unsigned api_lar3_want(unsigned fields);
  * checked (bool_expr_free it), or API_EINVALID naming the JSON path under "op". */
 int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err);
 
+/* Reads options.fill (api/boolop.c): "positive", "nonzero" or "odd" into *fill (MEMBER_FILL_*).
+ * Returns API_OK, or API_EINVALID listing the names with the kind's default, dflt, first. */
+int api_fill_parse(const json_t *v, int dflt, int *fill, api_error *err);
+
 /* A result (LAR JSON) as the renderers read it (api/result.c): one reader for every renderer,
  * the dimension a parameter.  Every index is checked while reading, so writers index without
  * checks.  Faces' rings: face f's are rings face_ring[f] .. face_ring[f+1] (its outer cycle

@@ -77,3 +77,17 @@ int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *
     if (rc) bool_expr_free(out);
     return rc;
 }
+
+int api_fill_parse(const json_t *v, int dflt, int *fill, api_error *err)
+{
+    static const char *const name[] = {"positive", "nonzero", "odd"}; /* by MEMBER_FILL_* */
+    const char *f = json_string_value(v);
+    for (int k = 0; f && k < 3; k++)
+        if (strcmp(f, name[k]) == 0) {
+            *fill = k;
+            return API_OK;
+        }
+    int a = dflt == MEMBER_FILL_POSITIVE ? MEMBER_FILL_ODD : MEMBER_FILL_POSITIVE;
+    return api_fail(err, API_EINVALID, "options.fill: expected \"%s\", \"nonzero\" or \"%s\"",
+                    name[dflt], name[a]);
+}

@@ -63,16 +63,8 @@ static int parse_options(const json_t *o, polygons_req *r, api_error *err)
     json_object_foreach((json_t *)o, key, v)
     {
         if (strcmp(key, "fill") == 0) {
-            const char *f = json_string_value(v);
-            if (f && strcmp(f, "odd") == 0)
-                r->fill = BOOL2_FILL_ODD;
-            else if (f && strcmp(f, "nonzero") == 0)
-                r->fill = BOOL2_FILL_NONZERO;
-            else if (f && strcmp(f, "positive") == 0)
-                r->fill = BOOL2_FILL_POSITIVE;
-            else
-                return api_fail(err, API_EINVALID,
-                                "options.fill: expected \"odd\", \"nonzero\" or \"positive\"");
+            int rc = api_fill_parse(v, BOOL2_FILL_ODD, &r->fill, err);
+            if (rc != API_OK) return rc;
             continue;
         }
         int rc = api_lar2_option(key, v, &r->opt, err);

@@ -142,16 +142,8 @@ static int parse_options(const json_t *o, solids_req *r, api_error *err)
             int rc = parse_fields(v, &r->fields, err);
             if (rc != API_OK) return rc;
         } else if (strcmp(key, "fill") == 0) {
-            const char *f = json_is_string(v) ? json_string_value(v) : "";
-            if (strcmp(f, "positive") == 0)
-                r->fill = BOOL3_FILL_POSITIVE;
-            else if (strcmp(f, "nonzero") == 0)
-                r->fill = BOOL3_FILL_NONZERO;
-            else if (strcmp(f, "odd") == 0)
-                r->fill = BOOL3_FILL_ODD;
-            else
-                return api_fail(err, API_EINVALID,
-                                "options.fill: expected \"positive\", \"nonzero\" or \"odd\"");
+            int rc = api_fill_parse(v, BOOL3_FILL_POSITIVE, &r->fill, err);
+            if (rc != API_OK) return rc;
         } else {
             return api_fail(err, API_EINVALID,
                             "options.%.64s: unknown option (expected precision, operators, "

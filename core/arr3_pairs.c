@@ -1520,13 +1520,10 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.bx = mem_malloc(n * sizeof *F.bx);
     F.ibox = mem_malloc(n * sizeof *F.ibox);
     F.isol = mem_malloc(n * sizeof *F.isol);
-    if (!F.isol) goto done;
-    if (!A->soup) {
-        F.itri = mem_malloc(n * sizeof *F.itri);
-        if (!F.itri) goto done;
-        F.vcert = vcert;
-    }
-    if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox) goto done;
+    if (!A->soup) F.itri = mem_malloc(n * sizeof *F.itri), F.vcert = vcert;
+    if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox || !F.isol ||
+        (!A->soup && !F.itri))
+        goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
     if (F.fail == 3) rc = -3;

@@ -109,6 +109,7 @@ typedef struct ck {
     solid_report *rep;
     const char *label;
     int faces_only;   /* a face soup: no closedness, any orientation */
+    int tri;          /* every face one cycle of 3 entries: face f's are 3 f .. 3 f + 2 */
     uint32_t *merged; /* nv: the merged vertex of each input vertex */
     int64_t *g;       /* 3 * nv: the grid point of each input vertex */
     double area;      /* the faces' outer cycles' areas, summed in face order */
@@ -223,6 +224,13 @@ static int check_shape(ck *c)
         return -1;
     }
     int bad = 0;
+    c->tri = s->nf == s->ncyc;
+    for (size_t k = 1; c->tri && k <= s->ncyc; k++) c->tri = s->cyc_off[k] == 3 * k;
+    if (c->tri) { /* a mesh of triangles: one pass over the indices, the face found on a fault */
+        uint32_t far = 0, nv = (uint32_t)s->nv;
+        for (size_t i = 0; i < 3 * s->nf; i++) far |= s->cyc[i] >= nv;
+        if (!far) goto vertices;
+    }
     for (size_t f = 0; f < s->nf; f++)
         for (uint32_t i = s->cyc_off[s->face_off[f]]; i < s->cyc_off[s->face_off[f + 1]]; i++)
             if (s->cyc[i] >= s->nv) {
@@ -231,6 +239,7 @@ static int check_shape(ck *c)
                 bad = 1;
                 break;
             }
+vertices:;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < s->nv; v++) {
         const double *x = vert(c, (uint32_t)v);
@@ -668,7 +677,17 @@ static int build_halves(ck *c)
     size_t nv = s->nv, n = 0;
     uint32_t *pos = mem_calloc(nv + 2, sizeof *pos);
     if (!pos) return -1;
-    for (size_t k = 0; k < s->ncyc; k++) {
+    if (c->tri) { /* three merged vertices a face, read once a pass: no cycle bounds */
+        const uint32_t *m = c->merged;
+        for (size_t f = 0; f < s->nf; f++) {
+            uint32_t u0 = m[cy[3 * f]], u1 = m[cy[3 * f + 1]], u2 = m[cy[3 * f + 2]];
+            pos[(u0 < u1 ? u0 : u1) + 1] += u0 != u1;
+            pos[(u1 < u2 ? u1 : u2) + 1] += u1 != u2;
+            pos[(u2 < u0 ? u2 : u0) + 1] += u2 != u0;
+            n += (u0 != u1) + (u1 != u2) + (u2 != u0);
+        }
+    }
+    for (size_t k = 0; !c->tri && k < s->ncyc; k++) {
         uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
         for (uint32_t i = lo; i < hi; i++) {
             uint32_t u = c->merged[cy[i]], w = c->merged[cy[i + 1 < hi ? i + 1 : lo]];
@@ -683,7 +702,23 @@ static int build_halves(ck *c)
         free(pos);
         return -1;
     }
-    for (size_t f = 0; f < s->nf; f++)
+    if (c->tri) {
+        const uint32_t *m = c->merged;
+        for (size_t f = 0; f < s->nf; f++) {
+            uint32_t u[4] = {m[cy[3 * f]], m[cy[3 * f + 1]], m[cy[3 * f + 2]]};
+            u[3] = u[0];
+            for (uint32_t t = 0; t < 3; t++) {
+                uint32_t a = u[t], b = u[t + 1];
+                if (a == b) continue;
+                c->he[pos[a < b ? a : b]++] =
+                    (half){.key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a,
+                           .ent = (uint32_t)(3 * f + t),
+                           .face = (uint32_t)f & 0x7fffffffu,
+                           .fwd = a < b};
+            }
+        }
+    }
+    for (size_t f = 0; !c->tri && f < s->nf; f++)
         for (size_t k = s->face_off[f]; k < s->face_off[f + 1]; k++) {
             uint32_t lo = s->cyc_off[k], hi = s->cyc_off[k + 1];
             for (uint32_t i = lo; i < hi; i++) {

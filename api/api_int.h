@@ -16,6 +16,7 @@
 #include <stdint.h>
 
 #include "api/api.h"
+#include "api/packed.h"
 #include "core/arr2.h"
 #include "core/bool3.h"
 #include "core/member.h"
@@ -153,6 +154,10 @@ typedef struct api_kind {
      * checks that parse leaves to run but a client should hear about at once (svg: the XML) */
     int (*check)(const void *parsed, api_error *err);
     const api_stage *stages; /* its stages, for progress */
+    /* optional: parse with the big arrays read beforehand (api/packed.h); req is the rest's
+     * tree.  Any failure sends the caller back to parse() on the whole text, whose message
+     * counts: this one is not shown. */
+    int (*parse_packed)(const json_t *req, const api_packed_set *pk, void **parsed, api_error *err);
 } api_kind;
 
 /* The "lines" kind (api/lines.c). */
@@ -168,6 +173,8 @@ int api_svg_check(const void *parsed, api_error *err);
 
 /* The "solids" kind (api/solids.c). */
 int api_solids_parse(const json_t *req, void **parsed, api_error *err);
+int api_solids_parse_packed(const json_t *req, const api_packed_set *pk, void **parsed,
+                            api_error *err);
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_solids_free(void *parsed);
 int api_solids_check(const void *parsed, api_error *err);

@@ -50,12 +50,12 @@ const api_stage api_stages_solids[] = {{"check", 0.01},      {"snap", 0.02},   {
                                        {"membership", 0.82}, {"output", 1},    {NULL, 0}};
 
 static const api_kind kinds[] = {
-    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL, api_stages_lines},
-    {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check, api_stages_svg},
+    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL, api_stages_lines, NULL},
+    {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check, api_stages_svg, NULL},
     {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check,
-     api_stages_solids},
-    {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL,
-     api_stages_polygons},
+     api_stages_solids, api_solids_parse_packed},
+    {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL, api_stages_polygons,
+     NULL},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 
@@ -283,16 +283,50 @@ static const api_kind *kind_of(const json_t *root, api_error *err)
     return NULL;
 }
 
+/* The fast path of parse(): the big arrays read by api_packed_scan, jansson on the rest.  1 when
+ * it parsed the request (*pk then holds the arrays, some handed to *parsed), 0 when the caller
+ * must read the whole text as before (*pk empty), -1 out of memory. */
+static int parse_fast(const char *body, size_t len, const api_kind **kind, void **parsed,
+                      json_t **tree, api_packed_set *pk)
+{
+    int r = api_packed_enabled() ? api_packed_scan(body, len, pk) : 0;
+    if (r <= 0) return r;
+    json_error_t je;
+    json_t *root = json_loadb(pk->rest, pk->restlen, JSON_DECODE_ANY | JSON_REJECT_DUPLICATES, &je);
+    const json_t *k = json_is_object(root) ? json_object_get(root, "kind") : NULL;
+    for (size_t i = 0; json_is_string(k) && i < NKINDS; i++) {
+        api_error quiet = {0};
+        if (strcmp(json_string_value(k), kinds[i].name) || !kinds[i].parse_packed) continue;
+        if (kinds[i].parse_packed(root, pk, parsed, &quiet) != API_OK) break;
+        *kind = &kinds[i];
+        if (tree)
+            *tree = root;
+        else
+            json_decref(root);
+        return 1;
+    }
+    json_decref(root);
+    api_packed_free(pk);
+    return 0;
+}
+
 /* Parses body into the request of its kind: *kind and *parsed (free with (*kind)->free); with
- * tree, a valid request's JSON tree is handed over too (the caller decrefs it), else freed. */
+ * tree, a valid request's JSON tree is handed over too (the caller decrefs it), else freed.
+ * With pk, a request whose big arrays the fast reader took comes that way: *pk holds them and
+ * *tree is the rest's (api_packed_canon writes the whole); the caller frees *pk after *parsed. */
 static int parse(const char *body, size_t len, const api_kind **kind, void **parsed, json_t **tree,
-                 api_error *err)
+                 api_packed_set *pk, api_error *err)
 {
     json_t *root;
     int rc;
     *kind = NULL;
     *parsed = NULL;
     if (tree) *tree = NULL;
+    if (pk) {
+        int r = parse_fast(body, len, kind, parsed, tree, pk);
+        if (r < 0) return api_fail(err, API_ENOMEM, "out of memory while reading the request");
+        if (r > 0) return API_OK;
+    }
     root = load(body, len, err);
     if (!root) return err ? err->status : API_EJSON;
     *kind = kind_of(root, err);
@@ -318,7 +352,8 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     *outlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (!ro) ro = &dflt;
-    rc = parse(body, len, &kind, &req, NULL, err);
+    api_packed_set pk = {0};
+    rc = parse(body, len, &kind, &req, NULL, &pk, err);
     if (rc != API_OK) goto fail;
     api_progress_wrap(&pr, kind->stages, ro, &wr);
     b.sink = wr.stream;
@@ -328,6 +363,7 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     rc = kind->run(req, &wr, &b, err);
 fail:
     if (kind) kind->free(req);
+    api_packed_free(&pk);
     void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
     void *uu = b.udata;
     rc = api_buf_finish(&b, rc, out, outlen, err);
@@ -353,21 +389,29 @@ int api_check_request(const char *body, size_t len, char **canon, size_t *canonl
     if (canonlen) *canonlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (kind_name) *kind_name = NULL;
-    rc = parse(body, len, &kind, &req, canon ? &root : NULL, err);
+    api_packed_set pk = {0};
+    rc = parse(body, len, &kind, &req, canon ? &root : NULL, &pk, err);
     if (rc == API_OK && kind->check) rc = kind->check(req, err);
-    if (kind) kind->free(req);
     if (rc == API_OK && kind_name) *kind_name = kind->name;
-    if (rc != API_OK || !canon) {
-        json_decref(root);
-        return rc;
+    if (rc == API_OK && canon) {
+        /* valid: the canonical form comes from the tree parse kept (and the arrays the fast
+         * reader took, still held by req) */
+        char *dump = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS | JSON_REAL_PRECISION(17));
+        size_t n = dump ? strlen(dump) : 0;
+        if (dump && pk.n) {
+            char *whole = api_packed_canon(&pk, dump, &n);
+            free(dump);
+            dump = whole;
+        }
+        *canon = dump;
+        if (canonlen) *canonlen = n;
+        if (!dump)
+            rc = api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");
     }
-    /* valid: the canonical form comes from the tree parse kept */
-    *canon = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS | JSON_REAL_PRECISION(17));
+    if (kind) kind->free(req);
+    api_packed_free(&pk);
     json_decref(root);
-    if (!*canon)
-        return api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");
-    if (canonlen) *canonlen = strlen(*canon);
-    return API_OK;
+    return rc;
 }
 
 int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err)

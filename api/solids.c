@@ -210,13 +210,24 @@ static const json_t *holes_of(const json_t *holes, size_t f)
     return json_object_get(holes, k);
 }
 
-/* Reads o, the solid at path ("solids[2]", or "faces" for a soup), into *out. */
+/* Row f of a packed FV: its indices, *n of them. */
+static const uint32_t *packed_row(const api_packed *a, size_t f, size_t *n)
+{
+    *n = a->off[f + 1] - a->off[f];
+    return a->idx + a->off[f];
+}
+
+/* Reads o, the solid at path ("solids[2]", or "faces" for a soup), into *out.  With pk, its V
+ * and FV may be placeholders of arrays read beforehand (solid si's, api/packed.h): those are
+ * taken as they are (checked here as the JSON ones are, but the messages are not kept: the
+ * caller reads the whole text again on any failure). */
 static int parse_solid(const json_t *o, const char *path, int soup, totals *tot, solid *out,
-                       api_error *err)
+                       const api_packed_set *pk, size_t si, api_error *err)
 {
     const json_t *V, *FV, *holes, *val;
     const char *key;
     size_t nv, nf, ncyc, nidx = 0, c, w;
+    api_packed *pv = NULL, *pf = NULL;
     if (!json_is_object(o))
         return api_fail(err, API_EINVALID,
                         "%s: expected an object {\"V\": [[x, y, z], ...], \"FV\": [[v, ...], "
@@ -231,27 +242,29 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     V = json_object_get(o, "V");
     FV = json_object_get(o, "FV");
     holes = json_object_get(o, "holes");
+    if (pk && json_is_string(V)) pv = api_packed_find(pk, si, 0, json_string_value(V));
+    if (pk && json_is_string(FV)) pf = api_packed_find(pk, si, 1, json_string_value(FV));
     if (!V) return api_fail(err, API_EINVALID, "%s.V: required, an array of [x, y, z]", path);
-    if (!json_is_array(V))
+    if (!json_is_array(V) && !pv)
         return api_fail(err, API_EINVALID, "%s.V: expected an array of [x, y, z]", path);
-    nv = json_array_size(V);
+    nv = pv ? pv->n : json_array_size(V);
     if (nv > SOLIDS_MAX_VERTICES - tot->nv)
         return api_fail(err, API_EINVALID, "%s.V: %zu vertices in all, at most %u allowed", path,
                         tot->nv + nv, SOLIDS_MAX_VERTICES);
     if (!FV)
         return api_fail(err, API_EINVALID,
                         "%s.FV: required, an array of faces (cycles of vertex indices)", path);
-    if (!json_is_array(FV))
+    if (!json_is_array(FV) && !pf)
         return api_fail(err, API_EINVALID,
                         "%s.FV: expected an array of faces (cycles of vertex indices)", path);
-    nf = json_array_size(FV);
+    nf = pf ? pf->n : json_array_size(FV);
     if (nf > SOLIDS_MAX_FACES - tot->nf)
         return api_fail(err, API_EINVALID, "%s.FV: %zu faces in all, at most %u allowed", path,
                         tot->nf + nf, (unsigned)max_faces);
     if (nf == 0)
         return api_fail(err, API_EINVALID, "%s.FV: expected %s, got none", path,
                         soup ? "at least one face" : "the faces of a closed surface");
-    for (size_t v = 0; v < nv; v++) {
+    for (size_t v = 0; !pv && v < nv; v++) { /* a packed V holds 3 finite numbers a row */
         const json_t *p = json_array_get(V, v);
         if (!json_is_array(p) || json_array_size(p) != 3)
             return api_fail(err, API_EINVALID, "%s.V[%zu]: expected 3 finite numbers [x, y, z]",
@@ -265,7 +278,18 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     }
     /* shapes and sizes of every cycle, before anything is allocated */
     ncyc = nf;
-    for (size_t f = 0; f < nf; f++) {
+    for (size_t f = 0; pf && f < nf; f++) { /* the checks of read_cycle */
+        size_t n;
+        const uint32_t *row = packed_row(pf, f, &n);
+        if (n < 3 || n > SOLIDS_MAX_CYCLE)
+            return api_fail(err, API_EINVALID, "%s.FV[%zu]: cycle length", path, f);
+        for (size_t i = 0; i < n; i++)
+            if (row[i] >= nv)
+                return api_fail(err, API_EINVALID, "%s.FV[%zu][%zu]: index", path, f, i);
+        nidx += n;
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    for (size_t f = 0; !pf && f < nf; f++) {
         int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
         if (rc != API_OK) return rc;
         nidx += json_array_size(json_array_get(FV, f));
@@ -297,11 +321,22 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
             }
         }
     }
-    /* copy */
-    out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
+    /* copy (a packed V, and a packed FV without holes, are taken as they are) */
+    if (pv && pv->V) {
+        out->V = pv->V;
+        pv->taken = 1;
+    } else {
+        out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
+    }
     out->face_off = malloc((nf + 1) * sizeof *out->face_off);
-    out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
-    out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
+    if (pf && ncyc == nf) {
+        out->cyc_off = pf->off;
+        out->cyc = pf->idx;
+        pf->taken = 1;
+    } else {
+        out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
+    }
     if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
         solid_free(out);
         return api_fail(err, API_ENOMEM, "out of memory for %s", path);
@@ -309,16 +344,27 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     out->nv = nv;
     out->nf = nf;
     out->ncyc = ncyc;
-    for (size_t v = 0; v < nv; v++)
+    if (pf && ncyc == nf) {
+        for (size_t f = 0; f <= nf; f++) out->face_off[f] = (uint32_t)f;
+        goto copied;
+    }
+    for (size_t v = 0; !pv && v < nv; v++)
         for (size_t a = 0; a < 3; a++)
             out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
     c = w = 0;
     for (size_t f = 0; f < nf; f++) {
-        const json_t *row = json_array_get(FV, f), *hs = holes_of(holes, f);
+        const json_t *row = pf ? NULL : json_array_get(FV, f), *hs = holes_of(holes, f);
         out->face_off[f] = (uint32_t)c;
         out->cyc_off[c++] = (uint32_t)w;
-        read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
-        w += json_array_size(row);
+        if (pf) {
+            size_t n;
+            const uint32_t *r = packed_row(pf, f, &n);
+            memcpy(out->cyc + w, r, n * sizeof *r);
+            w += n;
+        } else {
+            read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
+            w += json_array_size(row);
+        }
         for (size_t h = 0; h < json_array_size(hs); h++) {
             row = json_array_get(hs, h);
             out->cyc_off[c++] = (uint32_t)w;
@@ -332,6 +378,7 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
         solid_free(out);
         return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
     }
+copied:
     tot->nv += nv;
     tot->nf += nf;
     tot->nidx += nidx;
@@ -352,6 +399,12 @@ void api_solids_free(void *parsed)
 }
 
 int api_solids_parse(const json_t *req, void **parsed, api_error *err)
+{
+    return api_solids_parse_packed(req, NULL, parsed, err);
+}
+
+int api_solids_parse_packed(const json_t *req, const api_packed_set *pk, void **parsed,
+                            api_error *err)
 {
     const json_t *solids, *faces;
     const char *key;
@@ -402,7 +455,7 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
         for (size_t i = 0; i < n; i++) {
             char path[32];
             snprintf(path, sizeof path, "solids[%zu]", i);
-            rc = parse_solid(json_array_get(solids, i), path, 0, &tot, &r->s[i], err);
+            rc = parse_solid(json_array_get(solids, i), path, 0, &tot, &r->s[i], pk, i, err);
             if (rc != API_OK) goto fail;
         }
     } else {
@@ -413,7 +466,7 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
             goto fail;
         }
         r->ns = 1;
-        rc = parse_solid(faces, "faces", 1, &tot, &r->s[0], err);
+        rc = parse_solid(faces, "faces", 1, &tot, &r->s[0], pk, API_PACKED_FACES, err);
         if (rc != API_OK) goto fail;
     }
     if (json_object_get(req, "op")) {

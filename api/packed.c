@@ -1,0 +1,510 @@
+/* packed.c — see packed.h. */
+#include "api/packed.h"
+
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/fastfloat.h"
+
+static atomic_int enabled = 1;
+
+void api_packed_enable(int on)
+{
+    atomic_store(&enabled, on != 0);
+}
+
+int api_packed_enabled(void)
+{
+    return atomic_load(&enabled);
+}
+
+/* ---- the scan ----------------------------------------------------------------------------- */
+
+typedef struct scan {
+    const char *p, *end;
+    api_packed_set *set;
+    int oom;
+} scan;
+
+typedef struct span {
+    size_t at, len; /* in the body */
+} span;
+
+static int is_ws(char c)
+{
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
+
+static void ws(scan *s)
+{
+    while (s->p < s->end && is_ws(*s->p)) s->p++;
+}
+
+/* Skips a string (s->p at its opening quote); its raw bytes (without quotes) in *k, *kn.  0, or
+ * -1 when it does not end. */
+static int skip_string(scan *s, const char **k, size_t *kn)
+{
+    const char *q = s->p + 1;
+    while (q < s->end && *q != '"') q += *q == '\\' ? 2 : 1;
+    if (q >= s->end) return -1;
+    if (k) *k = s->p + 1, *kn = (size_t)(q - s->p - 1);
+    s->p = q + 1;
+    return 0;
+}
+
+/* Skips any value, counting brackets (jansson checks what is skipped).  0, or -1 at the end. */
+static int skip_value(scan *s)
+{
+    int depth = 0;
+    do {
+        ws(s);
+        if (s->p >= s->end) return -1;
+        char c = *s->p;
+        if (c == '"') {
+            if (skip_string(s, NULL, NULL)) return -1;
+        } else if (c == '[' || c == '{') {
+            depth++, s->p++;
+        } else if (c == ']' || c == '}') {
+            if (--depth < 0) return -1;
+            s->p++;
+        } else if (c == ',' || c == ':') {
+            if (depth == 0) return -1;
+            s->p++;
+        } else {
+            while (s->p < s->end && !is_ws(*s->p) && *s->p != ',' && *s->p != ']' && *s->p != '}' &&
+                   *s->p != ':' && *s->p != '"' && *s->p != '[' && *s->p != '{')
+                s->p++;
+        }
+    } while (depth > 0);
+    return 0;
+}
+
+/* A JSON number token at s->p (RFC 8259: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?),
+ * followed by a separator: its end in *e, *integer when it has no fraction and no exponent,
+ * *digits its integer part's digits.  0, or -1 when it is not one. */
+static int number_token(const scan *s, const char **e, int *integer, size_t *digits)
+{
+    const char *q = s->p, *end = s->end;
+    if (q < end && *q == '-') q++;
+    const char *d0 = q;
+    if (q >= end || *q < '0' || *q > '9') return -1;
+    if (*q == '0')
+        q++;
+    else
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    *digits = (size_t)(q - d0);
+    *integer = 1;
+    if (q < end && *q == '.') {
+        *integer = 0;
+        q++;
+        if (q >= end || *q < '0' || *q > '9') return -1;
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    }
+    if (q < end && (*q == 'e' || *q == 'E')) {
+        *integer = 0;
+        q++;
+        if (q < end && (*q == '+' || *q == '-')) q++;
+        if (q >= end || *q < '0' || *q > '9') return -1;
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    }
+    if (q < end && !is_ws(*q) && *q != ',' && *q != ']') return -1;
+    *e = q;
+    return 0;
+}
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return 0;
+    size_t nc = *cap ? *cap : 256;
+    while (nc < need) nc *= 2;
+    void *q = realloc(*p, nc * elem);
+    if (!q) return -1;
+    *p = q;
+    *cap = nc;
+    return 0;
+}
+
+/* Expects c (after blanks): 0, or -1. */
+static int expect(scan *s, char c)
+{
+    ws(s);
+    if (s->p >= s->end || *s->p != c) return -1;
+    s->p++;
+    return 0;
+}
+
+/* After an element: 1 at ',' (taken), 0 at ']' (taken), -1 else. */
+static int next_elem(scan *s)
+{
+    ws(s);
+    if (s->p < s->end && *s->p == ',') return s->p++, 1;
+    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    return -1;
+}
+
+/* [[x, y, z], ...] at s->p into a: 0, -1 (not taken), -2 out of memory. */
+static int read_V(scan *s, api_packed *a)
+{
+    size_t capv = 0, capi = 0; /* doubles, rows */
+    if (expect(s, '[')) return -1;
+    ws(s);
+    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    for (;;) {
+        if (expect(s, '[')) return -1;
+        if (grow((void **)&a->V, &capv, 3 * (a->n + 1), sizeof *a->V) ||
+            grow((void **)&a->vint, &capi, a->n + 1, 1))
+            return -2;
+        uint8_t flags = 0;
+        for (int k = 0; k < 3; k++) {
+            const char *e;
+            int integer;
+            size_t digits;
+            if (k && expect(s, ',')) return -1;
+            ws(s);
+            if (number_token(s, &e, &integer, &digits)) return -1;
+            double x;
+            if (integer) {
+                if (digits > 15) return -1; /* jansson's int64, exactly a double below 10^15 */
+                int64_t v = 0;
+                for (const char *q = *s->p == '-' ? s->p + 1 : s->p; q < e; q++)
+                    v = v * 10 + (*q - '0');
+                x = (double)(*s->p == '-' ? -v : v);
+                flags |= (uint8_t)(1u << k);
+            } else if (ff_parse(s->p, e, &x)) {
+                return -1; /* not finite: jansson's overflow error, or another message */
+            }
+            a->V[3 * a->n + (size_t)k] = x;
+            s->p = e;
+        }
+        if (expect(s, ']')) return -1;
+        a->vint[a->n++] = flags;
+        int r = next_elem(s);
+        if (r < 0) return -1;
+        if (r == 0) return 0;
+    }
+}
+
+/* [[v, ...], ...] at s->p into a: 0, -1 (not taken), -2 out of memory. */
+static int read_FV(scan *s, api_packed *a)
+{
+    size_t capo = 0, capi = 0, ni = 0;
+    if (grow((void **)&a->off, &capo, 1, sizeof *a->off)) return -2;
+    a->off[0] = 0;
+    if (expect(s, '[')) return -1;
+    ws(s);
+    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    for (;;) {
+        if (expect(s, '[')) return -1;
+        ws(s);
+        if (s->p < s->end && *s->p == ']') return -1; /* an empty cycle: the message is jansson's */
+        for (;;) {
+            ws(s);
+            const char *q = s->p;
+            uint64_t v = 0;
+            if (q >= s->end || *q < '0' || *q > '9' ||
+                (*q == '0' && q + 1 < s->end && q[1] >= '0' && q[1] <= '9'))
+                return -1;
+            while (q < s->end && *q >= '0' && *q <= '9' && v < ((uint64_t)1 << 32))
+                v = v * 10 + (uint64_t)(*q++ - '0');
+            if (v >= ((uint64_t)1 << 32) || (q < s->end && !is_ws(*q) && *q != ',' && *q != ']'))
+                return -1;
+            if (ni >= UINT32_MAX) return -1;
+            if (ni + 1 > capi && grow((void **)&a->idx, &capi, ni + 1, sizeof *a->idx)) return -2;
+            a->idx[ni++] = (uint32_t)v;
+            s->p = q;
+            int r = next_elem(s);
+            if (r < 0) return -1;
+            if (r == 0) break;
+        }
+        if (a->n + 2 > capo && grow((void **)&a->off, &capo, a->n + 2, sizeof *a->off)) return -2;
+        a->off[++a->n] = (uint32_t)ni;
+        int r = next_elem(s);
+        if (r < 0) return -1;
+        if (r == 0) return 0;
+    }
+}
+
+static void packed_release(api_packed *a)
+{
+    if (!a->taken) {
+        free(a->V);
+        free(a->off);
+        free(a->idx);
+    }
+    free(a->vint);
+    memset(a, 0, sizeof *a);
+}
+
+/* The value at s->p, for the key k of the solid object of solid `sol`: read when it is V or FV
+ * and an array, else skipped.  0, -1 (give up), -2 out of memory. */
+static int solid_member(scan *s, size_t sol, const char *k, size_t kn, span *sp)
+{
+    int fv = kn == 2 && !memcmp(k, "FV", 2) ? 1 : kn == 1 && *k == 'V' ? 0 : -1;
+    ws(s);
+    sp->len = 0;
+    if (fv < 0 || s->p >= s->end || *s->p != '[') return skip_value(s);
+    api_packed_set *set = s->set;
+    if (grow((void **)&set->a, &set->cap, set->n + 1, sizeof *set->a)) return -2;
+    api_packed *a = &set->a[set->n];
+    memset(a, 0, sizeof *a);
+    a->solid = sol, a->fv = fv;
+    const char *at = s->p;
+    int r = fv ? read_FV(s, a) : read_V(s, a);
+    if (r) {
+        packed_release(a);
+        return r;
+    }
+    set->n++;
+    sp->len = (size_t)(s->p - at); /* its place: solid_obj's */
+    return 0;
+}
+
+typedef struct spans {
+    span *v;
+    size_t n, cap;
+} spans;
+
+/* The object at s->p as a solid (index sol): its V and FV read.  0, -1, -2. */
+static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
+{
+    ws(s);
+    if (s->p >= s->end || *s->p != '{') return skip_value(s);
+    s->p++;
+    ws(s);
+    if (s->p < s->end && *s->p == '}') return s->p++, 0;
+    for (;;) {
+        ws(s);
+        const char *k;
+        size_t kn;
+        if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
+        ws(s);
+        const char *at = s->p;
+        span sp;
+        int r = solid_member(s, sol, k, kn, &sp);
+        if (r) return r;
+        if (sp.len) {
+            if (grow((void **)&out->v, &out->cap, out->n + 1, sizeof *out->v)) return -2;
+            out->v[out->n++] = (span){(size_t)(at - body), sp.len};
+        }
+        ws(s);
+        if (s->p < s->end && *s->p == ',') {
+            s->p++;
+            continue;
+        }
+        return expect(s, '}');
+    }
+}
+
+static void set_free_arrays(api_packed_set *set)
+{
+    for (size_t i = 0; i < set->n; i++) packed_release(&set->a[i]);
+    free(set->a);
+    free(set->rest);
+    memset(set, 0, sizeof *set);
+}
+
+void api_packed_free(api_packed_set *set)
+{
+    if (set) set_free_arrays(set);
+}
+
+/* The placeholder of array k: "\u0001#k" as JSON text (in *buf, its length returned). */
+static size_t placeholder(size_t k, char *buf, size_t cap)
+{
+    int n = snprintf(buf, cap, "\"\\u0001#%zu\"", k);
+    return n > 0 ? (size_t)n : 0;
+}
+
+int api_packed_scan(const char *body, size_t len, api_packed_set *set)
+{
+    memset(set, 0, sizeof *set);
+    scan s = {body, body + len, set, 0};
+    spans sp = {0};
+    int rc = 0;
+    if (expect(&s, '{')) goto give_up;
+    ws(&s);
+    if (s.p < s.end && *s.p == '}') goto give_up;
+    for (;;) {
+        const char *k;
+        size_t kn;
+        ws(&s);
+        if (s.p >= s.end || *s.p != '"' || skip_string(&s, &k, &kn) || expect(&s, ':'))
+            goto give_up;
+        ws(&s);
+        int r = 0;
+        if (kn == 6 && !memcmp(k, "solids", 6) && s.p < s.end && *s.p == '[') {
+            s.p++;
+            ws(&s);
+            if (s.p < s.end && *s.p == ']') {
+                s.p++;
+            } else {
+                for (size_t i = 0;; i++) {
+                    r = solid_obj(&s, body, i, &sp);
+                    if (r) break;
+                    int e = next_elem(&s);
+                    if (e < 0) r = -1;
+                    if (e <= 0) break;
+                }
+            }
+        } else if (kn == 5 && !memcmp(k, "faces", 5)) {
+            r = solid_obj(&s, body, API_PACKED_FACES, &sp);
+        } else {
+            r = skip_value(&s);
+        }
+        if (r == -2) goto oom;
+        if (r) goto give_up;
+        ws(&s);
+        if (s.p < s.end && *s.p == ',') {
+            s.p++;
+            continue;
+        }
+        break;
+    }
+    if (sp.n == 0) goto give_up; /* nothing read: the ordinary path (jansson checks the end) */
+    /* the rest: the body with each array's span replaced by its placeholder (spans ascend) */
+    size_t restcap = len + 24 * sp.n + 1, w = 0, from = 0;
+    set->rest = malloc(restcap);
+    if (!set->rest) goto oom;
+    for (size_t i = 0; i < sp.n; i++) {
+        memcpy(set->rest + w, body + from, sp.v[i].at - from);
+        w += sp.v[i].at - from;
+        w += placeholder(i, set->rest + w, restcap - w);
+        from = sp.v[i].at + sp.v[i].len;
+    }
+    memcpy(set->rest + w, body + from, len - from);
+    w += len - from;
+    set->rest[w] = 0;
+    set->restlen = w;
+    free(sp.v);
+    return 1;
+oom:
+    rc = -1;
+give_up:
+    free(sp.v);
+    set_free_arrays(set);
+    return rc;
+}
+
+api_packed *api_packed_find(const api_packed_set *set, size_t s, int fv, const char *str)
+{
+    if (!set || !str || str[0] != '\x01' || str[1] != '#') return NULL;
+    char *e;
+    unsigned long long k = strtoull(str + 2, &e, 10);
+    if (*e || e == str + 2 || k >= set->n) return NULL;
+    api_packed *a = &set->a[k];
+    return a->solid == s && a->fv == fv ? a : NULL;
+}
+
+/* ---- the canonical form ------------------------------------------------------------------- */
+
+typedef struct wbuf {
+    char *p;
+    size_t n, cap;
+    int oom;
+} wbuf;
+
+static char *room(wbuf *b, size_t k)
+{
+    if (b->oom) return NULL;
+    if (b->n + k + 1 > b->cap) {
+        size_t nc = b->cap ? b->cap : 4096;
+        while (nc < b->n + k + 1) nc *= 2;
+        char *q = realloc(b->p, nc);
+        if (!q) {
+            b->oom = 1;
+            return NULL;
+        }
+        b->p = q, b->cap = nc;
+    }
+    return b->p + b->n;
+}
+
+static void put(wbuf *b, const char *s, size_t k)
+{
+    char *q = room(b, k);
+    if (!q) return;
+    memcpy(q, s, k);
+    b->n += k;
+}
+
+/* A real as jansson writes it with JSON_REAL_PRECISION(17): %.17g, ".0" when it has neither a
+ * point nor an exponent, the exponent without '+' and leading zeros. */
+static size_t real_text(double x, char *buf)
+{
+    int n = snprintf(buf, 40, "%.17g", x);
+    size_t len = n > 0 ? (size_t)n : 0;
+    if (!strchr(buf, '.') && !strchr(buf, 'e')) {
+        memcpy(buf + len, ".0", 3);
+        len += 2;
+    }
+    char *e = strchr(buf, 'e');
+    if (e) {
+        char *start = e + 1, *end = e + 2;
+        if (*start == '-') start++;
+        while (*end == '0') end++;
+        if (end != start) {
+            memmove(start, end, len - (size_t)(end - buf) + 1);
+            len -= (size_t)(end - start);
+        }
+    }
+    return len;
+}
+
+static void put_array(wbuf *b, const api_packed *a)
+{
+    char num[48];
+    put(b, "[", 1);
+    for (size_t r = 0; r < a->n; r++) {
+        if (r) put(b, ",", 1);
+        put(b, "[", 1);
+        if (!a->fv) {
+            for (int k = 0; k < 3; k++) {
+                double x = a->V[3 * r + (size_t)k];
+                size_t m = a->vint[r] >> k & 1
+                               ? (size_t)snprintf(num, sizeof num, "%lld", (long long)x)
+                               : real_text(x, num);
+                if (k) put(b, ",", 1);
+                put(b, num, m);
+            }
+        } else {
+            for (uint32_t i = a->off[r]; i < a->off[r + 1]; i++) {
+                if (i > a->off[r]) put(b, ",", 1);
+                put(b, num, (size_t)snprintf(num, sizeof num, "%u", a->idx[i]));
+            }
+        }
+        put(b, "]", 1);
+    }
+    put(b, "]", 1);
+}
+
+char *api_packed_canon(const api_packed_set *set, const char *dump, size_t *outlen)
+{
+    wbuf b = {0};
+    static const char mark[] = "\"\\u0001#";
+    const char *p = dump;
+    for (;;) {
+        const char *q = strstr(p, mark);
+        if (!q) break;
+        const char *d = q + sizeof mark - 1;
+        size_t k = 0;
+        while (*d >= '0' && *d <= '9') k = k * 10 + (size_t)(*d++ - '0');
+        if (*d != '"' || k >= set->n) { /* not one of ours: kept as it is */
+            put(&b, p, (size_t)(d - p));
+            p = d;
+            continue;
+        }
+        put(&b, p, (size_t)(q - p));
+        put_array(&b, &set->a[k]);
+        p = d + 1;
+    }
+    put(&b, p, strlen(p));
+    if (b.oom || !room(&b, 0)) {
+        free(b.p);
+        return NULL;
+    }
+    b.p[b.n] = 0;
+    if (outlen) *outlen = b.n;
+    return b.p;
+}

@@ -1,0 +1,217 @@
+/* test_packed.c — the fast reader of a solids request's big arrays (api/packed.h): the same
+ * request read with it and without it (api_packed_enable) gives the same canonical form byte for
+ * byte, the same result, and the same error with the same status and message; it is taken for
+ * the requests it should take, and gives way on everything it is not sure of. */
+#include "api/api.h"
+#include "api/api_int.h"
+#include "api/packed.h"
+#include "tests/check.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The canonical form (api_check_json) and the run's output (api_run_json) of body, with the
+ * fast reader on or off. */
+typedef struct both {
+    int rc_check, rc_run;
+    char *canon, *out;
+    char msg_check[API_ERRMAX], msg_run[API_ERRMAX];
+} both;
+
+static void read_with(const char *body, int fast, both *b)
+{
+    api_error err;
+    size_t n;
+    memset(b, 0, sizeof *b);
+    api_packed_enable(fast);
+    b->rc_check = api_check_json(body, strlen(body), &b->canon, &n, &err);
+    snprintf(b->msg_check, sizeof b->msg_check, "%s", b->rc_check ? err.msg : "");
+    b->rc_run = api_run_json(body, strlen(body), 1, &b->out, &n, &err);
+    snprintf(b->msg_run, sizeof b->msg_run, "%s", b->rc_run ? err.msg : "");
+    api_packed_enable(1);
+}
+
+static void both_free(both *b)
+{
+    free(b->canon);
+    free(b->out);
+}
+
+static int same_str(const char *a, const char *b)
+{
+    return (!a && !b) || (a && b && strcmp(a, b) == 0);
+}
+
+/* Does the fast reader take body (a scan that reads at least one array)? */
+static int taken(const char *body)
+{
+    api_packed_set pk;
+    int r = api_packed_scan(body, strlen(body), &pk);
+    api_packed_free(&pk);
+    return r;
+}
+
+/* body read both ways agrees; ok: whether it must be valid. */
+static void agree_(const char *body, int ok, const char *func, int line)
+{
+    both f, s;
+    read_with(body, 1, &f);
+    read_with(body, 0, &s);
+    if (f.rc_check != s.rc_check || strcmp(f.msg_check, s.msg_check) || !same_str(f.canon, s.canon))
+        test_fail(__FILE__, func, line, "check differs: fast %d '%s' / %d '%s' on %.200s",
+                  f.rc_check, f.msg_check, s.rc_check, s.msg_check, body);
+    if (f.rc_run != s.rc_run || strcmp(f.msg_run, s.msg_run) || !same_str(f.out, s.out))
+        test_fail(__FILE__, func, line, "run differs: fast %d '%s' / %d '%s' on %.200s", f.rc_run,
+                  f.msg_run, s.rc_run, s.msg_run, body);
+    if ((f.rc_check == API_OK) != ok || (f.rc_run == API_OK) != ok)
+        test_fail(__FILE__, func, line, "expected %s: %d %d '%s' on %.200s",
+                  ok ? "valid" : "an error", f.rc_check, f.rc_run, f.msg_check, body);
+    both_free(&f);
+    both_free(&s);
+}
+#define agree(body, ok) agree_(body, ok, __func__, __LINE__)
+
+#define CUBE_V     "[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]"
+#define CUBE_FV    "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]"
+#define OPTS       "\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}"
+#define REQ(V, FV) "{\"kind\":\"solids\",\"solids\":[{\"V\":" V ",\"FV\":" FV "}]," OPTS "}"
+
+TEST(packed_same_as_jansson)
+{
+    static const char *good[] = {
+        REQ(CUBE_V, CUBE_FV),
+        /* reals, exponents, signs, zeros, blanks of every kind */
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[0.0,-0,0e0],[1.0E0,0,0],[1,1e+0,-0.0],"
+        "[0,10e-1,0],[ 0 ,\t0\n,\r1],[1,0,1.00000000000000000001],[1,1,1],[0,1,1]],"
+        "\"FV\":[[0, 3,2 ,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]}]," OPTS "}",
+        /* two solids, one moved by a tenth (reals that %.17g writes long), an op */
+        "{\"op\":\"union\",\"kind\":\"solids\",\"solids\":[{\"FV\":" CUBE_FV ",\"V\":" CUBE_V
+        "},{\"V\":[[0.1,0.1,0.1],[1.1,0.1,0.1],[1.1,1.1,0.1],[0.1,1.1,0.1],[0.1,0.1,1.1],"
+        "[1.1,0.1,1.1],[1.1,1.1,1.1],[0.1,1.1,1.1]],\"FV\":" CUBE_FV "}]," OPTS "}",
+        /* a box with a square hole through it: FV read fast, the holes by jansson, joined */
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[0,0,1],"
+        "[4,0,1],[4,4,1],[0,4,1],[1,1,1],[3,1,1],[3,3,1],[1,3,1],[1,1,0],[3,1,0],[3,3,0],"
+        "[1,3,0]],\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7],"
+        "[8,12,13,9],[9,13,14,10],[10,14,15,11],[11,15,12,8]],"
+        "\"holes\":{\"0\":[[12,13,14,15]],\"1\":[[8,11,10,9]]}}]," OPTS "}",
+        /* a face soup */
+        "{\"kind\":\"solids\",\"faces\":{\"V\":[[0,0,0],[1,0,0],[0,1,0],[0,0,1]],"
+        "\"FV\":[[0,1,2],[0,1,3]]}," OPTS "}",
+        /* numbers far apart, large and small */
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[1e6,2e6,3e6],[1000001,2000000,3000000],"
+        "[1e6,2000001,3e6],[1e6,2e6,3000001]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}]," OPTS "}",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[1.5e-3,0,0],[2.5e-3,0,0],[1.5e-3,1e-3,0],"
+        "[1.5e-3,0,1e-3]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}],\"options\":{\"precision\":"
+        "1e-7,\"fields\":[\"V\",\"FV\"]}}",
+    };
+    for (size_t i = 0; i < sizeof good / sizeof *good; i++) {
+        CHECK(taken(good[i]) == 1, "case %zu not taken", i);
+        agree(good[i], 1);
+    }
+}
+
+TEST(packed_errors_same_as_jansson)
+{
+    static const char *bad[] = {
+        REQ("[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1]]", CUBE_FV),
+        REQ("[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1,1]]", CUBE_FV),
+        REQ("[[01,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[1.,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[.5,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[+1,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[1e,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[1e400,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[NaN,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[\"0\",0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]", CUBE_FV),
+        REQ("[[99999999999999999999,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],"
+            "[0,1,1]]",
+            CUBE_FV),
+        REQ("[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1],]", CUBE_FV),
+        REQ("[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]", CUBE_FV),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,8]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,-7]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7.0]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,4294967296]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[]]"),
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,07]]"),
+        REQ(CUBE_V, "[]"),
+        REQ("[]", CUBE_FV),
+        /* the surface is open: a geometry error after a good parse */
+        REQ(CUBE_V, "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6]]"),
+        /* the same key twice, a key unknown, garbage after the end, an unclosed object */
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV ",\"W\":1}]}",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]} x",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}],\"kind\":1}",
+        "{\"kind\":\"lines\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}",
+        "{\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}",
+        /* a placeholder given by the user is a string like any other */
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":\"\\u0001#0\",\"FV\":" CUBE_FV "}]}",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":\"\\u0001#0\"}]}",
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "},"
+        "{\"V\":\"\\u0001#0\",\"FV\":\"\\u0001#1\"}]}",
+        "{\"kind\":\"solids\",\"solids\":[1,{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}",
+        "{\"kind\":\"solids\",\"faces\":{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "},\"solids\":[]}",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) agree(bad[i], 0);
+}
+
+/* Random solids (a tetrahedron moved and scaled, its numbers written in assorted forms: integers,
+ * reals with and without exponents, long digit strings) read both ways. */
+TEST(packed_random_numbers)
+{
+    uint64_t st = 20261129;
+    size_t n = 200;
+    const char *e = getenv("CELLAR_STRESS");
+    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    char *body = malloc(1 << 16);
+    REQUIRE(body, "out of memory");
+    for (size_t t = 0; t < n; t++) {
+        size_t w = 0;
+        w += (size_t)sprintf(body + w, "{\"kind\":\"solids\",\"solids\":[");
+        int ns = 1 + (int)(test_rnd(&st) * 2);
+        for (int k = 0; k < ns; k++) {
+            static const double T[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+            double sc = pow(10, (int)(test_rnd(&st) * 9) - 4), off = (test_rnd(&st) - 0.5) * 100;
+            w += (size_t)sprintf(body + w, "%s{\"V\":[", k ? "," : "");
+            for (int v = 0; v < 4; v++)
+                for (int a = 0; a < 3; a++) {
+                    double x = (T[v][a] + 0.3 * test_rnd(&st)) * sc + off * sc;
+                    int form = (int)(test_rnd(&st) * 5);
+                    const char *sep = a ? "," : v ? "],[" : "[";
+                    if (form == 0)
+                        w += (size_t)sprintf(body + w, "%s%lld", sep, (long long)llround(x));
+                    else if (form == 1)
+                        w += (size_t)sprintf(body + w, "%s%.17g", sep, x);
+                    else if (form == 2)
+                        w += (size_t)sprintf(body + w, "%s%.6e", sep, x);
+                    else if (form == 3)
+                        w += (size_t)sprintf(body + w, "%s%.25f", sep, x);
+                    else
+                        w += (size_t)sprintf(body + w, "%s%.3E", sep, x);
+                }
+            w += (size_t)sprintf(body + w, "]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}");
+        }
+        w += (size_t)sprintf(body + w, "],\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}}");
+        if (taken(body) != 1) {
+            CHECK(0, "not taken: %s", body);
+            break;
+        }
+        both f, s;
+        read_with(body, 1, &f);
+        read_with(body, 0, &s);
+        int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
+                   !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
+                   same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
+        CHECK(same, "differs (%d %d / %d %d '%s' '%s'): %s", f.rc_check, f.rc_run, s.rc_check,
+              s.rc_run, f.msg_check, s.msg_check, body);
+        both_free(&f);
+        both_free(&s);
+        if (!same) break;
+    }
+    free(body);
+}

@@ -1,6 +1,7 @@
 /* packed.c — see packed.h. */
 #include "api/packed.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -429,12 +430,129 @@ static void put(wbuf *b, const char *s, size_t k)
     b->n += k;
 }
 
+typedef unsigned __int128 u128;
+
+static u128 pow10_u128(int k) /* 0 <= k <= 38 */
+{
+    u128 r = 1;
+    for (; k >= 19; k -= 19) r *= (u128)10000000000000000000u;
+    static const uint64_t p[19] = {1,
+                                   10,
+                                   100,
+                                   1000,
+                                   10000,
+                                   100000,
+                                   1000000,
+                                   10000000,
+                                   100000000,
+                                   1000000000,
+                                   10000000000,
+                                   100000000000,
+                                   1000000000000,
+                                   10000000000000,
+                                   100000000000000,
+                                   1000000000000000,
+                                   10000000000000000,
+                                   100000000000000000,
+                                   1000000000000000000};
+    return r * p[k];
+}
+
+/* round(x 10^s) for x = m 2^e, ties to even (printf's rule), into *d and floor(x 10^s) into *f,
+ * when 128 bits hold the work: 1, else 0. */
+static int scaled(uint64_t m, int e, int s, u128 *d, u128 *f)
+{
+    if (s >= 0) {
+        if (s > 22) return 0; /* m 10^s below 2^128 */
+        u128 n = (u128)m * pow10_u128(s);
+        if (e >= 0) {
+            if (e > 10 || n >> (127 - e)) return 0;
+            *d = *f = n << e;
+            return 1;
+        }
+        if (-e >= 127) return 0;
+        u128 q = n >> -e, r = n & (((u128)1 << -e) - 1), half = (u128)1 << (-e - 1);
+        *f = q;
+        *d = q + (r > half || (r == half && (q & 1)));
+        return 1;
+    }
+    if (e < 0 || e > 74 || -s > 38) return 0;
+    u128 x = (u128)m << e, div = pow10_u128(-s), q = x / div, r = x % div;
+    *f = q;
+    *d = q + (2 * r > div || (2 * r == div && (q & 1)));
+    return 1;
+}
+
+size_t api_g17(double x, char *buf)
+{
+    char *p = buf;
+    if (!isfinite(x)) return 0;
+    if (signbit(x)) *p++ = '-', x = -x;
+    if (x == 0) {
+        *p++ = '0';
+        *p = 0;
+        return (size_t)(p - buf);
+    }
+    if (!(x >= 1e-6 && x < 1e38)) return 0;
+    int e2;
+    double fr = frexp(x, &e2);
+    uint64_t m = (uint64_t)ldexp(fr, 53); /* x = m 2^e exactly */
+    int e = e2 - 53, E = (int)floor(log10(x));
+    u128 d = 0, f = 0, lo = pow10_u128(16), hi = pow10_u128(17);
+    for (int tries = 0;; tries++) { /* E: 10^16 <= x 10^(16 - E) < 10^17, before rounding */
+        if (tries == 4 || !scaled(m, e, 16 - E, &d, &f)) return 0;
+        if (f >= hi)
+            E++;
+        else if (f < lo)
+            E--;
+        else
+            break;
+    }
+    if (d == hi) d = lo, E++; /* 99...9.5 rounds up to a digit more: printf's next exponent */
+    char dig[17];
+    uint64_t v = (uint64_t)d;
+    for (int i = 16; i >= 0; i--) dig[i] = (char)('0' + v % 10), v /= 10;
+    int nd = 17;
+    while (nd > 1 && dig[nd - 1] == '0') nd--; /* %g drops trailing zeros */
+    if (E < -4 || E >= 17) {
+        *p++ = dig[0];
+        if (nd > 1) {
+            *p++ = '.';
+            memcpy(p, dig + 1, (size_t)nd - 1);
+            p += nd - 1;
+        }
+        *p++ = 'e';
+        *p++ = E < 0 ? '-' : '+';
+        int a = E < 0 ? -E : E;
+        if (a >= 100) *p++ = (char)('0' + a / 100);
+        *p++ = (char)('0' + a / 10 % 10);
+        *p++ = (char)('0' + a % 10);
+    } else if (E >= 0) {
+        for (int i = 0; i <= E; i++) *p++ = i < nd ? dig[i] : '0';
+        if (nd > E + 1) {
+            *p++ = '.';
+            memcpy(p, dig + E + 1, (size_t)(nd - E - 1));
+            p += nd - E - 1;
+        }
+    } else {
+        *p++ = '0', *p++ = '.';
+        for (int i = 0; i < -E - 1; i++) *p++ = '0';
+        memcpy(p, dig, (size_t)nd);
+        p += nd;
+    }
+    *p = 0;
+    return (size_t)(p - buf);
+}
+
 /* A real as jansson writes it with JSON_REAL_PRECISION(17): %.17g, ".0" when it has neither a
  * point nor an exponent, the exponent without '+' and leading zeros. */
 static size_t real_text(double x, char *buf)
 {
-    int n = snprintf(buf, 40, "%.17g", x);
-    size_t len = n > 0 ? (size_t)n : 0;
+    size_t len = api_g17(x, buf);
+    if (!len) {
+        int n = snprintf(buf, 40, "%.17g", x);
+        len = n > 0 ? (size_t)n : 0;
+    }
     if (!strchr(buf, '.') && !strchr(buf, 'e')) {
         memcpy(buf + len, ".0", 3);
         len += 2;
@@ -452,6 +570,17 @@ static size_t real_text(double x, char *buf)
     return len;
 }
 
+/* An unsigned integer in decimal into buf (20 bytes at most): its length. */
+static size_t u64_text(uint64_t v, char *buf)
+{
+    char t[20];
+    size_t n = 0;
+    do t[n++] = (char)('0' + v % 10);
+    while ((v /= 10) != 0);
+    for (size_t i = 0; i < n; i++) buf[i] = t[n - 1 - i];
+    return n;
+}
+
 static void put_array(wbuf *b, const api_packed *a)
 {
     char num[48];
@@ -462,17 +591,26 @@ static void put_array(wbuf *b, const api_packed *a)
         if (!a->fv) {
             for (int k = 0; k < 3; k++) {
                 double x = a->V[3 * r + (size_t)k];
-                size_t m = a->vint[r] >> k & 1
-                               ? (size_t)snprintf(num, sizeof num, "%lld", (long long)x)
-                               : real_text(x, num);
+                size_t m;
+                if (a->vint[r] >> k & 1) { /* below 10^15 in magnitude: exact */
+                    long long v = (long long)x;
+                    num[0] = '-';
+                    m = v < 0 ? 1 + u64_text((uint64_t)-v, num + 1) : u64_text((uint64_t)v, num);
+                } else {
+                    m = real_text(x, num);
+                }
                 if (k) put(b, ",", 1);
                 put(b, num, m);
             }
         } else {
+            char *q = room(b, 11 * (size_t)(a->off[r + 1] - a->off[r]));
+            if (!q) return;
+            size_t m = 0;
             for (uint32_t i = a->off[r]; i < a->off[r + 1]; i++) {
-                if (i > a->off[r]) put(b, ",", 1);
-                put(b, num, (size_t)snprintf(num, sizeof num, "%u", a->idx[i]));
+                if (i > a->off[r]) q[m++] = ',';
+                m += u64_text(a->idx[i], q + m);
             }
+            b->n += m;
         }
         put(b, "]", 1);
     }

@@ -62,6 +62,10 @@ api_packed *api_packed_find(const api_packed_set *set, size_t s, int fv, const c
  * bytes) has each placeholder replaced by its array.  NULL out of memory. */
 char *api_packed_canon(const api_packed_set *set, const char *dump, size_t *outlen);
 
+/* x as printf's "%.17g" writes it, into buf (32 bytes), by exact 128-bit arithmetic for
+ * 1e-6 <= |x| < 1e38 and zeros: its length, or 0 elsewhere (then printf is the way). */
+size_t api_g17(double x, char *buf);
+
 /* 0 or 1: whether api_packed_scan is used by the request readers (api/run.c); on by default,
  * off for the tests that compare both paths. */
 void api_packed_enable(int on);

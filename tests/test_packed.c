@@ -215,3 +215,59 @@ TEST(packed_random_numbers)
     }
     free(body);
 }
+
+/* api_g17 against printf's %.17g: random bit patterns, decimal numbers, integers, dyadic
+ * fractions (ties at the 17th digit), powers of ten and their neighbours, the range's ends. */
+TEST(packed_g17_is_printf)
+{
+    uint64_t st = 17;
+    size_t n = 300000, bad = 0, fast = 0;
+    const char *e = getenv("CELLAR_STRESS");
+    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    char a[64], b[64];
+    for (size_t i = 0; i < n && bad < 5; i++) {
+        double x;
+        uint64_t r = (uint64_t)(test_rnd(&st) * 18446744073709551616.0);
+        switch (i % 8) {
+        case 0:
+            memcpy(&x, &r, sizeof x);
+            break;
+        case 1:
+            x = (test_rnd(&st) - 0.5) * pow(10, (int)(test_rnd(&st) * 50) - 10);
+            break;
+        case 2:
+            x = (double)(int64_t)(r >> (int)(test_rnd(&st) * 40));
+            break;
+        case 3:
+            x = ldexp((double)(r >> 11), -(int)(test_rnd(&st) * 120));
+            break;
+        case 4:
+            x = ldexp((double)(r >> 40 | 1), (int)(test_rnd(&st) * 80) - 60);
+            break;
+        case 5: {
+            double p = pow(10, (int)(test_rnd(&st) * 48) - 8);
+            x = r & 1 ? nextafter(p, 0) : r & 2 ? nextafter(p, INFINITY) : p;
+            break;
+        }
+        case 6:
+            x = (double)(r % 100000000) / pow(10, (int)(test_rnd(&st) * 12));
+            break;
+        default: {
+            static const double ends[] = {1e-6, 1e38, 5e-7, 2e38, 0.0, -0.0, 0.5, 1.5, 2.5};
+            x = ends[r % 9];
+            if (r & 16) x = nextafter(x, r & 32 ? INFINITY : -INFINITY);
+            break;
+        }
+        }
+        if (!isfinite(x)) continue;
+        size_t k = api_g17(x, a);
+        if (!k) continue;
+        fast++;
+        snprintf(b, sizeof b, "%.17g", x);
+        if (strcmp(a, b) || k != strlen(b)) {
+            CHECK(0, "%a: '%s', printf '%s'", x, a, b);
+            bad++;
+        }
+    }
+    CHECK(fast > n / 2, "only %zu of %zu in the fast range", fast, n);
+}

@@ -2734,19 +2734,25 @@ static void patch_range(void *ctx, size_t t, int worker)
     const patchjob *j = ctx;
     const a3 *A = j->A;
     uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], np = 0;
+    /* a range of triangles whose entries follow each other (the usual mesh): the piece of entry
+     * x is p0 + (x - e0) / 3, with no map written */
+    uint32_t e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
+    int tri = (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
     for (uint32_t i = p0; i < p1; i++) {
         const piece *pc = &A->pc[i];
         j->uf[i] = i;
         j->rch[i] = pc->reached;
-        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;
+        if (!tri)
+            for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;
     }
     for (uint32_t i = p0; i < p1; i++) {
         if (j->rch[i]) continue;
         const piece *pc = &A->pc[i];
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
             uint32_t t2 = A->ptwin[x];
-            /* each twin pair once (twins are mutual): from its lower entry */
-            if (t2 != NONE && t2 > x && !j->rch[j->epc[t2]]) a3_uf_union(j->uf, i, j->epc[t2]);
+            if (t2 == NONE || t2 <= x) continue; /* each twin pair once (twins are mutual) */
+            uint32_t q = tri ? p0 + (t2 - e0) / 3 : j->epc[t2];
+            if (!j->rch[q]) a3_uf_union(j->uf, i, q);
         }
     }
     for (uint32_t i = p0; i < p1; i++) j->lab[i] = NONE;

@@ -1110,7 +1110,9 @@ static void export_twins(const ck *c, uint32_t *twin)
         const half *h = &c->he[i];
         if ((i > 0 && h[-1].key == h->key) || (i + 2 < c->nhe && h[2].key == h->key))
             continue; /* a pair of a surface touching itself: four faces on the edge */
-        uint32_t x = fixed_entry(c, &h[0]), y = fixed_entry(c, &h[1]);
+        int fl = c->rep->flipped_faces != 0; /* orient's flips, or every face (check_volume) */
+        uint32_t x = fl ? fixed_entry(c, &h[0]) : h[0].ent,
+                 y = fl ? fixed_entry(c, &h[1]) : h[1].ent;
         twin[x] = y, twin[y] = x;
     }
 }

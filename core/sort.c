@@ -44,12 +44,11 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
  * comparisons up to about here (the charts' boundaries: hundreds of sorts of hundreds). */
 #define MEDIUM 1024
 
-/* A sort of T by the 64-bit key KEY(elem), stable: insertion below SMALL, merging below MEDIUM,
- * else the passes.  The
- * histograms of every digit are counted in one read of the data; a digit that every key shares
- * costs no pass. */
+/* A sort of T by the key KEY(elem) of KEYBITS bits (64 at most), stable: insertion below SMALL,
+ * merging below MEDIUM, else the passes.  The histograms of every digit are counted in one read of
+ * the data; a digit that every key shares costs no pass. */
 #define NDIG ((64 + RBITS - 1) / RBITS)
-#define RADIX_SORT(NAME, T, KEY)                                                                   \
+#define RADIX_SORT(NAME, T, KEY, KEYBITS)                                                          \
     int NAME(T *a, size_t n)                                                                       \
     {                                                                                              \
         if (n < 2) return 0;                                                                       \
@@ -90,12 +89,13 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
             free(cnt);                                                                             \
             return -1;                                                                             \
         }                                                                                          \
+        enum { nd = ((KEYBITS) + RBITS - 1) / RBITS }; /* the key's digits: no more counted */     \
         for (size_t i = 0; i < n; i++) {                                                           \
             uint64_t k = KEY(a[i]);                                                                \
-            for (unsigned d = 0; d < NDIG; d++)                                                    \
+            for (unsigned d = 0; d < nd; d++)                                                      \
                 cnt[d * RSIZE + ((k >> (d * RBITS)) & (RSIZE - 1))]++;                             \
         }                                                                                          \
-        for (unsigned d = 0; d < NDIG; d++) {                                                      \
+        for (unsigned d = 0; d < nd; d++) {                                                        \
             size_t *c = cnt + d * RSIZE, s = 0;                                                    \
             unsigned sh = d * RBITS;                                                               \
             if (c[(KEY(a[0]) >> sh) & (RSIZE - 1)] == n) continue; /* one digit for all */         \
@@ -116,9 +116,9 @@ RADIX_PASS(ipt_y, KEY_IPT_Y)
         return 0;                                                                                  \
     }
 
-RADIX_SORT(sort_u64, uint64_t, KEY_U64)
-RADIX_SORT(sort_u64_hi32, uint64_t, KEY_HI32)
-RADIX_SORT(sort_kv, kv, KEY_KV)
+RADIX_SORT(sort_u64, uint64_t, KEY_U64, 64)
+RADIX_SORT(sort_u64_hi32, uint64_t, KEY_HI32, 32)
+RADIX_SORT(sort_kv, kv, KEY_KV, 64)
 
 int sort_ipt(ipt *a, size_t n)
 {

@@ -2275,6 +2275,60 @@ static void pp_chunk(void *ctx, size_t item, int worker)
  * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then taken in the
  * list's order (so the ids are piece_plane_id's).  -1 out of memory (or a piece without a
  * plane). */
+/* Does every vertex of piece q lie strictly on one side of piece p's anchor plane (exact)?  Then
+ * the two neither cross nor touch, whatever else holds. */
+static int off_plane(const a3 *A, uint32_t p, uint32_t q)
+{
+    const piece *P = &A->pc[p], *Q = &A->pc[q];
+    const int64_t *a = A->g + 3 * (size_t)P->av[0];
+    int64_t n[3];
+    if (grid_normal(a, A->g + 3 * (size_t)P->av[1], A->g + 3 * (size_t)P->av[2], n)) return 0;
+    int side = 0;
+    for (uint32_t x = A->pc_off[Q->c0]; x < A->pc_off[Q->c0 + Q->nc]; x++) {
+        const int64_t *w = A->g + 3 * (size_t)A->pcv[x];
+        i128 d =
+            (i128)n[0] * (w[0] - a[0]) + (i128)n[1] * (w[1] - a[1]) + (i128)n[2] * (w[2] - a[2]);
+        int sd = (d > 0) - (d < 0);
+        if (sd == 0 || (side && sd != side)) return 0;
+        side = sd;
+    }
+    return 1;
+}
+
+/* The broad phase's pairs whose pieces lie apart by either one's plane (most of them: boxes
+ * meet far more often than faces), marked on the threads and dropped: no canonical plane and no
+ * cut work is spent on them.  Returns how many are kept, in order. */
+typedef struct apartjob {
+    const a3 *A;
+    const uint64_t *pairs;
+    uint8_t *keep;
+    size_t np;
+} apartjob;
+
+static void apart_chunk(void *ctx, size_t item, int worker)
+{
+    (void)worker;
+    const apartjob *j = ctx;
+    size_t k0 = item * CUT_CHUNK, k1 = k0 + CUT_CHUNK < j->np ? k0 + CUT_CHUNK : j->np;
+    for (size_t k = k0; k < k1; k++) {
+        uint32_t p = (uint32_t)(j->pairs[k] >> 32), q = (uint32_t)j->pairs[k];
+        j->keep[k] = !off_plane(j->A, p, q) && !off_plane(j->A, q, p);
+    }
+}
+
+static size_t drop_apart(const a3 *A, uint64_t *pairs, size_t np)
+{
+    uint8_t *keep = mem_malloc(np + 1);
+    if (!keep) return np; /* out of memory: every pair kept (the cuts decide alike) */
+    apartjob j = {A, pairs, keep, np};
+    par_for(A->threads, (np + CUT_CHUNK - 1) / CUT_CHUNK, apart_chunk, &j);
+    size_t m = 0;
+    for (size_t k = 0; k < np; k++)
+        if (keep[k]) pairs[m++] = pairs[k];
+    free(keep);
+    return m;
+}
+
 #define PLANE_LISTED (NONE - 1)
 static int pair_planes(a3 *A, const uint64_t *pairs, size_t np)
 {
@@ -2736,8 +2790,10 @@ static void patch_range(void *ctx, size_t t, int worker)
     uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], np = 0;
     /* a range of triangles whose entries follow each other (the usual mesh): the piece of entry
      * x is p0 + (x - e0) / 3, with no map written */
-    uint32_t e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
-    int tri = (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
+    uint32_t e0 = 0, e1 = 0;
+    if (p1 > p0)
+        e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
+    int tri = p1 > p0 && (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
     for (uint32_t i = p0; i < p1; i++) {
         const piece *pc = &A->pc[i];
         j->uf[i] = i;
@@ -3156,6 +3212,10 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     out->stats.ms_pairs = now_ms() - t;
     a3_progress(&A, "pairs", 1);
     t = now_ms();
+    np = drop_apart(&A, pairs, np);
+#ifdef A3_PROF
+    fprintf(stderr, "  pairs kept %zu of %zu\n", np, (size_t)out->stats.pairs_tested);
+#endif
     r = stage_cuts(&A, pairs, np);
     if (r == -3) goto cancel;
     if (r) goto oom;

@@ -129,7 +129,7 @@ BOOL2_STRESS ?= 20
 stress: deps
 	@$(MAKE) --no-print-directory tests
 	@CELLAR_STRESS=$(STRESS) tests/run.sh $(BUILD) test_exact3d t_real3d t_contacts3d test_torture \
-	    test_winding3d t_winding3d t_winding2d test_packed
+	    test_winding3d t_winding3d t_winding2d test_packed test_core
 	@CELLAR_STRESS=$(BOOL2_STRESS) tests/run.sh $(BUILD) test_bool2_geos
 
 bench: deps

@@ -2295,15 +2295,26 @@ static int off_plane(const a3 *A, uint32_t p, uint32_t q)
     return 1;
 }
 
-/* The broad phase's pairs whose pieces lie apart by either one's plane (most of them: boxes
- * meet far more often than faces), marked on the threads and dropped: no canonical plane and no
- * cut work is spent on them.  Returns how many are kept, in order. */
+/* The broad phase's pairs whose pieces are apart (most of them: boxes meet far more often than
+ * faces): by either one's plane, and for two triangles also along the line of their planes
+ * (tri_tri_apart), marked on the threads and dropped: no canonical plane and no cut work is
+ * spent on them.  Returns how many are kept, in order. */
 typedef struct apartjob {
     const a3 *A;
     const uint64_t *pairs;
     uint8_t *keep;
     size_t np;
 } apartjob;
+
+/* A triangle piece's vertices' grid points into t: 1, or 0 when the piece is no triangle. */
+static int piece_tri(const a3 *A, uint32_t p, const int64_t **t)
+{
+    const piece *P = &A->pc[p];
+    uint32_t o = A->pc_off[P->c0];
+    if (P->nc != 1 || A->pc_off[P->c0 + 1] - o != 3) return 0;
+    for (int i = 0; i < 3; i++) t[i] = A->g + 3 * (size_t)A->pcv[o + (uint32_t)i];
+    return 1;
+}
 
 static void apart_chunk(void *ctx, size_t item, int worker)
 {
@@ -2312,7 +2323,11 @@ static void apart_chunk(void *ctx, size_t item, int worker)
     size_t k0 = item * CUT_CHUNK, k1 = k0 + CUT_CHUNK < j->np ? k0 + CUT_CHUNK : j->np;
     for (size_t k = k0; k < k1; k++) {
         uint32_t p = (uint32_t)(j->pairs[k] >> 32), q = (uint32_t)j->pairs[k];
-        j->keep[k] = !off_plane(j->A, p, q) && !off_plane(j->A, q, p);
+        const int64_t *tp[3], *tq[3];
+        if (piece_tri(j->A, p, tp) && piece_tri(j->A, q, tq)) /* two triangles: their line too */
+            j->keep[k] = !tri_tri_apart(tp, tq);
+        else
+            j->keep[k] = !off_plane(j->A, p, q) && !off_plane(j->A, q, p);
     }
 }
 
@@ -2791,8 +2806,7 @@ static void patch_range(void *ctx, size_t t, int worker)
     /* a range of triangles whose entries follow each other (the usual mesh): the piece of entry
      * x is p0 + (x - e0) / 3, with no map written */
     uint32_t e0 = 0, e1 = 0;
-    if (p1 > p0)
-        e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
+    if (p1 > p0) e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
     int tri = p1 > p0 && (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
     for (uint32_t i = p0; i < p1; i++) {
         const piece *pc = &A->pc[i];

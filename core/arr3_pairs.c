@@ -347,18 +347,6 @@ int a3_piece_edge(const a3 *A, const piece *P, uint32_t a, uint32_t b)
     return 0;
 }
 
-/* The sign of det(b - a, c - a, d - a) for grid points, exactly: coordinates below 2^30 make
- * differences below 2^31, the cross product fit 64 bits (as grid_normal's) and the product
- * 128. */
-static int orient3g(const int64_t *a, const int64_t *b, const int64_t *c, const int64_t *d)
-{
-    int64_t v0 = c[0] - a[0], v1 = c[1] - a[1], v2 = c[2] - a[2];
-    int64_t w0 = d[0] - a[0], w1 = d[1] - a[1], w2 = d[2] - a[2];
-    i128 e = (i128)(v1 * w2 - v2 * w1) * (b[0] - a[0]) + (i128)(v2 * w0 - v0 * w2) * (b[1] - a[1]) +
-             (i128)(v0 * w1 - v1 * w0) * (b[2] - a[2]);
-    return (e > 0) - (e < 0);
-}
-
 /* Does Q lie on one side of P's anchor plane but for vertices and edges of P?  Then Q meets
  * that plane, and so P, only in P's own vertices and edges: the two meet as the neighbouring
  * faces of a surface do (Q is planar: on one closed side of the plane, it meets it only in its
@@ -429,8 +417,8 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
         const int64_t *g = A->g;
         if (shared == 2) { /* an edge: apart unless in one plane */
             int x = ins == 6 ? 0 : ins == 5 ? 1 : 2, y = inq == 6 ? 0 : inq == 5 ? 1 : 2;
-            if (orient3g(g + 3 * (size_t)pv[(x + 1) % 3], g + 3 * (size_t)pv[(x + 2) % 3],
-                         g + 3 * (size_t)pv[x], g + 3 * (size_t)qv[y]))
+            if (orient3_grid(g + 3 * (size_t)pv[(x + 1) % 3], g + 3 * (size_t)pv[(x + 2) % 3],
+                             g + 3 * (size_t)pv[x], g + 3 * (size_t)qv[y]))
                 return 1;
             return a3_flat_apart(A, p, q) == 1;
         }
@@ -449,9 +437,9 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
             corner(A, Q, u, &c, &d);
             const int64_t *pu = g + 3 * (size_t)u, *pa = g + 3 * (size_t)a, *pb = g + 3 * (size_t)b,
                           *pc = g + 3 * (size_t)c, *pd = g + 3 * (size_t)d;
-            int sc = orient3g(pu, pa, pb, pc), sd = orient3g(pu, pa, pb, pd);
+            int sc = orient3_grid(pu, pa, pb, pc), sd = orient3_grid(pu, pa, pb, pd);
             if (sc && sc == sd) return 1; /* Q beside P's plane but for u */
-            int sa = orient3g(pu, pc, pd, pa), sb = orient3g(pu, pc, pd, pb);
+            int sa = orient3_grid(pu, pc, pd, pa), sb = orient3_grid(pu, pc, pd, pb);
             if (sa && sa == sb) return 1;
             if (!sa && !sb && !sc && !sd) return a3_flat_apart(A, p, q) == 1;
             int dp = sa > 0 && sb < 0 ? 1 : sa < 0 && sb > 0 ? -1 : 0;

@@ -398,3 +398,29 @@ int det3_sign(const int64_t *a, const int64_t *b, const i128 *c)
     }
     return xi_sign(&s);
 }
+
+/* The index (0..2) of the sign that differs from the other two (s has both signs, no zero). */
+static int lone(const int *s)
+{
+    return s[0] != s[1] && s[0] != s[2] ? 0 : s[1] != s[0] ? 1 : 2;
+}
+
+int tri_tri_apart(const int64_t *const p_[3], const int64_t *const q_[3])
+{
+    int sp[3], sq[3]; /* sp[i]: q_i about p's plane; sq[i]: p_i about q's plane */
+    for (int i = 0; i < 3; i++) sp[i] = orient3_grid(p_[0], p_[1], p_[2], q_[i]);
+    if (sp[0] && sp[0] == sp[1] && sp[1] == sp[2]) return 1;
+    for (int i = 0; i < 3; i++) sq[i] = orient3_grid(q_[0], q_[1], q_[2], p_[i]);
+    if (sq[0] && sq[0] == sq[1] && sq[1] == sq[2]) return 1;
+    if (!sp[0] || !sp[1] || !sp[2] || !sq[0] || !sq[1] || !sq[2]) return 0;
+    /* each crosses the other's plane: each one's lone vertex first (a turn keeps the
+     * orientation), then each turned, if need be, so that the other's lone vertex lies on the
+     * positive side of its plane; the stretches on the line meet exactly when both hold */
+    int a = lone(sq), b = lone(sp);
+    const int64_t *p[3] = {p_[a], p_[(a + 1) % 3], p_[(a + 2) % 3]};
+    const int64_t *q[3] = {q_[b], q_[(b + 1) % 3], q_[(b + 2) % 3]};
+    const int64_t *t;
+    if (sq[a] < 0) t = q[1], q[1] = q[2], q[2] = t;
+    if (sp[b] < 0) t = p[1], p[1] = p[2], p[2] = t;
+    return orient3_grid(p[0], p[1], q[0], q[1]) > 0 || orient3_grid(p[0], p[2], q[2], q[0]) > 0;
+}

@@ -123,4 +123,23 @@ void cross_ll(const int64_t *a, const int64_t *b, i128 *out);
 /* Sign of a . b for an integer vector a and b (|b_i| < 2^127). */
 int dot_sign(const int64_t *a, const i128 *b);
 
+/* Sign of det(b - a, c - a, d - a) for grid points (coordinates below 2^30 in magnitude: the
+ * differences below 2^31, their cross product in 64 bits, the product in 128), exactly. */
+static inline int orient3_grid(const int64_t *a, const int64_t *b, const int64_t *c,
+                               const int64_t *d)
+{
+    int64_t v0 = c[0] - a[0], v1 = c[1] - a[1], v2 = c[2] - a[2];
+    int64_t w0 = d[0] - a[0], w1 = d[1] - a[1], w2 = d[2] - a[2];
+    i128 e = (i128)(v1 * w2 - v2 * w1) * (b[0] - a[0]) + (i128)(v2 * w0 - v0 * w2) * (b[1] - a[1]) +
+             (i128)(v0 * w1 - v1 * w0) * (b[2] - a[2]);
+    return (e > 0) - (e < 0);
+}
+
+/* Are triangles p and q (grid points, each spanning a plane) apart: 1 when they share no point,
+ * proven by exact orientation tests (Devillers and Guigue, "Faster triangle-triangle
+ * intersection tests", 2002): one wholly on one side of the other's plane, or each crossing the
+ * other's plane with the two stretches on the planes' line apart.  0 when they may meet, or when
+ * a vertex lies on the other's plane (touching and coplanar cases are left to the caller). */
+int tri_tri_apart(const int64_t *const p[3], const int64_t *const q[3]);
+
 #endif

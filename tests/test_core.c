@@ -8,6 +8,7 @@
 
 #include "core/arr2.h"
 #include "core/num.h"
+#include "core/pred.h"
 #include "core/sort.h"
 #include "tests/check.h"
 #include "tests/lar_check.h"
@@ -655,4 +656,76 @@ TEST(far_from_origin_small_drawings)
     o.precision = 0.25;
     CHECK(run(&sq[0][0], 4, &o, &c) == ARR_OK && c.nf == 1, "0.25 at 1e15: %zu faces", c.nf);
     lar2_free(&c);
+}
+
+/* ---- tri_tri_apart against edges through triangles --------------------------------------- */
+
+/* Does segment ab pass through triangle pqr?  -1 when a test on the way is 0 (not generic). */
+static int seg_tri(const int64_t *a, const int64_t *b, const int64_t *const t[3])
+{
+    int sa = orient3_grid(t[0], t[1], t[2], a), sb = orient3_grid(t[0], t[1], t[2], b);
+    if (!sa || !sb) return -1;
+    if (sa == sb) return 0;
+    int s0 = orient3_grid(a, b, t[0], t[1]), s1 = orient3_grid(a, b, t[1], t[2]),
+        s2 = orient3_grid(a, b, t[2], t[0]);
+    if (!s0 || !s1 || !s2) return -1;
+    return s0 == s1 && s1 == s2;
+}
+
+/* Do two triangles in general position meet (an edge of one through the other)?  -1 when the
+ * position is not general. */
+static int tri_tri_meet_ref(const int64_t *const p[3], const int64_t *const q[3])
+{
+    int any = 0;
+    for (int k = 0; k < 3; k++) {
+        int r1 = seg_tri(p[k], p[(k + 1) % 3], q), r2 = seg_tri(q[k], q[(k + 1) % 3], p);
+        if (r1 < 0 || r2 < 0) return -1;
+        any |= r1 | r2;
+    }
+    return any;
+}
+
+TEST(tri_tri_apart_matches_edges)
+{
+    uint64_t st = 99;
+    size_t n = 200000, generic = 0, meet = 0, bad = 0;
+    const char *e = getenv("CELLAR_STRESS");
+    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    for (size_t it = 0; it < n && bad < 5; it++) {
+        int64_t P[3][3], Q[3][3];
+        /* small ranges make touching and crossing common; large ones test the arithmetic's
+         * bounds (coordinates below 2^30) */
+        int64_t R = it % 4 == 3 ? ((int64_t)1 << 29) : it % 4 == 2 ? 1000 : 6;
+        for (int i = 0; i < 3; i++)
+            for (int a = 0; a < 3; a++) {
+                P[i][a] = (int64_t)(test_rnd(&st) * (double)(2 * R + 1)) - R;
+                Q[i][a] = (int64_t)(test_rnd(&st) * (double)(2 * R + 1)) - R;
+            }
+        const int64_t *p[3] = {P[0], P[1], P[2]}, *q[3] = {Q[0], Q[1], Q[2]};
+        int64_t n1[3], n2[3];
+        for (int a = 0; a < 3; a++) n1[a] = n2[a] = 0;
+        /* both spanning a plane */
+        int64_t u[3], v[3];
+        for (int a = 0; a < 3; a++) u[a] = P[1][a] - P[0][a], v[a] = P[2][a] - P[0][a];
+        n1[0] = u[1] * v[2] - u[2] * v[1], n1[1] = u[2] * v[0] - u[0] * v[2],
+        n1[2] = u[0] * v[1] - u[1] * v[0];
+        for (int a = 0; a < 3; a++) u[a] = Q[1][a] - Q[0][a], v[a] = Q[2][a] - Q[0][a];
+        n2[0] = u[1] * v[2] - u[2] * v[1], n2[1] = u[2] * v[0] - u[0] * v[2],
+        n2[2] = u[0] * v[1] - u[1] * v[0];
+        if (R < 1000 && ((!n1[0] && !n1[1] && !n1[2]) || (!n2[0] && !n2[1] && !n2[2]))) continue;
+        int apart = tri_tri_apart(p, q), ref = tri_tri_meet_ref(p, q);
+        if (apart != tri_tri_apart(q, p)) {
+            CHECK(0, "not symmetric at case %zu", it);
+            bad++;
+        }
+        if (ref < 0) continue;
+        generic++;
+        meet += (size_t)ref;
+        if (apart == ref) {
+            CHECK(0, "case %zu: apart %d, edges say they %s", it, apart, ref ? "meet" : "do not");
+            bad++;
+        }
+    }
+    CHECK(generic > n / 4 && meet > generic / 20 && meet < generic, "%zu generic, %zu meeting",
+          generic, meet);
 }

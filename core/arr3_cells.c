@@ -1158,6 +1158,7 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                                double **dl_out, char *err, size_t errlen)
 {
     size_t nf = A->nf, nsh = S->nsh;
+    int want_coords = !A->o->want || (A->o->want & ARR3_WANT_COORDS);
     uint32_t *cellof = mem_malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
     double *dh = NULL, *dl = NULL;
     size_t *roff = NULL;
@@ -1265,18 +1266,6 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
     orgv = mem_malloc((nc + 1) * sizeof *orgv);
     if (!dh || !dl || !orgv) goto done;
-    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN;                /* not wanted */
-    for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0; /* wanted */
-    {
-        ddjob j = {A, dh, dl, NULL, 0};
-        a3_span span = {A, "cells", 0.45, 0.5};
-        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
-                   &span);
-    }
-    if (a3_cancelled(A)) { /* a bounded part of the stage: the cancel is read here */
-        rc = ARR_ECANCELED;
-        goto done;
-    }
     /* each cell's origin: a point of the first face that bounds it (in unit order), on the grid
      * when one is; the double-double cones start from it (a vertex of the cell: the terms are as
      * small as the cell, so a sliver keeps its volume) */
@@ -1294,6 +1283,29 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                     break;
                 }
         }
+    /* the points wanted to 2^-100: every point of a face when the coordinates are written, else
+     * only those of the faces of no patch (the cones in double-double are theirs) and the cells'
+     * origins: a patch's faces are summed exactly from their grid points */
+    for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN; /* not wanted */
+    if (want_coords) {
+        for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0;
+    } else {
+        size_t f0 = A->npatch ? A->u_off[A->npatch] : 0;
+        for (size_t i = f0 < nf ? A->cyc_off[A->f_cyc[f0]] : A->nent; i < A->nent; i++)
+            dh[3 * (size_t)A->ent[i]] = 0;
+        for (size_t k = 0; k < nc; k++)
+            if (orgv[k] != NONE) dh[3 * (size_t)orgv[k]] = 0;
+    }
+    {
+        ddjob j = {A, dh, dl, NULL, 0};
+        a3_span span = {A, "cells", 0.45, 0.5};
+        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
+                   &span);
+    }
+    if (a3_cancelled(A)) { /* a bounded part of the stage: the cancel is read here */
+        rc = ARR_ECANCELED;
+        goto done;
+    }
     {
         /* the grid cycles, per unit (on the threads, in fixed chunks of faces) */
         size_t nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;

@@ -98,6 +98,9 @@ typedef struct builder {
 static size_t chart_front(builder *B, size_t lo, size_t hi)
 {
     uint32_t c = B->ch[lo];
+    size_t same = lo + 1;
+    while (same < hi && B->ch[same] == c) same++;
+    if (same == hi) return hi - lo; /* the usual run: one chart, nothing moves */
     uint64_t keep[BVH_LEAF];
     int32_t kbox[BVH_LEAF][6];
     uint32_t kch[BVH_LEAF];

@@ -1490,7 +1490,14 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
         rc = 0; /* one face: nothing to pair */
         goto done;
     }
-    if (!A->soup) { /* the solids' flat charts, whose pieces are never paired together */
+    /* A3_NO_SELF (a build for measuring only, as A3_PROF): no pairs of one solid, so that the
+     * cost of looking for them shows (issue 26's allowance) */
+#ifdef A3_NO_SELF
+    const int selfp = 0;
+#else
+    const int selfp = !A->soup;
+#endif
+    if (selfp) { /* the solids' flat charts, whose pieces are never paired together */
         vcert = mem_calloc(A->nv + 1, sizeof *vcert);
         if (!vcert) goto done;
         if ((rc = make_charts(A, &chart, &pclass, vcert)) != 0) {
@@ -1511,9 +1518,9 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     F.bx = mem_malloc(n * sizeof *F.bx);
     F.ibox = mem_malloc(n * sizeof *F.ibox);
     F.isol = mem_malloc(n * sizeof *F.isol);
-    if (!A->soup) F.itri = mem_malloc(n * sizeof *F.itri), F.vcert = vcert;
+    if (selfp) F.itri = mem_malloc(n * sizeof *F.itri), F.vcert = vcert;
     if (!F.root || !F.node || !F.item || !F.srt || !F.bx || !F.ibox || !F.isol ||
-        (!A->soup && !F.itri))
+        (selfp && !F.itri))
         goto done;
     F.chunk = F.ng / (8 * (size_t)A->threads) + 1;
     par_for(A->threads, (F.ng + F.chunk - 1) / F.chunk, build_groups, &F);
@@ -1535,7 +1542,7 @@ int a3_pairs(const a3 *A, uint64_t **outp, size_t *nout)
     for (size_t i = 0; i < gp.n; i++)
         if (push64(&q, (uint64_t)F.root[gp.v[i] >> 32] << 32 | F.root[(uint32_t)gp.v[i]]))
             goto done;
-    if (!A->soup) /* each solid against itself, but for its flat charts */
+    if (selfp) /* each solid against itself, but for its flat charts */
         for (size_t g = 0; g < F.ng; g++)
             if (push64(&q, (uint64_t)F.root[g] << 32 | F.root[g])) goto done;
     A3_TICK("p/top");

@@ -351,6 +351,11 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set)
             }
         } else if (kn == 5 && !memcmp(k, "faces", 5)) {
             r = solid_obj(&s, body, API_PACKED_FACES, &sp);
+        } else if (kn == 4 && !memcmp(k, "kind", 4) && s.p < s.end && *s.p == '"') {
+            const char *v;
+            size_t vn;
+            r = skip_string(&s, &v, &vn);
+            if (!r && !(vn == 6 && !memcmp(v, "solids", 6))) goto give_up; /* another kind's */
         } else {
             r = skip_value(&s);
         }

@@ -158,6 +158,11 @@ TEST(packed_errors_same_as_jansson)
         "{\"kind\":\"solids\",\"faces\":{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "},\"solids\":[]}",
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) agree(bad[i], 0);
+    /* another kind's request is left to jansson from its "kind" on: nothing more is scanned */
+    CHECK(taken("{\"kind\":\"lines\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}") == 0,
+          "a lines request taken");
+    CHECK(taken("{\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}],\"kind\":\"solids\"}") == 1,
+          "a solids request with its kind last not taken");
 }
 
 /* Random solids (a tetrahedron moved and scaled, its numbers written in assorted forms: integers,

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/fastfloat.h"
+#include "core/mem.h"
 
 static atomic_int enabled = 1;
 
@@ -115,18 +116,6 @@ static int number_token(const scan *s, const char **e, int *integer, size_t *dig
     return 0;
 }
 
-static int grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return 0;
-    size_t nc = *cap ? *cap : 256;
-    while (nc < need) nc *= 2;
-    void *q = realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
-}
-
 /* Expects c (after blanks): 0, or -1. */
 static int expect(scan *s, char c)
 {
@@ -154,8 +143,8 @@ static int read_V(scan *s, api_packed *a)
     if (s->p < s->end && *s->p == ']') return s->p++, 0;
     for (;;) {
         if (expect(s, '[')) return -1;
-        if (grow((void **)&a->V, &capv, 3 * (a->n + 1), sizeof *a->V) ||
-            grow((void **)&a->vint, &capi, a->n + 1, 1))
+        if (mem_grow(&a->V, &capv, 3 * (a->n + 1), sizeof *a->V) ||
+            mem_grow(&a->vint, &capi, a->n + 1, 1))
             return -2;
         uint8_t flags = 0;
         for (int k = 0; k < 3; k++) {
@@ -191,7 +180,7 @@ static int read_V(scan *s, api_packed *a)
 static int read_FV(scan *s, api_packed *a)
 {
     size_t capo = 0, capi = 0, ni = 0;
-    if (grow((void **)&a->off, &capo, 1, sizeof *a->off)) return -2;
+    if (mem_grow(&a->off, &capo, 1, sizeof *a->off)) return -2;
     a->off[0] = 0;
     if (expect(s, '[')) return -1;
     ws(s);
@@ -212,14 +201,14 @@ static int read_FV(scan *s, api_packed *a)
             if (v >= ((uint64_t)1 << 32) || (q < s->end && !is_ws(*q) && *q != ',' && *q != ']'))
                 return -1;
             if (ni >= UINT32_MAX) return -1;
-            if (ni + 1 > capi && grow((void **)&a->idx, &capi, ni + 1, sizeof *a->idx)) return -2;
+            if (mem_grow(&a->idx, &capi, ni + 1, sizeof *a->idx)) return -2;
             a->idx[ni++] = (uint32_t)v;
             s->p = q;
             int r = next_elem(s);
             if (r < 0) return -1;
             if (r == 0) break;
         }
-        if (a->n + 2 > capo && grow((void **)&a->off, &capo, a->n + 2, sizeof *a->off)) return -2;
+        if (mem_grow(&a->off, &capo, a->n + 2, sizeof *a->off)) return -2;
         a->off[++a->n] = (uint32_t)ni;
         int r = next_elem(s);
         if (r < 0) return -1;
@@ -247,7 +236,7 @@ static int solid_member(scan *s, size_t sol, const char *k, size_t kn, span *sp)
     sp->len = 0;
     if (fv < 0 || s->p >= s->end || *s->p != '[') return skip_value(s);
     api_packed_set *set = s->set;
-    if (grow((void **)&set->a, &set->cap, set->n + 1, sizeof *set->a)) return -2;
+    if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a)) return -2;
     api_packed *a = &set->a[set->n];
     memset(a, 0, sizeof *a);
     a->solid = sol, a->fv = fv;
@@ -286,7 +275,7 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         int r = solid_member(s, sol, k, kn, &sp);
         if (r) return r;
         if (sp.len) {
-            if (grow((void **)&out->v, &out->cap, out->n + 1, sizeof *out->v)) return -2;
+            if (mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v)) return -2;
             out->v[out->n++] = (span){(size_t)(at - body), sp.len};
         }
         ws(s);

@@ -63,19 +63,6 @@ static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
     return code;
 }
 
-int a3_grow_slow(void *pp, size_t *cap, size_t need, size_t elem)
-{
-    void **p = pp;
-    if (need <= *cap) return 0;
-    size_t nc = *cap ? *cap : 16;
-    while (nc < need) nc *= 2;
-    void *q = mem_realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
-}
-
 #ifdef A3_PROF
 void a3_prof(const char *name)
 {
@@ -215,7 +202,7 @@ static int pset_rehash(pset *s, size_t ncap)
 int pset_add(pset *s, const xpt *p, uint32_t id)
 {
     if (2 * (s->n + 1) > s->cap && pset_rehash(s, s->cap ? 2 * s->cap : 256)) return -1;
-    if (a3_grow(&s->next, &s->capnext, id - s->base + 1, sizeof *s->next)) return -1;
+    if (mem_grow(&s->next, &s->capnext, id - s->base + 1, sizeof *s->next)) return -1;
     uint64_t k =
         cell_key((int64_t)floor(p->x[0]), (int64_t)floor(p->x[1]), (int64_t)floor(p->x[2]));
     size_t h = pset_slot(s, k);
@@ -442,7 +429,7 @@ static int clip_loop(const a3 *A, int k, ring *L, uint32_t **tri, size_t *ntri, 
                 if (in_tri(A, k, a, b, c, x)) ear = 0;
             }
             if (!ear) continue;
-            if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
+            if (mem_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
             (*tri)[3 * *ntri] = a, (*tri)[3 * *ntri + 1] = b, (*tri)[3 * *ntri + 2] = c;
             (*ntri)++;
             memmove(L->v + i, L->v + i + 1, (L->n - i - 1) * sizeof *L->v);
@@ -473,7 +460,7 @@ static int clip_loop(const a3 *A, int k, ring *L, uint32_t **tri, size_t *ntri, 
         if (!cut) return -2;
     }
     if (L->n == 3 && orient2v(A, k, L->v[0], L->v[1], L->v[2]) > 0) {
-        if (a3_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
+        if (mem_grow(tri, captri, 3 * (*ntri + 1), sizeof **tri)) return -1;
         memcpy(*tri + 3 * *ntri, L->v, 3 * sizeof *L->v);
         (*ntri)++;
     }
@@ -510,7 +497,7 @@ static int split_and_clip(const a3 *A, int k, ring *L, uint32_t **tri, size_t *n
             free(S.v);
             continue;
         }
-        if (a3_grow(&vp, &capvp, S.n, sizeof *vp)) {
+        if (mem_grow(&vp, &capvp, S.n, sizeof *vp)) {
             free(S.v);
             goto done;
         }
@@ -544,7 +531,7 @@ static int split_and_clip(const a3 *A, int k, ring *L, uint32_t **tri, size_t *n
         for (size_t i = sp; i < sq && !bad; i++) bad = A3_PUSH(P.v, P.n, P.cap, S.v[i]);
         for (size_t i = sq; i < sp + S.n && !bad; i++) bad = A3_PUSH(Q.v, Q.n, Q.cap, S.v[i % S.n]);
         free(S.v);
-        if (bad || a3_grow(&st, &capst, nst + 2, sizeof *st)) {
+        if (bad || mem_grow(&st, &capst, nst + 2, sizeof *st)) {
             free(P.v), free(Q.v);
             goto done;
         }
@@ -611,7 +598,7 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
                 }
             }
         if (sp != SIZE_MAX) {
-            if (a3_grow(&L.v, &L.cap, L.n + hn, sizeof *L.v)) goto done;
+            if (mem_grow(&L.v, &L.cap, L.n + hn, sizeof *L.v)) goto done;
             memmove(L.v + sp + 1 + hn, L.v + sp + 1, (L.n - sp - 1) * sizeof *L.v);
             for (size_t i = 1; i <= hn; i++)
                 L.v[sp + i] = cyc[best][flip ? (sb + hn - i % hn) % hn : (sb + i) % hn];
@@ -657,7 +644,7 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
         }
         /* loop: ..., P, M, (hole from M around), M, P, ... */
         size_t ins = hn + 2;
-        if (a3_grow(&L.v, &L.cap, L.n + ins, sizeof *L.v)) goto done;
+        if (mem_grow(&L.v, &L.cap, L.n + ins, sizeof *L.v)) goto done;
         memmove(L.v + bp + 1 + ins, L.v + bp + 1, (L.n - bp - 1) * sizeof *L.v);
         for (size_t i = 0; i <= hn; i++) {
             size_t j = flip ? (bi + hn - i % hn) % hn : (bi + i) % hn;
@@ -911,8 +898,8 @@ static inline int pbuf_room(pbuf *B, size_t nc, size_t total)
         (B->npc + 1 > B->cappc || B->npcyc + nc > B->cappc_off || B->npcv + total > B->cappcv) &&
         pbuf_own(B))
         return -1;
-    if (!B->direct && (a3_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
-                       a3_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv)))
+    if (!B->direct && (mem_grow(&B->pc_off, &B->cappc_off, B->npcyc + nc + 1, sizeof *B->pc_off) ||
+                       mem_grow(&B->pcv, &B->cappcv, B->npcv + total, sizeof *B->pcv)))
         return -1;
     return 0;
 }
@@ -1020,7 +1007,7 @@ static inline int in_pairs(pbuf *B, uint32_t in, uint32_t base, uint32_t n)
         B->nin += n;
         return 0;
     }
-    if (a3_grow(&B->in, &B->capin, 2 * (B->nin + n), sizeof *B->in)) return -1;
+    if (mem_grow(&B->in, &B->capin, 2 * (B->nin + n), sizeof *B->in)) return -1;
     if (B->lazy) {
         B->lazy = 0;
         for (size_t k = 0; k < B->nin; k++)
@@ -1085,12 +1072,12 @@ static void in_task(void *ctx, size_t item, int worker)
                 }
             }
         }
-        if (a3_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
-            a3_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
-            a3_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo))
+        if (mem_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
+            mem_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
+            mem_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo))
             TASK_OOM;
         size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
-        if (a3_grow(&B->tv, &B->captv, total + 1, sizeof *B->tv)) TASK_OOM;
+        if (mem_grow(&B->tv, &B->captv, total + 1, sizeof *B->tv)) TASK_OOM;
         uint32_t *tv = B->tv, **cyc = B->cyc, *inlo = B->inlo;
         size_t *len = B->len;
         for (uint32_t cy = so->face_off[f]; cy < so->face_off[f + 1]; cy++) {
@@ -1177,7 +1164,7 @@ static void in_task(void *ctx, size_t item, int worker)
              * quad's order, whatever its projection looks like: two triangles in different
              * planes (no three of the four points are on one line) that share the diagonal,
              * walked once each way */
-            if (a3_grow(&B->tri, &B->captri, 6, sizeof *B->tri)) TASK_OOM;
+            if (mem_grow(&B->tri, &B->captri, 6, sizeof *B->tri)) TASK_OOM;
             const uint32_t *q = cyc[0];
             i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
             i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
@@ -1419,7 +1406,7 @@ static int dedup_vertices(a3 *A, const int64_t *g, size_t n, uint32_t *vmap)
     if (a3_firsts(A->threads, n, hash, grid_eq, g, first)) goto done;
     size_t nv = 0;
     for (size_t i = 0; i < n; i++) nv += first[i] == i;
-    if (nv > 0x7fffffffu || a3_grow(&A->g, &A->capv, 3 * nv + 3, sizeof *A->g)) goto done;
+    if (nv > 0x7fffffffu || mem_grow(&A->g, &A->capv, 3 * nv + 3, sizeof *A->g)) goto done;
     for (size_t i = 0; i < n; i++) {
         uint32_t f = first[i];
         if (f == i) {
@@ -1608,9 +1595,9 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
                 (intask){(uint32_t)s, (uint32_t)f0,
                          (uint32_t)(f0 + IN_CHUNK < solids[s].nf ? f0 + IN_CHUNK : solids[s].nf)};
     place = mem_malloc((3 * ntask + 3) * sizeof *place);
-    if (!place || a3_grow(&A->pc, &A->cappc, nfaces + 1, sizeof *A->pc) ||
-        a3_grow(&A->pc_off, &A->cappc_off, ncyin + 2, sizeof *A->pc_off) ||
-        a3_grow(&A->pcv, &A->cappcv, nein + 1, sizeof *A->pcv))
+    if (!place || mem_grow(&A->pc, &A->cappc, nfaces + 1, sizeof *A->pc) ||
+        mem_grow(&A->pc_off, &A->cappc_off, ncyin + 2, sizeof *A->pc_off) ||
+        mem_grow(&A->pcv, &A->cappcv, nein + 1, sizeof *A->pcv))
         goto oom;
     for (size_t t = 0, cy0 = 0, s = 0; t < ntask; t++) {
         const solid *so = &solids[task[t].s];
@@ -1651,11 +1638,11 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         A->pc = NULL, A->pc_off = A->pcv = NULL;
         A->cappc = A->cappc_off = A->cappcv = 0;
     }
-    if (a3_grow(&A->pc, &A->cappc, npc + 1, sizeof *A->pc) ||
-        a3_grow(&A->pc_off, &A->cappc_off, npcyc + 2, sizeof *A->pc_off) ||
-        a3_grow(&A->pcv, &A->cappcv, npcv + 1, sizeof *A->pcv) ||
-        a3_grow(&A->pcvp, &A->cappcvp, npcv + 1, sizeof *A->pcvp) ||
-        a3_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
+    if (mem_grow(&A->pc, &A->cappc, npc + 1, sizeof *A->pc) ||
+        mem_grow(&A->pc_off, &A->cappc_off, npcyc + 2, sizeof *A->pc_off) ||
+        mem_grow(&A->pcv, &A->cappcv, npcv + 1, sizeof *A->pcv) ||
+        mem_grow(&A->pcvp, &A->cappcvp, npcv + 1, sizeof *A->pcvp) ||
+        mem_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
         goto oom;
     /* by solid: the check's twins are taken (no split face), and its entries are its input's */
     ident = mem_calloc(ns + 1, 1);
@@ -2056,7 +2043,7 @@ static int piece_on_line(const a3 *A, cutout *o, cutwork *w, int s, uint32_t pi,
     for (uint32_t cy = P->c0; cy < P->c0 + P->nc; cy++) {
         uint32_t o0 = A->pc_off[cy], n = A->pc_off[cy + 1] - o0;
         const uint32_t *v = A->pcv + o0;
-        if (a3_grow(&w->sd, &w->capsd, n, 1)) return -1;
+        if (mem_grow(&w->sd, &w->capsd, n, 1)) return -1;
         uint32_t nz = 0, first = NONE;
         for (uint32_t i = 0; i < n; i++) {
             const int64_t *g = A->g + 3 * (size_t)v[i];
@@ -2098,7 +2085,7 @@ static int piece_on_line(const a3 *A, cutout *o, cutwork *w, int s, uint32_t pi,
         if (m && (par || cmp_on(A, o, E[i].lo, iv[2 * m - 1], ax) <= 0)) {
             if (cmp_on(A, o, E[i].hi, iv[2 * m - 1], ax) > 0) iv[2 * m - 1] = E[i].hi;
         } else {
-            if (a3_grow(&w->iv[s], &w->capiv[s], 2 * (m + 1), sizeof *w->iv[s])) return -1;
+            if (mem_grow(&w->iv[s], &w->capiv[s], 2 * (m + 1), sizeof *w->iv[s])) return -1;
             w->iv[s][2 * m] = E[i].lo;
             w->iv[s][2 * m + 1] = E[i].hi;
             w->niv[s]++;
@@ -2146,7 +2133,7 @@ static int pair_met(const a3 *A, cutout *o, uint32_t a, uint32_t b, uint32_t at)
     if (A->pc[a].solid == A->pc[b].solid) {
         size_t n = o->nself;
         if (A3_PUSH(o->self, o->nself, o->capself, (uint64_t)a << 32 | b) ||
-            a3_grow(&o->selfpt, &o->capselfpt, n + 1, sizeof *o->selfpt))
+            mem_grow(&o->selfpt, &o->capselfpt, n + 1, sizeof *o->selfpt))
             return -1;
         o->selfpt[n] = at;
     }
@@ -2457,7 +2444,7 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
     /* merge in chunk order: each LPI the global point of its triple */
     for (size_t ch = 0; ch < nch; ch++) {
         cutout *o = &j.o[ch];
-        if (a3_grow(&map, &capmap, o->npt + 1, sizeof *map)) goto done;
+        if (mem_grow(&map, &capmap, o->npt + 1, sizeof *map)) goto done;
         /* only the LPIs the cuts and contacts use (most pairs make none) */
         for (size_t i = 0; i < o->npt; i++) map[i] = NONE;
         for (size_t i = 0; i < o->ncs; i++) {
@@ -2491,7 +2478,7 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         for (size_t i = 0; i < o->nself; i++) {
             size_t k = A->nselfp;
             if (A3_PUSH(A->selfp, A->nselfp, A->capselfp, o->self[i]) ||
-                a3_grow(&A->selfpt, &A->capselfpt, k + 1, sizeof *A->selfpt))
+                mem_grow(&A->selfpt, &A->capselfpt, k + 1, sizeof *A->selfpt))
                 goto done;
             A->selfpt[k] = o->selfpt[i] == NONE ? NONE : merged_id(map, o->selfpt[i]);
         }
@@ -3052,7 +3039,7 @@ A3_STAGE static int merge_planes(a3 *A, pset *ps)
             pfaces_free(F);
             continue;
         }
-        if (a3_grow(&map, &capmap, F->nnew + 1, sizeof *map)) goto done;
+        if (mem_grow(&map, &capmap, F->nnew + 1, sizeof *map)) goto done;
         for (uint32_t i = 0; i < F->nnew; i++) {
             uint32_t q = pset_find(ps, &A->G, &F->newp[i], get_global, A);
             if (q == NONE) {
@@ -3208,7 +3195,7 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     A.solid_face_off = NULL;
     A.G.g = A.g;
     A.G.pl = A.pl;
-    if (A.nv >= CUT_LOCAL - 1 || a3_grow(&A.pt, &A.cappt, A.nv + 1, sizeof *A.pt)) goto oom;
+    if (A.nv >= CUT_LOCAL - 1 || mem_grow(&A.pt, &A.cappt, A.nv + 1, sizeof *A.pt)) goto oom;
     par_for(A.threads, (A.nv + SNAP_CHUNK - 1) / SNAP_CHUNK, grid_points, &A);
     A.npt = A.nv;
     A3_TICK("points");

@@ -589,7 +589,7 @@ static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, siz
         cell = (size_t)r * (size_t)g->nx + (size_t)c;
         m += g->off[cell + 1] - g->off[cell];
     }
-    if (a3_grow(out, cap, m + 1, sizeof **out)) return -1;
+    if (mem_grow(out, cap, m + 1, sizeof **out)) return -1;
     for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
     if (inside)
         for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
@@ -951,7 +951,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
                         (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
                         continue;
                     uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
-                    if (a3_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
+                    if (mem_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
                     memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
                     nff += n;
                 }
@@ -975,7 +975,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
                 if (fcomp(A, S, f) == c) {
                     if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
                 } else {
-                    if (a3_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
+                    if (mem_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
                     hits[nhit++] = f;
                 }
             }
@@ -1015,7 +1015,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
                 continue;
             }
             if (s_up == outer[d]) { /* entering part d from its outside */
-                if (a3_grow(&stack, &capstack, depth + 1, sizeof *stack)) goto done;
+                if (mem_grow(&stack, &capstack, depth + 1, sizeof *stack)) goto done;
                 stack[depth++] = d;
                 continue;
             }

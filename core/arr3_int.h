@@ -26,6 +26,7 @@
 #include <stdint.h>
 
 #include "core/arr3.h"
+#include "core/mem.h"
 #include "core/pred.h"
 
 #define NONE UINT32_MAX
@@ -189,13 +190,6 @@ typedef struct a3 {
 
 /* ---- shared tools (arr3.c) ------------------------------------------------------------- */
 
-/* *pp (an array of *cap elements of elem bytes) grown to hold need: 0, or -1 out of memory.
- * The common case, nothing to do, is inline. */
-int a3_grow_slow(void *pp, size_t *cap, size_t need, size_t elem);
-static inline int a3_grow(void *pp, size_t *cap, size_t need, size_t elem)
-{
-    return need <= *cap ? 0 : a3_grow_slow(pp, cap, need, elem);
-}
 /* Are items a and b equal? (a3_firsts) */
 typedef int (*a3_eq_fn)(const void *ctx, uint32_t a, uint32_t b);
 int a3_firsts(int threads, size_t n, const uint64_t *hash, a3_eq_fn eq, const void *ctx,
@@ -203,7 +197,7 @@ int a3_firsts(int threads, size_t n, const uint64_t *hash, a3_eq_fn eq, const vo
 /* qsort's comparison of uint32_t, ascending. */
 int a3_cmp_u32(const void *pa, const void *pb);
 #define A3_PUSH(arr, n, cap, val)                                                                  \
-    (a3_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
+    (mem_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
 uint64_t a3_mix64(uint64_t x);
 /* The first piece after piece i of another solid (A->npc if none): the pieces come solid by
  * solid, so it is found by bisection. */

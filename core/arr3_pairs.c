@@ -973,7 +973,7 @@ static int settle(solchart *C, uint32_t *list, uint32_t n, int depth)
                 return -1;
         return 0;
     }
-    if (a3_grow(&C->flat, &C->capflat, (size_t)C->m + 1, 1)) return -1;
+    if (mem_grow(&C->flat, &C->capflat, (size_t)C->m + 1, 1)) return -1;
     C->flat[C->m] = (uint8_t)f;
     for (uint32_t t = 0; t < n; t++) C->of[list[t]] = C->m;
     C->m++;
@@ -1104,7 +1104,7 @@ static int solid_charts(const chartjob *j, size_t sol)
         for (uint32_t s = 0; s < n; s++) {
             if (of[s] != NONE || (round == 0 && lone_joins(&C, cls0, cm, s))) continue;
             uint32_t d = cls0[s], top = 0;
-            if (a3_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
+            if (mem_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
             boff[m] = (uint32_t)nb;
             of[s] = m, cls[s] = (uint8_t)d, uf[top++] = s;
             while (top) {
@@ -1131,7 +1131,7 @@ static int solid_charts(const chartjob *j, size_t sol)
             }
             m++;
         }
-    if (a3_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
+    if (mem_grow(&boff, &capo, (size_t)m + 2, sizeof *boff)) goto done;
     boff[m] = (uint32_t)nb;
     C.m = m;
     C.flat = mem_malloc((size_t)m + 1);

@@ -117,7 +117,7 @@ typedef struct pwork {
     A3_PAD;
 } pwork;
 
-#define GROW(w, arr, need) a3_grow(&(w)->arr, &(w)->cap##arr, (need), sizeof *(w)->arr)
+#define GROW(w, arr, need) mem_grow(&(w)->arr, &(w)->cap##arr, (need), sizeof *(w)->arr)
 
 /* ---- local points -------------------------------------------------------------------- */
 
@@ -746,8 +746,8 @@ static uint32_t out_id(pwork *w, outb *o, uint32_t x, uint32_t *newid)
 static int out_entry(outb *o, uint32_t id, uint32_t side)
 {
     pfaces *F = o->F;
-    if (a3_grow(&F->ent, &o->cape, F->nent + 1, sizeof *F->ent) ||
-        a3_grow(&F->side, &o->caps, F->nent + 1, sizeof *F->side))
+    if (mem_grow(&F->ent, &o->cape, F->nent + 1, sizeof *F->ent) ||
+        mem_grow(&F->side, &o->caps, F->nent + 1, sizeof *F->side))
         return -1;
     F->ent[F->nent] = id;
     F->side[F->nent] = side;
@@ -758,7 +758,7 @@ static int out_entry(outb *o, uint32_t id, uint32_t side)
 static int out_close_cycle(outb *o)
 {
     pfaces *F = o->F;
-    if (a3_grow(&F->cyc_off, &o->capco, F->ncyc + 2, sizeof *F->cyc_off)) return -1;
+    if (mem_grow(&F->cyc_off, &o->capco, F->ncyc + 2, sizeof *F->cyc_off)) return -1;
     F->ncyc++;
     F->cyc_off[F->ncyc] = F->nent;
     return 0;
@@ -1039,9 +1039,9 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     if (GROW(w, x1, np + 1)) return -1;
     newid = w->x1;
     for (size_t p = 0; p < np; p++) newid[p] = NONE;
-    if (a3_grow(&F->f_cyc, &o.capfc, 1, sizeof *F->f_cyc) ||
-        a3_grow(&F->f_cov, &o.capfv, 1, sizeof *F->f_cov) ||
-        a3_grow(&F->cyc_off, &o.capco, 1, sizeof *F->cyc_off))
+    if (mem_grow(&F->f_cyc, &o.capfc, 1, sizeof *F->f_cyc) ||
+        mem_grow(&F->f_cov, &o.capfv, 1, sizeof *F->f_cov) ||
+        mem_grow(&F->cyc_off, &o.capco, 1, sizeof *F->cyc_off))
         return -1;
     F->f_cyc[0] = 0, F->f_cov[0] = 0, F->cyc_off[0] = 0;
     for (size_t cy = 0; cy < ncy; cy++) {
@@ -1054,8 +1054,8 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         }
         for (uint32_t i = 0; i < w->covn[cy]; i++)
             if (A3_PUSH(F->cov, F->ncov, o.capcov, w->cov[w->covo[cy] + i])) return -1;
-        if (a3_grow(&F->f_cyc, &o.capfc, F->nf + 2, sizeof *F->f_cyc) ||
-            a3_grow(&F->f_cov, &o.capfv, F->nf + 2, sizeof *F->f_cov))
+        if (mem_grow(&F->f_cyc, &o.capfc, F->nf + 2, sizeof *F->f_cyc) ||
+            mem_grow(&F->f_cov, &o.capfv, F->nf + 2, sizeof *F->f_cov))
             return -1;
         F->nf++;
         F->f_cyc[F->nf] = F->ncyc;

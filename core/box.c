@@ -1,6 +1,7 @@
 /* box.c — the box-kd-tree buckets; see box.h for the splitting rule and the invariants.
  * Built iteratively (an explicit stack), so depth never costs C stack. */
 #include "core/box.h"
+#include "core/mem.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,19 +21,6 @@ typedef struct leafrec {
     size_t off, cnt;
     double lo[2], hi[2];
 } leafrec;
-
-/* Growable arrays; each returns 0 or -1 on allocation failure. */
-static int grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return 0;
-    size_t nc = *cap ? *cap : 64;
-    while (nc < need) nc *= 2;
-    void *q = realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
-}
 
 /* The candidate thresholds of a bucket, for both axes: the mean of the box centres (the
  * seeds' rule) and the middle of the region clipped to the boxes' extent, which still halves
@@ -85,10 +73,10 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
     size_t nn = 0, ncap = 0;
 
     memset(t, 0, sizeof *t);
-    if (grow((void **)&pool, &pool_cap, n ? n : 1, sizeof *pool)) goto fail;
+    if (mem_grow(&pool, &pool_cap, n ? n : 1, sizeof *pool)) goto fail;
     for (size_t i = 0; i < n; i++) pool[i] = (uint32_t)i;
     pool_n = n;
-    if (grow((void **)&stack, &scap, 1, sizeof *stack)) goto fail;
+    if (mem_grow(&stack, &scap, 1, sizeof *stack)) goto fail;
     stack[sn++] = (pending){
         .node = -1, .off = 0, .cnt = n, .lo = {-INFINITY, -INFINITY}, .hi = {INFINITY, INFINITY}};
     while (sn) {
@@ -113,7 +101,7 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */
         }
         if (axis < 0) {
-            if (grow((void **)&leaves, &lcap, ln + 1, sizeof *leaves)) goto fail;
+            if (mem_grow(&leaves, &lcap, ln + 1, sizeof *leaves)) goto fail;
             leaves[ln] = (leafrec){.off = p.off, .cnt = p.cnt};
             memcpy(leaves[ln].lo, p.lo, sizeof p.lo);
             memcpy(leaves[ln].hi, p.hi, sizeof p.hi);
@@ -121,7 +109,7 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
             ln++;
             if (p.node >= 0)
                 nodes[p.node].child[p.side] = ref;
-            else if (grow((void **)&nodes, &ncap, 1, sizeof *nodes))
+            else if (mem_grow(&nodes, &ncap, 1, sizeof *nodes))
                 goto fail;
             else { /* the root is a leaf: a one-node tree whose both sides are that leaf */
                 nodes[0] = (box_node){.t = INFINITY, .axis = 0, .child = {ref, ref}};
@@ -129,11 +117,11 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
             }
             continue;
         }
-        if (grow((void **)&nodes, &ncap, nn + 1, sizeof *nodes)) goto fail;
+        if (mem_grow(&nodes, &ncap, nn + 1, sizeof *nodes)) goto fail;
         int32_t me = (int32_t)nn++;
         nodes[me] = (box_node){.t = thr, .axis = axis, .child = {0, 0}};
         if (p.node >= 0) nodes[p.node].child[p.side] = me;
-        if (grow((void **)&pool, &pool_cap, pool_n + 2 * best, sizeof *pool)) goto fail;
+        if (mem_grow(&pool, &pool_cap, pool_n + 2 * best, sizeof *pool)) goto fail;
         size_t boff = pool_n, aoff;
         for (size_t i = 0; i < p.cnt; i++) {
             uint32_t id = pool[p.off + i];
@@ -144,7 +132,7 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
             uint32_t id = pool[p.off + i];
             if ((double)box[4 * (size_t)id + axis + 2] > thr) pool[pool_n++] = id;
         }
-        if (grow((void **)&stack, &scap, sn + 2, sizeof *stack)) goto fail;
+        if (mem_grow(&stack, &scap, sn + 2, sizeof *stack)) goto fail;
         pending below = p, above = p;
         below.node = above.node = me;
         below.side = 0;

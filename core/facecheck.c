@@ -31,6 +31,7 @@
 #include <string.h>
 
 #include "core/num.h"
+#include "core/mem.h"
 
 #define SMALL 48 /* faces of at most this many edges: all pairs */
 #define LEAF  16 /* bucket size aimed at */
@@ -51,18 +52,6 @@ typedef struct fc {
     face_verdict *out;
     size_t ninc;
 } fc;
-
-static int grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return 0;
-    size_t nc = *cap ? *cap : 64;
-    while (nc < need) nc *= 2;
-    void *q = realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
-}
 
 void face_work_free(face_work *w)
 {
@@ -152,7 +141,7 @@ static int strictly_inside(ipt p, ipt a, ipt b)
 static int on_edge(fc *c, size_t x, size_t e)
 {
     if (c->w->cyc[x] == c->w->cyc[e] || c->strict) return fail(c, FACE_ON_EDGE, x, e);
-    if (grow(&c->w->inc, &c->w->capinc, c->ninc + 1, sizeof(trec))) return -1;
+    if (mem_grow(&c->w->inc, &c->w->capinc, c->ninc + 1, sizeof(trec))) return -1;
     ipt p = pt(c, x);
     ((trec *)c->w->inc)[c->ninc++] = (trec){p.x, p.y, c->w->cyc[e], NONE, (uint32_t)e};
     return 0;
@@ -204,7 +193,7 @@ static int stage_pairs(fc *c)
 {
     face_work *w = c->w;
     size_t n = c->n;
-    if (grow((void **)&w->box, &w->capbox, 4 * n, sizeof *w->box)) return -1;
+    if (mem_grow(&w->box, &w->capbox, 4 * n, sizeof *w->box)) return -1;
     for (size_t e = 0; e < n; e++) {
         ipt a = pt(c, e), b = pt(c, next_of(c, e));
         int64_t *bx = w->box + 4 * e;
@@ -356,8 +345,8 @@ static int stage_points(fc *c, int planar)
 {
     face_work *w = c->w;
     size_t n = c->n, m = n + c->ninc;
-    if (grow(&w->rec, &w->caprec, m, sizeof(trec)) ||
-        grow((void **)&w->touched, &w->captouched, n, 1))
+    if (mem_grow(&w->rec, &w->caprec, m, sizeof(trec)) ||
+        mem_grow(&w->touched, &w->captouched, n, 1))
         return -1;
     trec *R = w->rec;
     memset(w->touched, 0, n);
@@ -425,7 +414,7 @@ static int ray_leaves(face_work *w, double x, double y, int dir, size_t *nl)
     const box_tree *t = &w->tree;
     int32_t *st = (int32_t *)w->rec; /* scratch: free once the points stage is done */
     size_t n = 0, ns = 0;
-    if (grow(&w->rec, &w->caprec, 2 * (t->nnodes + t->nleaves) + 2, sizeof(int32_t))) return -1;
+    if (mem_grow(&w->rec, &w->caprec, 2 * (t->nnodes + t->nleaves) + 2, sizeof(int32_t))) return -1;
     st = (int32_t *)w->rec;
     uint32_t *out = (uint32_t *)(st + t->nnodes + 1);
     st[ns++] = 0;
@@ -479,7 +468,7 @@ static int stage_nesting(fc *c)
 {
     face_work *w = c->w;
     size_t n = c->n, ncyc = c->f->ncyc;
-    if (n > SMALL && grow((void **)&w->stamp, &w->capstamp, n, sizeof *w->stamp)) return -1;
+    if (n > SMALL && mem_grow(&w->stamp, &w->capstamp, n, sizeof *w->stamp)) return -1;
     if (n > SMALL) memset(w->stamp, 0, n * sizeof *w->stamp);
     /* the face's box in u, to send each ray the shorter way out */
     int64_t umax = 0;
@@ -608,9 +597,9 @@ int face_check(const face_cycles *f, int flags, face_work *w, face_verdict *out)
     c.strict = (flags & FACE_SOLID) || !planar;
     /* the entries in 2D */
     int ku = (k + 1) % 3, kv = (k + 2) % 3;
-    if (grow((void **)&w->P, &w->capP, 2 * n, sizeof *w->P) ||
-        grow((void **)&w->cyc, &w->capcyc, n, sizeof *w->cyc) ||
-        grow((void **)&w->start, &w->capstart, f->ncyc + 1, sizeof *w->start))
+    if (mem_grow(&w->P, &w->capP, 2 * n, sizeof *w->P) ||
+        mem_grow(&w->cyc, &w->capcyc, n, sizeof *w->cyc) ||
+        mem_grow(&w->start, &w->capstart, f->ncyc + 1, sizeof *w->start))
         return -1;
     size_t e = 0;
     for (size_t q = 0; q < f->ncyc; q++) {

@@ -35,4 +35,14 @@ static inline void *mem_realloc(void *p, size_t n)
     return n >= MEM_HUGE_MIN ? mem_huge(realloc(p, n), n) : realloc(p, n);
 }
 
+/* The growable array *pp (the address of a pointer to *cap elements of elem bytes, or to NULL
+ * with *cap 0) made to hold need elements, its room doubled as often as that takes (from 16):
+ * 0, or -1 out of memory or past what a size_t counts (*pp and *cap then as they were).  The
+ * common case, room enough, is inline. */
+int mem_grow_slow(void *pp, size_t *cap, size_t need, size_t elem);
+static inline int mem_grow(void *pp, size_t *cap, size_t need, size_t elem)
+{
+    return need <= *cap ? 0 : mem_grow_slow(pp, cap, need, elem);
+}
+
 #endif

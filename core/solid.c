@@ -80,8 +80,6 @@
 #define NUMBER_MAX         128                   /* longest number token a reader takes */
 #define NONE               UINT32_MAX
 
-static int grow(void **p, size_t *cap, size_t need, size_t elem);
-
 void solid_free(solid *s)
 {
     if (!s) return;
@@ -501,10 +499,10 @@ static int check_face_grid(ck *c, size_t f, gface *q)
     /* a triangle (not flat: checked before) is a polygon; so is any face of a single cycle of
      * three distinct points */
     if (nc == 1 && total == 3) return 0;
-    if (grow((void **)&q->ids, &q->capids, total + 1, sizeof *q->ids) ||
-        grow((void **)&q->inp, &q->capinp, total + 1, sizeof *q->inp) ||
-        grow((void **)&q->cyc, &q->capcyc, nc, sizeof *q->cyc) ||
-        grow((void **)&q->len, &q->caplen, nc, sizeof *q->len))
+    if (mem_grow(&q->ids, &q->capids, total + 1, sizeof *q->ids) ||
+        mem_grow(&q->inp, &q->capinp, total + 1, sizeof *q->inp) ||
+        mem_grow(&q->cyc, &q->capcyc, nc, sizeof *q->cyc) ||
+        mem_grow(&q->len, &q->caplen, nc, sizeof *q->len))
         return -1;
     size_t n = 0;
     for (size_t k = k0; k < k1; k++) {
@@ -1311,29 +1309,16 @@ typedef struct build {
     size_t nf, capf;
 } build;
 
-static int grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return 0;
-    size_t nc = *cap ? *cap : 64;
-    while (nc < need) nc *= 2;
-    if (nc > SIZE_MAX / elem) return -1;
-    void *q = mem_realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
-}
-
 static int build_vertex(build *b, const double *x)
 {
-    if (b->nv >= b->capv && grow((void **)&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
+    if (b->nv >= b->capv && mem_grow(&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
     memcpy(b->V + 3 * b->nv++, x, 3 * sizeof *x);
     return 0;
 }
 
 static int build_index(build *b, uint32_t v)
 {
-    if (b->ni >= b->capi && grow((void **)&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
+    if (b->ni >= b->capi && mem_grow(&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
     b->idx[b->ni++] = v;
     return 0;
 }
@@ -1341,8 +1326,7 @@ static int build_index(build *b, uint32_t v)
 /* Closes the face whose indices were appended since the last one. */
 static int build_face(build *b)
 {
-    if (b->nf + 2 > b->capf && grow((void **)&b->off, &b->capf, b->nf + 2, sizeof *b->off))
-        return -1;
+    if (b->nf + 2 > b->capf && mem_grow(&b->off, &b->capf, b->nf + 2, sizeof *b->off)) return -1;
     if (b->nf == 0) b->off[0] = 0;
     b->off[++b->nf] = (uint32_t)b->ni;
     return 0;

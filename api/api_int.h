@@ -157,7 +157,7 @@ typedef struct api_kind {
     /* optional: parse with the big arrays read beforehand (api/packed.h); req is the rest's
      * tree.  Any failure sends the caller back to parse() on the whole text, whose message
      * counts: this one is not shown. */
-    int (*parse_packed)(const json_t *req, const api_packed_set *pk, void **parsed, api_error *err);
+    int (*parse_packed)(const json_t *req, api_packed_set *pk, void **parsed, api_error *err);
 } api_kind;
 
 /* The "lines" kind (api/lines.c). */
@@ -173,8 +173,7 @@ int api_svg_check(const void *parsed, api_error *err);
 
 /* The "solids" kind (api/solids.c). */
 int api_solids_parse(const json_t *req, void **parsed, api_error *err);
-int api_solids_parse_packed(const json_t *req, const api_packed_set *pk, void **parsed,
-                            api_error *err);
+int api_solids_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err);
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_solids_free(void *parsed);
 int api_solids_check(const void *parsed, api_error *err);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "api/api_int.h"
 #include "core/fastfloat.h"
 #include "core/mem.h"
 
@@ -27,7 +28,6 @@ int api_packed_enabled(void)
 typedef struct scan {
     const char *p, *end;
     api_packed_set *set;
-    int oom;
 } scan;
 
 typedef struct span {
@@ -228,12 +228,12 @@ static void packed_release(api_packed *a)
 }
 
 /* The value at s->p, for the key k of the solid object of solid `sol`: read when it is V or FV
- * and an array, else skipped.  0, -1 (give up), -2 out of memory. */
-static int solid_member(scan *s, size_t sol, const char *k, size_t kn, span *sp)
+ * and an array (*len its bytes), else skipped (*len 0).  0, -1 (give up), -2 out of memory. */
+static int solid_member(scan *s, size_t sol, const char *k, size_t kn, size_t *len)
 {
     int fv = kn == 2 && !memcmp(k, "FV", 2) ? 1 : kn == 1 && *k == 'V' ? 0 : -1;
     ws(s);
-    sp->len = 0;
+    *len = 0;
     if (fv < 0 || s->p >= s->end || *s->p != '[') return skip_value(s);
     api_packed_set *set = s->set;
     if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a)) return -2;
@@ -247,7 +247,7 @@ static int solid_member(scan *s, size_t sol, const char *k, size_t kn, span *sp)
         return r;
     }
     set->n++;
-    sp->len = (size_t)(s->p - at); /* its place: solid_obj's */
+    *len = (size_t)(s->p - at);
     return 0;
 }
 
@@ -271,12 +271,12 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
         ws(s);
         const char *at = s->p;
-        span sp;
-        int r = solid_member(s, sol, k, kn, &sp);
+        size_t len;
+        int r = solid_member(s, sol, k, kn, &len);
         if (r) return r;
-        if (sp.len) {
+        if (len) {
             if (mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v)) return -2;
-            out->v[out->n++] = (span){(size_t)(at - body), sp.len};
+            out->v[out->n++] = (span){(size_t)(at - body), len};
         }
         ws(s);
         if (s->p < s->end && *s->p == ',') {
@@ -310,7 +310,7 @@ static size_t placeholder(size_t k, char *buf, size_t cap)
 int api_packed_scan(const char *body, size_t len, api_packed_set *set)
 {
     memset(set, 0, sizeof *set);
-    scan s = {body, body + len, set, 0};
+    scan s = {body, body + len, set};
     spans sp = {0};
     int rc = 0;
     if (expect(&s, '{')) goto give_up;
@@ -382,7 +382,7 @@ give_up:
     return rc;
 }
 
-api_packed *api_packed_find(const api_packed_set *set, size_t s, int fv, const char *str)
+api_packed *api_packed_find(api_packed_set *set, size_t s, int fv, const char *str)
 {
     if (!set || !str || str[0] != '\x01' || str[1] != '#') return NULL;
     char *e;
@@ -393,36 +393,6 @@ api_packed *api_packed_find(const api_packed_set *set, size_t s, int fv, const c
 }
 
 /* ---- the canonical form ------------------------------------------------------------------- */
-
-typedef struct wbuf {
-    char *p;
-    size_t n, cap;
-    int oom;
-} wbuf;
-
-static char *room(wbuf *b, size_t k)
-{
-    if (b->oom) return NULL;
-    if (b->n + k + 1 > b->cap) {
-        size_t nc = b->cap ? b->cap : 4096;
-        while (nc < b->n + k + 1) nc *= 2;
-        char *q = realloc(b->p, nc);
-        if (!q) {
-            b->oom = 1;
-            return NULL;
-        }
-        b->p = q, b->cap = nc;
-    }
-    return b->p + b->n;
-}
-
-static void put(wbuf *b, const char *s, size_t k)
-{
-    char *q = room(b, k);
-    if (!q) return;
-    memcpy(q, s, k);
-    b->n += k;
-}
 
 typedef unsigned __int128 u128;
 
@@ -564,56 +534,35 @@ static size_t real_text(double x, char *buf)
     return len;
 }
 
-/* An unsigned integer in decimal into buf (20 bytes at most): its length. */
-static size_t u64_text(uint64_t v, char *buf)
-{
-    char t[20];
-    size_t n = 0;
-    do t[n++] = (char)('0' + v % 10);
-    while ((v /= 10) != 0);
-    for (size_t i = 0; i < n; i++) buf[i] = t[n - 1 - i];
-    return n;
-}
-
-static void put_array(wbuf *b, const api_packed *a)
+/* Array a as jansson writes it compact: rows of V with each number as it was written (an
+ * integer, or a real by real_text), rows of FV as lists of indices. */
+static void put_array(api_buf *b, const api_packed *a)
 {
     char num[48];
-    put(b, "[", 1);
+    api_buf_putc(b, '[');
     for (size_t r = 0; r < a->n; r++) {
-        if (r) put(b, ",", 1);
-        put(b, "[", 1);
-        if (!a->fv) {
-            for (int k = 0; k < 3; k++) {
-                double x = a->V[3 * r + (size_t)k];
-                size_t m;
-                if (a->vint[r] >> k & 1) { /* below 10^15 in magnitude: exact */
-                    long long v = (long long)x;
-                    num[0] = '-';
-                    m = v < 0 ? 1 + u64_text((uint64_t)-v, num + 1) : u64_text((uint64_t)v, num);
-                } else {
-                    m = real_text(x, num);
-                }
-                if (k) put(b, ",", 1);
-                put(b, num, m);
-            }
-        } else {
-            char *q = room(b, 11 * (size_t)(a->off[r + 1] - a->off[r]));
-            if (!q) return;
-            size_t m = 0;
-            for (uint32_t i = a->off[r]; i < a->off[r + 1]; i++) {
-                if (i > a->off[r]) q[m++] = ',';
-                m += u64_text(a->idx[i], q + m);
-            }
-            b->n += m;
+        if (r) api_buf_putc(b, ',');
+        if (a->fv) {
+            api_buf_u32_list(b, a->idx + a->off[r], a->off[r + 1] - a->off[r]);
+            continue;
         }
-        put(b, "]", 1);
+        api_buf_putc(b, '[');
+        for (int k = 0; k < 3; k++) {
+            double x = a->V[3 * r + (size_t)k];
+            if (k) api_buf_putc(b, ',');
+            if (a->vint[r] >> k & 1)
+                api_buf_i64(b, (int64_t)x); /* below 10^15 in magnitude: exact */
+            else
+                api_buf_put(b, num, real_text(x, num));
+        }
+        api_buf_putc(b, ']');
     }
-    put(b, "]", 1);
+    api_buf_putc(b, ']');
 }
 
 char *api_packed_canon(const api_packed_set *set, const char *dump, size_t *outlen)
 {
-    wbuf b = {0};
+    api_buf b = {0};
     static const char mark[] = "\"\\u0001#";
     const char *p = dump;
     for (;;) {
@@ -623,20 +572,20 @@ char *api_packed_canon(const api_packed_set *set, const char *dump, size_t *outl
         size_t k = 0;
         while (*d >= '0' && *d <= '9') k = k * 10 + (size_t)(*d++ - '0');
         if (*d != '"' || k >= set->n) { /* not one of ours: kept as it is */
-            put(&b, p, (size_t)(d - p));
+            api_buf_put(&b, p, (size_t)(d - p));
             p = d;
             continue;
         }
-        put(&b, p, (size_t)(q - p));
+        api_buf_put(&b, p, (size_t)(q - p));
         put_array(&b, &set->a[k]);
         p = d + 1;
     }
-    put(&b, p, strlen(p));
-    if (b.oom || !room(&b, 0)) {
-        free(b.p);
+    api_buf_puts(&b, p);
+    if (b.failed || !api_buf_reserve(&b, 0)) {
+        api_buf_free(&b);
         return NULL;
     }
-    b.p[b.n] = 0;
-    if (outlen) *outlen = b.n;
+    b.p[b.len] = 0;
+    if (outlen) *outlen = b.len;
     return b.p;
 }

@@ -54,8 +54,8 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set);
 void api_packed_free(api_packed_set *set);
 
 /* The array of solid s (or API_PACKED_FACES), V (fv 0) or FV (fv 1) whose placeholder is str
- * (a JSON string's value), or NULL. */
-api_packed *api_packed_find(const api_packed_set *set, size_t s, int fv, const char *str);
+ * (a JSON string's value), or NULL.  Its taker sets its `taken`. */
+api_packed *api_packed_find(api_packed_set *set, size_t s, int fv, const char *str);
 
 /* The canonical form of the request: dump is json_dumps(JSON_COMPACT | JSON_SORT_KEYS |
  * JSON_REAL_PRECISION(17)) of the rest's tree; the result (malloc'd, NUL-terminated, *outlen

@@ -222,7 +222,7 @@ static const uint32_t *packed_row(const api_packed *a, size_t f, size_t *n)
  * taken as they are (checked here as the JSON ones are, but the messages are not kept: the
  * caller reads the whole text again on any failure). */
 static int parse_solid(const json_t *o, const char *path, int soup, totals *tot, solid *out,
-                       const api_packed_set *pk, size_t si, api_error *err)
+                       api_packed_set *pk, size_t si, api_error *err)
 {
     const json_t *V, *FV, *holes, *val;
     const char *key;
@@ -403,8 +403,7 @@ int api_solids_parse(const json_t *req, void **parsed, api_error *err)
     return api_solids_parse_packed(req, NULL, parsed, err);
 }
 
-int api_solids_parse_packed(const json_t *req, const api_packed_set *pk, void **parsed,
-                            api_error *err)
+int api_solids_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err)
 {
     const json_t *solids, *faces;
     const char *key;

@@ -1103,12 +1103,12 @@ static void export_twins(const ck *c, uint32_t *twin)
     const solid *s = c->s;
     size_t total = s->cyc_off[s->ncyc];
     for (size_t i = 0; i < total; i++) twin[i] = NONE;
+    int fl = c->rep->flipped_faces != 0; /* orient's flips, or every face (check_volume) */
     for (size_t e = 0; e < c->npair; e++) {
         size_t i = c->pair[e];
         const half *h = &c->he[i];
         if ((i > 0 && h[-1].key == h->key) || (i + 2 < c->nhe && h[2].key == h->key))
             continue; /* a pair of a surface touching itself: four faces on the edge */
-        int fl = c->rep->flipped_faces != 0; /* orient's flips, or every face (check_volume) */
         uint32_t x = fl ? fixed_entry(c, &h[0]) : h[0].ent,
                  y = fl ? fixed_entry(c, &h[1]) : h[1].ent;
         twin[x] = y, twin[y] = x;
@@ -1309,24 +1309,24 @@ typedef struct build {
     size_t nf, capf;
 } build;
 
-static int build_vertex(build *b, const double *x)
+static inline int build_vertex(build *b, const double *x)
 {
-    if (b->nv >= b->capv && mem_grow(&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
+    if (mem_grow(&b->V, &b->capv, b->nv + 1, 3 * sizeof *b->V)) return -1;
     memcpy(b->V + 3 * b->nv++, x, 3 * sizeof *x);
     return 0;
 }
 
-static int build_index(build *b, uint32_t v)
+static inline int build_index(build *b, uint32_t v)
 {
-    if (b->ni >= b->capi && mem_grow(&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
+    if (mem_grow(&b->idx, &b->capi, b->ni + 1, sizeof *b->idx)) return -1;
     b->idx[b->ni++] = v;
     return 0;
 }
 
 /* Closes the face whose indices were appended since the last one. */
-static int build_face(build *b)
+static inline int build_face(build *b)
 {
-    if (b->nf + 2 > b->capf && mem_grow(&b->off, &b->capf, b->nf + 2, sizeof *b->off)) return -1;
+    if (mem_grow(&b->off, &b->capf, b->nf + 2, sizeof *b->off)) return -1;
     if (b->nf == 0) b->off[0] = 0;
     b->off[++b->nf] = (uint32_t)b->ni;
     return 0;

@@ -2258,10 +2258,6 @@ static void pp_chunk(void *ctx, size_t item, int worker)
             j->fail = 1; /* the same value, whichever worker writes it */
 }
 
-/* piece_plane_id for both pieces of every pair, in pair order: the pieces without a plane
- * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then taken in the
- * list's order (so the ids are piece_plane_id's).  -1 out of memory (or a piece without a
- * plane). */
 /* Does every vertex of piece q lie strictly on one side of piece p's anchor plane (exact)?  Then
  * the two neither cross nor touch, whatever else holds. */
 static int off_plane(const a3 *A, uint32_t p, uint32_t q)
@@ -2282,10 +2278,6 @@ static int off_plane(const a3 *A, uint32_t p, uint32_t q)
     return 1;
 }
 
-/* The broad phase's pairs whose pieces are apart (most of them: boxes meet far more often than
- * faces): by either one's plane, and for two triangles also along the line of their planes
- * (tri_tri_apart), marked on the threads and dropped: no canonical plane and no cut work is
- * spent on them.  Returns how many are kept, in order. */
 typedef struct apartjob {
     const a3 *A;
     const uint64_t *pairs;
@@ -2296,11 +2288,9 @@ typedef struct apartjob {
 /* A triangle piece's vertices' grid points into t: 1, or 0 when the piece is no triangle. */
 static int piece_tri(const a3 *A, uint32_t p, const int64_t **t)
 {
-    const piece *P = &A->pc[p];
-    uint32_t o = A->pc_off[P->c0];
-    if (P->nc != 1 || A->pc_off[P->c0 + 1] - o != 3) return 0;
-    for (int i = 0; i < 3; i++) t[i] = A->g + 3 * (size_t)A->pcv[o + (uint32_t)i];
-    return 1;
+    const uint32_t *v = a3_piece_tri(A, &A->pc[p]);
+    for (int i = 0; v && i < 3; i++) t[i] = A->g + 3 * (size_t)v[i];
+    return v != NULL;
 }
 
 static void apart_chunk(void *ctx, size_t item, int worker)
@@ -2318,6 +2308,10 @@ static void apart_chunk(void *ctx, size_t item, int worker)
     }
 }
 
+/* The broad phase's pairs whose pieces are apart (most of them: boxes meet far more often than
+ * faces): by either one's plane, and for two triangles also along the line of their planes
+ * (tri_tri_apart), marked on the threads and dropped: no canonical plane and no cut work is
+ * spent on them.  Returns how many are kept, in order. */
 static size_t drop_apart(const a3 *A, uint64_t *pairs, size_t np)
 {
     uint8_t *keep = mem_malloc(np + 1);
@@ -2331,6 +2325,10 @@ static size_t drop_apart(const a3 *A, uint64_t *pairs, size_t np)
     return m;
 }
 
+/* piece_plane_id for both pieces of every pair, in pair order: the pieces without a plane
+ * listed (marked PLANE_LISTED meanwhile), their planes made on the threads, then taken in the
+ * list's order (so the ids are piece_plane_id's).  -1 out of memory (or a piece without a
+ * plane). */
 #define PLANE_LISTED (NONE - 1)
 static int pair_planes(a3 *A, const uint64_t *pairs, size_t np)
 {
@@ -3214,9 +3212,6 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     a3_progress(&A, "pairs", 1);
     t = now_ms();
     np = drop_apart(&A, pairs, np);
-#ifdef A3_PROF
-    fprintf(stderr, "  pairs kept %zu of %zu\n", np, (size_t)out->stats.pairs_tested);
-#endif
     r = stage_cuts(&A, pairs, np);
     if (r == -3) goto cancel;
     if (r) goto oom;

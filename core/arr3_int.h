@@ -188,6 +188,13 @@ typedef struct a3 {
                          the patch's other face (an edge inside the patch), else NONE */
 } a3;
 
+/* Piece P's three vertices when it is a triangle (one cycle of 3 entries), else NULL. */
+static inline const uint32_t *a3_piece_tri(const a3 *A, const piece *P)
+{
+    uint32_t o = A->pc_off[P->c0];
+    return P->nc == 1 && A->pc_off[P->c0 + 1] - o == 3 ? A->pcv + o : NULL;
+}
+
 /* ---- shared tools (arr3.c) ------------------------------------------------------------- */
 
 /* Are items a and b equal? (a3_firsts) */

@@ -297,10 +297,9 @@ static void build_groups(void *ctx, size_t item, int worker)
                     memcpy(F->itri[k], A->pcv + e0 + 3 * (size_t)(F->item[k] - o), sizeof *F->itri);
             else
                 for (uint32_t k = o; k < o + n; k++) {
-                    const piece *P = &A->pc[F->item[k]];
-                    uint32_t c = P->c0;
-                    if (P->nc == 1 && A->pc_off[c + 1] - A->pc_off[c] == 3)
-                        memcpy(F->itri[k], A->pcv + A->pc_off[c], sizeof *F->itri);
+                    const uint32_t *t = a3_piece_tri(A, &A->pc[F->item[k]]);
+                    if (t)
+                        memcpy(F->itri[k], t, sizeof *F->itri);
                     else
                         F->itri[k][0] = F->itri[k][1] = F->itri[k][2] = NONE;
                 }
@@ -409,10 +408,8 @@ static int self_apart(const a3 *A, uint32_t p, uint32_t q)
 {
     const piece *P = &A->pc[p], *Q = &A->pc[q];
     if (P->nc != 1 || Q->nc != 1) return 0;
-    uint32_t po = A->pc_off[P->c0], qo = A->pc_off[Q->c0];
-    if (A->pc_off[P->c0 + 1] - po == 3 && A->pc_off[Q->c0 + 1] - qo == 3) {
-        /* two triangles (most pairs): by their shared vertices */
-        const uint32_t *pv = A->pcv + po, *qv = A->pcv + qo;
+    const uint32_t *pv = a3_piece_tri(A, P), *qv = a3_piece_tri(A, Q);
+    if (pv && qv) { /* two triangles (most pairs): by their shared vertices */
         uint32_t shared = 0, ins = 0, inq = 0; /* bit t: P's vertex t (Q's) is shared */
         for (int t = 0; t < 3; t++)
             for (int r = 0; r < 3; r++)

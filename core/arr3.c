@@ -2775,7 +2775,7 @@ static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov, uint32_t *pe2e)
 typedef struct patchjob {
     const a3 *A;
     const uint32_t *r_off; /* ranges: pieces r_off[t] .. r_off[t + 1) */
-    uint32_t *uf, *lab, *epc;
+    uint32_t *stack, *lab, *epc; /* by piece: the walks' stack, the piece's patch */
     uint8_t *rch;
     uint32_t *np; /* by range: its patches, then its first patch (np[nr]: all of them) */
     uint32_t *nu; /* by range: its pieces in patches, then where the first goes in pp */
@@ -2787,37 +2787,40 @@ static void patch_range(void *ctx, size_t t, int worker)
     (void)worker;
     const patchjob *j = ctx;
     const a3 *A = j->A;
-    uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], np = 0;
+    uint32_t p0 = j->r_off[t], p1 = j->r_off[t + 1], np = 0, nu = 0;
     /* a range of triangles whose entries follow each other (the usual mesh): the piece of entry
-     * x is p0 + (x - e0) / 3, with no map written */
+     * x is p0 + (x - e0) / 3 and its entries e0 + 3 (i - p0) .., with no map written and no
+     * piece read by the walk */
     uint32_t e0 = 0, e1 = 0;
     if (p1 > p0) e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
     int tri = p1 > p0 && (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
-    for (uint32_t i = p0; i < p1; i++) {
+    const uint8_t *rch = j->rch;
+    uint32_t *lab = j->lab, *stack = j->stack + p0; /* each piece is pushed once: p1 - p0 room */
+    memset(lab + p0, 0xff, (p1 - p0) * sizeof *lab);  /* NONE */
+    for (uint32_t i = p0; !tri && i < p1; i++) {
         const piece *pc = &A->pc[i];
-        j->uf[i] = i;
-        j->rch[i] = pc->reached;
-        if (!tri)
-            for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;
+        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;
     }
+    /* each patch walked across twins from its lowest piece (patches numbered in that order) */
     for (uint32_t i = p0; i < p1; i++) {
-        if (j->rch[i]) continue;
-        const piece *pc = &A->pc[i];
-        for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + 1]; x++) {
-            uint32_t t2 = A->ptwin[x];
-            if (t2 == NONE || t2 <= x) continue; /* each twin pair once (twins are mutual) */
-            uint32_t q = tri ? p0 + (t2 - e0) / 3 : j->epc[t2];
-            if (!j->rch[q]) a3_uf_union(j->uf, i, q);
+        if (rch[i] || lab[i] != NONE) continue;
+        uint32_t top = 0;
+        lab[i] = np, stack[top++] = i, nu++;
+        while (top) {
+            uint32_t u = stack[--top], x0, x1;
+            if (tri)
+                x0 = e0 + 3 * (u - p0), x1 = x0 + 3;
+            else
+                x0 = A->pc_off[A->pc[u].c0], x1 = A->pc_off[A->pc[u].c0 + 1];
+            for (uint32_t x = x0; x < x1; x++) {
+                uint32_t t2 = A->ptwin[x];
+                if (t2 == NONE) continue;
+                uint32_t q = tri ? p0 + (t2 - e0) / 3 : j->epc[t2];
+                if (rch[q] || lab[q] != NONE) continue;
+                lab[q] = np, stack[top++] = q, nu++;
+            }
         }
-    }
-    for (uint32_t i = p0; i < p1; i++) j->lab[i] = NONE;
-    uint32_t nu = 0;
-    for (uint32_t i = p0; i < p1; i++) {
-        if (j->rch[i]) continue;
-        uint32_t r = a3_uf_find(j->uf, i);
-        if (j->lab[r] == NONE) j->lab[r] = np++;
-        j->lab[i] = j->lab[r];
-        nu++;
+        np++;
     }
     j->np[t] = np;
     j->nu[t] = nu;
@@ -2849,14 +2852,15 @@ static void patch_fill(void *ctx, size_t t, int worker)
 A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
 {
     size_t npc = A->npc, nr = 0;
-    uint32_t *uf = mem_malloc((npc + 1) * sizeof *uf), *lab = mem_malloc((npc + 1) * sizeof *lab);
+    uint32_t *stack = mem_malloc((npc + 1) * sizeof *stack);
+    uint32_t *lab = mem_malloc((npc + 1) * sizeof *lab);
     uint32_t *epc = mem_malloc((A->npcv + 1) * sizeof *epc), *ppo = NULL, *pp = NULL;
     uint8_t *rch = mem_malloc(npc + 1); /* the pieces' reached flags, packed: looked up at random */
     uint32_t *r_off = mem_malloc((4 * (size_t)A->threads + 3) * sizeof *r_off);
     uint32_t *np = mem_calloc(4 * (size_t)A->threads + 3, sizeof *np);
     uint32_t *nu = mem_calloc(4 * (size_t)A->threads + 3, sizeof *nu), *cur = NULL;
     int rc = -1;
-    if (!uf || !lab || !epc || !rch || !r_off || !np || !nu) goto done;
+    if (!stack || !lab || !epc || !rch || !r_off || !np || !nu) goto done;
     /* ranges of about npc / (4 threads) pieces, cut where a solid starts */
     size_t want = npc / (4 * (size_t)A->threads) + 1;
     r_off[nr++] = 0;
@@ -2866,7 +2870,11 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
         r_off[nr++] = (uint32_t)at;
     }
     r_off[nr] = (uint32_t)npc;
-    patchjob j = {A, r_off, uf, lab, epc, rch, np, nu, NULL, NULL, NULL};
+    /* the reached flags from stage_cuts' list, not from the 64-byte pieces (a stream of all of
+     * them: 80 MB at a million faces a solid) */
+    memset(rch, 0, npc);
+    for (size_t k = 0; k < A->nrl; k++) rch[A->rl[k]] = 1;
+    patchjob j = {A, r_off, stack, lab, epc, rch, np, nu, NULL, NULL, NULL};
     par_for(A->threads, nr, patch_range, &j);
     uint32_t total = 0, inp = 0;
     for (size_t t = 0; t < nr; t++) {
@@ -2888,7 +2896,7 @@ A3_STAGE static int stage_patches(a3 *A, uint32_t **ppo_out, uint32_t **pp_out)
     ppo = pp = NULL;
     rc = 0;
 done:
-    free(uf), free(lab), free(epc), free(ppo), free(pp), free(rch), free(r_off), free(np);
+    free(stack), free(lab), free(epc), free(ppo), free(pp), free(rch), free(r_off), free(np);
     free(nu), free(cur);
     return rc;
 }

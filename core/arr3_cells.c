@@ -1089,15 +1089,14 @@ static void vol_chunk(void *ctx, size_t item, int worker)
                 const int64_t *p0 = A->g + 3 * (size_t)e0, *p1 = A->g + 3 * (size_t)e1,
                               *p2 = A->g + 3 * (size_t)e2;
                 /* |coordinates| <= 2^29 + 1: each component of p1 x p2 below 2^60, and of the
-                 * differences (below 2^31) their cross product below 2^63 */
+                 * differences (below 2^31) their cross product below 2^62 (64 bits) */
                 int64_t c0 = p1[1] * p2[2] - p1[2] * p2[1];
                 int64_t c1 = p1[2] * p2[0] - p1[0] * p2[2];
                 int64_t c2 = p1[0] * p2[1] - p1[1] * p2[0];
                 i128 C = (i128)p0[0] * c0 + (i128)p0[1] * c1 + (i128)p0[2] * c2;
                 int64_t u0 = p1[0] - p0[0], u1 = p1[1] - p0[1], u2 = p1[2] - p0[2];
                 int64_t v0 = p2[0] - p0[0], v1 = p2[1] - p0[1], v2 = p2[2] - p0[2];
-                i128 S0 = (i128)u1 * v2 - (i128)u2 * v1, S1 = (i128)u2 * v0 - (i128)u0 * v2,
-                     S2 = (i128)u0 * v1 - (i128)u1 * v0;
+                int64_t S0 = u1 * v2 - u2 * v1, S1 = u2 * v0 - u0 * v2, S2 = u0 * v1 - u1 * v0;
                 if (neg) C = -C, S0 = -S0, S1 = -S1, S2 = -S2;
                 acc.C += C, acc.S[0] += S0, acc.S[1] += S1, acc.S[2] += S2;
                 continue;

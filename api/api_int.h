@@ -71,6 +71,12 @@ void api_buf_i64(api_buf *b, int64_t v);
 void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
 void api_buf_free(api_buf *b);
 void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n); /* [a0,a1,...] */
+/* The numbers' writers (larjson.c): 10^k in 128 bits (0 <= k <= 38); x > 0 written as
+ * %.{prec}g would (prec <= 17) from its prec-digit rounding d (10^(prec-1) <= d < 10^prec) and
+ * the decimal exponent E of its first digit.  Returns the length (a 0 is written after). */
+typedef unsigned __int128 api_u128;
+api_u128 api_pow10_u128(int k);
+size_t api_fmt_g(uint64_t d, int prec, int E, char *p);
 void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n);
 /* {"shape":[nrows,ncols],"indptr":[...],"indices":[...],"data":[±1,...]}: a CSR matrix whose
  * row r holds indices/data[indptr[r] .. indptr[r+1]). */

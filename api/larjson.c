@@ -166,6 +166,137 @@ void api_buf_i64(api_buf *b, int64_t v)
     b->p[b->len] = 0;
 }
 
+/* ---- doubles: the shortest of %.15g, %.16g, %.17g that reads back ---------------------------
+ *
+ * printf and strtod cost a microsecond a number (50 MB/s of output).  For 1e-6 <= |x| < 1e15
+ * (coordinates, areas, volumes) the digits come from one exact product instead: x = m 2^-k
+ * (m < 2^53), so X = x 10^s = m 10^s / 2^k with s chosen to put X in [10^16, 10^17) is known
+ * exactly as its integer part q and remainder r / 2^k (m 10^s < 2^53 10^22 < 2^127).  Rounding
+ * X to 17, 16 or 15 digits is then exact and halves go to even, as printf's %.Ng; a rounding
+ * D reads back as x when it lies within half a unit in the last place of x, |D - X| <
+ * 10^s / 2^(k+1), compared in integers (at exactly that distance strtod would round to the even
+ * m; the rule is kept, though in this range such a midpoint, an odd 54-bit number times a power
+ * of 5 over a power of 10, has 19 digits or more and is never a rounding of 16).  A power of two
+ * (whose lower neighbour is half as far) and anything outside the range take printf and strtod. */
+
+typedef __int128 fmt_i128;
+
+api_u128 api_pow10_u128(int k) /* 0 <= k <= 38 */
+{
+    api_u128 r = 1;
+    for (; k >= 19; k -= 19) r *= (api_u128)10000000000000000000u;
+    static const uint64_t small[19] = {1,
+                                       10,
+                                       100,
+                                       1000,
+                                       10000,
+                                       100000,
+                                       1000000,
+                                       10000000,
+                                       100000000,
+                                       1000000000,
+                                       10000000000,
+                                       100000000000,
+                                       1000000000000,
+                                       10000000000000,
+                                       100000000000000,
+                                       1000000000000000,
+                                       10000000000000000,
+                                       100000000000000000,
+                                       1000000000000000000};
+    return r * small[k];
+}
+
+size_t api_fmt_g(uint64_t d, int prec, int E, char *p)
+{
+    static const char two[201] =
+        "00010203040506070809101112131415161718192021222324252627282930313233"
+        "34353637383940414243444546474849505152535455565758596061626364656667"
+        "6869707172737475767778798081828384858687888990919293949596979899";
+    char dig[18], *p0 = p;
+    int i = prec;
+    for (; i >= 2; i -= 2, d /= 100) memcpy(dig + i - 2, two + 2 * (d % 100), 2);
+    if (i) dig[0] = (char)('0' + d);
+    int nd = prec;
+    while (nd > 1 && dig[nd - 1] == '0') nd--; /* %g drops trailing zeros */
+    if (E < -4 || E >= prec) {
+        *p++ = dig[0];
+        if (nd > 1) {
+            *p++ = '.';
+            memcpy(p, dig + 1, (size_t)nd - 1);
+            p += nd - 1;
+        }
+        *p++ = 'e';
+        *p++ = E < 0 ? '-' : '+';
+        int a = E < 0 ? -E : E;
+        if (a >= 100) *p++ = (char)('0' + a / 100);
+        *p++ = (char)('0' + a / 10 % 10);
+        *p++ = (char)('0' + a % 10);
+    } else if (E >= 0) {
+        for (int i = 0; i <= E; i++) *p++ = i < nd ? dig[i] : '0';
+        if (nd > E + 1) {
+            *p++ = '.';
+            memcpy(p, dig + E + 1, (size_t)(nd - E - 1));
+            p += nd - E - 1;
+        }
+    } else {
+        *p++ = '0', *p++ = '.';
+        for (int i = 0; i < -E - 1; i++) *p++ = '0';
+        memcpy(p, dig, (size_t)nd);
+        p += nd;
+    }
+    *p = 0;
+    return (size_t)(p - p0);
+}
+
+/* X = q + r / 2^k rounded to prec digits (unit = 10^(17 - prec)), halves to even: when the
+ * rounding reads back as x (or prec is 17), x written, else 0. */
+static inline size_t fmt_try(uint64_t q, api_u128 r, int k, uint64_t m, api_u128 ten_s, int E,
+                             int prec, uint64_t unit, char *p)
+{
+    uint64_t qd = q / unit, rem = q % unit;
+    api_u128 num2 = (((api_u128)rem << k) + r) << 1, half2 = (api_u128)unit << k;
+    uint64_t d = qd + (num2 > half2 || (num2 == half2 && (qd & 1)));
+    if (prec < 17) { /* |d unit - X| against half the unit in the last place of x */
+        fmt_i128 a = (fmt_i128)(d * unit) - (fmt_i128)q;
+        fmt_i128 diff2 = ((a * ((fmt_i128)1 << k)) - (fmt_i128)r) * 2;
+        api_u128 ad = (api_u128)(diff2 < 0 ? -diff2 : diff2);
+        if (ad > ten_s || (ad == ten_s && (m & 1))) return 0;
+    }
+    if (d == 100000000000000000u / unit) d /= 10, E++; /* 99..9.5 rounds up a digit */
+    return api_fmt_g(d, prec, E, p);
+}
+
+/* The fast path for x > 0; 0 when x is not in its range. */
+static size_t fmt_short(double x, char *p)
+{
+    if (!(x >= 1e-6 && x < 1e15)) return 0;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    uint64_t m = (bits & (((uint64_t)1 << 52) - 1)) | (uint64_t)1 << 52;
+    int e2 = (int)(bits >> 52 & 0x7ff) - 1022; /* x = m 2^(e2 - 53), 2^(e2-1) <= x < 2^e2 */
+    int k = 53 - e2;                           /* x = m / 2^k, 0 < k <= 73 in this range */
+    if (m == (uint64_t)1 << 52) return 0;
+    int E = (int)floor((e2 - 1) * 0.30102999566398120), s; /* log10 x, or one below */
+    api_u128 q, r, ten_s;
+    for (int tries = 0;; tries++) { /* E: 10^16 <= x 10^(16 - E) < 10^17 */
+        s = 16 - E;
+        if (tries == 3 || s < 0 || s > 22) return 0;
+        api_u128 n = (api_u128)m * (ten_s = api_pow10_u128(s));
+        q = n >> k, r = n & (((api_u128)1 << k) - 1);
+        if (q >= (api_u128)100000000000000000u)
+            E++;
+        else if (q < (api_u128)10000000000000000u)
+            E--;
+        else
+            break;
+    }
+    size_t n;
+    if ((n = fmt_try((uint64_t)q, r, k, m, ten_s, E, 15, 100, p))) return n;
+    if ((n = fmt_try((uint64_t)q, r, k, m, ten_s, E, 16, 10, p))) return n;
+    return fmt_try((uint64_t)q, r, k, m, ten_s, E, 17, 1, p);
+}
+
 size_t api_format_double(double x, char *buf)
 {
     size_t n;
@@ -180,11 +311,14 @@ size_t api_format_double(double x, char *buf)
         buf[n] = 0;
         return n;
     }
+    n = x < 0 ? (buf[0] = '-', 1) : 0;
+    size_t f = fmt_short(fabs(x), buf + n);
+    if (f) return n + f;
     /* the shortest of %.15g, %.16g, %.17g that reads back as x */
     for (int prec = 15;; prec++) {
-        int n = snprintf(buf, API_DOUBLE_MAX, "%.*g", prec, x);
-        assert(n > 0 && n < API_DOUBLE_MAX);
-        if (prec == 17 || strtod(buf, NULL) == x) return (size_t)n;
+        int w = snprintf(buf, API_DOUBLE_MAX, "%.*g", prec, x);
+        assert(w > 0 && w < API_DOUBLE_MAX);
+        if (prec == 17 || strtod(buf, NULL) == x) return (size_t)w;
     }
 }
 

@@ -394,33 +394,7 @@ api_packed *api_packed_find(api_packed_set *set, size_t s, int fv, const char *s
 
 /* ---- the canonical form ------------------------------------------------------------------- */
 
-typedef unsigned __int128 u128;
-
-static u128 pow10_u128(int k) /* 0 <= k <= 38 */
-{
-    u128 r = 1;
-    for (; k >= 19; k -= 19) r *= (u128)10000000000000000000u;
-    static const uint64_t p[19] = {1,
-                                   10,
-                                   100,
-                                   1000,
-                                   10000,
-                                   100000,
-                                   1000000,
-                                   10000000,
-                                   100000000,
-                                   1000000000,
-                                   10000000000,
-                                   100000000000,
-                                   1000000000000,
-                                   10000000000000,
-                                   100000000000000,
-                                   1000000000000000,
-                                   10000000000000000,
-                                   100000000000000000,
-                                   1000000000000000000};
-    return r * p[k];
-}
+typedef api_u128 u128;
 
 /* round(x 10^s) for x = m 2^e, ties to even (printf's rule), into *d and floor(x 10^s) into *f,
  * when 128 bits hold the work: 1, else 0. */
@@ -428,7 +402,7 @@ static int scaled(uint64_t m, int e, int s, u128 *d, u128 *f)
 {
     if (s >= 0) {
         if (s > 22) return 0; /* m 10^s below 2^128 */
-        u128 n = (u128)m * pow10_u128(s);
+        u128 n = (u128)m * api_pow10_u128(s);
         if (e >= 0) {
             if (e > 10 || n >> (127 - e)) return 0;
             *d = *f = n << e;
@@ -441,7 +415,7 @@ static int scaled(uint64_t m, int e, int s, u128 *d, u128 *f)
         return 1;
     }
     if (e < 0 || e > 74 || -s > 38) return 0;
-    u128 x = (u128)m << e, div = pow10_u128(-s), q = x / div, r = x % div;
+    u128 x = (u128)m << e, div = api_pow10_u128(-s), q = x / div, r = x % div;
     *f = q;
     *d = q + (2 * r > div || (2 * r == div && (q & 1)));
     return 1;
@@ -462,7 +436,7 @@ size_t api_g17(double x, char *buf)
     double fr = frexp(x, &e2);
     uint64_t m = (uint64_t)ldexp(fr, 53); /* x = m 2^e exactly */
     int e = e2 - 53, E = (int)floor(log10(x));
-    u128 d = 0, f = 0, lo = pow10_u128(16), hi = pow10_u128(17);
+    u128 d = 0, f = 0, lo = api_pow10_u128(16), hi = api_pow10_u128(17);
     for (int tries = 0;; tries++) { /* E: 10^16 <= x 10^(16 - E) < 10^17, before rounding */
         if (tries == 4 || !scaled(m, e, 16 - E, &d, &f)) return 0;
         if (f >= hi)
@@ -473,39 +447,7 @@ size_t api_g17(double x, char *buf)
             break;
     }
     if (d == hi) d = lo, E++; /* 99...9.5 rounds up to a digit more: printf's next exponent */
-    char dig[17];
-    uint64_t v = (uint64_t)d;
-    for (int i = 16; i >= 0; i--) dig[i] = (char)('0' + v % 10), v /= 10;
-    int nd = 17;
-    while (nd > 1 && dig[nd - 1] == '0') nd--; /* %g drops trailing zeros */
-    if (E < -4 || E >= 17) {
-        *p++ = dig[0];
-        if (nd > 1) {
-            *p++ = '.';
-            memcpy(p, dig + 1, (size_t)nd - 1);
-            p += nd - 1;
-        }
-        *p++ = 'e';
-        *p++ = E < 0 ? '-' : '+';
-        int a = E < 0 ? -E : E;
-        if (a >= 100) *p++ = (char)('0' + a / 100);
-        *p++ = (char)('0' + a / 10 % 10);
-        *p++ = (char)('0' + a % 10);
-    } else if (E >= 0) {
-        for (int i = 0; i <= E; i++) *p++ = i < nd ? dig[i] : '0';
-        if (nd > E + 1) {
-            *p++ = '.';
-            memcpy(p, dig + E + 1, (size_t)(nd - E - 1));
-            p += nd - E - 1;
-        }
-    } else {
-        *p++ = '0', *p++ = '.';
-        for (int i = 0; i < -E - 1; i++) *p++ = '0';
-        memcpy(p, dig, (size_t)nd);
-        p += nd;
-    }
-    *p = 0;
-    return (size_t)(p - buf);
+    return (size_t)(p - buf) + api_fmt_g((uint64_t)d, 17, E, p);
 }
 
 /* A real as jansson writes it with JSON_REAL_PRECISION(17): %.17g, ".0" when it has neither a

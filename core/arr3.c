@@ -2774,7 +2774,7 @@ static void put_piece_face(a3 *A, uint32_t pi, size_t *ncov, uint32_t *pe2e)
  * on its own range of pieces, numbering its patches from 0 in order of their lowest piece. */
 typedef struct patchjob {
     const a3 *A;
-    const uint32_t *r_off; /* ranges: pieces r_off[t] .. r_off[t + 1) */
+    const uint32_t *r_off;       /* ranges: pieces r_off[t] .. r_off[t + 1) */
     uint32_t *stack, *lab, *epc; /* by piece: the walks' stack, the piece's patch */
     uint8_t *rch;
     uint32_t *np; /* by range: its patches, then its first patch (np[nr]: all of them) */
@@ -2795,8 +2795,8 @@ static void patch_range(void *ctx, size_t t, int worker)
     if (p1 > p0) e0 = A->pc_off[A->pc[p0].c0], e1 = A->pc_off[A->pc[p1 - 1].c0 + A->pc[p1 - 1].nc];
     int tri = p1 > p0 && (size_t)e1 - e0 == 3 * (size_t)(p1 - p0);
     const uint8_t *rch = j->rch;
-    uint32_t *lab = j->lab, *stack = j->stack + p0; /* each piece is pushed once: p1 - p0 room */
-    memset(lab + p0, 0xff, (p1 - p0) * sizeof *lab);  /* NONE */
+    uint32_t *lab = j->lab, *stack = j->stack + p0;  /* each piece is pushed once: p1 - p0 room */
+    memset(lab + p0, 0xff, (p1 - p0) * sizeof *lab); /* NONE */
     for (uint32_t i = p0; !tri && i < p1; i++) {
         const piece *pc = &A->pc[i];
         for (uint32_t x = A->pc_off[pc->c0]; x < A->pc_off[pc->c0 + pc->nc]; x++) j->epc[x] = i;

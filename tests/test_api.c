@@ -713,6 +713,74 @@ TEST(double_format_known_values)
     }
 }
 
+/* The shortest of %.15g, %.16g, %.17g that reads back as x (integers below 1e15 as such): what
+ * api_format_double must print, byte for byte, fast path or not. */
+static size_t double_ref(double x, char *buf)
+{
+    if (fabs(x) < 1e15 && x == (double)(int64_t)x)
+        return (size_t)snprintf(buf, 64, "%lld", (long long)(int64_t)x);
+    for (int prec = 15;; prec++) {
+        int n = snprintf(buf, 64, "%.*g", prec, x);
+        if (prec == 17 || strtod(buf, NULL) == x) return (size_t)n;
+    }
+}
+
+/* api_format_double against that reference: random bit patterns, numbers of the fast path's
+ * range (1e-6 .. 1e15) with random mantissas, short decimals and their neighbours, decimals of
+ * 16 and 17 digits ending in 5 (ties at the 15th and 16th digit), powers of two (the path left
+ * to printf) and their neighbours, the range's ends; each also negated. */
+TEST(double_format_is_the_shortest_printf)
+{
+    uint64_t st = 1129;
+    size_t n = 300000, bad = 0;
+    const char *e = getenv("CELLAR_STRESS");
+    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    char a[64], b[64];
+    for (size_t i = 0; i < n && bad < 5; i++) {
+        double x;
+        uint64_t r = (uint64_t)(test_rnd(&st) * 18446744073709551616.0);
+        switch (i % 7) {
+        case 0:
+            memcpy(&x, &r, sizeof x);
+            if (!isfinite(x)) x = 0.75;
+            break;
+        case 1:
+            x = ldexp(1 + test_rnd(&st), (int)(test_rnd(&st) * 72) - 21);
+            break;
+        case 2:
+            x = floor(test_rnd(&st) * 1e6) * pow(10, (int)(test_rnd(&st) * 22) - 13);
+            break;
+        case 3:
+            x = floor(test_rnd(&st) * 1e5) * pow(10, (int)(test_rnd(&st) * 18) - 11);
+            x = nextafter(x, test_rnd(&st) < 0.5 ? INFINITY : 0);
+            break;
+        case 4: {
+            char s[64];
+            snprintf(s, sizeof s, "%llu5e%d", (unsigned long long)(r % 10000000000000000u),
+                     (int)(test_rnd(&st) * 30) - 26);
+            x = strtod(s, NULL);
+            break;
+        }
+        case 5:
+            x = ldexp(1, (int)(test_rnd(&st) * 90) - 40);
+            if (test_rnd(&st) < 0.7) x = nextafter(x, test_rnd(&st) < 0.5 ? INFINITY : 0);
+            break;
+        default: {
+            static const double ends[] = {1e-6,       1e15, 999999999999999.9,  1e-7, 9.999999e-7,
+                                          1e14 + 0.5, 0.1,  0.30000000000000004};
+            x = ends[r % (sizeof ends / sizeof ends[0])];
+            if (r >> 32 & 1) x = nextafter(x, r >> 33 & 1 ? INFINITY : 0);
+        }
+        }
+        if (r >> 63) x = -x;
+        size_t la = api_format_double(x, a), lb = double_ref(x, b);
+        if (la != lb || strcmp(a, b) != 0 || strlen(a) != la) {
+            bad++;
+            CHECK(0, "%a: \"%s\", want \"%s\"", x, a, b);
+        }
+    }
+}
+
 /* The submit-time check (api_check_json, what the daemon runs before queueing) reads an SVG
  * drawing, so a malformed one is refused at once with its line and column. */
 TEST(check_reads_svg_drawings)

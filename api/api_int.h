@@ -199,9 +199,13 @@ enum {
     API_F_EXTERIOR = 1u << 5,
     API_F_STATS = 1u << 6,
     API_F_OPERATORS = 1u << 7,
-    API_F_DEFAULT = (1u << 7) - 1 /* all but operators */
+    API_F_DEFAULT = (1u << 7) - 1, /* all but operators (and the two below) */
+    /* "polygons" only: when fields names either, only the one(s) named are written (else both,
+     * whatever the fields); a result named without V carries its own V */
+    API_F_MEMBERSHIP = 1u << 8,
+    API_F_RESULT = 1u << 9
 };
-#define API_NFIELDS 8
+#define API_NFIELDS 10
 extern const char *const api_field_names[API_NFIELDS]; /* "V", "EV", ... in bit order */
 
 /* The options of every kind that returns a 2-complex ("lines", "svg"): api/lines.c reads them. */
@@ -223,6 +227,8 @@ int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_erro
 /* Reads the whole "options" object o (may be NULL) of a kind whose options are exactly those of
  * api_lar2_option ("lines", "polygons"): API_OK, or an error naming options.KEY. */
 int api_lar2_options(const json_t *o, api_lar2_opts *opt, api_error *err);
+/* 422 when o's fields name "membership" or "result" (a kind without a Boolean), else API_OK. */
+int api_lar2_no_bool(const api_lar2_opts *o, api_error *err);
 
 /* How api_lar2_write() presents a 2-complex. */
 typedef struct api_lar2_fmt {

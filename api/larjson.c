@@ -31,8 +31,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const api_field_names[API_NFIELDS] = {"V",     "EV",       "FV",    "FE",
-                                                  "holes", "exterior", "stats", "operators"};
+const char *const api_field_names[API_NFIELDS] = {
+    "V", "EV", "FV", "FE", "holes", "exterior", "stats", "operators", "membership", "result"};
 
 /* ---- the buffer ---------------------------------------------------------------------------- */
 

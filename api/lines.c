@@ -14,7 +14,8 @@
  *   exterior_last  bool: the seeds' convention, exterior cycles as the last rows of FV and FE
  *   operators      bool: add the boundary operators d1, d2 as CSR
  *   fields         array of names among "V","EV","FV","FE","holes","exterior","stats",
- *                  "operators" (default: all but operators)
+ *                  "operators" (default: all but operators); "membership" and "result" are
+ *                  names of "polygons" only (api_lar2_no_bool refuses them elsewhere)
  * api_lar2_option() reads them, for "svg" (api/svg.c) too.
  *
  * Threads: reentrant, no globals.  Ownership: the body and req are borrowed; a parsed request
@@ -49,7 +50,8 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
     if (!json_is_array(v))
         return api_fail(err, API_EINVALID,
                         "options.fields: expected an array of names among \"V\", \"EV\", \"FV\", "
-                        "\"FE\", \"holes\", \"exterior\", \"stats\", \"operators\"");
+                        "\"FE\", \"holes\", \"exterior\", \"stats\", \"operators\" (and "
+                        "\"membership\", \"result\" for polygons)");
     *out = 0;
     json_array_foreach(v, i, name)
     {
@@ -59,7 +61,8 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
         if (!bit)
             return api_fail(err, API_EINVALID,
                             "options.fields[%zu]: expected one of \"V\", \"EV\", \"FV\", \"FE\", "
-                            "\"holes\", \"exterior\", \"stats\", \"operators\"",
+                            "\"holes\", \"exterior\", \"stats\", \"operators\" (and "
+                            "\"membership\", \"result\" for polygons)",
                             i);
         *out |= bit;
     }
@@ -99,6 +102,15 @@ int api_lar2_options(const json_t *o, api_lar2_opts *opt, api_error *err)
         if (rc != API_OK) return rc;
     }
     if (opt->operators) opt->fields |= API_F_OPERATORS;
+    return api_lar2_no_bool(opt, err);
+}
+
+int api_lar2_no_bool(const api_lar2_opts *o, api_error *err)
+{
+    if (o->fields & (API_F_MEMBERSHIP | API_F_RESULT))
+        return api_fail(err, API_EINVALID,
+                        "options.fields: \"membership\" and \"result\" are fields of a "
+                        "\"polygons\" request (its Boolean)");
     return API_OK;
 }
 

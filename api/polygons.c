@@ -16,7 +16,8 @@
  *   "result": {"cells": [selected faces], "FV": [outer cycle of each result polygon, CCW],
  *              "FE": [signed edges of each result polygon, outer cycle then holes],
  *              "holes": {"q": [[hole cycle, CW], ...]}, "area": total area}.
- * core/bool2.h does the work.
+ * options.fields may name "membership" and "result" (then only those named are written); a
+ * result named without V carries its own "V" (put_bool2).  core/bool2.h does the work.
  *
  * Threads: reentrant, no globals.  Ownership: req is borrowed; *parsed belongs to the caller,
  * who frees it with api_polygons_free().
@@ -56,7 +57,7 @@ static int parse_options(const json_t *o, polygons_req *r, api_error *err)
 {
     const char *key;
     json_t *v;
-    r->opt = (api_lar2_opts){.fields = API_F_DEFAULT};
+    r->opt = (api_lar2_opts){.fields = API_F_DEFAULT | API_F_MEMBERSHIP | API_F_RESULT};
     r->fill = BOOL2_FILL_ODD;
     if (!o) return API_OK;
     if (!json_is_object(o)) return api_fail(err, API_EINVALID, "options: expected an object");
@@ -519,35 +520,99 @@ fail:
     return rc;
 }
 
-/* The "membership" and "result" members (api_lar2_fmt.more). */
+/* What put_bool2 writes: the result, and the request's fields. */
+typedef struct bool2_out {
+    const bool2_result *r;
+    unsigned fields;
+} bool2_out;
+
+/* One cycle of the result's, its vertices through map (NULL: as they are). */
+static void put_cycle(api_buf *b, const bool2_result *r, uint32_t k, const uint32_t *map)
+{
+    if (!map) {
+        api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+        return;
+    }
+    api_buf_putc(b, '[');
+    for (uint32_t i = r->rc_off[k]; i < r->rc_off[k + 1]; i++) {
+        if (i > r->rc_off[k]) api_buf_putc(b, ',');
+        api_buf_u64(b, map[r->rv[i]]);
+    }
+    api_buf_putc(b, ']');
+}
+
+/* The "membership" and "result" members (api_lar2_fmt.more): both unless the fields name one
+ * of them.  A result named in the fields has "cells" with the complex's FV, "FE" with its EV,
+ * and, without its V, a "V" of its own: the vertices its cycles use, in the complex's order,
+ * which its "FV" and "holes" then index. */
 static void put_bool2(api_buf *b, const void *udata)
 {
-    const bool2_result *r = udata;
-    api_put_membership_w(b, r->c.nf, r->ninputs, r->mem_off, r->mem, r->memw);
-    api_buf_section(b);
-    api_buf_puts(b, ",\"result\":{\"cells\":");
-    api_buf_u32_list(b, r->cells, r->ncells);
-    api_buf_puts(b, ",\"FV\":[");
-    for (size_t q = 0; q < r->npoly; q++) {
-        uint32_t k = r->poly_outer[q];
-        if (q) api_buf_putc(b, ',');
-        api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+    const bool2_out *o = udata;
+    const bool2_result *r = o->r;
+    unsigned fl = o->fields, named = fl & (API_F_MEMBERSHIP | API_F_RESULT);
+    int membership = !named || (fl & API_F_MEMBERSHIP), result = !named || (fl & API_F_RESULT);
+    int cells = !named || (fl & API_F_FV), fe = !named || (fl & API_F_EV);
+    uint32_t *map = NULL;
+    if (membership) {
+        api_put_membership_w(b, r->c.nf, r->ninputs, r->mem_off, r->mem, r->memw);
+        api_buf_section(b);
     }
-    api_buf_puts(b, "],\"FE\":[");
+    if (!result) return;
+    api_buf_puts(b, ",\"result\":{");
+    const char *sep = "";
+    if (named && !(fl & API_F_V)) { /* its own V */
+        map = malloc((r->c.nv + 1) * sizeof *map);
+        if (!map) {
+            b->failed = 1; /* out of memory: the result is incomplete, the run says so */
+            return;
+        }
+        for (size_t v = 0; v < r->c.nv; v++) map[v] = 0;
+        for (size_t i = 0; i < r->rc_off[r->nrcyc]; i++) map[r->rv[i]] = 1;
+        uint32_t nv = 0;
+        api_buf_puts(b, "\"V\":[");
+        for (size_t v = 0; v < r->c.nv; v++) {
+            if (!map[v]) continue;
+            api_buf_puts(b, nv ? ",[" : "[");
+            api_buf_double(b, r->c.V[2 * v]);
+            api_buf_putc(b, ',');
+            api_buf_double(b, r->c.V[2 * v + 1]);
+            api_buf_putc(b, ']');
+            map[v] = nv++;
+        }
+        api_buf_putc(b, ']');
+        sep = ",";
+    }
+    if (cells) {
+        api_buf_puts(b, sep);
+        api_buf_puts(b, "\"cells\":");
+        api_buf_u32_list(b, r->cells, r->ncells);
+        sep = ",";
+    }
+    api_buf_puts(b, sep);
+    api_buf_puts(b, "\"FV\":[");
     for (size_t q = 0; q < r->npoly; q++) {
-        int first = 1;
-        api_buf_puts(b, q ? ",[" : "[");
-        for (uint32_t h = r->ph_off[q]; h <= r->ph_off[q + 1]; h++) {
-            uint32_t k = h == r->ph_off[q] ? r->poly_outer[q] : r->ph_cyc[h - 1];
-            for (uint32_t i = r->rc_off[k]; i < r->rc_off[k + 1]; i++) {
-                if (!first) api_buf_putc(b, ',');
-                first = 0;
-                api_buf_i64(b, r->re[i]);
+        if (q) api_buf_putc(b, ',');
+        put_cycle(b, r, r->poly_outer[q], map);
+    }
+    api_buf_putc(b, ']');
+    if (fe) {
+        api_buf_puts(b, ",\"FE\":[");
+        for (size_t q = 0; q < r->npoly; q++) {
+            int first = 1;
+            api_buf_puts(b, q ? ",[" : "[");
+            for (uint32_t h = r->ph_off[q]; h <= r->ph_off[q + 1]; h++) {
+                uint32_t k = h == r->ph_off[q] ? r->poly_outer[q] : r->ph_cyc[h - 1];
+                for (uint32_t i = r->rc_off[k]; i < r->rc_off[k + 1]; i++) {
+                    if (!first) api_buf_putc(b, ',');
+                    first = 0;
+                    api_buf_i64(b, r->re[i]);
+                }
             }
+            api_buf_putc(b, ']');
         }
         api_buf_putc(b, ']');
     }
-    api_buf_puts(b, "],\"holes\":{");
+    api_buf_puts(b, ",\"holes\":{");
     int hfirst = 1;
     for (size_t q = 0; q < r->npoly; q++) {
         if (r->ph_off[q] == r->ph_off[q + 1]) continue;
@@ -557,15 +622,15 @@ static void put_bool2(api_buf *b, const void *udata)
         api_buf_u64(b, q);
         api_buf_puts(b, "\":[");
         for (uint32_t h = r->ph_off[q]; h < r->ph_off[q + 1]; h++) {
-            uint32_t k = r->ph_cyc[h];
             if (h > r->ph_off[q]) api_buf_putc(b, ',');
-            api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+            put_cycle(b, r, r->ph_cyc[h], map);
         }
         api_buf_putc(b, ']');
     }
     api_buf_puts(b, "},\"area\":");
     api_buf_double(b, r->area);
     api_buf_putc(b, '}');
+    free(map);
 }
 
 int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
@@ -585,10 +650,11 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
         rc = api_core_fail(err, rc, core_msg);
         goto out;
     }
+    bool2_out bo = {&res, r->opt.fields};
     api_lar2_fmt fmt = {.fields = r->opt.fields,
                         .exterior_last = r->opt.exterior_last,
                         .more = put_bool2,
-                        .more_udata = &res};
+                        .more_udata = &bo};
     if (ro->progress) ro->progress(ro->udata, "output", 0);
     rc = api_lar2_write(out, &res.c, &fmt, err);
 out:

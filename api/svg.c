@@ -75,7 +75,7 @@ static int parse_options(const json_t *o, svg_req *r, api_error *err)
         }
     }
     if (r->opt.operators) r->opt.fields |= API_F_OPERATORS;
-    return API_OK;
+    return api_lar2_no_bool(&r->opt, err);
 }
 
 void api_svg_free(void *parsed)

@@ -116,7 +116,9 @@ for req in "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"union\"}" \
     "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]]}" \
     "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[]}}" \
     "{\"kind\":\"polygons\",\"polygons\":[\"POLYGON Z ((0 0 1, 2 0 1, 2 2 1, 0 0 1))\",\"SRID=4326;MULTIPOLYGON (((1 0, 3 0, 3 1, 1 0)), EMPTY)\",{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[1,1],[0,0]]]}],\"op\":\"union\"}" \
-    "{\"kind\":\"polygons\",\"polygons\":{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":7},\"geometry\":{\"type\":\"MultiPolygon\",\"coordinates\":[[[[0,0],[2,0],[2,2],[0,0]]]]}},{\"type\":\"Feature\",\"geometry\":null}]},\"op\":\"intersection\"}"; do
+    "{\"kind\":\"polygons\",\"polygons\":{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":7},\"geometry\":{\"type\":\"MultiPolygon\",\"coordinates\":[[[[0,0],[2,0],[2,2],[0,0]]]]}},{\"type\":\"Feature\",\"geometry\":null}]},\"op\":\"intersection\"}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]],\"options\":{\"fields\":[\"result\"]}}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"union\",\"options\":{\"fields\":[\"V\",\"membership\",\"result\",\"stats\"]}}"; do
     i=$((i + 1))
     printf '%s\n' "$req" >"$T/polygons/p$i.request.json"
     "$BIN" run "$T/polygons/p$i.request.json" >"$T/polygons/p$i.result.json" 2>"$T/err" ||
@@ -130,6 +132,10 @@ $V openapi:Result "$T"/polygons/*.result.json >"$T/out" 2>&1
 tally "polygons result (openapi.json)"
 check "polygons: a square with a hole minus two squares has a hole" grep -q '"holes":{"0":\[\[' "$T/polygons/p3.result.json"
 check "polygons: xor of a polygon with itself is empty" grep -q '"result":{"cells":\[\],"FV":\[\],"FE":\[\],"holes":{},"area":0}' "$T/polygons/p4.result.json"
+check "polygons: fields [\"result\"] gives the result alone, with its own V" \
+    grep -q '^{"dim":2,"result":{"V":\[\[' "$T/polygons/p7.result.json"
+check "polygons: fields without EV and FV leave the result's FE and cells out" \
+    sh -c "grep -q '\"membership\":' '$T/polygons/p8.result.json' && ! grep -q '\"cells\"\\|\"FE\"\\|\"EV\"' '$T/polygons/p8.result.json'"
 
 # --- hand-made documents that must be accepted
 H=0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef

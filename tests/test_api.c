@@ -132,6 +132,11 @@ static const err_case err_cases[] = {
      "operators, fields or fill)"},
     {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fill\":\"odd\"}}", 422,
      "options.fill: unknown option"},
+    {"{\"kind\":\"lines\",\"lines\":[],\"options\":{\"fields\":[\"result\"]}}", 422,
+     "options.fields: \"membership\" and \"result\" are fields of a \"polygons\" request"},
+    {"{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'/>\","
+     "\"options\":{\"fields\":[\"V\",\"membership\"]}}",
+     422, "options.fields: \"membership\" and \"result\" are fields of a \"polygons\" request"},
 };
 
 TEST(parse_errors_have_status_and_path)
@@ -673,6 +678,80 @@ TEST(check_json_canonical)
               strcmp(api_kind_name(1), "svg") == 0 && strcmp(api_kind_name(2), "solids") == 0 &&
               strcmp(api_kind_name(3), "polygons") == 0 && api_kind_name(4) == NULL,
           "kinds");
+}
+
+/* A polygons request's fields may name "result" alone: the answer is {"dim", "result"}, the
+ * result with a V of its own (the vertices its cycles use) that its FV and holes index; its
+ * polygons, coordinate for coordinate, and its area are those of the full answer.  Named with
+ * V, it indexes the complex's V; "membership" alone gives the membership alone. */
+TEST(polygons_fields_result_alone)
+{
+    const char *base = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[10,0],[10,10],[0,10]],"
+                       "[[4,4],[7,4],[7,7],[4,7]]],[[[1,1],[3,1],[3,3],[1,3]]],"
+                       "[[[8,-1],[12,-1],[12,12],[8,12]]]],\"op\":[\"-\",0,[\"+\",1,2]]";
+    char body[1024];
+    snprintf(body, sizeof body, "%s}", base);
+    json_t *full = run_ok(body);
+    snprintf(body, sizeof body, "%s,\"options\":{\"fields\":[\"result\"]}}", base);
+    json_t *alone = run_ok(body);
+    snprintf(body, sizeof body, "%s,\"options\":{\"fields\":[\"membership\"]}}", base);
+    json_t *mem = run_ok(body);
+    REQUIRE(full && alone && mem, "runs");
+    CHECK(json_object_size(alone) == 2 && json_object_get(alone, "dim") &&
+              json_object_get(alone, "result"),
+          "fields [result]: keys other than dim and result");
+    CHECK(json_object_size(mem) == 2 && json_object_get(mem, "membership"),
+          "fields [membership]: keys other than dim and membership");
+    json_t *fr = json_object_get(full, "result"), *ar = json_object_get(alone, "result");
+    json_t *fv = json_object_get(full, "V"), *av = json_object_get(ar, "V");
+    REQUIRE(json_is_array(av) && json_is_array(fv), "V missing");
+    CHECK(!json_object_get(ar, "cells") && !json_object_get(ar, "FE"),
+          "cells or FE without the complex's FV and EV");
+    CHECK(json_number_value(json_object_get(ar, "area")) ==
+                  json_number_value(json_object_get(fr, "area")) &&
+              json_number_value(json_object_get(ar, "area")) == 100 - 9 - 4 - 20,
+          "area %g", json_number_value(json_object_get(ar, "area")));
+    /* every cycle, coordinate for coordinate; each vertex of the own V used */
+    size_t nav = json_array_size(av), used = 0;
+    char *seen = calloc(nav + 1, 1);
+    for (int part = 0; part < 2; part++) {
+        json_t *fa = part ? json_object_get(fr, "holes") : json_object_get(fr, "FV");
+        json_t *aa = part ? json_object_get(ar, "holes") : json_object_get(ar, "FV");
+        REQUIRE(fa && aa, "part %d missing", part);
+        json_t *frows = json_array(), *arows = json_array();
+        if (part) {
+            const char *key;
+            json_t *v;
+            json_object_foreach(fa, key, v) json_array_extend(frows, v);
+            json_object_foreach(aa, key, v) json_array_extend(arows, v);
+            CHECK(json_object_size(fa) == json_object_size(aa), "holes keys differ");
+        } else {
+            json_array_extend(frows, fa);
+            json_array_extend(arows, aa);
+        }
+        CHECK(json_array_size(frows) == json_array_size(arows), "part %d: cycles differ", part);
+        for (size_t c = 0; c < json_array_size(frows) && c < json_array_size(arows); c++) {
+            json_t *x = json_array_get(frows, c), *y = json_array_get(arows, c);
+            CHECK(json_array_size(x) == json_array_size(y), "cycle %zu length", c);
+            for (size_t k = 0; k < json_array_size(x) && k < json_array_size(y); k++) {
+                size_t i = (size_t)json_integer_value(json_array_get(x, k));
+                size_t j = (size_t)json_integer_value(json_array_get(y, k));
+                REQUIRE(j < nav, "own index %zu of %zu", j, nav);
+                used += !seen[j], seen[j] = 1;
+                CHECK(json_equal(json_array_get(fv, i), json_array_get(av, j)),
+                      "cycle %zu vertex %zu: another point", c, k);
+            }
+        }
+        json_decref(frows);
+        json_decref(arows);
+    }
+    CHECK(used == nav, "own V has %zu vertices, the cycles use %zu", nav, used);
+    CHECK(json_array_size(json_object_get(json_object_get(ar, "holes"), "0")) == 2,
+          "the square's hole and the small square's are not its two holes");
+    free(seen);
+    json_decref(full);
+    json_decref(alone);
+    json_decref(mem);
 }
 
 /* ---- numbers ----------------------------------------------------------------------------- */

@@ -168,6 +168,8 @@ typedef struct api_kind {
 
 /* The "lines" kind (api/lines.c). */
 int api_lines_parse(const json_t *req, void **parsed, api_error *err);
+/* The same, its "lines" possibly read by api_packed_scan (pk: then taken from there). */
+int api_lines_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err);
 int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_lines_free(void *parsed);
 

@@ -172,6 +172,11 @@ void api_lines_free(void *parsed)
 
 int api_lines_parse(const json_t *req, void **parsed, api_error *err)
 {
+    return api_lines_parse_packed(req, NULL, parsed, err);
+}
+
+int api_lines_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err)
+{
     lines_req *r;
     int rc;
     *parsed = NULL;
@@ -180,7 +185,21 @@ int api_lines_parse(const json_t *req, void **parsed, api_error *err)
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = api_lar2_options(json_object_get(req, "options"), &r->opt, err);
     if (rc != API_OK) goto fail;
-    rc = parse_lines(json_object_get(req, "lines"), &r->seg, &r->n, err);
+    const json_t *lines = json_object_get(req, "lines");
+    api_packed *a = pk && json_is_string(lines)
+                        ? api_packed_find(pk, 0, API_PACKED_SEGMENTS, json_string_value(lines))
+                        : NULL;
+    if (a) { /* read by api_packed_scan: finite numbers, four a segment; taken as they are */
+        if (a->n > ARR2_MAX_SEGMENTS) {
+            rc = api_fail(err, API_EINVALID, "lines: %zu segments, at most %u allowed", a->n,
+                          (unsigned)ARR2_MAX_SEGMENTS);
+            goto fail;
+        }
+        r->seg = a->V, r->n = a->n;
+        a->taken = 1;
+    } else {
+        rc = parse_lines(lines, &r->seg, &r->n, err);
+    }
     if (rc != API_OK) goto fail;
     *parsed = r;
     return API_OK;

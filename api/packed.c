@@ -134,39 +134,48 @@ static int next_elem(scan *s)
     return -1;
 }
 
-/* [[x, y, z], ...] at s->p into a: 0, -1 (not taken), -2 out of memory. */
-static int read_V(scan *s, api_packed *a)
+/* One number at s->p (after blanks) into *x; *integer when written as one.  0, or -1 when it is
+ * not one the fast reader takes. */
+static int read_number(scan *s, double *x, int *integer)
+{
+    const char *e;
+    size_t digits;
+    ws(s);
+    if (number_token(s, &e, integer, &digits)) return -1;
+    if (*integer) {
+        if (digits > 15) return -1; /* jansson's int64, exactly a double below 10^15 */
+        int64_t v = 0;
+        for (const char *q = *s->p == '-' ? s->p + 1 : s->p; q < e; q++) v = v * 10 + (*q - '0');
+        *x = (double)(*s->p == '-' ? -v : v);
+    } else if (ff_parse(s->p, e, x)) {
+        return -1; /* not finite: jansson's overflow error, or another message */
+    }
+    s->p = e;
+    return 0;
+}
+
+/* The rows of a (API_PACKED_V: [[x, y, z], ...]; API_PACKED_SEGMENTS: [[[x1, y1], [x2, y2]],
+ * ...]) at s->p: 0, -1 (not taken), -2 out of memory. */
+static int read_rows(scan *s, api_packed *a)
 {
     size_t capv = 0, capi = 0; /* doubles, rows */
+    int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;
     if (expect(s, '[')) return -1;
     ws(s);
     if (s->p < s->end && *s->p == ']') return s->p++, 0;
     for (;;) {
         if (expect(s, '[')) return -1;
-        if (mem_grow(&a->V, &capv, 3 * (a->n + 1), sizeof *a->V) ||
+        if (mem_grow(&a->V, &capv, (size_t)per * (a->n + 1), sizeof *a->V) ||
             mem_grow(&a->vint, &capi, a->n + 1, 1))
             return -2;
         uint8_t flags = 0;
-        for (int k = 0; k < 3; k++) {
-            const char *e;
+        for (int k = 0; k < per; k++) {
             int integer;
-            size_t digits;
-            if (k && expect(s, ',')) return -1;
-            ws(s);
-            if (number_token(s, &e, &integer, &digits)) return -1;
-            double x;
-            if (integer) {
-                if (digits > 15) return -1; /* jansson's int64, exactly a double below 10^15 */
-                int64_t v = 0;
-                for (const char *q = *s->p == '-' ? s->p + 1 : s->p; q < e; q++)
-                    v = v * 10 + (*q - '0');
-                x = (double)(*s->p == '-' ? -v : v);
-                flags |= (uint8_t)(1u << k);
-            } else if (ff_parse(s->p, e, &x)) {
-                return -1; /* not finite: jansson's overflow error, or another message */
-            }
-            a->V[3 * a->n + (size_t)k] = x;
-            s->p = e;
+            if (seg && k % 2 == 0 && ((k && expect(s, ',')) || expect(s, '['))) return -1;
+            if ((seg ? k % 2 : k) && expect(s, ',')) return -1;
+            if (read_number(s, &a->V[(size_t)per * a->n + (size_t)k], &integer)) return -1;
+            flags |= (uint8_t)((unsigned)integer << k);
+            if (seg && k % 2 == 1 && expect(s, ']')) return -1;
         }
         if (expect(s, ']')) return -1;
         a->vint[a->n++] = flags;
@@ -241,7 +250,7 @@ static int solid_member(scan *s, size_t sol, const char *k, size_t kn, size_t *l
     memset(a, 0, sizeof *a);
     a->solid = sol, a->fv = fv;
     const char *at = s->p;
-    int r = fv ? read_FV(s, a) : read_V(s, a);
+    int r = fv ? read_FV(s, a) : read_rows(s, a);
     if (r) {
         packed_release(a);
         return r;
@@ -285,6 +294,27 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         }
         return expect(s, '}');
     }
+}
+
+/* The segments of a "lines" request at s->p, read as one array.  0, -1, -2. */
+static int segments(scan *s, const char *body, spans *out)
+{
+    api_packed_set *set = s->set;
+    if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a) ||
+        mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v))
+        return -2;
+    api_packed *a = &set->a[set->n];
+    memset(a, 0, sizeof *a);
+    a->solid = 0, a->fv = API_PACKED_SEGMENTS;
+    const char *at = s->p;
+    int r = read_rows(s, a);
+    if (r) {
+        packed_release(a);
+        return r;
+    }
+    set->n++;
+    out->v[out->n++] = (span){(size_t)(at - body), (size_t)(s->p - at)};
+    return 0;
 }
 
 static void set_free_arrays(api_packed_set *set)
@@ -340,11 +370,14 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set)
             }
         } else if (kn == 5 && !memcmp(k, "faces", 5)) {
             r = solid_obj(&s, body, API_PACKED_FACES, &sp);
+        } else if (kn == 5 && !memcmp(k, "lines", 5) && s.p < s.end && *s.p == '[') {
+            r = segments(&s, body, &sp);
         } else if (kn == 4 && !memcmp(k, "kind", 4) && s.p < s.end && *s.p == '"') {
             const char *v;
             size_t vn;
             r = skip_string(&s, &v, &vn);
-            if (!r && !(vn == 6 && !memcmp(v, "solids", 6))) goto give_up; /* another kind's */
+            if (!r && !(vn == 6 && !memcmp(v, "solids", 6)) && !(vn == 5 && !memcmp(v, "lines", 5)))
+                goto give_up; /* another kind's */
         } else {
             r = skip_value(&s);
         }
@@ -484,20 +517,21 @@ static void put_array(api_buf *b, const api_packed *a)
     api_buf_putc(b, '[');
     for (size_t r = 0; r < a->n; r++) {
         if (r) api_buf_putc(b, ',');
-        if (a->fv) {
+        if (a->fv == API_PACKED_FV) {
             api_buf_u32_list(b, a->idx + a->off[r], a->off[r + 1] - a->off[r]);
             continue;
         }
-        api_buf_putc(b, '[');
-        for (int k = 0; k < 3; k++) {
-            double x = a->V[3 * r + (size_t)k];
-            if (k) api_buf_putc(b, ',');
+        int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;
+        api_buf_puts(b, seg ? "[[" : "[");
+        for (int k = 0; k < per; k++) {
+            double x = a->V[(size_t)per * r + (size_t)k];
+            if (k) api_buf_puts(b, seg && k == 2 ? "],[" : ",");
             if (a->vint[r] >> k & 1)
                 api_buf_i64(b, (int64_t)x); /* below 10^15 in magnitude: exact */
             else
                 api_buf_put(b, num, real_text(x, num));
         }
-        api_buf_putc(b, ']');
+        api_buf_puts(b, seg ? "]]" : "]");
     }
     api_buf_putc(b, ']');
 }

@@ -50,7 +50,8 @@ const api_stage api_stages_solids[] = {{"check", 0.01},      {"snap", 0.02},   {
                                        {"membership", 0.82}, {"output", 1},    {NULL, 0}};
 
 static const api_kind kinds[] = {
-    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL, api_stages_lines, NULL},
+    {"lines", api_lines_parse, api_lines_run, api_lines_free, NULL, api_stages_lines,
+     api_lines_parse_packed},
     {"svg", api_svg_parse, api_svg_run, api_svg_free, api_svg_check, api_stages_svg, NULL},
     {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check,
      api_stages_solids, api_solids_parse_packed},

@@ -1,6 +1,6 @@
-/* test_packed.c — the fast reader of a solids request's big arrays (api/packed.h): the same
- * request read with it and without it (api_packed_enable) gives the same canonical form byte for
- * byte, the same result, and the same error with the same status and message; it is taken for
+/* test_packed.c — the fast reader of a solids or lines request's big arrays (api/packed.h): the
+ * same request read with it and without it (api_packed_enable) gives the same canonical form byte
+ * for byte, the same result, and the same error with the same status and message; it is taken for
  * the requests it should take, and gives way on everything it is not sure of. */
 #include "api/api.h"
 #include "api/api_int.h"
@@ -159,10 +159,100 @@ TEST(packed_errors_same_as_jansson)
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) agree(bad[i], 0);
     /* another kind's request is left to jansson from its "kind" on: nothing more is scanned */
-    CHECK(taken("{\"kind\":\"lines\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}") == 0,
-          "a lines request taken");
+    CHECK(taken("{\"kind\":\"polygons\",\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}]}") == 0,
+          "a polygons request taken");
     CHECK(taken("{\"solids\":[{\"V\":" CUBE_V ",\"FV\":" CUBE_FV "}],\"kind\":\"solids\"}") == 1,
           "a solids request with its kind last not taken");
+}
+
+/* A "lines" request's segments: read fast, the same canonical form, result and errors as
+ * jansson's path. */
+#define LOPTS "\"options\":{\"fields\":[\"V\",\"EV\",\"FV\"]}" /* no stats: no times */
+TEST(packed_lines_same_as_jansson)
+{
+    static const char *good[] = {
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[4,0]],[[4,0],[4,4]],[[4,4],[0,4]],[[0,4],[0,0]],"
+        "[[0,0],[4,4]]]," LOPTS "}",
+        /* reals, exponents, signs, zeros, blanks; the kind last */
+        "{\"lines\":[ [ [0.5,-0] , [1e1,0.0]],\n[[10E0,-0.0],[1.00000000000000000001,7.25e-1]],"
+        "[[0,0],[3.3333333333333335,9.999999999999999e22]]]," LOPTS ",\"kind\":\"lines\"}",
+        "{\"kind\":\"lines\",\"lines\":[]," LOPTS "}",
+        "{\"kind\":\"lines\",\"lines\":[[[123456789012345,-123456789012345],[1e-300,5e-324]]]"
+        "," LOPTS "}",
+    };
+    for (size_t i = 0; i < sizeof good / sizeof *good; i++) {
+        CHECK(taken(good[i]) == 1, "case %zu not taken", i);
+        agree(good[i], 1);
+    }
+    static const char *bad[] = {
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1],[2,2]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[0,0,1,1]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1e400,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[\"1\",1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[01,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]],]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[99999999999999999999,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]],\"lines\":[]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]],\"solids\":[]}",
+        "{\"kind\":\"lines\",\"lines\":\"\\u0001#0\"}",
+        "{\"kind\":\"solids\",\"lines\":[[[0,0],[1,1]]]}",
+        "{\"kind\":\"svg\",\"lines\":[[[0,0],[1,1]]]}",
+        "{\"lines\":[[[0,0],[1,1]]]}",
+        "{\"kind\":\"lines\",\"lines\":[[[0,0],[1,1]]],\"options\":{\"fields\":[\"result\"]}}",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) agree(bad[i], 0);
+    CHECK(taken("{\"kind\":\"svg\",\"lines\":[[[0,0],[1,1]]]}") == 0, "an svg request taken");
+}
+
+/* Random segments, their numbers in assorted forms, read both ways. */
+TEST(packed_lines_random_numbers)
+{
+    uint64_t st = 1128;
+    size_t n = 100;
+    const char *e = getenv("CELLAR_STRESS");
+    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    char *body = malloc(1 << 16);
+    REQUIRE(body, "out of memory");
+    for (size_t t = 0; t < n; t++) {
+        size_t w = (size_t)sprintf(body, "{\"kind\":\"lines\",\"lines\":[");
+        int ns = 1 + (int)(test_rnd(&st) * 30);
+        double sc = pow(10, (int)(test_rnd(&st) * 9) - 4), off = (test_rnd(&st) - 0.5) * 100;
+        for (int k = 0; k < 4 * ns; k++) {
+            double x = (test_rnd(&st) + off) * sc;
+            int form = (int)(test_rnd(&st) * 5);
+            const char *sep = k % 4 == 0 ? (k ? "]],[[" : "[[") : k % 2 == 0 ? "],[" : ",";
+            if (form == 0)
+                w += (size_t)sprintf(body + w, "%s%lld", sep, (long long)llround(x));
+            else if (form == 1)
+                w += (size_t)sprintf(body + w, "%s%.17g", sep, x);
+            else if (form == 2)
+                w += (size_t)sprintf(body + w, "%s%.6e", sep, x);
+            else if (form == 3)
+                w += (size_t)sprintf(body + w, "%s%.25f", sep, x);
+            else
+                w += (size_t)sprintf(body + w, "%s%.3E", sep, x);
+        }
+        w += (size_t)sprintf(body + w, "]]]," LOPTS "}");
+        if (taken(body) != 1) {
+            CHECK(0, "not taken: %s", body);
+            break;
+        }
+        both f, s;
+        read_with(body, 1, &f);
+        read_with(body, 0, &s);
+        int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
+                   !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
+                   same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
+        CHECK(same, "differs (%d %d / %d %d '%s' '%s'): %s", f.rc_check, f.rc_run, s.rc_check,
+              s.rc_run, f.msg_check, s.msg_check, body);
+        both_free(&f);
+        both_free(&s);
+        if (!same) break;
+    }
+    free(body);
 }
 
 /* Random solids (a tetrahedron moved and scaled, its numbers written in assorted forms: integers,

@@ -685,15 +685,25 @@ static void near_chunk(void *vc, size_t chunk, int w)
         } else if (leaves_meeting(&c->tree, q, &leaves, 0)) {
             goto nomem;
         }
+        double px = (double)p.x, py = (double)p.y;
         for (size_t k = 0; k < leaves.n; k++) {
             uint32_t l = ((uint32_t *)leaves.p)[k];
+            /* the one leaf whose region holds p holds every segment through p: the
+             * incidences come from it alone, each once */
+            const double *rg = c->tree.region ? c->tree.region + 4 * (size_t)l : NULL;
+            int home = !rg || (px > rg[0] && px <= rg[2] && py > rg[1] && py <= rg[3]);
             for (uint32_t i = c->tree.leaf_off[l]; i < c->tree.leaf_off[l + 1]; i++) {
                 uint32_t si = c->tree.items[i];
                 const seg2 *sg = &c->seg[si];
                 const int64_t *b = c->box + 4 * (size_t)si;
                 int in_box = p.x >= b[0] && p.x <= b[2] && p.y >= b[1] && p.y <= b[3];
                 if (!seg_near_pixel(sg->a, sg->b, p)) continue;
-                if (in_box && seg_hits_pixel(sg->a, sg->b, p)) continue; /* routed through p */
+                if (in_box && seg_hits_pixel(sg->a, sg->b, p)) { /* routed through p */
+                    if (!home) continue;
+                    if (vbuf_reserve(&c->inc[w], c->inc[w].n + 1, sizeof(uint64_t))) goto nomem;
+                    ((uint64_t *)c->inc[w].p)[c->inc[w].n++] = (uint64_t)si << 32 | pid;
+                    continue;
+                }
                 if (vbuf_reserve(&c->nearp[w], c->nearp[w].n + 1, sizeof(uint32_t)) ||
                     vbuf_reserve(&c->nears[w], c->nears[w].n + 1, sizeof(uint32_t)))
                     goto nomem;
@@ -709,13 +719,12 @@ nomem:
     atomic_store(&c->fail, ARR_ENOMEM);
 }
 
-/* c->pinned: the pixels that keep their grid coordinates (see above).  -1 out of memory. */
+/* c->pinned: the pixels that keep their grid coordinates (see above), from the near pairs
+ * near_chunk listed and the pixels of each segment (sp_off, sp_pix).  -1 out of memory. */
 static int pin_crowded(ctx *c)
 {
     c->pinned = calloc(c->npix + 1, 1);
     if (!c->pinned) return -1;
-    par_for(c->threads, (c->npix + 1023) / 1024, near_chunk, c);
-    if (atomic_load(&c->fail)) return -1;
     for (int w = 0; w < c->threads; w++) {
         const uint32_t *pp = c->nearp[w].p, *ss = c->nears[w].p;
         for (size_t k = 0; k < c->nearp[w].n; k++) {
@@ -790,28 +799,30 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     st->ms_intersect = t2 - t1;
     progress(c, "intersect", 1);
 
-    /* hot pixels into their buckets, then each bucket's pixels against its segments */
-    kv = malloc((c->npix ? c->npix : 1) * sizeof *kv);
-    if (!kv) goto fail;
-    locate_job lj = {c, kv};
-    par_for(c->threads, (c->npix + 4095) / 4096, locate_chunk, &lj);
-    if ((rc = atomic_load(&c->fail))) goto fail;
-    rc = ARR_ENOMEM;
-    if (group_by(kv, c->npix, c->tree.nleaves, &c->pl_off, &c->pl_pix)) goto fail;
-    free(kv);
-    kv = NULL;
     span sh = {c, "split", 0.05, 0.45};
-    par_for_ex(c->threads, c->tree.nleaves, hotpixel_leaf, c, span_tick, &sh);
+    if (c->o->input_coords) {
+        /* one pass over each pixel's neighbourhood (the leaves within NEAR_R of it): the
+         * segments through it (its incidences) and those near it (to pin) together */
+        par_for_ex(c->threads, (c->npix + 1023) / 1024, near_chunk, c, span_tick, &sh);
+    } else {
+        /* hot pixels into their buckets, then each bucket's pixels against its segments */
+        kv = malloc((c->npix ? c->npix : 1) * sizeof *kv);
+        if (!kv) goto fail;
+        locate_job lj = {c, kv};
+        par_for(c->threads, (c->npix + 4095) / 4096, locate_chunk, &lj);
+        if ((rc = atomic_load(&c->fail))) goto fail;
+        rc = ARR_ENOMEM;
+        if (group_by(kv, c->npix, c->tree.nleaves, &c->pl_off, &c->pl_pix)) goto fail;
+        free(kv);
+        kv = NULL;
+        par_for_ex(c->threads, c->tree.nleaves, hotpixel_leaf, c, span_tick, &sh);
+    }
     if ((rc = atomic_load(&c->fail))) goto fail;
     rc = ARR_ENOMEM;
     inc = gather(c->inc, c->threads, sizeof(uint64_t), &ninc);
     if (!inc) goto fail;
     if (group_by(inc, ninc, c->m, &c->sp_off, &c->sp_pix)) goto fail;
-    if (c->o->input_coords && pin_crowded(c)) {
-        if ((rc = atomic_load(&c->fail)) == ARR_ECANCELED) goto fail;
-        rc = ARR_ENOMEM;
-        goto fail;
-    }
+    if (c->o->input_coords && pin_crowded(c)) goto fail;
     free(inc);
     inc = NULL;
     span ss = {c, "split", 0.5, 0.9};

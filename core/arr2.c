@@ -113,9 +113,15 @@ static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
     return code;
 }
 
-static int vbuf_reserve(vbuf *v, size_t need, size_t elem)
+static int vbuf_grow(vbuf *v, size_t need, size_t elem);
+
+static inline int vbuf_reserve(vbuf *v, size_t need, size_t elem)
 {
-    if (need <= v->cap) return 0;
+    return need <= v->cap ? 0 : vbuf_grow(v, need, elem);
+}
+
+static int vbuf_grow(vbuf *v, size_t need, size_t elem)
+{
     size_t nc = v->cap ? v->cap * 2 : 256;
     while (nc < need) nc *= 2;
     void *q = realloc(v->p, nc * elem);
@@ -642,16 +648,24 @@ fail:
  * are then held on the grid. */
 #define NEAR_R 3
 
-static int seg_near_pixel(ipt a, ipt b, ipt p)
+/* Segment ab (its box b: x0, y0, x1, y1) and pixel p: 0 when it is not near p, 2 when it
+ * passes through p (seg_hits_pixel), 1 when it is only near; the orientation taken once. */
+static inline int seg_near_hit(ipt a, ipt b, const int64_t *bx, ipt p)
 {
-    int64_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x < b.x ? b.x : a.x;
-    int64_t y0 = a.y < b.y ? a.y : b.y, y1 = a.y < b.y ? b.y : a.y;
-    if (p.x < x0 - NEAR_R || p.x > x1 + NEAR_R || p.y < y0 - NEAR_R || p.y > y1 + NEAR_R) return 0;
+    if (p.x < bx[0] - NEAR_R || p.x > bx[2] + NEAR_R || p.y < bx[1] - NEAR_R ||
+        p.y > bx[3] + NEAR_R)
+        return 0;
     /* the line meets the square iff |orient(a, b, p)| <= R (|dx| + |dy|) (its corners spread
      * the orientation by that much); with the boxes meeting, so does the segment */
+    int64_t L = llabs(b.x - a.x) + llabs(b.y - a.y);
     i128 o = orient2(a, b, p);
     if (o < 0) o = -o;
-    return o <= (i128)NEAR_R * (llabs(b.x - a.x) + llabs(b.y - a.y));
+    if (o > (i128)NEAR_R * L) return 0;
+    if (p.x < bx[0] || p.x > bx[2] || p.y < bx[1] || p.y > bx[3]) return 1;
+    /* in its box: through p when 2|O| < L (or at an end); at 2|O| == L the corner rule */
+    if (2 * o < L || (a.x == p.x && a.y == p.y) || (b.x == p.x && b.y == p.y)) return 2;
+    if (2 * o > L) return 1;
+    return seg_hits_pixel(a, b, p) ? 2 : 1;
 }
 
 /* The leaves whose regions meet the closed box q, appended to *out (uint32). */
@@ -695,10 +709,9 @@ static void near_chunk(void *vc, size_t chunk, int w)
             for (uint32_t i = c->tree.leaf_off[l]; i < c->tree.leaf_off[l + 1]; i++) {
                 uint32_t si = c->tree.items[i];
                 const seg2 *sg = &c->seg[si];
-                const int64_t *b = c->box + 4 * (size_t)si;
-                int in_box = p.x >= b[0] && p.x <= b[2] && p.y >= b[1] && p.y <= b[3];
-                if (!seg_near_pixel(sg->a, sg->b, p)) continue;
-                if (in_box && seg_hits_pixel(sg->a, sg->b, p)) { /* routed through p */
+                int nh = seg_near_hit(sg->a, sg->b, c->box + 4 * (size_t)si, p);
+                if (!nh) continue;
+                if (nh == 2) { /* routed through p */
                     if (!home) continue;
                     if (vbuf_reserve(&c->inc[w], c->inc[w].n + 1, sizeof(uint64_t))) goto nomem;
                     ((uint64_t *)c->inc[w].p)[c->inc[w].n++] = (uint64_t)si << 32 | pid;

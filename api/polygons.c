@@ -142,17 +142,20 @@ static int end_ring(pbuild *b, const char *path, api_error *err)
     return API_OK;
 }
 
-/* A position: [x, y] (native: exactly 2 numbers; GeoJSON: 2 or more, the rest ignored). */
-static int json_position(const json_t *pt, int geojson, pbuild *b, const char *path, api_error *err)
+/* A position, point k of the ring at path: [x, y] (native: exactly 2 numbers; GeoJSON: 2 or
+ * more, the rest ignored).  The path is written only into a message. */
+static int json_position(const json_t *pt, int geojson, pbuild *b, const char *path, size_t k,
+                         api_error *err)
 {
     double c[2];
     if (!json_is_array(pt) || json_array_size(pt) < 2 || (!geojson && json_array_size(pt) != 2))
-        return api_fail(err, API_EINVALID, "%s: expected [x, y]%s", path,
+        return api_fail(err, API_EINVALID, "%s[%zu]: expected [x, y]%s", path, k,
                         geojson ? " (a GeoJSON position)" : "");
     for (size_t i = 0; i < json_array_size(pt); i++) {
         const json_t *x = json_array_get(pt, i);
         if (!json_is_number(x) || !isfinite(json_number_value(x)))
-            return api_fail(err, API_EINVALID, "%s[%zu]: expected a finite number", path, i);
+            return api_fail(err, API_EINVALID, "%s[%zu][%zu]: expected a finite number", path, k,
+                            i);
         if (i < 2) c[i] = json_number_value(x);
     }
     return add_point(b, c[0], c[1], err);
@@ -178,10 +181,7 @@ static int json_rings(const json_t *rings, int geojson, pbuild *b, const char *p
                             sub);
         json_array_foreach(ring, k, pt)
         {
-            char at[200];
-            int rc;
-            snprintf(at, sizeof at, "%s[%zu]", sub, k);
-            rc = json_position(pt, geojson, b, at, err);
+            int rc = json_position(pt, geojson, b, sub, k, err);
             if (rc != API_OK) return rc;
         }
         int rc = end_ring(b, sub, err);

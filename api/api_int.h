@@ -188,6 +188,8 @@ int api_solids_check(const void *parsed, api_error *err);
 
 /* The "polygons" kind (api/polygons.c): 2D Booleans. */
 int api_polygons_parse(const json_t *req, void **parsed, api_error *err);
+/* The same, its native "polygons" possibly read by api_packed_scan (pk). */
+int api_polygons_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err);
 int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_polygons_free(void *parsed);
 

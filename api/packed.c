@@ -225,6 +225,56 @@ static int read_FV(scan *s, api_packed *a)
     }
 }
 
+/* [[[[x, y], ...], ...], ...] at s->p (polygons of rings of points, the native form only: an
+ * element that is not an array, a GeoJSON object or a WKT string, gives up) into a: 0, -1 (not
+ * taken), -2 out of memory.  a->V the points, a->off the rings' offsets into them, a->idx the
+ * polygons' offsets into the rings. */
+static int read_rings(scan *s, api_packed *a)
+{
+    size_t capv = 0, capi = 0, capo = 0, capp = 0, nr = 0, np = 0;
+    if (mem_grow(&a->off, &capo, 1, sizeof *a->off) || mem_grow(&a->idx, &capp, 1, sizeof *a->idx))
+        return -2;
+    a->off[0] = a->idx[0] = 0;
+    if (expect(s, '[')) return -1;
+    ws(s);
+    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    for (;;) { /* a polygon */
+        if (expect(s, '[')) return -1;
+        ws(s);
+        if (s->p < s->end && *s->p == ']') return -1; /* no ring: jansson's message */
+        for (;;) {                                    /* a ring */
+            if (expect(s, '[')) return -1;
+            for (;;) { /* a point */
+                if (expect(s, '[')) return -1;
+                if (mem_grow(&a->V, &capv, 2 * (a->n + 1), sizeof *a->V) ||
+                    mem_grow(&a->vint, &capi, a->n + 1, 1))
+                    return -2;
+                int i0, i1;
+                if (read_number(s, &a->V[2 * a->n], &i0) || expect(s, ',') ||
+                    read_number(s, &a->V[2 * a->n + 1], &i1) || expect(s, ']'))
+                    return -1;
+                a->vint[a->n++] = (uint8_t)(i0 | i1 << 1);
+                if (a->n >= UINT32_MAX) return -1;
+                int r = next_elem(s);
+                if (r < 0) return -1;
+                if (r == 0) break;
+            }
+            if (mem_grow(&a->off, &capo, nr + 2, sizeof *a->off)) return -2;
+            a->off[++nr] = (uint32_t)a->n;
+            int r = next_elem(s);
+            if (r < 0) return -1;
+            if (r == 0) break;
+        }
+        if (mem_grow(&a->idx, &capp, np + 2, sizeof *a->idx)) return -2;
+        a->idx[++np] = (uint32_t)nr;
+        int r = next_elem(s);
+        if (r < 0) return -1;
+        if (r == 0) break;
+    }
+    a->nrings = nr, a->npoly = np;
+    return 0;
+}
+
 static void packed_release(api_packed *a)
 {
     if (!a->taken) {
@@ -296,8 +346,9 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
     }
 }
 
-/* The segments of a "lines" request at s->p, read as one array.  0, -1, -2. */
-static int segments(scan *s, const char *body, spans *out)
+/* The segments of a "lines" request, or the polygons of a "polygons" one (kind: their
+ * api_packed.fv), at s->p, read as one array.  0, -1, -2. */
+static int whole_array(scan *s, const char *body, int kind, spans *out)
 {
     api_packed_set *set = s->set;
     if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a) ||
@@ -305,9 +356,9 @@ static int segments(scan *s, const char *body, spans *out)
         return -2;
     api_packed *a = &set->a[set->n];
     memset(a, 0, sizeof *a);
-    a->solid = 0, a->fv = API_PACKED_SEGMENTS;
+    a->solid = 0, a->fv = kind;
     const char *at = s->p;
-    int r = read_rows(s, a);
+    int r = kind == API_PACKED_RINGS ? read_rings(s, a) : read_rows(s, a);
     if (r) {
         packed_release(a);
         return r;
@@ -371,12 +422,15 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set)
         } else if (kn == 5 && !memcmp(k, "faces", 5)) {
             r = solid_obj(&s, body, API_PACKED_FACES, &sp);
         } else if (kn == 5 && !memcmp(k, "lines", 5) && s.p < s.end && *s.p == '[') {
-            r = segments(&s, body, &sp);
+            r = whole_array(&s, body, API_PACKED_SEGMENTS, &sp);
+        } else if (kn == 8 && !memcmp(k, "polygons", 8) && s.p < s.end && *s.p == '[') {
+            r = whole_array(&s, body, API_PACKED_RINGS, &sp);
         } else if (kn == 4 && !memcmp(k, "kind", 4) && s.p < s.end && *s.p == '"') {
             const char *v;
             size_t vn;
             r = skip_string(&s, &v, &vn);
-            if (!r && !(vn == 6 && !memcmp(v, "solids", 6)) && !(vn == 5 && !memcmp(v, "lines", 5)))
+            if (!r && !(vn == 6 && !memcmp(v, "solids", 6)) &&
+                !(vn == 5 && !memcmp(v, "lines", 5)) && !(vn == 8 && !memcmp(v, "polygons", 8)))
                 goto give_up; /* another kind's */
         } else {
             r = skip_value(&s);
@@ -520,6 +574,30 @@ static void put_array(api_buf *b, const api_packed *a)
         if (a->fv == API_PACKED_FV) {
             api_buf_u32_list(b, a->idx + a->off[r], a->off[r + 1] - a->off[r]);
             continue;
+        }
+        if (a->fv == API_PACKED_RINGS) { /* rows are the points: written polygon by polygon */
+            r = a->n;
+            for (size_t q = 0; q < a->npoly; q++) {
+                api_buf_puts(b, q ? ",[" : "[");
+                for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
+                    api_buf_puts(b, k > a->idx[q] ? ",[" : "[");
+                    for (uint32_t v = a->off[k]; v < a->off[k + 1]; v++) {
+                        api_buf_puts(b, v > a->off[k] ? ",[" : "[");
+                        for (int c = 0; c < 2; c++) {
+                            double x = a->V[2 * (size_t)v + (size_t)c];
+                            if (c) api_buf_putc(b, ',');
+                            if (a->vint[v] >> c & 1)
+                                api_buf_i64(b, (int64_t)x);
+                            else
+                                api_buf_put(b, num, real_text(x, num));
+                        }
+                        api_buf_putc(b, ']');
+                    }
+                    api_buf_putc(b, ']');
+                }
+                api_buf_putc(b, ']');
+            }
+            break;
         }
         int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;
         api_buf_puts(b, seg ? "[[" : "[");

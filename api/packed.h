@@ -1,10 +1,11 @@
-/* packed.h — the big arrays of a "solids" or "lines" request read straight from its text (issue
- * 24, item 4, and 27, item 2: requests at disk speed).
+/* packed.h — the big arrays of a "solids", "lines" or "polygons" request read straight from its
+ * text (issue 24, item 4, and 27, item 2: requests at disk speed).
  *
  * A solid's "V" ([[x, y, z], ...]) and "FV" ([[v, ...], ...]) are most of a request's bytes;
  * read by jansson they cost a node, an allocation and a free per number (a request of 17 MB,
  * two solids of 160 000 triangles: 0.85 s around a core of 0.36 s).  api_packed_scan() walks
- * the request's text once, finds solids[i].V, solids[i].FV, faces.V, faces.FV and lines, reads each
+ * the request's text once, finds solids[i].V, solids[i].FV, faces.V, faces.FV, lines and polygons
+ * (native rings only), reads each
  * into flat arrays (numbers by the correctly rounded reader of core/fastfloat.h, tokens checked
  * against JSON's grammar) and gives the rest of the text with each such array replaced by a
  * placeholder string, for jansson to read as usual.
@@ -33,6 +34,7 @@
 #define API_PACKED_V        0 /* a solid's V: rows [x, y, z] */
 #define API_PACKED_FV       1 /* a solid's FV: rows of indices */
 #define API_PACKED_SEGMENTS 2 /* a "lines" request's lines: rows [[x1, y1], [x2, y2]] */
+#define API_PACKED_RINGS    3 /* a "polygons" request's polygons, each native [[[x, y], ...]] */
 
 typedef struct api_packed {
     size_t solid;  /* index in "solids", or API_PACKED_FACES (0 for segments) */
@@ -40,9 +42,10 @@ typedef struct api_packed {
     size_t n;      /* rows */
     double *V;     /* V: 3 n numbers; segments: 4 n (x1, y1, x2, y2) */
     uint8_t *vint; /* V, segments: by row, bit k set when number k was written as an integer */
-    uint32_t *off; /* FV: n + 1 offsets into idx */
-    uint32_t *idx;
-    int taken; /* the arrays were handed over (api_packed_take): not freed here */
+    uint32_t *off; /* FV: n + 1 offsets into idx; rings: nrings + 1 offsets into the points */
+    uint32_t *idx; /* FV: the indices; rings: npoly + 1 offsets into the rings */
+    size_t nrings, npoly; /* rings: n is the points (V: 2 n numbers, vint: 2 bits a point) */
+    int taken;            /* the arrays were handed over (api_packed_take): not freed here */
 } api_packed;
 
 typedef struct api_packed_set {

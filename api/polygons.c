@@ -422,9 +422,30 @@ static int end_polygon(pbuild *b, size_t total, api_error *err)
     return API_OK;
 }
 
+/* "polygons" as api_packed_scan read it (native rings, a: API_PACKED_RINGS): the same build as
+ * json_rings', without the messages (a failure sends the request to the ordinary path, which
+ * words it; end_ring refuses a ring of fewer than 3 points). */
+static int packed_polygons(const api_packed *a, pbuild *b, api_error *err)
+{
+    if (a->npoly == 0 || a->npoly > BOOL2_MAX_INPUTS) return API_EINVALID;
+    for (size_t q = 0; q < a->npoly; q++) {
+        for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
+            for (uint32_t v = a->off[k]; v < a->off[k + 1]; v++) {
+                int rc = add_point(b, a->V[2 * (size_t)v], a->V[2 * (size_t)v + 1], err);
+                if (rc != API_OK) return rc;
+            }
+            int rc = end_ring(b, "polygons", err);
+            if (rc != API_OK) return rc;
+        }
+        int rc = end_polygon(b, a->npoly, err);
+        if (rc != API_OK) return rc;
+    }
+    return API_OK;
+}
+
 /* Reads "polygons": an array of polygons (each native, GeoJSON or WKT), or a GeoJSON
- * FeatureCollection (one polygon per feature). */
-static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
+ * FeatureCollection (one polygon per feature); or, with pk, what api_packed_scan read of it. */
+static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r, api_error *err)
 {
     pbuild b = {0};
     const json_t *list = ps;
@@ -435,6 +456,13 @@ static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
         return api_fail(err, API_EINVALID,
                         "polygons: required, an array of polygons or a GeoJSON "
                         "FeatureCollection");
+    api_packed *a = pk && json_is_string(ps)
+                        ? api_packed_find(pk, 0, API_PACKED_RINGS, json_string_value(ps))
+                        : NULL;
+    if (a) {
+        rc = packed_polygons(a, &b, err);
+        goto built;
+    }
     if (json_is_object(ps)) {
         const char *type = json_string_value(json_object_get(ps, "type"));
         if (!type || strcmp(type, "FeatureCollection"))
@@ -463,6 +491,7 @@ static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
             rc = read_polygon(p, &b, path, err);
         if (rc == API_OK) rc = end_polygon(&b, json_array_size(list), err);
     }
+built:
     if (rc == API_OK && !b.ring_off) {
         b.ring_off = malloc(sizeof *b.ring_off);
         if (!b.ring_off)
@@ -487,6 +516,11 @@ static int parse_polygons(const json_t *ps, polygons_req *r, api_error *err)
 
 int api_polygons_parse(const json_t *req, void **parsed, api_error *err)
 {
+    return api_polygons_parse_packed(req, NULL, parsed, err);
+}
+
+int api_polygons_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err)
+{
     const char *key;
     json_t *v;
     polygons_req *r;
@@ -503,7 +537,7 @@ int api_polygons_parse(const json_t *req, void **parsed, api_error *err)
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = parse_options(json_object_get(req, "options"), r, err);
     if (rc != API_OK) goto fail;
-    rc = parse_polygons(json_object_get(req, "polygons"), r, err);
+    rc = parse_polygons(json_object_get(req, "polygons"), pk, r, err);
     if (rc != API_OK) goto fail;
     if (!json_object_get(req, "op")) {
         rc = api_fail(err, API_EINVALID,

@@ -56,7 +56,7 @@ static const api_kind kinds[] = {
     {"solids", api_solids_parse, api_solids_run, api_solids_free, api_solids_check,
      api_stages_solids, api_solids_parse_packed},
     {"polygons", api_polygons_parse, api_polygons_run, api_polygons_free, NULL, api_stages_polygons,
-     NULL},
+     api_polygons_parse_packed},
 };
 #define NKINDS (sizeof kinds / sizeof kinds[0])
 

@@ -31,6 +31,11 @@
 #   parcelsK.intersection the same two layers, intersected: ["&", ["+", layer 1], ["+", layer
 #                         2]] (op "intersection" would intersect every parcel with every other);
 #                         K = 100;
+#   layersKxM.OP          two GIS layers at UTM coordinates (500 000 m, 4 400 000 m): K x K
+#                         parcels of 20 m laid as bricks (T-junctions), and M buffers of 64
+#                         vertices (circles, segments' buffers) overlapping; OP of the layers'
+#                         unions ["&" / "-" / "+", ["+", layer 1], ["+", layer 2]], fields
+#                         ["result", "stats"]: the answer itself is written (K = 60, M = 550);
 #   real/NAME             tests/data/bool2-cases/NAME.json, every request of kind "polygons"
 #                         there (reduced from real GIS overlays), when the folder exists.
 # Each program runs under /usr/bin/time on the same request file:
@@ -80,7 +85,8 @@ real_cases() {
 }
 STARS="star10000.intersection star10000.difference star10000.xor"
 [ "$BIG" = 1 ] && STARS="$STARS star100000.intersection star100000.difference star100000.xor"
-CASES=${BENCHBOOL2_CASES:-"$SQUARES $STARS $PARCELS $(real_cases)"}
+LAYERS="layers60x550.intersection layers60x550.difference layers60x550.union"
+CASES=${BENCHBOOL2_CASES:-"$SQUARES $STARS $PARCELS $LAYERS $(real_cases)"}
 
 BENCH_NAME=benchbool2
 . "$HERE/lib.sh"
@@ -131,8 +137,41 @@ def parcels(k):
         return [m + c * x - s * y + 0.3, m + s * x + c * y + 0.2]
     return a, [[[move(p) for p in poly[0]]] for poly in a]
 
+def layers(k, m, seed=1):
+    """Two GIS layers at UTM-size coordinates: a cadastre of k x k parcels of 20 m laid as
+    bricks (each row shifted by half a parcel: T-junctions everywhere), and m buffers of 64
+    vertices (circles of radius 8 to 30 m, and segments' buffers: two half circles joined),
+    overlapping each other and the parcels."""
+    rnd = random.Random(seed)
+    x0, y0, w = 500000.0, 4400000.0, 20.0
+    a = []
+    for j in range(k):
+        sh = w / 2 if j % 2 else 0.0
+        for i in range(k):
+            x, y = x0 + i * w + sh, y0 + j * w
+            a.append([[[x, y], [x + w, y], [x + w, y + w], [x, y + w]]])
+    b = []
+    for q in range(m):
+        cx, cy = x0 + rnd.uniform(0, k * w), y0 + rnd.uniform(0, k * w)
+        r = rnd.uniform(8, 30)
+        if q % 2 == 0:
+            ring = [[cx + r * math.cos(2 * math.pi * t / 64), cy + r * math.sin(2 * math.pi * t / 64)]
+                    for t in range(64)]
+        else:
+            ang, ln = rnd.uniform(0, math.pi), rnd.uniform(20, 80)
+            dx, dy = math.cos(ang) * ln / 2, math.sin(ang) * ln / 2
+            ring = []
+            for end, (ex, ey) in enumerate(((cx + dx, cy + dy), (cx - dx, cy - dy))):
+                for t in range(32):
+                    th = ang - math.pi / 2 + math.pi * (t / 31.0) + end * math.pi
+                    ring.append([ex + r * math.cos(th), ey + r * math.sin(th)])
+        b.append([ring])
+    return a, b
+
 def make(case, out, real):
+    fields = ['stats']
     m = re.fullmatch(r'squares(\d+)', case)
+    lay = re.fullmatch(r'layers(\d+)x(\d+)\.(union|intersection|difference)', case)
     if m:
         req = {'kind': 'polygons', 'polygons': squares(int(m.group(1))), 'op': 'union'}
     elif re.fullmatch(r'star\d+\.(intersection|difference|xor)', case):
@@ -145,6 +184,13 @@ def make(case, out, real):
         if op == 'intersection':
             op = ['&', ['+'] + list(range(len(a))), ['+'] + list(range(len(a), 2 * len(a)))]
         req = {'kind': 'polygons', 'polygons': a + b, 'op': op}
+    elif lay:
+        a, b = layers(int(lay.group(1)), int(lay.group(2)))
+        la, lb = ['+'] + list(range(len(a))), ['+'] + list(range(len(a), len(a) + len(b)))
+        op = {'union': ['+', la, lb], 'intersection': ['&', la, lb],
+              'difference': ['-', la, lb]}[lay.group(3)]
+        req = {'kind': 'polygons', 'polygons': a + b, 'op': op}
+        fields = ['result', 'stats'] # the answer itself, written whole
     elif case.startswith('real/'):
         with open(os.path.join(real, case[5:] + '.json')) as f:
             req = json.load(f)
@@ -152,7 +198,7 @@ def make(case, out, real):
             sys.exit('%s: not a polygons request' % case)
     else:
         sys.exit('unknown case %s' % case)
-    req.setdefault('options', {})['fields'] = ['stats']
+    req.setdefault('options', {})['fields'] = fields
     with open(out, 'w') as f:
         json.dump(req, f, separators=(',', ':'))
 
@@ -192,7 +238,8 @@ row() {
 }
 
 echo "2D Boolean benchmark: polygons ($(date -u +%Y-%m-%dT%H:%MZ), $(nproc 2>/dev/null || echo '?') CPUs)"
-echo "  ours = $OURS run (fields: stats; the membership table and the result are printed too);"
+echo "  ours = $OURS run (fields: stats, so the membership table and the result are printed too;"
+echo "  layers: fields result and stats, the answer alone);"
 echo "  GEOS = $GEOS (GEOS $(geos-config --version 2>/dev/null || echo '?'), OverlayNG:"
 echo "  union = GEOSUnaryUnion of all, intersection / xor chained, difference = first minus the"
 echo "  unary union of the rest)."

@@ -9,12 +9,32 @@
 
 #define BOX_MAX_DEPTH 60
 
+/* What split_candidates needs of a bucket, gathered in the order of its ids: the sum of its
+ * boxes' centres (twice) and their extent per axis. */
+typedef struct bstats {
+    double sum[2];
+    double mn[2], mx[2];
+} bstats;
+
+static const bstats stats0 = {{0, 0}, {INFINITY, INFINITY}, {-INFINITY, -INFINITY}};
+
+/* b: a box as doubles (exact: grid coordinates are below 2^53) */
+static inline void stats_add(bstats *st, const double *b)
+{
+    for (int a = 0; a < 2; a++) {
+        st->sum[a] += b[a] + b[a + 2];
+        st->mn[a] = b[a] < st->mn[a] ? b[a] : st->mn[a];
+        st->mx[a] = b[a + 2] > st->mx[a] ? b[a + 2] : st->mx[a];
+    }
+}
+
 typedef struct pending {
     int32_t node;    /* index of the node to fill, or -1 for the root */
     int32_t side;    /* which child slot of node */
     size_t off, cnt; /* the bucket: pool[off .. off+cnt) */
     double lo[2], hi[2];
     int depth;
+    bstats st; /* of its boxes, taken as its parent split (one pass for the root) */
 } pending;
 
 typedef struct leafrec {
@@ -22,47 +42,41 @@ typedef struct leafrec {
     double lo[2], hi[2];
 } leafrec;
 
-/* The candidate thresholds of a bucket, for both axes: the mean of the box centres (the
- * seeds' rule) and the middle of the region clipped to the boxes' extent, which still halves
- * the short boxes where the mean fails (long boxes all centred alike).  One pass. */
-static void split_candidates(const int64_t *box, const uint32_t *ids, size_t cnt,
-                             const double lo[2], const double hi[2], double cand[4])
+/* The candidate thresholds of a bucket of cnt boxes with statistics st, for both axes: the mean
+ * of the box centres (the seeds' rule) and the middle of the region clipped to the boxes'
+ * extent, which still halves the short boxes where the mean fails (long boxes all centred
+ * alike). */
+static void split_candidates(const bstats *st, size_t cnt, const double lo[2], const double hi[2],
+                             double cand[4])
 {
-    double sum[2] = {0, 0};
-    int64_t mn[2] = {INT64_MAX, INT64_MAX}, mx[2] = {INT64_MIN, INT64_MIN};
-    for (size_t i = 0; i < cnt; i++) {
-        const int64_t *b = box + 4 * (size_t)ids[i];
-        for (int a = 0; a < 2; a++) {
-            sum[a] += (double)b[a] + (double)b[a + 2];
-            mn[a] = b[a] < mn[a] ? b[a] : mn[a];
-            mx[a] = b[a + 2] > mx[a] ? b[a + 2] : mx[a];
-        }
-    }
     for (int a = 0; a < 2; a++) {
-        double l = (double)mn[a] > lo[a] ? (double)mn[a] : lo[a];
-        double h = (double)mx[a] < hi[a] ? (double)mx[a] : hi[a];
-        cand[2 * a] = sum[a] / (2.0 * (double)cnt);
+        double l = st->mn[a] > lo[a] ? st->mn[a] : lo[a];
+        double h = st->mx[a] < hi[a] ? st->mx[a] : hi[a];
+        cand[2 * a] = st->sum[a] / (2.0 * (double)cnt);
         cand[2 * a + 1] = floor(l / 2 + h / 2) + 0.5; /* between grid lines */
     }
 }
 
 /* Sizes of both sides for the four candidates (two per axis).  One pass. */
-static void split_counts(const int64_t *box, const uint32_t *ids, size_t cnt, const double cand[4],
+static void split_counts(const double *box, const uint32_t *ids, size_t cnt, const double cand[4],
                          size_t nb[4], size_t na[4])
 {
-    for (int k = 0; k < 4; k++) nb[k] = na[k] = 0;
-    for (size_t i = 0; i < cnt; i++) {
-        const int64_t *b = box + 4 * (size_t)ids[i];
-        for (int k = 0; k < 4; k++) {
-            int a = k / 2;
-            nb[k] += (double)b[a] <= cand[k];
-            na[k] += (double)b[a + 2] > cand[k];
-        }
+    size_t b0 = 0, b1 = 0, b2 = 0, b3 = 0, a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    const double c0 = cand[0], c1 = cand[1], c2 = cand[2], c3 = cand[3];
+    for (size_t i = 0; i < cnt; i++) { /* unrolled: the counters stay in registers */
+        const double *b = box + 4 * (size_t)ids[i];
+        double x0 = b[0], y0 = b[1], x1 = b[2], y1 = b[3];
+        b0 += x0 <= c0, b1 += x0 <= c1, b2 += y0 <= c2, b3 += y0 <= c3;
+        a0 += x1 > c0, a1 += x1 > c1, a2 += y1 > c2, a3 += y1 > c3;
     }
+    nb[0] = b0, nb[1] = b1, nb[2] = b2, nb[3] = b3;
+    na[0] = a0, na[1] = a1, na[2] = a2, na[3] = a3;
 }
 
-int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
+int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
 {
+    /* the boxes as doubles, once: every pass compares them with the thresholds */
+    double *dbox = mem_malloc((4 * n + 1) * sizeof *dbox);
     uint32_t *pool = NULL;
     size_t pool_n = 0, pool_cap = 0;
     pending *stack = NULL;
@@ -73,22 +87,28 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
     size_t nn = 0, ncap = 0;
 
     memset(t, 0, sizeof *t);
-    if (mem_grow(&pool, &pool_cap, n ? n : 1, sizeof *pool)) goto fail;
+    if (!dbox || mem_grow(&pool, &pool_cap, n ? n : 1, sizeof *pool)) goto fail;
     for (size_t i = 0; i < n; i++) pool[i] = (uint32_t)i;
     pool_n = n;
     if (mem_grow(&stack, &scap, 1, sizeof *stack)) goto fail;
-    stack[sn++] = (pending){
-        .node = -1, .off = 0, .cnt = n, .lo = {-INFINITY, -INFINITY}, .hi = {INFINITY, INFINITY}};
+    stack[sn++] = (pending){.node = -1,
+                            .off = 0,
+                            .cnt = n,
+                            .lo = {-INFINITY, -INFINITY},
+                            .hi = {INFINITY, INFINITY},
+                            .st = stats0};
+    for (size_t i = 0; i < 4 * n; i++) dbox[i] = (double)ibox[i];
+    for (size_t i = 0; i < n; i++) stats_add(&stack[0].st, dbox + 4 * i);
     while (sn) {
         pending p = stack[--sn];
         int axis = -1;
         double thr = 0;
-        size_t best = p.cnt;
+        size_t best = p.cnt, nbelow = 0;
         if (p.cnt > leaf_max && p.depth < BOX_MAX_DEPTH) {
             double cand[4];
             size_t nb[4], na[4];
-            split_candidates(box, pool + p.off, p.cnt, p.lo, p.hi, cand);
-            split_counts(box, pool + p.off, p.cnt, cand, nb, na);
+            split_candidates(&p.st, p.cnt, p.lo, p.hi, cand);
+            split_counts(dbox, pool + p.off, p.cnt, cand, nb, na);
             for (int k = 0; k < 4; k++) {
                 int a = k / 2;
                 size_t worst = nb[k] > na[k] ? nb[k] : na[k];
@@ -96,6 +116,7 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
                     best = worst;
                     axis = a;
                     thr = cand[k];
+                    nbelow = nb[k];
                 }
             }
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */
@@ -122,18 +143,19 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
         nodes[me] = (box_node){.t = thr, .axis = axis, .child = {0, 0}};
         if (p.node >= 0) nodes[p.node].child[p.side] = me;
         if (mem_grow(&pool, &pool_cap, pool_n + 2 * best, sizeof *pool)) goto fail;
-        size_t boff = pool_n, aoff;
+        /* both sides in one pass, in order, each gathering its statistics as it grows */
+        size_t boff = pool_n, aoff = pool_n + nbelow, bn = 0, an = 0;
+        bstats sb = stats0, sa = stats0;
         for (size_t i = 0; i < p.cnt; i++) {
             uint32_t id = pool[p.off + i];
-            if ((double)box[4 * (size_t)id + axis] <= thr) pool[pool_n++] = id;
+            const double *b = dbox + 4 * (size_t)id;
+            if (b[axis] <= thr) pool[boff + bn++] = id, stats_add(&sb, b);
+            if (b[axis + 2] > thr) pool[aoff + an++] = id, stats_add(&sa, b);
         }
-        aoff = pool_n;
-        for (size_t i = 0; i < p.cnt; i++) {
-            uint32_t id = pool[p.off + i];
-            if ((double)box[4 * (size_t)id + axis + 2] > thr) pool[pool_n++] = id;
-        }
+        pool_n = aoff + an;
         if (mem_grow(&stack, &scap, sn + 2, sizeof *stack)) goto fail;
         pending below = p, above = p;
+        below.st = sb, above.st = sa;
         below.node = above.node = me;
         below.side = 0;
         above.side = 1;
@@ -170,8 +192,10 @@ int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max)
     free(pool);
     free(stack);
     free(leaves);
+    free(dbox);
     return 0;
 fail:
+    free(dbox);
     free(pool);
     free(stack);
     free(leaves);

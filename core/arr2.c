@@ -161,10 +161,12 @@ static void span_tick(void *sp, double f)
  * below 2^(ARR2_GRID_BITS-1) + 1 in magnitude.  When the origin's grid index is small enough,
  * output coordinates are (origin + g) * step: a coordinate that was on the grid comes back
  * exactly (0.3 with precision 0.01 gives 0.3, not 0.2999...). */
+/* llround's rule, inline (round_half_away): |v| / step <= 2^52 here, as stage_snap's step is
+ * never finer than the doubles at the largest coordinate */
 static int64_t snap_coord(const ctx *c, int axis, double v)
 {
-    if (c->origin_int[axis]) return llround(v / c->step) - c->origin[axis];
-    return llround((v - c->origin_d[axis] * c->step) / c->step);
+    if (c->origin_int[axis]) return round_half_away(v / c->step) - c->origin[axis];
+    return round_half_away((v - c->origin_d[axis] * c->step) / c->step);
 }
 
 static double unsnap(const ctx *c, int axis, int64_t g)

@@ -670,18 +670,25 @@ static inline int seg_near_hit(ipt a, ipt b, const int64_t *bx, ipt p)
     return seg_hits_pixel(a, b, p) ? 2 : 1;
 }
 
-/* The leaves whose regions meet the closed box q, appended to *out (uint32). */
+/* The leaves whose regions meet the closed box q, appended to *out (uint32): a walk down from
+ * node that goes on alone while q lies on one side of each threshold (a pixel's box nearly
+ * always does), with a stack of the other sides where it straddles one. */
 static int leaves_meeting(const box_tree *t, const double *q, vbuf *out, int32_t node)
 {
-    if (node < 0) {
+    int32_t stack[2 * BOX_DEPTH_MAX + 2];
+    int top = 0;
+    for (;;) {
+        while (node >= 0) {
+            const box_node *nd = &t->nodes[node];
+            int below = q[nd->axis] <= nd->t, above = q[2 + nd->axis] > nd->t;
+            if (below && above) stack[top++] = nd->child[1];
+            node = below ? nd->child[0] : nd->child[1];
+        }
         if (vbuf_reserve(out, out->n + 1, sizeof(uint32_t))) return -1;
         ((uint32_t *)out->p)[out->n++] = (uint32_t)~node;
-        return 0;
+        if (!top) return 0;
+        node = stack[--top];
     }
-    const box_node *nd = &t->nodes[node];
-    if (q[nd->axis] <= nd->t && leaves_meeting(t, q, out, nd->child[0])) return -1;
-    if (q[2 + nd->axis] > nd->t && leaves_meeting(t, q, out, nd->child[1])) return -1;
-    return 0;
 }
 
 static void near_chunk(void *vc, size_t chunk, int w)

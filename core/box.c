@@ -7,8 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define BOX_MAX_DEPTH 60
-
 /* What split_candidates needs of a bucket, gathered in the order of its ids: the sum of its
  * boxes' centres (twice) and their extent per axis. */
 typedef struct bstats {
@@ -104,7 +102,7 @@ int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
         int axis = -1;
         double thr = 0;
         size_t best = p.cnt, nbelow = 0;
-        if (p.cnt > leaf_max && p.depth < BOX_MAX_DEPTH) {
+        if (p.cnt > leaf_max && p.depth < BOX_DEPTH_MAX) {
             double cand[4];
             size_t nb[4], na[4];
             split_candidates(&p.st, p.cnt, p.lo, p.hi, cand);

@@ -21,6 +21,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#define BOX_DEPTH_MAX 60 /* levels of nodes at most below the root */
+
 typedef struct box_node {
     double t;         /* threshold */
     int32_t axis;     /* 0: x, 1: y */

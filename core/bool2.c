@@ -102,25 +102,36 @@ static int stage_segments(const bool2_input *in, double **seg, uint32_t **tag, s
 
 /* ---- sides -------------------------------------------------------------------------------- */
 
-/* The edge from vertex u to vertex v (EV is sorted), or NONE. */
-static uint32_t find_edge(const lar2 *c, uint32_t u, uint32_t v)
+static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop_meter *stop,
+                      char *err, size_t el);
+
+/* The edge from vertex u to vertex v, or NONE.  EV is sorted, v0 < v1: the edges whose lower
+ * end is a are EV's rows first[a] .. first[a + 1), a few. */
+static uint32_t find_edge(const lar2 *c, const uint32_t *first, uint32_t u, uint32_t v)
 {
     uint32_t a = u < v ? u : v, b = u < v ? v : u;
-    size_t lo = 0, hi = c->ne;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        uint32_t x = c->EV[2 * mid], y = c->EV[2 * mid + 1];
-        if (x < a || (x == a && y < b))
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < c->ne && c->EV[2 * lo] == a && c->EV[2 * lo + 1] == b ? (uint32_t)lo : NONE;
+    for (uint32_t e = first[a]; e < first[a + 1]; e++)
+        if (c->EV[2 * (size_t)e + 1] == b) return e;
+    return NONE;
 }
 
 /* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
  * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
 static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
+{
+    uint32_t *first = malloc((c->nv + 2) * sizeof *first);
+    if (!first) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    for (size_t a = 0, e = 0; a <= c->nv; a++) {
+        while (e < c->ne && c->EV[2 * e] < a) e++;
+        first[a] = (uint32_t)e;
+    }
+    int rc = sides_walk(c, first, side, stop, err, el);
+    free(first);
+    return rc;
+}
+
+static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop_meter *stop,
+                      char *err, size_t el)
 {
     for (size_t i = 0; i < 2 * c->ne; i++) side[i] = NONE;
     size_t nf = c->nf;
@@ -135,7 +146,7 @@ static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *er
             if (n < 2) continue;
             for (uint32_t i = 0; i < n; i++) {
                 uint32_t u = c->cyc[o + i], v = c->cyc[o + (i + 1) % n];
-                uint32_t e = find_edge(c, u, v);
+                uint32_t e = find_edge(c, first, u, v);
                 if (e == NONE)
                     return seterr(err, el, ARR_EINTERNAL, "internal: a cycle steps off the edges");
                 uint32_t *s = &side[2 * (size_t)e + (u < v ? 0 : 1)];

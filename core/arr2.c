@@ -89,6 +89,7 @@ typedef struct ctx {
     vbuf etags[MAXW];          /* uint32: with opts.tags, the tag of each edge in edges */
     /* with input_coords: pixels near a segment not routed through them, and those segments */
     vbuf nearp[MAXW], nears[MAXW]; /* uint32 */
+    struct nbox *nbox;             /* by tree item: its segment's box, each leaf's by x0 */
     uint8_t *pinned;               /* npix: the vertex keeps its grid coordinates */
     scratch scr[MAXW];
     stop_meter meter[MAXW]; /* each worker's cancel meter */
@@ -691,6 +692,42 @@ static int leaves_meeting(const box_tree *t, const double *q, vbuf *out, int32_t
     }
 }
 
+/* A tree item for the near pass: its segment's box and id, the leaf's items sorted by x0 so
+ * that a pixel's scan stops at the first one starting right of it. */
+typedef struct nbox {
+    int64_t x0, x1, y0, y1;
+    uint32_t si;
+} nbox;
+
+static int nbox_cmp(const void *a, const void *b)
+{
+    const nbox *x = a, *y = b;
+    return (x->x0 > y->x0) - (x->x0 < y->x0);
+}
+
+static void nbox_leaf(void *vc, size_t l, int w)
+{
+    (void)w;
+    ctx *c = vc;
+    uint32_t o = c->tree.leaf_off[l], n = c->tree.leaf_off[l + 1] - o;
+    nbox *nb = c->nbox + o;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t si = c->tree.items[o + i];
+        const int64_t *b = c->box + 4 * (size_t)si;
+        nb[i] = (nbox){b[0], b[2], b[1], b[3], si};
+    }
+    if (n > 32) {
+        qsort(nb, n, sizeof *nb, nbox_cmp);
+        return;
+    }
+    for (uint32_t i = 1; i < n; i++) {
+        nbox x = nb[i];
+        uint32_t j = i;
+        for (; j > 0 && nb[j - 1].x0 > x.x0; j--) nb[j] = nb[j - 1];
+        nb[j] = x;
+    }
+}
+
 static void near_chunk(void *vc, size_t chunk, int w)
 {
     ctx *c = vc;
@@ -716,7 +753,11 @@ static void near_chunk(void *vc, size_t chunk, int w)
             const double *rg = c->tree.region ? c->tree.region + 4 * (size_t)l : NULL;
             int home = !rg || (px > rg[0] && px <= rg[2] && py > rg[1] && py <= rg[3]);
             for (uint32_t i = c->tree.leaf_off[l]; i < c->tree.leaf_off[l + 1]; i++) {
-                uint32_t si = c->tree.items[i];
+                const nbox *nb = &c->nbox[i];
+                if (nb->x0 - NEAR_R > p.x) break; /* and every item after it */
+                if (nb->x1 + NEAR_R < p.x || nb->y0 - NEAR_R > p.y || nb->y1 + NEAR_R < p.y)
+                    continue;
+                uint32_t si = nb->si;
                 const seg2 *sg = &c->seg[si];
                 int nh = seg_near_hit(sg->a, sg->b, c->box + 4 * (size_t)si, p);
                 if (!nh) continue;
@@ -825,7 +866,12 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     if (c->o->input_coords) {
         /* one pass over each pixel's neighbourhood (the leaves within NEAR_R of it): the
          * segments through it (its incidences) and those near it (to pin) together */
+        c->nbox = malloc(((size_t)c->tree.leaf_off[c->tree.nleaves] + 1) * sizeof *c->nbox);
+        if (!c->nbox) goto fail;
+        par_for(c->threads, c->tree.nleaves, nbox_leaf, c);
         par_for_ex(c->threads, (c->npix + 1023) / 1024, near_chunk, c, span_tick, &sh);
+        free(c->nbox);
+        c->nbox = NULL;
     } else {
         /* hot pixels into their buckets, then each bucket's pixels against its segments */
         kv = malloc((c->npix ? c->npix : 1) * sizeof *kv);
@@ -1649,6 +1695,7 @@ static void ctx_free(ctx *c)
     c->pix = NULL;
     c->box = NULL;
     c->pl_off = c->pl_pix = c->sp_off = c->sp_pix = NULL;
+    free(c->nbox);
     free(c->pinned);
     c->pinned = NULL;
     for (int w = 0; w < MAXW; w++) {

@@ -420,11 +420,11 @@ char *huge_variant(int k, size_t *len)
     return b.p;
 }
 
-char *long_lines_body(int k, size_t *len)
+char *long_lines_body(int k, int n, size_t *len)
 {
     char cmd[512];
-    snprintf(cmd, sizeof cmd, "'%s' gen lines 2500 1.0 %d --options '{\"fields\":[\"stats\"]}'",
-             cli_bin(), 40 + k);
+    snprintf(cmd, sizeof cmd, "'%s' gen lines %d 1.0 %d --options '{\"fields\":[\"stats\"]}'",
+             cli_bin(), n, 40 + k);
     return run_capture(cmd, len);
 }
 

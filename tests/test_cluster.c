@@ -275,7 +275,8 @@ TEST(cluster_cancel_six_workers_idle)
     size_t hlen;
     ok = ok && huge_body(&hlen) != NULL; /* slow.secs: this run's measured speed */
     /* issue 25's jobs: long segments, a few buckets of thousands in the split stage */
-    for (int k = 0; ok && k < 6; k++) ok = (body[k] = long_lines_body(10 + k, &len[k])) != NULL;
+    for (int k = 0; ok && k < 6; k++)
+        ok = (body[k] = long_lines_body(10 + k, 2500, &len[k])) != NULL;
     if (!ok) {
         finish_all(d, 3);
         for (int k = 0; k < 6; k++) free(body[k]);

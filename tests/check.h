@@ -54,6 +54,8 @@ char *test_read_file(const char *path, size_t *len);
 
 /* The tests' reproducible random numbers (splitmix64), in [0, 1). */
 double test_rnd(uint64_t *state);
+/* n cases, times CELLAR_STRESS when that is a positive number (make stress). */
+size_t test_stress(size_t n);
 /* n random segments made like the seeds' randomLines(n, scaling), without the final shift:
  * malloc'd, 4 doubles each, the caller frees. */
 double *test_random_lines(size_t n, double scaling, uint64_t seed);

@@ -811,9 +811,7 @@ static size_t double_ref(double x, char *buf)
 TEST(double_format_is_the_shortest_printf)
 {
     uint64_t st = 1129;
-    size_t n = 300000, bad = 0;
-    const char *e = getenv("CELLAR_STRESS");
-    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    size_t n = test_stress(300000), bad = 0;
     char a[64], b[64];
     for (size_t i = 0; i < n && bad < 5; i++) {
         double x;

@@ -73,6 +73,47 @@ static void agree_(const char *body, int ok, const char *func, int line)
 }
 #define agree(body, ok) agree_(body, ok, __func__, __LINE__)
 
+/* x written after sep in one of five forms (form 0..4): an integer, %.17g, %.6e, %.25f, %.3E;
+ * returns the length. */
+static size_t put_number(char *p, const char *sep, double x, int form)
+{
+    switch (form) {
+    case 0:
+        return (size_t)sprintf(p, "%s%lld", sep, (long long)llround(x));
+    case 1:
+        return (size_t)sprintf(p, "%s%.17g", sep, x);
+    case 2:
+        return (size_t)sprintf(p, "%s%.6e", sep, x);
+    case 3:
+        return (size_t)sprintf(p, "%s%.25f", sep, x);
+    default:
+        return (size_t)sprintf(p, "%s%.3E", sep, x);
+    }
+}
+
+/* A random request: taken by the fast reader, and read both ways alike (canonical form, result,
+ * status and messages).  0 (with a failed check) when not. */
+#define random_agrees(body) random_agrees_(body, __func__, __LINE__)
+static int random_agrees_(const char *body, const char *func, int line)
+{
+    if (taken(body) != 1) {
+        test_fail(__FILE__, func, line, "not taken: %.300s", body);
+        return 0;
+    }
+    both f, s;
+    read_with(body, 1, &f);
+    read_with(body, 0, &s);
+    int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
+               !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
+               same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
+    if (!same)
+        test_fail(__FILE__, func, line, "differs (%d %d / %d %d '%s' '%s'): %.300s", f.rc_check,
+                  f.rc_run, s.rc_check, s.rc_run, f.msg_check, s.msg_check, body);
+    both_free(&f);
+    both_free(&s);
+    return same;
+}
+
 #define CUBE_V     "[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]"
 #define CUBE_FV    "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]"
 #define OPTS       "\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}"
@@ -261,9 +302,7 @@ TEST(packed_polygons_same_as_jansson)
 TEST(packed_polygons_random)
 {
     uint64_t st = 1127;
-    size_t n = 60;
-    const char *e = getenv("CELLAR_STRESS");
-    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    size_t n = test_stress(60);
     char *body = malloc(1 << 16);
     REQUIRE(body, "out of memory");
     static const char *ops[] = {"\"union\"", "\"intersection\"", "\"difference\"", "\"xor\""};
@@ -283,37 +322,15 @@ TEST(packed_polygons_random)
                 for (int k = 0; k < 4; k++)
                     for (int c = 0; c < 2; c++) {
                         double x = (pts[k][c] + (test_rnd(&st) - 0.5) * 0.1) * sc;
-                        int form = (int)(test_rnd(&st) * 4);
                         const char *sep = c ? "," : k ? "],[" : "[";
-                        if (form == 0)
-                            w += (size_t)sprintf(body + w, "%s%lld", sep, (long long)llround(x));
-                        else if (form == 1)
-                            w += (size_t)sprintf(body + w, "%s%.17g", sep, x);
-                        else if (form == 2)
-                            w += (size_t)sprintf(body + w, "%s%.6e", sep, x);
-                        else
-                            w += (size_t)sprintf(body + w, "%s%.3f", sep, x);
+                        w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
                     }
                 w += (size_t)sprintf(body + w, "]]");
             }
             w += (size_t)sprintf(body + w, "]");
         }
         w += (size_t)sprintf(body + w, "],\"op\":%s," POPTS "}", ops[t % 4]);
-        if (taken(body) != 1) {
-            CHECK(0, "not taken: %s", body);
-            break;
-        }
-        both f, s;
-        read_with(body, 1, &f);
-        read_with(body, 0, &s);
-        int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
-                   !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
-                   same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
-        CHECK(same, "differs (%d %d / %d %d '%s' '%s'): %s", f.rc_check, f.rc_run, s.rc_check,
-              s.rc_run, f.msg_check, s.msg_check, body);
-        both_free(&f);
-        both_free(&s);
-        if (!same) break;
+        if (!random_agrees(body)) break;
     }
     free(body);
 }
@@ -322,9 +339,7 @@ TEST(packed_polygons_random)
 TEST(packed_lines_random_numbers)
 {
     uint64_t st = 1128;
-    size_t n = 100;
-    const char *e = getenv("CELLAR_STRESS");
-    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    size_t n = test_stress(100);
     char *body = malloc(1 << 16);
     REQUIRE(body, "out of memory");
     for (size_t t = 0; t < n; t++) {
@@ -333,35 +348,11 @@ TEST(packed_lines_random_numbers)
         double sc = pow(10, (int)(test_rnd(&st) * 9) - 4), off = (test_rnd(&st) - 0.5) * 100;
         for (int k = 0; k < 4 * ns; k++) {
             double x = (test_rnd(&st) + off) * sc;
-            int form = (int)(test_rnd(&st) * 5);
             const char *sep = k % 4 == 0 ? (k ? "]],[[" : "[[") : k % 2 == 0 ? "],[" : ",";
-            if (form == 0)
-                w += (size_t)sprintf(body + w, "%s%lld", sep, (long long)llround(x));
-            else if (form == 1)
-                w += (size_t)sprintf(body + w, "%s%.17g", sep, x);
-            else if (form == 2)
-                w += (size_t)sprintf(body + w, "%s%.6e", sep, x);
-            else if (form == 3)
-                w += (size_t)sprintf(body + w, "%s%.25f", sep, x);
-            else
-                w += (size_t)sprintf(body + w, "%s%.3E", sep, x);
+            w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
         }
         w += (size_t)sprintf(body + w, "]]]," LOPTS "}");
-        if (taken(body) != 1) {
-            CHECK(0, "not taken: %s", body);
-            break;
-        }
-        both f, s;
-        read_with(body, 1, &f);
-        read_with(body, 0, &s);
-        int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
-                   !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
-                   same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
-        CHECK(same, "differs (%d %d / %d %d '%s' '%s'): %s", f.rc_check, f.rc_run, s.rc_check,
-              s.rc_run, f.msg_check, s.msg_check, body);
-        both_free(&f);
-        both_free(&s);
-        if (!same) break;
+        if (!random_agrees(body)) break;
     }
     free(body);
 }
@@ -371,9 +362,7 @@ TEST(packed_lines_random_numbers)
 TEST(packed_random_numbers)
 {
     uint64_t st = 20261129;
-    size_t n = 200;
-    const char *e = getenv("CELLAR_STRESS");
-    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    size_t n = test_stress(200);
     char *body = malloc(1 << 16);
     REQUIRE(body, "out of memory");
     for (size_t t = 0; t < n; t++) {
@@ -387,37 +376,13 @@ TEST(packed_random_numbers)
             for (int v = 0; v < 4; v++)
                 for (int a = 0; a < 3; a++) {
                     double x = (T[v][a] + 0.3 * test_rnd(&st)) * sc + off * sc;
-                    int form = (int)(test_rnd(&st) * 5);
                     const char *sep = a ? "," : v ? "],[" : "[";
-                    if (form == 0)
-                        w += (size_t)sprintf(body + w, "%s%lld", sep, (long long)llround(x));
-                    else if (form == 1)
-                        w += (size_t)sprintf(body + w, "%s%.17g", sep, x);
-                    else if (form == 2)
-                        w += (size_t)sprintf(body + w, "%s%.6e", sep, x);
-                    else if (form == 3)
-                        w += (size_t)sprintf(body + w, "%s%.25f", sep, x);
-                    else
-                        w += (size_t)sprintf(body + w, "%s%.3E", sep, x);
+                    w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
                 }
             w += (size_t)sprintf(body + w, "]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}");
         }
         w += (size_t)sprintf(body + w, "],\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}}");
-        if (taken(body) != 1) {
-            CHECK(0, "not taken: %s", body);
-            break;
-        }
-        both f, s;
-        read_with(body, 1, &f);
-        read_with(body, 0, &s);
-        int same = f.rc_check == s.rc_check && same_str(f.canon, s.canon) &&
-                   !strcmp(f.msg_check, s.msg_check) && f.rc_run == s.rc_run &&
-                   same_str(f.out, s.out) && !strcmp(f.msg_run, s.msg_run);
-        CHECK(same, "differs (%d %d / %d %d '%s' '%s'): %s", f.rc_check, f.rc_run, s.rc_check,
-              s.rc_run, f.msg_check, s.msg_check, body);
-        both_free(&f);
-        both_free(&s);
-        if (!same) break;
+        if (!random_agrees(body)) break;
     }
     free(body);
 }
@@ -427,9 +392,7 @@ TEST(packed_random_numbers)
 TEST(packed_g17_is_printf)
 {
     uint64_t st = 17;
-    size_t n = 300000, bad = 0, fast = 0;
-    const char *e = getenv("CELLAR_STRESS");
-    if (e && atoi(e) > 0) n *= (size_t)atoi(e);
+    size_t n = test_stress(300000), bad = 0, fast = 0;
     char a[64], b[64];
     for (size_t i = 0; i < n && bad < 5; i++) {
         double x;

@@ -73,6 +73,12 @@ out:
     return buf;
 }
 
+size_t test_stress(size_t n)
+{
+    const char *e = getenv("CELLAR_STRESS");
+    return e && atoi(e) > 0 ? n * (size_t)atoi(e) : n;
+}
+
 double test_rnd(uint64_t *state)
 {
     uint64_t z = (*state += 0x9e3779b97f4a7c15u);

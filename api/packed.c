@@ -286,36 +286,38 @@ static void packed_release(api_packed *a)
     memset(a, 0, sizeof *a);
 }
 
-/* The value at s->p, for the key k of the solid object of solid `sol`: read when it is V or FV
- * and an array (*len its bytes), else skipped (*len 0).  0, -1 (give up), -2 out of memory. */
-static int solid_member(scan *s, size_t sol, const char *k, size_t kn, size_t *len)
-{
-    int fv = kn == 2 && !memcmp(k, "FV", 2) ? 1 : kn == 1 && *k == 'V' ? 0 : -1;
-    ws(s);
-    *len = 0;
-    if (fv < 0 || s->p >= s->end || *s->p != '[') return skip_value(s);
-    api_packed_set *set = s->set;
-    if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a)) return -2;
-    api_packed *a = &set->a[set->n];
-    memset(a, 0, sizeof *a);
-    a->solid = sol, a->fv = fv;
-    const char *at = s->p;
-    int r = fv ? read_FV(s, a) : read_rows(s, a);
-    if (r) {
-        packed_release(a);
-        return r;
-    }
-    set->n++;
-    *len = (size_t)(s->p - at);
-    return 0;
-}
-
 typedef struct spans {
     span *v;
     size_t n, cap;
 } spans;
 
-/* The object at s->p as a solid (index sol): its V and FV read.  0, -1, -2. */
+/* The array at s->p, of solid `sol` (0 for a request's lines or polygons) and of the kind of
+ * api_packed.fv: read into a new entry of the set, its place in the body listed in out.  0, -1
+ * (give up), -2 out of memory. */
+static int take_array(scan *s, const char *body, size_t sol, int kind, spans *out)
+{
+    api_packed_set *set = s->set;
+    if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a) ||
+        mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v))
+        return -2;
+    api_packed *a = &set->a[set->n];
+    memset(a, 0, sizeof *a);
+    a->solid = sol, a->fv = kind;
+    const char *at = s->p;
+    int r = kind == API_PACKED_FV      ? read_FV(s, a)
+            : kind == API_PACKED_RINGS ? read_rings(s, a)
+                                       : read_rows(s, a);
+    if (r) {
+        packed_release(a);
+        return r;
+    }
+    set->n++;
+    out->v[out->n++] = (span){(size_t)(at - body), (size_t)(s->p - at)};
+    return 0;
+}
+
+/* The object at s->p as a solid (index sol): its V and FV read (other keys skipped).  0, -1,
+ * -2. */
 static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
 {
     ws(s);
@@ -329,14 +331,12 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         size_t kn;
         if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
         ws(s);
-        const char *at = s->p;
-        size_t len;
-        int r = solid_member(s, sol, k, kn, &len);
+        int kind = kn == 2 && !memcmp(k, "FV", 2) ? API_PACKED_FV
+                   : kn == 1 && *k == 'V'         ? API_PACKED_V
+                                                  : -1;
+        int r = kind >= 0 && s->p < s->end && *s->p == '[' ? take_array(s, body, sol, kind, out)
+                                                           : skip_value(s);
         if (r) return r;
-        if (len) {
-            if (mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v)) return -2;
-            out->v[out->n++] = (span){(size_t)(at - body), len};
-        }
         ws(s);
         if (s->p < s->end && *s->p == ',') {
             s->p++;
@@ -344,28 +344,6 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         }
         return expect(s, '}');
     }
-}
-
-/* The segments of a "lines" request, or the polygons of a "polygons" one (kind: their
- * api_packed.fv), at s->p, read as one array.  0, -1, -2. */
-static int whole_array(scan *s, const char *body, int kind, spans *out)
-{
-    api_packed_set *set = s->set;
-    if (mem_grow(&set->a, &set->cap, set->n + 1, sizeof *set->a) ||
-        mem_grow(&out->v, &out->cap, out->n + 1, sizeof *out->v))
-        return -2;
-    api_packed *a = &set->a[set->n];
-    memset(a, 0, sizeof *a);
-    a->solid = 0, a->fv = kind;
-    const char *at = s->p;
-    int r = kind == API_PACKED_RINGS ? read_rings(s, a) : read_rows(s, a);
-    if (r) {
-        packed_release(a);
-        return r;
-    }
-    set->n++;
-    out->v[out->n++] = (span){(size_t)(at - body), (size_t)(s->p - at)};
-    return 0;
 }
 
 static void set_free_arrays(api_packed_set *set)
@@ -422,9 +400,9 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set)
         } else if (kn == 5 && !memcmp(k, "faces", 5)) {
             r = solid_obj(&s, body, API_PACKED_FACES, &sp);
         } else if (kn == 5 && !memcmp(k, "lines", 5) && s.p < s.end && *s.p == '[') {
-            r = whole_array(&s, body, API_PACKED_SEGMENTS, &sp);
+            r = take_array(&s, body, 0, API_PACKED_SEGMENTS, &sp);
         } else if (kn == 8 && !memcmp(k, "polygons", 8) && s.p < s.end && *s.p == '[') {
-            r = whole_array(&s, body, API_PACKED_RINGS, &sp);
+            r = take_array(&s, body, 0, API_PACKED_RINGS, &sp);
         } else if (kn == 4 && !memcmp(k, "kind", 4) && s.p < s.end && *s.p == '"') {
             const char *v;
             size_t vn;
@@ -563,11 +541,48 @@ static size_t real_text(double x, char *buf)
     return len;
 }
 
-/* Array a as jansson writes it compact: rows of V with each number as it was written (an
- * integer, or a real by real_text), rows of FV as lists of indices. */
-static void put_array(api_buf *b, const api_packed *a)
+/* A number as jansson wrote it: an integer as such (below 10^15 in magnitude: exact), a real by
+ * real_text. */
+static void put_number(api_buf *b, double x, int integer)
 {
     char num[48];
+    if (integer)
+        api_buf_i64(b, (int64_t)x);
+    else
+        api_buf_put(b, num, real_text(x, num));
+}
+
+/* Polygons of rings of points (API_PACKED_RINGS) as jansson writes them compact. */
+static void put_rings(api_buf *b, const api_packed *a)
+{
+    api_buf_putc(b, '[');
+    for (size_t q = 0; q < a->npoly; q++) {
+        api_buf_puts(b, q ? ",[" : "[");
+        for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
+            api_buf_puts(b, k > a->idx[q] ? ",[" : "[");
+            for (uint32_t v = a->off[k]; v < a->off[k + 1]; v++) {
+                api_buf_puts(b, v > a->off[k] ? ",[" : "[");
+                put_number(b, a->V[2 * (size_t)v], a->vint[v] & 1);
+                api_buf_putc(b, ',');
+                put_number(b, a->V[2 * (size_t)v + 1], a->vint[v] >> 1 & 1);
+                api_buf_putc(b, ']');
+            }
+            api_buf_putc(b, ']');
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_putc(b, ']');
+}
+
+/* Array a as jansson writes it compact: rows of V and segments with each number as it was
+ * written, rows of FV as lists of indices, polygons by put_rings. */
+static void put_array(api_buf *b, const api_packed *a)
+{
+    if (a->fv == API_PACKED_RINGS) {
+        put_rings(b, a);
+        return;
+    }
+    int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;
     api_buf_putc(b, '[');
     for (size_t r = 0; r < a->n; r++) {
         if (r) api_buf_putc(b, ',');
@@ -575,39 +590,10 @@ static void put_array(api_buf *b, const api_packed *a)
             api_buf_u32_list(b, a->idx + a->off[r], a->off[r + 1] - a->off[r]);
             continue;
         }
-        if (a->fv == API_PACKED_RINGS) { /* rows are the points: written polygon by polygon */
-            r = a->n;
-            for (size_t q = 0; q < a->npoly; q++) {
-                api_buf_puts(b, q ? ",[" : "[");
-                for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
-                    api_buf_puts(b, k > a->idx[q] ? ",[" : "[");
-                    for (uint32_t v = a->off[k]; v < a->off[k + 1]; v++) {
-                        api_buf_puts(b, v > a->off[k] ? ",[" : "[");
-                        for (int c = 0; c < 2; c++) {
-                            double x = a->V[2 * (size_t)v + (size_t)c];
-                            if (c) api_buf_putc(b, ',');
-                            if (a->vint[v] >> c & 1)
-                                api_buf_i64(b, (int64_t)x);
-                            else
-                                api_buf_put(b, num, real_text(x, num));
-                        }
-                        api_buf_putc(b, ']');
-                    }
-                    api_buf_putc(b, ']');
-                }
-                api_buf_putc(b, ']');
-            }
-            break;
-        }
-        int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;
         api_buf_puts(b, seg ? "[[" : "[");
         for (int k = 0; k < per; k++) {
-            double x = a->V[(size_t)per * r + (size_t)k];
             if (k) api_buf_puts(b, seg && k == 2 ? "],[" : ",");
-            if (a->vint[r] >> k & 1)
-                api_buf_i64(b, (int64_t)x); /* below 10^15 in magnitude: exact */
-            else
-                api_buf_put(b, num, real_text(x, num));
+            put_number(b, a->V[(size_t)per * r + (size_t)k], a->vint[r] >> k & 1);
         }
         api_buf_puts(b, seg ? "]]" : "]");
     }

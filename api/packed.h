@@ -37,8 +37,8 @@
 #define API_PACKED_RINGS    3 /* a "polygons" request's polygons, each native [[[x, y], ...]] */
 
 typedef struct api_packed {
-    size_t solid;  /* index in "solids", or API_PACKED_FACES (0 for segments) */
-    int fv;        /* API_PACKED_V, _FV or _SEGMENTS */
+    size_t solid;  /* index in "solids", or API_PACKED_FACES (0 for segments and rings) */
+    int fv;        /* API_PACKED_V, _FV, _SEGMENTS or _RINGS */
     size_t n;      /* rows */
     double *V;     /* V: 3 n numbers; segments: 4 n (x1, y1, x2, y2) */
     uint8_t *vint; /* V, segments: by row, bit k set when number k was written as an integer */
@@ -61,8 +61,9 @@ typedef struct api_packed_set {
 int api_packed_scan(const char *body, size_t len, api_packed_set *set);
 void api_packed_free(api_packed_set *set);
 
-/* The array of solid s (or API_PACKED_FACES), V (fv 0) or FV (fv 1) whose placeholder is str
- * (a JSON string's value), or NULL.  Its taker sets its `taken`. */
+/* The array of solid s (or API_PACKED_FACES; 0 for segments and rings) and kind fv
+ * (API_PACKED_V, ...) whose placeholder is str (a JSON string's value), or NULL.  Its taker sets
+ * its `taken`. */
 api_packed *api_packed_find(api_packed_set *set, size_t s, int fv, const char *str);
 
 /* The canonical form of the request: dump is json_dumps(JSON_COMPACT | JSON_SORT_KEYS |

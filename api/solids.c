@@ -242,8 +242,9 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
     V = json_object_get(o, "V");
     FV = json_object_get(o, "FV");
     holes = json_object_get(o, "holes");
-    if (pk && json_is_string(V)) pv = api_packed_find(pk, si, 0, json_string_value(V));
-    if (pk && json_is_string(FV)) pf = api_packed_find(pk, si, 1, json_string_value(FV));
+    if (pk && json_is_string(V)) pv = api_packed_find(pk, si, API_PACKED_V, json_string_value(V));
+    if (pk && json_is_string(FV))
+        pf = api_packed_find(pk, si, API_PACKED_FV, json_string_value(FV));
     if (!V) return api_fail(err, API_EINVALID, "%s.V: required, an array of [x, y, z]", path);
     if (!json_is_array(V) && !pv)
         return api_fail(err, API_EINVALID, "%s.V: expected an array of [x, y, z]", path);

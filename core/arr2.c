@@ -651,20 +651,25 @@ fail:
  * are then held on the grid. */
 #define NEAR_R 3
 
-/* Segment ab (its box b: x0, y0, x1, y1) and pixel p: 0 when it is not near p, 2 when it
- * passes through p (seg_hits_pixel), 1 when it is only near; the orientation taken once. */
-static inline int seg_near_hit(ipt a, ipt b, const int64_t *bx, ipt p)
+/* A tree item for the near pass: its segment's box and id, the leaf's items sorted by x0 so
+ * that a pixel's scan stops at the first one starting right of it. */
+typedef struct nbox {
+    int64_t x0, x1, y0, y1;
+    uint32_t si;
+} nbox;
+
+/* Segment ab, its box nb, and a pixel p within NEAR_R of that box (the caller's filter): 0 when
+ * the segment is not near p, 2 when it passes through p (seg_hits_pixel), 1 when it is only
+ * near; the orientation taken once. */
+static inline int seg_near_hit(ipt a, ipt b, const nbox *nb, ipt p)
 {
-    if (p.x < bx[0] - NEAR_R || p.x > bx[2] + NEAR_R || p.y < bx[1] - NEAR_R ||
-        p.y > bx[3] + NEAR_R)
-        return 0;
     /* the line meets the square iff |orient(a, b, p)| <= R (|dx| + |dy|) (its corners spread
      * the orientation by that much); with the boxes meeting, so does the segment */
     int64_t L = llabs(b.x - a.x) + llabs(b.y - a.y);
     i128 o = orient2(a, b, p);
     if (o < 0) o = -o;
     if (o > (i128)NEAR_R * L) return 0;
-    if (p.x < bx[0] || p.x > bx[2] || p.y < bx[1] || p.y > bx[3]) return 1;
+    if (p.x < nb->x0 || p.x > nb->x1 || p.y < nb->y0 || p.y > nb->y1) return 1;
     /* in its box: through p when 2|O| < L (or at an end); at 2|O| == L the corner rule */
     if (2 * o < L || (a.x == p.x && a.y == p.y) || (b.x == p.x && b.y == p.y)) return 2;
     if (2 * o > L) return 1;
@@ -691,13 +696,6 @@ static int leaves_meeting(const box_tree *t, const double *q, vbuf *out, int32_t
         node = stack[--top];
     }
 }
-
-/* A tree item for the near pass: its segment's box and id, the leaf's items sorted by x0 so
- * that a pixel's scan stops at the first one starting right of it. */
-typedef struct nbox {
-    int64_t x0, x1, y0, y1;
-    uint32_t si;
-} nbox;
 
 static int nbox_cmp(const void *a, const void *b)
 {
@@ -759,7 +757,7 @@ static void near_chunk(void *vc, size_t chunk, int w)
                     continue;
                 uint32_t si = nb->si;
                 const seg2 *sg = &c->seg[si];
-                int nh = seg_near_hit(sg->a, sg->b, c->box + 4 * (size_t)si, p);
+                int nh = seg_near_hit(sg->a, sg->b, nb, p);
                 if (!nh) continue;
                 if (nh == 2) { /* routed through p */
                     if (!home) continue;

@@ -102,9 +102,6 @@ static int stage_segments(const bool2_input *in, double **seg, uint32_t **tag, s
 
 /* ---- sides -------------------------------------------------------------------------------- */
 
-static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop_meter *stop,
-                      char *err, size_t el);
-
 /* The edge from vertex u to vertex v, or NONE.  EV is sorted, v0 < v1: the edges whose lower
  * end is a are EV's rows first[a] .. first[a + 1), a few. */
 static uint32_t find_edge(const lar2 *c, const uint32_t *first, uint32_t u, uint32_t v)
@@ -115,21 +112,7 @@ static uint32_t find_edge(const lar2 *c, const uint32_t *first, uint32_t u, uint
     return NONE;
 }
 
-/* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
- * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
-static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
-{
-    uint32_t *first = malloc((c->nv + 2) * sizeof *first);
-    if (!first) return seterr(err, el, ARR_ENOMEM, "out of memory");
-    for (size_t a = 0, e = 0; a <= c->nv; a++) {
-        while (e < c->ne && c->EV[2 * e] < a) e++;
-        first[a] = (uint32_t)e;
-    }
-    int rc = sides_walk(c, first, side, stop, err, el);
-    free(first);
-    return rc;
-}
-
+/* stage_sides' walk over every cycle, with first: each vertex's first edge in EV. */
 static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop_meter *stop,
                       char *err, size_t el)
 {
@@ -160,6 +143,21 @@ static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop
         if (side[i] == NONE)
             return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in no face");
     return ARR_OK;
+}
+
+/* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
+ * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
+static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
+{
+    uint32_t *first = malloc((c->nv + 2) * sizeof *first);
+    if (!first) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    for (size_t a = 0, e = 0; a <= c->nv; a++) {
+        while (e < c->ne && c->EV[2 * e] < a) e++;
+        first[a] = (uint32_t)e;
+    }
+    int rc = sides_walk(c, first, side, stop, err, el);
+    free(first);
+    return rc;
 }
 
 /* ---- membership --------------------------------------------------------------------------- */

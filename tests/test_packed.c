@@ -93,7 +93,6 @@ static size_t put_number(char *p, const char *sep, double x, int form)
 
 /* A random request: taken by the fast reader, and read both ways alike (canonical form, result,
  * status and messages).  0 (with a failed check) when not. */
-#define random_agrees(body) random_agrees_(body, __func__, __LINE__)
 static int random_agrees_(const char *body, const char *func, int line)
 {
     if (taken(body) != 1) {
@@ -113,6 +112,24 @@ static int random_agrees_(const char *body, const char *func, int line)
     both_free(&s);
     return same;
 }
+
+/* n random requests, each written into a body by make (from the state st; t its number): taken
+ * by the fast reader and read both ways alike, up to the first that is not. */
+static void random_requests_(uint64_t st, size_t n, void (*make)(char *, uint64_t *, size_t),
+                             const char *func, int line)
+{
+    char *body = malloc(1 << 16);
+    if (!body) {
+        test_fail(__FILE__, func, line, "out of memory");
+        return;
+    }
+    for (size_t t = 0; t < n; t++) {
+        make(body, &st, t);
+        if (!random_agrees_(body, func, line)) break;
+    }
+    free(body);
+}
+#define random_requests(st, n, make) random_requests_(st, n, make, __func__, __LINE__)
 
 #define CUBE_V     "[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]]"
 #define CUBE_FV    "[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]"
@@ -299,92 +316,85 @@ TEST(packed_polygons_same_as_jansson)
 
 /* Random native polygons (jittered squares with square holes), numbers in assorted forms and
  * operations, read both ways. */
+static void random_polygons(char *body, uint64_t *st, size_t t)
+{
+    static const char *ops[] = {"\"union\"", "\"intersection\"", "\"difference\"", "\"xor\""};
+    size_t w = (size_t)sprintf(body, "{\"kind\":\"polygons\",\"polygons\":[");
+    int np = 1 + (int)(test_rnd(st) * 6);
+    double sc = pow(10, (int)(test_rnd(st) * 7) - 3);
+    for (int q = 0; q < np; q++) {
+        double cx = test_rnd(st) * 4, cy = test_rnd(st) * 4, h = 0.5 + test_rnd(st) * 2;
+        int holes = test_rnd(st) < 0.3;
+        w += (size_t)sprintf(body + w, "%s[", q ? "," : "");
+        for (int ring = 0; ring <= holes; ring++) {
+            double r = ring ? h / 3 : h;
+            double pts[4][2] = {
+                {cx - r, cy - r}, {cx + r, cy - r}, {cx + r, cy + r}, {cx - r, cy + r}};
+            w += (size_t)sprintf(body + w, "%s[", ring ? "," : "");
+            for (int k = 0; k < 4; k++)
+                for (int c = 0; c < 2; c++) {
+                    double x = (pts[k][c] + (test_rnd(st) - 0.5) * 0.1) * sc;
+                    const char *sep = c ? "," : k ? "],[" : "[";
+                    w += put_number(body + w, sep, x, (int)(test_rnd(st) * 5));
+                }
+            w += (size_t)sprintf(body + w, "]]");
+        }
+        w += (size_t)sprintf(body + w, "]");
+    }
+    w += (size_t)sprintf(body + w, "],\"op\":%s," POPTS "}", ops[t % 4]);
+}
+
 TEST(packed_polygons_random)
 {
-    uint64_t st = 1127;
-    size_t n = test_stress(60);
-    char *body = malloc(1 << 16);
-    REQUIRE(body, "out of memory");
-    static const char *ops[] = {"\"union\"", "\"intersection\"", "\"difference\"", "\"xor\""};
-    for (size_t t = 0; t < n; t++) {
-        size_t w = (size_t)sprintf(body, "{\"kind\":\"polygons\",\"polygons\":[");
-        int np = 1 + (int)(test_rnd(&st) * 6);
-        double sc = pow(10, (int)(test_rnd(&st) * 7) - 3);
-        for (int q = 0; q < np; q++) {
-            double cx = test_rnd(&st) * 4, cy = test_rnd(&st) * 4, h = 0.5 + test_rnd(&st) * 2;
-            int holes = test_rnd(&st) < 0.3;
-            w += (size_t)sprintf(body + w, "%s[", q ? "," : "");
-            for (int ring = 0; ring <= holes; ring++) {
-                double r = ring ? h / 3 : h;
-                double pts[4][2] = {
-                    {cx - r, cy - r}, {cx + r, cy - r}, {cx + r, cy + r}, {cx - r, cy + r}};
-                w += (size_t)sprintf(body + w, "%s[", ring ? "," : "");
-                for (int k = 0; k < 4; k++)
-                    for (int c = 0; c < 2; c++) {
-                        double x = (pts[k][c] + (test_rnd(&st) - 0.5) * 0.1) * sc;
-                        const char *sep = c ? "," : k ? "],[" : "[";
-                        w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
-                    }
-                w += (size_t)sprintf(body + w, "]]");
-            }
-            w += (size_t)sprintf(body + w, "]");
-        }
-        w += (size_t)sprintf(body + w, "],\"op\":%s," POPTS "}", ops[t % 4]);
-        if (!random_agrees(body)) break;
-    }
-    free(body);
+    random_requests(1127, test_stress(60), random_polygons);
 }
 
 /* Random segments, their numbers in assorted forms, read both ways. */
+static void random_lines(char *body, uint64_t *st, size_t t)
+{
+    (void)t;
+    size_t w = (size_t)sprintf(body, "{\"kind\":\"lines\",\"lines\":[");
+    int ns = 1 + (int)(test_rnd(st) * 30);
+    double sc = pow(10, (int)(test_rnd(st) * 9) - 4), off = (test_rnd(st) - 0.5) * 100;
+    for (int k = 0; k < 4 * ns; k++) {
+        double x = (test_rnd(st) + off) * sc;
+        const char *sep = k % 4 == 0 ? (k ? "]],[[" : "[[") : k % 2 == 0 ? "],[" : ",";
+        w += put_number(body + w, sep, x, (int)(test_rnd(st) * 5));
+    }
+    w += (size_t)sprintf(body + w, "]]]," LOPTS "}");
+}
+
 TEST(packed_lines_random_numbers)
 {
-    uint64_t st = 1128;
-    size_t n = test_stress(100);
-    char *body = malloc(1 << 16);
-    REQUIRE(body, "out of memory");
-    for (size_t t = 0; t < n; t++) {
-        size_t w = (size_t)sprintf(body, "{\"kind\":\"lines\",\"lines\":[");
-        int ns = 1 + (int)(test_rnd(&st) * 30);
-        double sc = pow(10, (int)(test_rnd(&st) * 9) - 4), off = (test_rnd(&st) - 0.5) * 100;
-        for (int k = 0; k < 4 * ns; k++) {
-            double x = (test_rnd(&st) + off) * sc;
-            const char *sep = k % 4 == 0 ? (k ? "]],[[" : "[[") : k % 2 == 0 ? "],[" : ",";
-            w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
-        }
-        w += (size_t)sprintf(body + w, "]]]," LOPTS "}");
-        if (!random_agrees(body)) break;
-    }
-    free(body);
+    random_requests(1128, test_stress(100), random_lines);
 }
 
 /* Random solids (a tetrahedron moved and scaled, its numbers written in assorted forms: integers,
  * reals with and without exponents, long digit strings) read both ways. */
+static void random_solids(char *body, uint64_t *st, size_t t)
+{
+    (void)t;
+    size_t w = 0;
+    w += (size_t)sprintf(body + w, "{\"kind\":\"solids\",\"solids\":[");
+    int ns = 1 + (int)(test_rnd(st) * 2);
+    for (int k = 0; k < ns; k++) {
+        static const double T[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        double sc = pow(10, (int)(test_rnd(st) * 9) - 4), off = (test_rnd(st) - 0.5) * 100;
+        w += (size_t)sprintf(body + w, "%s{\"V\":[", k ? "," : "");
+        for (int v = 0; v < 4; v++)
+            for (int a = 0; a < 3; a++) {
+                double x = (T[v][a] + 0.3 * test_rnd(st)) * sc + off * sc;
+                const char *sep = a ? "," : v ? "],[" : "[";
+                w += put_number(body + w, sep, x, (int)(test_rnd(st) * 5));
+            }
+        w += (size_t)sprintf(body + w, "]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}");
+    }
+    w += (size_t)sprintf(body + w, "],\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}}");
+}
+
 TEST(packed_random_numbers)
 {
-    uint64_t st = 20261129;
-    size_t n = test_stress(200);
-    char *body = malloc(1 << 16);
-    REQUIRE(body, "out of memory");
-    for (size_t t = 0; t < n; t++) {
-        size_t w = 0;
-        w += (size_t)sprintf(body + w, "{\"kind\":\"solids\",\"solids\":[");
-        int ns = 1 + (int)(test_rnd(&st) * 2);
-        for (int k = 0; k < ns; k++) {
-            static const double T[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-            double sc = pow(10, (int)(test_rnd(&st) * 9) - 4), off = (test_rnd(&st) - 0.5) * 100;
-            w += (size_t)sprintf(body + w, "%s{\"V\":[", k ? "," : "");
-            for (int v = 0; v < 4; v++)
-                for (int a = 0; a < 3; a++) {
-                    double x = (T[v][a] + 0.3 * test_rnd(&st)) * sc + off * sc;
-                    const char *sep = a ? "," : v ? "],[" : "[";
-                    w += put_number(body + w, sep, x, (int)(test_rnd(&st) * 5));
-                }
-            w += (size_t)sprintf(body + w, "]],\"FV\":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}");
-        }
-        w += (size_t)sprintf(body + w, "],\"options\":{\"fields\":[\"V\",\"FV\",\"CF\"]}}");
-        if (!random_agrees(body)) break;
-    }
-    free(body);
+    random_requests(20261129, test_stress(200), random_solids);
 }
 
 /* api_g17 against printf's %.17g: random bit patterns, decimal numbers, integers, dyadic

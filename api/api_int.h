@@ -69,6 +69,8 @@ void api_buf_puts(api_buf *b, const char *s);
 void api_buf_u64(api_buf *b, uint64_t v);
 void api_buf_i64(api_buf *b, int64_t v);
 void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
+/* [x0,x1,...] of the dim coordinates at x, each by api_buf_double. */
+void api_buf_point(api_buf *b, const double *x, int dim);
 void api_buf_free(api_buf *b);
 void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n); /* [a0,a1,...] */
 /* The numbers' writers (larjson.c): 10^k in 128 bits (0 <= k <= 38); x > 0 written as

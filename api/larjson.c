@@ -329,6 +329,16 @@ void api_buf_double(api_buf *b, double x)
     b->len += api_format_double(x, p);
 }
 
+void api_buf_point(api_buf *b, const double *x, int dim)
+{
+    api_buf_putc(b, '[');
+    for (int k = 0; k < dim; k++) {
+        if (k) api_buf_putc(b, ',');
+        api_buf_double(b, x[k]);
+    }
+    api_buf_putc(b, ']');
+}
+
 void api_buf_free(api_buf *b)
 {
     free(b->p);
@@ -692,11 +702,8 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
             if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            api_buf_puts(b, v ? ",[" : "[");
-            api_buf_double(b, c->V[2 * v]);
-            api_buf_putc(b, ',');
-            api_buf_double(b, c->V[2 * v + 1]);
-            api_buf_putc(b, ']');
+            if (v) api_buf_putc(b, ',');
+            api_buf_point(b, c->V + 2 * v, 2);
         }
         api_buf_putc(b, ']');
     }

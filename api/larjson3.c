@@ -386,13 +386,8 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         api_buf_putc(b, '[');
         for (size_t v = 0; v < c->nv; v++) {
             if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            api_buf_puts(b, v ? ",[" : "[");
-            api_buf_double(b, c->V[3 * v]);
-            api_buf_putc(b, ',');
-            api_buf_double(b, c->V[3 * v + 1]);
-            api_buf_putc(b, ',');
-            api_buf_double(b, c->V[3 * v + 2]);
-            api_buf_putc(b, ']');
+            if (v) api_buf_putc(b, ',');
+            api_buf_point(b, c->V + 3 * v, 3);
         }
         api_buf_putc(b, ']');
     }

@@ -606,11 +606,8 @@ static void put_bool2(api_buf *b, const void *udata)
         api_buf_puts(b, "\"V\":[");
         for (size_t v = 0; v < r->c.nv; v++) {
             if (!map[v]) continue;
-            api_buf_puts(b, nv ? ",[" : "[");
-            api_buf_double(b, r->c.V[2 * v]);
-            api_buf_putc(b, ',');
-            api_buf_double(b, r->c.V[2 * v + 1]);
-            api_buf_putc(b, ']');
+            if (nv) api_buf_putc(b, ',');
+            api_buf_point(b, r->c.V + 2 * v, 2);
             map[v] = nv++;
         }
         api_buf_putc(b, ']');

@@ -272,9 +272,9 @@ char *small_body(int k, int stats, size_t *len)
     return b.p;
 }
 
-/* Medium requests (gen lines, 300..3900 segments, k = 20: 8000; no stats): cached for the
- * process. */
-#define MAX_MEDIUM 24
+/* Medium requests (gen lines, 300..3900 segments, k = 20 and k >= 24: 8000, tens of ms; no
+ * stats): cached for the process. */
+#define MAX_MEDIUM 36
 static struct {
     char *p;
     size_t n;
@@ -285,7 +285,7 @@ const char *medium(int k, size_t *len)
     if (k < 0 || k >= MAX_MEDIUM) return NULL;
     if (!medium_cache[k].p) {
         char cmd[512];
-        int n = k == 20 ? 8000 : 300 + 400 * (k % 10);
+        int n = k == 20 || k >= 24 ? 8000 : 300 + 400 * (k % 10);
         snprintf(cmd, sizeof cmd, "'%s' gen lines %d 0.1 %d --options '%s'", cli_bin(), n, 100 + k,
                  NO_STATS);
         medium_cache[k].p = run_capture(cmd, &medium_cache[k].n);

@@ -118,6 +118,7 @@ char *run_capture(const char *cmd, size_t *len);
 const char *expect_threads(const char *body, size_t blen, size_t *len, int threads, double *secs);
 const char *expect(const char *body, size_t blen, size_t *len);
 char *small_body(int k, int stats, size_t *len);
+/* k < 36: 300 + 400 (k % 10) segments, 8000 for k = 20 and k >= 24 (no stats). */
 const char *medium(int k, size_t *len);
 const char *slow_body(int k, size_t *len);
 const char *huge_body(size_t *len);

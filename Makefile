@@ -23,7 +23,7 @@ TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
               libxml2-dev libpq-dev zlib1g-dev nodejs npm
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
-              python3-shapely sqlite3 \
+              python3-shapely python3-numpy python3-scipy sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
               postgresql postgresql-client nginx-light \
               podman podman-compose runc conmon slirp4netns netavark aardvark-dns iptables \
@@ -62,7 +62,7 @@ $(BUILD)/libcellar.a: $(CORE_OBJ) $(API_OBJ)
 	ar rcs $@ $^
 
 $(BUILD)/cellar: $(BUILD)/cli/cellar.o $(BUILD)/libcellar.a
-	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) $(LDLIBS)
+	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) -lz $(LDLIBS)
 
 $(BUILD)/gen/openapi.c: schemas/openapi.json scripts/embed.sh
 	@mkdir -p $(dir $@)

@@ -42,10 +42,11 @@
 /* ---- options ------------------------------------------------------------------------------- */
 
 const render_format render_formats[] = {
-    {"json", "application/json", "application/*", 0, NULL},
-    {"svg", "image/svg+xml", "image/*", 2, render_svg},
-    {"geojson", "application/geo+json", NULL, 2, render_geojson},
-    {"obj", "model/obj", "model/*", 3, render_obj},
+    {"json", "application/json", "application/*", 0, NULL, 0},
+    {"svg", "image/svg+xml", "image/*", 2, render_svg, RENDER_MAX_BYTES},
+    {"geojson", "application/geo+json", NULL, 2, render_geojson, RENDER_MAX_BYTES},
+    {"obj", "model/obj", "model/*", 3, render_obj, RENDER_MAX_BYTES},
+    {"npz", "application/x-npz", NULL, 0, render_npz, RENDER_NPZ_MAX_BYTES},
 };
 const size_t render_nformats = sizeof render_formats / sizeof *render_formats;
 

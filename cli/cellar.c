@@ -97,11 +97,12 @@ static const char usage_text[] =
     "       result; with --format obj the result solid is written)\n"
     "  svg, solids: --format request   print the request instead of running it (to post it\n"
     "       to the service: ... --format request | curl --data-binary @- ...)\n"
-    "  run, svg, solids: --format json|svg|geojson|obj   the result JSON (default), a picture\n"
-    "       of a 2D result (SVG: faces filled, edges, y up, a Boolean's result on top), a map\n"
-    "       of it (GeoJSON FeatureCollection of the faces; of a Boolean, its result as one\n"
-    "       MultiPolygon) or the cells of a 3D result (Wavefront OBJ: a group per cell, faces\n"
-    "       triangulated facing out); with svg: --explode K (faces moved apart, K >= 1),\n"
+    "  run, svg, solids: --format json|svg|geojson|obj|npz   the result JSON (default), a\n"
+    "       picture of a 2D result (SVG: faces filled, edges, y up, a Boolean's result on top),\n"
+    "       a map of it (GeoJSON FeatureCollection of the faces; of a Boolean, its result as\n"
+    "       one MultiPolygon), the cells of a 3D result (Wavefront OBJ: a group per cell, faces\n"
+    "       triangulated facing out) or its arrays for NumPy (npz: numpy.load reads it; see\n"
+    "       the README); with svg: --explode K (faces moved apart, K >= 1),\n"
     "       --numbers (vertex and face numbers), --width PX; with geojson: --cells all (a\n"
     "       Boolean's faces too, with membership) or result; with obj: --explode K (cells\n"
     "       moved apart)\n"
@@ -965,7 +966,8 @@ int main(int argc, char **argv)
                                                     : -1;
                 if (of.kind == -1) {
                     rc = usage_error(
-                        "--format: expected json, svg, geojson, obj or request, not \"%s\"", val);
+                        "--format: expected json, svg, geojson, obj, npz or request, not \"%s\"",
+                        val);
                     goto out;
                 }
                 continue;

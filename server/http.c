@@ -351,11 +351,12 @@ static int accepts_gzip(struct MHD_Connection *mc)
 /* Media types worth compressing: every text we send. */
 static int compressible(const char *ctype)
 {
-    return ctype && (!strncmp(ctype, "application/json", 16) ||
-                     !strncmp(ctype, "application/problem+json", 24) ||
-                     !strncmp(ctype, "application/geo+json", 20) ||
-                     !strncmp(ctype, "image/svg+xml", 13) || !strncmp(ctype, "model/obj", 9) ||
-                     !strncmp(ctype, "text/", 5) || !strncmp(ctype, "application/javascript", 22));
+    return ctype &&
+           (!strncmp(ctype, "application/json", 16) ||
+            !strncmp(ctype, "application/problem+json", 24) ||
+            !strncmp(ctype, "application/geo+json", 20) || !strncmp(ctype, "image/svg+xml", 13) ||
+            !strncmp(ctype, "model/obj", 9) || !strncmp(ctype, "application/x-npz", 17) ||
+            !strncmp(ctype, "text/", 5) || !strncmp(ctype, "application/javascript", 22));
 }
 
 /* Whether an answer of this type and size goes gzipped to a client that takes gzip. */
@@ -526,10 +527,6 @@ static json_t *job_json(const job_info *ji)
     return o;
 }
 
-/* Results of more than this are not rendered on an HTTP thread (rendering costs about ten
- * times the result's size in memory and ~0.2 s per MB). */
-#define RENDER_MAX_BYTES (16u << 20)
-
 /* The strong ETag of a result's representation: its hash, the rendering's suffix, and "-gz"
  * when it goes gzipped (every representation has its own). */
 static void result_etag(const conn *c, const char *hash, char *etag, size_t n)
@@ -563,9 +560,9 @@ static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
 {
     char msg[200];
     snprintf(msg, sizeof msg,
-             "the result is %llu bytes: pictures and maps are made of results up to %u bytes; "
+             "the result is %llu bytes: its %s form is made of results up to %lu bytes; "
              "ask for application/json",
-             (unsigned long long)len, RENDER_MAX_BYTES);
+             (unsigned long long)len, c->fmt->name, c->fmt->max);
     return problem(c, 422, msg, NULL, NULL);
 }
 
@@ -584,7 +581,7 @@ static enum MHD_Result respond_result(conn *c, const char *hash, char *body, siz
         char *pic = NULL;
         size_t piclen = 0;
         api_error ae;
-        if (len > RENDER_MAX_BYTES) {
+        if (len > c->fmt->max) {
             free(body);
             return too_large_to_draw(c, len);
         }
@@ -736,7 +733,7 @@ static enum MHD_Result serve_stored(conn *c, const char *hash, uint64_t size, co
     char *body = NULL;
     size_t len = 0;
     store *st = c->h->st;
-    if (rendered(c) && size > RENDER_MAX_BYTES) return too_large_to_draw(c, size);
+    if (rendered(c) && size > c->fmt->max) return too_large_to_draw(c, size);
     if (!rendered(c) && size > STORE_CHUNK) {
         result_reader *rr = calloc(1, sizeof *rr);
         if (!rr) return problem(c, 503, "out of memory", "5", NULL);
@@ -837,7 +834,7 @@ static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char 
             q->failed = 1;
             q->err.status = API_EINVALID;
             snprintf(q->err.msg, sizeof q->err.msg,
-                     "format: expected json, svg, geojson or obj, got \"%.40s\"",
+                     "format: expected json, svg, geojson, obj or npz, got \"%.40s\"",
                      value ? value : "");
         }
         q->c->fmt = f;
@@ -869,8 +866,9 @@ static int negotiate(conn *c, enum MHD_Result *r)
     if (!c->fmt) {
         *r = problem(c, 406,
                      "results are application/json, image/svg+xml (a picture of a 2D result), "
-                     "application/geo+json (a map of a 2D result) or model/obj (the cells of a "
-                     "3D result); a link can ask with ?format=json|svg|geojson|obj",
+                     "application/geo+json (a map of a 2D result), model/obj (the cells of a "
+                     "3D result) or application/x-npz (its arrays for NumPy); a link can ask "
+                     "with ?format=json|svg|geojson|obj|npz",
                      NULL, NULL);
         return 1;
     }

@@ -135,8 +135,9 @@ async function verifyPicture(label, { pixels = true } = {}) {
   }
   const links = await page.$$eval('#downloads a', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href')]));
   const want = dim === 2
-    ? [['json', `/v1/results/${hash}`], ['svg', `/v1/results/${hash}?format=svg`], ['geojson', `/v1/results/${hash}?format=geojson`]]
-    : [['json', `/v1/results/${hash}`], ['obj', `/v1/results/${hash}?format=obj`]];
+    ? [['json', `/v1/results/${hash}`], ['svg', `/v1/results/${hash}?format=svg`], ['geojson', `/v1/results/${hash}?format=geojson`],
+      ['npz', `/v1/results/${hash}?format=npz`]]
+    : [['json', `/v1/results/${hash}`], ['obj', `/v1/results/${hash}?format=obj`], ['npz', `/v1/results/${hash}?format=npz`]];
   if (JSON.stringify(links) !== JSON.stringify(want)) throw new Error(`downloads ${JSON.stringify(links)}`);
   if (outdir) await page.screenshot({ path: path.join(outdir, `${label.replace(/[^A-Za-z0-9.]+/g, '_')}.png`) });
   return res;

@@ -17,6 +17,7 @@
  * its directory is kept. */
 #include "tests/daemon.h"
 #include "api/api.h"
+#include "api/render.h"
 #include "server/store.h"
 
 #include <arpa/inet.h>
@@ -2010,6 +2011,7 @@ SERVER_TEST(browser_http, "--workers 1 --job-threads 2 --cache-bytes 40000000 "
     } fm[] = {{"svg", "image/svg+xml", 200},
               {"geojson", "application/geo+json", 200},
               {"json", "application/json", 200},
+              {"npz", "application/x-npz", 200},
               {"obj", NULL, 422},
               {"png", NULL, 422}};
     const char *small = medium(0, &len);
@@ -2030,6 +2032,30 @@ SERVER_TEST(browser_http, "--workers 1 --job-threads 2 --cache-bytes 40000000 "
             CHECK(hget(&r, "ETag", e, sizeof e) && !strncmp(e, etag, 65) &&
                       (strcmp(fm[i].q, "json") ? strstr(e, fm[i].q) != NULL : !strcmp(e, etag)),
                   "?format=%s: ETag %s", fm[i].q, e);
+            if (!strcmp(fm[i].q, "npz")) { /* what render_npz makes of the result JSON */
+                hresp j;
+                char *z = NULL;
+                size_t zl = 0;
+                api_error ae;
+                snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+                http_get(d, path, &j);
+                CHECK(j.status == 200 && render_npz(j.body.p, j.body.n, NULL, &z, &zl, &ae) == 0 &&
+                          zl == r.body.n && !memcmp(z, r.body.p, zl),
+                      "?format=npz: %zu bytes, not the npz of the result (%zu)", r.body.n, zl);
+                free(z);
+                hresp_free(&j);
+                /* gzipped to a client that takes gzip, with an ETag of its own */
+                snprintf(path, sizeof path, "/v1/results/%.64s", etag + 1);
+                hreq n = {.path = path, .decode = 1};
+                n.h[0] = "Accept: application/x-npz";
+                hresp zr;
+                http_do(d, &n, &zr);
+                CHECK(zr.status == 200 && has_header(&zr, "Content-Encoding", "gzip") &&
+                          zr.body.n == r.body.n && !memcmp(zr.body.p, r.body.p, r.body.n) &&
+                          hget(&zr, "ETag", e, sizeof e) && strstr(e, "npz") && strstr(e, "-gz"),
+                      "Accept npz, gzip: %ld, %zu bytes", zr.status, zr.body.n);
+                hresp_free(&zr);
+            }
         } else {
             path[strcspn(path, "?")] = 0; /* the problem's instance: the path alone */
             check_problem(d, &r, fm[i].status, path, fm[i].q);

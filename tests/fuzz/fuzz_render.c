@@ -1,6 +1,6 @@
 /* fuzz_render.c — libFuzzer target: the result readers of the renderers of api/render.h, the
  * input taken as a result JSON (LAR JSON): render_svg and render_geojson (2D), render_obj (3D),
- * each with the default options and, when that draws, again with the other paths on (numbers,
+ * render_npz (any), each with the default options and, when that draws, again with the other paths on (numbers,
  * an exploded picture, GeoJSON with every cell, an exploded OBJ).
  *
  * Checks beyond the sanitizers: "a bad result is a value, never a crash": every answer is
@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "api/api.h"
 #include "api/render.h"
@@ -57,6 +58,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         render_opts p = o;
         p.cells = 1;
         run("render_geojson cells", render_geojson, text, size, &p, 1);
+    }
+    { /* npz is binary: a zip whose end record closes it, or a refusal */
+        char *out = NULL;
+        size_t outlen = 0;
+        api_error err = {0};
+        int rc = render_npz(text, size, &o, &out, &outlen, &err);
+        FUZZ_CHECK(rc == API_OK || rc == API_EINVALID || rc == API_ENOMEM, "render_npz: %d", rc);
+        if (rc == API_OK)
+            FUZZ_CHECK(out && outlen >= 22 && !memcmp(out, "PK", 2) &&
+                           !memcmp(out + outlen - 22, "PK\x05\x06", 4),
+                       "render_npz: not a zip");
+        else
+            fuzz_check_answer("render_npz", rc, out, outlen, &err, 0);
+        free(out);
     }
     if (run("render_obj", render_obj, text, size, &o, 0) == API_OK) {
         render_opts p = o;

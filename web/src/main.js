@@ -436,6 +436,7 @@ function showResult(model, hash, size, notes) {
   const links = [['JSON', base, 'json']];
   if (model.dim === 2) links.push(['SVG', `${base}?format=svg`, 'svg'], ['GeoJSON', `${base}?format=geojson`, 'geojson']);
   else links.push(['OBJ', `${base}?format=obj`, 'obj']);
+  links.push(['NPZ', `${base}?format=npz`, 'npz']);
   links.forEach(([label, href, ext], i) => {
     const a = document.createElement('a');
     a.href = href;

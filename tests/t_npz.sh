@@ -1,0 +1,21 @@
+#!/bin/sh
+# t_npz.sh — results as NumPy arrays (--format npz, ?format=npz) read by numpy and scipy, as a
+# user reads them: the README's two lines run as written, and every array against the result's
+# JSON (V, EV, the rows, holes, the operators as scipy matrices with d1·d2 = 0 and d2·d3 = 0,
+# membership, the Boolean's result, the rest in "json"), for 2D lines, SVG, polygons and 3D
+# solids, and a 100 000-segment result.  See tests/npz_check.py.
+set -u
+cd "$(dirname "$0")/.." || exit 1
+. tests/lib.sh
+export CELLAR_BUILD="${CELLAR_BUILD:-build}"
+export CELLAR_BIN="${CELLAR_BIN:-$CELLAR_BUILD/cellar}"
+case $CELLAR_BIN in /*) ;; *) CELLAR_BIN="$(pwd)/$CELLAR_BIN" ;; esac
+[ -x "$CELLAR_BIN" ] || give_up "$CELLAR_BIN is not built"
+# python3 with numpy and scipy: the one on PATH, else Debian's (python3-numpy, python3-scipy)
+PY=${PYTHON:-python3}
+if ! $PY -c 'import numpy, scipy.sparse' 2>/dev/null; then
+    PY=/usr/bin/python3
+fi
+$PY -c 'import numpy, scipy.sparse' 2>/dev/null ||
+    give_up "python3 with numpy and scipy is needed: apt-get install python3-numpy python3-scipy (make deps)"
+run_py $PY tests/npz_check.py "$T"

@@ -135,11 +135,13 @@ stress: deps
 bench: deps
 	@scripts/deps.sh $(DEPS_BENCH)
 	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement \
-	    $(BUILD)/bench/geos_polygonize $(BUILD)/bench/geos_bool2 $(BUILD)/tests/ref/cgal_bool
+	    $(BUILD)/bench/geos_polygonize $(BUILD)/bench/geos_bool2 $(BUILD)/tests/ref/cgal_bool \
+	    $(BUILD)/bench/io
 	@if command -v npm >/dev/null 2>&1 && [ ! -d bench/node_modules/manifold-3d ]; then \
 	    npm ci --prefix bench --no-audit --no-fund >/dev/null 2>&1 || \
 	    echo "bench: npm ci --prefix bench failed: manifold is skipped" >&2; fi
-	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/run3d.sh $(BUILD) || s=1; echo; \
+	@s=0; bench/run.sh $(BUILD) || s=1; echo; bench/io.sh $(BUILD) || s=1; echo; \
+	    bench/run3d.sh $(BUILD) || s=1; echo; \
 	    bench/runbool.sh $(BUILD) || s=1; echo; bench/runbool2.sh $(BUILD) || s=1; echo; \
 	    bench/runmany.sh $(BUILD) || s=1; echo; \
 	    python3 bench/mesh3.py $(BUILD) $(BENCH_MESH3_ARGS) || s=1; exit $$s
@@ -151,6 +153,9 @@ $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 $(BUILD)/bench/geos_bool2: bench/geos_bool2.c tests/ref/geos_ref.c tests/ref/geos_ref.h
 	@mkdir -p $(dir $@)
 	$(CC) -std=c17 -O2 -Wall -Wextra -Werror -I. -o $@ bench/geos_bool2.c tests/ref/geos_ref.c -ljansson -lgeos_c -lm
+
+$(BUILD)/bench/io: $(BUILD)/bench/io.o $(BUILD)/libcellar.a
+	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) -lz $(LDLIBS)
 
 $(BUILD)/bench/geos_polygonize: bench/geos_polygonize.c tests/ref/geos_ref.c tests/ref/geos_ref.h
 	@mkdir -p $(dir $@)

@@ -497,10 +497,11 @@ size_t api_g17(double x, char *buf)
         return (size_t)(p - buf);
     }
     if (!(x >= 1e-6 && x < 1e38)) return 0;
-    int e2;
-    double fr = frexp(x, &e2);
-    uint64_t m = (uint64_t)ldexp(fr, 53); /* x = m 2^e exactly */
-    int e = e2 - 53, E = (int)floor(log10(x));
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits); /* x is normal here: x = m 2^e exactly */
+    uint64_t m = (bits & (((uint64_t)1 << 52) - 1)) | (uint64_t)1 << 52;
+    int e2 = (int)(bits >> 52 & 0x7ff) - 1022; /* 2^(e2 - 1) <= x < 2^e2 */
+    int e = e2 - 53, E = (int)floor((e2 - 1) * 0.30102999566398120); /* log10 x, or one below */
     u128 d = 0, f = 0, lo = api_pow10_u128(16), hi = api_pow10_u128(17);
     for (int tries = 0;; tries++) { /* E: 10^16 <= x 10^(16 - E) < 10^17, before rounding */
         if (tries == 4 || !scaled(m, e, 16 - E, &d, &f)) return 0;
@@ -524,11 +525,16 @@ static size_t real_text(double x, char *buf)
         int n = snprintf(buf, 40, "%.17g", x);
         len = n > 0 ? (size_t)n : 0;
     }
-    if (!strchr(buf, '.') && !strchr(buf, 'e')) {
+    char *e = NULL;
+    int point = 0;
+    for (size_t i = 0; i < len; i++) {
+        point |= buf[i] == '.';
+        if (buf[i] == 'e') e = buf + i;
+    }
+    if (!point && !e) {
         memcpy(buf + len, ".0", 3);
         len += 2;
     }
-    char *e = strchr(buf, 'e');
     if (e) {
         char *start = e + 1, *end = e + 2;
         if (*start == '-') start++;

@@ -65,6 +65,7 @@ typedef struct scratch {
 typedef struct ctx {
     const arr2_opts *o;
     const double *in; /* the input segments (borrowed) */
+    size_t n_in;      /* their number */
     int threads;
     atomic_int fail; /* set by workers: ARR_ENOMEM or ARR_ECANCELED */
     /* snap */
@@ -91,6 +92,7 @@ typedef struct ctx {
     vbuf nearp[MAXW], nears[MAXW]; /* uint32 */
     struct nbox *nbox;             /* by tree item: its segment's box, each leaf's by x0 */
     uint8_t *pinned;               /* npix: the vertex keeps its grid coordinates */
+    uint32_t *ep; /* with input_coords, 2n: the pixel of input endpoint 2i + k (NONE: not known) */
     scratch scr[MAXW];
     stop_meter meter[MAXW]; /* each worker's cancel meter */
     stop_meter serial;      /* the calling thread's, in the serial stages */
@@ -481,6 +483,11 @@ static void split_segments(void *vc, size_t chunk, int w)
             sc->val[i] = pid;
         }
         sort_keyed(sc->key, sc->val, k);
+        if (c->ep && k >= 2 && !ipt_cmp(c->pix[sc->val[0]], sg->a) &&
+            !ipt_cmp(c->pix[sc->val[k - 1]], sg->b)) { /* the input's endpoints' pixels */
+            c->ep[2 * (size_t)sg->id + sg->rev] = sc->val[0];
+            c->ep[2 * (size_t)sg->id + !sg->rev] = sc->val[k - 1];
+        }
         if (vbuf_reserve(out, out->n + k, sizeof(uint64_t))) {
             atomic_store(&c->fail, ARR_ENOMEM);
             return;
@@ -892,6 +899,11 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     free(inc);
     inc = NULL;
     span ss = {c, "split", 0.5, 0.9};
+    if (c->o->input_coords) {
+        c->ep = malloc((2 * c->n_in + 1) * sizeof *c->ep);
+        if (!c->ep) goto fail;
+        for (size_t i = 0; i < 2 * c->n_in; i++) c->ep[i] = NONE;
+    }
     par_for_ex(c->threads, (c->m + SEG_CHUNK - 1) / SEG_CHUNK, split_segments, c, span_tick, &ss);
     if ((rc = atomic_load(&c->fail))) goto fail;
     rc = ARR_ENOMEM;
@@ -1696,6 +1708,8 @@ static void ctx_free(ctx *c)
     free(c->nbox);
     free(c->pinned);
     c->pinned = NULL;
+    free(c->ep);
+    c->ep = NULL;
     for (int w = 0; w < MAXW; w++) {
         free(c->nearp[w].p);
         free(c->nears[w].p);
@@ -1712,7 +1726,9 @@ static void ctx_free(ctx *c)
 }
 
 /* With input_coords: for every vertex (hot pixel, g->P sorted), the first input endpoint that
- * snapped to it (2i for segment i's start, 2i+1 for its end), or NONE for a crossing. */
+ * snapped to it (2i for segment i's start, 2i+1 for its end), or NONE for a crossing.  The split
+ * stage noted the pixel of each endpoint of a segment of non-zero length (c->ep); the others are
+ * looked up. */
 static int vertex_sources(const ctx *c, const double *seg, size_t n, graph *g)
 {
     g->src = malloc((g->nv + 1) * sizeof *g->src);
@@ -1720,6 +1736,12 @@ static int vertex_sources(const ctx *c, const double *seg, size_t n, graph *g)
     for (size_t v = 0; v < g->nv; v++) g->src[v] = NONE;
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 2; k++) {
+            uint32_t q = c->ep ? c->ep[2 * i + (size_t)k] : NONE;
+            if (q != NONE) {
+                if (g->src[q] == NONE && !(c->pinned && c->pinned[q]))
+                    g->src[q] = (uint32_t)(2 * i + (size_t)k);
+                continue;
+            }
             ipt p = {snap_coord(c, 0, seg[4 * i + 2 * k]),
                      snap_coord(c, 1, seg[4 * i + 2 * k + 1])};
             size_t lo = 0, hi = g->nv;
@@ -1753,6 +1775,7 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     if (!c) return seterr(err, errlen, ARR_ENOMEM, "out of memory");
     c->o = opts ? opts : &defaults;
     c->in = seg;
+    c->n_in = n;
     c->threads = c->o->threads > 0 ? c->o->threads : par_ncpu();
     if (c->threads > MAXW) c->threads = MAXW;
     atomic_init(&c->fail, 0);

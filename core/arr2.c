@@ -1254,15 +1254,69 @@ static int hit_below(const graph *g, uint32_t e, ipt p, i128 *num, i128 *den, ui
     return 1;
 }
 
+#define PLACE_CHUNK 64 /* components per work item */
+
+typedef struct place_job {
+    ctx *c;
+    const graph *g;
+    const uint32_t *comp, *low, *soff, *sedge; /* see place_components */
+    int64_t minx;
+    int shift; /* slabs are 2^shift wide */
+    uint32_t *hit; /* per component: the half-edge whose face is just below it, or NONE */
+    size_t n;      /* components */
+} place_job;
+
+/* Components [chunk * PLACE_CHUNK, ...): the first edge of another component straight below
+ * each one's lowest vertex, as the half-edge with the face above on its left. */
+static void place_chunk(void *vj, size_t chunk, int wk)
+{
+    place_job *j = vj;
+    const graph *g = j->g;
+    size_t k0 = chunk * PLACE_CHUNK, k1 = k0 + PLACE_CHUNK;
+    for (size_t k = k0; k < k1 && k < j->n; k++) {
+        ipt p = g->P[j->low[k]];
+        uint64_t s = (uint64_t)(p.x - j->minx) >> j->shift;
+        if (worker_stop(j->c, wk, j->soff[s + 1] - j->soff[s] + 1)) return;
+        i128 bn = 0, bd = 0;
+        uint32_t be = NONE, bat = NONE;
+        for (uint32_t i = j->soff[s]; i < j->soff[s + 1]; i++) {
+            uint32_t e = j->sedge[i], at;
+            if (j->comp[g->EV[2 * e]] == k) continue;
+            i128 n, d;
+            if (!hit_below(g, e, p, &n, &d, &at)) continue;
+            if (be == NONE || n * bd > bn * d) {
+                bn = n;
+                bd = d;
+                be = e;
+                bat = at;
+            }
+        }
+        uint32_t h = NONE;
+        if (be != NONE && bat != NONE) { /* a vertex: the wedge there that holds "up" */
+            const uint32_t *o = g->out + g->off[bat];
+            size_t d = g->off[bat + 1] - g->off[bat], jj = d - 1;
+            for (size_t i = 0; i < d; i++) {
+                int64_t dx, dy;
+                he_dir(g, o[i], &dx, &dy);
+                if (dir_cmp(dx, dy, 0, 1) < 0) jj = i;
+            }
+            h = o[jj];
+        } else if (be != NONE) {
+            h = 2 * be; /* leaves the left end: the face above is on its left */
+        }
+        j->hit[k] = h;
+    }
+}
+
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
  * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
-static int place_components(const graph *g, const walks *w, const uint32_t *comp, size_t ncomp,
-                            const uint32_t *comp_outer, uint32_t *face_of)
+static int place_components(ctx *c, const graph *g, const walks *w, const uint32_t *comp,
+                            size_t ncomp, const uint32_t *comp_outer, uint32_t *face_of)
 {
     int rc = ARR_ENOMEM;
     uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
     uint32_t *found = malloc(ncomp * sizeof *found);
-    uint32_t *soff = NULL, *sedge = NULL;
+    uint32_t *soff = NULL, *sedge = NULL, *es = NULL;
     if (!low || !par || !found) goto out;
     for (size_t k = 0; k < ncomp; k++) {
         low[k] = NONE;
@@ -1277,71 +1331,46 @@ static int place_components(const graph *g, const walks *w, const uint32_t *comp
         minx = p.x < minx ? p.x : minx;
         maxx = p.x > maxx ? p.x : maxx;
     }
-    /* vertical slabs of edges: each edge listed in every slab its x-range meets */
+    /* vertical slabs of edges, 2^shift wide: each edge listed in every slab its x-range
+     * meets; the slabs of each edge found once (es, two per edge) */
     size_t ns = 1;
     while (ns * ns < g->ne) ns *= 2;
-    uint64_t width, total;
+    uint64_t total;
+    int shift = 0;
+    es = malloc((2 * g->ne + 1) * sizeof *es);
+    if (!es) goto out;
     for (;;) {
-        width = (uint64_t)(maxx - minx) / ns + 1;
+        shift = 0;
+        while (((uint64_t)(maxx - minx) >> shift) >= ns) shift++;
         total = 0;
-        for (size_t e = 0; e < g->ne; e++)
-            total += (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width -
-                     (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width + 1;
+        for (size_t e = 0; e < g->ne; e++) {
+            es[2 * e] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e]].x - minx) >> shift);
+            es[2 * e + 1] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) >> shift);
+            total += es[2 * e + 1] - es[2 * e] + 1;
+        }
         if (total <= 8 * (uint64_t)g->ne + ns || ns == 1) break;
         ns /= 2;
     }
     soff = calloc(ns + 2, sizeof *soff);
     sedge = malloc((total + 1) * sizeof *sedge);
     if (!soff || !sedge) goto out;
-    for (size_t e = 0; e < g->ne; e++) {
-        uint64_t s0 = (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width;
-        uint64_t s1 = (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width;
-        for (uint64_t s = s0; s <= s1; s++) soff[s + 1]++;
-    }
+    for (size_t e = 0; e < g->ne; e++)
+        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) soff[s + 1]++;
     for (size_t s = 0; s < ns + 1; s++) soff[s + 1] += soff[s];
-    for (size_t e = 0; e < g->ne; e++) {
-        uint64_t s0 = (uint64_t)(g->P[g->EV[2 * e]].x - minx) / width;
-        uint64_t s1 = (uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) / width;
-        for (uint64_t s = s0; s <= s1; s++) sedge[soff[s]++] = (uint32_t)e;
-    }
+    for (size_t e = 0; e < g->ne; e++)
+        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) sedge[soff[s]++] = (uint32_t)e;
     for (size_t s = ns + 1; s > 0; s--) soff[s] = soff[s - 1];
     soff[0] = 0;
 
+    /* each component's half-edge below its lowest vertex, in parallel; then, in order, the
+     * face it is a hole of, or the component whose outer walk holds it */
+    place_job pj = {c, g, comp, low, soff, sedge, minx, shift, found, ncomp};
+    par_for(c->threads, (ncomp + PLACE_CHUNK - 1) / PLACE_CHUNK, place_chunk, &pj);
+    if ((rc = atomic_load(&c->fail))) goto out;
     for (size_t k = 0; k < ncomp; k++) {
-        ipt p = g->P[low[k]];
-        uint64_t s = (uint64_t)(p.x - minx) / width;
-        if (g_stop(g, soff[s + 1] - soff[s] + 1)) {
-            rc = ARR_ECANCELED;
-            goto out;
-        }
-        i128 bn = 0, bd = 0;
-        uint32_t be = NONE, bat = NONE;
-        for (uint32_t i = soff[s]; i < soff[s + 1]; i++) {
-            uint32_t e = sedge[i], at;
-            if (comp[g->EV[2 * e]] == k) continue;
-            i128 n, d;
-            if (!hit_below(g, e, p, &n, &d, &at)) continue;
-            if (be == NONE || n * bd > bn * d) {
-                bn = n;
-                bd = d;
-                be = e;
-                bat = at;
-            }
-        }
-        if (be == NONE) continue; /* nothing below: in the unbounded face */
-        uint32_t h;
-        if (bat != NONE) { /* a vertex: the wedge there that holds the upward direction */
-            const uint32_t *o = g->out + g->off[bat];
-            size_t d = g->off[bat + 1] - g->off[bat], j = d - 1;
-            for (size_t i = 0; i < d; i++) {
-                int64_t dx, dy;
-                he_dir(g, o[i], &dx, &dy);
-                if (dir_cmp(dx, dy, 0, 1) < 0) j = i;
-            }
-            h = o[j];
-        } else {
-            h = 2 * be; /* leaves the left end: the face above is on its left */
-        }
+        uint32_t h = found[k];
+        found[k] = NONE;
+        if (h == NONE) continue; /* nothing below: in the unbounded face */
         uint32_t cyc = w->cyc_of[h];
         if (w->area2[cyc] > 0)
             found[k] = cyc;
@@ -1365,6 +1394,7 @@ out:
     free(found);
     free(soff);
     free(sedge);
+    free(es);
     return rc;
 }
 
@@ -1657,7 +1687,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 
     /* holes */
     if (ncomp > 1) {
-        rc = place_components(g, &w, comp, ncomp, comp_outer, face_of);
+        rc = place_components(c, g, &w, comp, ncomp, comp_outer, face_of);
         if (rc) {
             if (rc == ARR_EINTERNAL) seterr(err, el, rc, "internal: inconsistent hole placement");
             goto fail;

@@ -1121,34 +1121,57 @@ static inline void he_dir(const graph *g, uint32_t h, int64_t *dx, int64_t *dy)
     *dy = b.y - a.y;
 }
 
-/* Sorts each vertex's outgoing half-edges counter-clockwise; pos[h] = index of h in its list.
- * Returns -1 if two edges leave a vertex in the same direction (cannot happen after snap
- * rounding; checked rather than assumed), -2 when cancelled. */
-static int sort_around_vertices(const graph *g, uint32_t *pos)
+#define VERT_CHUNK 4096 /* vertices per work item of the face stage */
+
+typedef struct sort_job {
+    ctx *c;
+    const graph *g;
+    uint32_t *pos;
+    atomic_int same; /* two edges leave a vertex in the same direction */
+} sort_job;
+
+static void sort_chunk(void *vj, size_t chunk, int wk)
 {
-    for (size_t v = 0; v < g->nv; v++) {
+    sort_job *j = vj;
+    const graph *g = j->g;
+    size_t v0 = chunk * VERT_CHUNK, v1 = v0 + VERT_CHUNK < g->nv ? v0 + VERT_CHUNK : g->nv;
+    for (size_t v = v0; v < v1; v++) {
         uint32_t *o = g->out + g->off[v];
         size_t d = g->off[v + 1] - g->off[v];
-        if (g_stop(g, d * d + 1)) return -2;
+        if (worker_stop(j->c, wk, d * d + 1)) return;
         for (size_t i = 1; i < d; i++) {
             uint32_t h = o[i];
             int64_t hx, hy;
             he_dir(g, h, &hx, &hy);
-            size_t j = i;
-            while (j > 0) {
+            size_t k = i;
+            while (k > 0) {
                 int64_t px, py;
-                he_dir(g, o[j - 1], &px, &py);
-                int k = dir_cmp(px, py, hx, hy);
-                if (k == 0) return -1;
-                if (k < 0) break;
-                o[j] = o[j - 1];
-                j--;
+                he_dir(g, o[k - 1], &px, &py);
+                int cmp = dir_cmp(px, py, hx, hy);
+                if (cmp == 0) {
+                    atomic_store(&j->same, 1);
+                    return;
+                }
+                if (cmp < 0) break;
+                o[k] = o[k - 1];
+                k--;
             }
-            o[j] = h;
+            o[k] = h;
         }
-        for (size_t i = 0; i < d; i++) pos[o[i]] = (uint32_t)i;
+        for (size_t i = 0; i < d; i++) j->pos[o[i]] = (uint32_t)i;
     }
-    return 0;
+}
+
+/* Sorts each vertex's outgoing half-edges counter-clockwise, in parallel; pos[h] = index of h
+ * in its list.  Returns -1 if two edges leave a vertex in the same direction (cannot happen
+ * after snap rounding; checked rather than assumed), -2 when cancelled. */
+static int sort_around_vertices(ctx *c, const graph *g, uint32_t *pos)
+{
+    sort_job j = {.c = c, .g = g, .pos = pos};
+    atomic_init(&j.same, 0);
+    par_for(c->threads, (g->nv + VERT_CHUNK - 1) / VERT_CHUNK, sort_chunk, &j);
+    if (atomic_load(&j.same)) return -1;
+    return atomic_load(&c->fail) ? -2 : 0;
 }
 
 static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
@@ -1156,14 +1179,6 @@ static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
     uint32_t v = he_head(g, h), t = h ^ 1;
     uint32_t d = g->off[v + 1] - g->off[v], i = pos[t];
     return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
-}
-
-/* The half-edge from u to v (they are adjacent); a scan of u's few edges. */
-static uint32_t find_half_edge(const graph *g, uint32_t u, uint32_t v)
-{
-    for (uint32_t i = g->off[u]; i < g->off[u + 1]; i++)
-        if (he_head(g, g->out[i]) == v) return g->out[i];
-    return NONE;
 }
 
 static uint32_t uf_find(uint32_t *par, uint32_t x)
@@ -1192,14 +1207,61 @@ static void walks_free(walks *w)
     memset(w, 0, sizeof *w);
 }
 
-static int walk_faces(const graph *g, const uint32_t *pos, walks *w)
+#define HE_CHUNK 16384 /* half-edges (or cycles) per work item of the walks */
+
+typedef struct walk_job {
+    ctx *c;
+    const graph *g;
+    const uint32_t *pos;
+    uint32_t *next; /* the half-edge after each one around its face */
+    walks *w;
+} walk_job;
+
+static void next_chunk(void *vj, size_t chunk, int wk)
+{
+    walk_job *j = vj;
+    size_t nh = 2 * j->g->ne, h0 = chunk * HE_CHUNK, h1 = h0 + HE_CHUNK < nh ? h0 + HE_CHUNK : nh;
+    if (worker_stop(j->c, wk, h1 - h0)) return;
+    for (size_t h = h0; h < h1; h++) j->next[h] = he_next(j->g, j->pos, (uint32_t)h);
+}
+
+static void area_chunk(void *vj, size_t chunk, int wk)
+{
+    walk_job *j = vj;
+    const walks *w = j->w;
+    const graph *g = j->g;
+    size_t c0 = chunk * HE_CHUNK, c1 = c0 + HE_CHUNK < w->ncyc ? c0 + HE_CHUNK : w->ncyc;
+    if (worker_stop(j->c, wk, w->hoff[c1] - w->hoff[c0] + 1)) return;
+    for (size_t cy = c0; cy < c1; cy++) {
+        i128 a2 = 0;
+        for (uint32_t i = w->hoff[cy]; i < w->hoff[cy + 1]; i++) {
+            uint32_t h = w->hes[i];
+            ipt p = g->P[he_tail(g, h)], q = g->P[he_head(g, h)];
+            a2 += cross2(p.x, p.y, q.x, q.y);
+        }
+        w->area2[cy] = a2;
+    }
+}
+
+/* The boundary walks: each half-edge's successor around its face (in parallel), the cycles
+ * they make (in half-edge order), and each cycle's twice signed area (in parallel). */
+static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
 {
     size_t nh = 2 * g->ne, cap = 64;
+    uint32_t *next = malloc((nh + 1) * sizeof *next);
     w->cyc_of = malloc((nh + 1) * sizeof *w->cyc_of);
     w->hes = malloc((nh + 1) * sizeof *w->hes);
     w->hoff = malloc(cap * sizeof *w->hoff);
-    w->area2 = malloc(cap * sizeof *w->area2);
-    if (!w->cyc_of || !w->hes || !w->hoff || !w->area2) return ARR_ENOMEM;
+    if (!next || !w->cyc_of || !w->hes || !w->hoff) {
+        free(next);
+        return ARR_ENOMEM;
+    }
+    walk_job j = {c, g, pos, next, w};
+    par_for(c->threads, (nh + HE_CHUNK - 1) / HE_CHUNK, next_chunk, &j);
+    if (atomic_load(&c->fail)) {
+        free(next);
+        return ARR_ECANCELED;
+    }
     for (size_t h = 0; h < nh; h++) w->cyc_of[h] = NONE;
     size_t k = 0;
     w->hoff[0] = 0;
@@ -1208,26 +1270,33 @@ static int walk_faces(const graph *g, const uint32_t *pos, walks *w)
         if (w->ncyc + 2 > cap) {
             cap *= 2;
             uint32_t *a = realloc(w->hoff, cap * sizeof *a);
-            if (a) w->hoff = a;
-            i128 *b = realloc(w->area2, cap * sizeof *b);
-            if (b) w->area2 = b;
-            if (!a || !b) return ARR_ENOMEM;
+            if (!a) {
+                free(next);
+                return ARR_ENOMEM;
+            }
+            w->hoff = a;
         }
-        uint32_t c = (uint32_t)w->ncyc++, h = (uint32_t)h0;
-        i128 a2 = 0;
+        uint32_t cy = (uint32_t)w->ncyc++, h = (uint32_t)h0;
         do {
-            if (w->cyc_of[h] != NONE || k >= nh) return ARR_EINTERNAL;
-            if (g_stop(g, 1)) return ARR_ECANCELED;
-            w->cyc_of[h] = c;
+            if (w->cyc_of[h] != NONE || k >= nh) {
+                free(next);
+                return ARR_EINTERNAL;
+            }
+            w->cyc_of[h] = cy;
             w->hes[k++] = h;
-            ipt p = g->P[he_tail(g, h)], q = g->P[he_head(g, h)];
-            a2 += cross2(p.x, p.y, q.x, q.y);
-            h = he_next(g, pos, h);
+            h = next[h];
         } while (h != h0);
-        w->hoff[c + 1] = (uint32_t)k;
-        w->area2[c] = a2;
+        if (g_stop(g, k - w->hoff[cy] + 1)) {
+            free(next);
+            return ARR_ECANCELED;
+        }
+        w->hoff[cy + 1] = (uint32_t)k;
     }
-    return ARR_OK;
+    free(next);
+    w->area2 = malloc((w->ncyc + 1) * sizeof *w->area2);
+    if (!w->area2) return ARR_ENOMEM;
+    par_for(c->threads, (w->ncyc + HE_CHUNK - 1) / HE_CHUNK, area_chunk, &j);
+    return atomic_load(&c->fail) ? ARR_ECANCELED : ARR_OK;
 }
 
 /* Highest point strictly below p where edge e meets the vertical line through p, as the
@@ -1401,16 +1470,19 @@ out:
 /* ---- the whole pipeline ----------------------------------------------------------------- */
 
 /* Splits a closed walk of vertices at its repeated vertices into simple cycles, in walk
- * order; appends them to the cycle table (*k vertices, *np cycles so far) and their signs
- * (1: counter-clockwise) to pos.  instack has nv entries, all NONE, and is left so. */
-static void split_walk(const graph *g, const uint32_t *walk, size_t len, uint32_t *stack,
-                       uint32_t *instack, uint32_t *cyc, uint32_t *off, uint8_t *pos, size_t *k,
-                       size_t *np)
+ * order; appends them to the cycle table (*k vertices, *np cycles so far), with the half-edge
+ * leaving each vertex to ecyc (whe[i] leaves walk[i]), and their signs (1: counter-clockwise)
+ * to pos.  The top of the stack is always the last vertex walked, so the half-edge that arrives
+ * at each step leaves the top (estack).  instack has nv entries, all NONE, and is left so. */
+static void split_walk(const graph *g, const uint32_t *walk, const uint32_t *whe, size_t len,
+                       uint32_t *stack, uint32_t *estack, uint32_t *instack, uint32_t *cyc,
+                       uint32_t *ecyc, uint32_t *off, uint8_t *pos, size_t *k, size_t *np)
 {
     size_t sp = 0;
     for (size_t i = 0; i <= len; i++) {
         uint32_t v = i < len ? walk[i] : NONE;
         size_t from;
+        if (i > 0) estack[sp - 1] = whe[i - 1];
         if (i < len && instack[v] == NONE) {
             instack[v] = (uint32_t)sp;
             stack[sp++] = v;
@@ -1421,6 +1493,7 @@ static void split_walk(const graph *g, const uint32_t *walk, size_t len, uint32_
         for (size_t j = from; j < sp; j++) {
             ipt p = g->P[stack[j]], q = g->P[stack[j + 1 < sp ? j + 1 : from]];
             a2 += cross2(p.x, p.y, q.x, q.y);
+            ecyc[*k] = estack[j];
             cyc[(*k)++] = stack[j];
             if (j > from || i == len) instack[stack[j]] = NONE;
         }
@@ -1444,6 +1517,7 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     uint8_t *ppos = malloc(nh + 1);
     uint32_t *stack = malloc((nh + 1) * sizeof *stack), *instack = malloc((g->nv + 1) * 4);
     uint32_t *walkv = malloc((nh + 1) * sizeof *walkv);
+    uint32_t *estack = malloc((nh + 1) * sizeof *estack), *ecyc = malloc((nh + 1) * sizeof *ecyc);
     out->nv = g->nv;
     out->ne = g->ne;
     out->nf = nf;
@@ -1457,7 +1531,7 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
     out->cyc_off = malloc((nh + 2) * sizeof *out->cyc_off);
     out->cyc = malloc((nh + 1) * sizeof *out->cyc);
     out->ext_cyc = malloc((nh + 1) * sizeof *out->ext_cyc);
-    if (!pwalk || !ppos || !stack || !instack || !walkv || !out->V || !out->EV ||
+    if (!pwalk || !ppos || !stack || !instack || !walkv || !estack || !ecyc || !out->V || !out->EV ||
         !out->face_cycle || !out->hole_off || !out->hole_cyc || !out->fe_off || !out->fe ||
         !out->cyc_off || !out->cyc || !out->ext_cyc)
         goto out;
@@ -1507,11 +1581,13 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         for (size_t i = 0; i < len; i++) walkv[i] = he_tail(g, w->hes[w->hoff[cy] + i]);
         if (c->o->keep_dangling) {
             memcpy(out->cyc + k, walkv, len * sizeof *walkv);
+            memcpy(ecyc + k, w->hes + w->hoff[cy], len * sizeof *ecyc);
             k += len;
             ppos[np] = w->area2[cy] > 0;
             out->cyc_off[++np] = (uint32_t)k;
         } else {
-            split_walk(g, walkv, len, stack, instack, out->cyc, out->cyc_off, ppos, &k, &np);
+            split_walk(g, walkv, w->hes + w->hoff[cy], len, stack, estack, instack, out->cyc, ecyc,
+                       out->cyc_off, ppos, &k, &np);
         }
         size_t npos = 0;
         for (size_t p = p0; p < np; p++) {
@@ -1558,9 +1634,7 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         for (uint32_t j = 0; j <= nhol; j++) {
             uint32_t p = j == 0 ? out->face_cycle[f] : out->hole_cyc[out->hole_off[f] + j - 1];
             for (uint32_t i = out->cyc_off[p]; i < out->cyc_off[p + 1]; i++) {
-                uint32_t u = out->cyc[i];
-                uint32_t v = out->cyc[i + 1 < out->cyc_off[p + 1] ? i + 1 : out->cyc_off[p]];
-                uint32_t h = find_half_edge(g, u, v);
+                uint32_t h = ecyc[i]; /* from cyc[i] to the next vertex of the cycle */
                 if (face_of[w->cyc_of[h ^ 1]] == fw) continue;
                 int32_t e = (int32_t)(h >> 1) + 1;
                 out->fe[fe++] = (h & 1) ? -e : e;
@@ -1575,6 +1649,8 @@ out:
     free(stack);
     free(instack);
     free(walkv);
+    free(estack);
+    free(ecyc);
     return rc;
 }
 
@@ -1614,7 +1690,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     /* faces */
     pos = malloc((2 * g->ne + 1) * sizeof *pos);
     if (!pos) goto fail;
-    int sr = sort_around_vertices(g, pos);
+    int sr = sort_around_vertices(c, g, pos);
     if (sr == -2) {
         rc = ARR_ECANCELED;
         goto fail;
@@ -1624,35 +1700,27 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         goto fail;
     }
     progress(c, "faces", 0.3);
-    if ((rc = walk_faces(g, pos, &w))) goto fail;
+    if ((rc = walk_faces(c, g, pos, &w))) goto fail;
     progress(c, "faces", 0.55);
     rc = ARR_ENOMEM;
-    /* connected components */
+    /* connected components: union-find over the edges, numbered in the order of their first
+     * (smallest) vertex */
     comp = malloc((g->nv + 1) * sizeof *comp);
     stack = malloc((g->nv + 1) * sizeof *stack);
     if (!comp || !stack) goto fail;
-    for (size_t v = 0; v < g->nv; v++) comp[v] = NONE;
+    for (size_t v = 0; v < g->nv; v++) stack[v] = (uint32_t)v;
+    for (size_t e = 0; e < g->ne; e++) {
+        uint32_t a = uf_find(stack, g->EV[2 * e]), b = uf_find(stack, g->EV[2 * e + 1]);
+        if (a != b) stack[a > b ? a : b] = a < b ? a : b; /* the smaller vertex is the root */
+    }
+    if (g_stop(g, g->ne + 1)) {
+        rc = ARR_ECANCELED;
+        goto fail;
+    }
     size_t ncomp = 0;
-    for (size_t r = 0; r < g->nv; r++) {
-        if (comp[r] != NONE) continue;
-        size_t sp = 0;
-        comp[r] = (uint32_t)ncomp;
-        stack[sp++] = (uint32_t)r;
-        while (sp) {
-            if (g_stop(g, 1)) {
-                rc = ARR_ECANCELED;
-                goto fail;
-            }
-            uint32_t v = stack[--sp];
-            for (uint32_t i = g->off[v]; i < g->off[v + 1]; i++) {
-                uint32_t u = he_head(g, g->out[i]);
-                if (comp[u] == NONE) {
-                    comp[u] = (uint32_t)ncomp;
-                    stack[sp++] = u;
-                }
-            }
-        }
-        ncomp++;
+    for (size_t v = 0; v < g->nv; v++) { /* a root is the smallest vertex of its component */
+        uint32_t r = uf_find(stack, (uint32_t)v);
+        comp[v] = r == v ? (uint32_t)ncomp++ : comp[r];
     }
     comp_outer = malloc((ncomp + 1) * sizeof *comp_outer);
     face_of = malloc((w.ncyc + 1) * sizeof *face_of);

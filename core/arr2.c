@@ -996,84 +996,6 @@ static int graph_adjacency(graph *g)
     return 0;
 }
 
-/* Iterative biconnected components (Hopcroft–Tarjan).  block[e] gets the block of edge e;
- * returns the number of blocks, -1 when out of memory, -2 when cancelled.  bsize[b] = edges in
- * block b. */
-static long biconnected(const graph *g, uint32_t *block, uint32_t **bsize_out)
-{
-    typedef struct frame {
-        uint32_t v, pe, it;
-    } frame;
-    uint32_t *disc = calloc(g->nv + 1, sizeof *disc), *low = malloc((g->nv + 1) * sizeof *low);
-    frame *st = malloc((g->nv + 1) * sizeof *st);
-    uint32_t *es = malloc((g->ne + 1) * sizeof *es);
-    uint32_t *bsize = NULL;
-    size_t bcap = 0;
-    long nb = 0;
-    uint32_t time = 0;
-    if (!disc || !low || !st || !es) goto fail;
-    for (size_t r = 0; r < g->nv; r++) {
-        if (disc[r]) continue;
-        size_t sp = 0, ep = 0;
-        disc[r] = low[r] = ++time;
-        st[sp++] = (frame){(uint32_t)r, NONE, g->off[r]};
-        while (sp) {
-            if (g_stop(g, 1)) {
-                nb = -2;
-                goto fail;
-            }
-            frame *f = &st[sp - 1];
-            if (f->it < g->off[f->v + 1]) {
-                uint32_t h = g->out[f->it++], e = h >> 1, w = he_head(g, h);
-                if (e == f->pe) continue;
-                if (!disc[w]) {
-                    es[ep++] = e;
-                    disc[w] = low[w] = ++time;
-                    st[sp++] = (frame){w, e, g->off[w]};
-                } else if (disc[w] < disc[f->v]) {
-                    es[ep++] = e;
-                    if (disc[w] < low[f->v]) low[f->v] = disc[w];
-                }
-                continue;
-            }
-            frame done = *f;
-            sp--;
-            if (!sp) break;
-            uint32_t u = st[sp - 1].v;
-            if (low[done.v] < low[u]) low[u] = low[done.v];
-            if (low[done.v] >= disc[u]) {
-                if ((size_t)nb >= bcap) {
-                    size_t nc = bcap ? 2 * bcap : 64;
-                    uint32_t *q = realloc(bsize, nc * sizeof *q);
-                    if (!q) goto fail;
-                    bsize = q;
-                    bcap = nc;
-                }
-                uint32_t cnt = 0, e;
-                do {
-                    e = es[--ep];
-                    block[e] = (uint32_t)nb;
-                    cnt++;
-                } while (e != done.pe);
-                bsize[nb++] = cnt;
-            }
-        }
-    }
-    free(disc);
-    free(low);
-    free(st);
-    free(es);
-    *bsize_out = bsize;
-    return nb;
-fail:
-    free(disc);
-    free(low);
-    free(st);
-    free(es);
-    free(bsize);
-    return nb == -2 ? -2 : -1;
-}
-
 /* Removes the edges with drop[e] set and the vertices left without edges; keeps the order
  * of what remains (so EV stays sorted and V lexicographic). */
 static int graph_prune(graph *g, const uint8_t *drop)
@@ -1188,6 +1110,23 @@ static uint32_t uf_find(uint32_t *par, uint32_t x)
         x = par[x];
     }
     return x;
+}
+
+/* The connected components: comp[v] for every vertex, numbered in the order of their smallest
+ * vertex, by union-find over the edges (par: nv entries of scratch); returns their number. */
+static size_t components(const graph *g, uint32_t *comp, uint32_t *par)
+{
+    for (size_t v = 0; v < g->nv; v++) par[v] = (uint32_t)v;
+    for (size_t e = 0; e < g->ne; e++) {
+        uint32_t a = uf_find(par, g->EV[2 * e]), b = uf_find(par, g->EV[2 * e + 1]);
+        if (a != b) par[a > b ? a : b] = a < b ? a : b; /* the smaller vertex is the root */
+    }
+    size_t n = 0;
+    for (size_t v = 0; v < g->nv; v++) { /* a root is the smallest vertex of its component */
+        uint32_t r = uf_find(par, (uint32_t)v);
+        comp[v] = r == v ? (uint32_t)n++ : comp[r];
+    }
+    return n;
 }
 
 typedef struct walks {
@@ -1658,70 +1597,69 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 {
     arr2_stats *st = &out->stats;
     int rc = ARR_ENOMEM;
-    uint32_t *block = NULL, *bsize = NULL, *pos = NULL, *comp = NULL, *stack = NULL;
+    uint32_t *pos = NULL, *comp = NULL, *stack = NULL;
     uint32_t *comp_outer = NULL, *face_of = NULL, *face_idx = NULL;
     uint8_t *drop = NULL;
     walks w = {0};
     double t0 = now_ms();
 
-    /* blocks */
+    /* blocks, from the face walks of the plane graph: an edge is a bridge exactly when its two
+     * sides are on one walk, and a vertex lies in 1 + sum over the walks through it of (its
+     * visits - 1) blocks, so (block-cut tree) blocks = components + sum over the walks of
+     * (length - distinct vertices).  Bridges are removed (unless keep_dangling) and the walks
+     * made again. */
     if (graph_adjacency(g)) goto fail;
-    block = malloc((g->ne + 1) * sizeof *block);
-    if (!block) goto fail;
-    long nb = biconnected(g, block, &bsize);
-    if (nb == -2) rc = ARR_ECANCELED;
-    if (nb < 0) goto fail;
-    size_t blocks = 0;
-    drop = calloc(g->ne + 1, 1);
-    if (!drop) goto fail;
-    for (size_t e = 0; e < g->ne; e++) drop[e] = bsize[block[e]] == 1 && !c->o->keep_dangling;
-    for (long b = 0; b < nb; b++) blocks += bsize[b] > 1 || c->o->keep_dangling;
-    for (size_t e = 0; e < g->ne; e++) st->dangling_removed += drop[e];
-    st->blocks = blocks;
-    if (st->dangling_removed && graph_prune(g, drop)) goto fail;
+    size_t ncomp = 0, nbridge = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        free(pos);
+        pos = malloc((2 * g->ne + 1) * sizeof *pos);
+        if (!pos) goto fail;
+        int sr = sort_around_vertices(c, g, pos);
+        if (sr == -2) {
+            rc = ARR_ECANCELED;
+            goto fail;
+        }
+        if (sr) {
+            rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
+            goto fail;
+        }
+        walks_free(&w);
+        if ((rc = walk_faces(c, g, pos, &w))) goto fail;
+        rc = ARR_ENOMEM;
+        free(comp);
+        free(stack);
+        comp = malloc((g->nv + 1) * sizeof *comp);
+        stack = malloc((g->nv + 1) * sizeof *stack);
+        if (!comp || !stack) goto fail;
+        ncomp = components(g, comp, stack);
+        if (pass == 1) break;
+        drop = calloc(g->ne + 1, 1);
+        if (!drop) goto fail;
+        for (size_t e = 0; e < g->ne; e++) {
+            drop[e] = w.cyc_of[2 * e] == w.cyc_of[2 * e + 1];
+            nbridge += drop[e];
+        }
+        size_t repeats = 0; /* stack: the last walk seen at each vertex, + 1 */
+        for (size_t v = 0; v < g->nv; v++) stack[v] = 0;
+        for (size_t cy = 0; cy < w.ncyc; cy++)
+            for (uint32_t i = w.hoff[cy]; i < w.hoff[cy + 1]; i++) {
+                uint32_t v = he_tail(g, w.hes[i]);
+                if (stack[v] == cy + 1) repeats++;
+                stack[v] = (uint32_t)cy + 1;
+            }
+        if (g_stop(g, 2 * g->ne + 1)) {
+            rc = ARR_ECANCELED;
+            goto fail;
+        }
+        st->blocks = ncomp + repeats - (c->o->keep_dangling ? 0 : nbridge);
+        if (c->o->keep_dangling || !nbridge) break;
+        st->dangling_removed = nbridge;
+        if (graph_prune(g, drop)) goto fail;
+    }
     double t1 = now_ms();
     st->ms_biconnected = t1 - t0;
     progress(c, "biconnected", 1);
-    if (cancelled(c)) {
-        rc = ARR_ECANCELED;
-        goto fail;
-    }
-
-    /* faces */
-    pos = malloc((2 * g->ne + 1) * sizeof *pos);
-    if (!pos) goto fail;
-    int sr = sort_around_vertices(c, g, pos);
-    if (sr == -2) {
-        rc = ARR_ECANCELED;
-        goto fail;
-    }
-    if (sr) {
-        rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
-        goto fail;
-    }
-    progress(c, "faces", 0.3);
-    if ((rc = walk_faces(c, g, pos, &w))) goto fail;
     progress(c, "faces", 0.55);
-    rc = ARR_ENOMEM;
-    /* connected components: union-find over the edges, numbered in the order of their first
-     * (smallest) vertex */
-    comp = malloc((g->nv + 1) * sizeof *comp);
-    stack = malloc((g->nv + 1) * sizeof *stack);
-    if (!comp || !stack) goto fail;
-    for (size_t v = 0; v < g->nv; v++) stack[v] = (uint32_t)v;
-    for (size_t e = 0; e < g->ne; e++) {
-        uint32_t a = uf_find(stack, g->EV[2 * e]), b = uf_find(stack, g->EV[2 * e + 1]);
-        if (a != b) stack[a > b ? a : b] = a < b ? a : b; /* the smaller vertex is the root */
-    }
-    if (g_stop(g, g->ne + 1)) {
-        rc = ARR_ECANCELED;
-        goto fail;
-    }
-    size_t ncomp = 0;
-    for (size_t v = 0; v < g->nv; v++) { /* a root is the smallest vertex of its component */
-        uint32_t r = uf_find(stack, (uint32_t)v);
-        comp[v] = r == v ? (uint32_t)ncomp++ : comp[r];
-    }
     comp_outer = malloc((ncomp + 1) * sizeof *comp_outer);
     face_of = malloc((w.ncyc + 1) * sizeof *face_of);
     face_idx = malloc((w.ncyc + 1) * sizeof *face_idx);
@@ -1775,8 +1713,6 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     rc = ARR_OK;
 fail:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
-    free(block);
-    free(bsize);
     free(drop);
     free(pos);
     free(comp);

@@ -13,17 +13,22 @@
  *               vertex ever lies inside an edge.  Collinear overlaps come out as identical
  *               edges, which the sort merges.
  *   graph       edges sorted and made unique; vertices in lexicographic order
- *   biconnected iterative Hopcroft–Tarjan; blocks of one edge (bridges, dangling trees)
- *               removed unless keep_dangling, then vertices left without edges
- *   faces       edges sorted around each vertex by exact angle; half-edge walks; positive
- *               walks are bounded faces, the others the outer walks of components
+ *   biconnected edges sorted around each vertex by exact angle, half-edge walks (each
+ *               half-edge's successor, and the walks' areas, in parallel): an edge with one
+ *               walk on both sides is a bridge, and blocks = components + the walks'
+ *               repeated visits (block-cut tree); bridges (blocks of one edge: dangling trees)
+ *               removed unless keep_dangling, with the vertices left without edges, and the
+ *               walks made again
+ *   faces       positive walks are bounded faces, the others the outer walks of components
+ *               (union-find over the edges)
  *   holes       each component's outer walk is placed by a downward ray from its lowest
  *               vertex: the first edge of another component below it tells the face that
  *               contains it (a hole of that face) or the component it sits beside (same
  *               face as that one).  Chains only go down, so they end.
  *
  * Memory: flat arrays and per-worker buffers; nothing is allocated per element.
- * Thread use: par_for() in intersect and split; everything else on the calling thread.
+ * Thread use: par_for() in intersect, split, the sorts around vertices, the walks' successors
+ * and areas, and the holes' rays; everything else on the calling thread.
  */
 #include "core/arr2.h"
 

@@ -1452,7 +1452,58 @@ static void split_walk(const graph *g, const uint32_t *walk, const uint32_t *whe
  * whole): a bounded face's walk gives one counter-clockwise cycle, its outer cycle, and
  * clockwise cycles where something touches it from inside at a single vertex, which become
  * holes (as GEOS and the OGC model have it: holes may touch the shell at a point). */
-static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint32_t *face_idx,
+typedef struct emit_job {
+    ctx *c;
+    const graph *g;
+    const walks *w;
+    lar2 *out;
+    atomic_size_t bad; /* the first vertex not written on its grid point, + 1 (0: none) */
+} emit_job;
+
+/* Vertices [chunk * VERT_CHUNK, ...): their coordinates as written (the input's own where an
+ * input point snapped to them), their grid points, and the check that each written point
+ * snaps back to its grid point. */
+static void emit_vertices(void *vj, size_t chunk, int wk)
+{
+    emit_job *j = vj;
+    const ctx *c = j->c;
+    const graph *g = j->g;
+    lar2 *out = j->out;
+    size_t v0 = chunk * VERT_CHUNK, v1 = v0 + VERT_CHUNK < g->nv ? v0 + VERT_CHUNK : g->nv;
+    if (worker_stop(j->c, wk, v1 - v0)) return;
+    for (size_t v = v0; v < v1; v++) {
+        uint32_t s = g->src ? g->src[v] : NONE;
+        if (s != NONE) { /* segment s / 2's start (even) or end (odd), as given */
+            out->V[2 * v] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1)];
+            out->V[2 * v + 1] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1) + 1];
+        } else {
+            out->V[2 * v] = unsnap(c, 0, g->P[v].x);
+            out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
+        }
+        out->VG[2 * v] = g->P[v].x;
+        out->VG[2 * v + 1] = g->P[v].y;
+        if (snap_coord(c, 0, out->V[2 * v]) != g->P[v].x ||
+            snap_coord(c, 1, out->V[2 * v + 1]) != g->P[v].y) {
+            size_t want = v + 1, cur = atomic_load(&j->bad);
+            while ((cur == 0 || want < cur) &&
+                   !atomic_compare_exchange_weak(&j->bad, &cur, want))
+                ;
+            return;
+        }
+    }
+}
+
+/* With keep_dangling every walk is a cycle: its vertices, from half-edges [chunk * HE_CHUNK,
+ * ...). */
+static void emit_walk_cycles(void *vj, size_t chunk, int wk)
+{
+    emit_job *j = vj;
+    size_t nh = 2 * j->g->ne, h0 = chunk * HE_CHUNK, h1 = h0 + HE_CHUNK < nh ? h0 + HE_CHUNK : nh;
+    if (worker_stop(j->c, wk, h1 - h0)) return;
+    for (size_t i = h0; i < h1; i++) j->out->cyc[i] = he_tail(j->g, j->w->hes[i]);
+}
+
+static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *face_idx,
                         const uint32_t *face_of, size_t nf, lar2 *out, char *err, size_t el)
 {
     int rc = ARR_ENOMEM;
@@ -1481,32 +1532,27 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         goto out;
     out->VG = malloc((2 * g->nv + 1) * sizeof *out->VG);
     if (!out->VG) goto out;
-    for (size_t v = 0; v < g->nv; v++) {
-        uint32_t s = g->src ? g->src[v] : NONE;
-        if (s != NONE) { /* segment s / 2's start (even) or end (odd), as given */
-            out->V[2 * v] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1)];
-            out->V[2 * v + 1] = c->in[4 * (size_t)(s / 2) + 2 * (s & 1) + 1];
-        } else {
-            out->V[2 * v] = unsnap(c, 0, g->P[v].x);
-            out->V[2 * v + 1] = unsnap(c, 1, g->P[v].y);
-        }
-        out->VG[2 * v] = g->P[v].x;
-        out->VG[2 * v + 1] = g->P[v].y;
-        instack[v] = NONE;
-    }
     /* Distinct vertices must be written as distinct doubles.  Each written point snaps back to
      * its vertex's grid point, and snapping is a function, so two vertices could share a
      * double point only by sharing a grid point.  That holds because the grid is never finer
      * than twice the doubles' spacing (stage_snap); checked, as a bug would break it. */
-    for (size_t v = 0; v < g->nv; v++)
-        if (snap_coord(c, 0, out->V[2 * v]) != g->P[v].x ||
-            snap_coord(c, 1, out->V[2 * v + 1]) != g->P[v].y) {
-            rc = seterr(err, el, ARR_EINTERNAL,
-                        "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
-                        "point",
-                        v, out->V[2 * v], out->V[2 * v + 1]);
-            goto out;
-        }
+    emit_job ej = {.c = c, .g = g, .w = w, .out = out};
+    atomic_init(&ej.bad, 0);
+    par_for(c->threads, (g->nv + VERT_CHUNK - 1) / VERT_CHUNK, emit_vertices, &ej);
+    if (atomic_load(&c->fail)) {
+        rc = ARR_ECANCELED;
+        goto out;
+    }
+    size_t badv = atomic_load(&ej.bad);
+    if (badv) {
+        size_t v = badv - 1;
+        rc = seterr(err, el, ARR_EINTERNAL,
+                    "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
+                    "point",
+                    v, out->V[2 * v], out->V[2 * v + 1]);
+        goto out;
+    }
+    for (size_t v = 0; v < g->nv; v++) instack[v] = NONE;
     memcpy(out->EV, g->EV, 2 * g->ne * sizeof *g->EV);
     if (g->toff) {
         out->etag_off = g->toff;
@@ -1516,23 +1562,29 @@ static int emit_complex(const ctx *c, const graph *g, const walks *w, const uint
         ((graph *)g)->tw = NULL;
     }
     out->cyc_off[0] = 0;
-    for (size_t cy = 0; cy < w->ncyc; cy++) {
+    if (c->o->keep_dangling) { /* the walks as they are, in parallel */
+        par_for(c->threads, (nh + HE_CHUNK - 1) / HE_CHUNK, emit_walk_cycles, &ej);
+        if (atomic_load(&c->fail)) {
+            rc = ARR_ECANCELED;
+            goto out;
+        }
+        memcpy(ecyc, w->hes, nh * sizeof *ecyc);
+        for (size_t cy = 0; cy < w->ncyc; cy++) {
+            out->cyc_off[cy + 1] = w->hoff[cy + 1];
+            ppos[cy] = w->area2[cy] > 0; /* so face_idx[cy] != NONE: one outer cycle */
+            pwalk[cy] = (uint32_t)cy;
+        }
+        np = w->ncyc;
+    }
+    for (size_t cy = 0; !c->o->keep_dangling && cy < w->ncyc; cy++) {
         size_t len = w->hoff[cy + 1] - w->hoff[cy], p0 = np;
         if (g_stop(g, 4 * len + 1)) {
             rc = ARR_ECANCELED;
             goto out;
         }
         for (size_t i = 0; i < len; i++) walkv[i] = he_tail(g, w->hes[w->hoff[cy] + i]);
-        if (c->o->keep_dangling) {
-            memcpy(out->cyc + k, walkv, len * sizeof *walkv);
-            memcpy(ecyc + k, w->hes + w->hoff[cy], len * sizeof *ecyc);
-            k += len;
-            ppos[np] = w->area2[cy] > 0;
-            out->cyc_off[++np] = (uint32_t)k;
-        } else {
-            split_walk(g, walkv, w->hes + w->hoff[cy], len, stack, estack, instack, out->cyc, ecyc,
-                       out->cyc_off, ppos, &k, &np);
-        }
+        split_walk(g, walkv, w->hes + w->hoff[cy], len, stack, estack, instack, out->cyc, ecyc,
+                   out->cyc_off, ppos, &k, &np);
         size_t npos = 0;
         for (size_t p = p0; p < np; p++) {
             pwalk[p] = (uint32_t)cy;

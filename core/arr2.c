@@ -1321,6 +1321,56 @@ static void place_chunk(void *vj, size_t chunk, int wk)
     }
 }
 
+#define SLAB_CHUNK 65536 /* edges per work item of the slabs */
+
+typedef struct slab_job {
+    ctx *c;
+    const graph *g;
+    int64_t minx;
+    int shift;
+    size_t ns, nchunk;
+    uint32_t *es;    /* 2 per edge: its first and last slab */
+    uint64_t *ctot;  /* per chunk: its edges' slab entries */
+    uint32_t *cnt;   /* per chunk, ns + 1 apart: its entries per slab, then where they go */
+    uint32_t *sedge; /* the edges of each slab */
+} slab_job;
+
+static void slab_range(void *vj, size_t k, int wk)
+{
+    slab_job *j = vj;
+    const graph *g = j->g;
+    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < g->ne ? e0 + SLAB_CHUNK : g->ne;
+    if (worker_stop(j->c, wk, e1 - e0)) return;
+    uint64_t t = 0;
+    for (size_t e = e0; e < e1; e++) {
+        j->es[2 * e] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e]].x - j->minx) >> j->shift);
+        j->es[2 * e + 1] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e + 1]].x - j->minx) >> j->shift);
+        t += j->es[2 * e + 1] - j->es[2 * e] + 1;
+    }
+    j->ctot[k] = t;
+}
+
+static void slab_count(void *vj, size_t k, int wk)
+{
+    slab_job *j = vj;
+    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
+    uint32_t *cnt = j->cnt + k * (j->ns + 1);
+    (void)wk;
+    for (size_t e = e0; e < e1; e++)
+        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) cnt[s]++;
+}
+
+static void slab_fill(void *vj, size_t k, int wk)
+{
+    slab_job *j = vj;
+    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
+    uint32_t *at = j->cnt + k * (j->ns + 1);
+    (void)wk;
+    for (size_t e = e0; e < e1; e++)
+        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++)
+            j->sedge[at[s]++] = (uint32_t)e;
+}
+
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
  * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
 static int place_components(ctx *c, const graph *g, const walks *w, const uint32_t *comp,
@@ -1330,6 +1380,7 @@ static int place_components(ctx *c, const graph *g, const walks *w, const uint32
     uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
     uint32_t *found = malloc(ncomp * sizeof *found);
     uint32_t *soff = NULL, *sedge = NULL, *es = NULL;
+    slab_job sj = {0};
     if (!low || !par || !found) goto out;
     for (size_t k = 0; k < ncomp; k++) {
         low[k] = NONE;
@@ -1345,35 +1396,54 @@ static int place_components(ctx *c, const graph *g, const walks *w, const uint32
         maxx = p.x > maxx ? p.x : maxx;
     }
     /* vertical slabs of edges, 2^shift wide: each edge listed in every slab its x-range
-     * meets; the slabs of each edge found once (es, two per edge) */
+     * meets, in edge order (a bucket sort by chunks of edges, in parallel: each chunk counts
+     * its edges per slab, then writes them at its own offsets) */
     size_t ns = 1;
     while (ns * ns < g->ne) ns *= 2;
     uint64_t total;
     int shift = 0;
+    sj.c = c;
+    sj.g = g;
+    sj.minx = minx;
+    sj.nchunk = (g->ne + SLAB_CHUNK - 1) / SLAB_CHUNK;
     es = malloc((2 * g->ne + 1) * sizeof *es);
-    if (!es) goto out;
+    sj.ctot = calloc(sj.nchunk + 1, sizeof *sj.ctot);
+    if (!es || !sj.ctot) goto out;
+    sj.es = es;
     for (;;) {
         shift = 0;
         while (((uint64_t)(maxx - minx) >> shift) >= ns) shift++;
+        sj.shift = shift;
+        par_for(c->threads, sj.nchunk, slab_range, &sj);
+        if ((rc = atomic_load(&c->fail))) goto out;
+        rc = ARR_ENOMEM;
         total = 0;
-        for (size_t e = 0; e < g->ne; e++) {
-            es[2 * e] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e]].x - minx) >> shift);
-            es[2 * e + 1] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e + 1]].x - minx) >> shift);
-            total += es[2 * e + 1] - es[2 * e] + 1;
-        }
+        for (size_t k = 0; k < sj.nchunk; k++) total += sj.ctot[k];
         if (total <= 8 * (uint64_t)g->ne + ns || ns == 1) break;
         ns /= 2;
     }
+    sj.ns = ns;
     soff = calloc(ns + 2, sizeof *soff);
     sedge = malloc((total + 1) * sizeof *sedge);
-    if (!soff || !sedge) goto out;
-    for (size_t e = 0; e < g->ne; e++)
-        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) soff[s + 1]++;
-    for (size_t s = 0; s < ns + 1; s++) soff[s + 1] += soff[s];
-    for (size_t e = 0; e < g->ne; e++)
-        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) sedge[soff[s]++] = (uint32_t)e;
-    for (size_t s = ns + 1; s > 0; s--) soff[s] = soff[s - 1];
-    soff[0] = 0;
+    sj.cnt = calloc(sj.nchunk * (ns + 1) + 1, sizeof *sj.cnt);
+    if (!soff || !sedge || !sj.cnt) goto out;
+    sj.sedge = sedge;
+    par_for(c->threads, sj.nchunk, slab_count, &sj);
+    /* the chunks' offsets, slab by slab: chunk k's edges of slab s go after those of the
+     * chunks before it */
+    uint32_t at = 0;
+    for (size_t s = 0; s < ns; s++) {
+        soff[s] = at;
+        for (size_t k = 0; k < sj.nchunk; k++) {
+            uint32_t n = sj.cnt[k * (ns + 1) + s];
+            sj.cnt[k * (ns + 1) + s] = at;
+            at += n;
+        }
+    }
+    soff[ns] = soff[ns + 1] = at;
+    par_for(c->threads, sj.nchunk, slab_fill, &sj);
+    free(sj.cnt);
+    sj.cnt = NULL;
 
     /* each component's half-edge below its lowest vertex, in parallel; then, in order, the
      * face it is a hole of, or the component whose outer walk holds it */
@@ -1408,6 +1478,8 @@ out:
     free(soff);
     free(sedge);
     free(es);
+    free(sj.ctot);
+    free(sj.cnt);
     return rc;
 }
 

@@ -831,7 +831,7 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
         b[1] = s->a.y < s->b.y ? s->a.y : s->b.y;
         b[3] = s->a.y < s->b.y ? s->b.y : s->a.y;
     }
-    if (box_tree_build(&c->tree, c->box, c->m, LEAF_MAX)) goto fail;
+    if (box_tree_build_par(&c->tree, c->box, c->m, LEAF_MAX, c->threads)) goto fail;
     st->buckets = c->tree.nleaves;
     double t1 = now_ms();
     st->ms_buckets = t1 - t0;
@@ -1274,7 +1274,7 @@ typedef struct place_job {
     const graph *g;
     const uint32_t *comp, *low, *soff, *sedge; /* see place_components */
     int64_t minx;
-    int shift; /* slabs are 2^shift wide */
+    int shift;     /* slabs are 2^shift wide */
     uint32_t *hit; /* per component: the half-edge whose face is just below it, or NONE */
     size_t n;      /* components */
 } place_job;
@@ -1367,8 +1367,7 @@ static void slab_fill(void *vj, size_t k, int wk)
     uint32_t *at = j->cnt + k * (j->ns + 1);
     (void)wk;
     for (size_t e = e0; e < e1; e++)
-        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++)
-            j->sedge[at[s]++] = (uint32_t)e;
+        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) j->sedge[at[s]++] = (uint32_t)e;
 }
 
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
@@ -1557,8 +1556,7 @@ static void emit_vertices(void *vj, size_t chunk, int wk)
         if (snap_coord(c, 0, out->V[2 * v]) != g->P[v].x ||
             snap_coord(c, 1, out->V[2 * v + 1]) != g->P[v].y) {
             size_t want = v + 1, cur = atomic_load(&j->bad);
-            while ((cur == 0 || want < cur) &&
-                   !atomic_compare_exchange_weak(&j->bad, &cur, want))
+            while ((cur == 0 || want < cur) && !atomic_compare_exchange_weak(&j->bad, &cur, want))
                 ;
             return;
         }
@@ -1598,9 +1596,9 @@ static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *
     out->cyc_off = malloc((nh + 2) * sizeof *out->cyc_off);
     out->cyc = malloc((nh + 1) * sizeof *out->cyc);
     out->ext_cyc = malloc((nh + 1) * sizeof *out->ext_cyc);
-    if (!pwalk || !ppos || !stack || !instack || !walkv || !estack || !ecyc || !out->V || !out->EV ||
-        !out->face_cycle || !out->hole_off || !out->hole_cyc || !out->fe_off || !out->fe ||
-        !out->cyc_off || !out->cyc || !out->ext_cyc)
+    if (!pwalk || !ppos || !stack || !instack || !walkv || !estack || !ecyc || !out->V ||
+        !out->EV || !out->face_cycle || !out->hole_off || !out->hole_cyc || !out->fe_off ||
+        !out->fe || !out->cyc_off || !out->cyc || !out->ext_cyc)
         goto out;
     out->VG = malloc((2 * g->nv + 1) * sizeof *out->VG);
     if (!out->VG) goto out;

@@ -2,6 +2,7 @@
  * Built iteratively (an explicit stack), so depth never costs C stack. */
 #include "core/box.h"
 #include "core/mem.h"
+#include "core/par.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -71,42 +72,46 @@ static void split_counts(const double *box, const uint32_t *ids, size_t cnt, con
     na[0] = a0, na[1] = a1, na[2] = a2, na[3] = a3;
 }
 
-int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
-{
-    /* the boxes as doubles, once: every pass compares them with the thresholds */
-    double *dbox = mem_malloc((4 * n + 1) * sizeof *dbox);
-    uint32_t *pool = NULL;
-    size_t pool_n = 0, pool_cap = 0;
-    pending *stack = NULL;
-    size_t sn = 0, scap = 0;
-    leafrec *leaves = NULL;
-    size_t ln = 0, lcap = 0;
-    box_node *nodes = NULL;
-    size_t nn = 0, ncap = 0;
+/* One build: the buckets still to split (stack), the nodes and leaves made, the ids of every
+ * bucket (pool).  A builder may build a whole tree or one subtree (root: its root's reference,
+ * a node index or ~leaf). */
+typedef struct builder {
+    const double *dbox;
+    size_t leaf_max;
+    uint32_t *pool;
+    size_t pool_n, pool_cap;
+    pending *stack;
+    size_t sn, scap;
+    leafrec *leaves;
+    size_t ln, lcap;
+    box_node *nodes;
+    size_t nn, ncap;
+    int32_t root;
+    int failed;
+} builder;
 
-    memset(t, 0, sizeof *t);
-    if (!dbox || mem_grow(&pool, &pool_cap, n ? n : 1, sizeof *pool)) goto fail;
-    for (size_t i = 0; i < n; i++) pool[i] = (uint32_t)i;
-    pool_n = n;
-    if (mem_grow(&stack, &scap, 1, sizeof *stack)) goto fail;
-    stack[sn++] = (pending){.node = -1,
-                            .off = 0,
-                            .cnt = n,
-                            .lo = {-INFINITY, -INFINITY},
-                            .hi = {INFINITY, INFINITY},
-                            .st = stats0};
-    for (size_t i = 0; i < 4 * n; i++) dbox[i] = (double)ibox[i];
-    for (size_t i = 0; i < n; i++) stats_add(&stack[0].st, dbox + 4 * i);
-    while (sn) {
-        pending p = stack[--sn];
+static void builder_free(builder *b)
+{
+    free(b->pool);
+    free(b->stack);
+    free(b->leaves);
+    free(b->nodes);
+}
+
+/* Splits buckets until the stack is empty (or, with one_split, after the first split: its two
+ * sides are left on the stack).  0, or -1 out of memory. */
+static int build(builder *b, int one_split)
+{
+    while (b->sn) {
+        pending p = b->stack[--b->sn];
         int axis = -1;
         double thr = 0;
         size_t best = p.cnt, nbelow = 0;
-        if (p.cnt > leaf_max && p.depth < BOX_DEPTH_MAX) {
+        if (p.cnt > b->leaf_max && p.depth < BOX_DEPTH_MAX) {
             double cand[4];
             size_t nb[4], na[4];
             split_candidates(&p.st, p.cnt, p.lo, p.hi, cand);
-            split_counts(dbox, pool + p.off, p.cnt, cand, nb, na);
+            split_counts(b->dbox, b->pool + p.off, p.cnt, cand, nb, na);
             for (int k = 0; k < 4; k++) {
                 int a = k / 2;
                 size_t worst = nb[k] > na[k] ? nb[k] : na[k];
@@ -120,38 +125,37 @@ int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */
         }
         if (axis < 0) {
-            if (mem_grow(&leaves, &lcap, ln + 1, sizeof *leaves)) goto fail;
-            leaves[ln] = (leafrec){.off = p.off, .cnt = p.cnt};
-            memcpy(leaves[ln].lo, p.lo, sizeof p.lo);
-            memcpy(leaves[ln].hi, p.hi, sizeof p.hi);
-            int32_t ref = ~(int32_t)ln;
-            ln++;
+            if (mem_grow(&b->leaves, &b->lcap, b->ln + 1, sizeof *b->leaves)) return -1;
+            b->leaves[b->ln] = (leafrec){.off = p.off, .cnt = p.cnt};
+            memcpy(b->leaves[b->ln].lo, p.lo, sizeof p.lo);
+            memcpy(b->leaves[b->ln].hi, p.hi, sizeof p.hi);
+            int32_t ref = ~(int32_t)b->ln;
+            b->ln++;
             if (p.node >= 0)
-                nodes[p.node].child[p.side] = ref;
-            else if (mem_grow(&nodes, &ncap, 1, sizeof *nodes))
-                goto fail;
-            else { /* the root is a leaf: a one-node tree whose both sides are that leaf */
-                nodes[0] = (box_node){.t = INFINITY, .axis = 0, .child = {ref, ref}};
-                nn = 1;
-            }
+                b->nodes[p.node].child[p.side] = ref;
+            else
+                b->root = ref;
             continue;
         }
-        if (mem_grow(&nodes, &ncap, nn + 1, sizeof *nodes)) goto fail;
-        int32_t me = (int32_t)nn++;
-        nodes[me] = (box_node){.t = thr, .axis = axis, .child = {0, 0}};
-        if (p.node >= 0) nodes[p.node].child[p.side] = me;
-        if (mem_grow(&pool, &pool_cap, pool_n + 2 * best, sizeof *pool)) goto fail;
+        if (mem_grow(&b->nodes, &b->ncap, b->nn + 1, sizeof *b->nodes)) return -1;
+        int32_t me = (int32_t)b->nn++;
+        b->nodes[me] = (box_node){.t = thr, .axis = axis, .child = {0, 0}};
+        if (p.node >= 0)
+            b->nodes[p.node].child[p.side] = me;
+        else
+            b->root = me;
+        if (mem_grow(&b->pool, &b->pool_cap, b->pool_n + 2 * best, sizeof *b->pool)) return -1;
         /* both sides in one pass, in order, each gathering its statistics as it grows */
-        size_t boff = pool_n, aoff = pool_n + nbelow, bn = 0, an = 0;
+        size_t boff = b->pool_n, aoff = b->pool_n + nbelow, bn = 0, an = 0;
         bstats sb = stats0, sa = stats0;
         for (size_t i = 0; i < p.cnt; i++) {
-            uint32_t id = pool[p.off + i];
-            const double *b = dbox + 4 * (size_t)id;
-            if (b[axis] <= thr) pool[boff + bn++] = id, stats_add(&sb, b);
-            if (b[axis + 2] > thr) pool[aoff + an++] = id, stats_add(&sa, b);
+            uint32_t id = b->pool[p.off + i];
+            const double *bx = b->dbox + 4 * (size_t)id;
+            if (bx[axis] <= thr) b->pool[boff + bn++] = id, stats_add(&sb, bx);
+            if (bx[axis + 2] > thr) b->pool[aoff + an++] = id, stats_add(&sa, bx);
         }
-        pool_n = aoff + an;
-        if (mem_grow(&stack, &scap, sn + 2, sizeof *stack)) goto fail;
+        b->pool_n = aoff + an;
+        if (mem_grow(&b->stack, &b->scap, b->sn + 2, sizeof *b->stack)) return -1;
         pending below = p, above = p;
         below.st = sb, above.st = sa;
         below.node = above.node = me;
@@ -160,44 +164,145 @@ int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
         below.off = boff;
         below.cnt = aoff - boff;
         above.off = aoff;
-        above.cnt = pool_n - aoff;
+        above.cnt = b->pool_n - aoff;
         below.hi[axis] = thr;
         above.lo[axis] = thr;
         below.depth = above.depth = p.depth + 1;
-        stack[sn++] = above;
-        stack[sn++] = below;
+        b->stack[b->sn++] = above;
+        b->stack[b->sn++] = below;
+        if (one_split) return 0;
     }
-    size_t total = 0;
-    for (size_t l = 0; l < ln; l++) total += leaves[l].cnt;
+    return 0;
+}
+
+/* A subtree's builder: the bucket p of parent's pool, copied into its own, as its root. */
+static int sub_builder(builder *s, const builder *parent, pending p)
+{
+    memset(s, 0, sizeof *s);
+    s->dbox = parent->dbox;
+    s->leaf_max = parent->leaf_max;
+    if (mem_grow(&s->pool, &s->pool_cap, p.cnt ? p.cnt : 1, sizeof *s->pool) ||
+        mem_grow(&s->stack, &s->scap, 1, sizeof *s->stack))
+        return -1;
+    memcpy(s->pool, parent->pool + p.off, p.cnt * sizeof *s->pool);
+    s->pool_n = p.cnt;
+    p.off = 0;
+    p.node = -1;
+    s->stack[s->sn++] = p;
+    return 0;
+}
+
+static void build_item(void *vb, size_t i, int w)
+{
+    builder *b = (builder *)vb + i;
+    (void)w;
+    if (build(b, 0)) b->failed = 1;
+}
+
+/* A reference of subtree builder s moved by its node and leaf offsets in the whole tree. */
+static int32_t moved(int32_t ref, size_t node0, size_t leaf0)
+{
+    return ref >= 0 ? ref + (int32_t)node0 : ~(~ref + (int32_t)leaf0);
+}
+
+/* Below this many boxes the tree is built on one thread. */
+#define BOX_PAR_MIN 20000
+
+int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
+{
+    return box_tree_build_par(t, ibox, n, leaf_max, 1);
+}
+
+int box_tree_build_par(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max, int threads)
+{
+    /* the boxes as doubles, once: every pass compares them with the thresholds */
+    double *dbox = mem_malloc((4 * n + 1) * sizeof *dbox);
+    builder m = {.dbox = dbox, .leaf_max = leaf_max}, sub[2];
+    size_t nsub = 0;
+    memset(t, 0, sizeof *t);
+    memset(sub, 0, sizeof sub);
+    if (!dbox || mem_grow(&m.pool, &m.pool_cap, n ? n : 1, sizeof *m.pool) ||
+        mem_grow(&m.stack, &m.scap, 1, sizeof *m.stack))
+        goto fail;
+    for (size_t i = 0; i < n; i++) m.pool[i] = (uint32_t)i;
+    m.pool_n = n;
+    m.stack[m.sn++] = (pending){.node = -1,
+                                .off = 0,
+                                .cnt = n,
+                                .lo = {-INFINITY, -INFINITY},
+                                .hi = {INFINITY, INFINITY},
+                                .st = stats0};
+    for (size_t i = 0; i < 4 * n; i++) dbox[i] = (double)ibox[i];
+    for (size_t i = 0; i < n; i++) stats_add(&m.stack[0].st, dbox + 4 * i);
+    if (threads > 1 && n >= BOX_PAR_MIN) {
+        /* the root split here, then its two sides on two threads: the same nodes and leaves,
+         * numbered as one thread numbers them (depth first, below before above) */
+        if (build(&m, 1)) goto fail;
+        if (m.sn == 2) {
+            if (sub_builder(&sub[0], &m, m.stack[1]) || sub_builder(&sub[1], &m, m.stack[0]))
+                goto fail;
+            m.sn = 0;
+            nsub = 2;
+            par_for(threads, 2, build_item, sub);
+            if (sub[0].failed || sub[1].failed) goto fail;
+        }
+    }
+    if (build(&m, 0)) goto fail;
+    /* the whole tree: m's nodes and leaves, then each subtree's, moved */
+    builder *parts[3] = {&m, &sub[0], &sub[1]};
+    size_t np = 1 + nsub, nn = 0, ln = 0, total = 0;
+    size_t node0[3], leaf0[3];
+    for (size_t k = 0; k < np; k++) {
+        node0[k] = nn;
+        leaf0[k] = ln;
+        nn += parts[k]->nn;
+        ln += parts[k]->ln;
+        for (size_t l = 0; l < parts[k]->ln; l++) total += parts[k]->leaves[l].cnt;
+    }
+    if (nn == 0) nn = 1; /* the root is a leaf: a one-node tree whose both sides are it */
+    t->nodes = malloc(nn * sizeof *t->nodes);
     t->leaf_off = malloc((ln + 1) * sizeof *t->leaf_off);
     t->items = malloc((total ? total : 1) * sizeof *t->items);
     t->region = malloc((ln ? ln : 1) * 4 * sizeof *t->region);
-    if (!t->leaf_off || !t->items || !t->region) goto fail;
-    total = 0;
-    for (size_t l = 0; l < ln; l++) {
-        t->leaf_off[l] = (uint32_t)total;
-        memcpy(t->items + total, pool + leaves[l].off, leaves[l].cnt * sizeof *pool);
-        total += leaves[l].cnt;
-        t->region[4 * l + 0] = leaves[l].lo[0];
-        t->region[4 * l + 1] = leaves[l].lo[1];
-        t->region[4 * l + 2] = leaves[l].hi[0];
-        t->region[4 * l + 3] = leaves[l].hi[1];
+    if (!t->nodes || !t->leaf_off || !t->items || !t->region) goto fail;
+    if (m.nn == 0) {
+        t->nodes[0] = (box_node){.t = INFINITY, .axis = 0, .child = {m.root, m.root}};
+    } else {
+        for (size_t k = 0; k < np; k++)
+            for (size_t i = 0; i < parts[k]->nn; i++) {
+                box_node nd = parts[k]->nodes[i];
+                nd.child[0] = moved(nd.child[0], node0[k], leaf0[k]);
+                nd.child[1] = moved(nd.child[1], node0[k], leaf0[k]);
+                t->nodes[node0[k] + i] = nd;
+            }
+        for (size_t k = 1; k < np; k++) /* the root's sides: below (k 1), above (k 2) */
+            t->nodes[0].child[k - 1] = moved(parts[k]->root, node0[k], leaf0[k]);
     }
+    total = 0;
+    for (size_t k = 0, l0 = 0; k < np; k++)
+        for (size_t l = 0; l < parts[k]->ln; l++, l0++) {
+            const leafrec *lr = &parts[k]->leaves[l];
+            t->leaf_off[l0] = (uint32_t)total;
+            memcpy(t->items + total, parts[k]->pool + lr->off, lr->cnt * sizeof *t->items);
+            total += lr->cnt;
+            t->region[4 * l0 + 0] = lr->lo[0];
+            t->region[4 * l0 + 1] = lr->lo[1];
+            t->region[4 * l0 + 2] = lr->hi[0];
+            t->region[4 * l0 + 3] = lr->hi[1];
+        }
     t->leaf_off[ln] = (uint32_t)total;
     t->nleaves = ln;
-    t->nodes = nodes;
     t->nnodes = nn;
-    free(pool);
-    free(stack);
-    free(leaves);
+    builder_free(&m);
+    builder_free(&sub[0]);
+    builder_free(&sub[1]);
     free(dbox);
     return 0;
 fail:
     free(dbox);
-    free(pool);
-    free(stack);
-    free(leaves);
-    free(nodes);
+    builder_free(&m);
+    builder_free(&sub[0]);
+    builder_free(&sub[1]);
     box_tree_free(t);
     return -1;
 }

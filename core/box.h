@@ -42,6 +42,10 @@ typedef struct box_tree {
  * leaf_max boxes.  Returns 0, or -1 when out of memory (t is then zeroed). */
 int box_tree_build(box_tree *t, const int64_t *box, size_t n, size_t leaf_max);
 
+/* The same tree, node for node, with the two sides of the root split built on two threads
+ * when threads > 1 and there are enough boxes. */
+int box_tree_build_par(box_tree *t, const int64_t *box, size_t n, size_t leaf_max, int threads);
+
 /* The leaf whose region contains point (x, y). */
 uint32_t box_tree_locate(const box_tree *t, double x, double y);
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/arr2.h"
+#include "core/box.h"
 #include "core/num.h"
 #include "core/pred.h"
 #include "core/sort.h"
@@ -726,4 +727,58 @@ TEST(tri_tri_apart_matches_edges)
     }
     CHECK(generic > n / 4 && meet > generic / 20 && meet < generic, "%zu generic, %zu meeting",
           generic, meet);
+}
+
+/* The box-kd-tree built with the root's two sides on two threads is the tree one thread
+ * builds, node for node and leaf for leaf; and it keeps the invariant the 2D pipeline relies
+ * on: the leaf that a point locates to holds every box containing the point. */
+TEST(box_tree_parallel_build_is_the_serial_one)
+{
+    uint64_t seed = 11;
+    for (int family = 0; family < 4; family++) {
+        size_t n = 20000 + (size_t)(test_rnd(&seed) * 30000);
+        int64_t *box = malloc(4 * n * sizeof *box);
+        REQUIRE(box, "malloc");
+        for (size_t i = 0; i < n; i++) {
+            int64_t x = (int64_t)(test_rnd(&seed) * 1e6), y = (int64_t)(test_rnd(&seed) * 1e6);
+            int64_t w = (int64_t)(test_rnd(&seed) * 2e3), h = (int64_t)(test_rnd(&seed) * 2e3);
+            if (family == 1) /* long thin boxes, horizontal and vertical */
+                i % 2 ? (w *= 50, h = 0) : (h *= 50, w = 0);
+            if (family == 2) x = x / 50, y = y / 50; /* crowded: every box meets many */
+            if (family == 3 && i % 3) x = y;         /* along a diagonal */
+            box[4 * i] = x, box[4 * i + 1] = y, box[4 * i + 2] = x + w, box[4 * i + 3] = y + h;
+        }
+        box_tree a, b;
+        REQUIRE(box_tree_build(&a, box, n, 24) == 0, "serial build");
+        REQUIRE(box_tree_build_par(&b, box, n, 24, 2) == 0, "parallel build");
+        CHECK(a.nleaves == b.nleaves && a.nnodes == b.nnodes && a.nnodes > 1,
+              "family %d: %zu/%zu leaves, %zu/%zu nodes", family, a.nleaves, b.nleaves, a.nnodes,
+              b.nnodes);
+        if (a.nleaves == b.nleaves && a.nnodes == b.nnodes) {
+            size_t diff = 0;
+            for (size_t k = 0; k < a.nnodes; k++)
+                diff += a.nodes[k].t != b.nodes[k].t || a.nodes[k].axis != b.nodes[k].axis ||
+                        a.nodes[k].child[0] != b.nodes[k].child[0] ||
+                        a.nodes[k].child[1] != b.nodes[k].child[1];
+            CHECK(diff == 0, "family %d: %zu nodes differ", family, diff);
+            CHECK(!memcmp(a.leaf_off, b.leaf_off, (a.nleaves + 1) * sizeof *a.leaf_off) &&
+                      !memcmp(a.items, b.items, a.leaf_off[a.nleaves] * sizeof *a.items) &&
+                      !memcmp(a.region, b.region, 4 * a.nleaves * sizeof *a.region),
+                  "family %d: leaves", family);
+        }
+        size_t bad = 0;
+        for (int q = 0; q < 2000; q++) {
+            size_t i = (size_t)(test_rnd(&seed) * (double)n);
+            const int64_t *bx = box + 4 * i; /* a point of box i, a corner or inside */
+            double x = (double)bx[0] + floor(test_rnd(&seed) * (double)(bx[2] - bx[0] + 1));
+            double y = (double)bx[1] + floor(test_rnd(&seed) * (double)(bx[3] - bx[1] + 1));
+            uint32_t l = box_tree_locate(&b, x, y), found = 0;
+            for (uint32_t k = b.leaf_off[l]; k < b.leaf_off[l + 1]; k++) found |= b.items[k] == i;
+            bad += !found;
+        }
+        CHECK(bad == 0, "family %d: %zu points whose box is not in their leaf", family, bad);
+        box_tree_free(&a);
+        box_tree_free(&b);
+        free(box);
+    }
 }

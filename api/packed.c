@@ -500,7 +500,7 @@ size_t api_g17(double x, char *buf)
     uint64_t bits;
     memcpy(&bits, &x, sizeof bits); /* x is normal here: x = m 2^e exactly */
     uint64_t m = (bits & (((uint64_t)1 << 52) - 1)) | (uint64_t)1 << 52;
-    int e2 = (int)(bits >> 52 & 0x7ff) - 1022; /* 2^(e2 - 1) <= x < 2^e2 */
+    int e2 = (int)(bits >> 52 & 0x7ff) - 1022;                       /* 2^(e2 - 1) <= x < 2^e2 */
     int e = e2 - 53, E = (int)floor((e2 - 1) * 0.30102999566398120); /* log10 x, or one below */
     u128 d = 0, f = 0, lo = api_pow10_u128(16), hi = api_pow10_u128(17);
     for (int tries = 0;; tries++) { /* E: 10^16 <= x 10^(16 - E) < 10^17, before rounding */

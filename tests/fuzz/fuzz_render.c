@@ -1,7 +1,7 @@
 /* fuzz_render.c — libFuzzer target: the result readers of the renderers of api/render.h, the
  * input taken as a result JSON (LAR JSON): render_svg and render_geojson (2D), render_obj (3D),
- * render_npz (any), each with the default options and, when that draws, again with the other paths on (numbers,
- * an exploded picture, GeoJSON with every cell, an exploded OBJ).
+ * render_npz (any), each with the default options and, when that draws, again with the other paths
+ * on (numbers, an exploded picture, GeoJSON with every cell, an exploded OBJ).
  *
  * Checks beyond the sanitizers: "a bad result is a value, never a crash": every answer is
  * API_OK, API_EINVALID or API_ENOMEM and keeps the contract of api/render.h (fuzz.h); SVG and

@@ -228,17 +228,20 @@ static int read_FV(scan *s, api_packed *a)
 /* [[[[x, y], ...], ...], ...] at s->p (polygons of rings of points, the native form only: an
  * element that is not an array, a GeoJSON object or a WKT string, gives up) into a: 0, -1 (not
  * taken), -2 out of memory.  a->V the points, a->off the rings' offsets into them, a->idx the
- * polygons' offsets into the rings. */
-static int read_rings(scan *s, api_packed *a)
+ * polygons' offsets into the rings.  single: the array at s->p is one polygon's rings
+ * [[[x, y], ...], ...] (a GeoJSON Polygon's coordinates). */
+static int read_rings(scan *s, api_packed *a, int single)
 {
     size_t capv = 0, capi = 0, capo = 0, capp = 0, nr = 0, np = 0;
     if (mem_grow(&a->off, &capo, 1, sizeof *a->off) || mem_grow(&a->idx, &capp, 1, sizeof *a->idx))
         return -2;
     a->off[0] = a->idx[0] = 0;
-    if (expect(s, '[')) return -1;
-    ws(s);
-    if (s->p < s->end && *s->p == ']') return s->p++, 0;
-    for (;;) { /* a polygon */
+    if (!single) {
+        if (expect(s, '[')) return -1;
+        ws(s);
+        if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    }
+    for (;;) { /* a polygon (single: the only one, the array at s->p) */
         if (expect(s, '[')) return -1;
         ws(s);
         if (s->p < s->end && *s->p == ']') return -1; /* no ring: jansson's message */
@@ -267,12 +270,30 @@ static int read_rings(scan *s, api_packed *a)
         }
         if (mem_grow(&a->idx, &capp, np + 2, sizeof *a->idx)) return -2;
         a->idx[++np] = (uint32_t)nr;
+        if (single) break;
         int r = next_elem(s);
         if (r < 0) return -1;
         if (r == 0) break;
     }
     a->nrings = nr, a->npoly = np;
     return 0;
+}
+
+/* A GeoJSON geometry's "coordinates" at s->p: a Polygon's rings (a->solid = 3) or a
+ * MultiPolygon's polygons (a->solid = 4), told by how deep the first position lies; positions
+ * of 2 numbers only (others, and empty arrays, give up: jansson reads them). */
+static int read_coords(scan *s, api_packed *a)
+{
+    const char *q = s->p;
+    int depth = 0;
+    for (;;) {
+        while (q < s->end && is_ws(*q)) q++;
+        if (q >= s->end || *q != '[') break;
+        depth++, q++;
+    }
+    if (depth != 3 && depth != 4) return -1;
+    a->solid = (size_t)depth;
+    return read_rings(s, a, depth == 3);
 }
 
 static void packed_release(api_packed *a)
@@ -304,9 +325,10 @@ static int take_array(scan *s, const char *body, size_t sol, int kind, spans *ou
     memset(a, 0, sizeof *a);
     a->solid = sol, a->fv = kind;
     const char *at = s->p;
-    int r = kind == API_PACKED_FV      ? read_FV(s, a)
-            : kind == API_PACKED_RINGS ? read_rings(s, a)
-                                       : read_rows(s, a);
+    int r = kind == API_PACKED_FV       ? read_FV(s, a)
+            : kind == API_PACKED_RINGS  ? read_rings(s, a, 0)
+            : kind == API_PACKED_COORDS ? read_coords(s, a)
+                                        : read_rows(s, a);
     if (r) {
         packed_release(a);
         return r;
@@ -343,6 +365,77 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
             continue;
         }
         return expect(s, '}');
+    }
+}
+
+/* A GeoJSON object among "polygons" (a geometry, or a Feature and its "geometry"): each
+ * "coordinates" array read (other keys skipped).  0, -1, -2. */
+static int geo_obj(scan *s, const char *body, spans *out, int depth)
+{
+    ws(s);
+    if (s->p >= s->end || *s->p != '{' || depth > 2) return -1;
+    s->p++;
+    ws(s);
+    if (s->p < s->end && *s->p == '}') return s->p++, 0;
+    for (;;) {
+        ws(s);
+        const char *k;
+        size_t kn;
+        if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
+        ws(s);
+        int r;
+        if (kn == 11 && !memcmp(k, "coordinates", 11) && s->p < s->end && *s->p == '[')
+            r = take_array(s, body, 0, API_PACKED_COORDS, out);
+        else if (kn == 8 && !memcmp(k, "geometry", 8) && s->p < s->end && *s->p == '{')
+            r = geo_obj(s, body, out, depth + 1);
+        else
+            r = skip_value(s);
+        if (r) return r;
+        ws(s);
+        if (s->p < s->end && *s->p == ',') {
+            s->p++;
+            continue;
+        }
+        return expect(s, '}');
+    }
+}
+
+/* "polygons" that are GeoJSON: an array of geometries or Features (WKT strings among them
+ * skipped: jansson reads them), or a FeatureCollection object.  0, -1, -2. */
+static int geo_polygons(scan *s, const char *body, spans *out)
+{
+    ws(s);
+    if (s->p < s->end && *s->p == '{') { /* a FeatureCollection: its "features" */
+        s->p++;
+        for (;;) {
+            ws(s);
+            const char *k;
+            size_t kn;
+            if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':'))
+                return -1;
+            ws(s);
+            int r = kn == 8 && !memcmp(k, "features", 8) && s->p < s->end && *s->p == '['
+                        ? geo_polygons(s, body, out)
+                        : skip_value(s);
+            if (r) return r;
+            ws(s);
+            if (s->p < s->end && *s->p == ',') {
+                s->p++;
+                continue;
+            }
+            return expect(s, '}');
+        }
+    }
+    if (expect(s, '[')) return -1;
+    ws(s);
+    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    for (;;) {
+        ws(s);
+        int r = s->p < s->end && *s->p == '"' ? skip_value(s) : geo_obj(s, body, out, 0);
+        if (r) return r;
+        int e = next_elem(s);
+        if (e < 0) return -1;
+        if (e == 0) return 0;
     }
 }
 
@@ -402,7 +495,13 @@ int api_packed_scan(const char *body, size_t len, api_packed_set *set)
         } else if (kn == 5 && !memcmp(k, "lines", 5) && s.p < s.end && *s.p == '[') {
             r = take_array(&s, body, 0, API_PACKED_SEGMENTS, &sp);
         } else if (kn == 8 && !memcmp(k, "polygons", 8) && s.p < s.end && *s.p == '[') {
-            r = take_array(&s, body, 0, API_PACKED_RINGS, &sp);
+            const char *q = s.p + 1; /* native rings, or GeoJSON objects (and WKT strings) */
+            while (q < s.end && is_ws(*q)) q++;
+            r = q < s.end && (*q == '{' || *q == '"')
+                    ? geo_polygons(&s, body, &sp)
+                    : take_array(&s, body, 0, API_PACKED_RINGS, &sp);
+        } else if (kn == 8 && !memcmp(k, "polygons", 8) && s.p < s.end && *s.p == '{') {
+            r = geo_polygons(&s, body, &sp);
         } else if (kn == 4 && !memcmp(k, "kind", 4) && s.p < s.end && *s.p == '"') {
             const char *v;
             size_t vn;
@@ -559,9 +658,9 @@ static void put_number(api_buf *b, double x, int integer)
 }
 
 /* Polygons of rings of points (API_PACKED_RINGS) as jansson writes them compact. */
-static void put_rings(api_buf *b, const api_packed *a)
+static void put_rings(api_buf *b, const api_packed *a, int single)
 {
-    api_buf_putc(b, '[');
+    if (!single) api_buf_putc(b, '[');
     for (size_t q = 0; q < a->npoly; q++) {
         api_buf_puts(b, q ? ",[" : "[");
         for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
@@ -577,15 +676,15 @@ static void put_rings(api_buf *b, const api_packed *a)
         }
         api_buf_putc(b, ']');
     }
-    api_buf_putc(b, ']');
+    if (!single) api_buf_putc(b, ']');
 }
 
 /* Array a as jansson writes it compact: rows of V and segments with each number as it was
  * written, rows of FV as lists of indices, polygons by put_rings. */
 static void put_array(api_buf *b, const api_packed *a)
 {
-    if (a->fv == API_PACKED_RINGS) {
-        put_rings(b, a);
+    if (a->fv == API_PACKED_RINGS || a->fv == API_PACKED_COORDS) {
+        put_rings(b, a, a->fv == API_PACKED_COORDS && a->solid == 3);
         return;
     }
     int seg = a->fv == API_PACKED_SEGMENTS, per = seg ? 4 : 3;

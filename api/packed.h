@@ -5,7 +5,8 @@
  * read by jansson they cost a node, an allocation and a free per number (a request of 17 MB,
  * two solids of 160 000 triangles: 0.85 s around a core of 0.36 s).  api_packed_scan() walks
  * the request's text once, finds solids[i].V, solids[i].FV, faces.V, faces.FV, lines and polygons
- * (native rings only), reads each
+ * (native rings, or the "coordinates" of GeoJSON geometries and Features, in an array or a
+ * FeatureCollection; WKT strings are left to jansson), reads each
  * into flat arrays (numbers by the correctly rounded reader of core/fastfloat.h, tokens checked
  * against JSON's grammar) and gives the rest of the text with each such array replaced by a
  * placeholder string, for jansson to read as usual.
@@ -35,6 +36,9 @@
 #define API_PACKED_FV       1 /* a solid's FV: rows of indices */
 #define API_PACKED_SEGMENTS 2 /* a "lines" request's lines: rows [[x1, y1], [x2, y2]] */
 #define API_PACKED_RINGS    3 /* a "polygons" request's polygons, each native [[[x, y], ...]] */
+#define API_PACKED_COORDS                                                                          \
+    4 /* a GeoJSON geometry's "coordinates" among "polygons": solid 3, a                           \
+         Polygon's rings; solid 4, a MultiPolygon's polygons */
 
 typedef struct api_packed {
     size_t solid;  /* index in "solids", or API_PACKED_FACES (0 for segments and rings) */

@@ -23,6 +23,7 @@
  * who frees it with api_polygons_free().
  */
 #include "api/api_int.h"
+#include "core/fastfloat.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -193,7 +194,10 @@ static int json_rings(const json_t *rings, int geojson, pbuild *b, const char *p
 /* A GeoJSON object (RFC 7946) at path: a Polygon, a MultiPolygon (its parts' rings together:
  * the even-odd rule makes them the parts' union, as they do not overlap) or a Feature holding
  * one. */
-static int geojson_polygon(const json_t *o, pbuild *b, const char *path, api_error *err)
+static int packed_coords(const api_packed *a, pbuild *b, api_error *err);
+
+static int geojson_polygon(const json_t *o, api_packed_set *pk, pbuild *b, const char *path,
+                           api_error *err)
 {
     const char *type = json_string_value(json_object_get(o, "type"));
     const json_t *c = json_object_get(o, "coordinates");
@@ -209,9 +213,17 @@ static int geojson_polygon(const json_t *o, pbuild *b, const char *path, api_err
             !strcmp(json_string_value(json_object_get(g, "type")) ?: "", "Feature"))
             return api_fail(err, API_EINVALID, "%s: expected a Polygon or MultiPolygon object",
                             sub);
-        return geojson_polygon(g, b, sub, err);
+        return geojson_polygon(g, pk, b, sub, err);
     }
     snprintf(sub, sizeof sub, "%s.coordinates", path);
+    if (pk && json_is_string(c)) { /* read fast: a Polygon's rings or a MultiPolygon's */
+        int multi = !strcmp(type, "MultiPolygon");
+        const api_packed *a =
+            multi || !strcmp(type, "Polygon")
+                ? api_packed_find(pk, multi ? 4 : 3, API_PACKED_COORDS, json_string_value(c))
+                : NULL;
+        return a ? packed_coords(a, b, err) : API_EINVALID; /* jansson's path words it */
+    }
     if (!strcmp(type, "Polygon")) return json_rings(c, 1, b, sub, err);
     if (!strcmp(type, "MultiPolygon")) {
         size_t i;
@@ -284,7 +296,6 @@ static int wkt_char(wkt *w, char c)
 static int wkt_number(wkt *w, double *x)
 {
     const char *q;
-    char buf[64];
     size_t digits = 0;
     wkt_space(w);
     q = w->p;
@@ -302,11 +313,7 @@ static int wkt_number(wkt *w, double *x)
         while (*e >= '0' && *e <= '9') e++;
         q = e;
     }
-    if ((size_t)(q - w->p) >= sizeof buf) return 0;
-    memcpy(buf, w->p, (size_t)(q - w->p));
-    buf[q - w->p] = 0;
-    *x = strtod(buf, NULL);
-    if (!isfinite(*x)) return 0;
+    if (ff_parse(w->p, q, x) != 0 || !isfinite(*x)) return 0; /* strtod's double, faster */
     w->p = q;
     return 1;
 }
@@ -404,10 +411,11 @@ static int wkt_read(const char *text, pbuild *b, const char *path, api_error *er
 }
 
 /* One input polygon at path: native rings, a GeoJSON object or a WKT string. */
-static int read_polygon(const json_t *p, pbuild *b, const char *path, api_error *err)
+static int read_polygon(const json_t *p, api_packed_set *pk, pbuild *b, const char *path,
+                        api_error *err)
 {
     if (json_is_string(p)) return wkt_read(json_string_value(p), b, path, err);
-    if (json_is_object(p)) return geojson_polygon(p, b, path, err);
+    if (json_is_object(p)) return geojson_polygon(p, pk, b, path, err);
     return json_rings(p, 0, b, path, err);
 }
 
@@ -443,6 +451,24 @@ static int packed_polygons(const api_packed *a, pbuild *b, api_error *err)
     return API_OK;
 }
 
+/* A GeoJSON geometry's coordinates as api_packed_scan read them (a: API_PACKED_COORDS): every
+ * ring's points, as json_rings takes them (a closing point dropped by end_ring); a failure
+ * sends the request to the ordinary path, which words it. */
+static int packed_coords(const api_packed *a, pbuild *b, api_error *err)
+{
+    for (size_t q = 0; q < a->npoly; q++)
+        for (uint32_t k = a->idx[q]; k < a->idx[q + 1]; k++) {
+            if (a->off[k + 1] - a->off[k] < 3) return API_EINVALID;
+            for (uint32_t v = a->off[k]; v < a->off[k + 1]; v++) {
+                int rc = add_point(b, a->V[2 * (size_t)v], a->V[2 * (size_t)v + 1], err);
+                if (rc != API_OK) return rc;
+            }
+            int rc = end_ring(b, "polygons", err);
+            if (rc != API_OK) return rc;
+        }
+    return API_OK;
+}
+
 /* Reads "polygons": an array of polygons (each native, GeoJSON or WKT), or a GeoJSON
  * FeatureCollection (one polygon per feature); or, with pk, what api_packed_scan read of it. */
 static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r, api_error *err)
@@ -459,6 +485,7 @@ static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r,
     api_packed *a = pk && json_is_string(ps)
                         ? api_packed_find(pk, 0, API_PACKED_RINGS, json_string_value(ps))
                         : NULL;
+    if (pk && json_is_string(ps) && !a) return API_EINVALID; /* not ours: jansson's path */
     if (a) {
         rc = packed_polygons(a, &b, err);
         goto built;
@@ -488,7 +515,7 @@ static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r,
               !strcmp(json_string_value(json_object_get(p, "type")) ?: "", "Feature")))
             rc = api_fail(err, API_EINVALID, "%s: expected a GeoJSON Feature", path);
         else
-            rc = read_polygon(p, &b, path, err);
+            rc = read_polygon(p, pk, &b, path, err);
         if (rc == API_OK) rc = end_polygon(&b, json_array_size(list), err);
     }
 built:

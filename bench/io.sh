@@ -8,7 +8,8 @@
 #   lines100k     cellar gen lines 100000 0.02 1: the full result (V, EV, FV, FE, holes, ...)
 #   grid1000      cellar gen grid 1000: 998 001 faces
 #   layers60x550  the GIS layers of bench/runbool2.sh (60 x 60 parcels laid as bricks at UTM
-#                 coordinates, 550 circles of 64 vertices), their intersection, every field
+#                 coordinates, 550 circles of 64 vertices), their intersection, every field;
+#                 -geojson: the same as a GeoJSON FeatureCollection (properties, closed rings)
 #   spheres160k   two spheres of 160 000 triangles each, overlapping (their arrangement)
 # Exit status: 0, or 1 when a request failed.
 set -u
@@ -47,6 +48,14 @@ l1 = ",".join(str(i) for i in range(K * K))
 l2 = ",".join(str(i) for i in range(K * K, K * K + M))
 open(tmp + "/layers60x550.json", "w").write(
     '{"kind":"polygons","polygons":[%s],"op":["&",["+",%s],["+",%s]]}' % (text, l1, l2))
+# the same layers as a GeoJSON FeatureCollection, as GIS tools write them (rings closed)
+feats = ",".join(
+    '{"type":"Feature","properties":{"id":%d,"layer":"%s"},"geometry":{"type":"Polygon",'
+    '"coordinates":[%s]}}' % (i, "parcels" if i < K * K else "buffers",
+                              ",".join(ring(r + [r[0]]) for r in p)) for i, p in enumerate(polys))
+open(tmp + "/layers60x550-geojson.json", "w").write(
+    '{"kind":"polygons","polygons":{"type":"FeatureCollection","features":[%s]},'
+    '"op":["&",["+",%s],["+",%s]]}' % (feats, l1, l2))
 # two UV spheres of 400 x 200 quads (160 000 triangles each), the second moved
 def sphere(cx, cy, cz, n=400, m=200):
     V = [[cx, cy, cz + 1.0], [cx, cy, cz - 1.0]]
@@ -75,4 +84,4 @@ echo "  read = the request parsed and checked by a run; intake = the daemon's ch
 echo "  form; write = the result written (streamed to /dev/null); jansson r/w = json_loadb of the"
 echo "  request, json_dumps of the result's tree.  Targets: read >= 150, write >= 300."
 "$B/bench/io" "$tmp/lines100k.json" "$tmp/grid1000.json" "$tmp/layers60x550.json" \
-    "$tmp/spheres160k.json"
+    "$tmp/layers60x550-geojson.json" "$tmp/spheres160k.json"

@@ -544,8 +544,7 @@ static enum MHD_Result send_result(conn *c, const char *hash, struct MHD_Respons
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
                 {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
-                {MHD_HTTP_HEADER_VARY,
-                 c->route == ROUTE_JOBS ? "Accept-Encoding" : "Accept, Accept-Encoding"},
+                {MHD_HTTP_HEADER_VARY, "Accept, Accept-Encoding"},
                 {c->gz ? MHD_HTTP_HEADER_CONTENT_ENCODING : NULL, "gzip"},
                 {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_LOCATION, loc},
                 {c->route == ROUTE_RESULT ? NULL : MHD_HTTP_HEADER_CONTENT_LOCATION, loc},
@@ -1510,6 +1509,10 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
             }
             if (!json_content_type(mc))
                 return problem(c, 415, "the body must be application/json", NULL, NULL);
+            /* the representation of a result answered to this POST (Accept, ?format= and the
+             * drawing options), decided before the body is read: 406 or 422 at once */
+            enum MHD_Result nr;
+            if (negotiate(c, &nr)) return nr;
             /* the body's bytes are reserved before any is read (all of them when the length
              * is known, else as they come), against one budget for every connection */
             if (cl && (body_reserve(c, clv + 1) || !(c->body = malloc(clv + 1)))) {

@@ -1754,6 +1754,93 @@ SERVER_TEST(results_as_pictures_and_maps, "--workers 1 --job-threads 1")
     hresp_free(&r);
 }
 
+/* A POST answered with its result (cached, or done within Prefer: wait) comes as Accept or
+ * ?format= asks, with the drawing options of the query, exactly as GET /v1/results/{hash} gives
+ * it; an Accept or format the service cannot serve is refused before the body is read (406,
+ * 422), and no job is made for it. */
+SERVER_TEST(post_answers_in_the_format_asked, "--workers 1 --job-threads 1")
+{
+    size_t len;
+    char *body = small_body(5, 1, &len);
+    hresp r, g;
+    char etag[200], path[200], v[200];
+    /* ?format=svg with options, on the POST that runs the job */
+    hreq p = {
+        .path = "/v1/jobs?format=svg&numbers=1&width=300", .body = body, .len = len, .has_body = 1};
+    p.h[0] = "Content-Type: application/json";
+    p.h[1] = "Prefer: wait=20";
+    http_do(d, &p, &r);
+    REQUIRE(r.status == 200, "POST ?format=svg: %ld %s", r.status, r.body.p ? r.body.p : "");
+    CHECK(has_header(&r, "Content-Type", "image/svg+xml") && r.body.p && strstr(r.body.p, "<svg") &&
+              strstr(r.body.p, "vertex-numbers"),
+          "POST ?format=svg: not the picture asked for");
+    CHECK(has_header(&r, "Vary", "Accept, Accept-Encoding"), "POST: no Vary: Accept");
+    REQUIRE(hget(&r, "ETag", etag, sizeof etag) && strstr(etag, "-svg-"), "POST svg ETag %s", etag);
+    snprintf(path, sizeof path, "/v1/results/%.64s?format=svg&numbers=1&width=300", etag + 1);
+    http_get(d, path, &g);
+    CHECK(g.status == 200 && g.body.n == r.body.n && !memcmp(g.body.p, r.body.p, r.body.n) &&
+              hget(&g, "ETag", v, sizeof v) && !strcmp(v, etag),
+          "the GET of the same picture differs: %ld, %zu vs %zu bytes", g.status, g.body.n,
+          r.body.n);
+    hresp_free(&g);
+    hresp_free(&r);
+    /* Accept on a POST answered from the cache */
+    static const char *const accepts[][2] = {{"application/geo+json", "application/geo+json"},
+                                             {"application/x-npz", "application/x-npz"},
+                                             {"application/json", "application/json"}};
+    for (size_t i = 0; i < 3; i++) {
+        char acc[80];
+        hreq q = {.path = "/v1/jobs", .body = body, .len = len, .has_body = 1};
+        snprintf(acc, sizeof acc, "Accept: %s", accepts[i][0]);
+        q.h[0] = "Content-Type: application/json";
+        q.h[1] = acc;
+        http_do(d, &q, &r);
+        CHECK(r.status == 200 && has_header(&r, "Content-Type", accepts[i][1]) &&
+                  has_header(&r, "X-Cellar-Cache", "hit"),
+              "POST, Accept %s: %ld", accepts[i][0], r.status);
+        if (i == 0) {
+            json_t *fc = jbody(&r);
+            CHECK(fc && !strcmp(jstr(fc, "type"), "FeatureCollection"), "POST geojson: %.80s",
+                  r.body.p ? r.body.p : "");
+            json_decref(fc);
+        }
+        if (i == 1) CHECK(r.body.n > 22 && !memcmp(r.body.p, "PK", 2), "POST npz: not a zip");
+        hresp_free(&r);
+    }
+    /* refused before the body: an Accept nothing here serves, an unknown format, a bad option;
+     * no job is made (the metrics count none) */
+    http_get(d, "/metrics", &g);
+    static const char acc_m[] = "\ncellar_jobs_total{state=\"accepted\"} ";
+    const char *jm = g.body.p ? strstr(g.body.p, acc_m) : NULL;
+    long before = jm ? atol(jm + sizeof acc_m - 1) : -1;
+    hresp_free(&g);
+    static const struct {
+        const char *path, *accept;
+        long status;
+    } bad[] = {{"/v1/jobs", "Accept: image/png", 406},
+               {"/v1/jobs?format=png", NULL, 422},
+               {"/v1/jobs?format=svg&explode=0.5", NULL, 422}};
+    for (size_t i = 0; i < 3; i++) {
+        char *other = small_body(6 + (int)i, 1, &len); /* not in the cache */
+        hreq q = {.path = bad[i].path, .body = other, .len = len, .has_body = 1};
+        q.h[0] = "Content-Type: application/json";
+        q.h[1] = bad[i].accept;
+        http_do(d, &q, &r);
+        CHECK(r.status == bad[i].status &&
+                  has_header(&r, "Content-Type", "application/problem+json"),
+              "%s %s: %ld, want %ld", bad[i].path, bad[i].accept ? bad[i].accept : "", r.status,
+              bad[i].status);
+        hresp_free(&r);
+        free(other);
+    }
+    http_get(d, "/metrics", &g);
+    jm = g.body.p ? strstr(g.body.p, acc_m) : NULL;
+    CHECK(before >= 0 && jm && atol(jm + sizeof acc_m - 1) == before,
+          "jobs were accepted: %ld then %ld", before, jm ? atol(jm + sizeof acc_m - 1) : -1);
+    hresp_free(&g);
+    free(body);
+}
+
 /* ---- large results: streamed through a spool file and the store's chunks --------------- */
 
 /* The lines of an n x n grid of unit squares, moved by `shift` (a distinct job per shift), with

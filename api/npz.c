@@ -163,34 +163,10 @@ static int string(rd *r, const char **k, size_t *kn, int *plain)
 /* A JSON number at r->p: *x, and *integer when it is written without fraction and exponent. */
 static int number(rd *r, double *x, int *integer)
 {
-    const char *s = r->p, *q = s;
-    if (q < r->end && *q == '-') q++;
-    const char *d = q;
-    uint64_t m = 0;
-    while (q < r->end && *q >= '0' && *q <= '9') m = m * 10 + (uint64_t)(*q++ - '0');
-    size_t nd = (size_t)(q - d);
-    if (!nd || (nd > 1 && *d == '0')) return bad(r, "expected a number");
-    *integer = 1;
-    if (q < r->end && *q == '.') {
-        *integer = 0;
-        const char *f = ++q;
-        while (q < r->end && *q >= '0' && *q <= '9') q++;
-        if (q == f) return bad(r, "expected a number");
-    }
-    if (q < r->end && (*q == 'e' || *q == 'E')) {
-        *integer = 0;
-        q++;
-        if (q < r->end && (*q == '+' || *q == '-')) q++;
-        const char *e = q;
-        while (q < r->end && *q >= '0' && *q <= '9') q++;
-        if (q == e) return bad(r, "expected a number");
-    }
-    if (*integer && nd <= 15) {
-        *x = *s == '-' ? -(double)m : (double)m;
-    } else if (ff_parse(s, q, x) != 0) {
-        return bad(r, "a number beyond the doubles");
-    }
-    r->p = q;
+    size_t digits;
+    int rc = ff_json_number(r->p, r->end, x, integer, &digits, &r->p);
+    if (rc == -1) return bad(r, "expected a number");
+    if (rc) return bad(r, "a number beyond the doubles");
     return 0;
 }
 

@@ -83,39 +83,6 @@ static int skip_value(scan *s)
     return 0;
 }
 
-/* A JSON number token at s->p (RFC 8259: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?),
- * followed by a separator: its end in *e, *integer when it has no fraction and no exponent,
- * *digits its integer part's digits.  0, or -1 when it is not one. */
-static int number_token(const scan *s, const char **e, int *integer, size_t *digits)
-{
-    const char *q = s->p, *end = s->end;
-    if (q < end && *q == '-') q++;
-    const char *d0 = q;
-    if (q >= end || *q < '0' || *q > '9') return -1;
-    if (*q == '0')
-        q++;
-    else
-        while (q < end && *q >= '0' && *q <= '9') q++;
-    *digits = (size_t)(q - d0);
-    *integer = 1;
-    if (q < end && *q == '.') {
-        *integer = 0;
-        q++;
-        if (q >= end || *q < '0' || *q > '9') return -1;
-        while (q < end && *q >= '0' && *q <= '9') q++;
-    }
-    if (q < end && (*q == 'e' || *q == 'E')) {
-        *integer = 0;
-        q++;
-        if (q < end && (*q == '+' || *q == '-')) q++;
-        if (q >= end || *q < '0' || *q > '9') return -1;
-        while (q < end && *q >= '0' && *q <= '9') q++;
-    }
-    if (q < end && !is_ws(*q) && *q != ',' && *q != ']') return -1;
-    *e = q;
-    return 0;
-}
-
 /* Expects c (after blanks): 0, or -1. */
 static int expect(scan *s, char c)
 {
@@ -141,15 +108,12 @@ static int read_number(scan *s, double *x, int *integer)
     const char *e;
     size_t digits;
     ws(s);
-    if (number_token(s, &e, integer, &digits)) return -1;
-    if (*integer) {
-        if (digits > 15) return -1; /* jansson's int64, exactly a double below 10^15 */
-        int64_t v = 0;
-        for (const char *q = *s->p == '-' ? s->p + 1 : s->p; q < e; q++) v = v * 10 + (*q - '0');
-        *x = (double)(*s->p == '-' ? -v : v);
-    } else if (ff_parse(s->p, e, x)) {
-        return -1; /* not finite: jansson's overflow error, or another message */
-    }
+    /* not finite: jansson's overflow error, or another message; an integer of more than 15
+     * digits: jansson's int64, exactly a double only below 10^15 */
+    if (ff_json_number(s->p, s->end, x, integer, &digits, &e) || (*integer && digits > 15))
+        return -1;
+    if (e < s->end && !is_ws(*e) && *e != ',' && *e != ']') return -1; /* not a separator */
+    if (*integer) *x += 0.0; /* jansson reads "-0" as the integer 0 */
     s->p = e;
     return 0;
 }

@@ -193,3 +193,40 @@ int ff_parse_prefix(const char *p, const char *end, double *out, const char **st
     if (eisel_lemire(w, q, neg, out) == 0) return 0;
     return slow(p, end, out);
 }
+
+int ff_json_number(const char *p, const char *end, double *out, int *integer, size_t *digits,
+                   const char **stop)
+{
+    const char *q = p;
+    if (q < end && *q == '-') q++;
+    const char *d0 = q;
+    if (q >= end || *q < '0' || *q > '9') return -1;
+    if (*q == '0')
+        q++;
+    else
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    *digits = (size_t)(q - d0);
+    *integer = 1;
+    if (q < end && *q == '.') {
+        *integer = 0;
+        q++;
+        if (q >= end || *q < '0' || *q > '9') return -1;
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    }
+    if (q < end && (*q == 'e' || *q == 'E')) {
+        *integer = 0;
+        q++;
+        if (q < end && (*q == '+' || *q == '-')) q++;
+        if (q >= end || *q < '0' || *q > '9') return -1;
+        while (q < end && *q >= '0' && *q <= '9') q++;
+    }
+    if (*integer && *digits <= 15) { /* exact in a double */
+        int64_t v = 0;
+        for (const char *r = d0; r < q; r++) v = v * 10 + (*r - '0');
+        *out = *p == '-' ? -(double)v : (double)v; /* "-0" is -0.0, as strtod reads it */
+    } else if (ff_parse(p, q, out)) {
+        return -2;
+    }
+    *stop = q;
+    return 0;
+}

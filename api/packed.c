@@ -302,13 +302,20 @@ static int take_array(scan *s, const char *body, size_t sol, int kind, spans *ou
     return 0;
 }
 
-/* The object at s->p as a solid (index sol): its V and FV read (other keys skipped).  0, -1,
- * -2. */
-static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
+/* Where the members' readers put what they take: the body, the solid's index, the spans. */
+typedef struct walk {
+    const char *body;
+    size_t sol;
+    spans *out;
+    int depth; /* of a GeoJSON object (a Feature's geometry is 1) */
+} walk;
+
+/* The object at s->p (after blanks): member(s, key, its length, w) for each member, with s->p at
+ * its value (after blanks), which it reads or skips.  0; -1 when it is not an object or is
+ * malformed; or member's non-zero answer (-1, -2). */
+static int members(scan *s, int (*member)(scan *, const char *, size_t, walk *), walk *w)
 {
-    ws(s);
-    if (s->p >= s->end || *s->p != '{') return skip_value(s);
-    s->p++;
+    if (expect(s, '{')) return -1;
     ws(s);
     if (s->p < s->end && *s->p == '}') return s->p++, 0;
     for (;;) {
@@ -317,11 +324,7 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         size_t kn;
         if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
         ws(s);
-        int kind = kn == 2 && !memcmp(k, "FV", 2) ? API_PACKED_FV
-                   : kn == 1 && *k == 'V'         ? API_PACKED_V
-                                                  : -1;
-        int r = kind >= 0 && s->p < s->end && *s->p == '[' ? take_array(s, body, sol, kind, out)
-                                                           : skip_value(s);
+        int r = member(s, k, kn, w);
         if (r) return r;
         ws(s);
         if (s->p < s->end && *s->p == ',') {
@@ -330,72 +333,74 @@ static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
         }
         return expect(s, '}');
     }
+}
+
+static int at(const scan *s, char c)
+{
+    return s->p < s->end && *s->p == c;
+}
+
+/* A solid's member: V and FV read, the rest skipped. */
+static int solid_member(scan *s, const char *k, size_t kn, walk *w)
+{
+    int kind = kn == 2 && !memcmp(k, "FV", 2) ? API_PACKED_FV
+               : kn == 1 && *k == 'V'         ? API_PACKED_V
+                                              : -1;
+    return kind >= 0 && at(s, '[') ? take_array(s, w->body, w->sol, kind, w->out) : skip_value(s);
+}
+
+/* The object at s->p as a solid (index sol): its V and FV read (other keys skipped; a value
+ * that is not an object skipped too).  0, -1, -2. */
+static int solid_obj(scan *s, const char *body, size_t sol, spans *out)
+{
+    walk w = {body, sol, out, 0};
+    ws(s);
+    return at(s, '{') ? members(s, solid_member, &w) : skip_value(s);
+}
+
+static int geo_obj(scan *s, const char *body, spans *out, int depth);
+
+/* A GeoJSON object's member: "coordinates" read, a Feature's "geometry" walked, the rest
+ * skipped. */
+static int geo_member(scan *s, const char *k, size_t kn, walk *w)
+{
+    if (kn == 11 && !memcmp(k, "coordinates", 11) && at(s, '['))
+        return take_array(s, w->body, 0, API_PACKED_COORDS, w->out);
+    if (kn == 8 && !memcmp(k, "geometry", 8) && at(s, '{'))
+        return geo_obj(s, w->body, w->out, w->depth + 1);
+    return skip_value(s);
 }
 
 /* A GeoJSON object among "polygons" (a geometry, or a Feature and its "geometry"): each
  * "coordinates" array read (other keys skipped).  0, -1, -2. */
 static int geo_obj(scan *s, const char *body, spans *out, int depth)
 {
-    ws(s);
-    if (s->p >= s->end || *s->p != '{' || depth > 2) return -1;
-    s->p++;
-    ws(s);
-    if (s->p < s->end && *s->p == '}') return s->p++, 0;
-    for (;;) {
-        ws(s);
-        const char *k;
-        size_t kn;
-        if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':')) return -1;
-        ws(s);
-        int r;
-        if (kn == 11 && !memcmp(k, "coordinates", 11) && s->p < s->end && *s->p == '[')
-            r = take_array(s, body, 0, API_PACKED_COORDS, out);
-        else if (kn == 8 && !memcmp(k, "geometry", 8) && s->p < s->end && *s->p == '{')
-            r = geo_obj(s, body, out, depth + 1);
-        else
-            r = skip_value(s);
-        if (r) return r;
-        ws(s);
-        if (s->p < s->end && *s->p == ',') {
-            s->p++;
-            continue;
-        }
-        return expect(s, '}');
-    }
+    walk w = {body, 0, out, depth};
+    return depth > 2 ? -1 : members(s, geo_member, &w);
+}
+
+static int geo_polygons(scan *s, const char *body, spans *out);
+
+/* A FeatureCollection's member: its "features" walked, the rest skipped. */
+static int collection_member(scan *s, const char *k, size_t kn, walk *w)
+{
+    return kn == 8 && !memcmp(k, "features", 8) && at(s, '[') ? geo_polygons(s, w->body, w->out)
+                                                              : skip_value(s);
 }
 
 /* "polygons" that are GeoJSON: an array of geometries or Features (WKT strings among them
  * skipped: jansson reads them), or a FeatureCollection object.  0, -1, -2. */
 static int geo_polygons(scan *s, const char *body, spans *out)
 {
+    walk w = {body, 0, out, 0};
     ws(s);
-    if (s->p < s->end && *s->p == '{') { /* a FeatureCollection: its "features" */
-        s->p++;
-        for (;;) {
-            ws(s);
-            const char *k;
-            size_t kn;
-            if (s->p >= s->end || *s->p != '"' || skip_string(s, &k, &kn) || expect(s, ':'))
-                return -1;
-            ws(s);
-            int r = kn == 8 && !memcmp(k, "features", 8) && s->p < s->end && *s->p == '['
-                        ? geo_polygons(s, body, out)
-                        : skip_value(s);
-            if (r) return r;
-            ws(s);
-            if (s->p < s->end && *s->p == ',') {
-                s->p++;
-                continue;
-            }
-            return expect(s, '}');
-        }
-    }
+    if (at(s, '{')) return members(s, collection_member, &w); /* a FeatureCollection */
     if (expect(s, '[')) return -1;
     ws(s);
-    if (s->p < s->end && *s->p == ']') return s->p++, 0;
+    if (at(s, ']')) return s->p++, 0;
     for (;;) {
         ws(s);
-        int r = s->p < s->end && *s->p == '"' ? skip_value(s) : geo_obj(s, body, out, 0);
+        int r = at(s, '"') ? skip_value(s) : geo_obj(s, body, out, 0);
         if (r) return r;
         int e = next_elem(s);
         if (e < 0) return -1;

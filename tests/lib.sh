@@ -7,6 +7,9 @@
 #                               exits WANT, else prints what it got
 #   finish                      prints "N passed, N failed" and exits non-zero on a failure
 #   give_up WHY                 a test that cannot run: one failure, WHY, and exit
+#   need_python IMPORTS PKGS    sets PY to a python3 that runs "import IMPORTS": $PYTHON or
+#                               the one on PATH, else Debian's /usr/bin/python3; gives up
+#                               naming the Debian packages PKGS when none does
 #   run_py PY SCRIPT ARGS...    runs a Python test that prints its checks and a summary line
 #                               last (tests/tally.py), passes its lines on and exits with it;
 #                               a crash leaves no summary: one failure, with its stderr's end
@@ -38,6 +41,12 @@ give_up() {
     echo "FAIL $1"
     echo "0 passed, 1 failed"
     exit 1
+}
+need_python() {
+    PY=${PYTHON:-python3}
+    $PY -c "import $1" 2>/dev/null || PY=/usr/bin/python3
+    $PY -c "import $1" 2>/dev/null ||
+        give_up "python3 that imports $1 is needed: apt-get install $2 (make deps)"
 }
 run_py() {
     py=$1

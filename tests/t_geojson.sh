@@ -10,13 +10,7 @@ set -u
 BIN=${CELLAR_BIN:-build/cellar}
 case $BIN in /*) ;; *) [ -e "$BIN" ] && BIN="$(pwd)/$BIN" ;; esac
 cd "$(dirname "$0")/.."
-# python3 with shapely: the one on PATH, else Debian's (python3-shapely)
-PY=${PYTHON:-python3}
-if ! $PY -c 'import shapely.geometry, shapely.ops, shapely.validation' 2>/dev/null; then
-    PY=/usr/bin/python3
-fi
-$PY -c 'import shapely.geometry, shapely.ops, shapely.validation' 2>/dev/null ||
-    give_up "python3 with shapely is needed: apt-get install python3-shapely (make deps)"
+need_python "shapely.geometry, shapely.ops, shapely.validation" "python3-shapely"
 [ -x "$BIN" ] || give_up "$BIN is not built"
 # line drawings: dangling trees inside a face and hanging from its side, blocks at cut vertices
 cat >"$T/cut-vertices.json" <<'JSON'

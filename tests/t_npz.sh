@@ -11,11 +11,5 @@ export CELLAR_BUILD="${CELLAR_BUILD:-build}"
 export CELLAR_BIN="${CELLAR_BIN:-$CELLAR_BUILD/cellar}"
 case $CELLAR_BIN in /*) ;; *) CELLAR_BIN="$(pwd)/$CELLAR_BIN" ;; esac
 [ -x "$CELLAR_BIN" ] || give_up "$CELLAR_BIN is not built"
-# python3 with numpy and scipy: the one on PATH, else Debian's (python3-numpy, python3-scipy)
-PY=${PYTHON:-python3}
-if ! $PY -c 'import numpy, scipy.sparse' 2>/dev/null; then
-    PY=/usr/bin/python3
-fi
-$PY -c 'import numpy, scipy.sparse' 2>/dev/null ||
-    give_up "python3 with numpy and scipy is needed: apt-get install python3-numpy python3-scipy (make deps)"
+need_python "numpy, scipy.sparse" "python3-numpy python3-scipy"
 run_py $PY tests/npz_check.py "$T"

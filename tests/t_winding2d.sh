@@ -13,11 +13,5 @@ export CELLAR_BUILD="${CELLAR_BUILD:-build}"
 export CELLAR_BIN="${CELLAR_BIN:-$CELLAR_BUILD/cellar}"
 case $CELLAR_BIN in /*) ;; *) CELLAR_BIN="$(pwd)/$CELLAR_BIN" ;; esac
 [ -x "$CELLAR_BIN" ] || give_up "$CELLAR_BIN is not built"
-# python3 with shapely: the one on PATH, else Debian's (python3-shapely)
-PY=${PYTHON:-python3}
-if ! $PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null; then
-    PY=/usr/bin/python3
-fi
-$PY -c 'import shapely.geometry, shapely.ops' 2>/dev/null ||
-    give_up "python3 with shapely is needed: apt-get install python3-shapely (make deps)"
+need_python "shapely.geometry, shapely.ops" "python3-shapely"
 run_py $PY tests/winding2d.py

@@ -1733,10 +1733,13 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     /* blocks, from the face walks of the plane graph: an edge is a bridge exactly when its two
      * sides are on one walk, and a vertex lies in 1 + sum over the walks through it of (its
      * visits - 1) blocks, so (block-cut tree) blocks = components + sum over the walks of
-     * (length - distinct vertices).  Bridges are removed (unless keep_dangling) and the walks
-     * made again. */
+     * (length - distinct vertices), the components counted by their outer walks (one each: the
+     * faces below check it).  Bridges are removed (unless keep_dangling) and the walks made
+     * again. */
     if (graph_adjacency(g)) goto fail;
-    size_t ncomp = 0, nbridge = 0;
+    comp = malloc((g->nv + 1) * sizeof *comp); /* nv only shrinks from here */
+    stack = malloc((g->nv + 1) * sizeof *stack);
+    if (!comp || !stack) goto fail;
     for (int pass = 0; pass < 2; pass++) {
         free(pos);
         pos = malloc((2 * g->ne + 1) * sizeof *pos);
@@ -1753,36 +1756,33 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         walks_free(&w);
         if ((rc = walk_faces(c, g, pos, &w))) goto fail;
         rc = ARR_ENOMEM;
-        free(comp);
-        free(stack);
-        comp = malloc((g->nv + 1) * sizeof *comp);
-        stack = malloc((g->nv + 1) * sizeof *stack);
-        if (!comp || !stack) goto fail;
-        ncomp = components(g, comp, stack);
         if (pass == 1) break;
         drop = calloc(g->ne + 1, 1);
         if (!drop) goto fail;
+        size_t nbridge = 0, outer = 0, repeats = 0;
         for (size_t e = 0; e < g->ne; e++) {
             drop[e] = w.cyc_of[2 * e] == w.cyc_of[2 * e + 1];
             nbridge += drop[e];
         }
-        size_t repeats = 0; /* stack: the last walk seen at each vertex, + 1 */
-        for (size_t v = 0; v < g->nv; v++) stack[v] = 0;
-        for (size_t cy = 0; cy < w.ncyc; cy++)
+        for (size_t v = 0; v < g->nv; v++) stack[v] = 0; /* the last walk seen there, + 1 */
+        for (size_t cy = 0; cy < w.ncyc; cy++) {
+            outer += w.area2[cy] <= 0;
             for (uint32_t i = w.hoff[cy]; i < w.hoff[cy + 1]; i++) {
                 uint32_t v = he_tail(g, w.hes[i]);
                 if (stack[v] == cy + 1) repeats++;
                 stack[v] = (uint32_t)cy + 1;
             }
+        }
         if (g_stop(g, 2 * g->ne + 1)) {
             rc = ARR_ECANCELED;
             goto fail;
         }
-        st->blocks = ncomp + repeats - (c->o->keep_dangling ? 0 : nbridge);
+        st->blocks = outer + repeats - (c->o->keep_dangling ? 0 : nbridge);
         if (c->o->keep_dangling || !nbridge) break;
         st->dangling_removed = nbridge;
         if (graph_prune(g, drop)) goto fail;
     }
+    size_t ncomp = components(g, comp, stack);
     double t1 = now_ms();
     st->ms_biconnected = t1 - t0;
     progress(c, "biconnected", 1);

@@ -295,6 +295,22 @@ unsigned api_lar3_want(unsigned fields);
  * checked (bool_expr_free it), or API_EINVALID naming the JSON path under "op". */
 int api_bool_parse(const json_t *op, size_t ninputs, bool_expr *out, api_error *err);
 
+/* The layers of a request ("layers": {"name": inputs, ...}): layer k is named name[k] (JSON
+ * text of a string, quotes included) and holds the inputs first[k] .. first[k+1]). */
+#define API_LAYER_NAME_MAX 100
+typedef struct api_layers {
+    size_t n;
+    char *const *name;
+    const uint32_t *first; /* n + 1 */
+} api_layers;
+
+/* api_bool_parse() over layers: an operand may also be a layer's name (the union of its
+ * inputs), and "union", "intersection", "difference", "xor" combine the layers' unions (the
+ * first layer minus the others, ...).  Errors as api_bool_parse's, and an unknown name is
+ * named with the layers there are. */
+int api_bool_parse_layers(const json_t *op, size_t ninputs, const api_layers *ly, bool_expr *out,
+                          api_error *err);
+
 /* Reads options.fill (api/boolop.c): "positive", "nonzero" or "odd" into *fill (MEMBER_FILL_*).
  * Returns API_OK, or API_EINVALID listing the names with the kind's default, dflt, first. */
 int api_fill_parse(const json_t *v, int dflt, int *fill, api_error *err);
@@ -334,6 +350,9 @@ typedef struct api_result {
     /* 3D: the signed faces of the result's boundary ("result".faces) */
     size_t nres_faces;
     int32_t *res_faces; /* owned */
+    /* 2D: the whole result as read, kept only when it has "layers" (a layers request's: the
+     * GeoJSON writer reads its "layers" and "result".pieces there); else NULL */
+    json_t *root; /* owned reference */
 } api_result;
 
 /* Reads the result text[0..len) of dimension dim (2 or 3) into *m: "dim" must equal dim (why

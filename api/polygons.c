@@ -39,6 +39,14 @@ typedef struct polygons_req {
     bool_expr op;       /* owned, checked for npoly inputs */
     api_lar2_opts opt;
     int fill; /* options.fill: BOOL2_FILL_* */
+    /* "layers": layer k's name lname[k] (JSON text, quoted) and its polygons lfirst[k] ..
+     * lfirst[k+1]); each polygon's "properties" (a Feature's, JSON text; "null" for none)
+     * props[prop_off[p] .. prop_off[p+1]).  nlayers = 0: a plain "polygons" request. */
+    size_t nlayers;
+    char **lname;     /* owned, nlayers */
+    uint32_t *lfirst; /* owned, nlayers + 1 */
+    char *props;      /* owned */
+    size_t *prop_off; /* owned, npoly + 1 */
 } polygons_req;
 
 void api_polygons_free(void *parsed)
@@ -49,6 +57,11 @@ void api_polygons_free(void *parsed)
     free(r->ring_off);
     free(r->xy);
     bool_expr_free(&r->op);
+    for (size_t k = 0; k < r->nlayers; k++) free(r->lname[k]);
+    free(r->lname);
+    free(r->lfirst);
+    free(r->props);
+    free(r->prop_off);
     free(r);
 }
 
@@ -90,8 +103,9 @@ typedef struct pbuild {
     uint32_t *ring_off; /* nrings + 1 */
     size_t nrings, rcap;
     uint32_t *poly_off; /* npoly + 1 */
-    size_t npoly;
+    size_t npoly, pcap;
     size_t ring_start; /* first point of the ring being read */
+    api_buf *props;    /* NULL, or each polygon's properties, JSON text, ended by a NUL */
 } pbuild;
 
 static void pbuild_free(pbuild *b)
@@ -239,6 +253,12 @@ static int geojson_polygon(const json_t *o, api_packed_set *pk, pbuild *b, const
         }
         return API_OK;
     }
+    if (!strcmp(type, "FeatureCollection"))
+        return api_fail(err, API_EINVALID,
+                        "%s.type: a FeatureCollection is a layer, not one polygon: give two or "
+                        "more collections as \"layers\": {\"name\": collection, ...} and "
+                        "an op over the names, such as [\"&\", \"parcels\", \"zones\"]",
+                        path);
     return api_fail(err, API_EINVALID,
                     "%s.type: \"%.40s\" is not an area (expected Polygon, MultiPolygon or "
                     "Feature)",
@@ -421,13 +441,33 @@ static int read_polygon(const json_t *p, api_packed_set *pk, pbuild *b, const ch
 
 static int end_polygon(pbuild *b, size_t total, api_error *err)
 {
-    if (!b->poly_off) {
-        b->poly_off = malloc((total + 1) * sizeof *b->poly_off);
-        if (!b->poly_off) return api_fail(err, API_ENOMEM, "out of memory");
+    if (b->npoly + 2 > b->pcap) {
+        size_t cap = b->npoly + 1 + total;
+        uint32_t *o = realloc(b->poly_off, cap * sizeof *o);
+        if (!o) return api_fail(err, API_ENOMEM, "out of memory");
+        b->poly_off = o;
+        b->pcap = cap;
         b->poly_off[0] = 0;
     }
     b->poly_off[++b->npoly] = (uint32_t)b->nrings;
     return API_OK;
+}
+
+/* Keeps polygon p's "properties" (a Feature's; null for anything else) as JSON text. */
+static int keep_properties(pbuild *b, const json_t *p, api_error *err)
+{
+    if (!b->props) return API_OK;
+    const json_t *pr = json_is_object(p) ? json_object_get(p, "properties") : NULL;
+    if (pr && !json_is_null(pr)) {
+        char *t = json_dumps(pr, JSON_COMPACT | JSON_ENCODE_ANY);
+        if (!t) return api_fail(err, API_ENOMEM, "out of memory");
+        api_buf_puts(b->props, t);
+        free(t);
+    } else {
+        api_buf_puts(b->props, "null");
+    }
+    api_buf_putc(b->props, 0);
+    return b->props->failed ? api_fail(err, API_ENOMEM, "out of memory") : API_OK;
 }
 
 /* "polygons" as api_packed_scan read it (native rings, a: API_PACKED_RINGS): the same build as
@@ -469,76 +509,161 @@ static int packed_coords(const api_packed *a, pbuild *b, api_error *err)
     return API_OK;
 }
 
-/* Reads "polygons": an array of polygons (each native, GeoJSON or WKT), or a GeoJSON
- * FeatureCollection (one polygon per feature); or, with pk, what api_packed_scan read of it. */
-static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r, api_error *err)
+/* Appends the polygons of ps, at name ("polygons" or "layers.NAME"): an array of polygons
+ * (each native, GeoJSON or WKT), or a GeoJSON FeatureCollection (one polygon per feature); with
+ * one_ok, also one polygon alone (a layer of one); or, with pk, what api_packed_scan read of
+ * it. */
+static int read_list(const json_t *ps, const char *name, int one_ok, api_packed_set *pk, pbuild *b,
+                     api_error *err)
 {
-    pbuild b = {0};
     const json_t *list = ps;
-    const char *name = "polygons";
-    char path[64];
+    char lname[200], path[300];
     int rc = API_OK;
-    if (!ps)
-        return api_fail(err, API_EINVALID,
-                        "polygons: required, an array of polygons or a GeoJSON "
-                        "FeatureCollection");
+    snprintf(lname, sizeof lname, "%s", name);
     api_packed *a = pk && json_is_string(ps)
                         ? api_packed_find(pk, 0, API_PACKED_RINGS, json_string_value(ps))
                         : NULL;
     if (pk && json_is_string(ps) && !a) return API_EINVALID; /* not ours: jansson's path */
     if (a) {
-        rc = packed_polygons(a, &b, err);
-        goto built;
+        if ((rc = packed_polygons(a, b, err)) != API_OK) return rc;
+        for (size_t q = 0; q < a->npoly && rc == API_OK; q++) rc = keep_properties(b, NULL, err);
+        return rc;
+    }
+    if (one_ok &&
+        (json_is_string(ps) ||
+         (json_is_object(ps) &&
+          strcmp(json_string_value(json_object_get(ps, "type")) ?: "", "FeatureCollection")))) {
+        rc = read_polygon(ps, pk, b, name, err);
+        if (rc == API_OK) rc = end_polygon(b, 1, err);
+        if (rc == API_OK) rc = keep_properties(b, ps, err);
+        return rc;
     }
     if (json_is_object(ps)) {
         const char *type = json_string_value(json_object_get(ps, "type"));
         if (!type || strcmp(type, "FeatureCollection"))
             return api_fail(err, API_EINVALID,
-                            "polygons: expected an array of polygons or a GeoJSON "
-                            "FeatureCollection (an object with \"type\": \"FeatureCollection\")");
+                            "%s: expected an array of polygons or a GeoJSON "
+                            "FeatureCollection (an object with \"type\": \"FeatureCollection\")",
+                            name);
         list = json_object_get(ps, "features");
-        name = "polygons.features";
+        snprintf(lname, sizeof lname, "%s.features", name);
         if (!json_is_array(list))
-            return api_fail(err, API_EINVALID, "polygons.features: expected an array of Features");
+            return api_fail(err, API_EINVALID, "%s: expected an array of Features", lname);
     }
     if (!json_is_array(list) || json_array_size(list) == 0)
         return api_fail(err, API_EINVALID,
-                        "%s: expected a non-empty array of polygons [ring, hole, ...]", name);
-    if (json_array_size(list) > BOOL2_MAX_INPUTS)
-        return api_fail(err, API_EINVALID, "%s: %zu polygons, at most %u allowed", name,
-                        json_array_size(list), (unsigned)BOOL2_MAX_INPUTS);
+                        "%s: expected a non-empty array of polygons [ring, hole, ...]", lname);
+    if (b->npoly + json_array_size(list) > BOOL2_MAX_INPUTS)
+        return api_fail(err, API_EINVALID, "%s: %zu polygons in all, at most %u allowed", lname,
+                        b->npoly + json_array_size(list), (unsigned)BOOL2_MAX_INPUTS);
     for (size_t i = 0; i < json_array_size(list) && rc == API_OK; i++) {
         const json_t *p = json_array_get(list, i);
-        snprintf(path, sizeof path, "%s[%zu]", name, i);
+        snprintf(path, sizeof path, "%s[%zu]", lname, i);
         if (list != ps &&
             !(json_is_object(p) &&
               !strcmp(json_string_value(json_object_get(p, "type")) ?: "", "Feature")))
             rc = api_fail(err, API_EINVALID, "%s: expected a GeoJSON Feature", path);
         else
-            rc = read_polygon(p, pk, &b, path, err);
-        if (rc == API_OK) rc = end_polygon(&b, json_array_size(list), err);
+            rc = read_polygon(p, pk, b, path, err);
+        if (rc == API_OK) rc = end_polygon(b, json_array_size(list) - i, err);
+        if (rc == API_OK) rc = keep_properties(b, p, err);
     }
-built:
-    if (rc == API_OK && !b.ring_off) {
-        b.ring_off = malloc(sizeof *b.ring_off);
-        if (!b.ring_off)
+    return rc;
+}
+
+/* Hands b's arrays to r (empty ones allocated), or frees them on failure. */
+static int take_build(pbuild *b, int rc, polygons_req *r, api_error *err)
+{
+    if (rc == API_OK && !b->ring_off) {
+        b->ring_off = malloc(sizeof *b->ring_off);
+        if (!b->ring_off)
             rc = api_fail(err, API_ENOMEM, "out of memory");
         else
-            b.ring_off[0] = 0;
+            b->ring_off[0] = 0;
     }
-    if (rc == API_OK && !b.xy) {
-        b.xy = malloc(2 * sizeof *b.xy);
-        if (!b.xy) rc = api_fail(err, API_ENOMEM, "out of memory");
+    if (rc == API_OK && !b->xy) {
+        b->xy = malloc(2 * sizeof *b->xy);
+        if (!b->xy) rc = api_fail(err, API_ENOMEM, "out of memory");
     }
     if (rc != API_OK) {
-        pbuild_free(&b);
+        pbuild_free(b);
         return rc;
     }
-    r->npoly = b.npoly;
-    r->poly_off = b.poly_off;
-    r->ring_off = b.ring_off;
-    r->xy = b.xy;
+    r->npoly = b->npoly;
+    r->poly_off = b->poly_off;
+    r->ring_off = b->ring_off;
+    r->xy = b->xy;
     return API_OK;
+}
+
+/* Reads "polygons" (read_list). */
+static int parse_polygons(const json_t *ps, api_packed_set *pk, polygons_req *r, api_error *err)
+{
+    pbuild b = {0};
+    if (!ps)
+        return api_fail(err, API_EINVALID,
+                        "polygons: required, an array of polygons or a GeoJSON "
+                        "FeatureCollection (or \"layers\": {\"name\": polygons, ...})");
+    return take_build(&b, read_list(ps, "polygons", 0, pk, &b, err), r, err);
+}
+
+/* Reads "layers": {"name": polygons, ...} (each read_list's, or one polygon), in order: the
+ * layers' names, where each begins, and every polygon's properties. */
+static int parse_layers(const json_t *ls, api_packed_set *pk, polygons_req *r, api_error *err)
+{
+    pbuild b = {0};
+    api_buf props = {0};
+    const char *key;
+    json_t *v;
+    int rc = API_OK;
+    if (!json_is_object(ls) || json_object_size(ls) == 0)
+        return api_fail(err, API_EINVALID,
+                        "layers: expected an object {\"name\": FeatureCollection or array of "
+                        "polygons, ...}");
+    size_t nl = json_object_size(ls);
+    r->lname = calloc(nl, sizeof *r->lname);
+    r->lfirst = calloc(nl + 1, sizeof *r->lfirst);
+    if (!r->lname || !r->lfirst) return api_fail(err, API_ENOMEM, "out of memory");
+    b.props = &props;
+    json_object_foreach((json_t *)ls, key, v)
+    {
+        char name[200];
+        size_t k = r->nlayers;
+        if (!*key || strlen(key) > API_LAYER_NAME_MAX) {
+            rc = api_fail(err, API_EINVALID, "layers: a layer's name must have 1 to %d bytes",
+                          API_LAYER_NAME_MAX);
+            break;
+        }
+        json_t *js = json_string(key);
+        r->lname[k] = js ? json_dumps(js, JSON_ENCODE_ANY | JSON_COMPACT) : NULL;
+        json_decref(js);
+        if (!r->lname[k]) {
+            rc = api_fail(err, API_ENOMEM, "out of memory");
+            break;
+        }
+        r->nlayers++;
+        r->lfirst[k] = (uint32_t)b.npoly;
+        snprintf(name, sizeof name, "layers.%.100s", key);
+        if ((rc = read_list(v, name, 1, pk, &b, err)) != API_OK) break;
+    }
+    r->lfirst[r->nlayers] = (uint32_t)b.npoly;
+    if (rc == API_OK && props.failed) rc = api_fail(err, API_ENOMEM, "out of memory");
+    if (rc == API_OK) {
+        r->prop_off = malloc((b.npoly + 1) * sizeof *r->prop_off);
+        if (!r->prop_off) rc = api_fail(err, API_ENOMEM, "out of memory");
+    }
+    if (rc == API_OK) { /* the NUL-ended texts, one per polygon, in order */
+        size_t at = 0;
+        for (size_t p = 0; p < b.npoly; p++) {
+            r->prop_off[p] = at;
+            at += strlen(props.p + at) + 1;
+        }
+        r->prop_off[b.npoly] = at;
+        r->props = props.p;
+        props.p = NULL;
+    }
+    api_buf_free(&props);
+    return take_build(&b, rc, r, err);
 }
 
 int api_polygons_parse(const json_t *req, void **parsed, api_error *err)
@@ -555,16 +680,22 @@ int api_polygons_parse_packed(const json_t *req, api_packed_set *pk, void **pars
     *parsed = NULL;
     json_object_foreach((json_t *)req, key, v)
     {
-        if (strcmp(key, "kind") && strcmp(key, "polygons") && strcmp(key, "op") &&
-            strcmp(key, "options"))
+        if (strcmp(key, "kind") && strcmp(key, "polygons") && strcmp(key, "layers") &&
+            strcmp(key, "op") && strcmp(key, "options"))
             return api_fail(err, API_EINVALID,
-                            "%.64s: unknown key (expected kind, polygons, op or options)", key);
+                            "%.64s: unknown key (expected kind, polygons or layers, op, options)",
+                            key);
     }
+    if (json_object_get(req, "polygons") && json_object_get(req, "layers"))
+        return api_fail(err, API_EINVALID,
+                        "layers: give either \"polygons\" or \"layers\", not both");
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = parse_options(json_object_get(req, "options"), r, err);
     if (rc != API_OK) goto fail;
-    rc = parse_polygons(json_object_get(req, "polygons"), pk, r, err);
+    const json_t *layers = json_object_get(req, "layers");
+    rc = layers ? parse_layers(layers, pk, r, err)
+                : parse_polygons(json_object_get(req, "polygons"), pk, r, err);
     if (rc != API_OK) goto fail;
     if (!json_object_get(req, "op")) {
         rc = api_fail(err, API_EINVALID,
@@ -572,7 +703,12 @@ int api_polygons_parse_packed(const json_t *req, api_packed_set *pk, void **pars
                       "expression such as [\"-\", 0, [\"+\", 1, 2]]");
         goto fail;
     }
-    rc = api_bool_parse(json_object_get(req, "op"), r->npoly, &r->op, err);
+    if (layers) {
+        api_layers ly = {r->nlayers, r->lname, r->lfirst};
+        rc = api_bool_parse_layers(json_object_get(req, "op"), r->npoly, &ly, &r->op, err);
+    } else {
+        rc = api_bool_parse(json_object_get(req, "op"), r->npoly, &r->op, err);
+    }
     if (rc != API_OK) goto fail;
     *parsed = r;
     return API_OK;
@@ -585,19 +721,111 @@ fail:
 typedef struct bool2_out {
     const bool2_result *r;
     unsigned fields;
+    const polygons_req *req; /* its layers */
 } bool2_out;
 
-/* One cycle of the result's, its vertices through map (NULL: as they are). */
-static void put_cycle(api_buf *b, const bool2_result *r, uint32_t k, const uint32_t *map)
+/* One cycle, its vertices through map (NULL: as they are). */
+static void put_ring(api_buf *b, const uint32_t *rc_off, const uint32_t *rv, uint32_t k,
+                     const uint32_t *map)
 {
     if (!map) {
-        api_buf_u32_list(b, r->rv + r->rc_off[k], r->rc_off[k + 1] - r->rc_off[k]);
+        api_buf_u32_list(b, rv + rc_off[k], rc_off[k + 1] - rc_off[k]);
         return;
     }
     api_buf_putc(b, '[');
-    for (uint32_t i = r->rc_off[k]; i < r->rc_off[k + 1]; i++) {
-        if (i > r->rc_off[k]) api_buf_putc(b, ',');
-        api_buf_u64(b, map[r->rv[i]]);
+    for (uint32_t i = rc_off[k]; i < rc_off[k + 1]; i++) {
+        if (i > rc_off[k]) api_buf_putc(b, ',');
+        api_buf_u64(b, map[rv[i]]);
+    }
+    api_buf_putc(b, ']');
+}
+
+static void put_cycle(api_buf *b, const bool2_result *r, uint32_t k, const uint32_t *map)
+{
+    put_ring(b, r->rc_off, r->rv, k, map);
+}
+
+/* "holes": {"q": [cycle, ...], ...} of the polygons of g that have holes. */
+static void put_holes(api_buf *b, const bool2_rings *g, const uint32_t *map)
+{
+    api_buf_puts(b, "\"holes\":{");
+    int hfirst = 1;
+    for (size_t q = 0; q < g->npoly; q++) {
+        if (g->ph_off[q] == g->ph_off[q + 1]) continue;
+        if (!hfirst) api_buf_putc(b, ',');
+        hfirst = 0;
+        api_buf_putc(b, '"');
+        api_buf_u64(b, q);
+        api_buf_puts(b, "\":[");
+        for (uint32_t h = g->ph_off[q]; h < g->ph_off[q + 1]; h++) {
+            if (h > g->ph_off[q]) api_buf_putc(b, ',');
+            put_ring(b, g->rc_off, g->rv, g->ph_cyc[h], map);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_putc(b, '}');
+}
+
+/* "pieces" of a layers request's result: {"FV": [outer cycle of each polygon], "holes": {...},
+ * "piece": [the piece of each polygon], "inputs": {"indptr", "indices"} (piece k lies in the
+ * inputs indices[indptr[k] .. indptr[k+1]))}. */
+static void put_pieces(api_buf *b, const bool2_result *r, int fill, const uint32_t *map)
+{
+    const bool2_rings *g = &r->pieces;
+    api_buf_puts(b, ",\"pieces\":{\"FV\":[");
+    for (size_t q = 0; q < g->npoly; q++) {
+        if (q) api_buf_putc(b, ',');
+        put_ring(b, g->rc_off, g->rv, g->poly_outer[q], map);
+    }
+    api_buf_puts(b, "],");
+    put_holes(b, g, map);
+    api_buf_puts(b, ",\"piece\":");
+    api_buf_u32_list(b, r->poly_piece, g->npoly);
+    member_rows m = {r->mem_off, r->mem, r->memw};
+    uint32_t *buf = malloc((member_row_most(&m, r->c.nf) + 1) * sizeof *buf);
+    if (!buf) {
+        b->failed = 1;
+        return;
+    }
+    api_buf_puts(b, ",\"inputs\":{\"indptr\":[0");
+    size_t at = 0;
+    for (size_t k = 0; k < r->npieces; k++) {
+        const uint32_t *row;
+        at += member_row_inside(&m, r->piece_face[k], fill, buf, &row);
+        api_buf_putc(b, ',');
+        api_buf_u64(b, at);
+    }
+    api_buf_puts(b, "],\"indices\":[");
+    at = 0;
+    for (size_t k = 0; k < r->npieces; k++) {
+        const uint32_t *row;
+        size_t n = member_row_inside(&m, r->piece_face[k], fill, buf, &row);
+        for (size_t i = 0; i < n; i++) {
+            if (at++) api_buf_putc(b, ',');
+            api_buf_u64(b, row[i]);
+        }
+    }
+    api_buf_puts(b, "]}}");
+    free(buf);
+}
+
+/* "layers": [{"name", "first", "count", "properties": [each input's, or null]}, ...]. */
+static void put_layers(api_buf *b, const polygons_req *q)
+{
+    api_buf_puts(b, ",\"layers\":[");
+    for (size_t k = 0; k < q->nlayers; k++) {
+        api_buf_puts(b, k ? ",{\"name\":" : "{\"name\":");
+        api_buf_puts(b, q->lname[k]);
+        api_buf_puts(b, ",\"first\":");
+        api_buf_u64(b, q->lfirst[k]);
+        api_buf_puts(b, ",\"count\":");
+        api_buf_u64(b, q->lfirst[k + 1] - q->lfirst[k]);
+        api_buf_puts(b, ",\"properties\":[");
+        for (uint32_t p = q->lfirst[k]; p < q->lfirst[k + 1]; p++) {
+            if (p > q->lfirst[k]) api_buf_putc(b, ',');
+            api_buf_put(b, q->props + q->prop_off[p], q->prop_off[p + 1] - q->prop_off[p] - 1);
+        }
+        api_buf_puts(b, "]}");
     }
     api_buf_putc(b, ']');
 }
@@ -614,6 +842,7 @@ static void put_bool2(api_buf *b, const void *udata)
     int membership = !named || (fl & API_F_MEMBERSHIP), result = !named || (fl & API_F_RESULT);
     int cells = !named || (fl & API_F_FV), fe = !named || (fl & API_F_EV);
     uint32_t *map = NULL;
+    if (o->req->nlayers) put_layers(b, o->req);
     if (membership) {
         api_put_membership_w(b, r->c.nf, r->ninputs, r->mem_off, r->mem, r->memw);
         api_buf_section(b);
@@ -629,6 +858,8 @@ static void put_bool2(api_buf *b, const void *udata)
         }
         for (size_t v = 0; v < r->c.nv; v++) map[v] = 0;
         for (size_t i = 0; i < r->rc_off[r->nrcyc]; i++) map[r->rv[i]] = 1;
+        for (size_t i = 0; r->npieces && i < r->pieces.rc_off[r->pieces.nrcyc]; i++)
+            map[r->pieces.rv[i]] = 1;
         uint32_t nv = 0;
         api_buf_puts(b, "\"V\":[");
         for (size_t v = 0; v < r->c.nv; v++) {
@@ -670,22 +901,12 @@ static void put_bool2(api_buf *b, const void *udata)
         }
         api_buf_putc(b, ']');
     }
-    api_buf_puts(b, ",\"holes\":{");
-    int hfirst = 1;
-    for (size_t q = 0; q < r->npoly; q++) {
-        if (r->ph_off[q] == r->ph_off[q + 1]) continue;
-        if (!hfirst) api_buf_putc(b, ',');
-        hfirst = 0;
-        api_buf_putc(b, '"');
-        api_buf_u64(b, q);
-        api_buf_puts(b, "\":[");
-        for (uint32_t h = r->ph_off[q]; h < r->ph_off[q + 1]; h++) {
-            if (h > r->ph_off[q]) api_buf_putc(b, ',');
-            put_cycle(b, r, r->ph_cyc[h], map);
-        }
-        api_buf_putc(b, ']');
-    }
-    api_buf_puts(b, "},\"area\":");
+    api_buf_putc(b, ',');
+    bool2_rings g = {r->nrcyc, r->rc_off,     r->rv,     r->re,
+                     r->npoly, r->poly_outer, r->ph_off, r->ph_cyc};
+    put_holes(b, &g, map);
+    if (o->req->nlayers) put_pieces(b, r, o->req->fill, map);
+    api_buf_puts(b, ",\"area\":");
     api_buf_double(b, r->area);
     api_buf_putc(b, '}');
     free(map);
@@ -700,7 +921,7 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
                     .cancel = ro->cancel,
                     .progress = ro->progress,
                     .udata = ro->udata};
-    bool2_input in = {r->npoly, r->poly_off, r->ring_off, r->xy, r->fill};
+    bool2_input in = {r->npoly, r->poly_off, r->ring_off, r->xy, r->fill, r->nlayers > 0};
     bool2_result res = {0};
     char core_msg[API_ERRMAX] = "";
     int rc = bool2_build(&in, &r->op, &ao, &res, core_msg, sizeof core_msg);
@@ -708,7 +929,7 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
         rc = api_core_fail(err, rc, core_msg);
         goto out;
     }
-    bool2_out bo = {&res, r->opt.fields};
+    bool2_out bo = {&res, r->opt.fields, r};
     api_lar2_fmt fmt = {.fields = r->opt.fields,
                         .exterior_last = r->opt.exterior_last,
                         .more = put_bool2,

@@ -1025,6 +1025,276 @@ static void geojson_face(api_buf *b, const api_result *m, const vtext *vt, size_
     api_buf_puts(b, "}}");
 }
 
+/* ---- a layers request's result: the pieces with their parents' properties ------------------
+ *
+ * As a GIS overlay gives it: one Feature per piece of the result (the result cut where the
+ * inputs it lies in change: "result".pieces) and per choice of one parent in each layer the
+ * piece lies in (a piece in two overlapping features of one layer is written once with each, as
+ * GIS tools do; in none of a layer: that layer's properties are absent).  Properties: "area",
+ * then per layer L its parent's index in L ("L": k, or null) and the parent's own properties
+ * as "L.key".  The pieces' rings index V; every index and the layers' table are checked. */
+
+#define RENDER_MAX_FEATURES 2000000 /* pieces times parent choices */
+
+typedef struct lay {
+    size_t n;
+    const char **name;
+    size_t *first; /* n + 1 */
+    const json_t **props;
+} lay;
+
+static int lay_read(const json_t *root, size_t ninputs, lay *L, api_error *err)
+{
+    const json_t *ls = json_object_get(root, "layers");
+    size_t n = json_array_size(ls);
+    *L = (lay){0};
+    if (!json_is_array(ls) || n == 0)
+        return api_fail(err, API_EINVALID, "layers: expected an array of {name, first, count}");
+    L->name = calloc(n, sizeof *L->name);
+    L->first = calloc(n + 1, sizeof *L->first);
+    L->props = calloc(n, sizeof *L->props);
+    if (!L->name || !L->first || !L->props) return API_ENOMEM;
+    L->n = n;
+    for (size_t k = 0; k < n; k++) {
+        const json_t *x = json_array_get(ls, k);
+        const json_t *f = json_object_get(x, "first"), *c = json_object_get(x, "count");
+        const json_t *pr = json_object_get(x, "properties");
+        L->name[k] = json_string_value(json_object_get(x, "name"));
+        if (!L->name[k] || !json_is_integer(f) || !json_is_integer(c) ||
+            (size_t)json_integer_value(f) != L->first[k] || json_integer_value(c) < 0 ||
+            (pr && (!json_is_array(pr) || json_array_size(pr) != (size_t)json_integer_value(c))))
+            return api_fail(err, API_EINVALID,
+                            "layers[%zu]: expected {\"name\", \"first\": %zu, \"count\", "
+                            "\"properties\": [count values]}",
+                            k, L->first[k]);
+        L->first[k + 1] = L->first[k] + (size_t)json_integer_value(c);
+        L->props[k] = pr;
+    }
+    if (L->first[n] != ninputs)
+        return api_fail(err, API_EINVALID, "layers: they hold %zu inputs, membership %zu",
+                        L->first[n], ninputs);
+    return API_OK;
+}
+
+static void lay_free(lay *L)
+{
+    free(L->name);
+    free(L->first);
+    free(L->props);
+}
+
+/* The cycle row (indices < nv, 3 or more) into idx; 0, or -1 when it is not one. */
+static int piece_cycle(const json_t *row, size_t nv, uint32_t *idx, size_t *n)
+{
+    *n = json_array_size(row);
+    if (!json_is_array(row) || *n < 3) return -1;
+    for (size_t i = 0; i < *n; i++) {
+        const json_t *x = json_array_get(row, i);
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (uint64_t)json_integer_value(x) >= nv)
+            return -1;
+        idx[i] = (uint32_t)json_integer_value(x);
+    }
+    return 0;
+}
+
+/* The properties of one Feature: its area, and per layer the chosen parent (choice[k], or
+ * SIZE_MAX: none) with its properties. */
+static int piece_props(api_buf *b, const lay *L, const size_t *choice, double area)
+{
+    json_t *o = json_object();
+    int bad = !o || json_object_set_new(o, "area", json_real(area));
+    for (size_t k = 0; k < L->n && !bad; k++) {
+        size_t p = choice[k];
+        bad = json_object_set_new(o, L->name[k],
+                                  p == SIZE_MAX ? json_null() : json_integer((json_int_t)p));
+        const json_t *pr = p == SIZE_MAX ? NULL : json_array_get(L->props[k], p);
+        const char *key;
+        json_t *v;
+        json_object_foreach((json_t *)pr, key, v)
+        {
+            char name[512];
+            snprintf(name, sizeof name, "%s.%s", L->name[k], key);
+            if (json_object_set(o, name, v)) bad = 1;
+        }
+    }
+    char *t = bad ? NULL : json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(17));
+    json_decref(o);
+    if (!t) return API_ENOMEM;
+    api_buf_puts(b, t);
+    free(t);
+    return API_OK;
+}
+
+static int geojson_layers(api_buf *b, const api_result *m, const vtext *vt, int *any,
+                          api_error *err)
+{
+    const json_t *res = json_object_get(m->root, "result");
+    const json_t *pc = json_object_get(res, "pieces");
+    const json_t *FV = json_object_get(pc, "FV"), *holes = json_object_get(pc, "holes");
+    const json_t *piece = json_object_get(pc, "piece"), *in = json_object_get(pc, "inputs");
+    const json_t *ip = json_object_get(in, "indptr"), *ix = json_object_get(in, "indices");
+    size_t np = json_array_size(FV), nk = json_array_size(ip) ? json_array_size(ip) - 1 : 0;
+    size_t most = 0;
+    lay L;
+    int rc = lay_read(m->root, m->ninputs, &L, err);
+    if (rc != API_OK) goto done;
+    if (!json_is_array(FV) || !json_is_object(holes) || json_array_size(piece) != np ||
+        !json_is_array(ip) || !json_is_array(ix)) {
+        rc = api_fail(err, API_EINVALID,
+                      "result.pieces: required with \"layers\": {\"FV\", \"holes\", "
+                      "\"piece\", \"inputs\"}");
+        goto done;
+    }
+    for (size_t k = 0; k <= nk; k++) { /* the pieces' rows: offsets, inputs ascending */
+        const json_t *x = json_array_get(ip, k);
+        json_int_t v = json_integer_value(x);
+        if (!json_is_integer(x) || v < 0 || (size_t)v > json_array_size(ix) || (k == 0 && v != 0) ||
+            (k == nk && (size_t)v != json_array_size(ix)) ||
+            (k > 0 && v < json_integer_value(json_array_get(ip, k - 1)))) {
+            rc = api_fail(err, API_EINVALID, "result.pieces.inputs.indptr[%zu]: bad offset", k);
+            goto done;
+        }
+    }
+    for (size_t i = 0; i < json_array_size(ix); i++) {
+        const json_t *x = json_array_get(ix, i);
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (size_t)json_integer_value(x) >= m->ninputs) {
+            rc = api_fail(err, API_EINVALID,
+                          "result.pieces.inputs.indices[%zu]: expected an input < %zu", i,
+                          m->ninputs);
+            goto done;
+        }
+    }
+    for (size_t q = 0; q < np; q++) {
+        const json_t *x = json_array_get(piece, q);
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (size_t)json_integer_value(x) >= nk) {
+            rc = api_fail(err, API_EINVALID, "result.pieces.piece[%zu]: expected a piece < %zu", q,
+                          nk);
+            goto done;
+        }
+        size_t n = json_array_size(json_array_get(FV, q));
+        if (n > most) most = n;
+        char key[24];
+        snprintf(key, sizeof key, "%zu", q);
+        const json_t *hs = json_object_get(holes, key);
+        for (size_t h = 0; h < json_array_size(hs); h++)
+            if (json_array_size(json_array_get(hs, h)) > most)
+                most = json_array_size(json_array_get(hs, h));
+    }
+    /* the polygons of each piece, in order (CSR) */
+    size_t *poff = calloc(nk + 2, sizeof *poff), *plist = malloc((np + 1) * sizeof *plist);
+    uint32_t *idx = malloc((most + 1) * sizeof *idx);
+    size_t *choice = malloc((L.n + 1) * sizeof *choice), *lo = malloc((L.n + 1) * sizeof *lo);
+    size_t *hi = malloc((L.n + 1) * sizeof *hi), nfeat = 0;
+    if (!poff || !plist || !idx || !choice || !lo || !hi) {
+        rc = API_ENOMEM;
+        goto free_all;
+    }
+    for (size_t q = 0; q < np; q++) poff[json_integer_value(json_array_get(piece, q)) + 2]++;
+    for (size_t k = 0; k < nk; k++) poff[k + 2] += poff[k + 1];
+    for (size_t q = 0; q < np; q++)
+        plist[poff[json_integer_value(json_array_get(piece, q)) + 1]++] = q;
+    for (size_t k = 0; k < nk; k++) {
+        /* the piece's geometry, once, as text; its area */
+        api_buf g = {0};
+        double area2 = 0;
+        api_buf_puts(&g, "{\"type\":\"MultiPolygon\",\"coordinates\":[");
+        for (size_t i = poff[k]; i < poff[k + 1] && rc == API_OK; i++) {
+            size_t q = plist[i], n;
+            char key[24];
+            snprintf(key, sizeof key, "%zu", q);
+            const json_t *hs = json_object_get(holes, key);
+            api_buf_puts(&g, i > poff[k] ? ",[" : "[");
+            for (size_t h = 0; h <= json_array_size(hs); h++) {
+                const json_t *row = h ? json_array_get(hs, h - 1) : json_array_get(FV, q);
+                if (piece_cycle(row, m->nv, idx, &n)) {
+                    rc = api_fail(err, API_EINVALID,
+                                  "result.pieces.%s[%zu]: expected a cycle of vertex indices < "
+                                  "%zu",
+                                  h ? "holes" : "FV", q, m->nv);
+                    break;
+                }
+                if (h) api_buf_putc(&g, ',');
+                geojson_cycle(&g, vt, idx, n);
+                area2 += cycle_area2(m, idx, n);
+            }
+            api_buf_putc(&g, ']');
+        }
+        api_buf_puts(&g, "]}");
+        if (rc != API_OK || g.failed) {
+            if (rc == API_OK) rc = API_ENOMEM;
+            api_buf_free(&g);
+            goto free_all;
+        }
+        /* its parents per layer: the inputs of its row within each layer's range */
+        size_t a = (size_t)json_integer_value(json_array_get(ip, k));
+        size_t z = (size_t)json_integer_value(json_array_get(ip, k + 1));
+        for (size_t l = 0; l < L.n; l++) {
+            lo[l] = hi[l] = a;
+            while (lo[l] < z && (size_t)json_integer_value(json_array_get(ix, lo[l])) < L.first[l])
+                lo[l]++;
+            hi[l] = lo[l];
+            while (hi[l] < z &&
+                   (size_t)json_integer_value(json_array_get(ix, hi[l])) < L.first[l + 1])
+                hi[l]++;
+        }
+        /* every choice of one parent per layer (none where the piece lies in none) */
+        size_t at[64] = {0};
+        if (L.n > 64) {
+            api_buf_free(&g);
+            rc = api_fail(err, API_EINVALID, "layers: more than 64");
+            goto free_all;
+        }
+        for (;;) {
+            for (size_t l = 0; l < L.n; l++)
+                choice[l] = lo[l] == hi[l]
+                                ? SIZE_MAX
+                                : (size_t)json_integer_value(json_array_get(ix, lo[l] + at[l])) -
+                                      L.first[l];
+            if (++nfeat > RENDER_MAX_FEATURES) {
+                api_buf_free(&g);
+                rc = api_fail(err, API_EINVALID, "result: more than %d pieces and parents to write",
+                              RENDER_MAX_FEATURES);
+                goto free_all;
+            }
+            if (*any) api_buf_putc(b, ',');
+            *any = 1;
+            api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":");
+            api_buf_put(b, g.p, g.len);
+            api_buf_puts(b, ",\"properties\":");
+            if (piece_props(b, &L, choice, area2 / 2) != API_OK) {
+                api_buf_free(&g);
+                rc = API_ENOMEM;
+                goto free_all;
+            }
+            api_buf_putc(b, '}');
+            size_t l = 0; /* the next choice, as an odometer */
+            for (; l < L.n; l++) {
+                if (lo[l] + at[l] + 1 < hi[l]) {
+                    at[l]++;
+                    break;
+                }
+                at[l] = 0;
+            }
+            if (l == L.n) break;
+        }
+        api_buf_free(&g);
+    }
+free_all:
+    free(poff);
+    free(plist);
+    free(idx);
+    free(choice);
+    free(lo);
+    free(hi);
+done:
+    lay_free(&L);
+    if (rc == API_ENOMEM) rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+    return rc;
+}
+
 int render_geojson(const char *result_json, size_t len, const render_opts *o, char **out,
                    size_t *outlen, api_error *err)
 {
@@ -1062,7 +1332,16 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
             goto done;
         }
     api_buf_puts(&b, "{\"type\":\"FeatureCollection\",\"features\":[");
-    if (m.has_result) {
+    if (m.has_result && m.root) { /* a layers request's: the pieces with their parents */
+        if (!m.mem_off) {
+            rc = api_fail(err, API_EINVALID,
+                          "membership: required with \"layers\" (the result was made with "
+                          "\"fields\" leaving it out)");
+            goto done;
+        }
+        rc = geojson_layers(&b, &m, &vt, &any, err);
+        if (rc != API_OK) goto done;
+    } else if (m.has_result) {
         api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"MultiPolygon\","
                          "\"coordinates\":[");
         for (size_t q = 0; q < m.npoly; q++) {

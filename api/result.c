@@ -49,6 +49,7 @@ void api_result_free(api_result *m)
     free(m->selected);
     free(m->mem_off);
     free(m->mem);
+    json_decref(m->root);
     *m = (api_result){0};
 }
 
@@ -518,7 +519,10 @@ int api_result_read(const char *text, size_t len, int dim, const char *why, api_
         if (rc == API_ENOMEM) goto nomem;
         if (rc != API_OK) goto fail;
     }
-    json_decref(root);
+    if (dim == 2 && json_object_get(root, "layers"))
+        m->root = root;
+    else
+        json_decref(root);
     return API_OK;
 nomem:
     rc = api_fail(err, API_ENOMEM, "out of memory reading the result");

@@ -59,6 +59,17 @@ static int seterr(char *err, size_t el, int code, const char *fmt, ...)
     return code;
 }
 
+static void rings_free(bool2_rings *g)
+{
+    free(g->rc_off);
+    free(g->rv);
+    free(g->re);
+    free(g->poly_outer);
+    free(g->ph_off);
+    free(g->ph_cyc);
+    memset(g, 0, sizeof *g);
+}
+
 void bool2_free(bool2_result *r)
 {
     lar2_free(&r->c);
@@ -72,6 +83,9 @@ void bool2_free(bool2_result *r)
     free(r->poly_outer);
     free(r->ph_off);
     free(r->ph_cyc);
+    free(r->piece_face);
+    rings_free(&r->pieces);
+    free(r->poly_piece);
     memset(r, 0, sizeof *r);
 }
 
@@ -242,9 +256,9 @@ static uint32_t uf_find(uint32_t *p, uint32_t x)
     return x;
 }
 
-/* sel[f] for the nf + 1 faces (EXT never selected); out->cells.  The expression is evaluated on
- * each face's sparse row (bool_tree). */
-static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint8_t *sel)
+/* sel[f] (1: selected) for the nf + 1 faces (EXT never selected); out->cells.  The expression is
+ * evaluated on each face's sparse row (bool_tree). */
+static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint32_t *sel)
 {
     size_t nf = out->c.nf;
     member_rows m = {out->mem_off, out->mem, out->memw}; /* a view: owned by out */
@@ -264,7 +278,7 @@ static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint8_
     for (size_t f = 0; f < nf; f++) {
         const uint32_t *row; /* the polygons the face lies in, by the fill rule */
         size_t n = member_row_inside(&m, f, fill, buf, &row);
-        sel[f] = (uint8_t)bool_tree_eval(&t, row, n);
+        sel[f] = (uint32_t)bool_tree_eval(&t, row, n);
         if (sel[f]) out->cells[out->ncells++] = (uint32_t)f;
     }
     sel[nf] = 0;
@@ -273,19 +287,86 @@ static int stage_select(bool2_result *out, const bool_expr *op, int fill, uint8_
     return 0;
 }
 
-/* grp[f]: the group (a representative face) of each selected face, joined across edges with a
- * selected face on both sides. */
-static void stage_groups(const lar2 *c, const uint32_t *side, const uint8_t *sel, uint32_t *grp)
+/* grp[f]: the group (a representative face) of each labelled face (lab[f] != 0), joined across
+ * edges with one label on both sides. */
+static void stage_groups(const lar2 *c, const uint32_t *side, const uint32_t *lab, uint32_t *grp)
 {
     for (size_t f = 0; f <= c->nf; f++) grp[f] = (uint32_t)f;
     for (size_t e = 0; e < c->ne; e++) {
         uint32_t a = side[2 * e], b = side[2 * e + 1];
-        if (a != b && sel[a] && sel[b]) {
+        if (a != b && lab[a] && lab[a] == lab[b]) {
             uint32_t ra = uf_find(grp, a), rb = uf_find(grp, b);
             if (ra != rb) grp[ra < rb ? rb : ra] = ra < rb ? ra : rb; /* the smaller face leads */
         }
     }
     for (size_t f = 0; f <= c->nf; f++) grp[f] = uf_find(grp, (uint32_t)f);
+}
+
+/* The pieces: sel[f] becomes 1 + the piece of each selected face (0 stays 0), a piece the
+ * selected faces of one membership row (by the fill rule), numbered in the order of their first
+ * faces; out->npieces, piece_face.  The rows are sorted (length, then inputs) to find the equal
+ * ones.  0, or -1 out of memory. */
+typedef struct prow {
+    const uint32_t *in; /* the row's inputs */
+    uint32_t n, f;      /* their count, the face */
+} prow;
+
+static int prow_cmp(const void *pa, const void *pb)
+{
+    const prow *a = pa, *b = pb;
+    if (a->n != b->n) return a->n < b->n ? -1 : 1;
+    int c = a->n ? memcmp(a->in, b->in, a->n * sizeof *a->in) : 0;
+    if (c) return c;
+    return a->f < b->f ? -1 : a->f > b->f;
+}
+
+static int stage_pieces(bool2_result *out, int fill, uint32_t *sel)
+{
+    size_t ns = out->ncells, nf = out->c.nf;
+    member_rows m = {out->mem_off, out->mem, out->memw};
+    size_t total = 0;
+    for (size_t i = 0; i < ns; i++) {
+        uint32_t f = out->cells[i];
+        total += out->mem_off[f + 1] - out->mem_off[f];
+    }
+    uint32_t *flat = malloc((total + 1) * sizeof *flat), *lead = malloc((nf + 1) * sizeof *lead);
+    prow *rows = malloc((ns + 1) * sizeof *rows);
+    out->piece_face = malloc((ns + 1) * sizeof *out->piece_face);
+    int rc = -1;
+    if (!flat || !lead || !rows || !out->piece_face) goto done;
+    size_t k = 0;
+    for (size_t i = 0; i < ns; i++) {
+        uint32_t f = out->cells[i];
+        const uint32_t *row;
+        size_t n = member_row_inside(&m, f, fill, flat + k, &row);
+        if (row != flat + k) memcpy(flat + k, row, n * sizeof *row);
+        rows[i] = (prow){flat + k, (uint32_t)n, f};
+        k += n;
+    }
+    qsort(rows, ns, sizeof *rows, prow_cmp);
+    /* each run of equal rows is led by its first face (the run is sorted by face) */
+    for (size_t i = 0; i < ns; i++)
+        lead[rows[i].f] =
+            i && rows[i].n == rows[i - 1].n &&
+                    !memcmp(rows[i].in, rows[i - 1].in, rows[i].n * sizeof *rows[i].in)
+                ? lead[rows[i - 1].f]
+                : rows[i].f;
+    /* cells are ascending: a piece's number is given at its first face, its lead */
+    out->npieces = 0;
+    for (size_t i = 0; i < ns; i++) {
+        uint32_t f = out->cells[i];
+        if (lead[f] == f) {
+            out->piece_face[out->npieces] = f;
+            sel[f] = (uint32_t)++out->npieces;
+        }
+    }
+    for (size_t i = 0; i < ns; i++) sel[out->cells[i]] = sel[lead[out->cells[i]]];
+    rc = 0;
+done:
+    free(flat);
+    free(lead);
+    free(rows);
+    return rc;
 }
 
 /* ---- boundary rings ----------------------------------------------------------------------- */
@@ -324,35 +405,42 @@ static uint32_t he_head(const lar2 *c, uint32_t h)
     return c->EV[2 * (size_t)(h >> 1) + 1 - (h & 1)];
 }
 
-/* The result's rings: out->rc_off, rv, re (every ring with the selected side on its left), and
- * ring_grp (the group of each ring). */
-static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *sel,
+/* The rings of the labelled faces: g->rc_off, rv, re (every ring with its faces on its left),
+ * and ring_grp (the group of each ring).  An edge between two labels is on a ring of each
+ * (once each way), an edge between a label and none on one. */
+static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, const uint32_t *lab,
                        const uint32_t *grp, uint32_t **ring_grp, stop_meter *stop, char *err,
                        size_t el)
 {
-    const lar2 *c = &out->c;
     size_t nb = 0;
-    for (size_t e = 0; e < c->ne; e++) nb += sel[side[2 * e]] != sel[side[2 * e + 1]];
+    for (size_t e = 0; e < c->ne; e++) {
+        uint32_t l = lab[side[2 * e]], r = lab[side[2 * e + 1]];
+        if (l != r) nb += (l != 0) + (r != 0);
+    }
     ray *rays = malloc((2 * nb + 1) * sizeof *rays);
     uint32_t *next = malloc((2 * c->ne + 1) * sizeof *next);
     uint8_t *done = calloc(2 * c->ne + 1, 1);
-    out->rc_off = malloc((nb + 1) * sizeof *out->rc_off);
-    out->rv = malloc((nb + 1) * sizeof *out->rv);
-    out->re = malloc((nb + 1) * sizeof *out->re);
+    g->rc_off = malloc((nb + 1) * sizeof *g->rc_off);
+    g->rv = malloc((nb + 1) * sizeof *g->rv);
+    g->re = malloc((nb + 1) * sizeof *g->re);
     *ring_grp = malloc((nb + 1) * sizeof **ring_grp);
     int rc = ARR_ENOMEM;
     kv *order = NULL;
     ray *sorted = NULL;
-    if (!rays || !next || !done || !out->rc_off || !out->rv || !out->re || !*ring_grp) goto fail;
+    if (!rays || !next || !done || !g->rc_off || !g->rv || !g->re || !*ring_grp) goto fail;
     size_t nr = 0;
     for (size_t e = 0; e < c->ne; e++) {
         uint32_t l = side[2 * e], r = side[2 * e + 1];
-        if (sel[l] == sel[r]) continue;
-        uint32_t h = (uint32_t)(2 * e + (sel[l] ? 0 : 1)), g = grp[sel[l] ? l : r];
-        uint32_t t = he_tail(c, h), d = he_head(c, h);
-        int64_t dx = c->VG[2 * d] - c->VG[2 * t], dy = c->VG[2 * d + 1] - c->VG[2 * t + 1];
-        rays[nr++] = (ray){t, g, h, 0, dx, dy};
-        rays[nr++] = (ray){d, g, h, 1, -dx, -dy};
+        if (lab[l] == lab[r]) continue;
+        for (int s = 0; s < 2; s++) { /* the half-edge with face s ? r : l on its left */
+            uint32_t f = s ? r : l;
+            if (!lab[f]) continue;
+            uint32_t h = (uint32_t)(2 * e + s), gr = grp[f];
+            uint32_t t = he_tail(c, h), d = he_head(c, h);
+            int64_t dx = c->VG[2 * d] - c->VG[2 * t], dy = c->VG[2 * d + 1] - c->VG[2 * t + 1];
+            rays[nr++] = (ray){t, gr, h, 0, dx, dy};
+            rays[nr++] = (ray){d, gr, h, 1, -dx, -dy};
+        }
     }
     /* by (vertex, group) in a radix sort, then each run of rays by angle (runs are short: the
      * group's boundary edges at one vertex) */
@@ -397,7 +485,7 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
         }
     }
     size_t nring = 0, k = 0;
-    out->rc_off[0] = 0;
+    g->rc_off[0] = 0;
     for (size_t e = 0; e < c->ne; e++)
         for (uint32_t h = (uint32_t)(2 * e); h <= 2 * e + 1; h++) {
             if (next[h] == NONE || done[h]) continue;
@@ -412,16 +500,16 @@ static int stage_rings(bool2_result *out, const uint32_t *side, const uint8_t *s
                     goto fail;
                 }
                 done[x] = 1;
-                out->rv[k] = he_tail(c, x);
-                out->re[k] = (x & 1) ? -(int32_t)((x >> 1) + 1) : (int32_t)((x >> 1) + 1);
+                g->rv[k] = he_tail(c, x);
+                g->re[k] = (x & 1) ? -(int32_t)((x >> 1) + 1) : (int32_t)((x >> 1) + 1);
                 k++;
                 x = next[x];
             } while (x != h);
-            uint32_t s = side[2 * (size_t)(h >> 1) + (h & 1)]; /* the selected face */
+            uint32_t s = side[2 * (size_t)(h >> 1) + (h & 1)]; /* the labelled face */
             (*ring_grp)[nring] = grp[s];
-            out->rc_off[++nring] = (uint32_t)k;
+            g->rc_off[++nring] = (uint32_t)k;
         }
-    out->nrcyc = nring;
+    g->nrcyc = nring;
     rc = ARR_OK;
 fail:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
@@ -434,9 +522,9 @@ fail:
 }
 
 /* Twice ring k's signed area in grid units, exactly. */
-static i128 ring_area2(const bool2_result *r, size_t k)
+static i128 ring_area2(const lar2 *c, const bool2_rings *r, size_t k)
 {
-    const int64_t *G = r->c.VG;
+    const int64_t *G = c->VG;
     i128 a = 0;
     uint32_t b = r->rc_off[k], n = r->rc_off[k + 1] - b;
     for (uint32_t i = 0; i < n; i++) {
@@ -448,9 +536,10 @@ static i128 ring_area2(const bool2_result *r, size_t k)
 
 /* Per group, its one counter-clockwise ring (the shell) and its clockwise ones (the holes), in
  * the order of the groups' leading faces; the area of the result. */
-static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err, size_t el)
+static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_grp,
+                          double *area_out, char *err, size_t el)
 {
-    size_t nr = out->nrcyc, nf = out->c.nf;
+    size_t nr = out->nrcyc, nf = c->nf;
     uint32_t *gi = malloc((nf + 2) * sizeof *gi); /* group (leading face) -> polygon */
     int8_t *ccw = malloc(nr + 1);
     out->poly_outer = malloc((nr + 1) * sizeof *out->poly_outer);
@@ -460,7 +549,7 @@ static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err
     if (!gi || !ccw || !out->poly_outer || !out->ph_off || !out->ph_cyc) goto done;
     for (size_t f = 0; f <= nf; f++) gi[f] = NONE;
     for (size_t k = 0; k < nr; k++) {
-        i128 a = ring_area2(out, k);
+        i128 a = ring_area2(c, out, k);
         ccw[k] = a > 0;
         if (a == 0) {
             rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
@@ -500,7 +589,7 @@ static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err
      * everywhere; each ring about its first vertex, so that far coordinates do not cancel */
     long double area = 0;
     for (size_t k = 0; k < nr; k++) {
-        const double *V = out->c.V;
+        const double *V = c->V;
         uint32_t b = out->rc_off[k], n = out->rc_off[k + 1] - b;
         double x0 = V[2 * out->rv[b]], y0 = V[2 * out->rv[b] + 1];
         for (uint32_t i = 0; i < n; i++) {
@@ -509,7 +598,7 @@ static int stage_polygons(bool2_result *out, const uint32_t *ring_grp, char *err
                     ((long double)V[2 * v] - x0) * ((long double)V[2 * u + 1] - y0);
         }
     }
-    out->area = area > 0 ? (double)(area / 2) : 0;
+    *area_out = area > 0 ? (double)(area / 2) : 0;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
@@ -525,8 +614,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
 {
     static const arr2_opts defaults = {0};
     double *seg = NULL;
-    uint32_t *tag = NULL, *side = NULL, *grp = NULL, *ring_grp = NULL;
-    uint8_t *sel = NULL;
+    uint32_t *tag = NULL, *side = NULL, *grp = NULL, *ring_grp = NULL, *sel = NULL;
     size_t n = 0;
     int rc = ARR_ENOMEM;
     memset(out, 0, sizeof *out);
@@ -548,7 +636,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     out->ninputs = ni;
     rc = ARR_ENOMEM;
     side = malloc((2 * c->ne + 1) * sizeof *side);
-    sel = malloc(nf + 1);
+    sel = malloc((nf + 1) * sizeof *sel);
     grp = malloc((nf + 1) * sizeof *grp);
     if (!side || !sel || !grp) goto fail;
         /* the stages after the arrangement's, a cancel read between them and each stage's end
@@ -574,9 +662,34 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if (stage_select(out, op, in->fill, sel)) goto fail;
     stage_groups(c, side, sel, grp);
     BOOL2_PROGRESS("select", 1);
-    if ((rc = stage_rings(out, side, sel, grp, &ring_grp, &stop, err, errlen)) != ARR_OK) goto fail;
+    bool2_rings g = {0};
+    rc = stage_rings(c, &g, side, sel, grp, &ring_grp, &stop, err, errlen);
+    out->nrcyc = g.nrcyc, out->rc_off = g.rc_off, out->rv = g.rv, out->re = g.re;
+    if (rc != ARR_OK) goto fail;
     BOOL2_PROGRESS("polygons", 0.5);
-    if ((rc = stage_polygons(out, ring_grp, err, errlen)) != ARR_OK) goto fail;
+    rc = stage_polygons(c, &g, ring_grp, &out->area, err, errlen);
+    out->npoly = g.npoly, out->poly_outer = g.poly_outer, out->ph_off = g.ph_off;
+    out->ph_cyc = g.ph_cyc;
+    if (rc != ARR_OK) goto fail;
+    if (in->pieces) {
+        free(ring_grp);
+        ring_grp = NULL;
+        rc = ARR_ENOMEM;
+        if (stage_pieces(out, in->fill, sel)) goto fail;
+        stage_groups(c, side, sel, grp);
+        BOOL2_PROGRESS("polygons", 0.75);
+        if ((rc = stage_rings(c, &out->pieces, side, sel, grp, &ring_grp, &stop, err, errlen)) !=
+            ARR_OK)
+            goto fail;
+        double unused;
+        rc = stage_polygons(c, &out->pieces, ring_grp, &unused, err, errlen);
+        if (rc != ARR_OK) goto fail;
+        rc = ARR_ENOMEM;
+        out->poly_piece = malloc((out->pieces.npoly + 1) * sizeof *out->poly_piece);
+        if (!out->poly_piece) goto fail;
+        for (size_t q = 0; q < out->pieces.npoly; q++)
+            out->poly_piece[q] = sel[ring_grp[out->pieces.poly_outer[q]]] - 1;
+    }
     BOOL2_PROGRESS("polygons", 1);
 #undef BOOL2_PROGRESS
 #undef BOOL2_CANCEL_POINT

@@ -48,7 +48,23 @@ typedef struct bool2_input {
     const uint32_t *ring_off; /* nrings+1, nrings = poly_off[npoly] */
     const double *xy;         /* 2 * ring_off[nrings] */
     int fill;                 /* BOOL2_FILL_* (named: 0 is not the even-odd rule) */
+    int pieces;               /* non-zero: the result's pieces too (bool2_result.pieces) */
 } bool2_input;
+
+/* Polygons made of the boundary of labelled faces, CSR: cycle k has vertices
+ * rv[rc_off[k]..rc_off[k+1]) and signed edges re[same range], re[i] = ±(e+1) the edge from rv[i]
+ * to the next vertex (+ when that is EV's v0 -> v1), its faces on the left; polygon q has outer
+ * cycle poly_outer[q] (counter-clockwise) and holes ph_cyc[ph_off[q]..ph_off[q+1]) (clockwise). */
+typedef struct bool2_rings {
+    size_t nrcyc;
+    uint32_t *rc_off; /* nrcyc+1 */
+    uint32_t *rv;
+    int32_t *re;
+    size_t npoly;
+    uint32_t *poly_outer; /* npoly */
+    uint32_t *ph_off;     /* npoly+1 */
+    uint32_t *ph_cyc;
+} bool2_rings;
 
 /* The arrangement, its membership table and the selected region. */
 typedef struct bool2_result {
@@ -76,6 +92,15 @@ typedef struct bool2_result {
     uint32_t *poly_outer; /* npoly */
     uint32_t *ph_off;     /* npoly+1 */
     uint32_t *ph_cyc;
+    /* With in->pieces, the result cut where the membership changes, as a GIS overlay gives it:
+     * the selected faces of one membership row (the inputs a face lies in by the fill rule) are
+     * one piece, npieces of them, numbered in the order of their first face; piece k's row is
+     * that of face piece_face[k].  pieces holds their polygons (a piece may have several, and
+     * pieces meet along edges), polygon q of piece poly_piece[q].  Else all zero. */
+    size_t npieces;
+    uint32_t *piece_face; /* npieces */
+    bool2_rings pieces;
+    uint32_t *poly_piece; /* pieces.npoly */
 } bool2_result;
 
 /* Builds the arrangement of in's rings with opts (may be NULL: defaults; tags and input_coords

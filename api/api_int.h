@@ -280,6 +280,7 @@ typedef struct api_lar3_fmt {
      * cycles and signed edges, the volume), written whatever the fields */
     const member_rows *membership;
     const bool3_result *result;
+    const char *layers; /* borrowed, may be NULL: the JSON array written as "layers" */
 } api_lar3_fmt;
 
 /* Appends the LAR JSON object of the 3-complex c (borrowed; core/arr3.h) to b.  Returns API_OK,

@@ -456,6 +456,10 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         rc = put_operators(b, c, err);
         if (rc != API_OK) return rc;
     }
+    if (fmt->layers) {
+        put_key(b, "layers");
+        api_buf_puts(b, fmt->layers);
+    }
     if (fmt->membership) put_membership3(b, c, fmt->membership);
     if (fmt->result) put_result(b, c, fmt->result, fl);
     if (fl & API_F3_STATS) {

@@ -79,7 +79,28 @@ typedef struct solids_req {
     int has_op;       /* the request gave "op" */
     bool_expr op;     /* its program (api/boolop.c) */
     int fill;         /* options.fill: BOOL3_FILL_* */
+    /* "layers": {"name": [solid, ...], ...}: layer k's solids are lfirst[k] .. lfirst[k+1]),
+     * its name lname[k] (JSON text) and lkey[k] (as given); layers the result's "layers" */
+    size_t nlayers;
+    char **lname, **lkey;
+    uint32_t *lfirst;
+    char *layers;
 } solids_req;
+
+/* The name of solid i in messages: "solids[i]", "layers.NAME[j]" or "faces". */
+static void solid_label(const solids_req *r, size_t i, char *out, size_t cap)
+{
+    if (r->soup) {
+        snprintf(out, cap, "faces");
+        return;
+    }
+    for (size_t k = 0; k < r->nlayers; k++)
+        if (i < r->lfirst[k + 1]) {
+            snprintf(out, cap, "layers.%.100s[%zu]", r->lkey[k], i - r->lfirst[k]);
+            return;
+        }
+    snprintf(out, cap, "solids[%zu]", i);
+}
 
 typedef struct totals {
     size_t nv, nf, nidx; /* rows of V, rows of FV, vertex indices in cycles, so far */
@@ -396,7 +417,93 @@ void api_solids_free(void *parsed)
     bool_expr_free(&r->op);
     for (size_t i = 0; i < r->ns; i++) solid_free(&r->s[i]);
     free(r->s);
+    for (size_t k = 0; k < r->nlayers; k++) free(r->lname[k]), free(r->lkey[k]);
+    free(r->lname);
+    free(r->lkey);
+    free(r->lfirst);
+    free(r->layers);
     free(r);
+}
+
+/* Reads "layers": {"name": [solid, ...] or one solid, ...} into r->s, layer after layer. */
+static int parse_layers(const json_t *ls, solids_req *r, totals *tot, api_packed_set *pk,
+                        api_error *err)
+{
+    const char *key;
+    json_t *v;
+    size_t n = 0, nl = json_object_size(ls);
+    if (!json_is_object(ls) || nl == 0)
+        return api_fail(err, API_EINVALID,
+                        "layers: expected an object {\"name\": [solid, ...], ...}");
+    json_object_foreach((json_t *)ls, key, v) n += json_is_array(v) ? json_array_size(v) : 1;
+    if (n > SOLIDS_MAX_SOLIDS)
+        return api_fail(err, API_EINVALID, "layers: %zu solids, at most %u allowed", n,
+                        SOLIDS_MAX_SOLIDS);
+    r->s = calloc(n ? n : 1, sizeof *r->s);
+    r->lname = calloc(nl, sizeof *r->lname);
+    r->lkey = calloc(nl, sizeof *r->lkey);
+    r->lfirst = calloc(nl + 1, sizeof *r->lfirst);
+    if (!r->s || !r->lname || !r->lkey || !r->lfirst)
+        return api_fail(err, API_ENOMEM, "out of memory");
+    api_buf lb = {0};
+    api_buf_putc(&lb, '[');
+    json_object_foreach((json_t *)ls, key, v)
+    {
+        size_t k = r->nlayers;
+        if (!*key || strlen(key) > API_LAYER_NAME_MAX) {
+            api_buf_free(&lb);
+            return api_fail(err, API_EINVALID, "layers: a layer's name must have 1 to %d bytes",
+                            API_LAYER_NAME_MAX);
+        }
+        json_t *js = json_string(key);
+        r->lname[k] = js ? json_dumps(js, JSON_ENCODE_ANY | JSON_COMPACT) : NULL;
+        r->lkey[k] = strdup(key);
+        json_decref(js);
+        r->nlayers++;
+        if (!r->lname[k] || !r->lkey[k]) {
+            api_buf_free(&lb);
+            return api_fail(err, API_ENOMEM, "out of memory");
+        }
+        r->lfirst[k] = (uint32_t)r->ns;
+        size_t m = json_is_array(v) ? json_array_size(v) : 1;
+        if (json_is_array(v) && m == 0) {
+            api_buf_free(&lb);
+            return api_fail(err, API_EINVALID,
+                            "layers.%.100s: expected a solid or a non-empty "
+                            "array of solids",
+                            key);
+        }
+        for (size_t j = 0; j < m; j++) {
+            char path[160];
+            snprintf(path, sizeof path, json_is_array(v) ? "layers.%.100s[%zu]" : "layers.%.100s",
+                     key, j);
+            /* the fast reader knows "solids" only: a layer's solids are read by jansson */
+            int rc = parse_solid(json_is_array(v) ? json_array_get(v, j) : v, path, 0, tot,
+                                 &r->s[r->ns], NULL, r->ns, err);
+            r->ns++;
+            if (rc != API_OK) {
+                api_buf_free(&lb);
+                return rc;
+            }
+        }
+        if (k) api_buf_putc(&lb, ',');
+        api_buf_puts(&lb, "{\"name\":");
+        api_buf_puts(&lb, r->lname[k]);
+        api_buf_puts(&lb, ",\"first\":");
+        api_buf_u64(&lb, r->lfirst[k]);
+        api_buf_puts(&lb, ",\"count\":");
+        api_buf_u64(&lb, r->ns - r->lfirst[k]);
+        api_buf_putc(&lb, '}');
+    }
+    (void)pk;
+    r->lfirst[r->nlayers] = (uint32_t)r->ns;
+    api_buf_putc(&lb, ']');
+    if (lb.failed) {
+        api_buf_free(&lb);
+        return api_fail(err, API_ENOMEM, "out of memory");
+    }
+    r->layers = lb.p;
+    return API_OK;
 }
 
 int api_solids_parse(const json_t *req, void **parsed, api_error *err)
@@ -416,25 +523,32 @@ int api_solids_parse_packed(const json_t *req, api_packed_set *pk, void **parsed
     json_object_foreach((json_t *)req, key, val)
     {
         if (strcmp(key, "kind") && strcmp(key, "solids") && strcmp(key, "faces") &&
-            strcmp(key, "options") && strcmp(key, "op"))
+            strcmp(key, "layers") && strcmp(key, "options") && strcmp(key, "op"))
             return api_fail(err, API_EINVALID,
-                            "%.64s: unknown key (expected kind, solids or faces, op and options)",
+                            "%.64s: unknown key (expected kind, solids, layers or faces, op and "
+                            "options)",
                             key);
     }
     solids = json_object_get(req, "solids");
     faces = json_object_get(req, "faces");
-    if (solids && faces)
+    const json_t *layers = json_object_get(req, "layers");
+    if (!!solids + !!faces + !!layers > 1)
         return api_fail(err, API_EINVALID,
-                        "faces: not with \"solids\": give either solids (closed surfaces) or "
-                        "faces (one face soup)");
-    if (!solids && !faces)
+                        "%s: give one of \"solids\" (closed surfaces), \"layers\" (named groups "
+                        "of them) and \"faces\" (one face soup)",
+                        faces ? "faces" : "layers");
+    if (!solids && !faces && !layers)
         return api_fail(err, API_EINVALID,
-                        "solids: required, an array of solids (or \"faces\": one face soup)");
+                        "solids: required, an array of solids (or \"layers\": named groups of "
+                        "solids, or \"faces\": one face soup)");
     r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = parse_options(json_object_get(req, "options"), r, err);
     if (rc != API_OK) goto fail;
-    if (solids) {
+    if (layers) {
+        rc = parse_layers(layers, r, &tot, pk, err);
+        if (rc != API_OK) goto fail;
+    } else if (solids) {
         size_t n = json_array_size(solids);
         if (!json_is_array(solids)) {
             rc = api_fail(err, API_EINVALID,
@@ -475,7 +589,12 @@ int api_solids_parse_packed(const json_t *req, api_packed_set *pk, void **parsed
                           "op: needs \"solids\" (a face soup has no inside to combine)");
             goto fail;
         }
-        rc = api_bool_parse(json_object_get(req, "op"), r->ns, &r->op, err);
+        if (r->nlayers) {
+            api_layers ly = {r->nlayers, r->lname, r->lfirst};
+            rc = api_bool_parse_layers(json_object_get(req, "op"), r->ns, &ly, &r->op, err);
+        } else {
+            rc = api_bool_parse(json_object_get(req, "op"), r->ns, &r->op, err);
+        }
         if (rc != API_OK) goto fail;
         r->has_op = 1;
     }
@@ -535,13 +654,11 @@ static void warn_finish(warn_list *w)
 
 /* What check_solid found for solids[i] (rep), turned into the request's answer: its warnings
  * into w (may be NULL), or the 422 of its first error. */
-static int report_solid(const solid_report *rep, size_t i, int soup, warn_list *w, api_error *err)
+static int report_solid(const solids_req *r, const solid_report *rep, size_t i, warn_list *w,
+                        api_error *err)
 {
-    char label[32], where[API_ERRMAX];
-    if (soup)
-        snprintf(label, sizeof label, "faces");
-    else
-        snprintf(label, sizeof label, "solids[%zu]", i);
+    char label[160], where[API_ERRMAX];
+    solid_label(r, i, label, sizeof label);
     if (rep->errors == 0) {
         for (size_t m = 0; w && m < rep->nmsg; m++) warn_add(w, rep, m, label);
         if (w) w->total += rep->warnings > rep->nmsg ? rep->warnings - rep->nmsg : 0;
@@ -576,15 +693,12 @@ static void check_one(void *ctx, size_t i, int worker)
     const checkjob *j = ctx;
     const solids_req *r = j->r;
     solid_report *rep = &j->rep[i];
-    char label[32];
+    char label[160];
     if (j->ro && j->ro->cancel && atomic_load(j->ro->cancel)) {
         rep->errors = 0, rep->nmsg = 0;
         return;
     }
-    if (r->soup)
-        snprintf(label, sizeof label, "faces");
-    else
-        snprintf(label, sizeof label, "solids[%zu]", i);
+    solid_label(r, i, label, sizeof label);
     if (r->soup)
         solid_check_faces(&r->s[i], r->step, label, rep);
     else
@@ -617,8 +731,7 @@ static int validate(const solids_req *r, solid *fixed, uint32_t **twin, warn_lis
         rc = api_fail(err, API_ECANCELED, "canceled");
         goto out;
     }
-    for (size_t i = 0; i < r->ns && rc == API_OK; i++)
-        rc = report_solid(&rep[i], i, r->soup, w, err);
+    for (size_t i = 0; i < r->ns && rc == API_OK; i++) rc = report_solid(r, &rep[i], i, w, err);
 out:
     free(rep);
     return rc;
@@ -716,7 +829,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
     c.stats.ms_check = ms_check;
     c.stats.ms_total += ms_check;
-    api_lar3_fmt fmt = {.fields = r->fields, .warnings = w->ptr, .nwarnings = w->n};
+    api_lar3_fmt fmt = {
+        .fields = r->fields, .warnings = w->ptr, .nwarnings = w->n, .layers = r->layers};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
         double t_bool = ms_now();

@@ -277,7 +277,19 @@ static const api_kind *kind_of(const json_t *root, api_error *err)
         if (n < 0) break;
         w += (size_t)n;
     }
-    if (!k)
+    const char *type = json_string_value(json_object_get(root, "type"));
+    static const char *const geo[] = {"FeatureCollection",  "Feature", "Polygon",    "MultiPolygon",
+                                      "GeometryCollection", "Point",   "LineString", "MultiPoint",
+                                      "MultiLineString"};
+    int geojson = 0;
+    for (size_t i = 0; type && i < sizeof geo / sizeof *geo; i++) geojson |= !strcmp(type, geo[i]);
+    if (!k && geojson)
+        api_fail(err, API_EINVALID,
+                 "kind: required: this is GeoJSON (a %.20s), not a request; overlay files "
+                 "with cellar polygons A.geojson B.geojson --op OP, or post {\"kind\": "
+                 "\"polygons\", \"layers\": {\"a\": ..., \"b\": ...}, \"op\": ...}",
+                 type);
+    else if (!k)
         api_fail(err, API_EINVALID, "kind: required, expected %s", expected);
     else
         api_fail(err, API_EINVALID, "kind: expected %s", expected);

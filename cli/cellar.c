@@ -47,7 +47,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -80,6 +82,17 @@ static const char usage_text[] =
     "                                  (--groups: per group \"g\" too); runs {\"kind\":\n"
     "                                  \"solids\",\"solids\":[...]}; --faces: all their faces\n"
     "                                  as one soup\n"
+    "  cellar polygons A.geojson B.shp ... --op OP [--format geojson|gpkg|json|svg|request]\n"
+    "               [--output FILE] [--precision X] [--options JSON]\n"
+    "                                  GIS layers overlaid: each file a layer named by its base\n"
+    "                                  name (GeoJSON read as it is; Shapefile, GeoPackage,\n"
+    "                                  FlatGeobuf and every vector format GDAL reads through\n"
+    "                                  GDAL's ogr2ogr); OP over the layers: union,\n"
+    "                                  intersection, difference, xor or an expression such as\n"
+    "                                  '[\"&\", \"parcels\", \"zones\"]'; --format geojson: one\n"
+    "                                  Feature per piece with its parents' attributes\n"
+    "                                  (\"parcels.owner\"); gpkg: the same as a GeoPackage\n"
+    "                                  (--output FILE.gpkg, by ogr2ogr)\n"
     "\n"
     "options:\n"
     "  --threads N       worker threads of the core (default 0: one per CPU)\n"
@@ -417,6 +430,8 @@ fail:
 /* --format request: the request itself, not a row of render_formats (a format added there
  * takes the next index) */
 #define OUT_REQUEST (-2)
+/* --format gpkg (polygons): GeoJSON of the result written to a GeoPackage by ogr2ogr */
+#define OUT_GPKG (-3)
 
 /* What run, svg and solids print: the result JSON, or a picture, map or mesh of it
  * (api/render.h). */
@@ -868,6 +883,274 @@ out:
     return rc;
 }
 
+/* ---- polygons: GIS files as layers ---------------------------------------------------------
+ * Each file is a layer named by its base name (a second "a" becomes "a_2").  GeoJSON (.geojson,
+ * .json) is read as it is; every other vector format through GDAL's ogr2ogr (gdal-bin: GDAL
+ * reads Shapefile, GeoPackage, FlatGeobuf, KML, GML, ... and writes GeoJSON for us), run as
+ * a program without a shell.  The request is {"kind": "polygons", "layers": {...}, "op": ...};
+ * --format gpkg writes the GeoJSON of the result to a GeoPackage with ogr2ogr again.  The
+ * coordinates are taken as they are (no reprojection): layers in different reference systems
+ * are refused. */
+
+#define GIS_MAX_BYTES (4ul << 30) /* of one layer's GeoJSON from ogr2ogr */
+
+/* Runs argv (argv[0] looked up in PATH) with its standard output into *out (malloc'd, *len
+ * bytes, NUL-ended) when out is not NULL; its standard error passes through.  0, or -1 with
+ * a message printed. */
+static int run_program(char *const *argv, const char *what, char **out, size_t *len)
+{
+    int fd[2] = {-1, -1};
+    posix_spawn_file_actions_t fa;
+    pid_t pid;
+    if (out && pipe(fd) != 0) {
+        fprintf(stderr, "cellar: %s: %s\n", what, strerror(errno));
+        return -1;
+    }
+    posix_spawn_file_actions_init(&fa);
+    if (out) {
+        posix_spawn_file_actions_adddup2(&fa, fd[1], STDOUT_FILENO);
+        posix_spawn_file_actions_addclose(&fa, fd[0]);
+        posix_spawn_file_actions_addclose(&fa, fd[1]);
+    }
+    extern char **environ;
+    int e = posix_spawnp(&pid, argv[0], &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (out) close(fd[1]);
+    if (e != 0) {
+        if (out) close(fd[0]);
+        fprintf(stderr,
+                "cellar: %s needs GDAL's %s (%s); on Debian: apt-get install gdal-bin, or give "
+                "GeoJSON files\n",
+                what, argv[0], strerror(e));
+        return -1;
+    }
+    int bad = 0;
+    if (out) {
+        size_t cap = 1 << 16, n = 0;
+        char *buf = malloc(cap);
+        for (ssize_t got = 1; buf && got > 0;) {
+            if (n + 1 == cap) {
+                char *p = cap < GIS_MAX_BYTES ? realloc(buf, 2 * cap) : NULL;
+                if (!p) {
+                    free(buf);
+                    buf = NULL;
+                    break;
+                }
+                buf = p, cap *= 2;
+            }
+            got = read(fd[0], buf + n, cap - 1 - n);
+            if (got > 0) n += (size_t)got;
+            if (got < 0 && errno == EINTR) got = 1;
+        }
+        close(fd[0]);
+        if (!buf) {
+            fprintf(stderr, "cellar: %s: out of memory (or more than %lu bytes)\n", what,
+                    GIS_MAX_BYTES);
+            bad = 1;
+        } else {
+            buf[n] = 0;
+            *out = buf, *len = n;
+        }
+    }
+    int st;
+    while (waitpid(pid, &st, 0) < 0 && errno == EINTR) continue;
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) {
+        fprintf(stderr, "cellar: %s: %s failed (%s %d)\n", what, argv[0],
+                WIFEXITED(st) ? "exit status" : "signal",
+                WIFEXITED(st) ? WEXITSTATUS(st) : WTERMSIG(st));
+        bad = 1;
+    }
+    if (bad && out && *out) free(*out), *out = NULL;
+    return bad ? -1 : 0;
+}
+
+/* A layer's name: the file's base name without its extension; "layer" when nothing is left. */
+static void layer_name(const char *path, char *out, size_t cap)
+{
+    const char *b = strrchr(path, '/');
+    b = b ? b + 1 : path;
+    const char *dot = strrchr(b, '.');
+    size_t n = dot && dot != b ? (size_t)(dot - b) : strlen(b);
+    if (n == 0) b = "layer", n = 5;
+    if (n > 90) n = 90;
+    snprintf(out, cap, "%.*s", (int)n, b);
+}
+
+static int is_geojson_path(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    return !strcmp(path, "-") ||
+           (dot && (!strcasecmp(dot, ".geojson") || !strcasecmp(dot, ".json")));
+}
+
+static int polygons_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
+                            int threads, const out_format *of, const char *output)
+{
+    json_t *req = NULL, *layers = NULL, *opts = NULL, *op = NULL, *crs = NULL;
+    char *body = NULL, *out = NULL, *tmp = NULL;
+    size_t outlen = 0;
+    json_error_t je;
+    api_error err;
+    int rc = 1;
+    if (npos < 2)
+        return usage_error("%s", "polygons takes one or more GIS files (GeoJSON, Shapefile, "
+                                 "GeoPackage, ... : a layer each)");
+    if (!fl->op)
+        return usage_error("%s", "polygons: --op is required: union, intersection, difference, "
+                                 "xor (over the layers) or an expression over their names such "
+                                 "as '[\"&\", \"parcels\", \"zones\"]'");
+    if (of->kind == OUT_GPKG && !output)
+        return usage_error("%s", "--format gpkg needs --output FILE.gpkg");
+    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
+    if (!json_is_object(opts)) {
+        fprintf(stderr, "cellar: --options: expected a JSON object\n");
+        json_decref(opts);
+        return EXIT_USAGE;
+    }
+    if (fl->precision > 0) json_object_set_new(opts, "precision", json_real(fl->precision));
+    op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
+    layers = json_object();
+    req = json_object();
+    if (!op || !layers || !req) {
+        fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a JSON "
+                        "expression over the layers' names\n");
+        rc = EXIT_USAGE;
+        goto out;
+    }
+    for (int i = 1; i < npos; i++) {
+        const char *path = pos[i];
+        char name[128], uniq[140];
+        size_t len;
+        char *text = NULL;
+        if (is_geojson_path(path)) {
+            text = read_all(path, &len);
+        } else {
+            char *argv[] = {"ogr2ogr", "-q", "-f", "GeoJSON", "/vsistdout/", (char *)path, NULL};
+            char what[300];
+            snprintf(what, sizeof what, "reading %.250s", path);
+            text = run_program(argv, what, &text, &len) == 0 ? text : NULL;
+        }
+        if (!text) goto out;
+        json_t *fc = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
+        free(text);
+        if (!fc) {
+            fprintf(stderr, "cellar: %s: line %d, column %d: %s\n", path, je.line, je.column,
+                    je.text);
+            goto out;
+        }
+        /* the reference system: the same for every layer, carried to the result (none is
+         * GeoJSON's own, CRS84, as ogr2ogr names it) */
+        json_t *c = json_object_get(fc, "crs");
+        const char *cn =
+            json_string_value(json_object_get(json_object_get(c, "properties"), "name"));
+        if (cn && (!strcmp(cn, "urn:ogc:def:crs:OGC:1.3:CRS84") ||
+                   !strcmp(cn, "urn:ogc:def:crs:EPSG::4326") || !strcmp(cn, "EPSG:4326")))
+            c = NULL;
+        if (i == 1) {
+            crs = c ? json_incref(c) : NULL;
+        } else if (!json_equal(crs ? crs : json_null(), c ? c : json_null())) {
+            fprintf(stderr,
+                    "cellar: %s: its coordinate reference system differs from %s's; reproject "
+                    "one (ogr2ogr -t_srs) so that the coordinates agree\n",
+                    path, pos[1]);
+            json_decref(fc);
+            goto out;
+        }
+        json_object_del(fc, "crs");
+        json_object_del(fc, "name");
+        layer_name(path, name, sizeof name);
+        snprintf(uniq, sizeof uniq, "%s", name);
+        for (int k = 2; json_object_get(layers, uniq); k++)
+            snprintf(uniq, sizeof uniq, "%s_%d", name, k);
+        json_object_set_new(layers, uniq, fc);
+    }
+    json_object_set_new(req, "kind", json_string("polygons"));
+    json_object_set(req, "layers", layers);
+    json_object_set(req, "op", op);
+    if (json_object_size(opts)) json_object_set(req, "options", opts);
+    body = json_dumps(req, JSON_COMPACT);
+    if (!body) {
+        fprintf(stderr, "cellar: out of memory\n");
+        goto out;
+    }
+    if (of->kind == OUT_REQUEST) {
+        rc = write_request(body, strlen(body));
+        goto out;
+    }
+    api_run_opts ro = run_opts(threads, of->kind == OUT_GPKG ? &(out_format){.kind = 2} : of);
+    int r = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err);
+    progress_end();
+    if (r != API_OK) {
+        fprintf(stderr, "cellar: %s\n", err.msg);
+        goto out;
+    }
+    if (of->kind != OUT_GPKG && !crs) {
+        rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
+        goto out;
+    }
+    /* GeoJSON with the layers' reference system (ogr2ogr reads its "crs" member) */
+    char *map = NULL;
+    size_t maplen = 0;
+    out_format gj = *of;
+    gj.kind = 2;
+    if (render_formats[2].render(out, outlen, &gj.ro, &map, &maplen, &err) != API_OK) {
+        fprintf(stderr, "cellar: --format %s: %s\n", of->kind == OUT_GPKG ? "gpkg" : "geojson",
+                err.msg);
+        goto out;
+    }
+    char *crs_text = crs ? json_dumps(crs, JSON_COMPACT) : NULL;
+    FILE *f = stdout;
+    if (of->kind == OUT_GPKG) {
+        const char *dir = getenv("TMPDIR");
+        tmp = malloc(strlen(dir ? dir : "/tmp") + 32);
+        if (tmp) sprintf(tmp, "%s/cellar-XXXXXX.geojson", dir ? dir : "/tmp");
+        int fd = tmp ? mkstemps(tmp, 8) : -1;
+        f = fd >= 0 ? fdopen(fd, "w") : NULL;
+        if (!f) {
+            fprintf(stderr, "cellar: a temporary file: %s\n", strerror(errno));
+            if (fd >= 0) close(fd);
+            free(map);
+            free(crs_text);
+            goto out;
+        }
+    }
+    if (crs_text && maplen > 1) { /* {"type":"FeatureCollection","crs":...,"features":... */
+        fputc('{', f);
+        fprintf(f, "\"crs\":%s,", crs_text);
+        fwrite(map + 1, 1, maplen - 1, f);
+    } else {
+        fwrite(map, 1, maplen, f);
+    }
+    free(map);
+    free(crs_text);
+    if (of->kind != OUT_GPKG) {
+        rc = write_streamed();
+        goto out;
+    }
+    if (fclose(f) != 0) {
+        fprintf(stderr, "cellar: %s: %s\n", tmp, strerror(errno));
+        goto out;
+    }
+    char nln[140];
+    layer_name(output, nln, sizeof nln);
+    char *argv[] = {"ogr2ogr", "-q",   "-overwrite", "-f",   "GPKG",         (char *)output,
+                    tmp,       "-nln", nln,          "-nlt", "MULTIPOLYGON", NULL};
+    char what[300];
+    snprintf(what, sizeof what, "writing %.250s", output);
+    rc = run_program(argv, what, NULL, NULL) == 0 ? 0 : 1;
+out:
+    if (tmp) unlink(tmp);
+    free(tmp);
+    free(out);
+    free(body);
+    json_decref(req);
+    json_decref(layers);
+    json_decref(opts);
+    json_decref(op);
+    json_decref(crs);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     static char outbuf[1 << 16];
@@ -875,6 +1158,7 @@ int main(int argc, char **argv)
     const char *options_text = NULL;
     svg_flags fl = {0};
     out_format of = {.kind = 0, .ro = RENDER_OPTS_INIT};
+    const char *output = NULL;
     int npos = 0, threads = 0, rc, progress_flag = 0;
     if (!pos) return 1;
     /* One run a process: the arrays a stage frees stay in the heap for the next stage to reuse
@@ -886,7 +1170,7 @@ int main(int argc, char **argv)
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = NULL;
-        if (strncmp(a, "--", 2) != 0 && strcmp(a, "-h") != 0) {
+        if (strncmp(a, "--", 2) != 0 && strcmp(a, "-h") != 0 && strcmp(a, "-o") != 0) {
             pos[npos++] = argv[i];
             continue;
         }
@@ -963,6 +1247,7 @@ int main(int argc, char **argv)
                 const render_format *f = render_format_named(val);
                 of.kind = f                         ? (int)(f - render_formats)
                           : !strcmp(val, "request") ? OUT_REQUEST
+                          : !strcmp(val, "gpkg")    ? OUT_GPKG
                                                     : -1;
                 if (of.kind == -1) {
                     rc = usage_error(
@@ -983,6 +1268,14 @@ int main(int argc, char **argv)
                 of.cells = a;
             else if (!of.first)
                 of.first = a;
+            continue;
+        }
+        if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
+            if (i + 1 == argc) {
+                rc = usage_error("%s needs a value", a);
+                goto out;
+            }
+            output = argv[++i];
             continue;
         }
         if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
@@ -1015,8 +1308,14 @@ int main(int argc, char **argv)
     const char *cmd = npos ? pos[0] : "";
     if (fl.first && strcmp(cmd, "svg") != 0) {
         rc = usage_error("%s is for the svg command", fl.first);
-    } else if (fl.precision > 0 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
-        rc = usage_error("%s is for the svg and solids commands", "--precision");
+    } else if (fl.precision > 0 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0 &&
+               strcmp(cmd, "polygons") != 0) {
+        rc = usage_error("%s is for the svg, solids and polygons commands", "--precision");
+    } else if (of.kind == OUT_GPKG && strcmp(cmd, "polygons") != 0) {
+        rc = usage_error("%s", "--format gpkg is for the polygons command");
+    } else if (output && strcmp(cmd, "polygons") != 0) {
+        rc = usage_error("%s", "--output is for the polygons command (others write to standard "
+                               "output)");
     } else if (fl.faces && strcmp(cmd, "solids") != 0) {
         rc = usage_error("%s is for the solids command", "--faces");
     } else if (fl.groups && strcmp(cmd, "solids") != 0) {
@@ -1027,14 +1326,17 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for --format geojson", of.cells);
     } else if (of.explode && of.kind != 1 && of.kind != 3) {
         rc = usage_error("%s is for --format svg or obj", of.explode);
-    } else if (of.kind == OUT_REQUEST && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0) {
-        rc = usage_error("%s", "--format request is for the svg and solids commands");
+    } else if (of.kind == OUT_REQUEST && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0 &&
+               strcmp(cmd, "polygons") != 0) {
+        rc = usage_error("%s", "--format request is for the svg, solids and polygons commands");
     } else if (npos == 0) {
-        rc = usage_error("%s", "no command (run, gen, svg, solids)");
+        rc = usage_error("%s", "no command (run, gen, svg, solids, polygons)");
     } else if (strcmp(pos[0], "svg") == 0) {
         rc = svg_command(pos, npos, options_text, &fl, threads, &of);
     } else if (strcmp(pos[0], "solids") == 0) {
         rc = solids_command(pos, npos, options_text, &fl, threads, &of);
+    } else if (strcmp(pos[0], "polygons") == 0) {
+        rc = polygons_command(pos, npos, options_text, &fl, threads, &of, output);
     } else if (strcmp(pos[0], "run") == 0) {
         rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
                           : run(pos, npos, threads, &of);
@@ -1048,7 +1350,7 @@ int main(int argc, char **argv)
         else
             rc = usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
     } else {
-        rc = usage_error("unknown command \"%s\" (run, gen, svg, solids)", pos[0]);
+        rc = usage_error("unknown command \"%s\" (run, gen, svg, solids, polygons)", pos[0]);
     }
 out:
     free(pos);

@@ -137,6 +137,33 @@ static const err_case err_cases[] = {
     {"{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'/>\","
      "\"options\":{\"fields\":[\"V\",\"membership\"]}}",
      422, "options.fields: \"membership\" and \"result\" are fields of a \"polygons\" request"},
+    /* layers (issue 28) */
+    {"{\"type\":\"FeatureCollection\",\"features\":[]}", 422,
+     "kind: required: this is GeoJSON (a FeatureCollection), not a request"},
+    {"{\"kind\":\"polygons\",\"polygons\":[{\"type\":\"FeatureCollection\",\"features\":[]}],"
+     "\"op\":\"union\"}",
+     422, "polygons[0].type: a FeatureCollection is a layer, not one polygon"},
+    {"{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[1,0],[0,1]]]],\"layers\":{\"a\":[]},"
+     "\"op\":\"union\"}",
+     422, "layers: give either \"polygons\" or \"layers\""},
+    {"{\"kind\":\"polygons\",\"layers\":[],\"op\":\"union\"}", 422, "layers: expected an object"},
+    {"{\"kind\":\"polygons\",\"layers\":{\"a\":[]},\"op\":\"union\"}", 422,
+     "layers.a: expected a non-empty array of polygons"},
+    {"{\"kind\":\"polygons\",\"layers\":{\"a\":[[[[0,0],[1,0],[0,1]]]],\"b\":[[[[0,0],[1,0]]]]},"
+     "\"op\":\"union\"}",
+     422, "layers.b[0][0]: expected a ring of at least 3 points"},
+    {"{\"kind\":\"polygons\",\"layers\":{\"a\":[[[[0,0],[1,0],[0,1]]]]},\"op\":[\"+\",\"a\",\"z\"]"
+     "}",
+     422, "op[2]: \"z\" is not a layer (the layers: \"a\")"},
+    {"{\"kind\":\"polygons\",\"layers\":{\"a\":[[[[0,0],[1,0],[0,1]]]]},\"op\":\"unite\"}", 422,
+     "op: expected \"union\", \"intersection\", \"difference\", \"xor\" (over the layers)"},
+    {"{\"kind\":\"polygons\",\"layers\":{\"\":[[[[0,0],[1,0],[0,1]]]]},\"op\":\"union\"}", 422,
+     "layers: a layer's name must have 1 to 100 bytes"},
+    {"{\"kind\":\"solids\",\"layers\":{\"a\":[]},\"op\":\"union\"}", 422,
+     "layers.a: expected a solid or a non-empty array of solids"},
+    {"{\"kind\":\"solids\",\"layers\":{\"a\":{\"V\":[[0,0,0]],\"FV\":[[0,1,2]]}},\"op\":\"union\"}",
+     422, "layers.a.FV[0][1]: expected a vertex index"},
+    {"{\"kind\":\"solids\",\"solids\":[],\"layers\":{}}", 422, "layers: give one of \"solids\""},
 };
 
 TEST(parse_errors_have_status_and_path)
@@ -752,6 +779,113 @@ TEST(polygons_fields_result_alone)
     json_decref(full);
     json_decref(alone);
     json_decref(mem);
+}
+
+/* Layers (issue 28): an op over layer names is the op over the layers' unions; the result
+ * carries the layers with their features' properties and the pieces (the result cut where the
+ * inputs change), whose rows are the inputs each piece lies in; with fields ["result"] the
+ * pieces index the result's own V. */
+TEST(polygons_layers_pieces)
+{
+    const char *base =
+        "{\"kind\":\"polygons\",\"layers\":{\"p\":{\"type\":\"FeatureCollection\","
+        "\"features\":[{\"type\":\"Feature\",\"properties\":{\"n\":\"west\"},"
+        "\"geometry\":{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[2,0],[2,2],[0,2],[0,0]]]}},"
+        "{\"type\":\"Feature\",\"properties\":null,\"geometry\":{\"type\":\"Polygon\","
+        "\"coordinates\":[[[2,0],[4,0],[4,2],[2,2],[2,0]]]}}]},"
+        "\"z\":[[[[1,1],[3,1],[3,3],[1,3]]],[[[1,-1],[5,-1],[5,0.5],[1,0.5]]]]},\"op\":";
+    char body[2048];
+    snprintf(body, sizeof body, "%s[\"&\",\"p\",\"z\"]}", base);
+    json_t *r = run_ok(body);
+    snprintf(body, sizeof body, "%s\"intersection\"}", base);
+    json_t *named = run_ok(body);
+    snprintf(body, sizeof body, "%s\"difference\",\"options\":{\"fields\":[\"result\"]}}", base);
+    json_t *diff = run_ok(body);
+    REQUIRE(r && named && diff, "runs");
+    json_t *res = json_object_get(r, "result");
+    CHECK(json_number_value(json_object_get(res, "area")) == 2 + 1.5, "p & z: area %g, want 3.5",
+          json_number_value(json_object_get(res, "area")));
+    CHECK(json_equal(json_object_get(r, "result"), json_object_get(named, "result")),
+          "\"intersection\" over the layers differs from [\"&\", \"p\", \"z\"]");
+    json_t *ly = json_object_get(r, "layers");
+    CHECK(json_array_size(ly) == 2 &&
+              !strcmp(json_string_value(json_object_get(json_array_get(ly, 1), "name")), "z") &&
+              json_integer_value(json_object_get(json_array_get(ly, 1), "first")) == 2 &&
+              json_integer_value(json_object_get(json_array_get(ly, 1), "count")) == 2,
+          "layers: %s", json_dumps(ly, JSON_COMPACT));
+    json_t *pp = json_object_get(json_array_get(ly, 0), "properties");
+    CHECK(json_array_size(pp) == 2 &&
+              !strcmp(json_string_value(json_object_get(json_array_get(pp, 0), "n")), "west") &&
+              json_is_null(json_array_get(pp, 1)),
+          "the properties of layer p");
+    /* pieces: p0 & z0 (1), p1 & z0 (1), p0 & z1 (0.5), p1 & z1 (1): four rows */
+    json_t *pc = json_object_get(res, "pieces"), *in = json_object_get(pc, "inputs");
+    json_t *ip = json_object_get(in, "indptr"), *ix = json_object_get(in, "indices");
+    CHECK(json_array_size(ip) == 5 && json_array_size(ix) == 8, "pieces: %zu rows, %zu inputs",
+          json_array_size(ip) - 1, json_array_size(ix));
+    int seen[4] = {0};
+    for (size_t k = 0; k + 1 < json_array_size(ip); k++) {
+        json_int_t a = json_integer_value(json_array_get(ip, k));
+        json_int_t p = json_integer_value(json_array_get(ix, (size_t)a));
+        json_int_t z = json_integer_value(json_array_get(ix, (size_t)a + 1));
+        CHECK(p < 2 && z >= 2 && z < 4, "piece %zu lies in %lld and %lld", k, (long long)p,
+              (long long)z);
+        if (p < 2 && z >= 2 && z < 4) seen[p * 2 + (z - 2)]++;
+    }
+    CHECK(seen[0] == 1 && seen[1] == 1 && seen[2] == 1 && seen[3] == 1,
+          "each pair of parents once: %d %d %d %d", seen[0], seen[1], seen[2], seen[3]);
+    CHECK(json_array_size(json_object_get(pc, "FV")) == 4 &&
+              json_array_size(json_object_get(pc, "piece")) == 4,
+          "four piece polygons");
+    /* difference with fields [result]: the pieces index the own V */
+    json_t *dr = json_object_get(diff, "result"), *dv = json_object_get(dr, "V");
+    json_t *dfv = json_object_get(json_object_get(dr, "pieces"), "FV");
+    REQUIRE(json_is_array(dv) && json_is_array(dfv), "own V and pieces");
+    double area = 0;
+    for (size_t q = 0; q < json_array_size(dfv); q++) {
+        json_t *row = json_array_get(dfv, q);
+        for (size_t i = 0; i < json_array_size(row); i++) {
+            size_t a = (size_t)json_integer_value(json_array_get(row, i));
+            size_t b =
+                (size_t)json_integer_value(json_array_get(row, (i + 1) % json_array_size(row)));
+            REQUIRE(a < json_array_size(dv) && b < json_array_size(dv), "an index beyond V");
+            json_t *pa = json_array_get(dv, a), *pb = json_array_get(dv, b);
+            area +=
+                json_number_value(json_array_get(pa, 0)) *
+                    json_number_value(json_array_get(pb, 1)) -
+                json_number_value(json_array_get(pb, 0)) * json_number_value(json_array_get(pa, 1));
+        }
+    }
+    CHECK(area / 2 == 8 - 3.5, "p - z: pieces of area %g, want 4.5", area / 2);
+    json_decref(r);
+    json_decref(named);
+    json_decref(diff);
+}
+
+/* Solids in named groups: the op over names, the result's "layers". */
+TEST(solids_layers)
+{
+    const char *cube = "{\"V\":[[%d,0,0],[%d,0,0],[%d,2,0],[%d,2,0],[%d,0,2],[%d,0,2],[%d,2,2],"
+                       "[%d,2,2]],\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],"
+                       "[3,0,4,7]]}";
+    char c0[512], c1[512], c2[512], body[2048];
+    snprintf(c0, sizeof c0, cube, 0, 2, 2, 0, 0, 2, 2, 0);
+    snprintf(c1, sizeof c1, cube, 3, 5, 5, 3, 3, 5, 5, 3);
+    snprintf(c2, sizeof c2, cube, 1, 4, 4, 1, 1, 4, 4, 1);
+    snprintf(body, sizeof body,
+             "{\"kind\":\"solids\",\"layers\":{\"ab\":[%s,%s],\"c\":%s},\"op\":[\"-\",\"c\","
+             "\"ab\"],\"options\":{\"fields\":[\"stats\"]}}",
+             c0, c1, c2);
+    json_t *r = run_ok(body);
+    REQUIRE(r, "runs");
+    double v = json_number_value(json_object_get(json_object_get(r, "result"), "volume"));
+    CHECK(fabs(v - (12 - 4 - 4)) < 1e-9, "c - ab: volume %g, want 4", v);
+    json_t *ly = json_object_get(r, "layers");
+    CHECK(json_array_size(ly) == 2 &&
+              json_integer_value(json_object_get(json_array_get(ly, 1), "first")) == 2 &&
+              json_integer_value(json_object_get(json_array_get(ly, 0), "count")) == 2,
+          "layers");
+    json_decref(r);
 }
 
 /* ---- numbers ----------------------------------------------------------------------------- */

@@ -334,10 +334,14 @@ def lint_schema(name, s):
         if isinstance(node, dict):
             for k, v in node.items():
                 cond = conditional or k in ("if", "then", "else", "not")
-                if k == "properties" and isinstance(v, dict) and not conditional:
+                if k == "properties" and isinstance(v, dict):
+                    # a map of property names to schemas: a property may itself be named
+                    # "properties" (a layer's), so each schema is walked as a schema
                     for p, sub in v.items():
-                        if not isinstance(sub, dict) or not sub.get("description"):
+                        if not conditional and (not isinstance(sub, dict) or not sub.get("description")):
                             problems.append("%s/properties/%s: no description" % ("/".join(path) or "#", p))
+                        props(sub, path + ("properties", str(p)), cond)
+                    continue
                 props(v, path + (str(k),), cond)
         elif isinstance(node, list):
             for i, v in enumerate(node):

@@ -40,7 +40,11 @@
  * {"result": true, "area": a}; with o->cells, then one Feature per bounded face of the
  * arrangement (geometry a Polygon, properties {"face": f, "area": a, "selected": s,
  * "membership": [the inputs it lies in, ascending]}).  Of any other 2D result: one Feature per
- * bounded face, in face order, geometry a Polygon, properties {"face": f, "area": a}.  Rings are
+ * bounded face, in face order, geometry a Polygon, properties {"face": f, "area": a}.  Of a layers
+ * request's result ("layers" and "result".pieces): the overlay a GIS tool gives, one Feature per
+ * piece and choice of one parent per layer, geometry a MultiPolygon, properties {"area": a,
+ * "L": the parent's index in layer L or null, "L.key": each of the parent's properties}, then
+ * the faces with o->cells (api/render.c, geojson_layers).  Rings are
  * OGC rings: closed by repeating their first position, simple.  A face's boundary walk that passes
  * a vertex twice (a block hanging from a cut vertex: a triangle touching the outer boundary at one
  * vertex, two triangles meeting at a vertex inside; a dangling tree kept inside the face) is cut

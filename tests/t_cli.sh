@@ -107,7 +107,7 @@ cp "$T/out" "$T/solreq"
 check "solids --format request prints the solids request with the op" grep -q '^{"kind":"solids","solids":\[{"V":\[\[0,0,0\],.*"op":"union"}$' "$T/solreq"
 check "... which run - computes as solids does" sh -c "'$BIN' run - <'$T/solreq' | sed 's/\"ms\":{[^}]*}//' >'$T/a' && '$BIN' solids '$T/t.obj' '$T/t.obj' --op union | sed 's/\"ms\":{[^}]*}//' >'$T/b' && cmp -s '$T/a' '$T/b'"
 check "run --format request exits 2" status 2 "$BIN" run "$T/square.json" --format request
-check "... and says it is for svg and solids" grep -q -- '--format request is for the svg and solids' "$T/err"
+check "... and says it is for svg, solids and polygons" grep -q -- '--format request is for the svg, solids and polygons' "$T/err"
 
 # A result of more than a megabyte (the unit of streaming) goes to stdout as it is made: whole,
 # valid, with the area the GeoJSON path (which needs the whole result in memory) gives; a write

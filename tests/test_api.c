@@ -2,6 +2,7 @@
  * back with jansson and checked against hand-computed complexes, the CSR operators (d1·d2 = 0
  * from the CSR arrays alone), exterior_last, field subsets, number formatting. */
 #include "api/api.h"
+#include "api/render.h"
 #include "api/api_int.h"
 #include "tests/check.h"
 
@@ -860,6 +861,62 @@ TEST(polygons_layers_pieces)
     json_decref(r);
     json_decref(named);
     json_decref(diff);
+}
+
+/* The GeoJSON of a layers result read defensively: a result whose pieces or layers do not
+ * agree with it is a 422 naming the key, never a crash; the good one gives a Feature per piece
+ * with its parents' properties. */
+TEST(layers_geojson_checked)
+{
+    const char *req = "{\"kind\":\"polygons\",\"layers\":{\"a\":[{\"type\":\"Feature\","
+                      "\"properties\":{\"k\":\"x\"},\"geometry\":{\"type\":\"Polygon\","
+                      "\"coordinates\":[[[0,0],[2,0],[2,2],[0,2],[0,0]]]}}],\"b\":[[[[1,1],[3,1],"
+                      "[3,3],[1,3]]]]},\"op\":\"union\"}";
+    char *out = NULL, *map = NULL;
+    size_t outlen = 0, maplen = 0;
+    api_error err = {0};
+    REQUIRE(api_run_json(req, strlen(req), 1, &out, &outlen, &err) == API_OK, "%s", err.msg);
+    REQUIRE(render_geojson(out, outlen, NULL, &map, &maplen, &err) == API_OK, "%s", err.msg);
+    json_t *m = json_loadb(map, maplen, 0, NULL);
+    json_t *fs = json_object_get(m, "features");
+    /* a alone, a & b, b alone */
+    CHECK(json_array_size(fs) == 3, "%zu features", json_array_size(fs));
+    int both = 0;
+    for (size_t i = 0; i < json_array_size(fs); i++) {
+        json_t *p = json_object_get(json_array_get(fs, i), "properties");
+        if (json_is_integer(json_object_get(p, "a")) && json_is_integer(json_object_get(p, "b"))) {
+            both++;
+            CHECK(!strcmp(json_string_value(json_object_get(p, "a.k")) ?: "", "x") &&
+                      json_number_value(json_object_get(p, "area")) == 1,
+                  "the piece in both: %s", json_dumps(p, JSON_COMPACT));
+        }
+    }
+    CHECK(both == 1, "%d pieces in both", both);
+    json_decref(m);
+    free(map);
+    static const struct {
+        const char *after, *from, *to, *msg;
+    } bad[] = {
+        {"\"pieces\"", "\"piece\":[0", "\"piece\":[9", "result.pieces.piece[0]: expected a piece"},
+        {"\"layers\"", "\"first\":1", "\"first\":2", "layers[1]: expected {\"name\", \"first\": 1"},
+        {"\"pieces\"", "\"indices\":[0", "\"indices\":[5",
+         "result.pieces.inputs.indices[0]: expected an input"},
+        {"\"result\"", "\"pieces\":{\"FV\"", "\"pieces\":{\"GV\"", "result.pieces: required with"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        const char *from = strstr(out, bad[k].after);
+        const char *at = from ? strstr(from, bad[k].from) : NULL;
+        REQUIRE(at, "case %zu: %s not in the result", k, bad[k].from);
+        size_t n = outlen + strlen(bad[k].to) + 1, a = (size_t)(at - out);
+        char *t = malloc(n);
+        snprintf(t, n, "%.*s%s%s", (int)a, out, bad[k].to, at + strlen(bad[k].from));
+        err = (api_error){0};
+        int rc = render_geojson(t, strlen(t), NULL, &map, &maplen, &err);
+        CHECK(rc == API_EINVALID && strstr(err.msg, bad[k].msg) && !map,
+              "case %zu: %d \"%s\", want 422 \"%s\"", k, rc, err.msg, bad[k].msg);
+        free(t);
+    }
+    free(out);
 }
 
 /* Solids in named groups: the op over names, the result's "layers". */

@@ -47,6 +47,7 @@ typedef struct polygons_req {
     uint32_t *lfirst; /* owned, nlayers + 1 */
     char *props;      /* owned */
     size_t *prop_off; /* owned, npoly + 1 */
+    int named_and;    /* op "intersection" by name, over the single polygons */
 } polygons_req;
 
 void api_polygons_free(void *parsed)
@@ -708,6 +709,7 @@ int api_polygons_parse_packed(const json_t *req, api_packed_set *pk, void **pars
         rc = api_bool_parse_layers(json_object_get(req, "op"), r->npoly, &ly, &r->op, err);
     } else {
         rc = api_bool_parse(json_object_get(req, "op"), r->npoly, &r->op, err);
+        r->named_and = !strcmp(json_string_value(json_object_get(req, "op")) ?: "", "intersection");
     }
     if (rc != API_OK) goto fail;
     *parsed = r;
@@ -912,6 +914,22 @@ static void put_bool2(api_buf *b, const void *udata)
     free(map);
 }
 
+/* stats.warnings, when there is something to say: the one trap so far is a named
+ * "intersection" over many single polygons (two layers merged into one collection) that is
+ * empty, where "layers" was meant. */
+static void put_warnings(api_buf *b, const void *udata)
+{
+    const bool2_out *o = udata;
+    if (!(o->req->named_and && o->r->ninputs > 2 && o->r->npoly == 0)) return;
+    char msg[300];
+    snprintf(msg, sizeof msg,
+             ",\"warnings\":[\"op: the intersection of all %zu polygons is empty; to intersect "
+             "collections, give them as \\\"layers\\\" and an op over their names, such as "
+             "[\\\"&\\\", \\\"parcels\\\", \\\"zones\\\"]\"]",
+             o->r->ninputs);
+    api_buf_puts(b, msg);
+}
+
 int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
 {
     const polygons_req *r = parsed;
@@ -932,6 +950,8 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
     bool2_out bo = {&res, r->opt.fields, r};
     api_lar2_fmt fmt = {.fields = r->opt.fields,
                         .exterior_last = r->opt.exterior_last,
+                        .stats_more = put_warnings,
+                        .stats_udata = &bo,
                         .more = put_bool2,
                         .more_udata = &bo};
     if (ro->progress) ro->progress(ro->udata, "output", 0);

@@ -38,6 +38,21 @@ status 1 "$BIN" run "$T/two-fc.json"
 check "a FeatureCollection in polygons: the error names layers" \
     grep -q 'polygons\[0\].type: a FeatureCollection is a layer.*"layers"' "$T/err"
 
+# both collections merged into one with a named intersection: the empty answer warns
+/usr/bin/python3 -c '
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+print(json.dumps({"kind": "polygons", "op": "intersection", "polygons": {
+    "type": "FeatureCollection", "features": a["features"] + b["features"] + a["features"]}}))
+' "$T/a.geojson" "$T/b.geojson" >"$T/merged.json"
+sed 's/\[\[0, 0\], \[2, 0\], \[2, 2\], \[0, 2\], \[0, 0\]\]/[[9, 9], [10, 9], [10, 10], [9, 9]]/' \
+    "$T/merged.json" >"$T/merged-apart.json"
+status 0 "$BIN" run "$T/merged-apart.json"
+check "an empty intersection of all of many polygons: stats.warnings points to layers" \
+    grep -q '"warnings":\["op: the intersection of all 3 polygons is empty; to intersect collections, give them as \\"layers\\"' "$T/out"
+status 0 "$BIN" run "$T/merged.json"
+check "... and a non-empty one has no warnings" sh -c "! grep -q warnings '$T/out'"
+
 # layers and the op over their names, through cellar run
 printf '{"kind": "polygons", "layers": {"a": %s, "b": %s}, "op": ["&", "a", "b"]}' \
     "$(cat "$T/a.geojson")" "$(cat "$T/b.geojson")" >"$T/layers.json"

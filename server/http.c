@@ -1545,6 +1545,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
                 char msg[300];
                 snprintf(msg, sizeof msg, "X-Forwarded-Prefix: invalid value \"%.100s\": %s", xfp,
                          why);
+                c->close = 1; /* a body that follows is not read */
                 return problem(c, 400, msg, NULL, NULL);
             }
         } else {

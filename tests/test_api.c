@@ -564,14 +564,17 @@ TEST(fields_subset)
 {
     static const struct {
         const char *opts;
-        const char *keys[4];
+        const char *keys[6];
     } cases[] = {
         {"{\"fields\":[\"V\",\"stats\"]}", {"dim", "V", "stats"}},
         {"{\"fields\":[]}", {"dim"}},
         {"{\"fields\":[\"operators\"]}", {"dim", "operators"}},
-        {"{\"fields\":[\"FE\"],\"operators\":true}", {"dim", "FE", "operators"}},
-        {"{\"fields\":[\"holes\",\"exterior\",\"holes\"]}", {"dim", "holes", "exterior"}},
-        {"{\"fields\":[\"EV\",\"FV\"],\"exterior_last\":true}", {"dim", "EV", "FV"}},
+        {"{\"fields\":[\"FE\",\"EV\",\"V\"],\"operators\":true}",
+         {"dim", "V", "EV", "FE", "operators"}},
+        {"{\"fields\":[\"holes\",\"exterior\",\"holes\",\"V\",\"FV\"]}",
+         {"dim", "V", "FV", "holes", "exterior"}},
+        {"{\"fields\":[\"holes\",\"V\",\"FE\",\"EV\"]}", {"dim", "V", "EV", "FE", "holes"}},
+        {"{\"fields\":[\"V\",\"EV\",\"FV\"],\"exterior_last\":true}", {"dim", "V", "EV", "FV"}},
     };
     char body[512];
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -580,7 +583,7 @@ TEST(fields_subset)
                  cases[i].opts);
         json_t *r = run_ok(body);
         if (!r) continue;
-        while (n < 4 && cases[i].keys[n]) {
+        while (n < 6 && cases[i].keys[n]) {
             CHECK(json_object_get(r, cases[i].keys[n]), "%s: no %s", cases[i].opts,
                   cases[i].keys[n]);
             n++;
@@ -590,7 +593,7 @@ TEST(fields_subset)
         json_decref(r);
     }
     /* exterior_last without FE still adds the exterior row to FV */
-    json_t *r = run_ok(SQUARE_REQ("{\"fields\":[\"FV\"],\"exterior_last\":true}"));
+    json_t *r = run_ok(SQUARE_REQ("{\"fields\":[\"FV\",\"V\"],\"exterior_last\":true}"));
     CHECK(r && json_array_size(json_object_get(r, "FV")) == 2, "FV rows with exterior_last");
     json_decref(r);
 }

@@ -1314,7 +1314,8 @@ TEST(fields_result_alone_and_stats_alone)
                     same += p && q && json_equal(p, q);
                 }
             }
-            CHECK((total > 0 || part) && same == total && json_array_size(la) == json_array_size(lw),
+            CHECK((total > 0 || part) && same == total &&
+                      json_array_size(la) == json_array_size(lw),
                   "%s [\"result\"]: %s: %zu of %zu points as in the whole result",
                   k ? "solids" : "polygons", key, same, total);
             json_decref(la);

@@ -206,13 +206,29 @@ enum {
     API_F_STATS = 1u << 6,
     API_F_OPERATORS = 1u << 7,
     API_F_DEFAULT = (1u << 7) - 1, /* all but operators (and the two below) */
-    /* "polygons" only: when fields names either, only the one(s) named are written (else both,
-     * whatever the fields); a result named without V carries its own V */
+    /* "polygons" only (written when named, or when no fields are given); a result without V
+     * named carries its own V, its "cells" only with FV or FE named, its "FE" only with EV */
     API_F_MEMBERSHIP = 1u << 8,
     API_F_RESULT = 1u << 9
 };
 #define API_NFIELDS 10
 extern const char *const api_field_names[API_NFIELDS]; /* "V", "EV", ... in bit order */
+
+/* A rule of the fields: the key `key` (a bit) refers to one of the keys `any` (bits), so that
+ * naming key without one of them is refused. */
+typedef struct api_field_ref {
+    unsigned key, any;
+    const char *what; /* what the keys of any are, for a message when they are two: "the faces" */
+} api_field_ref;
+/* 422 naming the first rule that fl breaks (names: the keys' names in bit order), else API_OK. */
+int api_fields_refs(unsigned fl, const api_field_ref *rules, size_t n, const char *const *names,
+                    api_error *err);
+
+/* 422 naming the first key among fl (API_F_*) that refers to one fl leaves out ("FV" without
+ * "V": options.fields: "FV" refers to "V", which is not named), else API_OK.  EV, FV, holes and
+ * exterior index V; FE indexes EV; holes are keyed by faces (FV or FE).  operators, stats,
+ * membership and result stand alone (the result is made self-contained by its writer). */
+int api_lar2_fields_check(unsigned fl, api_error *err);
 
 /* The options of every kind that returns a 2-complex ("lines", "svg"): api/lines.c reads them. */
 typedef struct api_lar2_opts {
@@ -265,9 +281,14 @@ enum {
     API_F3_EXTERIOR = 1u << 7,
     API_F3_STATS = 1u << 8,
     API_F3_OPERATORS = 1u << 9,
-    API_F3_DEFAULT = (1u << 9) - 1 /* all but operators */
+    /* with an "op": written when named, or when no fields are given (a result without V named
+     * carries its own V; its "cells" come only with CF or CV, "faces" with FV or FE, "FE"
+     * with EV) */
+    API_F3_MEMBERSHIP = 1u << 10,
+    API_F3_RESULT = 1u << 11,
+    API_F3_DEFAULT = ((1u << 9) - 1) | API_F3_MEMBERSHIP | API_F3_RESULT /* all but operators */
 };
-#define API_NFIELDS3 10
+#define API_NFIELDS3 12
 extern const char *const api_field3_names[API_NFIELDS3]; /* "V", "EV", ... in bit order */
 
 /* How api_lar3_write() presents a 3-complex (api/larjson3.c). */
@@ -277,7 +298,7 @@ typedef struct api_lar3_fmt {
     size_t nwarnings;
     /* a Boolean operation (may be NULL): "membership" (the solids each bounded cell lies in,
      * sparse rows, c->nc of them) and "result" (the cells, the outward boundary faces, their
-     * cycles and signed edges, the volume), written whatever the fields */
+     * cycles and signed edges, the volume), each written when its field is in fields */
     const member_rows *membership;
     const bool3_result *result;
     const char *layers; /* borrowed, may be NULL: the JSON array written as "layers" */
@@ -287,6 +308,9 @@ typedef struct api_lar3_fmt {
  * API_ENOMEM (b failed or a scratch allocation failed) or API_EINTERNAL (c breaks an invariant
  * the writer relies on: an index out of range, offsets that decrease). */
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err);
+/* As api_lar2_fields_check for a 3-complex's fields (API_F3_*): EV, FV, holes and CV index V;
+ * FE indexes EV; holes, CF and exterior index the faces (FV or FE). */
+int api_lar3_fields_check(unsigned fl, api_error *err);
 /* The arr3_opts.want for a request of these fields (API_F3_*): the parts the writer prints. */
 unsigned api_lar3_want(unsigned fields);
 

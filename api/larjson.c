@@ -34,6 +34,38 @@
 const char *const api_field_names[API_NFIELDS] = {
     "V", "EV", "FV", "FE", "holes", "exterior", "stats", "operators", "membership", "result"};
 
+int api_fields_refs(unsigned fl, const api_field_ref *rules, size_t n, const char *const *names,
+                    api_error *err)
+{
+    for (size_t i = 0; i < n; i++) {
+        const api_field_ref *r = &rules[i];
+        if (!(fl & r->key) || (fl & r->any)) continue;
+        unsigned k = (unsigned)__builtin_ctz(r->key), a = (unsigned)__builtin_ctz(r->any);
+        unsigned rest = r->any & ~(1u << a);
+        if (!rest)
+            return api_fail(err, API_EINVALID,
+                            "options.fields: \"%s\" refers to \"%s\", which is not named: "
+                            "name it too, or leave \"%s\" out",
+                            names[k], names[a], names[k]);
+        return api_fail(err, API_EINVALID,
+                        "options.fields: \"%s\" refers to %s, \"%s\" or \"%s\", neither of "
+                        "which is named: name one, or leave \"%s\" out",
+                        names[k], r->what, names[a], names[__builtin_ctz(rest)], names[k]);
+    }
+    return API_OK;
+}
+
+int api_lar2_fields_check(unsigned fl, api_error *err)
+{
+    static const api_field_ref rules[] = {{API_F_EV, API_F_V, NULL},
+                                          {API_F_FV, API_F_V, NULL},
+                                          {API_F_FE, API_F_EV, NULL},
+                                          {API_F_HOLES, API_F_V, NULL},
+                                          {API_F_HOLES, API_F_FV | API_F_FE, "the faces"},
+                                          {API_F_EXTERIOR, API_F_V, NULL}};
+    return api_fields_refs(fl, rules, sizeof rules / sizeof *rules, api_field_names, err);
+}
+
 /* ---- the buffer ---------------------------------------------------------------------------- */
 
 void api_buf_section(api_buf *b)

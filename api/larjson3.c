@@ -30,8 +30,22 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const api_field3_names[API_NFIELDS3] = {"V",  "EV", "FV",       "FE",    "holes",
-                                                    "CF", "CV", "exterior", "stats", "operators"};
+const char *const api_field3_names[API_NFIELDS3] = {"V",     "EV",        "FV",         "FE",
+                                                    "holes", "CF",        "CV",         "exterior",
+                                                    "stats", "operators", "membership", "result"};
+
+int api_lar3_fields_check(unsigned fl, api_error *err)
+{
+    static const api_field_ref rules[] = {{API_F3_EV, API_F3_V, NULL},
+                                          {API_F3_FV, API_F3_V, NULL},
+                                          {API_F3_FE, API_F3_EV, NULL},
+                                          {API_F3_HOLES, API_F3_V, NULL},
+                                          {API_F3_HOLES, API_F3_FV | API_F3_FE, "the faces"},
+                                          {API_F3_CF, API_F3_FV | API_F3_FE, "the faces"},
+                                          {API_F3_CV, API_F3_V, NULL},
+                                          {API_F3_EXTERIOR, API_F3_FV | API_F3_FE, "the faces"}};
+    return api_fields_refs(fl, rules, sizeof rules / sizeof *rules, api_field3_names, err);
+}
 
 /* "membership": the solids each cell lies in (api_put_membership), or, when some cell winds
  * about a solid other than once (a surface that passes through itself, overlaps itself or
@@ -77,7 +91,7 @@ static int index_ok(const uint32_t *a, size_t n, size_t bound)
 static int need_faces(unsigned fl)
 {
     return (fl & (API_F3_V | API_F3_EV | API_F3_FV | API_F3_FE | API_F3_HOLES | API_F3_CV |
-                  API_F3_OPERATORS)) != 0;
+                  API_F3_OPERATORS | API_F3_RESULT)) != 0;
 }
 
 static int need_cf(unsigned fl)
@@ -87,7 +101,8 @@ static int need_cf(unsigned fl)
 
 unsigned api_lar3_want(unsigned fl)
 {
-    return ARR3_WANT_ONLY | (fl & API_F3_V ? ARR3_WANT_COORDS : 0) |
+    /* a result's own V (without V named) is made of the coordinates */
+    return ARR3_WANT_ONLY | (fl & (API_F3_V | API_F3_RESULT) ? ARR3_WANT_COORDS : 0) |
            (fl & API_F3_CV ? ARR3_WANT_CV : 0) | (need_faces(fl) ? ARR3_WANT_FACES : 0) |
            (need_cf(fl) ? ARR3_WANT_CF : 0);
 }
@@ -98,8 +113,9 @@ static int check_complex(const lar3 *c, unsigned fl, api_error *err)
 {
     const char *what = NULL;
     size_t ncycv, nfc, nfe, ncf, ncv;
-    if ((fl & API_F3_V) && c->nv && !c->V) what = "V";
-    for (size_t i = 0; !what && (fl & API_F3_V) && i < 3 * c->nv; i++)
+    unsigned coords = fl & (API_F3_V | API_F3_RESULT); /* the result's own V: see put_result */
+    if (coords && c->nv && !c->V) what = "V";
+    for (size_t i = 0; !what && coords && i < 3 * c->nv; i++)
         if (!isfinite(c->V[i])) what = "V (not finite)";
     if (need_faces(fl)) {
         if (!what && !index_ok(c->EV, 2 * c->ne, c->nv)) what = "EV";
@@ -303,38 +319,77 @@ static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
     api_buf_puts(b, "]}");
 }
 
-/* A cycle walked backwards when reversed (the face turned to point out of the result). */
-static void put_cycle_dir(api_buf *b, const lar3 *c, uint32_t cy, int reversed)
+/* A cycle walked backwards when reversed (the face turned to point out of the result), its
+ * vertices through map (NULL: as they are). */
+static void put_cycle_dir(api_buf *b, const lar3 *c, uint32_t cy, int reversed, const uint32_t *map)
 {
     uint32_t c0 = c->cyc_off[cy], c1 = c->cyc_off[cy + 1], n = c1 - c0;
     api_buf_putc(b, '[');
     for (uint32_t i = 0; i < n; i++) {
         if (i) api_buf_putc(b, ',');
-        api_buf_u64(b, c->cyc[reversed ? c0 + (n - i) % n : c0 + i]);
+        uint32_t v = c->cyc[reversed ? c0 + (n - i) % n : c0 + i];
+        api_buf_u64(b, map ? map[v] : v);
     }
     api_buf_putc(b, ']');
 }
 
-/* "result": {"cells": [...], "faces": [±(f+1), ...], "FV": [...], "FE": [...], "holes": {...},
- * "volume": v}: row i of FV, FE and holes is result face i (faces[i]), oriented out of the
- * result (a face listed -(f+1) has its cycles reversed and its edges' signs flipped). */
+/* "result": {"V": [...], "cells": [...], "faces": [±(f+1), ...], "FV": [...], "FE": [...],
+ * "holes": {...}, "volume": v}: row i of FV, FE and holes is result face i (faces[i]), oriented
+ * out of the result (a face listed -(f+1) has its cycles reversed and its edges' signs
+ * flipped).  Nothing in it refers to a key the fields leave out: "cells" (the complex's cells)
+ * come with CF or CV, "faces" (the complex's faces) with FV or FE, "FE" with EV; without V
+ * named, a "V" of its own (the vertices its cycles use, in the complex's order) is what its
+ * "FV" and "holes" index. */
 static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigned fl)
 {
+    uint32_t *map = NULL;
+    const char *sep = "";
     put_key(b, "result");
-    api_buf_puts(b, "{\"cells\":");
-    api_buf_u32_list(b, r->cells, r->ncells);
-    api_buf_puts(b, ",\"faces\":");
-    api_buf_i32_list(b, r->faces, r->nfaces);
-    if (fl & API_F3_FV) {
-        api_buf_puts(b, ",\"FV\":[");
+    api_buf_putc(b, '{');
+    if (!(fl & API_F3_V)) { /* its own V */
+        map = calloc(c->nv + 1, sizeof *map);
+        if (!map) {
+            b->failed = 1; /* out of memory: api_lar3_write says so */
+            return;
+        }
         for (size_t i = 0; i < r->nfaces; i++) {
             uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
-            if (i) api_buf_putc(b, ',');
-            put_cycle_dir(b, c, c->fc[c->fc_off[f]], r->faces[i] < 0);
+            for (uint32_t k = c->fc_off[f]; k < c->fc_off[f + 1]; k++)
+                for (uint32_t j = c->cyc_off[c->fc[k]]; j < c->cyc_off[c->fc[k] + 1]; j++)
+                    map[c->cyc[j]] = 1;
+        }
+        uint32_t nv = 0;
+        api_buf_puts(b, "\"V\":[");
+        for (size_t v = 0; v < c->nv; v++) {
+            if (!map[v]) continue;
+            if (nv) api_buf_putc(b, ',');
+            api_buf_point(b, c->V + 3 * v, 3);
+            map[v] = nv++;
         }
         api_buf_putc(b, ']');
+        sep = ",";
     }
-    if (fl & API_F3_FE) {
+    if (fl & (API_F3_CF | API_F3_CV)) {
+        api_buf_puts(b, sep);
+        api_buf_puts(b, "\"cells\":");
+        api_buf_u32_list(b, r->cells, r->ncells);
+        sep = ",";
+    }
+    if (fl & (API_F3_FV | API_F3_FE)) {
+        api_buf_puts(b, sep);
+        api_buf_puts(b, "\"faces\":");
+        api_buf_i32_list(b, r->faces, r->nfaces);
+        sep = ",";
+    }
+    api_buf_puts(b, sep);
+    api_buf_puts(b, "\"FV\":[");
+    for (size_t i = 0; i < r->nfaces; i++) {
+        uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+        if (i) api_buf_putc(b, ',');
+        put_cycle_dir(b, c, c->fc[c->fc_off[f]], r->faces[i] < 0, map);
+    }
+    api_buf_putc(b, ']');
+    if (fl & API_F3_EV) {
         api_buf_puts(b, ",\"FE\":[");
         for (size_t i = 0; i < r->nfaces; i++) {
             uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
@@ -346,12 +401,6 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigne
             api_buf_putc(b, ']');
         }
         api_buf_putc(b, ']');
-    }
-    if (!(fl & API_F3_HOLES)) {
-        api_buf_puts(b, ",\"volume\":");
-        api_buf_double(b, r->volume);
-        api_buf_putc(b, '}');
-        return;
     }
     api_buf_puts(b, ",\"holes\":{");
     int first = 1;
@@ -365,13 +414,14 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigne
         api_buf_puts(b, "\":[");
         for (uint32_t k = c->fc_off[f] + 1; k < c->fc_off[f + 1]; k++) {
             if (k > c->fc_off[f] + 1) api_buf_putc(b, ',');
-            put_cycle_dir(b, c, c->fc[k], r->faces[i] < 0);
+            put_cycle_dir(b, c, c->fc[k], r->faces[i] < 0, map);
         }
         api_buf_putc(b, ']');
     }
     api_buf_puts(b, "},\"volume\":");
     api_buf_double(b, r->volume);
     api_buf_putc(b, '}');
+    free(map);
 }
 
 int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error *err)
@@ -460,8 +510,8 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         put_key(b, "layers");
         api_buf_puts(b, fmt->layers);
     }
-    if (fmt->membership) put_membership3(b, c, fmt->membership);
-    if (fmt->result) put_result(b, c, fmt->result, fl);
+    if (fmt->membership && (fl & API_F3_MEMBERSHIP)) put_membership3(b, c, fmt->membership);
+    if (fmt->result && (fl & API_F3_RESULT)) put_result(b, c, fmt->result, fl);
     if (fl & API_F3_STATS) {
         put_key(b, "stats");
         put_stats(b, c, fmt);

@@ -66,7 +66,7 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
                             i);
         *out |= bit;
     }
-    return API_OK;
+    return api_lar2_fields_check(*out, err);
 }
 
 int api_lar2_option(const char *key, const json_t *v, api_lar2_opts *o, api_error *err)

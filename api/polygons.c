@@ -832,17 +832,18 @@ static void put_layers(api_buf *b, const polygons_req *q)
     api_buf_putc(b, ']');
 }
 
-/* The "membership" and "result" members (api_lar2_fmt.more): both unless the fields name one
- * of them.  A result named in the fields has "cells" with the complex's FV, "FE" with its EV,
- * and, without its V, a "V" of its own: the vertices its cycles use, in the complex's order,
- * which its "FV" and "holes" then index. */
+/* The "membership" and "result" members (api_lar2_fmt.more), each when the fields have it
+ * (without fields given: both).  Nothing in the result refers to a key left out: it has
+ * "cells" with the complex's faces (FV or FE), "FE" with its EV, and, without its V, a "V" of
+ * its own: the vertices its cycles use, in the complex's order, which its "FV" and "holes"
+ * then index. */
 static void put_bool2(api_buf *b, const void *udata)
 {
     const bool2_out *o = udata;
     const bool2_result *r = o->r;
-    unsigned fl = o->fields, named = fl & (API_F_MEMBERSHIP | API_F_RESULT);
-    int membership = !named || (fl & API_F_MEMBERSHIP), result = !named || (fl & API_F_RESULT);
-    int cells = !named || (fl & API_F_FV), fe = !named || (fl & API_F_EV);
+    unsigned fl = o->fields;
+    int membership = (fl & API_F_MEMBERSHIP) != 0, result = (fl & API_F_RESULT) != 0;
+    int cells = (fl & (API_F_FV | API_F_FE)) != 0, fe = (fl & API_F_EV) != 0;
     uint32_t *map = NULL;
     if (o->req->nlayers) put_layers(b, o->req);
     if (membership) {
@@ -852,7 +853,7 @@ static void put_bool2(api_buf *b, const void *udata)
     if (!result) return;
     api_buf_puts(b, ",\"result\":{");
     const char *sep = "";
-    if (named && !(fl & API_F_V)) { /* its own V */
+    if (!(fl & API_F_V)) { /* its own V */
         map = malloc((r->c.nv + 1) * sizeof *map);
         if (!map) {
             b->failed = 1; /* out of memory: the result is incomplete, the run says so */

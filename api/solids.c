@@ -123,7 +123,8 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
         return api_fail(
             err, API_EINVALID,
             "options.fields: expected an array of names among \"V\", \"EV\", \"FV\", "
-            "\"FE\", \"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\"");
+            "\"FE\", \"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\", "
+            "\"membership\", \"result\"");
     *out = 0;
     json_array_foreach(v, i, name)
     {
@@ -133,11 +134,12 @@ static int parse_fields(const json_t *v, unsigned *out, api_error *err)
         if (!bit)
             return api_fail(err, API_EINVALID,
                             "options.fields[%zu]: expected one of \"V\", \"EV\", \"FV\", \"FE\", "
-                            "\"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\"",
+                            "\"holes\", \"CF\", \"CV\", \"exterior\", \"stats\", \"operators\", "
+                            "\"membership\", \"result\"",
                             i);
         *out |= bit;
     }
-    return API_OK;
+    return api_lar3_fields_check(*out, err);
 }
 
 static int parse_options(const json_t *o, solids_req *r, api_error *err)

@@ -30,7 +30,7 @@ when gen3d.py or its source mesh changed (the file "key" holds their hash).
 
 Programs (one at a time, each on the same two OFF files, each under /usr/bin/time and timeout):
   cellar    BUILD_DIR/cellar --threads T --quiet solids A.off B.off --op OP
-            --options '{"fields":["stats"]}'; its figure is stats.ms.total (from the parsed
+            --options '{"fields":["stats","membership","result"]}'; its figure is stats.ms.total (from the parsed
             solids to the Boolean result: not reading the files nor writing the JSON) and its
             volume result.volume;
   Manifold  node bench/manifold_bool.mjs --warm --op OP A.off B.off; its figure is ms_warm (the
@@ -78,7 +78,7 @@ GEN = os.path.join(HERE, "gen3d.py")
 OFFIO = os.path.join(HERE, "..", "tests", "offio.py")  # gen3d.py's OFF reader
 MF = os.path.join(HERE, "manifold_bool.mjs")
 TIME = "/usr/bin/time"
-OPTS = '{"fields":["stats"]}'
+OPTS = '{"fields":["stats","membership","result"]}'
 SCENES = ("rot", "box", "shell")
 OPS_A = ("union", "intersection", "difference")
 OPS_B = ("union", "intersection")
@@ -548,7 +548,7 @@ def volume_columns(cel, mf, cg):
 def header_common(progs, threads_note):
     """The lines every part starts with: the programs and what their figures are."""
     out("  cellar   = %s %s --quiet solids A.off B.off --op OP" % (progs.cellar, threads_note))
-    out("             (fields: stats); ms = stats.ms.total: from the parsed solids to the")
+    out("             (fields: stats, membership, result); ms = stats.ms.total: from the parsed solids to the")
     out("             Boolean result (not reading the files, not writing the JSON);")
     if progs.mf_why:
         out("  Manifold = not run: %s; its columns show -;" % progs.mf_why)

@@ -16,7 +16,7 @@
 # through it, with its copy scaled by 0.8 inside it).
 # Each case is generated once by bench/gen3d.py as one OFF file per solid; each program reads
 # the same files and runs once under /usr/bin/time:
-#   ours      cellar solids FILES --op union --options '{"fields":["stats"]}' (result.volume)
+#   ours      cellar solids FILES --op union --options '{"fields":["stats","membership","result"]}' (result.volume)
 #   CGAL      cgal_bool --op union FILES (Epeck, PMP corefinement, pairwise union tree; volume)
 #   manifold  node manifold_bool.mjs --op union FILES (Manifold.union(array), double coordinates)
 # One row per case: wall time (s, the whole process: start-up and reading included) and peak RSS
@@ -43,7 +43,7 @@ real_cases() {
 CASES=${BENCHBOOL_CASES:-"cubes100 cubes1000 grid10 $(real_cases)"}
 LIMIT=${BENCHBOOL_TIMEOUT:-900}
 REPEAT=${BENCHBOOL_REPEAT:-3}
-OPTS='{"fields":["stats"]}'
+OPTS='{"fields":["stats","membership","result"]}'
 HERE=$(dirname "$0")
 OURS=$B/cellar
 CGAL=$B/tests/ref/cgal_bool

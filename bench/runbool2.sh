@@ -16,8 +16,8 @@
 # "timeout" unless BENCH_BIG=1).
 #
 # Cases (the requests are written by the python script below into a temporary directory;
-# every one gets "options": {"fields": ["stats"]}, so that our answer is the stats, the
-# membership table and the result, not the whole arrangement):
+# every one gets "options": {"fields": ["stats", "membership", "result"]}, so that our answer is
+# the stats, the membership table and the result, not the whole arrangement):
 #   squaresN              union of N unit squares, randomly turned, centres uniform in a square
 #                         of area N/2 (each point covered about twice); N = 1000, 10000, and
 #                         100000 with BENCH_BIG=1;
@@ -169,7 +169,7 @@ def layers(k, m, seed=1):
     return a, b
 
 def make(case, out, real):
-    fields = ['stats']
+    fields = ['stats', 'membership', 'result']
     m = re.fullmatch(r'squares(\d+)', case)
     lay = re.fullmatch(r'layers(\d+)x(\d+)\.(union|intersection|difference)', case)
     if m:
@@ -238,7 +238,7 @@ row() {
 }
 
 echo "2D Boolean benchmark: polygons ($(date -u +%Y-%m-%dT%H:%MZ), $(nproc 2>/dev/null || echo '?') CPUs)"
-echo "  ours = $OURS run (fields: stats, so the membership table and the result are printed too;"
+echo "  ours = $OURS run (fields: stats, membership and result: the membership table and the result;"
 echo "  layers: fields result and stats, the answer alone);"
 echo "  GEOS = $GEOS (GEOS $(geos-config --version 2>/dev/null || echo '?'), OverlayNG:"
 echo "  union = GEOSUnaryUnion of all, intersection / xor chained, difference = first minus the"

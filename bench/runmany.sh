@@ -19,8 +19,8 @@
 #                K = 13, 20, 32 (1099, 4000, 16384 cubes).
 # Each program reads the same files and runs once under /usr/bin/time (wall seconds of the
 # whole process, start-up and reading included; peak RSS MiB).  ours 2D: cellar run REQUEST
-# (fields: stats; the result polygons and the membership are written whatever the fields);
-# ours 3D: cellar solids FILES --op union (fields: stats).  agree: the areas within the
+# (fields: stats, membership, result: the result polygons and the membership, not the complex);
+# ours 3D: cellar solids FILES --op union (the same fields).  agree: the areas within the
 # snapping bound (GEOS's result perimeter x our grid step) and the same polygon and hole
 # counts (2D), the volumes within 1e-9 relative or our grid step x the cubes' total area (3D);
 # for the tilings and the checkerboards also against the exact value.
@@ -74,7 +74,7 @@ elif case.startswith('tiling'):
     exact = (float(k * k), 1, 0)
 if case.startswith(('squares', 'tiling')):
     json.dump({'kind': 'polygons', 'polygons': polys, 'op': 'union',
-               'options': {'fields': ['stats']}}, open(os.path.join(d, 'req.json'), 'w'))
+               'options': {'fields': ['stats', 'membership', 'result']}}, open(os.path.join(d, 'req.json'), 'w'))
     print(json.dumps({'n': len(polys), 'exact': exact}))
     sys.exit(0)
 os.makedirs(os.path.join(d, 'off'))
@@ -122,7 +122,7 @@ for c in $CASES; do
         timed "geos_bool2 ($c)" "$d/peer" "$GEOS" "$d/req.json"
         ps=$T_S pm=$T_MIB
     else
-        timed "cellar ($c)" "$d/ours" "$OURS" solids "$d"/off/*.off --op union --options '{"fields":["stats"]}'
+        timed "cellar ($c)" "$d/ours" "$OURS" solids "$d"/off/*.off --op union --options '{"fields":["stats","membership","result"]}'
         os=$T_S om=$T_MIB
         ps=- pm=-
         if [ $have_mf -eq 1 ]; then

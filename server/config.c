@@ -49,6 +49,12 @@ const char config_usage[] =
     "  --cors-origins LIST   CELLAR_CORS_ORIGINS  origins whose pages may call the API (CORS):\n"
     "                                             \"*\", or comma-separated origins such as\n"
     "                                             https://app.example (default none)\n"
+    "  --base-path PATH      CELLAR_BASE_PATH     the path the service is mounted at behind a\n"
+    "                                             proxy, such as /geometry: the links it writes\n"
+    "                                             (Location, job \"result\") start with it, and\n"
+    "                                             it is removed from request paths under it; a\n"
+    "                                             request's X-Forwarded-Prefix overrides it\n"
+    "                                             (default: none, the root)\n"
     "  --init                make a store in an empty --db file, or add its tables to another\n"
     "                        program's SQLite database (both are refused without it)\n"
     "  --healthcheck         ask the daemon at --listen for /healthz and exit 0 when it answers\n"
@@ -59,6 +65,35 @@ static int bad(char *err, size_t errlen, const char *what, const char *v)
 {
     snprintf(err, errlen, "%s: invalid value \"%s\"", what, v);
     return -1;
+}
+
+int config_path_prefix(const char *v, char out[CONFIG_PREFIX_MAX + 1], const char **why)
+{
+    size_t n = strlen(v);
+    out[0] = 0;
+    *why = NULL;
+    if (v[0] != '/')
+        *why = "it must begin with \"/\"";
+    else if (n > CONFIG_PREFIX_MAX)
+        *why = "it is longer than 128 bytes";
+    else if (n == 1)
+        return 0; /* "/": the root */
+    else if (v[n - 1] == '/')
+        *why = "it must not end with \"/\"";
+    for (const char *p = v; !*why && *p;) { /* a segment after each "/" */
+        size_t k =
+            strspn(++p, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-._~");
+        if (p[k] && p[k] != '/')
+            *why = "only letters, digits, \"-._~\" and \"/\" between segments are allowed";
+        else if (k == 0)
+            *why = "it has an empty segment (\"//\")";
+        else if ((k == 1 && p[0] == '.') || (k == 2 && p[0] == '.' && p[1] == '.'))
+            *why = "it has a \".\" or \"..\" segment";
+        p += k;
+    }
+    if (*why) return -1;
+    memcpy(out, v, n + 1);
+    return 0;
 }
 
 static int parse_u64(const char *v, uint64_t lo, uint64_t hi, uint64_t *out)
@@ -109,6 +144,28 @@ static int set(config *c, const char *name, const char *v, char *err, size_t err
     } else if (!strcmp(name, "cors-origins")) {
         if (strlen(v) >= sizeof c->cors_origins) return bad(err, errlen, "--cors-origins", v);
         strcpy(c->cors_origins, v);
+    } else if (!strcmp(name, "base-path")) {
+        const char *why;
+        if (config_path_prefix(v, c->base_path, &why)) {
+            snprintf(err, errlen, "--base-path: invalid value \"%.200s\": %s", v, why);
+            return -1;
+        }
+        /* a request path under it has it removed: it cannot begin like a path of the
+         * daemon's own (the page's assets, the API, the operations routes) */
+        static const char *const own[] = {"v1",     "assets",  "healthz",
+                                          "readyz", "metrics", "openapi.json"};
+        for (size_t i = 0; i < sizeof own / sizeof *own; i++) {
+            size_t k = strlen(own[i]);
+            if (!strncmp(c->base_path + 1, own[i], k) &&
+                (c->base_path[1 + k] == 0 || c->base_path[1 + k] == '/')) {
+                snprintf(err, errlen,
+                         "--base-path: invalid value \"%.200s\": it begins like a path of the "
+                         "service's own (/%s)",
+                         v, own[i]);
+                c->base_path[0] = 0;
+                return -1;
+            }
+        }
     } else if (!strcmp(name, "spool")) {
         if (!*v || strlen(v) >= sizeof c->spool) return bad(err, errlen, "--spool", v);
         strcpy(c->spool, v);
@@ -196,7 +253,8 @@ static const char *names[] = {"listen",
                               "name",
                               "lease-seconds",
                               "intake-threads",
-                              "cors-origins"};
+                              "cors-origins",
+                              "base-path"};
 
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen)
 {

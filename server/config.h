@@ -28,6 +28,11 @@
  *   --max-jobs      CELLAR_MAX_JOBS     100000          finished jobs kept at most
  *   --log-level     CELLAR_LOG_LEVEL    info            debug, info, warn, error
  *   --cors-origins  CELLAR_CORS_ORIGINS ""              origins allowed by CORS ("*": any)
+ *   --base-path     CELLAR_BASE_PATH    ""              the path the service is mounted at
+ *                                                       behind a proxy ("/geometry"): the
+ *                                                       links it writes start with it, and a
+ *                                                       request path under it is served with
+ *                                                       it removed (config_path_prefix)
  *   --healthcheck   (flag only)                         GET /healthz of the daemon at --listen:
  *                                                       exit 0 on 200 (a container's check)
  *   --init          (flag only)                         make a store in an empty or foreign
@@ -39,6 +44,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* The longest path prefix (--base-path, X-Forwarded-Prefix) taken, in bytes. */
+#define CONFIG_PREFIX_MAX 128
+
 typedef struct config {
     char host[256];
     unsigned port;
@@ -46,6 +54,7 @@ typedef struct config {
     char spool[4096]; /* "": the system's temporary directory */
     char name[64];
     char cors_origins[1024]; /* --cors-origins: "" none, "*" any, or a comma-separated list */
+    char base_path[CONFIG_PREFIX_MAX + 1]; /* --base-path: "" (the root) or "/a/b" */
     double lease;
     int workers, job_threads, intake_threads;
     size_t queue;
@@ -67,6 +76,12 @@ typedef struct config {
 /* Fills *c from the environment and argv.  Returns 0; 1 after printing help (exit 0); -1 with
  * a message in err for a bad value or an unknown flag (exit 2). */
 int config_load(config *c, int argc, char **argv, char *err, size_t errlen);
+
+/* A path prefix (--base-path, or a request's X-Forwarded-Prefix) checked and copied to out:
+ * "/" followed by segments of letters, digits and "-._~" separated by single "/", no segment
+ * "." or "..", no "/" at the end, at most CONFIG_PREFIX_MAX bytes.  "/" alone is the root and
+ * gives "".  Returns 0, or -1 (out is then "") with what is wrong in why (static). */
+int config_path_prefix(const char *v, char out[CONFIG_PREFIX_MAX + 1], const char **why);
 
 extern const char config_usage[];
 

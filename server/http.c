@@ -22,6 +22,7 @@
 #include <openssl/evp.h>
 #include <zlib.h>
 #include <pthread.h>
+#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -126,8 +127,11 @@ typedef struct conn {
     struct MHD_Connection *mc;
     metrics_route route;
     char method[8];
-    char path[160]; /* for the log */
-    char id[65];    /* the job id or hash in the path */
+    char path[160]; /* for the log: as the request named it */
+    size_t off;     /* the length of --base-path at the start of path (then removed) */
+    char prefix[CONFIG_PREFIX_MAX + 1]; /* the links' prefix: X-Forwarded-Prefix, --base-path */
+    int linked;  /* a link with the prefix was written: Vary: X-Forwarded-Prefix */
+    char id[65]; /* the job id or hash in the path */
     double t0;
     char *body;
     size_t len, cap;
@@ -149,6 +153,29 @@ typedef struct conn {
     int close;        /* answer with Connection: close (the rest of the stream cannot be trusted) */
     uint64_t reserved; /* bytes of h->inflight this request's body holds */
 } conn;
+
+/* The path that routes: the request's, without --base-path when it begins with it. */
+static const char *route_path(const conn *c)
+{
+    return c->path + c->off;
+}
+
+/* A link back to this service as the client sees it, into out: c->prefix (X-Forwarded-Prefix,
+ * else --base-path, else "") then the printf of fmt (a path from "/").  Every URL the daemon
+ * writes (Location, Content-Location, job "result", problem "instance", OpenAPI "servers") is
+ * made here, and the answer then varies with X-Forwarded-Prefix (queue() says so). */
+static void link_to(conn *c, char *out, size_t n, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void link_to(conn *c, char *out, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    int k = snprintf(out, n, "%s", c->prefix);
+    c->linked = 1;
+    if (k < 0 || (size_t)k >= n) return;
+    va_start(ap, fmt);
+    vsnprintf(out + k, n - (size_t)k, fmt, ap);
+    va_end(ap);
+}
 
 /* Reserves n more bytes of the in-flight budget for c's body: 0, or -1 when over it. */
 static int body_reserve(conn *c, uint64_t n)
@@ -323,6 +350,8 @@ static enum MHD_Result queue(conn *c, unsigned status, const char *ctype, struct
     const char *cors = c->h->cfg->cors_origins;
     if (cors[0] && strcmp(cors, "*")) /* the answer depends on Origin: caches must know */
         MHD_add_response_header(r, MHD_HTTP_HEADER_VARY, "Origin");
+    if (c->linked) /* its links carry the client's prefix: a cache keeps one per prefix */
+        MHD_add_response_header(r, MHD_HTTP_HEADER_VARY, "X-Forwarded-Prefix");
     c->status = status;
     enum MHD_Result ok = MHD_queue_response(c->mc, status, r);
     MHD_destroy_response(r);
@@ -471,7 +500,9 @@ static json_t *problem_json(unsigned status, const char *detail, const char *ins
 static enum MHD_Result problem(conn *c, unsigned status, const char *detail, const char *retry,
                                const char *allow)
 {
-    json_t *o = problem_json(status, detail, c->path);
+    char instance[CONFIG_PREFIX_MAX + sizeof c->path];
+    link_to(c, instance, sizeof instance, "%s", route_path(c));
+    json_t *o = problem_json(status, detail, instance);
     char *s = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
     json_decref(o);
     if (!s) return MHD_NO;
@@ -498,9 +529,10 @@ static json_t *time_or_null(double t)
     return json_string(b);
 }
 
-static json_t *job_json(const job_info *ji)
+/* A job as JSON, its links made for c's client. */
+static json_t *job_json(conn *c, const job_info *ji)
 {
-    char url[100];
+    char url[CONFIG_PREFIX_MAX + 100];
     json_t *o = json_object();
     if (!o) return NULL;
     json_object_set_new(o, "id", json_string(ji->id));
@@ -517,11 +549,11 @@ static json_t *job_json(const job_info *ji)
     json_object_set_new(o, "attempts", json_integer(ji->attempts));
     json_object_set_new(o, "daemon", ji->owner[0] ? json_string(ji->owner) : json_null());
     if (ji->state == JOB_FAILED) {
-        snprintf(url, sizeof url, "/v1/jobs/%s", ji->id);
+        link_to(c, url, sizeof url, "/v1/jobs/%s", ji->id);
         json_object_set_new(o, "error", problem_json((unsigned)ji->error_status, ji->error, url));
     }
     if (ji->state == JOB_DONE) {
-        snprintf(url, sizeof url, "/v1/results/%s", ji->hash);
+        link_to(c, url, sizeof url, "/v1/results/%s", ji->hash);
         json_object_set_new(o, "result", json_string(url));
     }
     return o;
@@ -538,9 +570,9 @@ static void result_etag(const conn *c, const char *hash, char *etag, size_t n)
 static enum MHD_Result send_result(conn *c, const char *hash, struct MHD_Response *r,
                                    const char *ctype, const char *job_id, const char *cache)
 {
-    char etag[120], loc[100], applied[40];
+    char etag[120], loc[CONFIG_PREFIX_MAX + 100] = "", applied[40];
     result_etag(c, hash, etag, sizeof etag);
-    snprintf(loc, sizeof loc, "/v1/results/%s", hash);
+    if (c->route != ROUTE_RESULT) link_to(c, loc, sizeof loc, "/v1/results/%s", hash);
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_ETAG, etag},
                 {MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=31536000, immutable"},
@@ -909,14 +941,14 @@ static const char *retry_after(const job_info *ji, char *buf)
 
 static enum MHD_Result respond_accepted(conn *c, const job_info *ji)
 {
-    char loc[100], applied[40], retry[16];
-    snprintf(loc, sizeof loc, "/v1/jobs/%s", ji->id);
+    char loc[CONFIG_PREFIX_MAX + 100], applied[40], retry[16];
+    link_to(c, loc, sizeof loc, "/v1/jobs/%s", ji->id);
     snprintf(applied, sizeof applied, "wait=%g", c->wait_applied);
     hdr hs[] = {{MHD_HTTP_HEADER_LOCATION, loc},
                 {MHD_HTTP_HEADER_RETRY_AFTER, retry_after(ji, retry)},
                 {"X-Cellar-Job", ji->id},
                 {c->wait_applied > 0 ? MHD_HTTP_HEADER_PREFERENCE_APPLIED : NULL, applied}};
-    return respond_json(c, 202, job_json(ji), hs, sizeof hs / sizeof *hs);
+    return respond_json(c, 202, job_json(c, ji), hs, sizeof hs / sizeof *hs);
 }
 
 /* The answer to a POST about its submission c->job_id, once its wait is over. */
@@ -999,7 +1031,13 @@ static void page_gz_init(void)
 static enum MHD_Result route_page(conn *c)
 {
     size_t i = 0;
-    while (i < cellar_web_assets_n && strcmp(cellar_web_assets[i].path, c->path)) i++;
+    if (c->off && !route_path(c)[0]) { /* the base path without its "/": to the page */
+        char loc[CONFIG_PREFIX_MAX + 2];
+        link_to(c, loc, sizeof loc, "/");
+        hdr hs[] = {{MHD_HTTP_HEADER_LOCATION, loc}};
+        return respond(c, 301, NULL, NULL, 0, 1, hs, 1);
+    }
+    while (i < cellar_web_assets_n && strcmp(cellar_web_assets[i].path, route_path(c))) i++;
     if (i == cellar_web_assets_n) return problem(c, 404, "no such asset", NULL, NULL);
     const web_asset *a = &cellar_web_assets[i];
     const page_gz *g = NULL;
@@ -1062,7 +1100,7 @@ static enum MHD_Result route_job(conn *c, int want_result)
     int busy = ji.state == JOB_QUEUED || ji.state == JOB_RUNNING;
     if (!want_result) {
         hdr hs[] = {{busy ? MHD_HTTP_HEADER_RETRY_AFTER : NULL, retry_after(&ji, retry)}};
-        return respond_json(c, 200, job_json(&ji), hs, 1);
+        return respond_json(c, 200, job_json(c, &ji), hs, 1);
     }
     switch (ji.state) {
     case JOB_DONE:
@@ -1082,7 +1120,7 @@ static enum MHD_Result route_cancel(conn *c)
     job_info ji;
     snprintf(c->job_id, sizeof c->job_id, "%.32s", c->id);
     int rc = engine_cancel(c->h->e, c->id, &ji, err, sizeof err);
-    if (rc == ENG_OK) return respond_json(c, 200, job_json(&ji), NULL, 0);
+    if (rc == ENG_OK) return respond_json(c, 200, job_json(c, &ji), NULL, 0);
     if (rc == ENG_ENDED)
         return problem(c, 409,
                        ji.state == JOB_CANCELED ? "the job was canceled already"
@@ -1375,6 +1413,26 @@ static enum MHD_Result route_options(conn *c)
     return respond(c, 204, NULL, NULL, 0, 1, hs, sizeof hs / sizeof *hs);
 }
 
+/* The OpenAPI document, its "servers" URL the client's prefix ("/" without one). */
+static enum MHD_Result route_openapi(conn *c)
+{
+    static const char root[] = "\"servers\": [{\"url\": \"/\"";
+    char url[CONFIG_PREFIX_MAX + 2];
+    link_to(c, url, sizeof url, "%s", "");
+    const char *doc = (const char *)cellar_openapi;
+    const char *at = memmem(doc, cellar_openapi_len, root, sizeof root - 1);
+    if (!url[0] || !at) /* the root (or no such line: the document as it is) */
+        return respond(c, 200, "application/json", (char *)doc, cellar_openapi_len, 1, NULL, 0);
+    size_t head = (size_t)(at - doc) + sizeof root - 3; /* at its "/" */
+    size_t ul = strlen(url), len = cellar_openapi_len - 1 + ul;
+    char *b = malloc(len);
+    if (!b) return problem(c, 503, "out of memory", "5", NULL);
+    memcpy(b, doc, head);
+    memcpy(b + head, url, ul);
+    memcpy(b + head + ul, doc + head + 1, cellar_openapi_len - head - 1);
+    return respond(c, 200, "application/json", b, len, 0, NULL, 0);
+}
+
 static enum MHD_Result dispatch(conn *c)
 {
     const char *m = c->method;
@@ -1395,8 +1453,7 @@ static enum MHD_Result dispatch(conn *c)
         return route_metrics(c);
     case ROUTE_OPENAPI:
         if (!get) break;
-        return respond(c, 200, "application/json", (char *)cellar_openapi, cellar_openapi_len, 1,
-                       NULL, 0);
+        return route_openapi(c);
     case ROUTE_JOBS:
         if (strcmp(m, "POST")) return problem(c, 405, "use POST", NULL, "POST");
         return intake_push(c);
@@ -1431,7 +1488,9 @@ static enum MHD_Result refuse_mid_body(conn *c, unsigned status, const char *det
     c->status = status;
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(c->mc, MHD_CONNECTION_INFO_CONNECTION_FD);
-    json_t *o = problem_json(status, detail, c->path);
+    char instance[CONFIG_PREFIX_MAX + sizeof c->path];
+    link_to(c, instance, sizeof instance, "%s", route_path(c));
+    json_t *o = problem_json(status, detail, instance);
     char *body = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
     json_decref(o);
     if (ci && body) {
@@ -1468,9 +1527,30 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         c->t0 = engine_now();
         snprintf(c->method, sizeof c->method, "%s", method);
         snprintf(c->path, sizeof c->path, "%s", url);
-        c->route = classify(url, c->id);
+        /* --base-path: a path under it is served without it (a proxy that passes the path
+         * whole); one that is the base path itself goes to the page (route_page) */
+        const char *bp = h->cfg->base_path;
+        size_t bl = strlen(bp);
+        if (bl && !strncmp(url, bp, bl) && (url[bl] == '/' || !url[bl]) && bl < sizeof c->path)
+            c->off = bl;
+        c->route = c->off && !url[bl] ? ROUTE_INDEX : classify(url + c->off, c->id);
         c->gz = accepts_gzip(mc);
         cors_origin(c);
+        /* the links' prefix: the proxy's X-Forwarded-Prefix (any client may send one: it only
+         * changes the links of its own answer, which then vary with it), else --base-path */
+        const char *xfp = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, "X-Forwarded-Prefix");
+        if (xfp && *xfp) {
+            const char *why;
+            if (config_path_prefix(xfp, c->prefix, &why)) {
+                char msg[300];
+                snprintf(msg, sizeof msg, "X-Forwarded-Prefix: invalid value \"%.100s\": %s", xfp,
+                         why);
+                c->close = 1; /* a body that follows is not read */
+                return problem(c, 400, msg, NULL, NULL);
+            }
+        } else {
+            memcpy(c->prefix, bp, bl + 1);
+        }
         sock_ctx *sc = sock_of(mc);
         int bad_escape = sc && sc->bad_escape;
         if (sc) sc->bad_escape = 0;

@@ -871,7 +871,7 @@ def place(g, solids, variant):
 # ---- running and comparing ------------------------------------------------------------------
 
 def cellar(files, op):
-    opts = json.dumps({"fields": ["stats"]})
+    opts = json.dumps({"fields": ["stats", "membership", "result"]})
     try:
         r = subprocess.run([CEL, "solids"] + files + ["--op", op, "--options", opts],
                            capture_output=True, text=True)
@@ -1021,7 +1021,7 @@ def run_scene(tmp, name, solids, parent, pair, touch):
                                                      for k, x in want.items()))
             fh.write("input volumes: %r\nboundary area: %.17g\n" % ([float(x) for x in vols], areas))
             fh.write("\n".join(log) + "\n")
-            fh.write("cellar solids %s --op OP --options '{\"fields\":[\"stats\"]}'\n" %
+            fh.write("cellar solids %s --op OP --options '{\"fields\":[\"stats\",\"membership\",\"result\"]}'\n" %
                      " ".join(os.path.basename(f) for f in files))
 
 

@@ -95,7 +95,7 @@ def box(lo, hi):
 
 
 def cellar(files, op, precision=None):
-    opts = {"fields": ["stats"]}
+    opts = {"fields": ["stats", "membership", "result"]}
     if precision:
         opts["precision"] = precision
     r = subprocess.run([CEL, "solids"] + files + ["--op", op, "--options", json.dumps(opts)],
@@ -303,7 +303,7 @@ def main():
         for n in names:
             if n == "cow":
                 r = subprocess.run([CEL, "--quiet", "solids", os.path.join(REAL, "cow.off"),
-                                    "--op", "union", "--options", '{"fields":["stats"]}'],
+                                    "--op", "union", "--options", '{"fields":["stats","membership","result"]}'],
                                    capture_output=True, text=True)
                 w = json.loads(r.stdout)["stats"]["warnings"] if r.returncode == 0 else []
                 if any("passes through itself" in x for x in w):

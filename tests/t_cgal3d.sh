@@ -24,7 +24,7 @@ compare() {
     shift
     rm -rf "$T/off" && mkdir -p "$T/off"
     # shellcheck disable=SC2086
-    $GEN "$@" --json "$T/req.json" --off "$T/off" --options '{"fields":["stats"]}' 2>/dev/null ||
+    $GEN "$@" --json "$T/req.json" --off "$T/off" --options '{"fields":["stats","membership","result"]}' 2>/dev/null ||
         { fail "$name: gen3d"; return; }
     if ! "$CELLAR" run "$T/req.json" >"$T/ours.json" 2>"$T/err"; then
         fail "$name: cellar run ($(head -c 200 "$T/err"))"

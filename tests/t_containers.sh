@@ -8,9 +8,9 @@
 #      job resumes in a new container on the same volume: nothing lost);
 #   2. deploy/compose.yaml (PostgreSQL, three cellard, nginx with deploy/nginx.conf), run with
 #      podman-compose: 100 distinct jobs through nginx, each run exactly once and equal to
-#      `cellar run`; one cellard killed while it runs jobs (the others finish them once the
-#      lease runs out); the stack stopped and started again on its volumes (results and
-#      finished jobs still there).
+#      `cellar run`; a job through nginx's sub-path /cellar/, its links under it; one cellard
+#      killed while it runs jobs (the others finish them once the lease runs out); the stack
+#      stopped and started again on its volumes (results and finished jobs still there).
 # Prints the figures (build times, size, time to healthy, stack up time).  Under make check
 # (CELLAR_SANITIZED=1) only part 1's container checks run, on the image make test built.
 # A missing podman is a failure; skipped only when CELLAR_SKIP_CONTAINERS=1 asks for it.
@@ -245,6 +245,31 @@ echo "  (100 jobs through nginx: $total in the database, $once run exactly once,
 check "100 jobs through nginx: each run exactly once, equal to cellar run" sh -c \
     "[ $bad = 0 ] && [ $notdone = 0 ] && [ $same = 100 ] && [ '$once' = 100 ] && [ '$total' = 100 ]"
 check "  ... shared by the three daemons" sh -c "[ '$daemons' = 3 ]"
+
+# the service on a sub-path through nginx (deploy/nginx.conf's /cellar/, X-Forwarded-Prefix):
+# the page, and a job whose Location and result link are under /cellar/ and lead, through
+# nginx, to its result
+check "GET /cellar/ through nginx: the page" sh -c "curl -fs '$url/cellar/' | grep -q '<title>cellar'"
+check "  ... GET /cellar redirects to it (relative: the published port kept)" sh -c \
+    "[ \"\$(curl -s -o /dev/null -w '%{http_code} %{redirect_url}' '$url/cellar')\" = '301 $url/cellar/' ]"
+"$B/cellar" gen lines 1500 0.4 77 --options '{"fields":["V","EV","FV","FE"]}' >"$T/p.json"
+s=$(curl -s -o "$T/out" -D "$T/hdr" -w '%{http_code}' -H 'Content-Type: application/json' \
+    --data-binary @"$T/p.json" "$url/cellar/v1/jobs")
+loc=$(sed -n 's/^[Ll]ocation: *\([^[:space:]]*\).*/\1/p' "$T/hdr")
+check "a job posted to /cellar/v1/jobs through nginx: 202, its Location under /cellar/ ($loc)" \
+    sh -c "[ '$s' = 202 ] && case '$loc' in /cellar/v1/jobs/*) true ;; *) false ;; esac"
+res=""
+for k in $(seq 300); do
+    [ -n "$loc" ] || break
+    res=$(curl -fs "$url$loc" | sed -n 's/.*"result":"\([^"]*\)".*/\1/p')
+    [ -n "$res" ] && break
+    sleep 0.1
+done
+check "  ... its Location followed through nginx: done, its result link under /cellar/ ($res)" \
+    sh -c "case '$res' in /cellar/v1/results/*) true ;; *) false ;; esac"
+rm -f "$T/out"
+[ -n "$res" ] && curl -fs -o "$T/out" "$url$res"
+check "  ... the result link followed through nginx: the result of cellar run" same_as_cli "$T/p.json"
 
 # one cellard killed while it runs jobs: the others finish them once the lease runs out
 for k in 1 2 3 4; do

@@ -57,7 +57,7 @@ i=0
 for seed in 1 2 3 4; do
     for opt in '' '{"operators":true,"keep_dangling":true}' \
         '{"operators":true,"keep_dangling":true,"exterior_last":true,"precision":0.02}' \
-        '{"fields":["stats","holes"]}' '{"fields":[]}'; do
+        '{"fields":["stats","holes","V","FV"]}' '{"fields":[]}'; do
         i=$((i + 1))
         if [ -n "$opt" ]; then
             "$BIN" gen lines $((40 * seed)) 0.3 "$seed" --options "$opt" >"$T/gen/g$i.request.json"
@@ -87,7 +87,7 @@ for req in "{\"kind\":\"solids\",\"solids\":[$CUBE]}" '{"kind":"solids","solids"
     "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"options\":{\"operators\":true}}" \
     "{\"kind\":\"solids\",\"solids\":[{\"V\":$CUBE_V,\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,7,4,0]]}]}" \
     '{"kind":"solids","faces":{"V":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],[3,3,0],[3,1,0],[2,2,-1],[2,2,1],[2,5,1],[2,5,-1]],"FV":[[0,1,2,3],[8,9,10,11]],"holes":{"0":[[4,5,6,7]]}}}' \
-    "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"exterior\",\"stats\"],\"precision\":0.001}}" \
+    "{\"kind\":\"solids\",\"solids\":[$CUBE],\"options\":{\"fields\":[\"CF\",\"exterior\",\"FE\",\"EV\",\"V\",\"stats\"],\"precision\":0.001}}" \
     "{\"kind\":\"solids\",\"solids\":[$CUBE,{\"V\":$HALF_V,\"FV\":$CUBE_FV}],\"op\":[\"-\",0,1]}"; do
     i=$((i + 1))
     printf '%s\n' "$req" >"$T/solids/s$i.request.json"
@@ -103,7 +103,7 @@ tally "solids result (openapi.json)"
 check "3D operators d1, d2, d3 with options.operators" grep -q '"d3":{"shape":\[18,3\]' "$T/solids/s3.result.json"
 check "a flipped face gives a warning" grep -q '"warnings":\["solids\[0\]: orientation inconsistent' "$T/solids/s4.result.json"
 check "op: membership and result" grep -q '"membership":{"format":"csr".*"result":{"cells":\[' "$T/solids/s7.result.json"
-check "fields CF, exterior, stats only" grep -q '^{"dim":3,"CF":\[\[[-0-9,]*\]\],"exterior":\[[-0-9,]*\],"stats":{' "$T/solids/s6.result.json"
+check "fields V, EV, FE, CF, exterior, stats only" python3 -c 'import json, sys; sys.exit(list(json.load(open(sys.argv[1]))) != ["dim", "V", "EV", "FE", "CF", "exterior", "stats"])' "$T/solids/s6.result.json"
 
 # --- 2D Booleans: polygons requests and their results (core/bool2.c)
 SQ1='[[[0,0],[2,0],[2,2],[0,2]]]'
@@ -114,7 +114,7 @@ i=0
 for req in "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"union\"}" \
     "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ2],\"op\":\"difference\",\"options\":{\"operators\":true,\"exterior_last\":true}}" \
     "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]]}" \
-    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[]}}" \
+    "{\"kind\":\"polygons\",\"polygons\":[$SQ1,$SQ1],\"op\":\"xor\",\"options\":{\"fields\":[\"V\",\"EV\",\"FV\",\"result\"]}}" \
     "{\"kind\":\"polygons\",\"polygons\":[\"POLYGON Z ((0 0 1, 2 0 1, 2 2 1, 0 0 1))\",\"SRID=4326;MULTIPOLYGON (((1 0, 3 0, 3 1, 1 0)), EMPTY)\",{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[1,0],[1,1],[0,0]]]}],\"op\":\"union\"}" \
     "{\"kind\":\"polygons\",\"polygons\":{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":7},\"geometry\":{\"type\":\"MultiPolygon\",\"coordinates\":[[[[0,0],[2,0],[2,2],[0,0]]]]}},{\"type\":\"Feature\",\"geometry\":null}]},\"op\":\"intersection\"}" \
     "{\"kind\":\"polygons\",\"polygons\":[$RINGHOLE,$SQ1,$SQ2],\"op\":[\"-\",0,[\"+\",1,2]],\"options\":{\"fields\":[\"result\"]}}" \

@@ -592,14 +592,17 @@ TEST(fields_subset)
 {
     static const struct {
         const char *opts;
-        const char *keys[4];
+        const char *keys[6];
     } cases[] = {
         {"{\"fields\":[\"V\",\"stats\"]}", {"dim", "V", "stats"}},
         {"{\"fields\":[]}", {"dim"}},
         {"{\"fields\":[\"operators\"]}", {"dim", "operators"}},
-        {"{\"fields\":[\"FE\"],\"operators\":true}", {"dim", "FE", "operators"}},
-        {"{\"fields\":[\"holes\",\"exterior\",\"holes\"]}", {"dim", "holes", "exterior"}},
-        {"{\"fields\":[\"EV\",\"FV\"],\"exterior_last\":true}", {"dim", "EV", "FV"}},
+        {"{\"fields\":[\"FE\",\"EV\",\"V\"],\"operators\":true}",
+         {"dim", "V", "EV", "FE", "operators"}},
+        {"{\"fields\":[\"holes\",\"exterior\",\"holes\",\"V\",\"FV\"]}",
+         {"dim", "V", "FV", "holes", "exterior"}},
+        {"{\"fields\":[\"holes\",\"V\",\"FE\",\"EV\"]}", {"dim", "V", "EV", "FE", "holes"}},
+        {"{\"fields\":[\"V\",\"EV\",\"FV\"],\"exterior_last\":true}", {"dim", "V", "EV", "FV"}},
     };
     char body[512];
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -608,7 +611,7 @@ TEST(fields_subset)
                  cases[i].opts);
         json_t *r = run_ok(body);
         if (!r) continue;
-        while (n < 4 && cases[i].keys[n]) {
+        while (n < 6 && cases[i].keys[n]) {
             CHECK(json_object_get(r, cases[i].keys[n]), "%s: no %s", cases[i].opts,
                   cases[i].keys[n]);
             n++;
@@ -618,7 +621,7 @@ TEST(fields_subset)
         json_decref(r);
     }
     /* exterior_last without FE still adds the exterior row to FV */
-    json_t *r = run_ok(SQUARE_REQ("{\"fields\":[\"FV\"],\"exterior_last\":true}"));
+    json_t *r = run_ok(SQUARE_REQ("{\"fields\":[\"FV\",\"V\"],\"exterior_last\":true}"));
     CHECK(r && json_array_size(json_object_get(r, "FV")) == 2, "FV rows with exterior_last");
     json_decref(r);
 }
@@ -1218,4 +1221,327 @@ TEST(progress_every_kind)
         free(body);
     }
     CHECK(api_stage_name("nonsense", 0) == NULL, "stages of an unknown kind");
+}
+
+/* ---- fields never send a key that refers to one left out (issue 28) ----------------------- */
+
+/* The largest index in a (nested arrays of integers; a signed index ±(i+1) counts as i), or
+ * -1 when there is none. */
+static long long max_index(const json_t *a, int is_signed)
+{
+    long long m = -1;
+    if (json_is_integer(a)) {
+        long long v = json_integer_value(a);
+        return is_signed ? (v < 0 ? -v : v) - 1 : v;
+    }
+    size_t i;
+    const json_t *x;
+    if (json_is_array(a)) json_array_foreach(a, i, x)
+        {
+            long long k = max_index(x, is_signed);
+            if (k > m) m = k;
+        }
+    if (json_is_object(a)) {
+        const char *key;
+        json_object_foreach((json_t *)a, key, x)
+        {
+            long long k = max_index(x, is_signed);
+            if (k > m) m = k;
+        }
+    }
+    return m;
+}
+
+/* The rows of r's key, or -1 when r has no such key. */
+static long long rows(const json_t *r, const char *key)
+{
+    const json_t *a = json_object_get(r, key);
+    return a ? (long long)json_array_size(a) : -1;
+}
+
+/* Why result r (of dimension dim) has a key that refers to one it lacks or indexes past it
+ * ("" when nothing does): every index points into a key that is there. */
+static void dangling(const json_t *r, int dim, char *why, size_t n)
+{
+    long long nv = rows(r, "V"), ne = rows(r, "EV");
+    long long nf = rows(r, "FV") >= 0 ? rows(r, "FV") : rows(r, "FE");
+    long long nc = rows(r, "CF") >= 0 ? rows(r, "CF") : rows(r, "CV");
+    const json_t *res = json_object_get(r, "result"), *h = json_object_get(r, "holes");
+    struct {
+        const json_t *a;
+        int is_signed;
+        long long bound;
+        const char *what;
+    } refs[] = {{json_object_get(r, "EV"), 0, nv, "EV into V"},
+                {json_object_get(r, "FV"), 0, nv, "FV into V"},
+                {json_object_get(r, "FE"), 1, ne, "FE into EV"},
+                {h, 0, nv, "holes into V"},
+                {json_object_get(r, "exterior"), dim == 3, dim == 3 ? nf : nv,
+                 dim == 3 ? "exterior into the faces" : "exterior into V"},
+                {json_object_get(r, "CF"), 1, nf, "CF into the faces"},
+                {json_object_get(r, "CV"), 0, nv, "CV into V"},
+                {json_object_get(res, "FV"), 0, json_object_get(res, "V") ? rows(res, "V") : nv,
+                 "result.FV into a V"},
+                {json_object_get(res, "holes"), 0, json_object_get(res, "V") ? rows(res, "V") : nv,
+                 "result.holes into a V"},
+                {json_object_get(res, "FE"), 1, ne, "result.FE into EV"},
+                {json_object_get(res, "cells"), 0, dim == 3 ? nc : nf,
+                 dim == 3 ? "result.cells into the cells" : "result.cells into the faces"},
+                {json_object_get(res, "faces"), 1, nf, "result.faces into the faces"}};
+    why[0] = 0;
+    for (size_t i = 0; i < sizeof refs / sizeof *refs; i++) {
+        if (!refs[i].a) continue;
+        long long m = max_index(refs[i].a, refs[i].is_signed);
+        if (refs[i].bound < 0 || m >= refs[i].bound) {
+            snprintf(why, n, "%s: index %lld, %lld rows there", refs[i].what, m, refs[i].bound);
+            return;
+        }
+    }
+    const char *key;
+    const json_t *x;
+    if (h) json_object_foreach((json_t *)h, key, x)
+        {
+            if (nf < 0 || atoll(key) >= nf) {
+                snprintf(why, n, "holes.%s: a face not sent (%lld rows)", key, nf);
+                return;
+            }
+        }
+}
+
+/* The test's own statement of the rule, apart from the code's: bit k of names refers to the
+ * keys of any[k] (bits, one of which must be named; 0: refers to none). */
+typedef struct fields_rule {
+    const char *key;
+    const char *any[2];
+} fields_rule;
+
+static int named(unsigned set, const char *const *names, size_t nn, const char *key)
+{
+    for (size_t k = 0; k < nn; k++)
+        if ((set >> k & 1) && !strcmp(names[k], key)) return 1;
+    return 0;
+}
+
+/* Whether `set` of names breaks a rule with key `key` (any key when NULL). */
+static int breaks(unsigned set, const char *const *names, size_t nn, const fields_rule *rules,
+                  size_t nr, const char *key)
+{
+    for (size_t i = 0; i < nr; i++) {
+        const fields_rule *r = &rules[i];
+        if (key && strcmp(key, r->key)) continue;
+        if (named(set, names, nn, r->key) && !named(set, names, nn, r->any[0]) &&
+            !(r->any[1] && named(set, names, nn, r->any[1])))
+            return 1;
+    }
+    return 0;
+}
+
+/* Every subset of the names as a request's fields (body: the request up to its options,
+ * without the closing brace): a subset that names a key without one it refers to is refused
+ * 422 naming such a key; any other gives exactly its keys (and "dim"), none of which refers to
+ * one left out.  Returns the number of subsets refused. */
+static size_t every_subset(const char *body, int dim, const char *const *names, size_t nn,
+                           const fields_rule *rules, size_t nr, const char *label)
+{
+    size_t refused = 0, failed = 0;
+    for (unsigned set = 0; set < 1u << nn && failed < 5; set++) {
+        char req[8192], fl[256] = "[";
+        size_t w = 1;
+        for (size_t k = 0; k < nn; k++)
+            if (set >> k & 1)
+                w +=
+                    (size_t)snprintf(fl + w, sizeof fl - w, "%s\"%s\"", w > 1 ? "," : "", names[k]);
+        snprintf(fl + w, sizeof fl - w, "]");
+        snprintf(req, sizeof req, "%s,\"options\":{\"fields\":%s}}", body, fl);
+        char *out = NULL;
+        size_t outlen = 0;
+        api_error err = {0};
+        int rc = api_run_json(req, strlen(req), 1, &out, &outlen, &err);
+        int broken = breaks(set, names, nn, rules, nr, NULL);
+        if (broken) {
+            refused++;
+            char key[32] = "";
+            if (rc == API_EINVALID) sscanf(err.msg, "options.fields: \"%31[^\"]\" refers to", key);
+            int ok = rc == API_EINVALID && key[0] && breaks(set, names, nn, rules, nr, key) &&
+                     (strstr(err.msg, "which is not named") || strstr(err.msg, "neither of which"));
+            if (!ok) failed++;
+            CHECK(ok, "%s fields %s: %d \"%s\", want 422 naming a key that refers to one left out",
+                  label, fl, rc, err.msg);
+            free(out);
+            continue;
+        }
+        json_t *r = rc == API_OK ? json_loadb(out, outlen, 0, NULL) : NULL;
+        free(out);
+        if (!r) {
+            failed++;
+            CHECK(0, "%s fields %s: %d %s", label, fl, rc, err.msg);
+            continue;
+        }
+        size_t want = 1;
+        for (size_t k = 0; k < nn; k++)
+            if (set >> k & 1) {
+                want++;
+                if (!json_object_get(r, names[k])) {
+                    failed++;
+                    CHECK(0, "%s fields %s: no \"%s\"", label, fl, names[k]);
+                }
+            }
+        char why[200];
+        dangling(r, dim, why, sizeof why);
+        if (json_object_size(r) != want || why[0]) failed++;
+        CHECK(json_object_size(r) == want, "%s fields %s: %zu keys, want %zu", label, fl,
+              json_object_size(r), want);
+        CHECK(!why[0], "%s fields %s: %s", label, fl, why);
+        json_decref(r);
+    }
+    return refused;
+}
+
+static const fields_rule rules2[] = {{"EV", {"V"}},           {"FV", {"V"}},
+                                     {"FE", {"EV"}},          {"holes", {"V"}},
+                                     {"holes", {"FV", "FE"}}, {"exterior", {"V"}}};
+static const fields_rule rules3[] = {
+    {"EV", {"V"}},           {"FV", {"V"}},        {"FE", {"EV"}}, {"holes", {"V"}},
+    {"holes", {"FV", "FE"}}, {"CF", {"FV", "FE"}}, {"CV", {"V"}},  {"exterior", {"FV", "FE"}}};
+
+/* Every kind, every subset of its fields: lines, svg and polygons (2D, with holes), solids
+ * (with an op: membership and result). */
+TEST(fields_never_refer_to_left_out_keys)
+{
+    static const char *const n2[] = {"V",        "EV",    "FV",        "FE",         "holes",
+                                     "exterior", "stats", "operators", "membership", "result"};
+    static const char *const n3[] = {"V",     "EV",        "FV",         "FE",
+                                     "holes", "CF",        "CV",         "exterior",
+                                     "stats", "operators", "membership", "result"};
+    /* a square with a square hole (a face with a hole) */
+    const char *lines = "{\"kind\":\"lines\",\"lines\":[[[0,0],[4,0]],[[4,0],[4,4]],[[4,4],[0,4]],"
+                        "[[0,4],[0,0]],[[1,1],[2,1]],[[2,1],[2,2]],[[2,2],[1,2]],[[1,2],[1,1]]]";
+    const char *svg =
+        "{\"kind\":\"svg\",\"svg\":\"<svg xmlns='http://www.w3.org/2000/svg'>"
+        "<rect width='4' height='4'/><rect x='1' y='1' width='1' height='1'/></svg>\"";
+    /* a square with a hole, minus a square across its corner: a result polygon with a hole */
+    const char *poly = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[10,0],[10,10],[0,10]],"
+                       "[[4,4],[6,4],[6,6],[4,6]]],[[[8,8],[12,8],[12,12],[8,12]]]],"
+                       "\"op\":\"difference\"";
+    /* a box with a box through its top: result faces with holes */
+    const char *solids =
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[0,0,1],[4,0,1],"
+        "[4,4,1],[0,4,1]],\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]},"
+        "{\"V\":[[1,1,1],[3,1,1],[3,3,1],[1,3,1],[1,1,2],[3,1,2],[3,3,2],[1,3,2]],"
+        "\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]}],\"op\":\"union\"";
+    size_t r;
+    r = every_subset(lines, 2, n2, 8, rules2, 6, "lines");
+    CHECK(r > 0 && r < 256, "lines: %zu of 256 subsets refused", r);
+    r = every_subset(svg, 2, n2, 8, rules2, 6, "svg");
+    CHECK(r > 0 && r < 256, "svg: %zu of 256 subsets refused", r);
+    r = every_subset(poly, 2, n2, 10, rules2, 6, "polygons");
+    CHECK(r > 0 && r < 1024, "polygons: %zu of 1024 subsets refused", r);
+    r = every_subset(solids, 3, n3, 12, rules3, 8, "solids");
+    CHECK(r > 0 && r < 4096, "solids: %zu of 4096 subsets refused", r);
+}
+
+/* The cases a user meets, spelled out: ["stats"] is only stats (no membership, no result);
+ * ["result"] alone is the result with a V of its own that its cycles index (2D and 3D), the
+ * same points as the complex's; a key without the one it refers to is a 422 naming both. */
+TEST(fields_result_alone_and_stats_alone)
+{
+    const char *poly = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[10,0],[10,10],[0,10]],"
+                       "[[4,4],[6,4],[6,6],[4,6]]],[[[8,8],[12,8],[12,12],[8,12]]]],"
+                       "\"op\":\"difference\"";
+    const char *solids =
+        "{\"kind\":\"solids\",\"solids\":[{\"V\":[[0,0,0],[2,0,0],[2,2,0],[0,2,0],[0,0,2],[2,0,2],"
+        "[2,2,2],[0,2,2]],\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]},"
+        "{\"V\":[[1,1,1],[3,1,1],[3,3,1],[1,3,1],[1,1,3],[3,1,3],[3,3,3],[1,3,3]],"
+        "\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]}],\"op\":"
+        "\"difference\"";
+    const char *bodies[] = {poly, solids};
+    for (int k = 0; k < 2; k++) {
+        char req[4096];
+        snprintf(req, sizeof req, "%s,\"options\":{\"fields\":[\"stats\"]}}", bodies[k]);
+        json_t *r = run_ok(req);
+        CHECK(r && json_object_size(r) == 2 && json_object_get(r, "stats"),
+              "%s [\"stats\"]: only dim and stats", k ? "solids" : "polygons");
+        json_decref(r);
+        /* the result alone, against the whole result: the same points, face by face */
+        snprintf(req, sizeof req, "%s,\"options\":{\"fields\":[\"result\"]}}", bodies[k]);
+        json_t *alone = run_ok(req);
+        snprintf(req, sizeof req, "%s}", bodies[k]);
+        json_t *all = run_ok(req);
+        REQUIRE(alone && all, "no results");
+        const json_t *ra = json_object_get(alone, "result"), *rw = json_object_get(all, "result");
+        const json_t *va = json_object_get(ra, "V"), *vw = json_object_get(all, "V");
+        CHECK(json_object_size(alone) == 2 && json_is_array(va) && json_array_size(va) > 0 &&
+                  json_array_size(va) < json_array_size(vw) && !json_object_get(ra, "cells") &&
+                  !json_object_get(ra, "faces") && !json_object_get(ra, "FE"),
+              "%s [\"result\"]: {dim, result: {V, FV, holes, %s}}", k ? "solids" : "polygons",
+              k ? "volume" : "area");
+        for (int part = 0; part < 2; part++) { /* FV, then holes */
+            const char *key = part ? "holes" : "FV";
+            char *a = json_dumps(json_object_get(ra, key), JSON_COMPACT | JSON_SORT_KEYS);
+            char *w = json_dumps(json_object_get(rw, key), JSON_COMPACT | JSON_SORT_KEYS);
+            /* map each index to its point: the same text when the points agree */
+            json_t *pa = json_loads(a ? a : "null", JSON_DECODE_ANY, NULL);
+            json_t *pw = json_loads(w ? w : "null", JSON_DECODE_ANY, NULL);
+            size_t same = 0, total = 0;
+            const json_t *cyc_a, *cyc_w;
+            json_t *ea, *ew;
+            const char *hk;
+            json_t *la = part ? json_array() : json_incref(pa),
+                   *lw = part ? json_array() : json_incref(pw);
+            if (part) {
+                json_object_foreach(pa, hk, ea) json_array_extend(la, ea);
+                json_object_foreach(pw, hk, ew) json_array_extend(lw, ew);
+            }
+            size_t i;
+            json_array_foreach(la, i, cyc_a)
+            {
+                cyc_w = json_array_get(lw, i);
+                for (size_t j = 0; j < json_array_size(cyc_a); j++) {
+                    total++;
+                    json_t *p =
+                        json_array_get(va, (size_t)json_integer_value(json_array_get(cyc_a, j)));
+                    json_t *q =
+                        json_array_get(vw, (size_t)json_integer_value(json_array_get(cyc_w, j)));
+                    same += p && q && json_equal(p, q);
+                }
+            }
+            CHECK((total > 0 || part) && same == total &&
+                      json_array_size(la) == json_array_size(lw),
+                  "%s [\"result\"]: %s: %zu of %zu points as in the whole result",
+                  k ? "solids" : "polygons", key, same, total);
+            json_decref(la);
+            json_decref(lw);
+            json_decref(pa);
+            json_decref(pw);
+            free(a);
+            free(w);
+        }
+        json_decref(alone);
+        json_decref(all);
+    }
+    /* the messages */
+    static const struct {
+        const char *fields, *msg;
+    } bad[] = {{"[\"FV\"]", "options.fields: \"FV\" refers to \"V\", which is not named"},
+               {"[\"V\",\"FE\"]", "options.fields: \"FE\" refers to \"EV\", which is not named"},
+               {"[\"V\",\"CF\"]",
+                "options.fields: \"CF\" refers to the faces, \"FV\" or \"FE\", neither of which "
+                "is named"}};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        char req[4096], *out = NULL;
+        size_t outlen;
+        api_error err = {0};
+        snprintf(req, sizeof req, "%s,\"options\":{\"fields\":%s}}", solids, bad[i].fields);
+        int rc = api_run_json(req, strlen(req), 1, &out, &outlen, &err);
+        CHECK(rc == 422 && !strncmp(err.msg, bad[i].msg, strlen(bad[i].msg)),
+              "fields %s: %d \"%s\"", bad[i].fields, rc, err.msg);
+        free(out);
+        /* the daemon's intake says the same, before any geometry */
+        char *canon = NULL;
+        memset(&err, 0, sizeof err);
+        rc = api_check_json(req, strlen(req), &canon, NULL, &err);
+        CHECK(rc == 422 && !strncmp(err.msg, bad[i].msg, strlen(bad[i].msg)) && !canon,
+              "api_check_json fields %s: %d \"%s\"", bad[i].fields, rc, err.msg);
+        free(canon);
+    }
 }

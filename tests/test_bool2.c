@@ -1028,7 +1028,7 @@ TEST(bool2_api_result)
 {
     const char *body = "{\"kind\":\"polygons\",\"polygons\":[[[[0,0],[2,0],[2,2],[0,2]]],"
                        "[[[1,1],[3,1],[3,3],[1,3]]]],\"op\":[\"^\",0,1],"
-                       "\"options\":{\"fields\":[\"V\",\"FV\"]}}";
+                       "\"options\":{\"fields\":[\"V\",\"FV\",\"membership\",\"result\"]}}";
     char *out = NULL;
     size_t outlen;
     api_error err = {0};
@@ -1048,7 +1048,8 @@ TEST(bool2_api_result)
     }
     CHECK(json_array_size(json_object_get(result, "cells")) == 2, "xor: 2 cells");
     CHECK(json_array_size(json_object_get(result, "FV")) == 2, "xor: 2 polygons");
-    CHECK(json_array_size(json_object_get(result, "FE")) == 2, "xor: 2 FE rows");
+    CHECK(!json_object_get(result, "FE"), "xor: no FE without EV named");
+    CHECK(!json_object_get(result, "V"), "xor: no V of its own with V named");
     CHECK(json_object_size(json_object_get(result, "holes")) == 0, "xor: no holes");
     CHECK(json_number_value(json_object_get(result, "area")) == 6, "xor: area 6");
     CHECK(!json_object_get(res, "EV"), "fields: no EV");

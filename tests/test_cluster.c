@@ -9,6 +9,8 @@
  *     out, and not before;
  *   - PostgreSQL stopped and started again under load: the daemons answer 503 meanwhile,
  *     recover by themselves, and every job they accepted ends done;
+ *   - behind Debian's nginx with deploy/nginx.conf, the jobs spread over the daemons, and the
+ *     service also works on the sub-path /cellar/ (its links under it);
  * and one SQLite file is refused to a second daemon.  CELLAR_SKIP_PG=1 skips the PostgreSQL
  * tests (reported as skipped). */
 #include <pthread.h>
@@ -627,6 +629,73 @@ TEST(cluster_behind_nginx)
           "a gzip answer through nginx (%s, %zu bytes) does not decode to the result", enc, zl);
     printf("  (a %zu-byte result came through nginx as %zu bytes of gzip)\n", ul, zl);
     free(un);
+    /* the service on a sub-path, /cellar/ (X-Forwarded-Prefix): its page, and a job posted
+     * there whose links (Location, "result", Content-Location) are under /cellar/ and lead,
+     * through nginx, to its result */
+    http_get(&x, "/cellar/", &r);
+    CHECK(r.status == 200 && r.body.p && strstr(r.body.p, "<title>cellar"),
+          "GET /cellar/ through nginx: %ld %.100s", r.status, r.body.p ? r.body.p : "");
+    hresp_free(&r);
+    http_get(&x, "/cellar", &r);
+    CHECK(r.status == 301 && has_header(&r, "Location", "/cellar/"),
+          "GET /cellar through nginx: %ld, not a redirect to /cellar/", r.status);
+    hresp_free(&r);
+    {
+        size_t blen, elen2;
+        const char *big = medium(20, &blen); /* tens of ms: a 202 */
+        const char *bexp = big ? expect(big, blen, &elen2) : NULL;
+        hreq pq = {.path = "/cellar/v1/jobs",
+                   .body = big,
+                   .len = blen,
+                   .has_body = 1,
+                   .h = {"Content-Type: application/json"}};
+        char loc[256] = "", result[256] = "", want[256];
+        jobv j = {0};
+        http_do(&x, &pq, &r);
+        hget(&r, "Location", loc, sizeof loc);
+        int accepted = r.status == 202 && job_parse(&r, &j) == 0;
+        snprintf(want, sizeof want, "/cellar/v1/jobs/%.32s", j.id);
+        CHECK(accepted && !strcmp(loc, want), "POST /cellar/v1/jobs: %ld, Location \"%s\"",
+              r.status, loc);
+        hresp_free(&r);
+        /* its Location followed through nginx until the job is done */
+        double deadline = now_s() + 60 * slowdown();
+        while (accepted && !result[0] && now_s() < deadline) {
+            http_get(&x, loc, &r);
+            json_t *o = jbody(&r);
+            if (r.status == 200 && !strcmp(jstr(o, "state"), "done"))
+                snprintf(result, sizeof result, "%s", jstr(o, "result"));
+            int ended = r.status != 200 ||
+                        (strcmp(jstr(o, "state"), "queued") && strcmp(jstr(o, "state"), "running"));
+            json_decref(o);
+            hresp_free(&r);
+            if (ended && !result[0]) break;
+            if (!result[0]) sleep_s(0.05);
+        }
+        snprintf(want, sizeof want, "/cellar/v1/results/%.64s", j.hash);
+        CHECK(!strcmp(result, want), "the job's result link \"%s\", want \"%s\"", result, want);
+        http_get(&x, result[0] ? result : want, &r);
+        CHECK(r.status == 200 && bexp && same_result(r.body.p, r.body.n, bexp, elen2) == 1,
+              "GET %s through nginx: %ld, not the result", want, r.status);
+        hresp_free(&r);
+        char jr[128];
+        snprintf(jr, sizeof jr, "%s/result", loc);
+        http_get(&x, jr, &r);
+        CHECK(r.status == 200 && has_header(&r, "Content-Location", want),
+              "GET %s through nginx: %ld, Content-Location not %s", jr, r.status, want);
+        hresp_free(&r);
+        /* at "/" a client's own X-Forwarded-Prefix does not reach the daemons */
+        pq.path = "/v1/jobs";
+        pq.h[1] = "X-Forwarded-Prefix: /elsewhere";
+        pq.h[2] = "Prefer: wait=30";
+        http_do(&x, &pq, &r);
+        snprintf(want, sizeof want, "/v1/results/%.64s", j.hash);
+        CHECK(r.status == 200 && has_header(&r, "Content-Location", want),
+              "POST /v1/jobs with a client's X-Forwarded-Prefix through nginx: %ld, "
+              "Content-Location not %s",
+              r.status, want);
+        hresp_free(&r);
+    }
     /* one daemon stops: nginx goes on with the other */
     srv_term(&d[0]);
     int ok = 0;

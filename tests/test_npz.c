@@ -395,7 +395,8 @@ static const char *const requests[] = {
     "<rect width='10' height='6'/><circle cx='5' cy='3' r='2'/><path d='M4 0V6M4 3H10'/></svg>\","
     "\"options\":{\"y_up\":true}}",
     TETRAS ",\"op\":\"intersection\",\"options\":{\"operators\":true}}",
-    TETRAS ",\"op\":\"union\",\"options\":{\"fields\":[\"stats\",\"FV\"]}}",
+    TETRAS ",\"op\":\"union\",\"options\":{\"fields\":[\"stats\",\"FV\",\"V\",\"result\"]}}",
+    TETRAS ",\"op\":\"union\",\"options\":{\"fields\":[\"result\"]}}",
     /* a box with a square hole through its top face's plane: a face with a hole */
     "{\"kind\":\"solids\",\"solids\":[{\"V\":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[0,0,1],[4,0,1],"
     "[4,4,1],[0,4,1]],\"FV\":[[0,3,2,1],[4,5,6,7],[0,1,5,4],[1,2,6,5],[2,3,7,6],[3,0,4,7]]},"

@@ -1216,7 +1216,7 @@ TEST(render_missing_fields_of_real_results)
         const char *fields;
         const char *key;
     } cases[] = {{"[\"V\",\"EV\"]", "FV:"},
-                 {"[\"FV\",\"EV\"]", "V:"},
+                 {"[\"operators\"]", "V:"},
                  {"[\"stats\"]", "V:"},
                  {"[\"V\",\"EV\",\"FV\"]", "holes:"}};
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {

@@ -1677,6 +1677,264 @@ SERVER_TEST(health_and_docs, "--workers 1 --job-threads 1")
     srv_term(d);
 }
 
+/* ---- behind a proxy on a sub-path ---------------------------------------------------------- */
+
+/* A request to d with an X-Forwarded-Prefix (NULL: none) and, for a POST, a body.  Requests to
+ * paths under --base-path are sent unrecorded: tests/openapi_check.py reads the recorded
+ * exchanges against the spec's paths, which are relative to its server URL. */
+static void proxied(const srv *d, const char *method, const char *path, const char *body,
+                    size_t len, const char *xfp, const char *prefer, hresp *r)
+{
+    char h1[300], h2[128];
+    hreq q = {.method = method, .path = path, .body = body, .len = len, .has_body = body != NULL};
+    int k = 0;
+    if (body) q.h[k++] = "Content-Type: application/json";
+    if (xfp) {
+        snprintf(h1, sizeof h1, "X-Forwarded-Prefix: %s", xfp);
+        q.h[k++] = h1;
+    }
+    if (prefer) {
+        snprintf(h2, sizeof h2, "Prefer: %s", prefer);
+        q.h[k++] = h2;
+    }
+    srv *nd = malloc(sizeof *nd);
+    if (!nd) {
+        memset(r, 0, sizeof *r);
+        return;
+    }
+    *nd = *d;
+    if (strncmp(path, "/v1/", 4) && strcmp(path, "/openapi.json")) nd->dir[0] = 0;
+    http_do(nd, &q, r);
+    free(nd);
+}
+
+/* Whether one of r's Vary headers names `name`. */
+static int varies_with(const hresp *r, const char *name)
+{
+    for (const char *p = r->hdr.p; p && *p;) {
+        const char *e = strchr(p, '\n');
+        size_t k = e ? (size_t)(e - p) : strlen(p);
+        if (k > 5 && !strncasecmp(p, "Vary:", 5)) {
+            char line[512];
+            snprintf(line, sizeof line, "%.*s", (int)k, p);
+            if (strcasestr(line, name)) return 1;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    return 0;
+}
+
+/* --base-path /geometry: the Location of a 202, the job's "result", a result's Location and
+ * Content-Location, a problem's "instance" and the OpenAPI servers URL start with it; a path
+ * under it is served as the same path without it (a proxy that passes the path whole), as is
+ * the path without it (a proxy that strips it); /geometry redirects to the page at /geometry/;
+ * an X-Forwarded-Prefix overrides it. */
+SERVER_TEST(links_under_base_path, "--workers 1 --job-threads 1 --base-path /geometry")
+{
+    size_t len;
+    const char *body = medium(20, &len); /* tens of ms: a 202 */
+    REQUIRE(body, "no request");
+    hresp r;
+    char v[256], want[256], path[256];
+    jobv j, done;
+    http_post(d, body, len, NULL, &r);
+    REQUIRE(r.status == 202 && job_parse(&r, &j) == 0, "POST: %ld %.300s", r.status, r.body.p);
+    vq_add(d, "job", &r);
+    snprintf(want, sizeof want, "/geometry/v1/jobs/%.32s", j.id);
+    CHECK(hget(&r, "Location", v, sizeof v) && !strcmp(v, want), "202 Location %s, want %s", v,
+          want);
+    CHECK(varies_with(&r, "X-Forwarded-Prefix"), "202 without Vary: X-Forwarded-Prefix");
+    hresp_free(&r);
+    REQUIRE(wait_state(d, j.id, "done", 60 * slowdown(), &done), "job %s: %s", j.id, done.state);
+    char res[256];
+    snprintf(res, sizeof res, "/geometry/v1/results/%.64s", j.hash);
+    CHECK(!strcmp(done.result, res), "result link %s, want %s", done.result, res);
+
+    /* the Location followed as it is: the same job, its links the same */
+    proxied(d, NULL, want, NULL, 0, NULL, NULL, &r);
+    json_t *o = jbody(&r);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "id"), j.id) && !strcmp(jstr(o, "result"), res),
+          "GET %s: %ld %.300s", want, r.status, r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+
+    /* the job's result under the base path: its Location and Content-Location */
+    snprintf(path, sizeof path, "/geometry/v1/jobs/%.32s/result", j.id);
+    proxied(d, NULL, path, NULL, 0, NULL, NULL, &r);
+    CHECK(r.status == 200 && has_header(&r, "Content-Location", res) &&
+              has_header(&r, "Location", res) && varies_with(&r, "X-Forwarded-Prefix"),
+          "GET %s: %ld, Content-Location and Location %s, Vary: X-Forwarded-Prefix", path, r.status,
+          res);
+    size_t n1 = r.body.n;
+    hresp_free(&r);
+    /* the result link followed: the same bytes, no Location of its own */
+    proxied(d, NULL, res, NULL, 0, NULL, NULL, &r);
+    snprintf(v, sizeof v, "\"%s\"", j.hash);
+    CHECK(r.status == 200 && r.body.n == n1 && has_header(&r, "ETag", v) &&
+              !hget(&r, "Location", path, sizeof path),
+          "GET %s: %ld, %zu bytes (want %zu)", res, r.status, r.body.n, n1);
+    hresp_free(&r);
+
+    /* a problem's instance: the path as the client named it */
+    const char *none = "/geometry/v1/jobs/00000000000000000000000000000000";
+    proxied(d, NULL, none, NULL, 0, NULL, NULL, &r);
+    o = jbody(&r);
+    CHECK(r.status == 404 && !strcmp(jstr(o, "instance"), none), "GET %s: %ld %.300s", none,
+          r.status, r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+    http_get(d, none + 9, &r); /* through a proxy that strips it: the same instance */
+    o = jbody(&r);
+    CHECK(r.status == 404 && !strcmp(jstr(o, "instance"), none), "GET %s: %ld %.300s", none + 9,
+          r.status, r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+
+    /* the page: /geometry goes to /geometry/, which serves it */
+    proxied(d, NULL, "/geometry", NULL, 0, NULL, NULL, &r);
+    CHECK(r.status == 301 && has_header(&r, "Location", "/geometry/"),
+          "GET /geometry: %ld, Location \"/geometry/\"", r.status);
+    hresp_free(&r);
+    proxied(d, NULL, "/geometry/", NULL, 0, NULL, NULL, &r);
+    CHECK(r.status == 200 && r.body.p && strstr(r.body.p, "<html") &&
+              hget(&r, "Content-Type", v, sizeof v) && !strncmp(v, "text/html", 9),
+          "GET /geometry/: %ld", r.status);
+    hresp_free(&r);
+    proxied(d, NULL, "/geometryx/", NULL, 0, NULL, NULL, &r);
+    CHECK(r.status == 404, "GET /geometryx/: %ld (not under the base path)", r.status);
+    hresp_free(&r);
+
+    /* the OpenAPI document's server */
+    http_get(d, "/openapi.json", &r);
+    o = jbody(&r);
+    const char *url = jstr(json_array_get(json_object_get(o, "servers"), 0), "url");
+    CHECK(r.status == 200 && !strcmp(url, "/geometry"), "OpenAPI servers[0].url \"%s\"", url);
+    json_decref(o);
+    hresp_free(&r);
+
+    /* a proxy's X-Forwarded-Prefix wins */
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", j.id);
+    proxied(d, NULL, path, NULL, 0, "/cellar", NULL, &r);
+    o = jbody(&r);
+    snprintf(want, sizeof want, "/cellar/v1/results/%.64s", j.hash);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "result"), want), "with X-Forwarded-Prefix: %.300s",
+          r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+    srv_term(d);
+}
+
+/* X-Forwarded-Prefix (no --base-path): the links of that answer start with it, each answer
+ * carrying links says Vary: X-Forwarded-Prefix (a cache keeps one per prefix), an answer
+ * without the header has them as before, "/" is the root, and a prefix that is not a clean
+ * path is refused 400 naming the header (a POST so refused makes no job). */
+SERVER_TEST(links_under_forwarded_prefix, "--workers 1 --job-threads 1")
+{
+    size_t len;
+    const char *body = medium(24, &len); /* tens of ms: a 202 */
+    REQUIRE(body, "no request");
+    hresp r;
+    char v[256], want[256], path[256], res[256];
+    jobv j, done;
+    proxied(d, NULL, "/v1/jobs", body, len, "/cellar", NULL, &r);
+    REQUIRE(r.status == 202 && job_parse(&r, &j) == 0, "POST: %ld %.300s", r.status, r.body.p);
+    vq_add(d, "job", &r);
+    snprintf(want, sizeof want, "/cellar/v1/jobs/%.32s", j.id);
+    CHECK(hget(&r, "Location", v, sizeof v) && !strcmp(v, want), "202 Location %s, want %s", v,
+          want);
+    CHECK(varies_with(&r, "X-Forwarded-Prefix"), "202 without Vary: X-Forwarded-Prefix");
+    hresp_free(&r);
+    REQUIRE(wait_state(d, j.id, "done", 60 * slowdown(), &done), "job %s: %s", j.id, done.state);
+    /* without the header: as ever */
+    snprintf(res, sizeof res, "/v1/results/%.64s", j.hash);
+    CHECK(!strcmp(done.result, res), "result link %s, want %s", done.result, res);
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", j.id);
+    http_get(d, path, &r);
+    CHECK(varies_with(&r, "X-Forwarded-Prefix"), "a job without Vary: X-Forwarded-Prefix");
+    hresp_free(&r);
+    /* with it */
+    proxied(d, NULL, path, NULL, 0, "/cellar", NULL, &r);
+    vq_add(d, "job", &r);
+    json_t *o = jbody(&r);
+    snprintf(res, sizeof res, "/cellar/v1/results/%.64s", j.hash);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "result"), res), "job with the prefix: %.300s",
+          r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+    /* the same request again: its result at once, Location and Content-Location prefixed */
+    proxied(d, NULL, "/v1/jobs", body, len, "/cellar", "wait=10", &r);
+    CHECK(r.status == 200 && has_header(&r, "Location", res) &&
+              has_header(&r, "Content-Location", res) && varies_with(&r, "X-Forwarded-Prefix"),
+          "POST again: %ld, Location and Content-Location %s", r.status, res);
+    hresp_free(&r);
+    snprintf(path, sizeof path, "/v1/jobs/%.32s/result", j.id);
+    proxied(d, NULL, path, NULL, 0, "/a/b-c_d.e~f", NULL, &r);
+    snprintf(res, sizeof res, "/a/b-c_d.e~f/v1/results/%.64s", j.hash);
+    CHECK(r.status == 200 && has_header(&r, "Content-Location", res), "GET %s: %ld, want %s", path,
+          r.status, res);
+    hresp_free(&r);
+    /* "/": the root */
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", j.id);
+    proxied(d, NULL, path, NULL, 0, "/", NULL, &r);
+    o = jbody(&r);
+    snprintf(res, sizeof res, "/v1/results/%.64s", j.hash);
+    CHECK(r.status == 200 && !strcmp(jstr(o, "result"), res), "X-Forwarded-Prefix /: %.300s",
+          r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+    /* a problem's instance, the OpenAPI server */
+    const char *none = "/v1/jobs/00000000000000000000000000000000";
+    proxied(d, NULL, none, NULL, 0, "/cellar", NULL, &r);
+    o = jbody(&r);
+    snprintf(want, sizeof want, "/cellar%s", none);
+    CHECK(r.status == 404 && !strcmp(jstr(o, "instance"), want), "404: %.300s", r.body.p);
+    json_decref(o);
+    hresp_free(&r);
+    proxied(d, NULL, "/openapi.json", NULL, 0, "/cellar", NULL, &r);
+    o = jbody(&r);
+    const char *url = jstr(json_array_get(json_object_get(o, "servers"), 0), "url");
+    CHECK(r.status == 200 && !strcmp(url, "/cellar") && varies_with(&r, "X-Forwarded-Prefix"),
+          "OpenAPI servers[0].url \"%s\"", url);
+    json_decref(o);
+    hresp_free(&r);
+    http_get(d, "/openapi.json", &r);
+    o = jbody(&r);
+    url = jstr(json_array_get(json_object_get(o, "servers"), 0), "url");
+    CHECK(r.status == 200 && !strcmp(url, "/"), "OpenAPI servers[0].url \"%s\" without", url);
+    json_decref(o);
+    hresp_free(&r);
+
+    /* bad prefixes: 400 naming the header and why, on a GET and on a POST (no job made) */
+    char longp[200];
+    memset(longp, 'a', sizeof longp - 1);
+    longp[0] = '/';
+    longp[sizeof longp - 1] = 0;
+    const char *bad[][2] = {{"/cellar/", "end with"},    {"cellar", "begin with"},
+                            {"//evil.example", "empty"}, {"/a/../b", "\"..\""},
+                            {"/a b", "only letters"},    {"/ce%2Fllar", "only letters"},
+                            {"/a?b", "only letters"},    {longp, "longer than"}};
+    double accepted = metric(d, ACCEPTED);
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        for (int post = 0; post < 2; post++) {
+            if (post)
+                proxied(d, NULL, "/v1/jobs", body, len, bad[i][0], NULL, &r);
+            else
+                proxied(d, NULL, path, NULL, 0, bad[i][0], NULL, &r);
+            o = jbody(&r);
+            const char *det = jstr(o, "detail");
+            CHECK(r.status == 400 && !strncmp(det, "X-Forwarded-Prefix: invalid value", 33) &&
+                      strstr(det, bad[i][1]),
+                  "X-Forwarded-Prefix \"%.40s\" (%s): %ld %.300s", bad[i][0], post ? "POST" : "GET",
+                  r.status, r.body.p);
+            CHECK(!hget(&r, "Location", v, sizeof v), "a Location with a bad prefix: %s", v);
+            json_decref(o);
+            hresp_free(&r);
+        }
+    }
+    CHECK(metric(d, ACCEPTED) == accepted, "a POST with a bad prefix made a job");
+    srv_term(d);
+}
+
 /* Results as pictures and maps: Accept image/svg+xml gives an SVG document (valid XML, one
  * filled path per face), with query options and its own ETag (304 on it, Vary: Accept);
  * application/geo+json a FeatureCollection of the faces; an Accept we cannot serve is 406 and
@@ -2187,6 +2445,27 @@ TEST(cellard_refuses_to_start)
     st = cellard_fails(args, out, sizeof out);
     CHECK(st == 2 && strstr(out, "--lease-seconds (2..3600): invalid value \"1\""),
           "lease 1 s: exit %d: %s", st, out);
+    /* --base-path: a clean path, not one of the service's own */
+    const char *bps[][2] = {{"geometry", "must begin with \"/\""},
+                            {"/geometry/", "must not end with \"/\""},
+                            {"/a//b", "empty segment"},
+                            {"/a/./b", "\".\" or \"..\" segment"},
+                            {"/a%20b", "only letters"},
+                            {"/v1", "a path of the service's own (/v1)"},
+                            {"/assets/x", "a path of the service's own (/assets)"}};
+    for (size_t i = 0; i < sizeof bps / sizeof *bps; i++) {
+        snprintf(args, sizeof args, "--db %s/c.db --base-path '%s'", dir, bps[i][0]);
+        st = cellard_fails(args, out, sizeof out);
+        CHECK(st == 2 && strstr(out, "--base-path: invalid value") && strstr(out, bps[i][1]),
+              "--base-path %s: exit %d: %s", bps[i][0], st, out);
+    }
+    setenv("CELLAR_BASE_PATH", "/geo/", 1);
+    snprintf(args, sizeof args, "--db %s/c.db", dir);
+    st = cellard_fails(args, out, sizeof out);
+    unsetenv("CELLAR_BASE_PATH");
+    CHECK(st == 2 && strstr(out, "--base-path: invalid value \"/geo/\"") &&
+              strstr(out, "(from CELLAR_BASE_PATH)"),
+          "CELLAR_BASE_PATH /geo/: exit %d: %s", st, out);
     snprintf(args, sizeof args, "--db %s/c.db --bogus 1", dir);
     st = cellard_fails(args, out, sizeof out);
     CHECK(st == 2 && strstr(out, "unknown option --bogus"), "--bogus: exit %d: %s", st, out);

@@ -238,7 +238,8 @@ TEST(check_accepts_valid_requests)
         SOLIDS(CUBE),
         SOLIDS(CUBE "," CUBE_HALF),
         "{\"kind\":\"solids\",\"solids\":[]}",
-        "{\"options\":{\"precision\":0.001,\"operators\":true,\"fields\":[\"CF\",\"stats\"]},"
+        "{\"options\":{\"precision\":0.001,\"operators\":true,\"fields\":[\"CF\",\"FE\",\"EV\","
+        "\"V\",\"stats\"]},"
         "\"kind\":\"solids\",\"solids\":[" CUBE "]}",
         /* a face with a hole: a unit cube whose top carries a hole, the hole's walls and floor */
         "{\"kind\":\"solids\",\"faces\":{\"V\":[[0,0,0],[4,0,0],[4,4,0],[0,4,0],[1,1,0],[1,3,0],"
@@ -1253,10 +1254,11 @@ TEST(core_soup_and_fields)
           stat_of(r, "C"));
     json_decref(r);
     r = run_ok("{\"kind\":\"solids\",\"solids\":[" CUBE "],\"options\":{\"fields\":[\"CF\","
-               "\"stats\"],\"precision\":0.001}}");
+               "\"V\",\"FV\",\"stats\"],\"precision\":0.001}}");
     REQUIRE(r, "no result");
-    CHECK(json_object_size(r) == 3 && json_object_get(r, "CF") && json_object_get(r, "stats"),
-          "fields CF and stats only");
+    CHECK(json_object_size(r) == 5 && json_object_get(r, "CF") && json_object_get(r, "stats") &&
+              json_object_get(r, "V") && json_object_get(r, "FV"),
+          "fields CF, V, FV and stats only");
     CHECK(json_number_value(json_object_get(json_object_get(r, "stats"), "precision")) == 0.001,
           "precision");
     json_decref(r);

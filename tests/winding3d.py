@@ -220,7 +220,7 @@ def normalised(mesh):
 # ---- running ------------------------------------------------------------------------------
 
 def cellar(files, op, fill=None, extra=None):
-    opts = {"fields": ["stats"]}
+    opts = {"fields": ["stats", "membership", "result"]}
     if fill:
         opts["fill"] = fill
     if extra:

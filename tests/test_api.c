@@ -934,7 +934,7 @@ TEST(solids_layers)
     snprintf(c2, sizeof c2, cube, 1, 4, 4, 1, 1, 4, 4, 1);
     snprintf(body, sizeof body,
              "{\"kind\":\"solids\",\"layers\":{\"ab\":[%s,%s],\"c\":%s},\"op\":[\"-\",\"c\","
-             "\"ab\"],\"options\":{\"fields\":[\"stats\"]}}",
+             "\"ab\"],\"options\":{\"fields\":[\"stats\",\"result\"]}}",
              c0, c1, c2);
     json_t *r = run_ok(body);
     REQUIRE(r, "runs");

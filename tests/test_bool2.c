@@ -49,7 +49,7 @@ static void pb_rect(pb *b, double x0, double y0, double x1, double y1)
 
 static bool2_input pb_input(const pb *b, int fill)
 {
-    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy, fill};
+    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy, fill, 0};
 }
 
 /* Runs a named operation under a fill rule; returns the status, result in *r. */
@@ -707,7 +707,7 @@ TEST(bool2_many_operands)
             poly_off[q + 1] = (uint32_t)(q + 1);
             ring_off[q + 1] = (uint32_t)(4 * (q + 1));
         }
-    bool2_input in = {n, poly_off, ring_off, xy, BOOL2_FILL_ODD};
+    bool2_input in = {n, poly_off, ring_off, xy, BOOL2_FILL_ODD, 0};
     static const char *const ops[] = {"union", "xor", "intersection"};
     static const double want[] = {1600, 1600, 0};
     for (int t = 0; t < 3; t++) {
@@ -753,7 +753,7 @@ TEST(bool2_many_operands)
         GEOSGeometry *u = GEOSUnaryUnion_r(h, coll);
         double ga = -1;
         if (u) GEOSArea_r(h, u, &ga);
-        bool2_input in2 = {m, poly_off, ring_off, xy, BOOL2_FILL_ODD};
+        bool2_input in2 = {m, poly_off, ring_off, xy, BOOL2_FILL_ODD, 0};
         bool_expr e;
         bool2_result r;
         char err[256];

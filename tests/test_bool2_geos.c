@@ -148,7 +148,7 @@ static void pb_copy_poly(pb *dst, const pb *src, size_t p, double s, double ox, 
 
 static bool2_input pb_input(const pb *b)
 {
-    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy, BOOL2_FILL_ODD};
+    return (bool2_input){b->np, b->poly_off, b->ring_off, b->xy, BOOL2_FILL_ODD, 0};
 }
 
 /* The total perimeter of all rings and the largest coordinate magnitude. */

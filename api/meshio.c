@@ -573,13 +573,14 @@ static int ply_value(ply *h, int t, double *x)
 {
     if (h->fmt == 0) {
         next_token(&h->k);
-        if (!h->k.n || ff_parse(h->k.t, h->k.t + h->k.n, x)) return -1;
+        if (!h->k.n) return -2;
+        if (ff_parse(h->k.t, h->k.t + h->k.n, x)) return -1;
         if (t < PLY_F32 && *x != floor(*x)) return -1;
         return 0;
     }
     int size = ply_types[t].size;
     unsigned char b[8];
-    if (h->end - h->p < size) return -1;
+    if (h->end - h->p < size) return -2;
     for (int i = 0; i < size; i++) b[i] = h->p[h->fmt == 1 ? i : size - 1 - i];
     h->p += size;
     uint64_t u = 0;
@@ -668,15 +669,16 @@ int mesh_read_ply(const char *data, size_t len, solid *out, char *err, size_t er
             for (size_t q = 0; q < e->np; q++) {
                 const ply_prop *pp = &e->p[q];
                 double v;
+                int got;
                 if (pp->count < 0) {
-                    if (ply_value(h, pp->type, &v)) goto bad_value;
+                    if ((got = ply_value(h, pp->type, &v))) goto bad_value;
                     if ((int)q == ix) x[0] = v;
                     if ((int)q == iy) x[1] = v;
                     if ((int)q == iz) x[2] = v;
                     continue;
                 }
                 double c;
-                if (ply_value(h, pp->count, &c)) goto bad_value;
+                if ((got = ply_value(h, pp->count, &c))) goto bad_value;
                 if (c < 0 || c > MESH_PLY_POLYGON) {
                     say(err, errlen, "%s: %s: a list of %g items (0 to %d)", where, pp->name, c,
                         MESH_PLY_POLYGON);
@@ -687,7 +689,7 @@ int mesh_read_ply(const char *data, size_t len, solid *out, char *err, size_t er
                     goto fail;
                 }
                 for (int j = 0; j < (int)c; j++) {
-                    if (ply_value(h, pp->type, &v)) goto bad_value;
+                    if ((got = ply_value(h, pp->type, &v))) goto bad_value;
                     if ((int)q != il) continue;
                     if (!(v >= 0 && v < 4294967295.0) || v != floor(v)) {
                         say(err, errlen, "%s: vertex_indices[%d]: %g is not a vertex index", where,
@@ -701,12 +703,13 @@ int mesh_read_ply(const char *data, size_t len, solid *out, char *err, size_t er
                 }
                 continue;
             bad_value:
-                if (h->fmt == 0)
+                if (got == -2)
+                    say(err, errlen, "%s: %s: the file ends", where, pp->name);
+                else if (h->fmt == 0)
                     say(err, errlen, "%s: %s: line %zu: expected %s number", where, pp->name,
                         h->k.line, pp->type < PLY_F32 ? "an integer" : "a finite");
                 else
-                    say(err, errlen, "%s: %s: %s", where, pp->name,
-                        h->p >= h->end ? "the file ends" : "not a finite number");
+                    say(err, errlen, "%s: %s: not a finite number", where, pp->name);
                 goto fail;
             }
             if (vert && (rc = mb_vertex(&b, x))) {

@@ -10,10 +10,11 @@
  * Then every face is triangulated once, in its own orientation (the outer cycle's Newell
  * normal), and each cell writes the triangles of its faces, reversed for a face it lists as
  * -(f+1), so every triangle of a cell faces out of it.  Of a Boolean's result the one cell
- * written is the result's boundary ("result".faces) in place of the cells. * The triangles come
- * from api/rmesh.c (the triangulation every mesh writer shares).  Only the vertices the written
- * triangles use are written, numbered in the order they are first used (a Boolean's result writes
- * its boundary's, not every vertex of the arrangement).
+ * written is the result's boundary ("result".faces) in place of the cells.
+ *
+ * The triangles come from api/rmesh.c (the triangulation every mesh writer shares).  Only the
+ * vertices the written triangles use are written, numbered in the order they are first used (a
+ * Boolean's result writes its boundary's, not every vertex of the arrangement).
  *
  * Exploding: with explode = k > 1 each cell moves by (k - 1) * (c - C), c the cell's centroid
  * (of its volume, from the outward triangles; the mean of its vertices when the volume is not

@@ -378,6 +378,7 @@ static int stl_binary(const char *data, size_t len, mbuild *b, char *err, size_t
 
 int mesh_read_stl(const char *data, size_t len, solid *out, char *err, size_t errlen)
 {
+    if (errlen) err[0] = 0;
     mbuild b = {0};
     size_t i = 0;
     char aerr[160] = "";
@@ -619,6 +620,7 @@ static int ply_value(ply *h, int t, double *x)
 
 int mesh_read_ply(const char *data, size_t len, solid *out, char *err, size_t errlen)
 {
+    if (errlen) err[0] = 0;
     ply *h = calloc(1, sizeof *h);
     mbuild b = {0};
     char where[96];
@@ -1129,6 +1131,7 @@ comps:
 int mesh_read_3mf(const char *data, size_t len, solid **parts, size_t *nparts, char *err,
                   size_t errlen)
 {
+    if (errlen) err[0] = 0;
     zip_error_t ze;
     zip_source_t *src;
     zip_t *za = NULL;

@@ -15,13 +15,13 @@ SAN     ?=
 CFLAGS  += -std=c17 $(OPT) -g -Wall -Wextra -Werror -pthread -D_GNU_SOURCE $(SAN)
 CPPFLAGS += -I. -I/usr/include/libxml2 -I/usr/include/postgresql
 LDLIBS  += -lm -pthread
-JANSSON_LIBS := -ljansson -lxml2
+JANSSON_LIBS := -ljansson -lxml2 -lzip
 GEOS_LIBS    := -lgeos_c
 SERVER_LIBS  := -lmicrohttpd -lsqlite3 -lpq -lcrypto -lz
 TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
-              libxml2-dev libpq-dev zlib1g-dev nodejs npm
+              libxml2-dev libpq-dev zlib1g-dev libzip-dev nodejs npm
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
               python3-shapely python3-numpy python3-scipy sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \

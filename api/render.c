@@ -47,6 +47,10 @@ const render_format render_formats[] = {
     {"geojson", "application/geo+json", NULL, 2, render_geojson, RENDER_MAX_BYTES},
     {"obj", "model/obj", "model/*", 3, render_obj, RENDER_MAX_BYTES},
     {"npz", "application/x-npz", NULL, 0, render_npz, RENDER_NPZ_MAX_BYTES},
+    {"stl", "model/stl", NULL, 3, render_stl, RENDER_MAX_BYTES},
+    {"off", "model/vnd.off", NULL, 3, render_off, RENDER_MAX_BYTES},
+    {"3mf", "model/3mf", NULL, 3, render_3mf, RENDER_MAX_BYTES},
+    {"glb", "model/gltf-binary", NULL, 3, render_glb, RENDER_MAX_BYTES},
 };
 const size_t render_nformats = sizeof render_formats / sizeof *render_formats;
 

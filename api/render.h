@@ -106,14 +106,38 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
 
 /* Writes the bounded cells of the 3D result result_json[0..len) (dim 3; "V", "FV" and "CF"
  * required, "holes" optional) as Wavefront OBJ (api/render_obj.c): a comment line, every
- * vertex as "v x y z", then per cell "g cellN" and its faces triangulated ("f a b c", 1-based),
- * each triangle facing out of the cell (a face listed -(f+1) in CF is reversed).  Faces may be
- * non-convex and have holes.  With o->explode = k > 1 each cell is moved by (k - 1) * (its
- * centroid - the centre of the box of V) and writes its own vertices (all of them first, cell
- * by cell, then the groups).  Only o->explode is read (o may be NULL: the defaults).  Returns
- * API_OK, API_EINVALID (a result it cannot read: the message names the JSON path, "CF[2][0]:
+ * vertex its triangles use as "v x y z" (in the order first used), then per cell "g cellN" and its
+ * faces triangulated ("f a b c", 1-based), each triangle facing out of the cell (a face listed
+ * -(f+1) in CF is reversed).  Faces may be non-convex and have holes.  With o->explode = k > 1 each
+ * cell is moved by (k - 1) * (its centroid - the centre of the box of V) and writes its own
+ * vertices (all of them first, cell by cell, then the groups).  Only o->explode is read (o may be
+ * NULL: the defaults).  Returns API_OK, API_EINVALID (a result it cannot read: the message names
+ * the JSON path, "CF[2][0]:
  * ...", "dim: expected 3 ..."; explode out of range) or API_ENOMEM. */
 int render_obj(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
+
+/* Meshes of a 3D result for other tools (api/render_mesh.c), of the triangles render_obj
+ * writes (api/rmesh.c), each holding only the vertices its triangles use:
+ *   render_stl  binary STL (float32; the 80-byte header never starts with "solid")
+ *   render_off  OFF: "OFF", a comment, counts, the vertices (exact doubles), "3 a b c" faces
+ *   render_3mf  a 3MF package ([Content_Types].xml, _rels/.rels, 3D/3dmodel.model; deflated
+ *               zip): one object per cell (its own vertices), each a build item
+ *   render_glb  glTF 2.0 binary: one mesh per cell, each its own node ("cellN"), float32
+ *               positions and uint32 indices; with explode = k > 1 each cell's node is
+ *               translated as render_obj moves it
+ * Of a Boolean's result STL, OFF and 3MF hold the result solid only (its boundary,
+ * "result".faces, as render_obj writes it); glb holds every cell and one more node "result"
+ * (not moved by explode).  Of any other result STL and OFF hold every cell's triangles (a face
+ * two cells share twice, facing out of each).  Only o->explode is read, by glb (o may be
+ * NULL).  Returns API_OK, API_EINVALID (as render_obj) or API_ENOMEM. */
+int render_stl(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
+int render_off(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
+int render_3mf(const char *result_json, size_t len, const render_opts *o, char **out,
+               size_t *outlen, api_error *err);
+int render_glb(const char *result_json, size_t len, const render_opts *o, char **out,
                size_t *outlen, api_error *err);
 
 /* Writes the result result_json[0..len) (2D or 3D, any kind, any fields) as NumPy arrays in one
@@ -148,7 +172,8 @@ int render_npz(const char *result_json, size_t len, const render_opts *o, char *
 typedef int (*render_fn)(const char *result_json, size_t len, const render_opts *o, char **out,
                          size_t *outlen, api_error *err);
 typedef struct render_format {
-    const char *name;  /* "json", "svg", "geojson", "obj", "npz": ?format= and --format */
+    const char *name;  /* "json", "svg", "geojson", "obj", "npz", "stl", "off", "3mf", "glb":
+                          ?format= and --format */
     const char *media; /* its media type (Content-Type, and what Accept names) */
     const char *wild;  /* a wildcard media type that picks it (image/ and a star), or NULL */
     int dim;           /* the results it is made of: 2, 3, or 0 (any) */
@@ -156,7 +181,8 @@ typedef struct render_format {
     unsigned long max; /* the largest result (bytes of JSON) the daemon renders this way */
 } render_format;
 
-/* json, svg, geojson, obj, npz, in that order (the order Accept's ties are broken in). */
+/* json, svg, geojson, obj, npz, stl, off, 3mf, glb, in that order (the order Accept's ties are
+ * broken in). */
 extern const render_format render_formats[];
 extern const size_t render_nformats;
 

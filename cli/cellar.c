@@ -9,9 +9,10 @@
  *                                    the others)
  *   cellar solids A.obj B.off ... [--faces] [--groups] [--precision X] [--options JSON]
  *                                    the same for the request {"kind":"solids","solids":[...]}
- *                                    of the solids read from the files (.obj or .off by the
- *                                    extension, "-": standard input as OBJ; a solid per object
- *                                    "o" of an OBJ file, and with --groups per group "g"), or
+ *                                    of the solids read from the files (.obj, .off, .stl, .ply
+ *                                    or .3mf by the extension, api/meshio.h; "-": standard
+ *                                    input as OBJ; a solid per object "o" of an OBJ file, and
+ *                                    with --groups per group "g"; per build item of a 3MF), or
  *                                    with --faces
  *                                    {"kind":"solids","faces":{...}}: all their faces as one
  *                                    soup; --format obj writes the cells as a Wavefront OBJ
@@ -33,6 +34,7 @@
  * Ownership: everything is freed before exit; the API's output buffer is the caller's to free.
  */
 #include "api/api.h"
+#include "api/meshio.h"
 #include "api/render.h"
 #include "core/arr2.h"
 #include "core/solid.h"
@@ -75,11 +77,11 @@ static const char usage_text[] =
     "                                  runs {\"kind\":\"svg\",\"svg\":...,\"options\":...}\n"
     "  cellar solids A.obj B.off ... [--faces] [--groups] [--precision X] [--op OP]\n"
     "               [--options JSON]   the arrangement of the solids in the files (Wavefront\n"
-    "                                  OBJ or OFF by the extension, \"-\": OBJ on standard "
-    "input),\n"
-    "                                  each a closed surface (it may pass through itself): a\n"
-    "                                  solid per OFF file and per object \"o\" of an OBJ file\n"
-    "                                  (--groups: per group \"g\" too); runs {\"kind\":\n"
+    "                                  OBJ, OFF, STL, PLY or 3MF by the extension, \"-\": OBJ\n"
+    "                                  on standard input), each a closed surface (it may pass\n"
+    "                                  through itself): a solid per OFF, STL or PLY file, per\n"
+    "                                  object \"o\" of an OBJ file (--groups: per group \"g\"\n"
+    "                                  too) and per mesh a 3MF file builds; runs {\"kind\":\n"
     "                                  \"solids\",\"solids\":[...]}; --faces: all their faces\n"
     "                                  as one soup\n"
     "  cellar polygons A.geojson B.shp ... --op OP [--format geojson|gpkg|json|svg|request]\n"
@@ -110,7 +112,8 @@ static const char usage_text[] =
     "       result; with --format obj the result solid is written)\n"
     "  svg, solids: --format request   print the request instead of running it (to post it\n"
     "       to the service: ... --format request | curl --data-binary @- ...)\n"
-    "  run, svg, solids: --format json|svg|geojson|obj|npz   the result JSON (default), a\n"
+    "  run, svg, solids: --format json|svg|geojson|obj|npz|stl|off|3mf|glb   the result\n"
+    "       JSON (default), a\n"
     "       picture of a 2D result (SVG: faces filled, edges, y up, a Boolean's result on top),\n"
     "       a map of it (GeoJSON FeatureCollection of the faces; of a Boolean, its result as\n"
     "       one MultiPolygon), the cells of a 3D result (Wavefront OBJ: a group per cell, faces\n"
@@ -118,7 +121,9 @@ static const char usage_text[] =
     "       the README); with svg: --explode K (faces moved apart, K >= 1),\n"
     "       --numbers (vertex and face numbers), --width PX; with geojson: --cells all (a\n"
     "       Boolean's faces too, with membership) or result; with obj: --explode K (cells\n"
-    "       moved apart)\n"
+    "       moved apart); stl (binary), off, 3mf: the cells of a 3D result, or a Boolean's\n"
+    "       result solid only; glb (glTF 2.0 binary): a node per cell and one for a\n"
+    "       Boolean's result (--explode K moves the cells' nodes)\n"
     "  --help            this text\n"
     "  --version         the version\n"
     "\n"
@@ -718,15 +723,11 @@ static void put_solid_json(FILE *f, const solid *s, size_t n)
     fputs("}}", f);
 }
 
-/* The reader of a file by its extension: 1 OBJ, 2 OFF, 0 neither. */
-static int solid_format(const char *path)
+/* The reader of a file by its extension (api/meshio.h); "-" is OBJ on standard input. */
+static mesh_format solid_format(const char *path)
 {
-    const char *dot = strrchr(path, '.');
-    if (strcmp(path, "-") == 0) return 1;
-    if (!dot || strchr(dot, '/')) return 0;
-    if (strcasecmp(dot, ".obj") == 0) return 1;
-    if (strcasecmp(dot, ".off") == 0) return 2;
-    return 0;
+    if (strcmp(path, "-") == 0) return MESH_OBJ;
+    return mesh_format_of_name(path);
 }
 
 /* cellar solids FILE...: the request {"kind":"solids",...} of the solids the files hold, run as
@@ -744,11 +745,12 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
     FILE *m = NULL;
     int rc = 1;
     if (n == 0)
-        return usage_error("%s", "solids takes one or more files (.obj, .off, - for stdin)");
+        return usage_error("%s", "solids takes one or more files (.obj, .off, .stl, .ply, .3mf, "
+                                 "- for OBJ on stdin)");
     for (size_t i = 0; i < n; i++)
         if (!solid_format(pos[i + 1]))
-            return usage_error("solids: \"%s\": expected a .obj or .off file (or - for OBJ on "
-                               "standard input)",
+            return usage_error("solids: \"%s\": expected a .obj, .off, .stl, .ply or .3mf file "
+                               "(or - for OBJ on standard input)",
                                pos[i + 1]);
     opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
     if (!opts || !json_is_object(opts)) {
@@ -764,18 +766,17 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         fprintf(stderr, "cellar: out of memory\n");
         goto out;
     }
-    /* a solid per OFF file, and per object of an OBJ file ("o"; with --groups "g" too) */
+    /* a solid per OFF, STL or PLY file, per object of an OBJ file ("o"; with --groups "g"
+     * too), per mesh object a 3MF file's build places */
     n = 0;
     for (size_t i = 0; i < nfiles; i++) {
         const char *path = pos[i + 1];
-        size_t len, np = 1;
+        size_t len, np = 0;
         char *text = read_all(path, &len);
-        solid one, *parts = &one;
+        solid *parts = NULL;
         int r;
         if (!text) goto out;
-        r = solid_format(path) == 2
-                ? solid_read_off(text, len, &one, rerr, sizeof rerr)
-                : solid_read_obj_parts(text, len, fl->groups, &parts, &np, rerr, sizeof rerr);
+        r = mesh_read(solid_format(path), text, len, fl->groups, &parts, &np, rerr, sizeof rerr);
         free(text);
         if (r != 0) {
             fprintf(stderr, "cellar: %s: %s\n", strcmp(path, "-") ? path : "standard input", rerr);
@@ -789,14 +790,14 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
             if (y) from = y;
             if (!x || !y) {
                 for (size_t k = 0; k < np; k++) solid_free(&parts[k]);
-                if (parts != &one) free(parts);
+                free(parts);
                 fprintf(stderr, "cellar: out of memory\n");
                 goto out;
             }
             cap = c;
         }
         for (size_t k = 0; k < np; k++) sv[n] = parts[k], from[n++] = i;
-        if (parts != &one) free(parts);
+        free(parts);
     }
     if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
         op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
@@ -1251,7 +1252,8 @@ int main(int argc, char **argv)
                                                     : -1;
                 if (of.kind == -1) {
                     rc = usage_error(
-                        "--format: expected json, svg, geojson, obj, npz or request, not \"%s\"",
+                        "--format: expected json, svg, geojson, obj, npz, stl, off, 3mf, glb or "
+                        "request, not \"%s\"",
                         val);
                     goto out;
                 }
@@ -1324,8 +1326,9 @@ int main(int argc, char **argv)
         rc = usage_error("%s is for --format svg", of.first);
     } else if (of.cells && of.kind != 2) {
         rc = usage_error("%s is for --format geojson", of.cells);
-    } else if (of.explode && of.kind != 1 && of.kind != 3) {
-        rc = usage_error("%s is for --format svg or obj", of.explode);
+    } else if (of.explode && of.kind != 1 && of.kind != 3 &&
+               !(of.kind >= 0 && !strcmp(render_formats[of.kind].name, "glb"))) {
+        rc = usage_error("%s is for --format svg, obj or glb", of.explode);
     } else if (of.kind == OUT_REQUEST && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0 &&
                strcmp(cmd, "polygons") != 0) {
         rc = usage_error("%s", "--format request is for the svg, solids and polygons commands");

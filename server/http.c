@@ -33,6 +33,7 @@
 #include <time.h>
 
 #include "api/api.h"
+#include "api/meshio.h"
 #include "api/render.h"
 #include "server/log.h"
 #include "server/webassets.h"
@@ -122,6 +123,20 @@ typedef struct plan {
     uint64_t size;     /* PLAN_STORED */
 } plan;
 
+/* The body of a POST /v1/jobs, by its Content-Type. */
+enum { BODY_JSON = 0, BODY_MESH, BODY_MULTIPART };
+
+/* Parts of a multipart/form-data body at most, and the bytes of their names kept. */
+#define HTTP_MAX_PARTS 256
+
+/* A part of a multipart/form-data body: its data is c->body[start .. start + len). */
+typedef struct http_part {
+    char name[64];      /* the form field's name ("request", "file", ...) */
+    char filename[128]; /* "" when none */
+    char ctype[96];     /* its Content-Type, "" when none */
+    size_t start, len;
+} http_part;
+
 typedef struct conn {
     http_server *h;
     struct MHD_Connection *mc;
@@ -152,6 +167,17 @@ typedef struct conn {
     char job_id[33];  /* for the log */
     int close;        /* answer with Connection: close (the rest of the stream cannot be trusted) */
     uint64_t reserved; /* bytes of h->inflight this request's body holds */
+    /* a POST's body type (BODY_*): JSON as it is; one mesh file (mesh its format); or
+     * multipart/form-data, split by MHD's post processor as it arrives: the parts' data one
+     * after the other in body (len of them; raw counts the body's own bytes, which bound
+     * them), described in parts */
+    int body_type;
+    mesh_format mesh;
+    struct MHD_PostProcessor *pp;
+    uint64_t raw;
+    http_part *parts;
+    size_t nparts;
+    char mp_err[160]; /* the multipart body is bad: why ("" when it is not) */
 } conn;
 
 /* The path that routes: the request's, without --base-path when it begins with it. */
@@ -254,6 +280,9 @@ static void cors_origin(conn *c)
 static void body_release(conn *c)
 {
     free(c->body);
+    free(c->parts);
+    c->parts = NULL;
+    c->nparts = 0;
     c->body = NULL;
     c->len = c->cap = 0;
     if (c->reserved) atomic_fetch_sub(&c->h->inflight, c->reserved);
@@ -1169,13 +1198,149 @@ static void wake_conn(void *ctx)
     MHD_resume_connection(c->mc);
 }
 
-static int json_content_type(struct MHD_Connection *mc)
+/* The media type t (spaces before it skipped) is name (then the end, ';' or a space). */
+static int media_is(const char *t, const char *name)
 {
-    const char *t = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    size_t n = strlen(name);
     if (!t) return 0;
     while (*t == ' ') t++;
-    if (strncasecmp(t, "application/json", 16) != 0) return 0;
-    return t[16] == 0 || t[16] == ';' || t[16] == ' ';
+    if (strncasecmp(t, name, n) != 0) return 0;
+    return t[n] == 0 || t[n] == ';' || t[n] == ' ';
+}
+
+/* The body type of a POST /v1/jobs by its Content-Type (c->body_type, c->mesh): 0, or -1 when
+ * it is none the service reads (415). */
+static int body_content_type(conn *c)
+{
+    const char *t =
+        MHD_lookup_connection_value(c->mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (media_is(t, "application/json")) {
+        c->body_type = BODY_JSON;
+        return 0;
+    }
+    if ((c->mesh = mesh_format_of_media(t)) != MESH_NONE) {
+        c->body_type = BODY_MESH;
+        return 0;
+    }
+    if (media_is(t, "multipart/form-data")) {
+        c->body_type = BODY_MULTIPART;
+        return 0;
+    }
+    return -1;
+}
+
+/* MHD's post processor hands the data of a multipart body's parts here as it reads them:
+ * appended to c->body (whose room the caller made: the data is never more than the body),
+ * a part starting where off is 0. */
+static enum MHD_Result part_data(void *cls, enum MHD_ValueKind kind, const char *key,
+                                 const char *filename, const char *content_type,
+                                 const char *transfer_encoding, const char *data, uint64_t off,
+                                 size_t size)
+{
+    conn *c = cls;
+    (void)kind;
+    (void)transfer_encoding;
+    http_part *p = c->nparts ? &c->parts[c->nparts - 1] : NULL;
+    int same = p && p->len == 0 && !strcmp(p->name, key ? key : "") &&
+               !strcmp(p->filename, filename ? filename : "");
+    if (off == 0 && !same) {
+        if (c->nparts >= HTTP_MAX_PARTS) {
+            snprintf(c->mp_err, sizeof c->mp_err, "more than %d parts", HTTP_MAX_PARTS);
+            return MHD_NO;
+        }
+        if (!c->parts && !(c->parts = calloc(HTTP_MAX_PARTS, sizeof *c->parts))) {
+            snprintf(c->mp_err, sizeof c->mp_err, "out of memory");
+            return MHD_NO;
+        }
+        p = &c->parts[c->nparts++];
+        snprintf(p->name, sizeof p->name, "%s", key ? key : "");
+        snprintf(p->filename, sizeof p->filename, "%s", filename ? filename : "");
+        snprintf(p->ctype, sizeof p->ctype, "%s", content_type ? content_type : "");
+        p->start = c->len;
+        p->len = 0;
+    }
+    if (!p || c->len + size + 1 > c->cap) {
+        snprintf(c->mp_err, sizeof c->mp_err, "malformed multipart body");
+        return MHD_NO;
+    }
+    memcpy(c->body + c->len, data, size);
+    c->len += size;
+    p->len += size;
+    return MHD_YES;
+}
+
+/* Fills *ae with status and message; returns status. */
+static int body_fail(api_error *ae, int status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int body_fail(api_error *ae, int status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    ae->status = status;
+    vsnprintf(ae->msg, sizeof ae->msg, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+/* The request of a mesh or multipart body (c->body_type not BODY_JSON) as JSON text, into
+ * *json: API_OK, or a status with ae filled. */
+static int mesh_body_request(conn *c, char **json, size_t *jlen, api_error *ae)
+{
+    const char *body = c->body ? c->body : "";
+    if (c->body_type == BODY_MESH) {
+        mesh_file f = {"body", c->mesh, body, c->len};
+        char name[32];
+        snprintf(name, sizeof name, "body (%s)", mesh_format_name(c->mesh));
+        f.name = name;
+        return mesh_request_json(&f, 1, NULL, 0, json, jlen, ae);
+    }
+    if (c->mp_err[0]) return body_fail(ae, API_EJSON, "multipart/form-data: %s", c->mp_err);
+    mesh_file *files = calloc(c->nparts + 1, sizeof *files);
+    char(*names)[200] = calloc(c->nparts + 1, sizeof *names);
+    const char *req = NULL;
+    size_t rlen = 0, n = 0;
+    int rc = API_OK;
+    if (!files || !names) {
+        rc = body_fail(ae, API_ENOMEM, "out of memory");
+        goto out;
+    }
+    for (size_t i = 0; i < c->nparts; i++) {
+        const http_part *p = &c->parts[i];
+        if (!strcmp(p->name, "request") && !p->filename[0]) {
+            if (req) {
+                rc = body_fail(ae, API_EINVALID, "multipart/form-data: two parts \"request\"");
+                goto out;
+            }
+            req = body + p->start;
+            rlen = p->len;
+            continue;
+        }
+        mesh_format f = mesh_format_of_media(p->ctype);
+        if (f == MESH_NONE) f = mesh_format_of_name(p->filename);
+        if (p->filename[0])
+            snprintf(names[n], sizeof names[n], "part %zu (%s)", i, p->filename);
+        else
+            snprintf(names[n], sizeof names[n], "part %zu (\"%s\")", i, p->name);
+        if (f == MESH_NONE) {
+            rc = body_fail(ae, API_EINVALID,
+                           "%s: not a mesh: expected a Content-Type such as model/stl or a file "
+                           "name ending in .stl, .obj, .off, .ply or .3mf (or the part "
+                           "\"request\")",
+                           names[n]);
+            goto out;
+        }
+        files[n] = (mesh_file){names[n], f, body + p->start, p->len};
+        n++;
+    }
+    if (!n) {
+        rc = body_fail(ae, API_EINVALID, "multipart/form-data: no mesh file among the parts");
+        goto out;
+    }
+    rc = mesh_request_json(files, n, req, rlen, json, jlen, ae);
+out:
+    free(files);
+    free(names);
+    return rc;
 }
 
 static void plan_problem(plan *pl, unsigned status, const char *msg, const char *retry)
@@ -1222,7 +1387,20 @@ static void intake_work(conn *c)
     plan *pl = &c->plan;
 
     if (!EVP_Digest(c->body ? c->body : "", c->len, raw, NULL, EVP_sha256(), NULL))
-        memset(raw, 0, sizeof raw); /* cannot happen with OpenSSL's sha256: never found */
+        memset(raw, 0, sizeof raw);  /* cannot happen with OpenSSL's sha256: never found */
+    if (c->body_type != BODY_JSON) { /* a mesh's bytes mean what their type says: in the key */
+        unsigned char k[32 + 2 + HTTP_MAX_PARTS * sizeof(http_part)];
+        size_t kn = 0;
+        memcpy(k, raw, 32);
+        kn = 32;
+        k[kn++] = (unsigned char)c->body_type;
+        k[kn++] = (unsigned char)c->mesh;
+        if (c->nparts) {
+            memcpy(k + kn, c->parts, c->nparts * sizeof *c->parts);
+            kn += c->nparts * sizeof *c->parts;
+        }
+        if (!EVP_Digest(k, kn, raw, NULL, EVP_sha256(), NULL)) memset(raw, 0, sizeof raw);
+    }
     int full = engine_full(h->e, err, sizeof err);
     if (full == ENG_ERR) {
         body_release(c);
@@ -1241,6 +1419,16 @@ static void intake_work(conn *c)
         return;
     }
 
+    if (c->body_type != BODY_JSON) { /* a mesh, or mesh files: their "solids" request */
+        char *json = NULL;
+        size_t jlen = 0;
+        rc = mesh_body_request(c, &json, &jlen, &ae);
+        body_release(c);
+        if (rc != API_OK)
+            return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
+        c->body = json;
+        c->len = jlen;
+    }
     rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
     body_release(c);
     if (rc != API_OK) return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
@@ -1587,8 +1775,15 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
                 too_large_msg(h, msg, sizeof msg);
                 return problem(c, 413, msg, NULL, NULL);
             }
-            if (!json_content_type(mc))
-                return problem(c, 415, "the body must be application/json", NULL, NULL);
+            if (body_content_type(c))
+                return problem(c, 415,
+                               "the body must be application/json, one mesh (model/stl, "
+                               "model/obj, model/3mf, model/vnd.ply, model/vnd.off) or "
+                               "multipart/form-data of mesh files",
+                               NULL, NULL);
+            if (c->body_type == BODY_MULTIPART &&
+                !(c->pp = MHD_create_post_processor(mc, 65536, part_data, c)))
+                return problem(c, 415, "multipart/form-data without a boundary", NULL, NULL);
             /* the representation of a result answered to this POST (Accept, ?format= and the
              * drawing options), decided before the body is read: 406 or 422 at once */
             enum MHD_Result nr;
@@ -1610,16 +1805,17 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         *upload_size = 0;
         if (c->status) return MHD_YES;              /* answered already */
         if (c->route != ROUTE_JOBS) return MHD_YES; /* bodies of other routes are ignored */
-        if (c->len + n > h->cfg->max_body) {
+        uint64_t seen = c->pp ? c->raw : c->len;    /* multipart: len counts the parts' data */
+        if (seen + n > h->cfg->max_body) {
             /* no Content-Length said so (chunked): the rest is never read */
             char msg[128];
             body_release(c);
             too_large_msg(h, msg, sizeof msg);
             return refuse_mid_body(c, 413, msg);
         }
-        if (c->len + n + 1 > c->cap) { /* chunked: no length was reserved */
+        if (seen + n + 1 > c->cap) { /* chunked: no length was reserved */
             size_t cap = c->cap ? c->cap : 4096;
-            while (cap < c->len + n + 1) cap *= 2;
+            while (cap < seen + n + 1) cap *= 2;
             if (cap > h->cfg->max_body + 1) cap = h->cfg->max_body + 1;
             if (body_reserve(c, cap - c->cap)) {
                 char msg[200];
@@ -1632,9 +1828,20 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
             c->body = b;
             c->cap = cap;
         }
+        if (c->pp) { /* the parts' data go to body as the post processor finds them */
+            c->raw += n;
+            if (!c->mp_err[0] && MHD_post_process(c->pp, upload, n) != MHD_YES && !c->mp_err[0])
+                snprintf(c->mp_err, sizeof c->mp_err, "malformed multipart body");
+            return MHD_YES;
+        }
         memcpy(c->body + c->len, upload, n);
         c->len += n;
         return MHD_YES;
+    }
+    if (c->pp) { /* the body is in: the parts are all found */
+        if (MHD_destroy_post_processor(c->pp) != MHD_YES && !c->mp_err[0])
+            snprintf(c->mp_err, sizeof c->mp_err, "the body ends inside a part");
+        c->pp = NULL;
     }
     set_deadline(h, mc, 0, NULL);  /* the request is in: handled and answered, no deadline */
     if (c->status) return MHD_YES; /* answered before the body (413, 415, 503) */
@@ -1663,6 +1870,7 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
            c->job_id[0] ? c->job_id : NULL, "closed",
            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? NULL : "early", NULL);
     unpark(c);
+    if (c->pp) MHD_destroy_post_processor(c->pp);
     /* kept alive: the next request's headers are due within the idle time and the header time */
     set_deadline(h, mc, h->cfg->idle_timeout + h->cfg->header_timeout, "headers");
     body_release(c);

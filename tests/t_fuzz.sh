@@ -1,6 +1,6 @@
 #!/bin/sh
-# t_fuzz.sh — the libFuzzer targets of tests/fuzz/ (json, svg, obj, off, render, http): builds
-# them if needed (make fuzz-build: clang, ASan + UBSan, into build/fuzz/), then
+# t_fuzz.sh — the libFuzzer targets of tests/fuzz/ (json, svg, obj, off, stl, ply, 3mf, render,
+# http): builds them if needed (make fuzz-build: clang, ASan + UBSan, into build/fuzz/), then
 #   - runs every file of each checked-in corpus (tests/fuzz/corpus/NAME/) once: no crash;
 #   - fuzzes each target CELLAR_FUZZ_SECONDS seconds (default 30) from that corpus (new inputs
 #     go to a temporary directory: the corpus is only read).

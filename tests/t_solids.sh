@@ -90,16 +90,16 @@ NOSTATS='{"fields":["V","EV","FV","FE","holes","CF","CV","exterior"]}'
 check "--help names solids" sh -c "'$BIN' --help | grep -q 'cellar solids A.obj B.off'"
 check "solids without a file exits 2" status 2 "$BIN" solids
 check "... and says what it takes" errhas '^cellar: solids takes one or more files'
-check "a file that is neither .obj nor .off exits 2" status 2 "$BIN" solids "$T/cube.obj" "$T/cube.stl"
-check "... and names it" errhas 'cube.stl": expected a .obj or .off file'
+check "a file of no mesh format exits 2" status 2 "$BIN" solids "$T/cube.obj" "$T/cube.step"
+check "... and names it" errhas 'cube.step": expected a .obj, .off, .stl, .ply or .3mf file'
 check "--faces with run exits 2" status 2 "$BIN" run "$T/x.json" --faces
 check "... and says it is for solids" errhas '^cellar: --faces is for the solids command'
 check "--precision with run exits 2" status 2 "$BIN" run "$T/x.json" --precision 0.1
 check "--normalize with solids exits 2" status 2 "$BIN" solids "$T/cube.obj" --normalize
 check "--precision 0 exits 2" status 2 "$BIN" solids "$T/cube.obj" --precision 0
-check "--format stl exits 2" status 2 "$BIN" solids "$T/cube.obj" --format stl
+check "--format step exits 2" status 2 "$BIN" solids "$T/cube.obj" --format step
 check "--explode without --format obj or svg exits 2" status 2 "$BIN" solids "$T/cube.obj" --explode 2
-check "... and says so" errhas '^cellar: --explode is for --format svg or obj'
+check "... and says so" errhas '^cellar: --explode is for --format svg, obj or glb'
 check "--width with --format obj exits 2" status 2 "$BIN" solids "$T/cube.obj" --format obj --width 100
 check "--explode 0.5 exits 2" status 2 "$BIN" solids "$T/cube.obj" --format obj --explode 0.5
 check "--options not an object exits 2" status 2 "$BIN" solids "$T/cube.obj" --options '[1]'
@@ -185,7 +185,7 @@ check "... both apply" test "$(json 'list(r), r["stats"]["precision"]')" = "['di
 # --- OBJ out (CORE: the cells come from the core)
 check "--format obj exits 0" status 0 "$BIN" solids "$T/cube.obj" "$T/half.OFF" --format obj
 cp "$T/out" "$T/two.obj"
-check "OBJ: a comment first" sh -c "head -n 1 '$T/two.obj' | grep -q '^# cellar: 3 cells, 18 faces, 22 vertices$'"
+check "OBJ: a comment first" sh -c "head -n 1 '$T/two.obj' | grep -q -E '^# cellar: 3 cells, [0-9]+ triangles of 18 faces, 22 of 22 vertices$'"
 check "CORE: OBJ has 22 vertices and 3 groups" test "$(count '^v ' "$T/two.obj") $(count '^g cell' "$T/two.obj")" = "22 3"
 check "OBJ: only v, g, f and comment lines" sh -c "! grep -v -E '^(v -?[0-9.e+-]+ -?[0-9.e+-]+ -?[0-9.e+-]+|g cell[0-9]+|f [0-9]+ [0-9]+ [0-9]+|# .*)$' '$T/two.obj'"
 "$BIN" run "$T/two.request.json" --format obj >"$T/two.run.obj"

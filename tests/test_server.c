@@ -17,6 +17,7 @@
  * its directory is kept. */
 #include "tests/daemon.h"
 #include "api/api.h"
+#include "api/meshio.h"
 #include "api/render.h"
 #include "server/store.h"
 
@@ -2408,6 +2409,136 @@ SERVER_TEST(browser_http, "--workers 1 --job-threads 2 --cache-bytes 40000000 "
         hresp_free(&r);
     }
     srv_term(d);
+}
+
+/* ---- mesh bodies ------------------------------------------------------------------------- */
+
+/* A binary STL of the cube [o, o + 2]^3 (12 triangles, outward). */
+static char *stl_cube(double o, size_t *len)
+{
+    static const int T[12][3] = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                 {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+    static const int V[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    *len = 84 + 50 * 12;
+    unsigned char *b = calloc(1, *len);
+    if (!b) return NULL;
+    b[80] = 12;
+    for (int t = 0; t < 12; t++)
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++) {
+                float f = (float)(o + 2 * V[T[t][k]][a]);
+                memcpy(b + 84 + 50 * t + 12 + 12 * k + 4 * a, &f, 4); /* little-endian host */
+            }
+    return (char *)b;
+}
+
+/* The multipart/form-data body of parts {name, filename (may be NULL), content type (may be
+ * NULL), data, len}; boundary "xBOUNDARYx". */
+typedef struct mpart {
+    const char *name, *filename, *ctype, *data;
+    size_t len;
+} mpart;
+
+static char *multipart(const mpart *p, size_t n, size_t *len)
+{
+    char *b = NULL;
+    FILE *f = open_memstream(&b, len);
+    for (size_t i = 0; i < n; i++) {
+        fprintf(f, "--xBOUNDARYx\r\nContent-Disposition: form-data; name=\"%s\"", p[i].name);
+        if (p[i].filename) fprintf(f, "; filename=\"%s\"", p[i].filename);
+        fprintf(f, "\r\n");
+        if (p[i].ctype) fprintf(f, "Content-Type: %s\r\n", p[i].ctype);
+        fprintf(f, "\r\n");
+        fwrite(p[i].data, 1, p[i].len, f);
+        fprintf(f, "\r\n");
+    }
+    fprintf(f, "--xBOUNDARYx--\r\n");
+    fclose(f);
+    return b;
+}
+
+static void post_mesh(srv *d, const char *path, const char *ctype, const char *body, size_t len,
+                      hresp *r)
+{
+    char h[160];
+    snprintf(h, sizeof h, "Content-Type: %s", ctype);
+    hreq q = {.path = path, .body = body, .len = len, .has_body = 1, .h = {h, "Prefer: wait=30"}};
+    http_do(d, &q, r);
+}
+
+/* A POST of one mesh (model/stl) answered as STL (?format=stl); multipart/form-data of an STL, an
+ * OFF and a part "request" asking for their union; 415 for another type, 422 naming the body or
+ * the part for a bad mesh. */
+SERVER_TEST(mesh_bodies, "--workers 1 --job-threads 1")
+{
+    size_t alen, blen, mlen;
+    hresp r;
+    char v[160];
+    char *a = stl_cube(0, &alen), *bstl = stl_cube(1, &blen);
+    REQUIRE(a && bstl, "no memory");
+
+    post_mesh(d, "/v1/jobs?format=stl", "model/stl", a, alen, &r);
+    CHECK(r.status == 200 && hget(&r, "Content-Type", v, sizeof v) && !strncmp(v, "model/stl", 9),
+          "raw STL POST ?format=stl: %ld %s", r.status, v);
+    if (r.status == 200) {
+        solid s;
+        char err[200];
+        int rc = mesh_read_stl(r.body.p, r.body.n, &s, err, sizeof err);
+        CHECK(rc == 0 && s.nv == 8 && s.nf == 12 && r.body.n == 84 + 50 * 12,
+              "the STL answered: %zu bytes, %s, %zu vertices", r.body.n, rc ? err : "read", s.nv);
+        if (rc == 0) solid_free(&s);
+    }
+    hresp_free(&r);
+
+    /* the second cube as OFF, text */
+    static const char off[] = "OFF\n8 6 0\n1 1 1\n3 1 1\n3 3 1\n1 3 1\n1 1 3\n3 1 3\n3 3 3\n1 3 3\n"
+                              "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n";
+    const char *req = "{\"op\":\"union\"}";
+    mpart parts[] = {{"a", "a.stl", "application/octet-stream", a, alen},
+                     {"b", "b", "model/vnd.off", off, sizeof off - 1},
+                     {"request", NULL, NULL, req, strlen(req)}};
+    char *mp = multipart(parts, 3, &mlen);
+    post_mesh(d, "/v1/jobs", "multipart/form-data; boundary=xBOUNDARYx", mp, mlen, &r);
+    json_t *j = r.status == 200 ? json_loadb(r.body.p, r.body.n, 0, NULL) : NULL;
+    json_t *vol = json_object_get(json_object_get(j, "result"), "volume");
+    CHECK(j && json_number_value(vol) == 15 && json_array_size(json_object_get(j, "CF")) == 3,
+          "multipart union: %ld, volume %g, %zu cells (15, 3)", r.status, json_number_value(vol),
+          json_array_size(json_object_get(j, "CF")));
+    json_decref(j);
+    hresp_free(&r);
+    free(mp);
+
+    post_mesh(d, "/v1/jobs", "text/plain", a, alen, &r);
+    check_problem(d, &r, 415, "/v1/jobs", "model/stl");
+    hresp_free(&r);
+
+    post_mesh(d, "/v1/jobs", "model/stl", "solid x\n", 8, &r);
+    check_problem(d, &r, 422, "/v1/jobs", "body (stl): line 2");
+    hresp_free(&r);
+
+    mpart bad[] = {{"a", "a.stl", NULL, a, alen}, {"notes", "x.txt", "text/plain", "hi", 2}};
+    mp = multipart(bad, 2, &mlen);
+    post_mesh(d, "/v1/jobs", "multipart/form-data; boundary=xBOUNDARYx", mp, mlen, &r);
+    check_problem(d, &r, 422, "/v1/jobs", "part 1 (x.txt): not a mesh");
+    hresp_free(&r);
+    free(mp);
+
+    mpart badstl[] = {{"a", "a.stl", NULL, a, alen - 7}};
+    mp = multipart(badstl, 1, &mlen);
+    post_mesh(d, "/v1/jobs", "multipart/form-data; boundary=xBOUNDARYx", mp, mlen, &r);
+    check_problem(d, &r, 422, "/v1/jobs", "part 0 (a.stl): not an STL file");
+    hresp_free(&r);
+    free(mp);
+
+    mpart badreq[] = {{"a", "a.stl", NULL, a, alen}, {"request", NULL, NULL, "{\"solids\":1}", 12}};
+    mp = multipart(badreq, 2, &mlen);
+    post_mesh(d, "/v1/jobs", "multipart/form-data; boundary=xBOUNDARYx", mp, mlen, &r);
+    check_problem(d, &r, 422, "/v1/jobs", "request: the solids are the files");
+    hresp_free(&r);
+    free(mp);
+    free(a);
+    free(bstl);
 }
 
 /* Runs cellard with args until it exits (it must not start): its exit status and output. */

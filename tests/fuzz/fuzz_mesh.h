@@ -1,6 +1,7 @@
 /* fuzz_mesh.h — the body of the OBJ and OFF targets (fuzz_obj.c, fuzz_off.c): one reader of
  * core/solid.h on the input, then what the CLI does with what it read, at a small scale.
  *
+ * Also the STL and PLY targets (fuzz_stl.c, fuzz_ply.c: any message but an empty one).
  * Checks beyond the sanitizers: a refusal is -1 with a "line N: ..." message and an empty
  * solid; a reading is a well-formed solid (offsets from 0, non-decreasing, ending at the counts;
  * every index < nv).  A reading then goes through solid_check() and solid_check_faces() at the
@@ -46,7 +47,9 @@ static void fuzz_check_solid(const solid *s)
     }
 }
 
-static int fuzz_mesh_one(fuzz_mesh_reader reader, const uint8_t *data, size_t size)
+/* One input through reader; a refusal's message must start with prefix (NULL: any text). */
+static int fuzz_mesh_one_msg(fuzz_mesh_reader reader, const uint8_t *data, size_t size,
+                             const char *prefix)
 {
     solid s, fixed = {0};
     solid_report rep;
@@ -58,7 +61,8 @@ static int fuzz_mesh_one(fuzz_mesh_reader reader, const uint8_t *data, size_t si
     FUZZ_CHECK(memchr(err, 0, sizeof err) != NULL, "unterminated message");
     if (rc != 0) {
         FUZZ_CHECK(rc == -1, "reader returned %d", rc);
-        FUZZ_CHECK(strncmp(err, "line ", 5) == 0, "message \"%s\"", err);
+        FUZZ_CHECK(prefix ? strncmp(err, prefix, strlen(prefix)) == 0 : err[0] != 0,
+                   "message \"%s\"", err);
         FUZZ_CHECK(s.nv == 0 && s.nf == 0 && !s.V && !s.cyc, "refused with a solid");
         return 0;
     }
@@ -95,6 +99,12 @@ static int fuzz_mesh_one(fuzz_mesh_reader reader, const uint8_t *data, size_t si
     fuzz_check_answer("api_solids_run_direct", rc, out, outlen, &e, 1);
     free(out);
     return 0;
+}
+
+/* OBJ and OFF: "line N: ..." */
+static inline int fuzz_mesh_one(fuzz_mesh_reader reader, const uint8_t *data, size_t size)
+{
+    return fuzz_mesh_one_msg(reader, data, size, "line ");
 }
 
 #endif

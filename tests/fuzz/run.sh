@@ -38,7 +38,8 @@ flags() {
     json) echo "-max_len=4096 -dict=tests/fuzz/json.dict" ;;
     render) echo "-max_len=16384 -dict=tests/fuzz/json.dict" ;;
     svg) echo "-max_len=16384 -dict=tests/fuzz/svg.dict" ;;
-    obj | off) echo "-max_len=16384 -dict=tests/fuzz/mesh.dict" ;;
+    obj | off | stl | ply) echo "-max_len=16384 -dict=tests/fuzz/mesh.dict" ;;
+    3mf) echo "-max_len=16384" ;;
     http) echo "-max_len=4096 -dict=tests/fuzz/http.dict" ;;
     *) echo "" ;;
     esac

@@ -9,7 +9,7 @@
 FROM debian:12 AS build
 RUN apt-get update && apt-get install -y --no-install-recommends \
         gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev libxml2-dev \
-        libpq-dev zlib1g-dev nodejs npm ca-certificates \
+        libpq-dev zlib1g-dev libzip-dev nodejs npm ca-certificates \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY . .
@@ -21,12 +21,13 @@ RUN --mount=type=secret,id=ca \
 
 # The runtime holds only the libraries cellard links (ldd build/cellard): libjansson4 (JSON),
 # libmicrohttpd12 (HTTP), libsqlite3-0 (the embedded store), libpq5 (the PostgreSQL store),
-# libssl3 (SHA-256 of requests and results), libxml2 (SVG); zlib1g (gzip) is in every Debian
+# libssl3 (SHA-256 of requests and results), libxml2 (SVG and 3MF), libzip4 (3MF packages);
+# zlib1g (gzip) is in every Debian
 # image already.  No curl: the HEALTHCHECK is
 # cellard --healthcheck.
 FROM debian:12-slim
 RUN apt-get update && apt-get install -y --no-install-recommends \
-        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 \
+        libjansson4 libmicrohttpd12 libsqlite3-0 libssl3 libxml2 libpq5 libzip4 \
     && rm -rf /var/lib/apt/lists/* /var/cache/apt/* /usr/share/doc/* /usr/share/man/* \
     && useradd --system --home /data --shell /usr/sbin/nologin cellar \
     && mkdir -p /data && chown cellar:cellar /data

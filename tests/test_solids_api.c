@@ -96,7 +96,7 @@ static const err_case err_cases[] = {
     /* the request's keys */
     {"{\"kind\":\"solids\"}", 422, "solids: required", NULL},
     {"{\"kind\":\"solids\",\"solids\":[" CUBE "],\"faces\":" CUBE "}", 422,
-     "faces: not with \"solids\"", NULL},
+     "faces: give one of \"solids\" (closed surfaces), \"layers\"", NULL},
     {"{\"kind\":\"solids\",\"solids\":[],\"name\":\"x\"}", 422, "name: unknown key", NULL},
     {"{\"kind\":\"solids\",\"solids\":{}}", 422, "solids: expected an array of solids", NULL},
     {"{\"kind\":\"solids\",\"solids\":\"cube\"}", 422, "solids: expected an array", NULL},

@@ -25,6 +25,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <zip.h>
 
 typedef struct mctx {
@@ -310,6 +311,11 @@ static int zip_parts(const char *model, size_t mlen, char **out, size_t *outlen,
     if (!src) goto fail;
     zip_source_keep(src);
     if (!(za = zip_open_from_source(src, ZIP_TRUNCATE, &ze))) goto fail;
+    /* the entries' time, 1980-01-01 12:00 as the zip's DOS time holds it: libzip turns a time_t
+     * into DOS time through the local time zone, so the time_t is the one local time gives for
+     * that date, and the bytes are the same in every time zone (a strong ETag) */
+    struct tm noon = {.tm_year = 80, .tm_mon = 0, .tm_mday = 1, .tm_hour = 12, .tm_isdst = -1};
+    time_t when = mktime(&noon);
     for (size_t i = 0; i < 3; i++) {
         zip_source_t *s = zip_source_buffer(za, parts[i].data, parts[i].len, 0);
         zip_int64_t k = s ? zip_file_add(za, parts[i].name, s, ZIP_FL_ENC_UTF_8) : -1;
@@ -319,7 +325,7 @@ static int zip_parts(const char *model, size_t mlen, char **out, size_t *outlen,
             goto fail_za;
         }
         zip_set_file_compression(za, (zip_uint64_t)k, ZIP_CM_DEFLATE, 6);
-        zip_file_set_mtime(za, (zip_uint64_t)k, 315532800 + 43200, 0); /* 1980-01-01 */
+        zip_file_set_mtime(za, (zip_uint64_t)k, when, 0);
     }
     if (zip_close(za) < 0) {
         snprintf(msg, msglen, "%s", zip_strerror(za));

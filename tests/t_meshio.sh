@@ -141,6 +141,11 @@ else
     fail "ply stl 3mf obj off in one request: $(cat "$T/err") ${n:-?} solids"
 fi
 
+# a result's 3MF is the same bytes in every time zone (the daemon's strong ETag promises it)
+TZ=UTC "$C" solids "$A" "$B" --op union --format 3mf --quiet >"$T/utc.3mf" 2>/dev/null
+TZ=Pacific/Kiritimati "$C" solids "$A" "$B" --op union --format 3mf --quiet >"$T/kir.3mf" 2>/dev/null
+check "3mf: the same bytes in UTC and UTC+14" sh -c "[ -s '$T/utc.3mf' ] && cmp -s '$T/utc.3mf' '$T/kir.3mf'"
+
 # a bad file: the message names it and where
 printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n' >"$T/bad.stl"
 if status 1 "$C" solids "$T/bad.stl" --quiet && grep -q "bad.stl: line 5: expected a finite number" "$T/err"; then

@@ -148,6 +148,7 @@ async function loadExample(ex) {
 
 function setInput(inp) {
   state.input = inp;
+  state.mode = 'result'; // a new input's Boolean: its result as one, first
   const req = inp.request, o = req.options || {};
   $('summary').textContent = `${inp.label} — a "${req.kind}" request`;
   $('precision').value = o.precision !== undefined ? String(o.precision) : '';
@@ -179,7 +180,10 @@ function enableControls(kind) {
   on('keep_dangling', ['lines', 'svg', 'polygons'].includes(kind));
   on('normalize', kind === 'svg');
   on('y_up', kind === 'svg');
-  on('op', kind === 'polygons' || kind === 'solids');
+  // (the op stays open: one chosen for the next file is kept; it is greyed where it does
+  // not apply)
+  on('op', true);
+  $('op').closest('label').classList.toggle('off', kind !== 'polygons' && kind !== 'solids');
   $('op').querySelector('option[value=""]').disabled = kind === 'polygons';
   if (kind === 'polygons' && $('op').value === '') $('op').value = 'union';
   $('expr').hidden = $('op').value !== 'expr';
@@ -623,7 +627,7 @@ function wire() {
     state.opChosen = true;
     $('expr').hidden = $('op').value !== 'expr';
     if ($('op').value === 'expr') $('expr').focus();
-    else if (state.input && !$('op').disabled) compute();
+    else if (state.input && ['polygons', 'solids'].includes(state.input.request.kind)) compute();
   });
   $('expr').addEventListener('change', () => { state.opChosen = true; });
   for (const r of document.querySelectorAll('input[name="mode"]')) {

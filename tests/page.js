@@ -964,7 +964,7 @@ async function main() {
         const s = await page.evaluate(() => ({ run: window.cellar.run, stage: window.cellar.stage, state: window.cellar.state, p: window.cellar.progress, text: document.getElementById('status').textContent, cancel: !document.getElementById('cancel').disabled, error: document.getElementById('error').innerText }));
         if (s.run <= r0) { await new Promise((r) => setTimeout(r, 15)); continue; }
         if (['drawn', 'error', 'canceled'].includes(s.state)) return { seen, end: s };
-        if (s.stage === stage && s.p) seen.push(s);
+        if (s.stage === stage && s.p && (stage === 'drawing' || s.p.loaded !== undefined)) seen.push(s);
         if (until(seen)) return { seen };
         await new Promise((r) => setTimeout(r, 15));
       }
@@ -1030,7 +1030,7 @@ async function main() {
       await verifyPicture('proxied-polygons');
       const outside = requests.filter((u) => !u.startsWith(purl) && !u.startsWith('data:'));
       if (outside.length) return `requests outside ${purl}: ${[...new Set(outside)].slice(0, 5).join(' ')}`;
-      const kinds = ['assets/app-', 'assets/worker-', 'assets/examples-', 'assets/style-', 'v1/jobs', 'v1/results/'];
+      const kinds = ['assets/app-', 'assets/worker-', 'assets/examples-', 'assets/style-', 'v1/jobs'];
       for (const k of kinds) if (!requests.some((u) => u.startsWith(purl + k))) return `no request of ${purl}${k}`;
       const abs = await page.evaluate(() => [...document.querySelectorAll('[href], [src]')].map((e) => e.getAttribute('href') ?? e.getAttribute('src')).filter((u) => u.startsWith('/')));
       if (abs.length) return `absolute links in the page: ${abs.join(' ')}`;

@@ -610,7 +610,12 @@ function cellList(model) {
 
 function wire() {
   const drop = $('drop');
-  $('file').addEventListener('change', () => { if ($('file').files.length) loadFiles($('file').files); });
+  // (the input emptied once read: the same file chosen again is another change)
+  $('file').addEventListener('change', () => {
+    const list = [...$('file').files];
+    $('file').value = '';
+    if (list.length) loadFiles(list);
+  });
   for (const t of ['dragenter', 'dragover']) drop.addEventListener(t, (e) => { e.preventDefault(); drop.classList.add('over'); });
   for (const t of ['dragleave', 'drop']) drop.addEventListener(t, () => drop.classList.remove('over'));
   drop.addEventListener('drop', (e) => { e.preventDefault(); if (e.dataTransfer.files.length) loadFiles(e.dataTransfer.files); });

@@ -231,8 +231,12 @@ function startProxy(target) {
       pace(ur, res, () => px.down, () => {});
     });
     up.on('error', () => res.destroy());
-    req.on('close', () => { if (!sent) { px.aborted.push(`${what} upload`); up.destroy(); } });
-    res.on('close', () => { if (!res.writableFinished && sent) { px.aborted.push(`${what} download`); up.destroy(); } });
+    // (the connection closed before the answer went: cut short, while the body came or after)
+    res.on('close', () => {
+      if (res.writableFinished) return;
+      px.aborted.push(`${what} ${sent ? 'download' : 'upload'}`);
+      up.destroy();
+    });
     pace(req, up, () => px.up, () => { sent = true; });
   });
   return new Promise((resolve) => px.server.listen(0, '127.0.0.1', () => {
@@ -985,8 +989,9 @@ async function main() {
       if (!/sending the request: [\d.]+ MB of [\d.]+ MB \(\d+%\)/.test(last.text) || !last.cancel) return `status "${last.text}", Cancel enabled: ${last.cancel}`;
       if (outdir) await page.screenshot({ path: path.join(outdir, 'upload-progress.png') });
       const st = await canceled(r0);
-      await new Promise((r) => setTimeout(r, 300));
+      // (the proxy reads what the socket holds, at full speed now, before it sees the close)
       proxy.up = 0;
+      for (let i = 0; i < 100 && !proxy.aborted.length; i++) await new Promise((r) => setTimeout(r, 100));
       if (st !== 'canceled') return `after Cancel: ${st}`;
       if (!proxy.aborted.some((a) => /^POST \/cellar\/v1\/jobs upload/.test(a))) return `the proxy saw no upload cut short: ${proxy.aborted}`;
       figure(`upload of ${fmtMB(last.p.total)}: ${fmtMB(last.p.loaded)} seen sent ("${last.text}"), then canceled: ${proxy.aborted.join(', ')}`);
@@ -1003,8 +1008,8 @@ async function main() {
         if (!/receiving the result: [\d.]+ MB/.test(last.text) || !last.cancel) return `status "${last.text}", Cancel enabled: ${last.cancel}`;
         if (outdir) await page.screenshot({ path: path.join(outdir, 'download-progress.png') });
         const st = await canceled(r0);
-        await new Promise((r) => setTimeout(r, 300));
         proxy.down = 0;
+        for (let i = 0; i < 100 && !proxy.aborted.length; i++) await new Promise((r) => setTimeout(r, 100));
         if (st !== 'canceled') return `after Cancel: ${st}`;
         if (!proxy.aborted.some((a) => /download/.test(a))) return `the proxy saw no download cut short: ${proxy.aborted}`;
         figure(`download: ${fmtMB(last.p.loaded)} seen received ("${last.text}"), then canceled: ${proxy.aborted.join(', ')}`);

@@ -4,11 +4,22 @@
 // against the result's own numbers, read from GET /v1/results/{hash} here (never against
 // stored images): faces drawn = the result's faces (and the pixel where each face's number
 // goes has that face's colour), meshes = cells, a Boolean's highlighted faces or cells = its
-// "result" cells.  Prints "ok NAME" or "FAIL NAME: why" per check, "figure: ..." lines (page
-// weight, time to the first picture), screenshots in OUTDIR, and "N passed, N failed" last.
+// "result" cells, shown by default as one region or one solid.  The traps a new user met
+// (issue 28, item 5) each have a check: an op chosen before a file loads is kept, and a new op
+// recomputes; numbers keep their exponents (a tiny and a huge volume); the counts are the
+// result's stats; the explode label follows its slider; the pointer's place is said as such;
+// upload, download and drawing progress, each with a Cancel that stops it (through a small
+// proxy that slows the bytes down); face numbers that would overlap are left out.  Also the
+// mesh files (STL, PLY, 3MF), the 3D download links, several GeoJSON files as a "layers"
+// request, and the page served under a sub-path (/cellar/, through the proxy): every URL it
+// uses is relative.  Prints "ok NAME" or "FAIL NAME: why" per check, "figure: ..." lines
+// (page weight, time to the first picture), screenshots in OUTDIR, and "N passed, N failed"
+// last.
 'use strict';
 const fs = require('fs');
+const http = require('http');
 const path = require('path');
+const zlib = require('zlib');
 const { chromium } = require('playwright-core');
 
 const [base, outdir, longJob, bigJob] = process.argv.slice(2);
@@ -67,11 +78,37 @@ const errorText = () => page.evaluate(() => (document.getElementById('error').hi
 
 // The drawn picture against the result (fetched here): 2D faces (and their pixels) or 3D
 // meshes; a Boolean's highlight; the download links.  Returns the result.
-async function verifyPicture(label, { pixels = true } = {}) {
+async function verifyPicture(label, opts = {}) {
   const hash = await page.evaluate(() => window.cellar.hash);
   if (!/^[0-9a-f]{64}$/.test(hash)) throw new Error(`no result hash (${hash})`);
   const res = await getJSON(`/v1/results/${hash}`);
+  const mode = await page.evaluate(() => document.querySelector('input[name="mode"]:checked').value);
+  await verifyMode(res, opts);
+  if (res.result) { // a Boolean: its other mode too (its cells, or the result as one), then back
+    const other = mode === 'result' ? 'cells' : 'result';
+    await page.check(`input[name="mode"][value="${other}"]`);
+    await verifyMode(res, opts);
+    await page.check(`input[name="mode"][value="${mode}"]`);
+  }
+  const links = await page.$$eval('#downloads a', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href'), a.href]));
+  const formats = res.dim === 2 ? ['json', 'svg', 'geojson', 'npz'] : ['json', 'obj', 'stl', 'off', '3mf', 'glb', 'npz'];
+  const pageUrl = await page.evaluate(() => document.baseURI);
+  const want = formats.map((f) => {
+    const rel = f === 'json' ? `v1/results/${hash}` : `v1/results/${hash}?format=${f}`;
+    return [f, rel, new URL(rel, pageUrl).href];
+  });
+  if (JSON.stringify(links) !== JSON.stringify(want)) throw new Error(`downloads ${JSON.stringify(links)}`);
+  if (outdir) await page.screenshot({ path: path.join(outdir, `${label.replace(/[^A-Za-z0-9.]+/g, '_')}.png`) });
+  return res;
+}
+
+// The picture in the view's current mode: 'result' (a Boolean's result as one region or one
+// solid) or 'cells'.
+async function verifyMode(res, { pixels = true } = {}) {
   const dim = res.dim;
+  const mode = await page.evaluate((d) => document.getElementById(d === 2 ? 'view2d' : 'view3d').dataset.mode, dim);
+  const want = await page.evaluate(() => document.querySelector('input[name="mode"]:checked').value);
+  if (mode !== (res.result ? want : 'cells')) throw new Error(`the view's mode is ${mode}, the control says ${want} (a Boolean: ${!!res.result})`);
   // what the view was last told is on the screen after the next frames
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   if (dim === 2) {
@@ -106,7 +143,7 @@ async function verifyPicture(label, { pixels = true } = {}) {
   } else {
     const m = await page.evaluate(() => {
       const v = window.cellar.view;
-      const meshes = v.scene.children.filter((o) => o.isMesh && o.userData.cell !== undefined);
+      const meshes = v.meshes;
       return {
         n: meshes.length, cells: meshes.map((o) => o.userData.cell),
         lit: meshes.filter((o) => o.material.opacity === 1 && !o.material.transparent).map((o) => o.userData.cell),
@@ -117,7 +154,24 @@ async function verifyPicture(label, { pixels = true } = {}) {
       throw new Error(`${m.n} meshes, the result has ${res.CF.length} cells (stats.C ${res.stats && res.stats.C})`);
     if (!same(m.cells, m.cells.map((_, i) => i))) throw new Error('the meshes are not cells 0..C-1');
     if (m.tris.some((t) => t < 4)) throw new Error('a cell with fewer than 4 triangles');
-    if (res.result) {
+    if (mode === 'result') {
+      // one solid: the only mesh shown, one colour, enclosing the result's volume
+      const r = await page.evaluate(() => {
+        const v = window.cellar.view, shown = [];
+        v.scene.traverseVisible((o) => { if (o.isMesh) shown.push(o); });
+        const rm = v.resultMesh, p = rm ? rm.geometry.attributes.position.array : [];
+        let vol = 0;
+        for (let i = 0; i < p.length; i += 9) {
+          vol += (p[i] * (p[i + 4] * p[i + 8] - p[i + 5] * p[i + 7]) - p[i + 1] * (p[i + 3] * p[i + 8] - p[i + 5] * p[i + 6]) +
+            p[i + 2] * (p[i + 3] * p[i + 7] - p[i + 4] * p[i + 6])) / 6;
+        }
+        return { shown: shown.length, isResult: shown.length === 1 && shown[0] === rm, vol, tris: p.length / 9 };
+      });
+      const ext = Math.max(...[0, 1, 2].map((k) => Math.max(...res.V.map((q) => q[k])) - Math.min(...res.V.map((q) => q[k]))));
+      const wantVol = res.result.volume * (2 / ext) ** 3;
+      if (!r.isResult) throw new Error(`result mode: ${r.shown} meshes shown, not the result as one solid`);
+      if (!(Math.abs(r.vol - wantVol) <= 1e-4 * Math.max(wantVol, 1e-3))) throw new Error(`the result solid encloses ${r.vol}, the result's volume is ${wantVol} (scaled)`);
+    } else if (res.result) {
       if (!same(m.lit, res.result.cells)) throw new Error(`highlighted cells ${fmtList(m.lit)}, the result's cells ${fmtList(res.result.cells)}`);
     } else if (m.lit.length !== m.n) throw new Error(`${m.n - m.lit.length} cells faint without an op`);
     if (pixels) {
@@ -133,14 +187,62 @@ async function verifyPicture(label, { pixels = true } = {}) {
       if (!(drawn > 0.01)) throw new Error(`only ${(100 * drawn).toFixed(2)}% of the 3D view is not background`);
     }
   }
-  const links = await page.$$eval('#downloads a', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href')]));
-  const want = dim === 2
-    ? [['json', `/v1/results/${hash}`], ['svg', `/v1/results/${hash}?format=svg`], ['geojson', `/v1/results/${hash}?format=geojson`],
-      ['npz', `/v1/results/${hash}?format=npz`]]
-    : [['json', `/v1/results/${hash}`], ['obj', `/v1/results/${hash}?format=obj`], ['npz', `/v1/results/${hash}?format=npz`]];
-  if (JSON.stringify(links) !== JSON.stringify(want)) throw new Error(`downloads ${JSON.stringify(links)}`);
-  if (outdir) await page.screenshot({ path: path.join(outdir, `${label.replace(/[^A-Za-z0-9.]+/g, '_')}.png`) });
-  return res;
+}
+
+const fmtMB = (n) => `${(n / 1048576).toFixed(1)} MB`;
+
+// A proxy that mounts the daemon at target under /cellar/ (any other path: 404), as a
+// front server would: the page must work there.  up and down (bytes a second, 0: as fast as
+// it goes) slow the request bodies and the answers; aborted lists the exchanges the browser
+// cut short ("METHOD PATH upload" or "... download"); log every answer's "STATUS METHOD PATH".
+function startProxy(target) {
+  const t = new URL(target);
+  const px = { up: 0, down: 0, aborted: [], log: [] };
+  const pace = (src, dst, rate, done) => {
+    const t0 = Date.now();
+    let n = 0;
+    src.on('data', (c) => {
+      const ok = dst.write(c);
+      n += c.length;
+      const r = rate();
+      const due = r > 0 ? t0 + (n / r) * 1000 - Date.now() : 0;
+      if (due > 0 || !ok) {
+        src.pause();
+        let waits = (due > 0 ? 1 : 0) + (ok ? 0 : 1);
+        const go = () => { if (--waits === 0) src.resume(); };
+        if (due > 0) setTimeout(go, due);
+        if (!ok) dst.once('drain', go);
+      }
+    });
+    src.on('end', () => { done(); dst.end(); });
+  };
+  px.server = http.createServer((req, res) => {
+    const what = `${req.method} ${req.url}`;
+    if (!req.url.startsWith('/cellar/')) {
+      px.log.push(`404 ${what}`);
+      res.writeHead(404, { 'Content-Type': 'text/plain' });
+      res.end('not under /cellar/');
+      return;
+    }
+    let sent = false;
+    const up = http.request({ host: t.hostname, port: t.port, method: req.method, path: req.url.slice('/cellar'.length), headers: req.headers }, (ur) => {
+      px.log.push(`${ur.statusCode} ${what}`);
+      res.writeHead(ur.statusCode, ur.headers);
+      pace(ur, res, () => px.down, () => {});
+    });
+    up.on('error', () => res.destroy());
+    // (the connection closed before the answer went: cut short, while the body came or after)
+    res.on('close', () => {
+      if (res.writableFinished) return;
+      px.aborted.push(`${what} ${sent ? 'download' : 'upload'}`);
+      up.destroy();
+    });
+    pace(req, up, () => px.up, () => { sent = true; });
+  });
+  return new Promise((resolve) => px.server.listen(0, '127.0.0.1', () => {
+    px.url = `http://127.0.0.1:${px.server.address().port}`;
+    resolve(px);
+  }));
 }
 
 function shoelace(V, c) {
@@ -197,8 +299,10 @@ async function main() {
     if (!/<title>cellar/.test(html)) return 'no <title>cellar';
     if (r.headers.get('cache-control') !== 'no-cache' || !/^"[0-9a-f]{32}(-gz)?"$/.test(r.headers.get('etag') || '')) return `/: ${r.headers.get('cache-control')} ${r.headers.get('etag')}`;
     if (!/default-src 'self'/.test(r.headers.get('content-security-policy') || '')) return 'no Content-Security-Policy';
-    const assets = [...html.matchAll(/(?:src|href)="(\/assets\/[^"]+)"/g)].map((m) => m[1]);
-    if (assets.length < 2) return `the page names ${assets.length} assets`;
+    const absolute = [...html.matchAll(/(?:src|href|action)\s*=\s*"(\/[^"]*)"/g)].map((m) => m[1]);
+    if (absolute.length) return `index.html names absolute paths (the page may sit under a sub-path): ${absolute.join(' ')}`;
+    const assets = [...html.matchAll(/(?:src|href)="(assets\/[^"]+)"/g)].map((m) => `/${m[1]}`);
+    if (assets.length < 2) return `the page names ${assets.length} assets (relative: assets/...)`;
     for (const a of assets) {
       const x = await fetch(url + a);
       await x.arrayBuffer();
@@ -433,12 +537,27 @@ async function main() {
         { type: 'Feature', properties: { name: 'a point' }, geometry: { type: 'Point', coordinates: [5, 5] } },
       ],
     };
+    if (await page.inputValue('#op') !== 'union') { // (the op chosen before is kept: union here)
+      const r = await runNow();
+      await page.selectOption('#op', 'union');
+      await settle(r);
+    }
     const r0 = await files([{ name: 'parcels.geojson', text: JSON.stringify(fc) }]);
     if (await settle(r0) !== 'drawn') return await errorText();
     const req = await page.textContent('#summary');
     if (!/2 polygons/.test(req) || !/1 feature without a polygon left out/.test(req)) return `summary "${req}"`;
     const res = await verifyPicture('geojson');
     if (!res.result || Math.abs(res.result.area - (16 - 1 + 9 - 1 + 1)) > 1e-9) return `union area ${res.result && res.result.area}`;
+    // a face with a hole: the hover says the face has it, and where the pointer is, as such
+    const f = await page.evaluate(() => window.cellar.view.model.nholes.findIndex((n) => n > 0));
+    if (f < 0) return 'no face with a hole';
+    const box = await page.locator('#view2d canvas.over').boundingBox();
+    const p = await page.evaluate((g) => window.cellar.view.facePixel(g), f);
+    await page.mouse.move(box.x + p.x, box.y + p.y);
+    await page.waitForFunction((g) => document.getElementById('info').dataset.face === String(g), f, { timeout: T(3000), polling: 50 });
+    const text = await page.textContent('#info');
+    await page.mouse.move(box.x + 3, box.y + 3);
+    if (!/the face has 1 hole/.test(text) || !/ · pointer at \(-?[\d.e+-]+, -?[\d.e+-]+\)$/.test(text) || /hole at/.test(text)) return `hover: "${text}"`;
   });
   await check('OFF and OBJ files together: a solid each', async () => {
     const off = 'OFF\n# a tetrahedron\n4 4 6\n0.5 0.5 0.5\n3 0.5 0.5\n0.5 3 0.5\n0.5 0.5 3\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n';
@@ -468,7 +587,7 @@ async function main() {
     ['an OBJ with a bad face: the file and its line', [{ name: 'bad.obj', text: 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n' }],
       (t) => /bad\.obj: line 4: vertex index 9 out of range/.test(t)],
     ['a .json that is not JSON', [{ name: 'notjson.json', text: '{"kind": "lines", ' }], (t) => /notjson\.json: not JSON/.test(t)],
-    ['a file of another kind', [{ name: 'notes.txt', text: 'hello' }], (t) => /notes\.txt: not an SVG, OBJ, OFF, JSON or GeoJSON file/.test(t)],
+    ['a file of another kind', [{ name: 'notes.txt', text: 'hello' }], (t) => /notes\.txt: not an SVG, OBJ, OFF, STL, PLY, 3MF, JSON or GeoJSON file/.test(t)],
     ['an op expression that is not valid for the inputs: the path in op', [{ name: 'op.json', text: '{"kind":"solids","solids":[{"V":[[0,0,0],[1,0,0],[0,1,0],[0,0,1]],"FV":[[0,2,1],[0,1,3],[0,3,2],[1,2,3]]}],"op":["-",0,7]}' }],
       (t) => /422/.test(t) && /op\[2\]/.test(t)],
   ];
@@ -563,13 +682,13 @@ async function main() {
       let jobUrl = '';
       while (Date.now() - t0 < 60000) {
         const s = await page.evaluate(() => ({
-          state: window.cellar.state, run: window.cellar.run, url: window.cellar.jobUrl,
+          state: window.cellar.state, run: window.cellar.run, url: window.cellar.jobUrl, stage: window.cellar.stage,
           value: document.getElementById('progress').hidden ? -1 : document.getElementById('progress').position >= 0 ? document.getElementById('progress').value : -1,
           text: document.getElementById('status').textContent,
         }));
         if (s.run > r0 && s.state !== 'running') return `the job ended (${s.state}: ${s.text}) before it could be canceled`;
         if (s.url) jobUrl = s.url;
-        if (s.value > 0 && (!seen.length || s.value !== seen[seen.length - 1])) seen.push(s.value);
+        if (s.stage === 'running' && s.value > 0 && (!seen.length || s.value !== seen[seen.length - 1])) seen.push(s.value);
         if (seen.length >= 2) break;
         await new Promise((r) => setTimeout(r, 100));
       }
@@ -579,12 +698,355 @@ async function main() {
       await page.click('#cancel');
       if (await settle(r0, 20000) !== 'canceled') return `after Cancel: ${await page.evaluate(() => window.cellar.state)}: ${await errorText()}`;
       if (!jobUrl) return 'no job URL';
-      const job = await getJSON(jobUrl);
+      if (!jobUrl.startsWith(`${url}/v1/jobs/`)) return `the job's URL ${jobUrl}: not under the page's`;
+      const job = await getJSON(jobUrl.slice(url.length));
       if (job.state !== 'canceled') return `the job is ${job.state}`;
       const shown = await page.textContent('#status');
       if (!/canceled/.test(shown)) return `status "${shown}"`;
       figure(`long job: progress ${seen.map((x) => x.toFixed(2)).join(' -> ')} ("${status}"), then canceled (GET ${jobUrl}: ${job.state})`);
     });
+  }
+
+  // ---- face numbers of a large result: thinned where they would overlap ------------------------
+  if (bigJob) {
+    await check('face numbers of 100 000 faces: none overlaps another, the others left out and said so', async () => {
+      const n = await page.evaluate(() => window.cellar.view.model && window.cellar.view.model.faces);
+      if (!(n >= 100000)) return `the view holds ${n} faces (the 100 000 faces check did not draw)`;
+      await page.click('#fit');
+      await page.check('#fnum');
+      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+      const st = await page.evaluate(() => ({
+        placed: window.cellar.view.placed, labels: window.cellar.view.faceLabels.length,
+        skipped: window.cellar.view.skipped, note: window.cellar.view.note.textContent,
+      }));
+      if (outdir) await page.screenshot({ path: path.join(outdir, 'lines-100k-numbers.png') });
+      await page.uncheck('#fnum');
+      if (!st.labels || st.placed.length !== st.labels) return `${st.labels} numbers drawn, ${st.placed.length} boxes`;
+      for (let i = 0; i < st.placed.length; i++) {
+        const a = st.placed[i];
+        for (let j = i + 1; j < st.placed.length; j++) {
+          const b = st.placed[j];
+          if (a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]) return `numbers ${i} and ${j} overlap: ${a} ${b}`;
+        }
+      }
+      if (!(st.skipped > 0) || !/overlap/.test(st.note)) return `${st.skipped} left out, the note "${st.note}"`;
+      figure(`face numbers of ${n} faces at fit: ${st.labels} drawn, ${st.skipped} left out (they would overlap)`);
+    });
+  }
+
+  // ---- several GeoJSON files: a "layers" request ---------------------------------------------------
+  await check('several GeoJSON files: a "layers" request, a layer per file named by it, the op over the layers', async () => {
+    const sq = (x, y, d) => ({ type: 'Polygon', coordinates: [[[x, y], [x + d, y], [x + d, y + d], [x, y + d], [x, y]]] });
+    const parcels = {
+      type: 'FeatureCollection',
+      features: [
+        { type: 'Feature', properties: { name: 'P1' }, geometry: sq(0, 0, 4) },
+        { type: 'Feature', properties: { name: 'P2' }, geometry: sq(4, 0, 4) },
+        { type: 'Feature', properties: { name: 'a point' }, geometry: { type: 'Point', coordinates: [1, 1] } },
+      ],
+    };
+    const bodies = [];
+    await context.route('**/v1/jobs', async (route) => {
+      const r = route.request();
+      if (r.method() === 'POST') bodies.push(r.postData());
+      await route.continue();
+    });
+    try {
+      await page.selectOption('#op', 'intersection');
+      const r0 = await runNow();
+      await page.setInputFiles('#file', [
+        { name: 'parcels.geojson', mimeType: 'application/geo+json', buffer: Buffer.from(JSON.stringify(parcels)) },
+        { name: 'zones.json', mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(sq(2, 2, 4))) },
+      ]);
+      await page.waitForFunction((r) => window.cellar.run > r && ['drawn', 'error', 'canceled'].includes(window.cellar.state), r0, { timeout: T(15000), polling: 50 });
+      if (!bodies.length) return 'no POST of v1/jobs seen';
+      const req = JSON.parse(bodies[bodies.length - 1]);
+      if (req.kind !== 'polygons' || 'polygons' in req) return `kind ${req.kind}, keys ${Object.keys(req)}`;
+      if (JSON.stringify(Object.keys(req.layers)) !== '["parcels","zones"]') return `layers ${Object.keys(req.layers)}`;
+      const p = req.layers.parcels, z = req.layers.zones;
+      if (p.type !== 'FeatureCollection' || p.features.length !== 2 || p.features[1].properties.name !== 'P2') return `parcels ${JSON.stringify(p).slice(0, 200)}`;
+      if (!Array.isArray(z) || z.length !== 1 || z[0].type !== 'Polygon') return `zones ${JSON.stringify(z).slice(0, 200)}`;
+      if (req.op !== 'intersection') return `op ${JSON.stringify(req.op)} (intersection was chosen before the files)`;
+      const summary = await page.textContent('#summary');
+      if (!/2 layers: parcels \(2 polygons \(1 feature without a polygon left out\)\), zones \(1 polygons\)/.test(summary)) return `summary "${summary}"`;
+      const ph = await page.getAttribute('#expr', 'placeholder');
+      if (ph !== '["-","parcels",["+","zones"]]') return `the expression's placeholder ${ph}`;
+      const r1 = await runNow();
+      await page.selectOption('#op', 'expr');
+      await page.fill('#expr', '["&", "parcels", "zones"]');
+      await page.press('#expr', 'Enter');
+      await page.waitForFunction((r) => window.cellar.run > r && ['drawn', 'error', 'canceled'].includes(window.cellar.state), r1, { timeout: T(15000), polling: 50 });
+      const req2 = JSON.parse(bodies[bodies.length - 1]);
+      if (JSON.stringify(req2.op) !== '["&","parcels","zones"]' || JSON.stringify(Object.keys(req2.layers)) !== '["parcels","zones"]') return `then: op ${JSON.stringify(req2.op)}, layers ${Object.keys(req2.layers)}`;
+      figure(`layers: the page sent ${bodies.length} requests {"kind": "polygons", "layers": {"parcels": FeatureCollection(2), "zones": [Polygon]}, "op": ...}; the daemon of this branch answered: ${(await errorText()).replace(/\n/g, ' | ').slice(0, 160) || await page.evaluate(() => window.cellar.state)}`);
+    } finally {
+      await context.unroute('**/v1/jobs');
+      await page.selectOption('#op', 'union');
+    }
+  });
+
+  // ---- the page under a sub-path, through a proxy: relative URLs, and the traps ---------------
+  const proxy = await startProxy(url);
+  const main = page;
+  const requests = [];
+  page = await context.newPage();
+  page.on('pageerror', (e) => errors.push(`uncaught (proxied page): ${e.message}`));
+  page.on('request', (r) => requests.push(r.url()));
+  const purl = `${proxy.url}/cellar/`;
+  try {
+    await page.goto(purl);
+    await page.waitForFunction(() => window.cellar && Number(document.getElementById('example').dataset.count) > 0, null, { polling: 20, timeout: T(15000) });
+    const ex = await page.$$eval('#example option', (os) => os.filter((o) => o.value !== '').map((o) => [o.value, o.textContent]));
+    const pick = async (name) => {
+      const v = ex.find((e) => e[1] === name);
+      const r0 = await runNow();
+      await page.selectOption('#example', v[0]);
+      return settle(r0);
+    };
+    const boxObj = fs.readFileSync('examples/box.obj', 'utf8'), pyrObj = fs.readFileSync('examples/pyramid.obj', 'utf8');
+
+    await check('an op chosen before a file is kept: intersection of two squares (GeoJSON) is 25, not their union', async () => {
+      await page.selectOption('#op', 'intersection');
+      const sq = (x, y) => ({ type: 'Feature', properties: {}, geometry: { type: 'Polygon', coordinates: [[[x, y], [x + 10, y], [x + 10, y + 10], [x, y + 10], [x, y]]] } });
+      const r0 = await files([{ name: 'squares.geojson', text: JSON.stringify({ type: 'FeatureCollection', features: [sq(0, 0), sq(5, 5)] }) }]);
+      if (await settle(r0) !== 'drawn') return await errorText();
+      const res = await verifyPicture('op-kept-squares');
+      const op = await page.inputValue('#op');
+      const counts = await page.textContent('#counts');
+      if (op !== 'intersection' || !res.result || res.result.area !== 25 || !/area 25\b/.test(counts)) return `op ${op}, area ${res.result && res.result.area}, "${counts}"`;
+    });
+    await check('a new op recomputes at once: difference of the two squares (75)', async () => {
+      const r0 = await runNow();
+      await page.selectOption('#op', 'difference');
+      if (await settle(r0) !== 'drawn') return await errorText();
+      const res = await getJSON(`/v1/results/${await page.evaluate(() => window.cellar.hash)}`);
+      if (!res.result || res.result.area !== 75) return `area ${res.result && res.result.area}`;
+    });
+    await check('difference chosen, then box.obj and pyramid.obj loaded: their difference (89/12), then union at once', async () => {
+      const r0 = await files([{ name: 'box.obj', text: boxObj }, { name: 'pyramid.obj', text: pyrObj }]);
+      if (await settle(r0) !== 'drawn') return await errorText();
+      const res = await verifyPicture('op-kept-difference');
+      if (!res.result || Math.abs(res.result.volume - 89 / 12) > 1e-9) return `volume ${res.result && res.result.volume}`;
+      const counts = await page.textContent('#counts');
+      if (!counts.includes('volume 7.41667')) return `counts "${counts}"`;
+      const r1 = await runNow();
+      await page.selectOption('#op', 'union');
+      if (await settle(r1) !== 'drawn') return await errorText();
+      const sent = await page.evaluate(() => window.cellar.sent.op);
+      const u = await getJSON(`/v1/results/${await page.evaluate(() => window.cellar.hash)}`);
+      if (sent !== 'union' || !u.result || !(u.result.volume > 8)) return `union: sent ${sent}, volume ${u.result && u.result.volume}`;
+    });
+
+    // the meshes of box.obj and pyramid.obj in the other formats
+    const readObj = (t) => {
+      const V = [], T3 = [];
+      for (const l of t.split('\n')) {
+        const w = l.trim().split(/\s+/);
+        if (w[0] === 'v') V.push(w.slice(1, 4).map(Number));
+        if (w[0] === 'f') { const f = w.slice(1).map((x) => parseInt(x, 10) - 1); for (let i = 1; i + 1 < f.length; i++) T3.push([f[0], f[i], f[i + 1]]); }
+      }
+      return { V, T: T3 };
+    };
+    const box = readObj(boxObj), pyr = readObj(pyrObj);
+    const stlBinary = (m) => {
+      const b = Buffer.alloc(84 + 50 * m.T.length);
+      b.write('binary STL from page.js', 0);
+      b.writeUInt32LE(m.T.length, 80);
+      m.T.forEach((t, i) => t.forEach((v, k) => m.V[v].forEach((x, j) => b.writeFloatLE(x, 84 + 50 * i + 12 + 12 * k + 4 * j))));
+      return b;
+    };
+    const stlAscii = (m, name) => Buffer.from(`solid ${name}\n${m.T.map((t) => `facet normal 0 0 0\n outer loop\n${t.map((v) => `  vertex ${m.V[v].join(' ')}\n`).join('')} endloop\nendfacet\n`).join('')}endsolid ${name}\n`);
+    const plyHeader = (m, fmt) => `ply\nformat ${fmt} 1.0\ncomment from page.js\nelement vertex ${m.V.length}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nelement face ${m.T.length}\nproperty list uchar int vertex_indices\nend_header\n`;
+    const plyAscii = (m) => Buffer.from(plyHeader(m, 'ascii') + m.V.map((p) => `${p.join(' ')} 200\n`).join('') + m.T.map((t) => `3 ${t.join(' ')}\n`).join(''));
+    const plyBinary = (m) => {
+      const h = Buffer.from(plyHeader(m, 'binary_little_endian'));
+      const b = Buffer.alloc(13 * m.V.length + 13 * m.T.length);
+      let o = 0;
+      for (const p of m.V) { for (const x of p) { b.writeFloatLE(x, o); o += 4; } b.writeUInt8(200, o++); }
+      for (const t of m.T) { b.writeUInt8(3, o++); for (const v of t) { b.writeInt32LE(v, o); o += 4; } }
+      return Buffer.concat([h, b]);
+    };
+    const zip = (entries) => { // [name, Buffer, deflate?]
+      const locals = [], central = [];
+      let off = 0;
+      for (const [name, data, deflate] of entries) {
+        const body = deflate ? zlib.deflateRawSync(data) : data, n = Buffer.from(name);
+        const crc = zlib.crc32 ? zlib.crc32(data) : 0;
+        const lh = Buffer.alloc(30);
+        lh.writeUInt32LE(0x04034b50, 0); lh.writeUInt16LE(20, 4); lh.writeUInt16LE(deflate ? 8 : 0, 8);
+        lh.writeUInt32LE(crc >>> 0, 14); lh.writeUInt32LE(body.length, 18); lh.writeUInt32LE(data.length, 22); lh.writeUInt16LE(n.length, 26);
+        const ch = Buffer.alloc(46);
+        ch.writeUInt32LE(0x02014b50, 0); ch.writeUInt16LE(20, 4); ch.writeUInt16LE(20, 6); ch.writeUInt16LE(deflate ? 8 : 0, 10);
+        ch.writeUInt32LE(crc >>> 0, 16); ch.writeUInt32LE(body.length, 20); ch.writeUInt32LE(data.length, 24); ch.writeUInt16LE(n.length, 28); ch.writeUInt32LE(off, 42);
+        locals.push(lh, n, body);
+        central.push(ch, n);
+        off += 30 + n.length + body.length;
+      }
+      const cd = Buffer.concat(central), end = Buffer.alloc(22);
+      end.writeUInt32LE(0x06054b50, 0); end.writeUInt16LE(entries.length, 8); end.writeUInt16LE(entries.length, 10);
+      end.writeUInt32LE(cd.length, 12); end.writeUInt32LE(off, 16);
+      return Buffer.concat([...locals, cd, end]);
+    };
+    const model3mf = (objs) => Buffer.from(`<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"><resources>${
+      objs.map(([name, m], i) => `<object id="${i + 1}" name="${name}" type="model"><mesh><vertices>${m.V.map((p) => `<vertex x="${p[0]}" y="${p[1]}" z="${p[2]}"/>`).join('')}</vertices><triangles>${
+        m.T.map((t) => `<triangle v1="${t[0]}" v2="${t[1]}" v3="${t[2]}"/>`).join('')}</triangles></mesh></object>`).join('')}</resources><build>${objs.map((_, i) => `<item objectid="${i + 1}"/>`).join('')}</build></model>`);
+    const threeMf = zip([['[Content_Types].xml', Buffer.from('<?xml version="1.0"?><Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"/>'), false],
+      ['3D/3dmodel.model', model3mf([['box', box], ['pyramid', pyr]]), true]]);
+    const meshCases = [
+      ['a binary STL and an ASCII PLY', [{ name: 'box.stl', buffer: stlBinary(box) }, { name: 'pyramid.ply', buffer: plyAscii(pyr) }], /box\.stl, pyramid\.ply: 2 solids/],
+      ['a binary PLY and an ASCII STL', [{ name: 'box.ply', buffer: plyBinary(box) }, { name: 'pyramid.stl', buffer: stlAscii(pyr, 'pyramid') }], /box\.ply, pyramid\.stl: 2 solids/],
+      ['a 3MF file of two objects (deflated)', [{ name: 'both.3mf', buffer: threeMf }], /both\.3mf:box, both\.3mf:pyramid: 2 solids/],
+    ];
+    await page.selectOption('#op', 'intersection');
+    for (const [name, list, summaryRe] of meshCases) {
+      await check(`mesh files: ${name}: the same solids as box.obj and pyramid.obj (welded), their intersection 7/12`, async () => {
+        const r0 = await runNow();
+        await page.setInputFiles('#file', list.map((f) => ({ name: f.name, mimeType: 'application/octet-stream', buffer: f.buffer })));
+        if (await settle(r0) !== 'drawn') return await errorText();
+        const s = await page.textContent('#summary');
+        if (!summaryRe.test(s)) return `summary "${s}"`;
+        const sent = await page.evaluate(() => window.cellar.sent);
+        if (JSON.stringify(sent.solids) !== JSON.stringify([{ V: 8, FV: 12 }, { V: 5, FV: 6 }])) return `solids sent ${JSON.stringify(sent.solids)}`;
+        const res = await verifyPicture(`mesh-${list.map((f) => f.name).join('-')}`);
+        if (sent.op !== 'intersection' || !res.result || Math.abs(res.result.volume - 7 / 12) > 1e-9) return `op ${sent.op}, volume ${res.result && res.result.volume}`;
+      });
+    }
+
+    await check('numbers keep their exponents: a tiny volume (1.46e-10) and a huge one (2.5e+20) as the page shows them', async () => {
+      await page.selectOption('#op', 'union');
+      const cube = (a, b, c) => `v 0 0 0\nv ${a} 0 0\nv ${a} ${b} 0\nv 0 ${b} 0\nv 0 0 ${c}\nv ${a} 0 ${c}\nv ${a} ${b} ${c}\nv 0 ${b} ${c}\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n`;
+      for (const [name, dims, want] of [['tiny.obj', [0.000527, 0.000527, 0.000527], /^1\.46363e-10$/], ['huge.obj', [1e7, 1e7, 2.5e6], /^2\.5e\+20$/], ['big.obj', [1000, 1000, 25000], /^25000000000$/]]) {
+        const r0 = await files([{ name, text: cube(...dims) }]);
+        if (await settle(r0) !== 'drawn') return `${name}: ${await errorText()}`;
+        const res = await getJSON(`/v1/results/${await page.evaluate(() => window.cellar.hash)}`);
+        const counts = await page.textContent('#counts');
+        const m = /volume (\S+?)\.? /.exec(counts + ' ');
+        const cell = await page.textContent('#celllist li');
+        const c = /· (\S+)/.exec(cell);
+        if (!m || !want.test(m[1]) || Math.abs(Number(m[1]) - res.result.volume) > 1e-5 * res.result.volume) return `${name}: counts "${counts}", volume ${res.result.volume}`;
+        if (!c || !want.test(c[1])) return `${name}: the cell list says "${cell}"`;
+        const box = await page.locator('#view3d canvas').boundingBox();
+        await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+        const info = await page.textContent('#info');
+        const v = /volume (\S+)/.exec(info);
+        if (!v || !want.test(v[1])) return `${name}: the pick says "${info}"`;
+      }
+    });
+
+    await check('the counts are the result\'s stats: the solids-op example (no EV in its fields) says its 64 edges', async () => {
+      if (await pick('solids-op.json') !== 'drawn') return await errorText();
+      const res = await getJSON(`/v1/results/${await page.evaluate(() => window.cellar.hash)}`);
+      const st = res.stats, counts = await page.textContent('#counts');
+      const want = `3D: ${st.V} vertices, ${st.E} edges, ${st.F} faces, ${st.C} cells`;
+      if (!counts.startsWith(want) || st.E === 0) return `"${counts}", the stats say "${want}"`;
+    });
+    await check('the explode label follows its slider, also when a new input resets it', async () => {
+      await page.selectOption('#op', 'intersection');
+      await settle(await runNow() - 1);
+      await slide('#explode', 2);
+      const a = await page.textContent('#explodeval');
+      if (await pick('box.obj + pyramid.obj') !== 'drawn') return await errorText();
+      const b = await page.textContent('#explodeval'), v = await page.inputValue('#explode');
+      if (a !== '2' || b !== '1' || v !== '1') return `slid to 2: "${a}"; after a new input: "${b}" (slider ${v})`;
+    });
+    await check('the result is shown as one solid by default, the cells a click away', async () => {
+      const st = await page.evaluate(() => ({ mode: document.getElementById('view3d').dataset.mode, box: !document.getElementById('modebox').hidden }));
+      if (st.mode !== 'result' || !st.box) return `mode ${st.mode}, the mode control shown: ${st.box}`;
+      if (outdir) await page.screenshot({ path: path.join(outdir, 'result-as-one-solid.png') });
+      await page.check('input[name="mode"][value="cells"]');
+      const m2 = await page.evaluate(() => document.getElementById('view3d').dataset.mode);
+      if (outdir) await page.screenshot({ path: path.join(outdir, 'result-cells.png') });
+      await page.check('input[name="mode"][value="result"]');
+      if (m2 !== 'cells') return `after a click on "its cells": ${m2}`;
+    });
+
+    // ---- progress and Cancel: upload, download, drawing ----------------------------------------
+    const watch = async (r0, stage, until, limit = 30000) => { // samples cellar.progress of the run after r0 at stage
+      const seen = [];
+      const t0 = Date.now();
+      while (Date.now() - t0 < T(limit)) {
+        const s = await page.evaluate(() => ({ run: window.cellar.run, stage: window.cellar.stage, state: window.cellar.state, p: window.cellar.progress, text: document.getElementById('status').textContent, cancel: !document.getElementById('cancel').disabled, error: document.getElementById('error').innerText }));
+        if (s.run <= r0) { await new Promise((r) => setTimeout(r, 15)); continue; }
+        if (['drawn', 'error', 'canceled'].includes(s.state)) return { seen, end: s };
+        if (s.stage === stage && s.p && (stage === 'drawing' || s.p.loaded !== undefined)) seen.push(s);
+        if (until(seen)) return { seen };
+        await new Promise((r) => setTimeout(r, 15));
+      }
+      return { seen, end: 'timeout' };
+    };
+    const canceled = async (r0) => {
+      await page.click('#cancel');
+      return settle(r0, T(15000));
+    };
+    await check('upload: progress as the request goes (slowed by the proxy), and Cancel aborts it', async () => {
+      proxy.up = 3 << 20;
+      proxy.aborted.length = 0;
+      const pad = 'x'.repeat(24 << 20);
+      const r0 = await files([{ name: 'big-upload.json', text: `{"kind":"lines","lines":[[[0,0],[1,1]]],"pad":"${pad}"}` }]);
+      const w = await watch(r0, 'uploading', (s) => s.length > 2 && s[s.length - 1].p.loaded > s[0].p.loaded && s[s.length - 1].p.loaded > (4 << 20));
+      const last = w.seen[w.seen.length - 1];
+      if (w.end || !last) return `the upload was not seen going: ${JSON.stringify(w.end || w.seen.slice(-1))}`;
+      if (!/sending the request: [\d.]+ MB of [\d.]+ MB \(\d+%\)/.test(last.text) || !last.cancel) return `status "${last.text}", Cancel enabled: ${last.cancel}`;
+      if (outdir) await page.screenshot({ path: path.join(outdir, 'upload-progress.png') });
+      const st = await canceled(r0);
+      // (the proxy reads what the socket holds, at full speed now, before it sees the close)
+      proxy.up = 0;
+      for (let i = 0; i < 100 && !proxy.aborted.length; i++) await new Promise((r) => setTimeout(r, 100));
+      if (st !== 'canceled') return `after Cancel: ${st}`;
+      if (!proxy.aborted.some((a) => /^POST \/cellar\/v1\/jobs upload/.test(a))) return `the proxy saw no upload cut short: ${proxy.aborted}`;
+      figure(`upload of ${fmtMB(last.p.total)}: ${fmtMB(last.p.loaded)} seen sent ("${last.text}"), then canceled: ${proxy.aborted.join(', ')}`);
+    });
+    if (bigJob) {
+      await check('download: progress as the result comes (slowed by the proxy), and Cancel aborts it', async () => {
+        proxy.down = 1 << 20;
+        proxy.aborted.length = 0;
+        const r0 = await runNow();
+        await page.setInputFiles('#file', bigJob);
+        const w = await watch(r0, 'downloading', (s) => s.length > 2 && s[s.length - 1].p.loaded > s[0].p.loaded, 120000);
+        const last = w.seen[w.seen.length - 1];
+        if (w.end || !last) return `the download was not seen going: ${JSON.stringify(w.end || w.seen.slice(-1))}`;
+        if (!/receiving the result: [\d.]+ MB/.test(last.text) || !last.cancel) return `status "${last.text}", Cancel enabled: ${last.cancel}`;
+        if (outdir) await page.screenshot({ path: path.join(outdir, 'download-progress.png') });
+        const st = await canceled(r0);
+        proxy.down = 0;
+        for (let i = 0; i < 100 && !proxy.aborted.length; i++) await new Promise((r) => setTimeout(r, 100));
+        if (st !== 'canceled') return `after Cancel: ${st}`;
+        if (!proxy.aborted.some((a) => /download/.test(a))) return `the proxy saw no download cut short: ${proxy.aborted}`;
+        figure(`download: ${fmtMB(last.p.loaded)} seen received ("${last.text}"), then canceled: ${proxy.aborted.join(', ')}`);
+      });
+      await check('drawing: progress as the worker prepares a large result, and Cancel stops it (the next run draws)', async () => {
+        const r0 = await runNow();
+        await page.setInputFiles('#file', bigJob);
+        const w = await watch(r0, 'drawing', (s) => s.length > 1 && s.some((x) => x.p.fraction > 0.1) && new Set(s.map((x) => x.p.fraction)).size > 1, 120000);
+        const last = w.seen[w.seen.length - 1];
+        if (w.end || !last) return `the drawing was not seen going: ${JSON.stringify(w.end || w.seen.slice(-1))}`;
+        if (!/drawing: .* \d+%/.test(last.text) || !last.cancel) return `status "${last.text}", Cancel enabled: ${last.cancel}`;
+        const st = await canceled(r0);
+        if (st !== 'canceled') return `after Cancel: ${st}`;
+        const shown = await page.textContent('#status');
+        if (!/canceled/.test(shown)) return `status "${shown}"`;
+        figure(`drawing: progress ${[...new Set(w.seen.map((x) => x.p.fraction.toFixed(2)))].join(' -> ')} ("${last.text}"), then canceled`);
+        if (await pick('polygons.json') !== 'drawn') return `the next run: ${await errorText()}`;
+      });
+    }
+
+    await check('under a sub-path (/cellar/ through a proxy): every request and every link of the page is relative to it', async () => {
+      if (await pick('polygons.json') !== 'drawn') return await errorText();
+      await verifyPicture('proxied-polygons');
+      const outside = requests.filter((u) => !u.startsWith(purl) && !u.startsWith('data:'));
+      if (outside.length) return `requests outside ${purl}: ${[...new Set(outside)].slice(0, 5).join(' ')}`;
+      const kinds = ['assets/app-', 'assets/worker-', 'assets/examples-', 'assets/style-', 'v1/jobs'];
+      for (const k of kinds) if (!requests.some((u) => u.startsWith(purl + k))) return `no request of ${purl}${k}`;
+      const abs = await page.evaluate(() => [...document.querySelectorAll('[href], [src]')].map((e) => e.getAttribute('href') ?? e.getAttribute('src')).filter((u) => u.startsWith('/')));
+      if (abs.length) return `absolute links in the page: ${abs.join(' ')}`;
+      const notFound = proxy.log.filter((l) => l.startsWith('404'));
+      if (notFound.length) return `the proxy refused: ${notFound.slice(0, 3).join(', ')}`;
+      figure(`under /cellar/: ${requests.length} requests, all under ${purl}`);
+    });
+  } finally {
+    await page.close();
+    page = main;
+    proxy.server.close();
   }
 
   await check('no uncaught error and no Content-Security-Policy violation in the page', async () => (errors.length ? errors.slice(0, 3).join(' | ') : undefined));

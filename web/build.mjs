@@ -6,6 +6,9 @@
 //   - every asset named by its content (app-0123456789.js): the names change exactly when the
 //     bytes do, so cellard serves them as immutable; index.html (not renamed, revalidated)
 //     names them;
+//   - every URL the page names (in index.html, examples.json, the bundles) relative to the
+//     page ("assets/app-0123456789.js"): the service may be mounted under a sub-path behind a
+//     proxy (/cellar/); the routes cellard serves them at are absolute ("/assets/...");
 //   - OUTDIR/assets.list: one line per asset, "URL<TAB>FILE<TAB>MEDIA TYPE<TAB>CACHE", which
 //     scripts/web-embed.sh turns into the C table cellard serves from.
 import { createHash } from 'node:crypto';
@@ -33,14 +36,15 @@ mkdirSync(join(out, 'assets/examples'), { recursive: true });
 const list = [];
 const sizes = {};
 
-// Writes bytes under assets/ with their content hash in the name; returns the URL.
+// Writes bytes under assets/ with their content hash in the name; returns its URL relative to
+// the page (the route in the list: "/" and that).
 function put(name, bytes, sub = '') {
   const h = createHash('sha256').update(bytes).digest('hex').slice(0, 10);
   const ext = extname(name);
   const file = join('assets', sub, `${basename(name, ext)}-${h}${ext}`);
   writeFileSync(join(out, file), bytes);
-  const url = '/' + file;
-  list.push([url, file, typeOf(name), IMMUTABLE]);
+  const url = file.split('\\').join('/');
+  list.push(['/' + url, file, typeOf(name), IMMUTABLE]);
   sizes[sub ? `${sub}/${name}` : name] = bytes.length;
   return url;
 }
@@ -53,7 +57,7 @@ for (const f of files)  // a URL and a C string as they are
 const urls = {};
 for (const f of files) urls[f] = put(f, readFileSync(join(exdir, f)), 'examples');
 const examples = files.map((f) => ({ name: f, files: [{ name: f, url: urls[f] }] }));
-const solids = files.filter((f) => /\.(obj|off)$/i.test(f));
+const solids = files.filter((f) => /\.(obj|off|stl|ply|3mf)$/i.test(f));
 if (solids.length > 1)
   examples.push({ name: solids.join(' + '), files: solids.map((f) => ({ name: f, url: urls[f] })) });
 const examplesUrl = put('examples.json', Buffer.from(JSON.stringify(examples)));

@@ -5,6 +5,7 @@
 // (view2d.js), 3D in WebGL (view3d.js).  window.cellar exposes the state for the browser
 // tests (tests/page.js).
 import { Canceled, Problem } from './api.js';
+import { fmt } from './format.js';
 import { namesOf, requestFromFiles } from './input.js';
 import { View2D } from './view2d.js';
 import { View3D } from './view3d.js';
@@ -27,8 +28,11 @@ const state = {
   view: null,      // View2D or View3D
   model: null,
   t0: 0,
+  opChosen: false, // the op control was set by the user (kept when a file loads)
+  mode: 'result',  // a Boolean's picture: 'result' (one solid or region) or 'cells'
 };
-const cellar = { state: 'idle', run: 0, hash: '', jobUrl: '', timing: {}, model: null, view: null };
+// stage: where a run is (uploading, running, downloading, drawing); progress: its last report
+const cellar = { state: 'idle', run: 0, hash: '', jobUrl: '', timing: {}, model: null, view: null, stage: '', progress: null };
 window.cellar = cellar;
 
 function setState(s) {
@@ -43,7 +47,7 @@ function setState(s) {
 // paths; a request's answers come back by id.
 
 let worker = null;
-const pending = new Map(); // id -> {resolve, reject, onJob, onReceived}
+const pending = new Map(); // id -> {resolve, reject, onJob, onReceived, onProgress}
 let wid = 0;
 
 function problemOf(e) {
@@ -60,6 +64,7 @@ function theWorker() {
     if (!p) return;
     if (d.job) { if (p.onJob) p.onJob(d.job, d.url); return; }
     if (d.received) { if (p.onReceived) p.onReceived(d.received); return; }
+    for (const k of ['sent', 'got', 'drawing']) if (d[k]) { if (p.onProgress) p.onProgress(k, d[k]); return; }
     if (d.cancelError) { showError(problemOf(d.cancelError)); return; }
     pending.delete(d.id);
     if (d.error) p.reject(problemOf(d.error));
@@ -73,6 +78,16 @@ function theWorker() {
   return worker;
 }
 
+// Stops the worker where it is (a result being parsed or prepared hears no message): its
+// requests end as canceled; the next request starts another.
+function killWorker() {
+  if (!worker) return;
+  worker.terminate();
+  worker = null;
+  for (const p of pending.values()) p.reject(new Canceled());
+  pending.clear();
+}
+
 function ask(msg, hooks) {
   const id = ++wid;
   const done = new Promise((resolve, reject) => {
@@ -82,10 +97,15 @@ function ask(msg, hooks) {
   return { id, done };
 }
 
-// a job for body (JSON text), run by the worker: {done (the prepared model), cancel}
-function runJob(body, flipY, onJob, onReceived) {
-  const { id, done } = ask({ run: { body, flipY } }, { onJob, onReceived });
-  return { done, cancel: () => theWorker().postMessage({ cancel: id }) };
+// a job for body (JSON text), run by the worker at the service the page came from (its URLs
+// made relative to the page's): {done (the prepared model), cancel}.  Cancel stops the
+// upload, the job or the download (the worker, api.js), or, once the result is in and being
+// prepared, the worker itself.
+function runJob(body, flipY, hooks) {
+  let preparing = false;
+  const onReceived = (got) => { preparing = true; hooks.onReceived(got); };
+  const { id, done } = ask({ run: { base: document.baseURI, body, flipY } }, { ...hooks, onReceived });
+  return { done, cancel: () => (preparing ? killWorker() : theWorker().postMessage({ cancel: id })) };
 }
 
 // the 2D paths of the last result, exploded by k (made by the worker)
@@ -99,8 +119,8 @@ async function loadFiles(list) {
   $('example').value = '';
   clearError();
   try {
-    const files = await Promise.all([...list].map(async (f) => ({ name: f.name, text: await f.text() })));
-    setInput(requestFromFiles(files));
+    const files = await Promise.all([...list].map(async (f) => ({ name: f.name, bytes: new Uint8Array(await f.arrayBuffer()) })));
+    setInput(await requestFromFiles(files));
   } catch (e) {
     showError(e);
     return;
@@ -116,9 +136,9 @@ async function loadExample(ex) {
     const files = await Promise.all(ex.files.map(async (f) => {
       const r = await fetch(f.url);
       if (!r.ok) throw new Error(`${f.name}: ${r.status} ${r.statusText}`);
-      return { name: f.name, text: await r.text() };
+      return { name: f.name, bytes: new Uint8Array(await r.arrayBuffer()) };
     }));
-    setInput(requestFromFiles(files));
+    setInput(await requestFromFiles(files));
   } catch (e) {
     showError(e);
     return;
@@ -128,27 +148,44 @@ async function loadExample(ex) {
 
 function setInput(inp) {
   state.input = inp;
+  state.mode = 'result'; // a new input's Boolean: its result as one, first
   const req = inp.request, o = req.options || {};
   $('summary').textContent = `${inp.label} — a "${req.kind}" request`;
   $('precision').value = o.precision !== undefined ? String(o.precision) : '';
   $('keep_dangling').checked = !!o.keep_dangling;
   $('normalize').checked = !!o.normalize;
   $('y_up').checked = !!o.y_up;
-  if (req.op === undefined) $('op').value = '';
-  else if (typeof req.op === 'string') $('op').value = req.op;
-  else $('op').value = 'expr';
-  $('expr').value = Array.isArray(req.op) ? JSON.stringify(req.op) : '';
+  // the op: the file's own (a JSON request that names one), else the one the user chose (kept),
+  // else the input's default (GeoJSON: union)
+  if (req.op !== undefined && !inp.defaultOp) {
+    $('op').value = typeof req.op === 'string' && OPS.includes(req.op) ? req.op : 'expr';
+    $('expr').value = $('op').value === 'expr' ? JSON.stringify(req.op) : '';
+    state.opChosen = false;
+  } else if (!state.opChosen) {
+    $('op').value = inp.defaultOp || '';
+    $('expr').value = '';
+  }
+  const layers = req.layers && typeof req.layers === 'object' ? Object.keys(req.layers) : null;
+  $('expr').placeholder = layers && layers.length >= 2
+    ? JSON.stringify(['-', layers[0], ['+', ...layers.slice(1)]]) : '["-", 0, ["+", 1, 2]]';
+  $('op').querySelector('option[value="difference"]').textContent = layers
+    ? `difference (the first layer minus the others)` : 'difference (the first minus the others)';
   enableControls(req.kind);
   showRequest(req);
 }
+const OPS = ['union', 'intersection', 'difference', 'xor'];
 
 function enableControls(kind) {
   const on = (id, yes) => { $(id).disabled = !yes; $(id).closest('label, .field').classList.toggle('off', !yes); };
   on('keep_dangling', ['lines', 'svg', 'polygons'].includes(kind));
   on('normalize', kind === 'svg');
   on('y_up', kind === 'svg');
-  on('op', kind === 'polygons' || kind === 'solids');
+  // (the op stays open: one chosen for the next file is kept; it is greyed where it does
+  // not apply)
+  on('op', true);
+  $('op').closest('label').classList.toggle('off', kind !== 'polygons' && kind !== 'solids');
   $('op').querySelector('option[value=""]').disabled = kind === 'polygons';
+  if (kind === 'polygons' && $('op').value === '') $('op').value = 'union';
   $('expr').hidden = $('op').value !== 'expr';
 }
 
@@ -236,6 +273,9 @@ async function compute() {
   }
   state.sent = req;
   cellar.sent = { kind: req.kind, options: req.options || {}, op: req.op };
+  if (req.kind === 'solids' && Array.isArray(req.solids))
+    cellar.sent.solids = req.solids.map((x) => ({ V: x && x.V ? x.V.length : 0, FV: x && x.FV ? x.FV.length : 0 }));
+  if (req.layers) cellar.sent.layers = Object.keys(req.layers);
   showRequest(req);
   const body = JSON.stringify(req);
   cellar.timing = { t0, built: performance.now() - t0 };
@@ -244,28 +284,47 @@ async function compute() {
   cellar.jobUrl = '';
   setState('running');
   $('resultbox').hidden = true;
-  status(notes.length ? `posting… (${notes.join('; ')})` : 'posting…');
   const bar = $('progress');
   bar.hidden = false;
   bar.removeAttribute('value');
   $('cancel').disabled = false;
+  const secs = () => `${fmt((performance.now() - t0) / 1000, 2)} s`;
+  // a stage's report: the status line, the bar (a fraction, or none: indeterminate)
+  const report = (stage, text, fraction, extra = {}) => {
+    cellar.stage = stage;
+    cellar.progress = { stage, fraction, ...extra };
+    if (fraction === undefined || fraction === null) bar.removeAttribute('value');
+    else bar.value = Math.min(1, Math.max(0, fraction));
+    status(`${text} · ${secs()}${notes.length ? ` (${notes.join('; ')})` : ''}`);
+  };
+  const amount = (loaded, total) => (total > 0
+    ? `${mb(loaded)} of ${mb(total)} (${fmt(Math.floor((100 * loaded) / total))}%)` : mb(loaded));
+  report('uploading', `sending the request (${mb(body.length)})`, 0);
   const flipY = !(req.kind === 'svg' && !(req.options && (req.options.y_up || req.options.normalize)));
-  const job = runJob(body, flipY, (j, url) => {
-    if (run !== state.run) return;
-    cellar.jobUrl = url || '';
-    const pr = j.progress || {};
-    if (j.state === 'running' || j.state === 'done') bar.value = pr.fraction || 0;
-    const pct = j.state === 'running' ? ` ${Math.round(100 * (pr.fraction || 0))}%` : '';
-    status(`${j.state}${j.state === 'running' && pr.stage ? `: ${pr.stage}` : ''}${pct} · ${((performance.now() - t0) / 1000).toFixed(1)} s`);
-  }, (got) => {
-    if (run !== state.run) return;
-    cellar.hash = got.hash;
-    cellar.timing.result = performance.now() - t0;
-    performance.mark('cellar:result');
-    $('cancel').disabled = true;
-    bar.value = 1;
-    setState('drawing');
-    status(`drawing… (${(got.bytes / 1048576).toFixed(1)} MB of JSON)`);
+  const job = runJob(body, flipY, {
+    onJob: (j, url) => {
+      if (run !== state.run) return;
+      cellar.jobUrl = url || '';
+      const pr = j.progress || {};
+      const running = j.state === 'running';
+      report('running', `${j.state}${running && pr.stage ? `: ${pr.stage}` : ''}${running ? ` ${fmt(Math.round(100 * (pr.fraction || 0)))}%` : ''}`,
+        running || j.state === 'done' ? pr.fraction || 0 : null, { state: j.state });
+    },
+    onProgress: (kind, p) => {
+      if (run !== state.run) return;
+      if (kind === 'sent') report('uploading', `sending the request: ${amount(p.loaded, p.total)}`, p.total ? p.loaded / p.total : null, p);
+      else if (kind === 'got' && (p.loaded > 65536 || cellar.stage === 'downloading'))
+        report('downloading', `receiving the result: ${amount(p.loaded, p.total)}`, p.total ? p.loaded / p.total : null, p);
+      else if (kind === 'drawing') report('drawing', `drawing: ${p.stage} ${fmt(Math.floor(100 * p.fraction))}%`, p.fraction, p);
+    },
+    onReceived: (got) => {
+      if (run !== state.run) return;
+      cellar.hash = got.hash;
+      cellar.timing.result = performance.now() - t0;
+      performance.mark('cellar:result');
+      setState('drawing');
+      report('drawing', `drawing (${mb(got.bytes)} of JSON)`, 0);
+    },
   });
   state.job = job;
   let model;
@@ -284,6 +343,7 @@ async function compute() {
   }
   if (run !== state.run) return;
   state.job = null;
+  $('cancel').disabled = true;
   cellar.timing.prepared = performance.now() - t0;
   performance.mark('cellar:prepared');
   try {
@@ -303,7 +363,8 @@ async function compute() {
   cellar.timing.parse = model.ms.parse;
   cellar.timing.prepare = model.ms.prepare;
   showResult(model, model.hash, model.bytes, notes);
-  status(`done in ${(cellar.timing.drawn / 1000).toFixed(2)} s (result ${(cellar.timing.result / 1000).toFixed(2)} s, picture ${((cellar.timing.drawn - cellar.timing.result) / 1000).toFixed(2)} s)`);
+  cellar.stage = '';
+  status(`done in ${fmt(cellar.timing.drawn / 1000, 3)} s (result ${fmt(cellar.timing.result / 1000, 3)} s, picture ${fmt((cellar.timing.drawn - cellar.timing.result) / 1000, 3)} s)`);
   setState('drawn');
 }
 
@@ -317,6 +378,10 @@ async function draw(model) {
   $('view2dopts').hidden = is3;
   $('view3dopts').hidden = !is3;
   $('explode').value = '1';
+  syncLabels();
+  $('modebox').hidden = !model.result;
+  $('modebox').querySelector('.dimword').textContent = is3 ? 'solid' : 'region';
+  for (const r of document.querySelectorAll('input[name="mode"]')) r.checked = r.value === state.mode;
   $('info').textContent = is3 ? 'Click a cell to pick it.' : 'Hover a face.';
   delete $('info').dataset.face;
   delete $('info').dataset.cell;
@@ -332,12 +397,12 @@ async function draw(model) {
         throw new Error(`no 3D view: this browser gives no WebGL context (${e.message})`);
       }
     }
-    state.view.show(model);
+    state.view.show(model, state.mode);
     state.view.setLabels($('cnum').checked);
     cellList(model);
   } else {
     if (!state.view) state.view = new View2D($('view2d'), { onHover: hover2, explodePaths });
-    state.view.show(model);
+    state.view.show(model, state.mode);
     state.view.setNumbers({ faces: $('fnum').checked, vertices: $('vnum').checked });
     performance.mark('cellar:shown');
   }
@@ -405,21 +470,30 @@ function showError(e) {
   box.hidden = false;
 }
 
-const fmt = (x) => (typeof x === 'number' ? (Number.isInteger(x) ? String(x) : x.toPrecision(6).replace(/\.?0+$/, '')) : '?');
+const mb = (n) => `${fmt(n / 1048576, 3)} MB`;
+
+// The labels that show a control's value, from the controls (after any change of either).
+function syncLabels() {
+  $('explodeval').textContent = fmt(Number($('explode').value), 3);
+}
 
 function showResult(model, hash, size, notes) {
   $('resultbox').hidden = false;
   const s = model.stats || {};
+  // the counts are the result's stats (what it counts, whatever fields it carries), else what
+  // it carries
+  const n = (k, have) => fmt(typeof s[k] === 'number' ? s[k] : have);
   const ms = s.ms && s.ms.total !== undefined ? ` · ${fmt(s.ms.total)} ms` : '';
   let t = model.dim === 3
-    ? `3D: ${model.vertices} vertices, ${model.edges} edges, ${model.faces} faces, ${model.cells} cells${ms}`
-    : `2D: ${model.vertices} vertices, ${model.edges} edges, ${model.faces} faces${s.components !== undefined ? `, ${s.components} components` : ''}${ms}`;
+    ? `3D: ${n('V', model.vertices)} vertices, ${n('E', model.edges)} edges, ${n('F', model.faces)} faces, ${n('C', model.cells)} cells${ms}`
+    : `2D: ${n('V', model.vertices)} vertices, ${n('E', model.edges)} edges, ${n('F', model.faces)} faces${s.components !== undefined ? `, ${fmt(s.components)} components` : ''}${ms}`;
   if (model.result) {
     t += model.dim === 3
-      ? `. Result: ${model.result.cells} cells, volume ${fmt(model.result.volume)}`
-      : `. Result: ${model.result.cells} faces in ${model.result.polygons} polygons, area ${fmt(model.result.area)}`;
+      ? `. Result: ${fmt(model.result.cells)} cells, volume ${fmt(model.result.volume)}`
+      : `. Result: ${fmt(model.result.cells)} faces in ${fmt(model.result.polygons)} polygons, area ${fmt(model.result.area)}`;
   }
-  $('counts').textContent = `${t}. ${(size / 1024).toFixed(size < 10240 ? 1 : 0)} KiB of JSON.`;
+  if (model.layers) t += `. Layers: ${model.layers.map((l) => `${l.name} (${fmt(l.count)} features)`).join(', ')}`;
+  $('counts').textContent = `${t}. ${fmt(size / 1024, size < 10240 ? 2 : 3)} KiB of JSON.`;
   const warn = [...(s.warnings || []), ...((s.svg && s.svg.warnings) || []), ...notes]
     .map((w) => (typeof w === 'string' ? w : w.message || JSON.stringify(w)));
   const wl = $('warnings');
@@ -432,10 +506,14 @@ function showResult(model, hash, size, notes) {
   if (warn.length > 8) wl.append(Object.assign(document.createElement('li'), { textContent: `and ${warn.length - 8} more` }));
   const dl = $('downloads');
   dl.textContent = 'Download: ';
-  const base = `/v1/results/${hash}`, name = `cellar-${hash.slice(0, 12)}`;
+  // (relative to the page: the service may sit under a sub-path)
+  const base = `v1/results/${hash}`, name = `cellar-${hash.slice(0, 12)}`;
   const links = [['JSON', base, 'json']];
   if (model.dim === 2) links.push(['SVG', `${base}?format=svg`, 'svg'], ['GeoJSON', `${base}?format=geojson`, 'geojson']);
-  else links.push(['OBJ', `${base}?format=obj`, 'obj']);
+  else {
+    for (const [label, f] of [['OBJ', 'obj'], ['STL', 'stl'], ['OFF', 'off'], ['3MF', '3mf'], ['glTF (GLB)', 'glb']])
+      links.push([label, `${base}?format=${f}`, f]);
+  }
   links.push(['NPZ', `${base}?format=npz`, 'npz']);
   links.forEach(([label, href, ext], i) => {
     const a = document.createElement('a');
@@ -464,17 +542,18 @@ function named(list) {
 function hover2(f, at) {
   const m = state.model;
   const info = $('info');
-  const where = at ? `at (${fmt(at[0])}, ${fmt(at[1])})` : '';
+  // (the pointer's place, said as such: "1 hole at (x, y)" read as the hole's)
+  const where = at ? `pointer at (${fmt(at[0])}, ${fmt(at[1])})` : '';
   if (!m || f < 0) {
-    info.textContent = where || 'Hover a face.';
+    info.textContent = where ? `no face · ${where}` : 'Hover a face.';
     delete info.dataset.face;
     return;
   }
-  let t = `face ${f} · area ${fmt(m.area[f])}${m.nholes[f] ? ` · ${m.nholes[f]} hole${m.nholes[f] > 1 ? 's' : ''}` : ''}`;
+  let t = `face ${f} · area ${fmt(m.area[f])}${m.nholes[f] ? ` · the face has ${fmt(m.nholes[f])} hole${m.nholes[f] > 1 ? 's' : ''}` : ''}`;
   const mem = memberOf(m, f);
   if (mem) t += ` · in ${named(mem)}`;
   if (m.result) t += m.sel[f] ? ' · in the result' : ' · not in the result';
-  info.textContent = `${t} ${where}`;
+  info.textContent = `${t} · ${where}`;
   info.dataset.face = String(f);
 }
 
@@ -485,7 +564,7 @@ function pick3(c) {
   info.dataset.cell = String(c);
   if (!m || c < 0) { info.textContent = 'Click a cell to pick it.'; return; }
   const faces = m.cf[c].split(' ');
-  let t = `cell ${c} · volume ${m.volumes ? fmt(m.volumes[c]) : '?'} · ${faces.length} faces: ${faces.slice(0, 24).map((x) => (x > 0 ? `+${x - 1}` : `−${-x - 1}`)).join(' ')}${faces.length > 24 ? ' …' : ''}`;
+  let t = `cell ${c} · volume ${m.volumes ? fmt(m.volumes[c]) : '?'} · ${fmt(faces.length)} faces: ${faces.slice(0, 24).map((x) => (x > 0 ? `+${x - 1}` : `−${-x - 1}`)).join(' ')}${faces.length > 24 ? ' …' : ''}`;
   const mem = memberOf(m, c);
   if (mem) t += ` · in ${named(mem)}`;
   if (m.result) t += m.sel[c] ? ' · in the result' : ' · not in the result';
@@ -507,7 +586,7 @@ function cellList(model) {
   const ul = $('celllist');
   ul.textContent = '';
   if (model.cells > CELL_LIST_MAX) {
-    ul.append(Object.assign(document.createElement('li'), { textContent: `${model.cells} cells: too many to list (pick one to hide it)` }));
+    ul.append(Object.assign(document.createElement('li'), { textContent: `${fmt(model.cells)} cells: too many to list (pick one to hide it)` }));
     return;
   }
   for (let c = 0; c < model.cells; c++) {
@@ -531,7 +610,12 @@ function cellList(model) {
 
 function wire() {
   const drop = $('drop');
-  $('file').addEventListener('change', () => { if ($('file').files.length) loadFiles($('file').files); });
+  // (the input emptied once read: the same file chosen again is another change)
+  $('file').addEventListener('change', () => {
+    const list = [...$('file').files];
+    $('file').value = '';
+    if (list.length) loadFiles(list);
+  });
   for (const t of ['dragenter', 'dragover']) drop.addEventListener(t, (e) => { e.preventDefault(); drop.classList.add('over'); });
   for (const t of ['dragleave', 'drop']) drop.addEventListener(t, () => drop.classList.remove('over'));
   drop.addEventListener('drop', (e) => { e.preventDefault(); if (e.dataTransfer.files.length) loadFiles(e.dataTransfer.files); });
@@ -542,7 +626,22 @@ function wire() {
     const ex = examples[Number($('example').value)];
     if (ex) loadExample(ex);
   });
-  $('op').addEventListener('change', () => { $('expr').hidden = $('op').value !== 'expr'; if ($('op').value === 'expr') $('expr').focus(); });
+  // an op chosen is the user's (kept when a file loads) and recomputes the result at once (an
+  // expression: at Enter in its field)
+  $('op').addEventListener('change', () => {
+    state.opChosen = true;
+    $('expr').hidden = $('op').value !== 'expr';
+    if ($('op').value === 'expr') $('expr').focus();
+    else if (state.input && ['polygons', 'solids'].includes(state.input.request.kind)) compute();
+  });
+  $('expr').addEventListener('change', () => { state.opChosen = true; });
+  for (const r of document.querySelectorAll('input[name="mode"]')) {
+    r.addEventListener('change', () => {
+      if (!r.checked) return;
+      state.mode = r.value;
+      if (state.view && state.view.setMode) state.view.setMode(state.mode);
+    });
+  }
   $('expr').addEventListener('keydown', (e) => { if (e.key === 'Enter') compute(); });
   $('precision').addEventListener('keydown', (e) => { if (e.key === 'Enter') compute(); });
   $('go').addEventListener('click', () => compute());
@@ -571,9 +670,8 @@ function wire() {
     compute();
   });
   $('explode').addEventListener('input', () => {
-    const k = Number($('explode').value);
-    $('explodeval').textContent = k.toFixed(2);
-    if (state.view) state.view.setExplode(k);
+    syncLabels();
+    if (state.view) state.view.setExplode(Number($('explode').value));
   });
   const nums = () => state.view && state.view.setNumbers && state.view.setNumbers({ faces: $('fnum').checked, vertices: $('vnum').checked });
   $('fnum').addEventListener('change', nums);
@@ -582,13 +680,24 @@ function wire() {
   $('zoomin').addEventListener('click', () => state.view && state.view.zoom && state.view.zoom(2));
   $('zoomout').addEventListener('click', () => state.view && state.view.zoom && state.view.zoom(0.5));
   $('cnum').addEventListener('change', () => state.view && state.view.setLabels && state.view.setLabels($('cnum').checked));
+  // (both show the cells)
+  const cellsMode = () => {
+    if (state.mode === 'cells') return;
+    state.mode = 'cells';
+    document.querySelector('input[name="mode"][value="cells"]').checked = true;
+    state.view.setMode('cells');
+  };
   $('showall').addEventListener('click', () => {
     const m = state.model;
-    if (m && m.dim === 3) for (let c = 0; c < m.cells; c++) setCellVisible(c, true);
+    if (!m || m.dim !== 3) return;
+    cellsMode();
+    for (let c = 0; c < m.cells; c++) setCellVisible(c, true);
   });
   $('resultonly').addEventListener('click', () => {
     const m = state.model;
-    if (m && m.dim === 3 && m.result) for (let c = 0; c < m.cells; c++) setCellVisible(c, !!m.sel[c]);
+    if (!m || m.dim !== 3 || !m.result) return;
+    cellsMode();
+    for (let c = 0; c < m.cells; c++) setCellVisible(c, !!m.sel[c]);
   });
 }
 
@@ -611,6 +720,7 @@ async function loadExamples() {
 }
 
 wire();
+syncLabels();
 loadExamples();
 theWorker(); // loaded with the page, not at the first result
 setState('idle');

@@ -7,7 +7,11 @@
 // are greyed.
 //   Zoom with the wheel at the cursor, pan by dragging, double-click to fit; hover a face (a
 // grid of the faces' boxes, then an exact even-odd test) for its id, area and membership;
-// face and vertex numbers of what is in view; explode.
+// face and vertex numbers of what is in view (a number whose box would overlap one already
+// placed is left out: the labels of small faces do not pile up); explode.
+//   A Boolean's result is shown by default as one region (mode 'result': its faces filled in
+// one colour, without the edges between them, its outline on top, the other faces grey);
+// mode 'cells' shows every face in its own colour.
 // The paths are made by the worker (worker.js, paths2) as SVG path data.
 // For the tests: `drawn` = {faces, selected, dangling} counts what the current paths hold
 // (faces filled, faces filled as the result, dangling edges), `drawnSelected()` the result's, facePixel(f) where face f's
@@ -15,11 +19,14 @@
 const BUCKETS = 48;
 const MAX_LABELS = 1500;
 const GREY = '#e1e3e6';
+const REGION = '#f0a868';
 
 export function faceColour(f) {
   const b = f % BUCKETS;
   return `hsl(${((b * 137.508) % 360).toFixed(1)} 62% ${70 + (b % 3) * 5}%)`;
 }
+
+import { LabelBoxes } from './labels.js';
 
 export class View2D {
   constructor(root, { onHover, onView, explodePaths }) {
@@ -31,6 +38,7 @@ export class View2D {
     this.explode = 1;
     this.numbers = { faces: false, vertices: false };
     this.hovered = -1;
+    this.mode = 'result';
     this.drawn = { faces: 0, selected: 0 };
     root.innerHTML = '';
     this.canvas = document.createElement('canvas');
@@ -72,7 +80,7 @@ export class View2D {
   setPaths(pd) {
     const mk = (d) => (d ? new Path2D(d) : null);
     this.paths = {
-      fills: pd.fills.map(mk), grey: mk(pd.grey), dangling: mk(pd.dangling), outline: mk(pd.outline),
+      fills: pd.fills.map(mk), grey: mk(pd.grey), region: mk(pd.region), dangling: mk(pd.dangling), outline: mk(pd.outline),
     };
     this.drawn = { faces: pd.faces, selected: pd.selected, dangling: pd.dangling_edges };
     this.canvas.dataset.faces = String(pd.faces);
@@ -87,8 +95,19 @@ export class View2D {
 
   // ---- the view -------------------------------------------------------------------------
 
-  show(model) {
+  // 'result' (a Boolean's result as one region) or 'cells'
+  setMode(mode) {
+    this.mode = mode;
+    this.root.dataset.mode = this.showsResult() ? 'result' : 'cells';
+    this.draw();
+  }
+
+  showsResult() { return this.mode === 'result' && !!(this.model && this.model.result); }
+
+  show(model, mode = this.mode) {
     this.model = model;
+    this.mode = mode;
+    this.root.dataset.mode = this.showsResult() ? 'result' : 'cells';
     this.hovered = -1;
     this.onHover(-1, null);
     this.explode = 1;
@@ -162,14 +181,22 @@ export class View2D {
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
     ctx.setTransform(d * k, 0, 0, d * k, d * this.tx, d * this.ty);
+    const region = this.showsResult();
     if (p.grey) {
       ctx.fillStyle = GREY;
       ctx.fill(p.grey);
     }
-    for (let b = 0; b < BUCKETS; b++) {
-      if (!p.fills[b]) continue;
-      ctx.fillStyle = faceColour(b);
-      ctx.fill(p.fills[b]);
+    if (region) {
+      if (p.region) {
+        ctx.fillStyle = REGION;
+        ctx.fill(p.region);
+      }
+    } else {
+      for (let b = 0; b < BUCKETS; b++) {
+        if (!p.fills[b]) continue;
+        ctx.fillStyle = faceColour(b);
+        ctx.fill(p.fills[b]);
+      }
     }
     ctx.lineJoin = 'round';
     if (this.faceSize * k >= 8) { // the outlines: where faces are specks, only darkness
@@ -177,7 +204,9 @@ export class View2D {
       ctx.strokeStyle = '#a3a9b2';
       if (p.grey) ctx.stroke(p.grey);
       ctx.strokeStyle = '#39414c';
-      for (const f of p.fills) if (f) ctx.stroke(f);
+      if (!region) {
+        for (const f of p.fills) if (f) ctx.stroke(f);
+      } else if (this.explode !== 1 && p.region) ctx.stroke(p.region); // exploded: no outline
     }
     if (p.dangling) {
       ctx.strokeStyle = '#c0392b';
@@ -216,10 +245,17 @@ export class View2D {
     ctx.lineWidth = 3;
     ctx.strokeStyle = 'rgba(255,255,255,0.85)';
     let over = 0;
-    const put = (x, y, text, colour) => {
+    const boxes = new LabelBoxes();
+    this.faceLabels = [];
+    // a number whose box (its width, 14 px high) overlaps one already placed is left out
+    const put = (x, y, text, colour, left) => {
+      const tw = ctx.measureText(text).width + 2, th = 14;
+      const bx = left ? x : x - tw / 2, by = left ? y - th : y - th / 2;
+      if (!boxes.place(bx, by, tw, th)) return false;
       ctx.strokeText(text, x, y);
       ctx.fillStyle = colour;
       ctx.fillText(text, x, y);
+      return true;
     };
     if (this.numbers.faces) {
       ctx.textAlign = 'center';
@@ -229,8 +265,8 @@ export class View2D {
         const [dx, dy] = this.offset(f);
         const x = this.tx + (m.lx[f] + dx) * this.k, y = this.ty + (m.ly[f] + dy) * this.k;
         if (x < 0 || x > w || y < 0 || y > h) continue;
-        if (n++ >= MAX_LABELS) { over++; continue; }
-        put(x, y, String(f), '#111');
+        if (n >= MAX_LABELS) { over++; continue; }
+        if (put(x, y, String(f), '#111', false)) { n++; this.faceLabels.push(f); } else over++;
       }
     }
     if (this.numbers.vertices && this.explode === 1) {
@@ -240,13 +276,15 @@ export class View2D {
       for (let v = 0; v < m.vertices; v++) {
         const x = this.tx + m.vxy[2 * v] * this.k, y = this.ty + m.vxy[2 * v + 1] * this.k;
         if (x < 0 || x > w || y < 0 || y > h) continue;
-        if (n++ >= MAX_LABELS) { over++; continue; }
+        if (n >= MAX_LABELS) { over++; continue; }
         ctx.fillStyle = '#1f4e9c';
         ctx.fillRect(x - 1.5, y - 1.5, 3, 3);
-        put(x + 3, y - 2, String(v), '#1f4e9c');
+        if (put(x + 3, y - 2, String(v), '#1f4e9c', true)) n++; else over++;
       }
     }
-    if (over) this.note.textContent = `${over} more numbers in view: zoom in to see them`;
+    this.placed = boxes.list;
+    this.skipped = over;
+    if (over) this.note.textContent = `${over} more numbers in view (left out where they would overlap): zoom in to see them`;
     else if (this.numbers.vertices && this.explode !== 1) this.note.textContent = 'vertex numbers: not while exploded';
   }
 
@@ -306,7 +344,8 @@ export class View2D {
     const m = this.model;
     const [dx, dy] = this.offset(f);
     const on = !m.result || m.sel[f];
-    return { x: this.tx + (m.lx[f] + dx) * this.k, y: this.ty + (m.ly[f] + dy) * this.k, fill: on ? faceColour(f) : GREY, selected: !!(m.result && m.sel[f]) };
+    const fill = !on ? GREY : this.showsResult() ? REGION : faceColour(f);
+    return { x: this.tx + (m.lx[f] + dx) * this.k, y: this.ty + (m.ly[f] + dy) * this.k, fill, selected: !!(m.result && m.sel[f]) };
   }
 
   bindEvents() {

@@ -2,15 +2,20 @@
 // one colour per cell, with the edges of its faces; orbit, zoom and pan (OrbitControls); an
 // explode slider (each cell moved away from the centre); cell numbers; click a cell to pick
 // it; show or hide cells.  A Boolean's result cells keep their colours, the other cells are
-// drawn faint and see-through.  Frames are drawn on demand only.
+// drawn faint and see-through.  A Boolean's result is shown by default as one solid (mode
+// 'result': one Mesh of its boundary faces, one colour, the cells hidden; a click still picks
+// the result cell under it); mode 'cells' shows the cells.  Cell numbers that would overlap
+// one already placed are left out.  Frames are drawn on demand only.
 import {
   AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, LineBasicMaterial,
   LineSegments, Mesh, MeshLambertMaterial, PerspectiveCamera, Raycaster, Scene, Vector2, Vector3,
-  WebGLRenderer, DoubleSide, FrontSide,
+  WebGLRenderer, DoubleSide, FrontSide, Group,
 } from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { LabelBoxes } from './labels.js';
 
 const MAX_LABELS = 400;
+const RESULT_COLOUR = 0xe0893a;
 
 let renderer = null; // one WebGL context for the page's life: browsers keep only a few
 
@@ -41,6 +46,10 @@ export class View3D {
     this.controls = new OrbitControls(this.camera, renderer.domElement);
     this.controls.addEventListener('change', () => this.draw());
     this.meshes = [];
+    this.cellsGroup = new Group();
+    this.scene.add(this.cellsGroup);
+    this.resultMesh = null;
+    this.mode = 'result';
     this.explode = 1;
     this.showLabels = false;
     this.picked = -1;
@@ -63,8 +72,10 @@ export class View3D {
       const p = new Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
       const rc = new Raycaster();
       rc.setFromCamera(p, this.camera);
-      const hits = rc.intersectObjects(this.meshes.filter((m) => m.visible && !m.userData.faint), false);
-      const all = hits.length ? hits : rc.intersectObjects(this.meshes.filter((m) => m.visible), false);
+      // (the result as one solid: the result cell under the pointer, hidden as it is)
+      const cand = this.showsResult() ? this.meshes.filter((m) => m.userData.result) : this.meshes.filter((m) => m.visible);
+      const hits = rc.intersectObjects(cand.filter((m) => !m.userData.faint), false);
+      const all = hits.length ? hits : rc.intersectObjects(cand, false);
       this.pick(all.length ? all[0].object.userData.cell : -1);
     };
     el.addEventListener('pointerdown', this.onDown);
@@ -79,13 +90,20 @@ export class View3D {
     this.onPick(c);
   }
 
-  show(model) {
-    for (const m of this.meshes) {
-      this.scene.remove(m);
+  showsResult() { return this.mode === 'result' && !!this.resultMesh; }
+
+  disposeMeshes() {
+    for (const m of [...this.meshes, ...(this.resultMesh ? [this.resultMesh] : [])]) {
+      m.parent.remove(m);
       m.geometry.dispose();
       m.material.dispose();
       m.children.forEach((l) => { l.geometry.dispose(); l.material.dispose(); });
     }
+    this.resultMesh = null;
+  }
+
+  show(model, mode = this.mode) {
+    this.disposeMeshes();
     this.model = model;
     this.meshes = [];
     this.picked = -1;
@@ -111,9 +129,27 @@ export class View3D {
       }));
       lines.raycast = () => {};
       mesh.add(lines);
-      this.scene.add(mesh);
+      this.cellsGroup.add(mesh);
       this.meshes.push(mesh);
     }
+    if (boolean && model.resPos) {
+      const g = new BufferGeometry();
+      g.setAttribute('position', new BufferAttribute(model.resPos, 3));
+      g.setAttribute('normal', new BufferAttribute(model.resNor, 3));
+      const mesh = new Mesh(g, new MeshLambertMaterial({
+        color: RESULT_COLOUR, side: FrontSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+      }));
+      const eg = new BufferGeometry();
+      eg.setAttribute('position', new BufferAttribute(model.resSeg, 3));
+      const lines = new LineSegments(eg, new LineBasicMaterial({ color: 0x5a3a1a }));
+      lines.raycast = () => {};
+      mesh.add(lines);
+      mesh.raycast = () => {};
+      mesh.userData = { resultSolid: true };
+      this.scene.add(mesh);
+      this.resultMesh = mesh;
+    }
+    this.setMode(mode);
     this.root.dataset.cells = String(model.cells);
     this.setExplode(1);
     this.controls.target.set(0, 0, 0);
@@ -128,6 +164,16 @@ export class View3D {
     if (!m) return;
     for (let c = 0; c < m.cells; c++)
       this.meshes[c].position.set(m.centre[3 * c] * (k - 1), m.centre[3 * c + 1] * (k - 1), m.centre[3 * c + 2] * (k - 1));
+    this.draw();
+  }
+
+  // 'result' (the result as one solid, when there is one) or 'cells'
+  setMode(mode) {
+    this.mode = mode;
+    const r = this.showsResult();
+    this.cellsGroup.visible = !r;
+    if (this.resultMesh) this.resultMesh.visible = r;
+    this.root.dataset.mode = r ? 'result' : 'cells';
     this.draw();
   }
 
@@ -168,21 +214,29 @@ export class View3D {
     const m = this.model;
     const spans = this.labels.children;
     let n = 0;
+    const boxes = new LabelBoxes();
+    this.skipped = 0;
     if (this.showLabels && m) {
       const w = this.root.clientWidth, h = this.root.clientHeight, v = new Vector3();
+      const res = this.showsResult();
       for (let c = 0; c < m.cells && n < MAX_LABELS; c++) {
         const mesh = this.meshes[c];
-        if (!mesh.visible) continue;
+        if (res ? !mesh.userData.result : !mesh.visible) continue;
         v.set(m.centre[3 * c], m.centre[3 * c + 1], m.centre[3 * c + 2]).add(mesh.position).project(this.camera);
         if (v.z > 1 || Math.abs(v.x) > 1 || Math.abs(v.y) > 1) continue;
+        const x = ((v.x + 1) / 2) * w, y = ((1 - v.y) / 2) * h;
+        // the span's box (12 px bold digits, 3 px padding): left out where it would overlap
+        const bw = 7.5 * String(c).length + 6, bh = 16;
+        if (!boxes.place(x - bw / 2, y - bh / 2, bw, bh)) { this.skipped++; continue; }
         const s = n < spans.length ? spans[n] : this.labels.appendChild(document.createElement('span'));
         s.textContent = String(c);
         s.className = mesh.userData.faint ? 'faint' : '';
-        s.style.left = `${(((v.x + 1) / 2) * w).toFixed(0)}px`;
-        s.style.top = `${(((1 - v.y) / 2) * h).toFixed(0)}px`;
+        s.style.left = `${x.toFixed(0)}px`;
+        s.style.top = `${y.toFixed(0)}px`;
         n++;
       }
     }
+    this.placed = boxes.list;
     while (spans.length > n) spans[spans.length - 1].remove();
   }
 
@@ -192,11 +246,7 @@ export class View3D {
     const el = this.renderer.domElement;
     el.removeEventListener('pointerdown', this.onDown);
     el.removeEventListener('pointerup', this.onUp);
-    for (const m of this.meshes) {
-      m.geometry.dispose();
-      m.material.dispose();
-      m.children.forEach((l) => { l.geometry.dispose(); l.material.dispose(); });
-    }
+    this.disposeMeshes();
     this.meshes = [];
     this.root.innerHTML = '';
   }

@@ -14,6 +14,19 @@ import { Canceled, Problem, startJob } from './api.js';
 
 const SIZE = 1e6;
 
+// Drawing progress: tick(stage, fraction) tells the page (at most every 100 ms) how far the
+// preparation of the current result is; set by the run that prepares it.
+let tick = () => {};
+function ticker(id) {
+  let last = 0;
+  return (stage, fraction) => {
+    const t = performance.now();
+    if (t - last < 100 && fraction < 1) return;
+    last = t;
+    self.postMessage({ id, drawing: { stage, fraction } });
+  };
+}
+
 function csr(m) {
   if (!m || !Array.isArray(m.indptr)) return null;
   return { indptr: Int32Array.from(m.indptr), indices: Int32Array.from(m.indices), shape: m.shape };
@@ -176,6 +189,7 @@ function prep2(r, flipY) {
   const acc = [0, 0, 0], vacc = [0, 0, 0];
   const cycles = [];
   for (let f = 0; f < nf; f++) {
+    if ((f & 1023) === 0) tick('faces', 0.1 + (0.6 * f) / nf);
     acc[0] = acc[1] = acc[2] = 0;
     vacc[0] = vacc[1] = vacc[2] = 0;
     cycles.length = 0;
@@ -203,6 +217,7 @@ function prep2(r, flipY) {
   }
   const out = res && res.FV ? flatCycles(res.FV, res.holes) : null;
   const width = (maxx - minx) * s, height = (maxy - miny) * s;
+  tick('hover grid', 0.75);
   const g = grid(nf, faceCyc, cycOff, cyc, vxy, width, height);
   return {
     dim: 2, faces: nf, vertices: nv, edges: ne, width, height,
@@ -212,6 +227,7 @@ function prep2(r, flipY) {
     grid: { gw: g.gw, gh: g.gh, cw: g.cw, ch: g.ch }, gridOff: g.off, gridIds: g.ids, box: g.bx,
     membership: csr(r.membership),
     result: res ? { cells: res.cells.length, area: res.area, polygons: res.FV ? res.FV.length : 0 } : null,
+    layers: Array.isArray(r.layers) ? r.layers : null,
     stats: r.stats || null,
   };
 }
@@ -269,6 +285,7 @@ function prep3(r) {
   const tris = new Array(nf), nrms = new Array(nf);
   let triCount = 0, segCount = 0;
   for (let f = 0; f < nf; f++) {
+    if ((f & 255) === 0) tick('triangulating', 0.1 + (0.6 * f) / nf);
     const cycles = holes[f] ? [r.FV[f], ...holes[f]] : [r.FV[f]];
     nrms[f] = newell(r.FV[f], P);
     tris[f] = triangulate(cycles, P, nrms[f]);
@@ -324,12 +341,56 @@ function prep3(r) {
   const sel = new Uint8Array(nc);
   if (res) for (const c of res.cells) if (c < nc) sel[c] = 1;
   const cf = r.CF.map((row) => row.join(' '));
+  // the result as one solid: its boundary faces (result.faces, signed as CF's rows: outward),
+  // else the faces of its cells that no other result cell shares
+  let rfaces = res && Array.isArray(res.faces) ? res.faces : null;
+  if (res && !rfaces) {
+    const n = new Map();
+    for (const c of res.cells) for (const sf of r.CF[c] || []) n.set(Math.abs(sf), (n.get(Math.abs(sf)) || 0) + 1);
+    rfaces = [];
+    for (const c of res.cells) for (const sf of r.CF[c] || []) if (n.get(Math.abs(sf)) === 1) rfaces.push(sf);
+  }
+  let resPos = null, resNor = null, resSeg = null;
+  if (rfaces) {
+    let t = 0, e = 0;
+    for (const sf of rfaces) {
+      const f = Math.abs(sf) - 1;
+      if (f >= nf) continue;
+      t += tris[f].length / 3;
+      e += r.FV[f].length;
+      for (const h of holes[f] || []) e += h.length;
+    }
+    resPos = new Float32Array(9 * t);
+    resNor = new Float32Array(9 * t);
+    resSeg = new Float32Array(6 * e);
+    let q = 0, w = 0;
+    for (const sf of rfaces) {
+      const f = Math.abs(sf) - 1;
+      if (f >= nf) continue;
+      const tr = tris[f], n = nrms[f], sg = sf > 0 ? 1 : -1;
+      for (let i = 0; i < tr.length; i += 3) {
+        for (const v of [tr[i], sg > 0 ? tr[i + 1] : tr[i + 2], sg > 0 ? tr[i + 2] : tr[i + 1]]) {
+          resPos[q] = P[3 * v]; resPos[q + 1] = P[3 * v + 1]; resPos[q + 2] = P[3 * v + 2];
+          resNor[q] = sg * n[0]; resNor[q + 1] = sg * n[1]; resNor[q + 2] = sg * n[2];
+          q += 3;
+        }
+      }
+      for (const cyc of holes[f] ? [r.FV[f], ...holes[f]] : [r.FV[f]]) {
+        for (let i = 0; i < cyc.length; i++) {
+          const a = cyc[i], b = cyc[(i + 1) % cyc.length];
+          resSeg.set([P[3 * a], P[3 * a + 1], P[3 * a + 2], P[3 * b], P[3 * b + 1], P[3 * b + 2]], w);
+          w += 6;
+        }
+      }
+    }
+  }
   return {
     dim: 3, cells: nc, faces: nf, vertices: nv, edges: r.EV ? r.EV.length : 0,
-    pos, nor, seg, triOff, segOff, centre, sel, cf,
+    pos, nor, seg, triOff, segOff, centre, sel, cf, resPos, resNor, resSeg,
     volumes: r.stats && r.stats.volumes ? Float64Array.from(r.stats.volumes) : null,
     membership: csr(r.membership),
-    result: res ? { cells: res.cells.length, volume: res.volume, faces: res.faces ? res.faces.length : 0 } : null,
+    result: res ? { cells: res.cells.length, volume: res.volume, faces: rfaces.length } : null,
+    layers: Array.isArray(r.layers) ? r.layers : null,
     stats: r.stats ? { ...r.stats, volumes: undefined } : null,
   };
 }
@@ -343,7 +404,7 @@ const BUCKETS = 48;
 function paths2(m, k) {
   const { faceCyc, cycOff, cyc, vxy, cx, cy, sel } = m;
   const t = k - 1, boolean = !!m.result, hx = m.width / 2, hy = m.height / 2;
-  const fills = Array.from({ length: BUCKETS }, () => []), grey = [];
+  const fills = Array.from({ length: BUCKETS }, () => []), grey = [], region = [];
   const num = Math.round; // integers: a millionth of the drawing, and far faster to write
   let selected = 0;
   for (let f = 0; f < m.faces; f++) {
@@ -356,7 +417,7 @@ function paths2(m, k) {
       d += 'Z';
     }
     const on = !boolean || sel[f];
-    if (boolean && on) selected++;
+    if (boolean && on) { selected++; region.push(d); }
     (on ? fills[f % BUCKETS] : grey).push(d);
   }
   let dangling = '', outline = '', ndangling = 0;
@@ -379,7 +440,7 @@ function paths2(m, k) {
     }
   }
   return {
-    fills: fills.map((x) => x.join('')), grey: grey.join(''), dangling, outline,
+    fills: fills.map((x) => x.join('')), grey: grey.join(''), region: region.join(''), dangling, outline,
     explode: k, faces: m.faces, selected, dangling_edges: ndangling,
   };
 }
@@ -393,10 +454,13 @@ function copyArrays(model) {
 }
 
 // ---- messages ------------------------------------------------------------------------------
-// in:  {id, run: {body, flipY}}  runs the job (api.js), then prepares its result; answers
-//        {id, job} for every status read, {id, received: {hash, bytes}} once the result is
-//        in, then {id, model}, or {id, error: {status, title, detail, path} | {canceled} |
-//        {message}};
+// in:  {id, run: {base, body, flipY}}  runs the job (api.js) at the service under base (the
+//        page's URL), then prepares its result; answers {id, sent: {loaded, total}} as the
+//        request goes, {id, job, url} for every status read, {id, got: {loaded, total}} as the
+//        result comes, {id, received: {hash, bytes}} once it is in, {id, drawing: {stage,
+//        fraction}} as it is prepared, then {id, model}, or {id, error: {status, title,
+//        detail, path} | {canceled} | {message}} (a Cancel while the result is prepared: the
+//        page terminates this worker, which is busy and hears no message);
 //      {cancel: id}               cancels that run's submission;
 //      {id, explode: k}           answers {id, paths} of the last 2D result exploded by k.
 // The network and the parsing stay off the page's thread: a result of many megabytes is read
@@ -407,8 +471,10 @@ const runs = new Map();
 
 function prepareResult(buffer, flipY) {
   const t0 = performance.now();
+  tick('parsing the JSON', 0);
   const r = JSON.parse(new TextDecoder().decode(buffer));
   const t1 = performance.now();
+  tick('parsed', 0.1);
   if (!r || typeof r !== 'object') throw new Error('the result is not a JSON object');
   let model;
   if (r.dim === 3) {
@@ -419,10 +485,12 @@ function prepareResult(buffer, flipY) {
     const t2 = performance.now();
     model = copyArrays(last2);
     const t3 = performance.now();
+    tick('paths', 0.85);
     model.paths = paths2(last2, 1);
     model.ms = { prep2: t2 - t1, copy: t3 - t2, paths: performance.now() - t3 };
   }
   model.ms = { ...model.ms, parse: t1 - t0, prepare: performance.now() - t1 };
+  tick('prepared', 1);
   return model;
 }
 
@@ -432,12 +500,18 @@ function errorOf(e) {
   return { message: String(e && e.message ? e.message : e) };
 }
 
-async function run(id, { body, flipY }) {
-  const job = startJob(body, (j) => self.postMessage({ id, job: j, url: job.jobUrl() }));
+async function run(id, { base, body, flipY }) {
+  const job = startJob(base, body, {
+    onJob: (j, url) => self.postMessage({ id, job: j, url }),
+    onSent: (loaded, total) => self.postMessage({ id, sent: { loaded, total } }),
+    onGot: (loaded, total) => self.postMessage({ id, got: { loaded, total } }),
+  });
   runs.set(id, job);
   try {
     const got = await job.done;
+    runs.delete(id);
     self.postMessage({ id, received: { hash: got.hash, bytes: got.buffer.byteLength } });
+    tick = ticker(id);
     const model = prepareResult(got.buffer, flipY);
     model.hash = got.hash;
     model.bytes = got.buffer.byteLength;
@@ -448,6 +522,7 @@ async function run(id, { body, flipY }) {
     self.postMessage({ id, error: errorOf(e) });
   } finally {
     runs.delete(id);
+    tick = () => {};
   }
 }
 

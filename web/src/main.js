@@ -241,7 +241,8 @@ function buildRequest(notes) {
     else delete req.op;
   }
   if (Array.isArray(opts.fields)) {
-    const need = NEEDS[kind === 'solids' ? 3 : 2];
+    // a Boolean's membership and result come only when named once fields are given
+    const need = [...NEEDS[kind === 'solids' ? 3 : 2], ...(req.op ? ['membership', 'result'] : [])];
     const add = need.filter((f) => !opts.fields.includes(f));
     if (add.length) {
       opts.fields = [...opts.fields, ...add];

@@ -451,7 +451,7 @@ async function main() {
   });
 
   // ---- 3D: op controls, pick, show/hide, explode, numbers -------------------------------------
-  const both = examples.find((e) => /\+/.test(e[1]));
+  const both = examples.find((e) => /\.obj \+/.test(e[1]));
   await check('3D Boolean from the op control: intersection of box.obj and pyramid.obj (volume 7/12)', async () => {
     if (!both) return 'no combined example';
     if (await pick(both[1]) !== 'drawn') return 'did not draw';

@@ -49,7 +49,8 @@ function put(name, bytes, sub = '') {
   return url;
 }
 
-// the examples, and the picker's list: each file, then all the solids files together
+// the examples, and the picker's list: each file, then all the solids files together, then all
+// the GeoJSON files together (layers)
 const exdir = join(top, 'examples');
 const files = readdirSync(exdir).filter((f) => statSync(join(exdir, f)).isFile()).sort();
 for (const f of files)  // a URL and a C string as they are
@@ -60,6 +61,10 @@ const examples = files.map((f) => ({ name: f, files: [{ name: f, url: urls[f] }]
 const solids = files.filter((f) => /\.(obj|off|stl|ply|3mf)$/i.test(f));
 if (solids.length > 1)
   examples.push({ name: solids.join(' + '), files: solids.map((f) => ({ name: f, url: urls[f] })) });
+// the GeoJSON files together: their layers overlaid
+const layers = files.filter((f) => /\.geojson$/i.test(f));
+if (layers.length > 1)
+  examples.push({ name: layers.join(' + '), files: layers.map((f) => ({ name: f, url: urls[f] })) });
 const examplesUrl = put('examples.json', Buffer.from(JSON.stringify(examples)));
 
 const common = {

@@ -462,6 +462,24 @@ async function main() {
     const res = await verifyPicture('box-pyramid-intersection');
     if (!res.result || Math.abs(res.result.volume - 7 / 12) > 1e-9) return `volume ${res.result && res.result.volume}`;
   });
+  await check('the page\'s glb download of that result, opened by three.js\'s GLTFLoader: a mesh node per cell, then the result\'s', async () => {
+    const href = await page.$eval('#downloads a[data-format="glb"]', (a) => a.href);
+    const res = await getJSON(`/v1/results/${await page.evaluate(() => window.cellar.hash)}`);
+    const r = await fetch(href);
+    if (!r.ok || r.headers.get('content-type') !== 'model/gltf-binary') return `GET ${href}: ${r.status} ${r.headers.get('content-type')}`;
+    const ab = await r.arrayBuffer();
+    const loader = path.join(__dirname, '..', 'web', 'node_modules', 'three', 'examples', 'jsm', 'loaders', 'GLTFLoader.js');
+    const { GLTFLoader } = await import(require('url').pathToFileURL(loader).href);
+    const gltf = await new Promise((resolve, reject) => new GLTFLoader().parse(ab, '', resolve, reject));
+    const nodes = gltf.scene.children;
+    const want = [...res.CF.map((_, i) => `cell${i}`), 'result'];
+    const names = nodes.map((n) => n.name);
+    if (!same(names, want)) return `nodes ${fmtList(names)}, want ${fmtList(want)}`;
+    const bad = nodes.filter((n) => !n.isMesh || !n.geometry.index || n.geometry.index.count < 12 || n.geometry.index.count % 3);
+    if (bad.length) return `${bad.map((n) => n.name).join(', ')}: not meshes of triangles`;
+    const tris = nodes[nodes.length - 1].geometry.index.count / 3;
+    figure(`glb of the intersection: ${nodes.length} nodes (${res.CF.length} cells + result), the result ${tris} triangles, ${ab.byteLength} bytes`);
+  });
   await check('3D Boolean from an expression: ["-", 0, 1] of box.obj and pyramid.obj (volume 89/12)', async () => {
     const r0 = await runNow();
     await page.selectOption('#op', 'expr');
@@ -892,13 +910,21 @@ async function main() {
         m.T.map((t) => `<triangle v1="${t[0]}" v2="${t[1]}" v3="${t[2]}"/>`).join('')}</triangles></mesh></object>`).join('')}</resources><build>${objs.map((_, i) => `<item objectid="${i + 1}"/>`).join('')}</build></model>`);
     const threeMf = zip([['[Content_Types].xml', Buffer.from('<?xml version="1.0"?><Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"/>'), false],
       ['3D/3dmodel.model', model3mf([['box', box], ['pyramid', pyr]]), true]]);
+    // the box placed by its build item moved by (10, 0, 0), the pyramid through an object of
+    // components moved by (4, 0, 0) and its item by (6, 0, 0): the same pair, 10 to the right
+    const moved3mf = Buffer.from(`<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"><resources>${
+      [['box', box], ['pyramid', pyr]].map(([name, m], i) => `<object id="${i + 1}" name="${name}" type="model"><mesh><vertices>${m.V.map((p) => `<vertex x="${p[0]}" y="${p[1]}" z="${p[2]}"/>`).join('')}</vertices><triangles>${
+        m.T.map((t) => `<triangle v1="${t[0]}" v2="${t[1]}" v3="${t[2]}"/>`).join('')}</triangles></mesh></object>`).join('')
+    }<object id="3" name="placed" type="model"><components><component objectid="2" transform="1 0 0 0 1 0 0 0 1 4 0 0"/></components></object></resources><build><item objectid="1" transform="1 0 0 0 1 0 0 0 1 10 0 0"/><item objectid="3" transform="1 0 0 0 1 0 0 0 1 6 0 0"/></build></model>`);
+    const moved = zip([['3D/3dmodel.model', moved3mf, true]]);
     const meshCases = [
       ['a binary STL and an ASCII PLY', [{ name: 'box.stl', buffer: stlBinary(box) }, { name: 'pyramid.ply', buffer: plyAscii(pyr) }], /box\.stl, pyramid\.ply: 2 solids/],
       ['a binary PLY and an ASCII STL', [{ name: 'box.ply', buffer: plyBinary(box) }, { name: 'pyramid.stl', buffer: stlAscii(pyr, 'pyramid') }], /box\.ply, pyramid\.stl: 2 solids/],
       ['a 3MF file of two objects (deflated)', [{ name: 'both.3mf', buffer: threeMf }], /both\.3mf:box, both\.3mf:pyramid: 2 solids/],
+      ['a 3MF file placing them by build items and components with transforms', [{ name: 'moved.3mf', buffer: moved }], /moved\.3mf:box, moved\.3mf:pyramid: 2 solids/, 10],
     ];
     await page.selectOption('#op', 'intersection');
-    for (const [name, list, summaryRe] of meshCases) {
+    for (const [name, list, summaryRe, dx = 0] of meshCases) {
       await check(`mesh files: ${name}: the same solids as box.obj and pyramid.obj (welded), their intersection 7/12`, async () => {
         const r0 = await runNow();
         await page.setInputFiles('#file', list.map((f) => ({ name: f.name, mimeType: 'application/octet-stream', buffer: f.buffer })));
@@ -909,6 +935,8 @@ async function main() {
         if (JSON.stringify(sent.solids) !== JSON.stringify([{ V: 8, FV: 12 }, { V: 5, FV: 6 }])) return `solids sent ${JSON.stringify(sent.solids)}`;
         const res = await verifyPicture(`mesh-${list.map((f) => f.name).join('-')}`);
         if (sent.op !== 'intersection' || !res.result || Math.abs(res.result.volume - 7 / 12) > 1e-9) return `op ${sent.op}, volume ${res.result && res.result.volume}`;
+        const xmin = Math.min(...res.V.map((p) => p[0]));
+        if (xmin !== dx) return `the solids begin at x = ${xmin}, not ${dx}`;
       });
     }
 

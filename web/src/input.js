@@ -443,9 +443,33 @@ export function readPly(bytes, file) {
 }
 
 // 3MF: a zip (its central directory read from the end) whose 3D/3dmodel.model entry (or the
-// first *.model) is XML: each <object> with a <mesh> of <vertex x y z> and <triangle v1 v2
-// v3> becomes a solid (components and the build's transforms are not applied).  A deflated
+// first *.model) is XML: objects with a <mesh> of <vertex x y z> and <triangle v1 v2 v3>, or
+// with <components>; each build <item> is a solid per mesh it reaches, with the components'
+// and the item's transforms applied (as the daemon reads 3MF, api/meshio.c).  A deflated
 // entry is inflated by DecompressionStream('deflate-raw').
+
+// A 3MF transform "m00 m01 m02 m10 ... m32" (row vectors: p' = [x y z 1] M), or null.
+function transform3mf(text, where) {
+  if (text === null || text === undefined || text.trim() === '') return null;
+  const m = text.trim().split(/\s+/).map(Number);
+  if (m.length !== 12 || !m.every(Number.isFinite)) throw new Error(`${where}: transform "${text.slice(0, 80)}": expected 12 numbers`);
+  return m;
+}
+
+// a, then b (either may be null).
+function compose3mf(a, b) {
+  if (!a) return b;
+  if (!b) return a;
+  const r = new Array(12);
+  for (let i = 0; i < 4; i++) {
+    for (let j = 0; j < 3; j++) {
+      let x = i === 3 ? b[9 + j] : 0;
+      for (let k = 0; k < 3; k++) x += a[3 * i + k] * b[3 * k + j];
+      r[3 * i + j] = x;
+    }
+  }
+  return r;
+}
 export async function read3mf(bytes, file) {
   const dv = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   let eocd = -1;
@@ -483,11 +507,19 @@ export async function read3mf(bytes, file) {
   const doc = new DOMParser().parseFromString(new TextDecoder().decode(data), 'application/xml');
   const bad = doc.getElementsByTagName('parsererror')[0];
   if (bad) throw new Error(`${file}: ${e.name}: not XML: ${bad.textContent.trim().split('\n')[0].slice(0, 200)}`);
-  const out = [];
+  // the objects: a mesh's vertices and triangles, or components (other objects, transformed)
+  const objects = new Map();
   for (const obj of doc.getElementsByTagNameNS('*', 'object')) {
+    const id = obj.getAttribute('id');
+    const label = obj.getAttribute('name') || `object ${id}`;
     const mesh = obj.getElementsByTagNameNS('*', 'mesh')[0];
-    if (!mesh) continue;
-    const label = obj.getAttribute('name') || `object ${obj.getAttribute('id')}`;
+    if (!mesh) {
+      const comps = [...obj.getElementsByTagNameNS('*', 'component')].map((c) => ({
+        id: c.getAttribute('objectid'), m: transform3mf(c.getAttribute('transform'), `${file}: ${label}: a component`),
+      }));
+      objects.set(id, { label, comps });
+      continue;
+    }
     const V = [...mesh.getElementsByTagNameNS('*', 'vertex')].map((v, i) => ['x', 'y', 'z'].map((a) => {
       const x = Number(v.getAttribute(a));
       if (v.getAttribute(a) === null || !Number.isFinite(x)) throw new Error(`${file}: ${label}: vertex ${i}: ${a} is not a number`);
@@ -498,7 +530,31 @@ export async function read3mf(bytes, file) {
       if (!Number.isInteger(x) || x < 0 || x >= V.length) throw new Error(`${file}: ${label}: triangle ${i}: ${a} = ${t.getAttribute(a)} out of range (${V.length} vertices)`);
       return x;
     }));
-    if (FV.length) out.push({ name: label, V, FV });
+    objects.set(id, { label, V, FV });
+  }
+  // what the build places: each item's object, through its components, with the transforms
+  // applied (a component's, then its parent's, then the item's); a mirroring one turns the
+  // triangles round.  No build: each mesh object once, as it is.
+  const out = [];
+  const place = (id, m, depth, where) => {
+    const o = objects.get(id);
+    if (!o) throw new Error(`${file}: ${where}: no object ${id}`);
+    if (depth > 16) throw new Error(`${file}: ${o.label}: components nest deeper than 16`);
+    if (o.comps) {
+      for (const c of o.comps) place(c.id, compose3mf(c.m, m), depth + 1, o.label);
+      return;
+    }
+    if (!o.FV.length) return;
+    const V = m ? o.V.map((p) => [0, 1, 2].map((j) => p[0] * m[j] + p[1] * m[3 + j] + p[2] * m[6 + j] + m[9 + j])) : o.V;
+    const det = m ? m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]) : 1;
+    if (det === 0) throw new Error(`${file}: ${o.label}: a transform that flattens it`);
+    out.push({ name: o.label, V, FV: det < 0 ? o.FV.map((t) => [t[0], t[2], t[1]]) : o.FV });
+  };
+  const items = [...doc.getElementsByTagNameNS('*', 'item')];
+  if (items.length) {
+    for (const it of items) place(it.getAttribute('objectid'), transform3mf(it.getAttribute('transform'), `${file}: a build item`), 0, 'build');
+  } else {
+    for (const [id, o] of objects) if (o.FV) place(id, null, 0, 'resources');
   }
   if (!out.length) throw new Error(`${file}: no mesh object with triangles in ${e.name}`);
   if (out.length === 1) out[0].name = '';

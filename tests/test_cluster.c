@@ -678,7 +678,7 @@ TEST(cluster_behind_nginx)
         CHECK(r.status == 200 && bexp && same_result(r.body.p, r.body.n, bexp, elen2) == 1,
               "GET %s through nginx: %ld, not the result", want, r.status);
         hresp_free(&r);
-        char jr[128];
+        char jr[300];
         snprintf(jr, sizeof jr, "%s/result", loc);
         http_get(&x, jr, &r);
         CHECK(r.status == 200 && has_header(&r, "Content-Location", want),

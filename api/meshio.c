@@ -1162,7 +1162,7 @@ int mesh_read_3mf(const char *data, size_t len, solid **parts, size_t *nparts, c
     }
     m.part = name;
     if (model_parse(xml, n, &m, err, errlen)) goto out;
-    qsort(m.o, m.no, sizeof *m.o, cmp_obj);
+    if (m.no > 1) qsort(m.o, m.no, sizeof *m.o, cmp_obj);
     for (size_t i = 1; i < m.no; i++)
         if (m.o[i].id == m.o[i - 1].id) {
             say(err, errlen, "%s: object id %u twice", name, m.o[i].id);

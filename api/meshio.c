@@ -1044,7 +1044,7 @@ static int cmp_obj(const void *a, const void *b)
 static obj3 *find_obj(model3 *m, uint32_t id)
 {
     obj3 key = {.id = id};
-    return bsearch(&key, m->o, m->no, sizeof *m->o, cmp_obj);
+    return m->no ? bsearch(&key, m->o, m->no, sizeof *m->o, cmp_obj) : NULL;
 }
 
 /* c = a then b (row vectors: p a b). */

@@ -10,6 +10,8 @@
 #   need_python IMPORTS PKGS    sets PY to a python3 that runs "import IMPORTS": $PYTHON or
 #                               the one on PATH, else Debian's /usr/bin/python3; gives up
 #                               naming the Debian packages PKGS when none does
+#   tally_file FILE             counts a checker's "ok ..." / "FAIL ..." lines in FILE as checks
+#                               of this test (its summary line dropped, other lines shown)
 #   run_py PY SCRIPT ARGS...    runs a Python test that prints its checks and a summary line
 #                               last (tests/tally.py), passes its lines on and exits with it;
 #                               a crash leaves no summary: one failure, with its stderr's end
@@ -47,6 +49,16 @@ need_python() {
     $PY -c "import $1" 2>/dev/null || PY=/usr/bin/python3
     $PY -c "import $1" 2>/dev/null ||
         give_up "python3 that imports $1 is needed: apt-get install $2 (make deps)"
+}
+tally_file() {
+    while IFS= read -r line; do
+        case $line in
+        "ok "*) pass "${line#ok }" ;;
+        "FAIL "*) fail "${line#FAIL }" ;;
+        [0-9]*" passed, "*" failed"*) ;;
+        *) echo "  $line" ;;
+        esac
+    done <"$1"
 }
 run_py() {
     py=$1

@@ -33,13 +33,6 @@ $PY tests/geojson_check.py "$BIN" "$T" examples/polygons.json examples/orthogona
     tests/data/bool2-cases/xor-walk.json tests/data/bool2-cases/touching-holes-union.json \
     "$T/cut-vertices.json" "$T"/svg-*.json >"$T/out" 2>&1
 rc=$?
-while IFS= read -r line; do
-    case $line in
-    "ok "*) pass "${line#ok }" ;;
-    "FAIL "*) fail "${line#FAIL }" ;;
-    [0-9]*" passed, "*) ;;
-    *) echo "  $line" ;;
-    esac
-done <"$T/out"
+tally_file "$T/out"
 [ "$rc" -eq 0 ] || [ "$F" -gt 0 ] || fail "geojson_check.py exited $rc"
 finish

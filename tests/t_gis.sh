@@ -94,14 +94,7 @@ assert d["kind"] == "polygons" and list(d["layers"]) == ["a", "b"] and d["op"] =
 # the overlays against shapely
 $PY tests/gis_check.py "$T" >"$T/py.out" 2>"$T/py.err"
 rc=$?
-while IFS= read -r line; do
-    case $line in
-    "ok "*) pass "${line#ok }" ;;
-    "FAIL "*) fail "${line#FAIL }" ;;
-    [0-9]*" passed, "*) ;;
-    *) echo "  $line" ;;
-    esac
-done <"$T/py.out"
+tally_file "$T/py.out"
 grep -q -E '^[0-9]+ passed, [0-9]+ failed' "$T/py.out" ||
     fail "gis_check.py exited $rc without a summary: $(tail -n 3 "$T/py.err")"
 finish

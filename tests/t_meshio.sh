@@ -18,23 +18,12 @@ command -v node >/dev/null 2>&1 || give_up "node is missing (make deps)"
 A=examples/box.obj
 B=examples/pyramid.obj
 
-# sub-tests print their own ok/FAIL lines and a summary: count them here
-tally() {
-    while IFS= read -r line; do
-        case $line in
-        "ok "*) pass "${line#ok }" ;;
-        "FAIL "*) fail "${line#FAIL }" ;;
-        *" passed, "*" failed") ;;
-        *) echo "$line" ;;
-        esac
-    done <"$1"
-}
 sub() { # sub NAME CMD...: runs a checker, tallies its lines (a crash is a failure)
     name=$1
     shift
     "$@" >"$T/sub.out" 2>"$T/sub.err"
     rc=$?
-    tally "$T/sub.out"
+    tally_file "$T/sub.out"
     grep -q -E '^[0-9]+ passed, [0-9]+ failed' "$T/sub.out" ||
         { tail -n 5 "$T/sub.err"; fail "$name: exited $rc without a summary"; }
 }

@@ -39,9 +39,11 @@ done
 if [ -z "$port" ]; then
     echo "FAIL page: cellard did not start"; cat "$tmp/log"; echo "0 passed, 1 failed"; exit 1
 fi
-# a job of several seconds on one thread (12 000 random segments: 1.8 million faces), and a
-# result of 100 000 faces (2 920 segments: 100 012 faces)
-"$B/cellar" gen lines 12000 0.4 1 >"$tmp/long.json"
+# a job of many seconds on one thread (16 000 random segments, 3.2 million faces: 14 s here,
+# so that it is still running when the test has seen its progress move and presses Cancel, also
+# on a loaded machine; 12 000 took 7 s and was sometimes done first), and a result of 100 000
+# faces (2 920 segments: 100 012 faces)
+"$B/cellar" gen lines 16000 0.4 1 >"$tmp/long.json"
 "$B/cellar" gen lines 2920 0.4 1 >"$tmp/big.json"
 # this machine's pace now: the best of three runs of a reference job (400 long segments) over
 # a quiet machine's 0.04 s; page.js stretches its waits by it (never below 1)

@@ -963,6 +963,13 @@ static int zip_member(zip_t *za, const char *name, size_t max, char **buf, size_
     *buf = NULL;
     *n = 0;
     if (i < 0) return 1;
+    /* a size the directory declares beyond the limit is refused before anything is inflated;
+     * a directory that lies is caught by the count below, at the limit */
+    zip_stat_t st;
+    if (zip_stat_index(za, (zip_uint64_t)i, 0, &st) == 0 && (st.valid & ZIP_STAT_SIZE) &&
+        st.size > max)
+        return say(err, errlen, "%s: inflates to more than %zu bytes (%llu, its directory says)",
+                   name, max, (unsigned long long)st.size);
     zip_file_t *zf = zip_fopen_index(za, (zip_uint64_t)i, 0);
     if (!zf) return say(err, errlen, "%s: cannot open: %s", name, zip_strerror(za));
     size_t cap = 0, len = 0;

@@ -135,6 +135,44 @@ TZ=UTC "$C" solids "$A" "$B" --op union --format 3mf --quiet >"$T/utc.3mf" 2>/de
 TZ=Pacific/Kiritimati "$C" solids "$A" "$B" --op union --format 3mf --quiet >"$T/kir.3mf" 2>/dev/null
 check "3mf: the same bytes in UTC and UTC+14" sh -c "[ -s '$T/utc.3mf' ] && cmp -s '$T/utc.3mf' '$T/kir.3mf'"
 
+# zip bombs: a 3MF whose model inflates to 300 MiB (306 KB of zip) is refused by the size its
+# directory declares, before inflating (under 100 MB of memory); one whose directory lies (says
+# 1 000 bytes) is refused when inflating passes the limit of 256 MiB (under 300 MB)
+$PY - "$T" <<'PY'
+import struct, sys, zipfile
+d = sys.argv[1]
+with zipfile.ZipFile(d + "/bomb.3mf", "w", zipfile.ZIP_DEFLATED) as z:
+    with z.open("3D/3dmodel.model", "w", force_zip64=True) as f:
+        f.write(b'<?xml version="1.0"?><model xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"><!--')
+        for _ in range(300):
+            f.write(b" " * (1 << 20))
+        f.write(b"--></model>")
+# the same, its sizes in the directory and the local header changed to 1 000 bytes
+with zipfile.ZipFile(d + "/liar.3mf", "w", zipfile.ZIP_DEFLATED) as z:
+    z.writestr("3D/3dmodel.model", b'<?xml version="1.0"?><model><!--' + b" " * (300 << 20) + b"--></model>")
+b = bytearray(open(d + "/liar.3mf", "rb").read())
+struct.pack_into("<I", b, 22, 1000)  # the local header's uncompressed size
+cd = b.rfind(b"PK\x01\x02")
+struct.pack_into("<I", b, cd + 24, 1000)  # the directory's
+open(d + "/liar.3mf", "wb").write(bytes(b))
+PY
+for f in bomb:102400 liar:307200; do
+    most=${f#*:}
+    f=${f%:*}
+    # under the sanitizers memory is theirs too (shadow, quarantine of every realloc's old
+    # block): the refusal is checked, the bound is not
+    [ "${CELLAR_SANITIZED:-0}" = 1 ] && most=99999999
+    /usr/bin/time -f %M -o "$T/$f.mem" "$C" solids "$T/$f.3mf" --quiet >/dev/null 2>"$T/$f.err"
+    rc=$?
+    kb=$(tail -n 1 "$T/$f.mem")
+    if [ "$rc" -eq 1 ] && grep -q "$f.3mf: 3D/3dmodel.model: inflates to more than 268435456 bytes" "$T/$f.err" &&
+        [ "$kb" -lt "$most" ]; then
+        pass "$f.3mf refused in $kb KB: $(head -c 160 "$T/$f.err")"
+    else
+        fail "$f.3mf: exit $rc, $kb KB: $(head -c 300 "$T/$f.err")"
+    fi
+done
+
 # a bad file: the message names it and where
 printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n' >"$T/bad.stl"
 if status 1 "$C" solids "$T/bad.stl" --quiet && grep -q "bad.stl: line 5: expected a finite number" "$T/err"; then

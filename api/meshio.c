@@ -21,6 +21,7 @@
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -956,6 +957,18 @@ out:
 }
 
 /* Reads the member name of za (at most max bytes inflated) into *buf (NUL after). */
+static _Atomic size_t max_part = MESH_3MF_MAX_PART;
+
+void mesh_set_max_part(size_t bytes)
+{
+    max_part = bytes && bytes < MESH_3MF_MAX_PART ? bytes : MESH_3MF_MAX_PART;
+}
+
+size_t mesh_max_part(void)
+{
+    return max_part;
+}
+
 static int zip_member(zip_t *za, const char *name, size_t max, char **buf, size_t *n, char *err,
                       size_t errlen)
 {
@@ -1160,7 +1173,7 @@ int mesh_read_3mf(const char *data, size_t len, solid **parts, size_t *nparts, c
         goto out;
     }
     if (find_model(za, name, sizeof name, err, errlen)) goto out;
-    int r = zip_member(za, name, MESH_3MF_MAX_PART, &xml, &n, err, errlen);
+    int r = zip_member(za, name, mesh_max_part(), &xml, &n, err, errlen);
     if (r > 0) say(err, errlen, "not a 3MF file: no model part %s", name);
     if (r) goto out;
     if (n > INT32_MAX) {

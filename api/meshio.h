@@ -53,6 +53,12 @@
 #define MESH_3MF_SOLIDS    4096          /* solids (build items times components) of a file */
 #define MESH_3MF_NESTING   16            /* components within components */
 
+/* The bytes a 3MF part may inflate to in this process: MESH_3MF_MAX_PART, or less as set (the
+ * daemon sets its --max-body: a 3MF body must not make more than a JSON body may hold).  Both
+ * thread-safe; set it before the readers run. */
+void mesh_set_max_part(size_t bytes);
+size_t mesh_max_part(void);
+
 typedef enum mesh_format {
     MESH_NONE = 0,
     MESH_OBJ,

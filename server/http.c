@@ -1426,6 +1426,15 @@ static void intake_work(conn *c)
         body_release(c);
         if (rc != API_OK)
             return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
+        if (jlen > h->cfg->max_body) { /* the request the files make, as a JSON body is held */
+            char msg[200];
+            snprintf(msg, sizeof msg,
+                     "the solids request these mesh files make is %zu bytes, more than the %llu "
+                     "a request may hold (--max-body)",
+                     jlen, (unsigned long long)h->cfg->max_body);
+            free(json);
+            return plan_problem(pl, 413, msg, NULL);
+        }
         c->body = json;
         c->len = jlen;
     }

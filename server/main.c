@@ -17,6 +17,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include "api/meshio.h"
 #include "api/api.h"
 #include "server/config.h"
 #include "server/engine.h"
@@ -80,6 +81,7 @@ int main(int argc, char **argv)
     }
     if (cfg.healthcheck) return healthcheck(&cfg);
     log_set_level(cfg.log_level);
+    mesh_set_max_part(cfg.max_body); /* a 3MF body inflates to no more than a JSON body holds */
 
     sigset_t set;
     sigemptyset(&set);

@@ -2541,6 +2541,87 @@ SERVER_TEST(mesh_bodies, "--workers 1 --job-threads 1")
     free(bstl);
 }
 
+/* A zip of one deflated member (a 3MF package of its model part alone), by zlib; malloc'd. */
+static char *zip_one(const char *name, const char *data, size_t n, size_t *len)
+{
+    uLong bound = compressBound((uLong)n) + 64;
+    unsigned char *z = malloc(bound), *out = NULL;
+    z_stream s = {0};
+    if (!z || deflateInit2(&s, 6, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK) goto done;
+    s.next_in = (unsigned char *)data, s.avail_in = (uInt)n;
+    s.next_out = z, s.avail_out = (uInt)bound;
+    int rc = deflate(&s, Z_FINISH);
+    size_t zn = s.total_out, nl = strlen(name);
+    deflateEnd(&s);
+    if (rc != Z_STREAM_END) goto done;
+    uLong crc = crc32(0, (const unsigned char *)data, (uInt)n);
+    *len = 30 + nl + zn + 46 + nl + 22;
+    out = calloc(1, *len);
+    if (!out) goto done;
+    unsigned char *p = out;
+#define LE16(x, o) (p[o] = (unsigned char)((x)&255), p[(o) + 1] = (unsigned char)(((x) >> 8) & 255))
+#define LE32(x, o) (LE16((x)&65535, o), LE16(((x) >> 16) & 65535, (o) + 2))
+    LE32(0x04034b50u, 0), LE16(20, 4), LE16(8, 8), LE32(crc, 14), LE32(zn, 18), LE32(n, 22);
+    LE16(nl, 26);
+    memcpy(p + 30, name, nl);
+    memcpy(p + 30 + nl, z, zn);
+    p = out + 30 + nl + zn;
+    LE32(0x02014b50u, 0), LE16(20, 4), LE16(20, 6), LE16(8, 10), LE32(crc, 16), LE32(zn, 20);
+    LE32(n, 24), LE16(nl, 28), LE32(0, 42);
+    memcpy(p + 46, name, nl);
+    p += 46 + nl;
+    LE32(0x06054b50u, 0), LE16(1, 8), LE16(1, 10), LE32(46 + nl, 12), LE32(30 + nl + zn, 16);
+#undef LE32
+#undef LE16
+done:
+    free(z);
+    return (char *)out;
+}
+
+/* A mesh body makes no more than a JSON body may hold (--max-body): a 3MF whose model inflates
+ * beyond it is refused (422 naming the part) without inflating further, and a binary STL under
+ * the limit whose request comes out over it is 413. */
+SERVER_TEST(mesh_bodies_limits, "--workers 1 --job-threads 1 --max-body 1048576")
+{
+    hresp r;
+    size_t n = 2u << 20, zlen = 0;
+    char *model = malloc(n + 1);
+    REQUIRE(model, "no memory");
+    static const char head[] = "<?xml version=\"1.0\"?><model xmlns=\"http://schemas.microsoft.com/"
+                               "3dmanufacturing/core/2015/02\"><!--";
+    memset(model, ' ', n);
+    memcpy(model, head, sizeof head - 1);
+    memcpy(model + n - 11, "--></model>", 11);
+    char *z = zip_one("3D/3dmodel.model", model, n, &zlen);
+    free(model);
+    REQUIRE(z && zlen < 65536, "the zip: %zu bytes", zlen);
+    post_mesh(d, "/v1/jobs", "model/3mf", z, zlen, &r);
+    CHECK(r.status == 422 &&
+              strstr(r.body.p ? r.body.p : "", "inflates to more than 1048576 bytes"),
+          "a 3MF inflating to 2 MiB under --max-body 1 MiB: %ld %.300s", r.status,
+          r.body.p ? r.body.p : "");
+    hresp_free(&r);
+    free(z);
+
+    /* 20 000 triangles of distinct corners: 1 000 084 bytes of STL, about 1.6 MB of request */
+    size_t nt = 20000, slen = 84 + 50 * nt;
+    unsigned char *stl = calloc(1, slen);
+    REQUIRE(stl, "no memory");
+    stl[80] = (unsigned char)(nt & 255), stl[81] = (unsigned char)(nt >> 8);
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++) {
+                float f = (float)(1000.125 + (double)(3 * t + (size_t)k) * 0.001 + a);
+                memcpy(stl + 84 + 50 * t + 12 + 12 * k + 4 * a, &f, 4);
+            }
+    post_mesh(d, "/v1/jobs", "model/stl", (const char *)stl, slen, &r);
+    CHECK(r.status == 413 && strstr(r.body.p ? r.body.p : "", "--max-body"),
+          "an STL whose request is over --max-body: %ld %.300s", r.status,
+          r.body.p ? r.body.p : "");
+    hresp_free(&r);
+    free(stl);
+}
+
 /* Runs cellard with args until it exits (it must not start): its exit status and output. */
 static int cellard_fails(const char *args, char *out, size_t max)
 {

@@ -71,6 +71,10 @@ void api_buf_i64(api_buf *b, int64_t v);
 void api_buf_double(api_buf *b, double x); /* x finite (asserted) */
 /* [x0,x1,...] of the dim coordinates at x, each by api_buf_double. */
 void api_buf_point(api_buf *b, const double *x, int dim);
+/* A Boolean result's own "V" (fields without V): writes "V":[...] of the vertices v < nv whose
+ * map[v] is non-zero (V holds dim coordinates each), in order, and renumbers map[v] to their
+ * place in it, which the result's cycles then write. */
+void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint32_t *map);
 void api_buf_free(api_buf *b);
 void api_buf_u32_list(api_buf *b, const uint32_t *a, size_t n); /* [a0,a1,...] */
 /* The numbers' writers (larjson.c): 10^k in 128 bits (0 <= k <= 38); x > 0 written as

@@ -371,6 +371,19 @@ void api_buf_point(api_buf *b, const double *x, int dim)
     api_buf_putc(b, ']');
 }
 
+void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint32_t *map)
+{
+    uint32_t n = 0;
+    api_buf_puts(b, "\"V\":[");
+    for (size_t v = 0; v < nv; v++) {
+        if (!map[v]) continue;
+        if (n) api_buf_putc(b, ',');
+        api_buf_point(b, V + (size_t)dim * v, dim);
+        map[v] = n++;
+    }
+    api_buf_putc(b, ']');
+}
+
 void api_buf_free(api_buf *b)
 {
     free(b->p);

@@ -358,15 +358,7 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigne
                 for (uint32_t j = c->cyc_off[c->fc[k]]; j < c->cyc_off[c->fc[k] + 1]; j++)
                     map[c->cyc[j]] = 1;
         }
-        uint32_t nv = 0;
-        api_buf_puts(b, "\"V\":[");
-        for (size_t v = 0; v < c->nv; v++) {
-            if (!map[v]) continue;
-            if (nv) api_buf_putc(b, ',');
-            api_buf_point(b, c->V + 3 * v, 3);
-            map[v] = nv++;
-        }
-        api_buf_putc(b, ']');
+        api_buf_own_vertices(b, c->V, c->nv, 3, map);
         sep = ",";
     }
     if (fl & (API_F3_CF | API_F3_CV)) {

@@ -854,24 +854,15 @@ static void put_bool2(api_buf *b, const void *udata)
     api_buf_puts(b, ",\"result\":{");
     const char *sep = "";
     if (!(fl & API_F_V)) { /* its own V */
-        map = malloc((r->c.nv + 1) * sizeof *map);
+        map = calloc(r->c.nv + 1, sizeof *map);
         if (!map) {
             b->failed = 1; /* out of memory: the result is incomplete, the run says so */
             return;
         }
-        for (size_t v = 0; v < r->c.nv; v++) map[v] = 0;
         for (size_t i = 0; i < r->rc_off[r->nrcyc]; i++) map[r->rv[i]] = 1;
         for (size_t i = 0; r->npieces && i < r->pieces.rc_off[r->pieces.nrcyc]; i++)
             map[r->pieces.rv[i]] = 1;
-        uint32_t nv = 0;
-        api_buf_puts(b, "\"V\":[");
-        for (size_t v = 0; v < r->c.nv; v++) {
-            if (!map[v]) continue;
-            if (nv) api_buf_putc(b, ',');
-            api_buf_point(b, r->c.V + 2 * v, 2);
-            map[v] = nv++;
-        }
-        api_buf_putc(b, ']');
+        api_buf_own_vertices(b, r->c.V, r->c.nv, 2, map);
         sep = ",";
     }
     if (cells) {

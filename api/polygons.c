@@ -742,11 +742,6 @@ static void put_ring(api_buf *b, const uint32_t *rc_off, const uint32_t *rv, uin
     api_buf_putc(b, ']');
 }
 
-static void put_cycle(api_buf *b, const bool2_result *r, uint32_t k, const uint32_t *map)
-{
-    put_ring(b, r->rc_off, r->rv, k, map);
-}
-
 /* "holes": {"q": [cycle, ...], ...} of the polygons of g that have holes. */
 static void put_holes(api_buf *b, const bool2_rings *g, const uint32_t *map)
 {
@@ -841,6 +836,7 @@ static void put_bool2(api_buf *b, const void *udata)
 {
     const bool2_out *o = udata;
     const bool2_result *r = o->r;
+    const bool2_rings *g = &r->region;
     unsigned fl = o->fields;
     int membership = (fl & API_F_MEMBERSHIP) != 0, result = (fl & API_F_RESULT) != 0;
     int cells = (fl & (API_F_FV | API_F_FE)) != 0, fe = (fl & API_F_EV) != 0;
@@ -859,7 +855,7 @@ static void put_bool2(api_buf *b, const void *udata)
             b->failed = 1; /* out of memory: the result is incomplete, the run says so */
             return;
         }
-        for (size_t i = 0; i < r->rc_off[r->nrcyc]; i++) map[r->rv[i]] = 1;
+        for (size_t i = 0; i < g->rc_off[g->nrcyc]; i++) map[g->rv[i]] = 1;
         for (size_t i = 0; r->npieces && i < r->pieces.rc_off[r->pieces.nrcyc]; i++)
             map[r->pieces.rv[i]] = 1;
         api_buf_own_vertices(b, r->c.V, r->c.nv, 2, map);
@@ -873,22 +869,22 @@ static void put_bool2(api_buf *b, const void *udata)
     }
     api_buf_puts(b, sep);
     api_buf_puts(b, "\"FV\":[");
-    for (size_t q = 0; q < r->npoly; q++) {
+    for (size_t q = 0; q < g->npoly; q++) {
         if (q) api_buf_putc(b, ',');
-        put_cycle(b, r, r->poly_outer[q], map);
+        put_ring(b, g->rc_off, g->rv, g->poly_outer[q], map);
     }
     api_buf_putc(b, ']');
     if (fe) {
         api_buf_puts(b, ",\"FE\":[");
-        for (size_t q = 0; q < r->npoly; q++) {
+        for (size_t q = 0; q < g->npoly; q++) {
             int first = 1;
             api_buf_puts(b, q ? ",[" : "[");
-            for (uint32_t h = r->ph_off[q]; h <= r->ph_off[q + 1]; h++) {
-                uint32_t k = h == r->ph_off[q] ? r->poly_outer[q] : r->ph_cyc[h - 1];
-                for (uint32_t i = r->rc_off[k]; i < r->rc_off[k + 1]; i++) {
+            for (uint32_t h = g->ph_off[q]; h <= g->ph_off[q + 1]; h++) {
+                uint32_t k = h == g->ph_off[q] ? g->poly_outer[q] : g->ph_cyc[h - 1];
+                for (uint32_t i = g->rc_off[k]; i < g->rc_off[k + 1]; i++) {
                     if (!first) api_buf_putc(b, ',');
                     first = 0;
-                    api_buf_i64(b, r->re[i]);
+                    api_buf_i64(b, g->re[i]);
                 }
             }
             api_buf_putc(b, ']');
@@ -896,9 +892,7 @@ static void put_bool2(api_buf *b, const void *udata)
         api_buf_putc(b, ']');
     }
     api_buf_putc(b, ',');
-    bool2_rings g = {r->nrcyc, r->rc_off,     r->rv,     r->re,
-                     r->npoly, r->poly_outer, r->ph_off, r->ph_cyc};
-    put_holes(b, &g, map);
+    put_holes(b, g, map);
     if (o->req->nlayers) put_pieces(b, r, o->req->fill, map);
     api_buf_puts(b, ",\"area\":");
     api_buf_double(b, r->area);
@@ -912,7 +906,7 @@ static void put_bool2(api_buf *b, const void *udata)
 static void put_warnings(api_buf *b, const void *udata)
 {
     const bool2_out *o = udata;
-    if (!(o->req->named_and && o->r->ninputs > 2 && o->r->npoly == 0)) return;
+    if (!(o->req->named_and && o->r->ninputs > 2 && o->r->region.npoly == 0)) return;
     char msg[300];
     snprintf(msg, sizeof msg,
              ",\"warnings\":[\"op: the intersection of all %zu polygons is empty; to intersect "

@@ -77,12 +77,7 @@ void bool2_free(bool2_result *r)
     free(r->mem);
     free(r->memw);
     free(r->cells);
-    free(r->rc_off);
-    free(r->rv);
-    free(r->re);
-    free(r->poly_outer);
-    free(r->ph_off);
-    free(r->ph_cyc);
+    rings_free(&r->region);
     free(r->piece_face);
     rings_free(&r->pieces);
     free(r->poly_piece);
@@ -662,15 +657,12 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     if (stage_select(out, op, in->fill, sel)) goto fail;
     stage_groups(c, side, sel, grp);
     BOOL2_PROGRESS("select", 1);
-    bool2_rings g = {0};
-    rc = stage_rings(c, &g, side, sel, grp, &ring_grp, &stop, err, errlen);
-    out->nrcyc = g.nrcyc, out->rc_off = g.rc_off, out->rv = g.rv, out->re = g.re;
-    if (rc != ARR_OK) goto fail;
+    if ((rc = stage_rings(c, &out->region, side, sel, grp, &ring_grp, &stop, err, errlen)) !=
+        ARR_OK)
+        goto fail;
     BOOL2_PROGRESS("polygons", 0.5);
-    rc = stage_polygons(c, &g, ring_grp, &out->area, err, errlen);
-    out->npoly = g.npoly, out->poly_outer = g.poly_outer, out->ph_off = g.ph_off;
-    out->ph_cyc = g.ph_cyc;
-    if (rc != ARR_OK) goto fail;
+    if ((rc = stage_polygons(c, &out->region, ring_grp, &out->area, err, errlen)) != ARR_OK)
+        goto fail;
     if (in->pieces) {
         free(ring_grp);
         ring_grp = NULL;

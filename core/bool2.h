@@ -79,19 +79,10 @@ typedef struct bool2_result {
     size_t ncells;
     uint32_t *cells; /* ncells selected faces, ascending */
     double area;     /* the area the result polygons enclose, from their written coordinates */
-    /* The region's boundary cycles, CSR: cycle k has vertices rv[rc_off[k]..rc_off[k+1]) and
-     * signed edges re[same range], re[i] = ±(e+1) the edge from rv[i] to the next vertex
-     * (+ when that is EV's v0 -> v1).  The selected region is on the left of every cycle. */
-    size_t nrcyc;
-    uint32_t *rc_off; /* nrcyc+1 */
-    uint32_t *rv;
-    int32_t *re;
-    /* The result polygons: polygon q has outer cycle poly_outer[q] (counter-clockwise) and
-     * holes ph_cyc[ph_off[q]..ph_off[q+1]) (clockwise), cycle ids as above. */
-    size_t npoly;
-    uint32_t *poly_outer; /* npoly */
-    uint32_t *ph_off;     /* npoly+1 */
-    uint32_t *ph_cyc;
+    /* The result polygons (bool2_rings): the region's boundary cycles, the selected region on
+     * the left of every one, and the polygons, outer cycles counter-clockwise, holes
+     * clockwise. */
+    bool2_rings region;
     /* With in->pieces, the result cut where the membership changes, as a GIS overlay gives it:
      * the selected faces of one membership row (the inputs a face lies in by the fill rule) are
      * one piece, npieces of them, numbered in the order of their first face; piece k's row is

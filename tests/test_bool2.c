@@ -75,12 +75,12 @@ static int run_named(const pb *b, const char *name, bool2_result *r)
 static void check_result(const char *what, const bool2_result *r)
 {
     double sum = 0;
-    for (size_t k = 0; k < r->nrcyc; k++) {
-        uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
+    for (size_t k = 0; k < r->region.nrcyc; k++) {
+        uint32_t a = r->region.rc_off[k], n = r->region.rc_off[k + 1] - a;
         double s = 0;
         for (uint32_t i = 0; i < n; i++) {
-            uint32_t v = r->rv[a + i], w = r->rv[a + (i + 1) % n];
-            int32_t se = r->re[a + i];
+            uint32_t v = r->region.rv[a + i], w = r->region.rv[a + (i + 1) % n];
+            int32_t se = r->region.re[a + i];
             uint32_t e = (uint32_t)abs(se) - 1;
             uint32_t v0 = r->c.EV[2 * e], v1 = r->c.EV[2 * e + 1];
             CHECK((se > 0 && v0 == v && v1 == w) || (se < 0 && v1 == v && v0 == w),
@@ -90,25 +90,27 @@ static void check_result(const char *what, const bool2_result *r)
         }
         sum += s / 2;
     }
-    for (size_t q = 0; q < r->npoly; q++) {
-        uint32_t k = r->poly_outer[q], a = r->rc_off[k], n = r->rc_off[k + 1] - a;
+    for (size_t q = 0; q < r->region.npoly; q++) {
+        uint32_t k = r->region.poly_outer[q], a = r->region.rc_off[k],
+                 n = r->region.rc_off[k + 1] - a;
         double s = 0;
         for (uint32_t i = 0; i < n; i++) {
-            const double *p = r->c.V + 2 * r->rv[a + i], *w = r->c.V + 2 * r->rv[a + (i + 1) % n];
+            const double *p = r->c.V + 2 * r->region.rv[a + i],
+                         *w = r->c.V + 2 * r->region.rv[a + (i + 1) % n];
             s += p[0] * w[1] - p[1] * w[0];
         }
         CHECK(s > 0, "%s: outer cycle %u is not counter-clockwise", what, k);
     }
     CHECK(fabs(sum - r->area) <= 1e-9 * fmax(1, fabs(r->area)),
           "%s: cycles bound %.17g, selected faces %.17g", what, sum, r->area);
-    size_t nh = r->npoly ? r->ph_off[r->npoly] : 0;
-    CHECK(r->npoly + nh == r->nrcyc, "%s: %zu polygons + %zu holes != %zu cycles", what, r->npoly,
-          nh, r->nrcyc);
+    size_t nh = r->region.npoly ? r->region.ph_off[r->region.npoly] : 0;
+    CHECK(r->region.npoly + nh == r->region.nrcyc, "%s: %zu polygons + %zu holes != %zu cycles",
+          what, r->region.npoly, nh, r->region.nrcyc);
 }
 
 static size_t boundary_edges(const bool2_result *r)
 {
-    return r->nrcyc ? r->rc_off[r->nrcyc] : 0;
+    return r->region.nrcyc ? r->region.rc_off[r->region.nrcyc] : 0;
 }
 
 /* ---- hand-made cases ------------------------------------------------------------------------ */
@@ -134,8 +136,8 @@ TEST(bool2_two_squares)
               want[t].area);
         CHECK(boundary_edges(&r) == want[t].edges, "%s: %zu boundary edges, want %zu", want[t].op,
               boundary_edges(&r), want[t].edges);
-        CHECK(r.npoly == want[t].polys, "%s: %zu polygons, want %zu", want[t].op, r.npoly,
-              want[t].polys);
+        CHECK(r.region.npoly == want[t].polys, "%s: %zu polygons, want %zu", want[t].op,
+              r.region.npoly, want[t].polys);
         check_result(want[t].op, &r);
         /* membership: every face in one or both inputs, one face in both, rows ascending */
         size_t both = 0;
@@ -202,8 +204,8 @@ TEST(bool2_square_with_hole_minus_square)
     /* 100 - 16 = 84; minus the square [5,10]x[0,5] (25) plus its part in the hole [5,7]x[3,5]
      * (4): 84 - 21 = 63 */
     CHECK(fabs(r.area - 63) < 1e-12, "area %g, want 63", r.area);
-    CHECK(r.npoly == 1 && r.ph_off[1] == 0, "%zu polygons, %u holes", r.npoly,
-          r.npoly ? r.ph_off[1] : 0);
+    CHECK(r.region.npoly == 1 && r.region.ph_off[1] == 0, "%zu polygons, %u holes", r.region.npoly,
+          r.region.npoly ? r.region.ph_off[1] : 0);
     check_result("hole minus square", &r);
     bool2_free(&r);
     REQUIRE(run_named(&b, "union", &r) == ARR_OK, "union failed");
@@ -216,8 +218,9 @@ TEST(bool2_square_with_hole_minus_square)
     pb_rect(&one, 3, 3, 7, 7);
     pb_end(&one);
     REQUIRE(run_named(&one, "union", &r) == ARR_OK, "single failed");
-    CHECK(r.npoly == 1 && r.ph_off[1] == 1 && fabs(r.area - 84) < 1e-12,
-          "%zu polygons, %u holes, area %g", r.npoly, r.npoly ? r.ph_off[1] : 0, r.area);
+    CHECK(r.region.npoly == 1 && r.region.ph_off[1] == 1 && fabs(r.area - 84) < 1e-12,
+          "%zu polygons, %u holes, area %g", r.region.npoly,
+          r.region.npoly ? r.region.ph_off[1] : 0, r.area);
     check_result("square with hole", &r);
     bool2_free(&r);
 }
@@ -232,8 +235,8 @@ TEST(bool2_self_difference_is_empty)
     pb_end(&b);
     bool2_result r;
     REQUIRE(run_named(&b, "difference", &r) == ARR_OK, "difference failed");
-    CHECK(r.ncells == 0 && r.area == 0 && r.nrcyc == 0 && r.npoly == 0,
-          "%zu cells, area %g, %zu cycles", r.ncells, r.area, r.nrcyc);
+    CHECK(r.ncells == 0 && r.area == 0 && r.region.nrcyc == 0 && r.region.npoly == 0,
+          "%zu cells, area %g, %zu cycles", r.ncells, r.area, r.region.nrcyc);
     bool2_free(&r);
     REQUIRE(run_named(&b, "intersection", &r) == ARR_OK, "intersection failed");
     CHECK(r.ncells == 1 && fabs(r.area - 5.5) < 1e-12 && boundary_edges(&r) == 3,
@@ -253,9 +256,10 @@ TEST(bool2_touching_squares)
     pb_end(&b);
     bool2_result r;
     REQUIRE(run_named(&b, "union", &r) == ARR_OK, "union failed");
-    CHECK(r.ncells == 2 && r.npoly == 1 && boundary_edges(&r) == 6 && fabs(r.area - 2) < 1e-12,
-          "%zu cells, %zu polygons, %zu edges, area %g", r.ncells, r.npoly, boundary_edges(&r),
-          r.area);
+    CHECK(r.ncells == 2 && r.region.npoly == 1 && boundary_edges(&r) == 6 &&
+              fabs(r.area - 2) < 1e-12,
+          "%zu cells, %zu polygons, %zu edges, area %g", r.ncells, r.region.npoly,
+          boundary_edges(&r), r.area);
     check_result("touching union", &r);
     bool2_free(&r);
     REQUIRE(run_named(&b, "intersection", &r) == ARR_OK, "intersection failed");
@@ -268,8 +272,8 @@ TEST(bool2_touching_squares)
     pb_rect(&c, 1, 1, 2, 2);
     pb_end(&c);
     REQUIRE(run_named(&c, "union", &r) == ARR_OK, "corner union failed");
-    CHECK(r.npoly == 2 && r.nrcyc == 2 && boundary_edges(&r) == 8, "%zu polygons, %zu cycles",
-          r.npoly, r.nrcyc);
+    CHECK(r.region.npoly == 2 && r.region.nrcyc == 2 && boundary_edges(&r) == 8,
+          "%zu polygons, %zu cycles", r.region.npoly, r.region.nrcyc);
     check_result("corner union", &r);
     bool2_free(&r);
 }
@@ -427,9 +431,10 @@ static void differential(const char *what, const pb *b)
         CHECK(g >= 0, "%s %s: GEOS failed", what, ops[t]);
         CHECK(fabs(r.area - g) <= 1e-9 * fmax(1, g), "%s %s: area %.17g, GEOS %.17g", what, ops[t],
               r.area, g);
-        size_t holes = r.npoly ? r.ph_off[r.npoly] : 0;
-        CHECK(r.npoly == gp && holes == gh, "%s %s: %zu polygons and %zu holes, GEOS %zu and %zu",
-              what, ops[t], r.npoly, holes, gp, gh);
+        size_t holes = r.region.npoly ? r.region.ph_off[r.region.npoly] : 0;
+        CHECK(r.region.npoly == gp && holes == gh,
+              "%s %s: %zu polygons and %zu holes, GEOS %zu and %zu", what, ops[t], r.region.npoly,
+              holes, gp, gh);
         check_result(what, &r);
         bool2_free(&r);
     }
@@ -719,8 +724,9 @@ TEST(bool2_many_operands)
         CHECK(rc == ARR_OK, "tiling %s: %s", ops[t], err);
         if (rc == ARR_OK) {
             CHECK(r.area == want[t], "tiling %s: area %.17g, want %g", ops[t], r.area, want[t]);
-            CHECK(r.npoly == (t < 2 ? 1u : 0u) && (r.npoly == 0 || r.ph_off[r.npoly] == 0),
-                  "tiling %s: %zu polygons", ops[t], r.npoly);
+            CHECK(r.region.npoly == (t < 2 ? 1u : 0u) &&
+                      (r.region.npoly == 0 || r.region.ph_off[r.region.npoly] == 0),
+                  "tiling %s: %zu polygons", ops[t], r.region.npoly);
             CHECK(r.c.nf == n && r.mem_off[r.c.nf] == n, "tiling %s: %zu faces, %u memberships",
                   ops[t], r.c.nf, r.mem_off[r.c.nf]);
             check_result(ops[t], &r);
@@ -1074,9 +1080,10 @@ TEST(bool2_hole_touching_outer_at_a_vertex)
     bool2_result r;
     REQUIRE(run_named(&b, "difference", &r) == ARR_OK, "difference failed");
     CHECK(fabs(r.area - 77) < 1e-12, "area %g, want 77", r.area);
-    CHECK(r.npoly == 1 && r.nrcyc == 2 && boundary_edges(&r) == 14 &&
-              r.ph_off[1] - r.ph_off[0] == 1,
-          "%zu polygons, %zu cycles, %zu edges", r.npoly, r.nrcyc, boundary_edges(&r));
+    CHECK(r.region.npoly == 1 && r.region.nrcyc == 2 && boundary_edges(&r) == 14 &&
+              r.region.ph_off[1] - r.region.ph_off[0] == 1,
+          "%zu polygons, %zu cycles, %zu edges", r.region.npoly, r.region.nrcyc,
+          boundary_edges(&r));
     check_result("hole touching outer", &r);
     bool2_free(&r);
 }

@@ -703,11 +703,12 @@ static int ours(tcase *c, const pb *b, const char *op, const char *what, bool2_r
 /* Signed area of result cycle k from its coordinates (about its first vertex). */
 static double cycle_area(const bool2_result *r, uint32_t k)
 {
-    uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
-    const double *o = r->c.V + 2 * r->rv[a];
+    uint32_t a = r->region.rc_off[k], n = r->region.rc_off[k + 1] - a;
+    const double *o = r->c.V + 2 * r->region.rv[a];
     double s = 0;
     for (uint32_t i = 1; i + 1 < n; i++) {
-        const double *p = r->c.V + 2 * r->rv[a + i], *q = r->c.V + 2 * r->rv[a + i + 1];
+        const double *p = r->c.V + 2 * r->region.rv[a + i],
+                     *q = r->c.V + 2 * r->region.rv[a + i + 1];
         s += (p[0] - o[0]) * (q[1] - o[1]) - (q[0] - o[0]) * (p[1] - o[1]);
     }
     return s / 2;
@@ -715,10 +716,10 @@ static double cycle_area(const bool2_result *r, uint32_t k)
 
 static GEOSGeometry *geos_cycle(GEOSContextHandle_t h, const bool2_result *r, uint32_t k)
 {
-    uint32_t a = r->rc_off[k], n = r->rc_off[k + 1] - a;
+    uint32_t a = r->region.rc_off[k], n = r->region.rc_off[k + 1] - a;
     GEOSCoordSequence *cs = GEOSCoordSeq_create_r(h, n + 1, 2);
     for (uint32_t i = 0; i <= n; i++) {
-        const double *p = r->c.V + 2 * r->rv[a + i % n];
+        const double *p = r->c.V + 2 * r->region.rv[a + i % n];
         GEOSCoordSeq_setXY_r(h, cs, i, p[0], p[1]);
     }
     return GEOSGeom_createLinearRing_r(h, cs);
@@ -730,20 +731,21 @@ static void check_polygons(tcase *c, const pb *b, const char *op, const char *wh
                            const bool2_result *r)
 {
     GEOSContextHandle_t h = c->h;
-    size_t nh = r->npoly ? r->ph_off[r->npoly] : 0;
+    size_t nh = r->region.npoly ? r->region.ph_off[r->region.npoly] : 0;
     int bad = 0;
     c->s->results++;
-    if (r->npoly + nh != r->nrcyc) {
+    if (r->region.npoly + nh != r->region.nrcyc) {
         test_fail(__FILE__, __func__, __LINE__,
                   "%s/%s case %llu %s: %zu polygons + %zu holes != %zu cycles", c->fam->name,
-                  c->frm->name, (unsigned long long)c->seed, what, r->npoly, nh, r->nrcyc);
+                  c->frm->name, (unsigned long long)c->seed, what, r->region.npoly, nh,
+                  r->region.nrcyc);
         bad = 1;
     }
-    GEOSGeometry **polys = malloc((r->npoly + 1) * sizeof *polys);
+    GEOSGeometry **polys = malloc((r->region.npoly + 1) * sizeof *polys);
     GEOSGeometry **holes = malloc((nh + 1) * sizeof *holes);
     double sum = 0, scale = fabs(r->area);
-    for (size_t q = 0; q < r->npoly; q++) {
-        uint32_t k = r->poly_outer[q];
+    for (size_t q = 0; q < r->region.npoly; q++) {
+        uint32_t k = r->region.poly_outer[q];
         double a = cycle_area(r, k);
         sum += a, scale += fabs(a);
         if (!(a > 0) && !bad) {
@@ -752,9 +754,9 @@ static void check_polygons(tcase *c, const pb *b, const char *op, const char *wh
                       c->fam->name, c->frm->name, (unsigned long long)c->seed, what, q, a);
             bad = 1;
         }
-        uint32_t h0 = r->ph_off[q], h1 = r->ph_off[q + 1];
+        uint32_t h0 = r->region.ph_off[q], h1 = r->region.ph_off[q + 1];
         for (uint32_t i = h0; i < h1; i++) {
-            double ha = cycle_area(r, r->ph_cyc[i]);
+            double ha = cycle_area(r, r->region.ph_cyc[i]);
             sum += ha, scale += fabs(ha);
             if (!(ha < 0) && !bad) {
                 test_fail(__FILE__, __func__, __LINE__,
@@ -763,15 +765,15 @@ static void check_polygons(tcase *c, const pb *b, const char *op, const char *wh
                           ha);
                 bad = 1;
             }
-            holes[i - h0] = geos_cycle(h, r, r->ph_cyc[i]);
+            holes[i - h0] = geos_cycle(h, r, r->region.ph_cyc[i]);
         }
         polys[q] = GEOSGeom_createPolygon_r(h, geos_cycle(h, r, k), holes, h1 - h0);
         if (!bad && GEOSisValid_r(h, polys[q]) != 1) {
             char *why = GEOSisValidReason_r(h, polys[q]);
             test_fail(__FILE__, __func__, __LINE__,
                       "%s/%s case %llu %s: result polygon %zu (of %zu, %u holes) is invalid: %s",
-                      c->fam->name, c->frm->name, (unsigned long long)c->seed, what, q, r->npoly,
-                      h1 - h0, why ? why : "?");
+                      c->fam->name, c->frm->name, (unsigned long long)c->seed, what, q,
+                      r->region.npoly, h1 - h0, why ? why : "?");
             GEOSFree_r(h, why);
             bad = 1;
         }
@@ -803,12 +805,13 @@ static void check_polygons(tcase *c, const pb *b, const char *op, const char *wh
             dump(c, b, op, tag);
         }
     }
-    GEOSGeometry *mp = GEOSGeom_createCollection_r(h, GEOS_MULTIPOLYGON, polys, (unsigned)r->npoly);
+    GEOSGeometry *mp =
+        GEOSGeom_createCollection_r(h, GEOS_MULTIPOLYGON, polys, (unsigned)r->region.npoly);
     if (!bad && GEOSisValid_r(h, mp) != 1) {
         char *why = GEOSisValidReason_r(h, mp);
         test_fail(__FILE__, __func__, __LINE__,
                   "%s/%s case %llu %s: the MultiPolygon of the %zu result polygons is invalid: %s",
-                  c->fam->name, c->frm->name, (unsigned long long)c->seed, what, r->npoly,
+                  c->fam->name, c->frm->name, (unsigned long long)c->seed, what, r->region.npoly,
                   why ? why : "?");
         GEOSFree_r(h, why);
         bad = 1;
@@ -909,7 +912,7 @@ static outcome run_op(tcase *c, const pb *b, const char *op, const char *what)
     o.area = r.area;
     o.step = r.c.stats.precision;
     o.bound = area_bound(b, o.step);
-    o.npoly = r.npoly;
+    o.npoly = r.region.npoly;
     check_polygons(c, b, cop, what, &r);
     bool2_free(&r);
     c->s->geos_runs++;

@@ -1078,23 +1078,26 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
         rc = write_request(body, strlen(body));
         goto out;
     }
-    api_run_opts ro = run_opts(threads, of->kind == OUT_GPKG ? &(out_format){.kind = 2} : of);
+    /* GeoJSON (and the GeoPackage made of it) carries the layers' reference system: written
+     * here, every other format as the other commands write it */
+    const render_format *geo = render_format_named("geojson");
+    int kgeo = (int)(geo - render_formats);
+    int own = of->kind == OUT_GPKG || (of->kind == kgeo && crs);
+    api_run_opts ro = run_opts(threads, of->kind == OUT_GPKG ? &(out_format){.kind = kgeo} : of);
     int r = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err);
     progress_end();
     if (r != API_OK) {
         fprintf(stderr, "cellar: %s\n", err.msg);
         goto out;
     }
-    if (of->kind != OUT_GPKG && !crs) {
+    if (!own) {
         rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
         goto out;
     }
     /* GeoJSON with the layers' reference system (ogr2ogr reads its "crs" member) */
     char *map = NULL;
     size_t maplen = 0;
-    out_format gj = *of;
-    gj.kind = 2;
-    if (render_formats[2].render(out, outlen, &gj.ro, &map, &maplen, &err) != API_OK) {
+    if (geo->render(out, outlen, &of->ro, &map, &maplen, &err) != API_OK) {
         fprintf(stderr, "cellar: --format %s: %s\n", of->kind == OUT_GPKG ? "gpkg" : "geojson",
                 err.msg);
         goto out;

@@ -84,6 +84,20 @@ check "a file GDAL cannot read: an error naming it" grep -q 'reading .*broken.sh
 ogr2ogr -q -f GeoJSON -s_srs EPSG:4326 -t_srs EPSG:3857 "$T/b3857.geojson" "$T/b.geojson"
 status 1 "$BIN" polygons "$T/a.geojson" "$T/b3857.geojson" --op union
 check "layers in different reference systems: refused" grep -q 'reference system differs' "$T/err"
+# a reference system is carried to GeoJSON, and every other format is what it says
+ogr2ogr -q -f GeoJSON -s_srs EPSG:4326 -t_srs EPSG:3857 "$T/a3857.geojson" "$T/a.geojson"
+status 0 "$BIN" polygons "$T/a3857.geojson" "$T/b3857.geojson" --op union --format geojson
+check "layers in EPSG:3857 to GeoJSON: the FeatureCollection names the system" /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["type"] == "FeatureCollection" and "3857" in json.dumps(d["crs"]), d.get("crs")
+' "$T/out"
+status 0 "$BIN" polygons "$T/a3857.geojson" "$T/b3857.geojson" --op union --format json
+check "... and to --format json: the LAR JSON result" /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["dim"] == 2 and d["result"]["area"] > 0, list(d)
+' "$T/out"
 status 0 "$BIN" polygons "$T/a.geojson" "$T/b.geojson" --op xor --format request
 check "--format request: the layers request, named by the files" /usr/bin/python3 -c '
 import json, sys

@@ -14,15 +14,17 @@ import { Canceled, Problem, startJob } from './api.js';
 
 const SIZE = 1e6;
 
-// Drawing progress: tick(stage, fraction) tells the page (at most every 100 ms) how far the
-// preparation of the current result is; set by the run that prepares it.
+// Drawing progress: tick(stage, fraction) tells the page how far the preparation of the
+// current result is: each new stage at once, and within a stage at most every 100 ms; set by
+// the run that prepares it.
 let tick = () => {};
 function ticker(id) {
-  let last = 0;
+  let last = 0, lastStage = '';
   return (stage, fraction) => {
     const t = performance.now();
-    if (t - last < 100 && fraction < 1) return;
+    if (t - last < 100 && fraction < 1 && stage === lastStage) return;
     last = t;
+    lastStage = stage;
     self.postMessage({ id, drawing: { stage, fraction } });
   };
 }

@@ -30,6 +30,8 @@ DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-
               catatonit debootstrap bc gdal-bin
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
+LIB_VERSION := 0.3.0
+LIB_SONAME  := libcellar.so.0
 CORE_SRC := $(wildcard core/*.c)
 API_SRC  := $(wildcard api/*.c)
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
@@ -46,7 +48,8 @@ TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/s
 .PHONY: all deps test check stress bench run clean format format-check tests fuzz
 # the tests' shared objects are not intermediates (two makes at once must find them)
 .SECONDARY: $(TEST_LIB)
-all: $(BUILD)/cellar $(BUILD)/cellard
+all: $(BUILD)/cellar $(BUILD)/cellard $(BUILD)/lib/libcellar.so.$(LIB_VERSION)
+
 
 deps:
 	@scripts/deps.sh $(DEPS_BUILD)
@@ -57,9 +60,20 @@ $(BUILD)/%.o: %.c $(wildcard core/*.h api/*.h server/*.h tests/*.h)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
+# The library's objects are position-independent, and only the names of include/cellar.h
+# (CELLAR_EXPORT) are visible outside it: libcellar.so exports cellar_* alone.
+$(CORE_OBJ) $(API_OBJ): CFLAGS += -fPIC -fvisibility=hidden
+
 $(BUILD)/libcellar.a: $(CORE_OBJ) $(API_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
+
+$(BUILD)/lib/libcellar.so.$(LIB_VERSION): $(CORE_OBJ) $(API_OBJ)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -shared -Wl,-soname,$(LIB_SONAME) -Wl,--no-undefined -o $@ $^ \
+	    $(JANSSON_LIBS) -lz $(LDLIBS)
+	ln -sf libcellar.so.$(LIB_VERSION) $(BUILD)/lib/$(LIB_SONAME)
+	ln -sf $(LIB_SONAME) $(BUILD)/lib/libcellar.so
 
 $(BUILD)/cellar: $(BUILD)/cli/cellar.o $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) -lz $(LDLIBS)

@@ -398,4 +398,74 @@ void api_result_free(api_result *m);
  * *out; 0 when it is not one (api/result.c). */
 int api_face_key(const char *key, size_t nf, size_t *out);
 
+/* ---- arrays out (the library, include/cellar.h) ------------------------------------------- *
+ * A result as named arrays (struct cellar_result, api/lib.c): the kinds' *_arrays functions
+ * compute as *_run does and add each array of the result JSON, under the name the .npz output
+ * gives it, instead of writing it.  An array is added either owned (malloc'd, freed with the
+ * result) or borrowed from a block the result keeps (api_arrays_keep: the core's complex, freed
+ * with the result by its function), so the core's own arrays are handed out without a copy. */
+typedef struct cellar_result api_arrays;
+enum { API_A_F64 = 1, API_A_I32, API_A_U32, API_A_I8, API_A_U64 }; /* cellar_dtype's values */
+/* Adds name (copied) as rows x cols elements of type dt at data; own: data is malloc'd and
+ * the result takes it (freed here on failure too).  0, or -1 out of memory. */
+int api_arrays_add(api_arrays *r, const char *name, int dt, size_t rows, size_t cols,
+                   const void *data, int own);
+/* The same, with a sticky failure: nothing is added once *bad is set (an owned data is freed),
+ * and a failure sets it. */
+void api_arrays_put(api_arrays *r, int *bad, const char *name, int dt, size_t rows, size_t cols,
+                    const void *data, int own);
+/* The result keeps p until it is freed, then calls fr(p); on failure fr(p) is called now.  0 or
+ * -1 (out of memory). */
+int api_arrays_keep(api_arrays *r, void *p, void (*fr)(void *));
+/* Sets the result's JSON member text (taken over, malloc'd) and its dim. */
+void api_arrays_json(api_arrays *r, int dim, char *json);
+/* CSR rows gathered from pieces: adds "name.indptr" (U32, n + 1) and "name.indices" (U32) where
+ * row i is the cycle cyc[cyc_off[k] .. cyc_off[k+1]) of k = which[i]; reversed[i] (may be NULL)
+ * walks it backwards from its first vertex, and map (may be NULL) renumbers the vertices.
+ * 0 or -1 (out of memory). */
+int api_arrays_cycles(api_arrays *r, const char *name, const uint32_t *cyc_off, const uint32_t *cyc,
+                      const uint32_t *which, const uint8_t *reversed, size_t n,
+                      const uint32_t *map);
+/* A compressed sparse row matrix: row i holds idx/val[ptr[i] .. ptr[i+1]); owned arrays. */
+typedef struct api_csr {
+    size_t nrows, ncols;
+    size_t *ptr; /* nrows + 1 */
+    uint32_t *idx;
+    int8_t *val;
+} api_csr;
+void api_csr_free(api_csr *m);
+/* Adds "name.shape", ".indptr", ".indices", ".data" of m, taking its arrays over (m is left
+ * empty, success or not).  0 or -1 (out of memory). */
+int api_arrays_csr(api_arrays *out, const char *name, api_csr *m);
+/* A Boolean result's own V (fields without V), as api_buf_own_vertices writes it: "name" (F64,
+ * rows of dim) holds the vertices v < nv whose map[v] is non-zero, in order, and map[v] becomes
+ * their place in it.  0 or -1 (out of memory). */
+int api_arrays_own_vertices(api_arrays *out, const char *name, const double *V, size_t nv, int dim,
+                            uint32_t *map);
+/* The kinds' array runs: as *_run, the result's arrays added to out instead of written. */
+int api_lines_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err);
+int api_polygons_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out,
+                        api_error *err);
+int api_solids_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err);
+/* The arrays of a 2-complex (the fields of fmt: V, EV, FV, FE, holes, exterior, operators) and
+ * the JSON of its stats (with fmt's stats_more), as api_lar2_write writes them; c must outlive
+ * out (api_arrays_keep). */
+int api_lar2_arrays(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, api_error *err);
+/* The same of a 3-complex (the fields of fmt, its membership and result). */
+int api_lar3_arrays(api_arrays *out, const lar3 *c, const api_lar3_fmt *fmt, api_error *err);
+/* membership as api_put_membership_w writes it: "membership.shape" (U64, 2), ".indptr",
+ * ".indices", and ".data" when a winding number is not 1; the arrays are borrowed. */
+int api_arrays_membership(api_arrays *out, size_t nrows, size_t ninputs, const uint32_t *off,
+                          const uint32_t *idx, const int32_t *wind);
+/* The library's requests, made from arrays (api/lib.c builds options and op as small JSON values
+ * and the kinds check them as in a JSON request): *parsed as the kind's parse gives it. */
+int api_lines_make(const double *seg, size_t n, const json_t *options, void **parsed,
+                   api_error *err);
+int api_polygons_make(size_t npoly, const uint32_t *poly_off, const uint32_t *ring_off,
+                      const double *xy, const json_t *op, const json_t *options, void **parsed,
+                      api_error *err);
+/* s (n solids) taken over as api_solids_run_direct takes them. */
+int api_solids_make(struct solid *s, size_t n, const json_t *op, const json_t *options,
+                    void **parsed, api_error *err);
+
 #endif

@@ -666,41 +666,46 @@ void api_buf_csr(api_buf *b, size_t nrows, size_t ncols, const size_t *indptr,
     api_buf_puts(b, "]}");
 }
 
-/* Writes the operators d1 (V x E) and d2 (E x rows) as CSR. */
-static int put_operators(api_buf *b, const rows *r, api_error *err)
+void api_csr_free(api_csr *m)
+{
+    free(m->ptr);
+    free(m->idx);
+    free(m->val);
+    *m = (api_csr){0};
+}
+
+/* The operators d1 (V x E) and d2 (E x rows) as CSR into m[0], m[1] (the caller frees them
+ * with api_csr_free, success or not). */
+static int lar2_operators(const rows *r, api_csr m[2], api_error *err)
 {
     const lar2 *c = r->c;
-    size_t nnz2 = 0, n = c->nv > c->ne ? c->nv : c->ne;
-    size_t *ptr = NULL, *fill = NULL;
-    uint32_t *idx = NULL;
-    int8_t *val = NULL;
-    int rc = API_OK;
+    size_t nnz2 = 0;
     for (size_t f = 0; f < r->nrows; f++) {
         const int32_t *e;
         nnz2 += fe_row(r, f, &e);
     }
-    ptr = calloc(n + 1, sizeof *ptr);
-    fill = malloc((n + 1) * sizeof *fill);
-    idx = malloc((2 * c->ne > nnz2 ? 2 * c->ne : nnz2) * sizeof *idx + 1);
-    val = malloc((2 * c->ne > nnz2 ? 2 * c->ne : nnz2) * sizeof *val + 1);
-    if (!ptr || !fill || !idx || !val) {
-        rc = api_fail(err, API_ENOMEM, "out of memory while writing the operators");
-        goto out;
+    m[0] = (api_csr){c->nv, c->ne, calloc(c->nv + 1, sizeof *m[0].ptr),
+                     malloc((2 * c->ne + 1) * sizeof *m[0].idx), malloc(2 * c->ne + 1)};
+    m[1] = (api_csr){c->ne, r->nrows, calloc(c->ne + 1, sizeof *m[1].ptr),
+                     malloc((nnz2 + 1) * sizeof *m[1].idx), malloc(nnz2 + 1)};
+    size_t *fill = malloc(((c->nv > c->ne ? c->nv : c->ne) + 1) * sizeof *fill);
+    if (!fill || !m[0].ptr || !m[0].idx || !m[0].val || !m[1].ptr || !m[1].idx || !m[1].val) {
+        free(fill);
+        return api_fail(err, API_ENOMEM, "out of memory while writing the operators");
     }
     /* d1: row v holds edge e with -1 when v is EV's v0, +1 when it is v1; edges are visited in
      * order, so every row's indices come out sorted. */
+    size_t *ptr = m[0].ptr;
     for (size_t e = 0; e < c->ne; e++) ptr[c->EV[2 * e] + 1]++, ptr[c->EV[2 * e + 1] + 1]++;
     for (size_t v = 0; v < c->nv; v++) ptr[v + 1] += ptr[v];
     memcpy(fill, ptr, (c->nv + 1) * sizeof *fill);
     for (size_t e = 0; e < c->ne; e++) {
         size_t k0 = fill[c->EV[2 * e]]++, k1 = fill[c->EV[2 * e + 1]]++;
-        idx[k0] = (uint32_t)e, val[k0] = -1;
-        idx[k1] = (uint32_t)e, val[k1] = 1;
+        m[0].idx[k0] = (uint32_t)e, m[0].val[k0] = -1;
+        m[0].idx[k1] = (uint32_t)e, m[0].val[k1] = 1;
     }
-    api_buf_puts(b, "{\"d1\":");
-    api_buf_csr(b, c->nv, c->ne, ptr, idx, val);
     /* d2: row e holds the FE rows (faces) that contain ±(e+1), with that sign. */
-    memset(ptr, 0, (c->ne + 1) * sizeof *ptr);
+    ptr = m[1].ptr;
     for (size_t f = 0; f < r->nrows; f++) {
         const int32_t *e;
         size_t k = fe_row(r, f, &e);
@@ -713,18 +718,28 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
         size_t k = fe_row(r, f, &e);
         for (size_t i = 0; i < k; i++) {
             size_t at = fill[(size_t)llabs(e[i]) - 1]++;
-            idx[at] = (uint32_t)f;
-            val[at] = e[i] > 0 ? 1 : -1;
+            m[1].idx[at] = (uint32_t)f;
+            m[1].val[at] = e[i] > 0 ? 1 : -1;
         }
     }
-    api_buf_puts(b, ",\"d2\":");
-    api_buf_csr(b, c->ne, r->nrows, ptr, idx, val);
-    api_buf_putc(b, '}');
-out:
-    free(ptr);
     free(fill);
-    free(idx);
-    free(val);
+    return API_OK;
+}
+
+/* Writes the operators d1 (V x E) and d2 (E x rows) as CSR. */
+static int put_operators(api_buf *b, const rows *r, api_error *err)
+{
+    api_csr m[2] = {0};
+    int rc = lar2_operators(r, m, err);
+    if (rc == API_OK) {
+        api_buf_puts(b, "{\"d1\":");
+        api_buf_csr(b, m[0].nrows, m[0].ncols, m[0].ptr, m[0].idx, m[0].val);
+        api_buf_puts(b, ",\"d2\":");
+        api_buf_csr(b, m[1].nrows, m[1].ncols, m[1].ptr, m[1].idx, m[1].val);
+        api_buf_putc(b, '}');
+    }
+    api_csr_free(&m[0]);
+    api_csr_free(&m[1]);
     return rc;
 }
 
@@ -838,4 +853,101 @@ out:
     free(r.xoff);
     free(r.xfe);
     return rc;
+}
+
+/* ---- arrays out (the library) ---------------------------------------------------------------- */
+
+_Static_assert(sizeof(size_t) == sizeof(uint64_t), "CSR offsets are handed out as uint64");
+
+int api_arrays_csr(api_arrays *out, const char *name, api_csr *m)
+{
+    char nm[96];
+    uint64_t *shape = malloc(2 * sizeof *shape);
+    int bad = !shape;
+    size_t nnz = m->ptr ? m->ptr[m->nrows] : 0;
+    if (shape) shape[0] = m->nrows, shape[1] = m->ncols;
+    snprintf(nm, sizeof nm, "%s.shape", name);
+    api_arrays_put(out, &bad, nm, API_A_U64, 2, 1, shape, 1);
+    snprintf(nm, sizeof nm, "%s.indptr", name);
+    api_arrays_put(out, &bad, nm, API_A_U64, m->nrows + 1, 1, m->ptr, 1);
+    snprintf(nm, sizeof nm, "%s.indices", name);
+    api_arrays_put(out, &bad, nm, API_A_U32, nnz, 1, m->idx, 1);
+    snprintf(nm, sizeof nm, "%s.data", name);
+    api_arrays_put(out, &bad, nm, API_A_I8, nnz, 1, m->val, 1);
+    *m = (api_csr){0};
+    return bad ? -1 : 0;
+}
+
+/* The JSON of what is not an array: dim and, with the fields' stats, the stats. */
+static int stats_json(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
+{
+    api_buf b = {0};
+    api_lar2_fmt f = *fmt;
+    f.fields &= API_F_STATS;
+    f.exterior_last = 0;
+    int rc = api_lar2_write(&b, c, &f, err);
+    if (rc == API_OK && b.failed) rc = api_fail(err, API_ENOMEM, "out of memory");
+    if (rc != API_OK) {
+        api_buf_free(&b);
+        return rc;
+    }
+    api_arrays_json(out, 2, b.p);
+    return API_OK;
+}
+
+int api_lar2_arrays(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
+{
+    rows r = {.c = c, .nrows = c->nf};
+    unsigned fl = fmt->fields;
+    int rc = check_complex(c, err), bad = 0;
+    uint32_t *which = NULL;
+    if (rc != API_OK) return rc;
+    size_t most = c->nf > c->next ? c->nf : c->next;
+    if (c->nf && most < c->hole_off[c->nf]) most = c->hole_off[c->nf];
+    if (!(which = malloc((most + 1) * sizeof *which))) goto nomem;
+    if (fl & API_F_V) bad = bad || api_arrays_add(out, "V", API_A_F64, c->nv, 2, c->V, 0);
+    if (fl & API_F_EV) bad = bad || api_arrays_add(out, "EV", API_A_U32, c->ne, 2, c->EV, 0);
+    if (fl & API_F_FV) {
+        for (size_t f = 0; f < c->nf; f++) which[f] = c->face_cycle[f];
+        bad = bad || api_arrays_cycles(out, "FV", c->cyc_off, c->cyc, which, NULL, c->nf, NULL);
+    }
+    if (fl & API_F_FE) {
+        static const uint32_t zero = 0;
+        bad = bad || api_arrays_add(out, "FE.indptr", API_A_U32, c->nf + 1, 1,
+                                    c->nf ? c->fe_off : &zero, 0);
+        bad = bad || api_arrays_add(out, "FE.indices", API_A_I32, c->nf ? c->fe_off[c->nf] : 0, 1,
+                                    c->fe, 0);
+    }
+    if (fl & API_F_HOLES) {
+        size_t nh = c->nf ? c->hole_off[c->nf] : 0;
+        uint32_t *face = malloc((nh + 1) * sizeof *face);
+        if (!face) goto nomem;
+        for (size_t f = 0; f < c->nf; f++)
+            for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) face[h] = (uint32_t)f;
+        api_arrays_put(out, &bad, "holes.face", API_A_U32, nh, 1, face, 1);
+        bad =
+            bad || api_arrays_cycles(out, "holes", c->cyc_off, c->cyc, c->hole_cyc, NULL, nh, NULL);
+    }
+    if (fl & API_F_EXTERIOR)
+        bad = bad || api_arrays_cycles(out, "exterior", c->cyc_off, c->cyc, c->ext_cyc, NULL,
+                                       c->next, NULL);
+    if (!bad && (fl & API_F_OPERATORS)) {
+        api_csr m[2] = {0};
+        rc = lar2_operators(&r, m, err);
+        if (rc != API_OK) {
+            api_csr_free(&m[0]);
+            api_csr_free(&m[1]);
+            free(which);
+            return rc;
+        }
+        bad = api_arrays_csr(out, "operators.d1", &m[0]);
+        bad = api_arrays_csr(out, "operators.d2", &m[1]) || bad;
+    }
+    free(which);
+    which = NULL;
+    if (bad) goto nomem;
+    return stats_json(out, c, fmt, err);
+nomem:
+    free(which);
+    return api_fail(err, API_ENOMEM, "out of memory");
 }

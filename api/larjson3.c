@@ -181,45 +181,42 @@ static void put_string(api_buf *b, const char *s)
     api_buf_putc(b, '"');
 }
 
-/* Writes {"shape":[nrows,ncols],"indptr":...,"indices":...,"data":...}: the matrix whose
- * column j holds, for each entry s of ent[col_off[j] .. col_off[j+1]), sign(s) at row |s|-1.
+/* The matrix whose column j holds, for each entry s of ent[col_off[j] .. col_off[j+1]),
+ * sign(s) at row |s|-1, into *m (the caller frees it with api_csr_free, success or not).
  * Columns are visited in order, so every row's indices come out sorted. */
-static int put_csr_from_columns(api_buf *b, size_t nrows, size_t ncols, const uint32_t *col_off,
-                                const int32_t *ent, api_error *err)
+static int csr_from_columns(size_t nrows, size_t ncols, const uint32_t *col_off, const int32_t *ent,
+                            api_csr *m, api_error *err)
 {
     size_t nnz = ncols ? col_off[ncols] : 0;
-    size_t *ptr = calloc(nrows + 2, sizeof *ptr), *fill = malloc((nrows + 1) * sizeof *fill);
-    uint32_t *idx = malloc((nnz ? nnz : 1) * sizeof *idx);
-    int8_t *val = malloc(nnz ? nnz : 1);
-    if (!ptr || !fill || !idx || !val) {
-        free(ptr), free(fill), free(idx), free(val);
+    size_t *fill = malloc((nrows + 1) * sizeof *fill);
+    *m = (api_csr){nrows, ncols, calloc(nrows + 2, sizeof *m->ptr),
+                   malloc((nnz ? nnz : 1) * sizeof *m->idx), malloc(nnz ? nnz : 1)};
+    if (!fill || !m->ptr || !m->idx || !m->val) {
+        free(fill);
         return api_fail(err, API_ENOMEM, "out of memory while writing the operators");
     }
+    size_t *ptr = m->ptr;
     for (size_t i = 0; i < nnz; i++) ptr[(size_t)llabs((long long)ent[i])]++;
     for (size_t r = 0; r < nrows; r++) ptr[r + 1] += ptr[r];
     memcpy(fill, ptr, (nrows + 1) * sizeof *fill);
     for (size_t j = 0; j < ncols; j++)
         for (size_t i = col_off[j]; i < col_off[j + 1]; i++) {
             size_t at = fill[(size_t)llabs((long long)ent[i]) - 1]++;
-            idx[at] = (uint32_t)j;
-            val[at] = ent[i] > 0 ? 1 : -1;
+            m->idx[at] = (uint32_t)j;
+            m->val[at] = ent[i] > 0 ? 1 : -1;
         }
-    api_buf_csr(b, nrows, ncols, ptr, idx, val);
-    free(ptr), free(fill), free(idx), free(val);
+    free(fill);
     return API_OK;
 }
 
-/* d1 (V x E), d2 (E x F), d3 (F x C). */
-static int put_operators(api_buf *b, const lar3 *c, api_error *err)
+/* d1 (V x E), d2 (E x F), d3 (F x C) into m[0..2] (the caller frees them, success or not). */
+static int lar3_operators(const lar3 *c, api_csr m[3], api_error *err)
 {
     static const uint32_t zero = 0;
-    uint32_t *off = NULL;
-    int32_t *ent = NULL;
-    int rc;
     if (c->nv >= INT32_MAX || c->ne >= UINT32_MAX / 2)
         return api_fail(err, API_EINVALID, "operators: the complex is too large to write them");
-    off = malloc((c->ne + 1) * sizeof *off);
-    ent = malloc((2 * c->ne + 1) * sizeof *ent);
+    uint32_t *off = malloc((c->ne + 1) * sizeof *off);
+    int32_t *ent = malloc((2 * c->ne + 1) * sizeof *ent);
     if (!off || !ent) {
         free(off), free(ent);
         return api_fail(err, API_ENOMEM, "out of memory while writing the operators");
@@ -229,18 +226,29 @@ static int put_operators(api_buf *b, const lar3 *c, api_error *err)
         ent[2 * e] = -(int32_t)(c->EV[2 * e] + 1);
         ent[2 * e + 1] = (int32_t)(c->EV[2 * e + 1] + 1);
     }
-    api_buf_puts(b, "{\"d1\":");
-    rc = put_csr_from_columns(b, c->nv, c->ne, off, ent, err);
+    int rc = csr_from_columns(c->nv, c->ne, off, ent, &m[0], err);
     free(off), free(ent);
-    if (rc != API_OK) return rc;
-    api_buf_puts(b, ",\"d2\":");
-    rc = put_csr_from_columns(b, c->ne, c->nf, c->nf ? c->fe_off : &zero, c->fe, err);
-    if (rc != API_OK) return rc;
-    api_buf_puts(b, ",\"d3\":");
-    rc = put_csr_from_columns(b, c->nf, c->nc, c->nc ? c->cf_off : &zero, c->cf, err);
-    if (rc != API_OK) return rc;
-    api_buf_putc(b, '}');
-    return API_OK;
+    if (rc == API_OK)
+        rc = csr_from_columns(c->ne, c->nf, c->nf ? c->fe_off : &zero, c->fe, &m[1], err);
+    if (rc == API_OK)
+        rc = csr_from_columns(c->nf, c->nc, c->nc ? c->cf_off : &zero, c->cf, &m[2], err);
+    return rc;
+}
+
+static int put_operators(api_buf *b, const lar3 *c, api_error *err)
+{
+    static const char *const key[3] = {"{\"d1\":", ",\"d2\":", ",\"d3\":"};
+    api_csr m[3] = {0};
+    int rc = lar3_operators(c, m, err);
+    for (int i = 0; i < 3; i++) {
+        if (rc == API_OK) {
+            api_buf_puts(b, key[i]);
+            api_buf_csr(b, m[i].nrows, m[i].ncols, m[i].ptr, m[i].idx, m[i].val);
+        }
+        api_csr_free(&m[i]);
+    }
+    if (rc == API_OK) api_buf_putc(b, '}');
+    return rc;
 }
 
 static void put_stats(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt)
@@ -510,5 +518,161 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
     }
     api_buf_putc(b, '}');
     if (b->failed) return api_fail(err, API_ENOMEM, "out of memory while writing the result");
+    return API_OK;
+}
+
+/* ---- arrays out (the library) ---------------------------------------------------------------- */
+
+/* The absolute face of result face i. */
+static uint32_t res_face(const bool3_result *r, size_t i)
+{
+    return (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
+}
+
+/* Rows of signed lists (FE, CF) with their offsets as they lie. */
+static void signed_rows(api_arrays *out, int *bad, const char *name, const uint32_t *off,
+                        const int32_t *a, size_t n)
+{
+    static const uint32_t zero = 0;
+    char nm[64];
+    snprintf(nm, sizeof nm, "%s.indptr", name);
+    api_arrays_put(out, bad, nm, API_A_U32, n + 1, 1, n ? off : &zero, 0);
+    snprintf(nm, sizeof nm, "%s.indices", name);
+    api_arrays_put(out, bad, nm, API_A_I32, n ? off[n] : 0, 1, a, 0);
+}
+
+/* "holes": the faces i < n with more than one cycle (face fof[i]), each cycle after the first
+ * (reversed with rev[i], through map) as a row, and "name.face" the row i of each. */
+static void holes_rows(api_arrays *out, int *bad, const char *name, const lar3 *c,
+                       const uint32_t *fof, const uint8_t *rev, size_t n, const uint32_t *map)
+{
+    size_t nh = 0;
+    char nm[64];
+    for (size_t i = 0; i < n; i++) nh += c->fc_off[fof[i] + 1] - c->fc_off[fof[i]] - 1;
+    uint32_t *face = *bad ? NULL : malloc((nh + 1) * sizeof *face);
+    uint32_t *cyc = face ? malloc((nh + 1) * sizeof *cyc) : NULL;
+    uint8_t *r = cyc && rev ? malloc(nh + 1) : NULL;
+    *bad = *bad || !face || !cyc || (rev && !r);
+    size_t w = 0;
+    for (size_t i = 0; !*bad && i < n; i++)
+        for (uint32_t k = c->fc_off[fof[i]] + 1; k < c->fc_off[fof[i] + 1]; k++) {
+            face[w] = (uint32_t)i;
+            if (r) r[w] = rev[i];
+            cyc[w++] = c->fc[k];
+        }
+    snprintf(nm, sizeof nm, "%s.face", name);
+    if (*bad) free(cyc), cyc = NULL;
+    api_arrays_put(out, bad, nm, API_A_U32, nh, 1, face, 1);
+    *bad = *bad || api_arrays_cycles(out, name, c->cyc_off, c->cyc, cyc, r, nh, map);
+    free(cyc);
+    free(r);
+}
+
+/* "result", as put_result writes it. */
+static void result_arrays(api_arrays *out, int *bad, const lar3 *c, const bool3_result *r,
+                          unsigned fl)
+{
+    uint32_t *map = NULL, *fof = malloc((r->nfaces + 1) * sizeof *fof), *outer = NULL;
+    uint8_t *rev = malloc(r->nfaces + 1);
+    outer = malloc((r->nfaces + 1) * sizeof *outer);
+    *bad = *bad || !fof || !rev || !outer;
+    for (size_t i = 0; !*bad && i < r->nfaces; i++) {
+        fof[i] = res_face(r, i);
+        rev[i] = r->faces[i] < 0;
+        outer[i] = c->fc[c->fc_off[fof[i]]];
+    }
+    if (!*bad && !(fl & API_F3_V)) { /* its own V */
+        map = calloc(c->nv + 1, sizeof *map);
+        *bad = !map;
+        for (size_t i = 0; !*bad && i < r->nfaces; i++)
+            for (uint32_t k = c->fc_off[fof[i]]; k < c->fc_off[fof[i] + 1]; k++)
+                for (uint32_t j = c->cyc_off[c->fc[k]]; j < c->cyc_off[c->fc[k] + 1]; j++)
+                    map[c->cyc[j]] = 1;
+        *bad = *bad || api_arrays_own_vertices(out, "result.V", c->V, c->nv, 3, map);
+    }
+    if (fl & (API_F3_CF | API_F3_CV))
+        api_arrays_put(out, bad, "result.cells", API_A_U32, r->ncells, 1, r->cells, 0);
+    if (fl & (API_F3_FV | API_F3_FE))
+        api_arrays_put(out, bad, "result.faces", API_A_I32, r->nfaces, 1, r->faces, 0);
+    *bad =
+        *bad || api_arrays_cycles(out, "result.FV", c->cyc_off, c->cyc, outer, rev, r->nfaces, map);
+    if (!*bad && (fl & API_F3_EV)) {
+        size_t total = 0, w = 0;
+        for (size_t i = 0; i < r->nfaces; i++) total += c->fe_off[fof[i] + 1] - c->fe_off[fof[i]];
+        uint32_t *ptr = malloc((r->nfaces + 1) * sizeof *ptr);
+        int32_t *idx = malloc((total + 1) * sizeof *idx);
+        for (size_t i = 0; ptr && idx && i < r->nfaces; i++) {
+            ptr[i] = (uint32_t)w;
+            for (uint32_t j = c->fe_off[fof[i]]; j < c->fe_off[fof[i] + 1]; j++)
+                idx[w++] = r->faces[i] > 0 ? c->fe[j] : -c->fe[j];
+        }
+        if (ptr) ptr[r->nfaces] = (uint32_t)w;
+        *bad = !ptr || !idx;
+        api_arrays_put(out, bad, "result.FE.indptr", API_A_U32, r->nfaces + 1, 1, ptr, 1);
+        api_arrays_put(out, bad, "result.FE.indices", API_A_I32, w, 1, idx, 1);
+    }
+    holes_rows(out, bad, "result.holes", c, fof, rev, r->nfaces, map);
+    double *vol = *bad ? NULL : malloc(sizeof *vol);
+    if (vol) *vol = r->volume;
+    *bad = *bad || !vol;
+    api_arrays_put(out, bad, "result.volume", API_A_F64, 1, 1, vol, 1);
+    free(map);
+    free(fof);
+    free(rev);
+    free(outer);
+}
+
+int api_lar3_arrays(api_arrays *out, const lar3 *c, const api_lar3_fmt *fmt, api_error *err)
+{
+    unsigned fl = fmt->fields;
+    int rc = check_complex(c, fl, err), bad = 0;
+    if (rc != API_OK) return rc;
+    uint32_t *fof = malloc((c->nf + 1) * sizeof *fof), *outer = malloc((c->nf + 1) * sizeof *outer);
+    bad = !fof || !outer;
+    for (size_t f = 0; !bad && f < c->nf; f++) fof[f] = (uint32_t)f, outer[f] = c->fc[c->fc_off[f]];
+    if (fl & API_F3_V) api_arrays_put(out, &bad, "V", API_A_F64, c->nv, 3, c->V, 0);
+    if (fl & API_F3_EV) api_arrays_put(out, &bad, "EV", API_A_U32, c->ne, 2, c->EV, 0);
+    if (!bad && (fl & API_F3_FV))
+        bad = api_arrays_cycles(out, "FV", c->cyc_off, c->cyc, outer, NULL, c->nf, NULL);
+    if (fl & API_F3_FE) signed_rows(out, &bad, "FE", c->fe_off, c->fe, c->nf);
+    if (fl & API_F3_HOLES) holes_rows(out, &bad, "holes", c, fof, NULL, c->nf, NULL);
+    if (fl & API_F3_CF) signed_rows(out, &bad, "CF", c->cf_off, c->cf, c->nc);
+    if (fl & API_F3_CV) {
+        static const uint32_t zero = 0;
+        api_arrays_put(out, &bad, "CV.indptr", API_A_U32, c->nc + 1, 1, c->nc ? c->cv_off : &zero,
+                       0);
+        api_arrays_put(out, &bad, "CV.indices", API_A_U32, c->nc ? c->cv_off[c->nc] : 0, 1, c->cv,
+                       0);
+    }
+    if (fl & API_F3_EXTERIOR)
+        api_arrays_put(out, &bad, "exterior", API_A_I32, c->next, 1, c->ext, 0);
+    free(fof);
+    free(outer);
+    if (!bad && (fl & API_F3_OPERATORS)) {
+        static const char *const name[3] = {"operators.d1", "operators.d2", "operators.d3"};
+        api_csr m[3] = {0};
+        rc = lar3_operators(c, m, err);
+        for (int i = 0; i < 3; i++)
+            if (rc == API_OK && !bad)
+                bad = api_arrays_csr(out, name[i], &m[i]);
+            else
+                api_csr_free(&m[i]);
+        if (rc != API_OK) return rc;
+    }
+    if (!bad && fmt->membership && (fl & API_F3_MEMBERSHIP))
+        bad = api_arrays_membership(out, c->nc, c->nsolids, fmt->membership->off,
+                                    fmt->membership->idx, fmt->membership->wind);
+    if (fmt->result && (fl & API_F3_RESULT)) result_arrays(out, &bad, c, fmt->result, fl);
+    if (bad) return api_fail(err, API_ENOMEM, "out of memory");
+    /* the JSON of what is not an array: dim and the stats */
+    api_buf b = {0};
+    api_lar3_fmt f = {
+        .fields = fl & API_F3_STATS, .warnings = fmt->warnings, .nwarnings = fmt->nwarnings};
+    rc = api_lar3_write(&b, c, &f, err);
+    if (rc != API_OK) {
+        api_buf_free(&b);
+        return rc;
+    }
+    api_arrays_json(out, 3, b.p);
     return API_OK;
 }

@@ -208,10 +208,10 @@ fail:
     return rc;
 }
 
-int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+/* Runs r's arrangement into *c (the caller frees it with lar2_free, success or not). */
+static int lines_compute(const lines_req *r, const api_run_opts *ro, lar2 *c, api_error *err)
 {
     static const double no_segment[4];
-    const lines_req *r = parsed;
     arr2_opts ao = {.precision = r->opt.precision,
                     .input_coords = 1,
                     .keep_dangling = r->opt.keep_dangling,
@@ -219,17 +219,69 @@ int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_
                     .cancel = ro->cancel,
                     .progress = ro->progress,
                     .udata = ro->udata};
+    char core_msg[API_ERRMAX] = "";
+    int rc = arr2_build(r->n ? r->seg : no_segment, r->n, &ao, c, core_msg, sizeof core_msg);
+    if (rc != ARR_OK) return api_core_fail(err, rc, core_msg);
+    if (ro->progress) ro->progress(ro->udata, "output", 0);
+    return API_OK;
+}
+
+int api_lines_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+{
+    const lines_req *r = parsed;
     api_lar2_fmt fmt = {.fields = r->opt.fields, .exterior_last = r->opt.exterior_last};
     lar2 c = {0};
-    char core_msg[API_ERRMAX] = "";
-    int rc = arr2_build(r->n ? r->seg : no_segment, r->n, &ao, &c, core_msg, sizeof core_msg);
-    if (rc != ARR_OK) {
-        rc = api_core_fail(err, rc, core_msg);
-        goto out;
-    }
-    if (ro->progress) ro->progress(ro->udata, "output", 0);
-    rc = api_lar2_write(out, &c, &fmt, err);
-out:
+    int rc = lines_compute(r, ro, &c, err);
+    if (rc == API_OK) rc = api_lar2_write(out, &c, &fmt, err);
     lar2_free(&c);
     return rc;
+}
+
+static void lar2_drop(void *p)
+{
+    lar2_free(p);
+    free(p);
+}
+
+int api_lines_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err)
+{
+    const lines_req *r = parsed;
+    api_lar2_fmt fmt = {.fields = r->opt.fields};
+    lar2 *c = calloc(1, sizeof *c);
+    if (!c) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = lines_compute(r, ro, c, err);
+    if (rc != API_OK) {
+        lar2_drop(c);
+        return rc;
+    }
+    if (api_arrays_keep(out, c, lar2_drop)) return api_fail(err, API_ENOMEM, "out of memory");
+    return api_lar2_arrays(out, c, &fmt, err);
+}
+
+int api_lines_make(const double *seg, size_t n, const json_t *options, void **parsed,
+                   api_error *err)
+{
+    *parsed = NULL;
+    if (n > ARR2_MAX_SEGMENTS)
+        return api_fail(err, API_EINVALID, "segments: %zu segments, at most %u allowed", n,
+                        (unsigned)ARR2_MAX_SEGMENTS);
+    for (size_t i = 0; i < 4 * n; i++)
+        if (!isfinite(seg[i]))
+            return api_fail(err, API_EINVALID, "segments[%zu][%zu][%zu]: expected a finite number",
+                            i / 4, i / 2 % 2, i % 2);
+    lines_req *r = calloc(1, sizeof *r);
+    if (!r) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = api_lar2_options(options, &r->opt, err);
+    if (rc == API_OK && r->opt.exterior_last)
+        rc = api_fail(err, API_EINVALID, "options.exterior_last: not an option of the library");
+    if (rc == API_OK && !(r->seg = malloc((4 * n + 1) * sizeof *r->seg)))
+        rc = api_fail(err, API_ENOMEM, "out of memory for %zu segments", n);
+    if (rc != API_OK) {
+        api_lines_free(r);
+        return rc;
+    }
+    if (n) memcpy(r->seg, seg, 4 * n * sizeof *seg);
+    r->n = n;
+    *parsed = r;
+    return API_OK;
 }

@@ -916,9 +916,10 @@ static void put_warnings(api_buf *b, const void *udata)
     api_buf_puts(b, msg);
 }
 
-int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+/* Builds r's arrangement and Boolean into *res (the caller frees it with bool2_free). */
+static int polygons_compute(const polygons_req *r, const api_run_opts *ro, bool2_result *res,
+                            api_error *err)
 {
-    const polygons_req *r = parsed;
     arr2_opts ao = {.precision = r->opt.precision,
                     .keep_dangling = r->opt.keep_dangling,
                     .threads = ro->threads,
@@ -926,23 +927,161 @@ int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, a
                     .progress = ro->progress,
                     .udata = ro->udata};
     bool2_input in = {r->npoly, r->poly_off, r->ring_off, r->xy, r->fill, r->nlayers > 0};
-    bool2_result res = {0};
     char core_msg[API_ERRMAX] = "";
-    int rc = bool2_build(&in, &r->op, &ao, &res, core_msg, sizeof core_msg);
-    if (rc != ARR_OK) {
-        rc = api_core_fail(err, rc, core_msg);
-        goto out;
-    }
-    bool2_out bo = {&res, r->opt.fields, r};
-    api_lar2_fmt fmt = {.fields = r->opt.fields,
-                        .exterior_last = r->opt.exterior_last,
-                        .stats_more = put_warnings,
-                        .stats_udata = &bo,
-                        .more = put_bool2,
-                        .more_udata = &bo};
+    int rc = bool2_build(&in, &r->op, &ao, res, core_msg, sizeof core_msg);
+    if (rc != ARR_OK) return api_core_fail(err, rc, core_msg);
     if (ro->progress) ro->progress(ro->udata, "output", 0);
-    rc = api_lar2_write(out, &res.c, &fmt, err);
-out:
+    return API_OK;
+}
+
+int api_polygons_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+{
+    const polygons_req *r = parsed;
+    bool2_result res = {0};
+    int rc = polygons_compute(r, ro, &res, err);
+    if (rc == API_OK) {
+        bool2_out bo = {&res, r->opt.fields, r};
+        api_lar2_fmt fmt = {.fields = r->opt.fields,
+                            .exterior_last = r->opt.exterior_last,
+                            .stats_more = put_warnings,
+                            .stats_udata = &bo,
+                            .more = put_bool2,
+                            .more_udata = &bo};
+        rc = api_lar2_write(out, &res.c, &fmt, err);
+    }
     bool2_free(&res);
     return rc;
+}
+
+/* ---- arrays out (the library) ---------------------------------------------------------------- */
+
+static void bool2_drop(void *p)
+{
+    bool2_free(p);
+    free(p);
+}
+
+/* The arrays of "result", as put_bool2 writes it. */
+static int bool2_arrays(api_arrays *out, const bool2_result *r, unsigned fl)
+{
+    const bool2_rings *g = &r->region;
+    int bad = 0;
+    uint32_t *map = NULL;
+    if (!(fl & API_F_V)) { /* its own V */
+        map = calloc(r->c.nv + 1, sizeof *map);
+        if (!map) return -1;
+        for (size_t i = 0; i < g->rc_off[g->nrcyc]; i++) map[g->rv[i]] = 1;
+        bad = api_arrays_own_vertices(out, "result.V", r->c.V, r->c.nv, 2, map);
+    }
+    if (fl & (API_F_FV | API_F_FE))
+        api_arrays_put(out, &bad, "result.cells", API_A_U32, r->ncells, 1, r->cells, 0);
+    bad = bad ||
+          api_arrays_cycles(out, "result.FV", g->rc_off, g->rv, g->poly_outer, NULL, g->npoly, map);
+    if (!bad && (fl & API_F_EV)) {
+        size_t total = g->rc_off[g->nrcyc];
+        uint32_t *ptr = malloc((g->npoly + 1) * sizeof *ptr);
+        int32_t *idx = malloc((total + 1) * sizeof *idx);
+        size_t w = 0;
+        for (size_t q = 0; ptr && idx && q < g->npoly; q++) {
+            ptr[q] = (uint32_t)w;
+            for (uint32_t h = g->ph_off[q]; h <= g->ph_off[q + 1]; h++) {
+                uint32_t k = h == g->ph_off[q] ? g->poly_outer[q] : g->ph_cyc[h - 1];
+                for (uint32_t i = g->rc_off[k]; i < g->rc_off[k + 1]; i++) idx[w++] = g->re[i];
+            }
+        }
+        if (ptr) ptr[g->npoly] = (uint32_t)w;
+        bad = !ptr || !idx;
+        api_arrays_put(out, &bad, "result.FE.indptr", API_A_U32, g->npoly + 1, 1, ptr, 1);
+        api_arrays_put(out, &bad, "result.FE.indices", API_A_I32, w, 1, idx, 1);
+    }
+    size_t nh = g->ph_off[g->npoly];
+    uint32_t *face = bad ? NULL : malloc((nh + 1) * sizeof *face);
+    for (size_t q = 0; face && q < g->npoly; q++)
+        for (uint32_t h = g->ph_off[q]; h < g->ph_off[q + 1]; h++) face[h] = (uint32_t)q;
+    bad = bad || !face;
+    api_arrays_put(out, &bad, "result.holes.face", API_A_U32, nh, 1, face, 1);
+    bad = bad || api_arrays_cycles(out, "result.holes", g->rc_off, g->rv, g->ph_cyc, NULL, nh, map);
+    double *area = bad ? NULL : malloc(sizeof *area);
+    if (area) *area = r->area;
+    bad = bad || !area;
+    api_arrays_put(out, &bad, "result.area", API_A_F64, 1, 1, area, 1);
+    free(map);
+    return bad ? -1 : 0;
+}
+
+int api_polygons_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err)
+{
+    const polygons_req *r = parsed;
+    bool2_result *res = calloc(1, sizeof *res);
+    if (!res) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = polygons_compute(r, ro, res, err);
+    if (rc != API_OK) {
+        bool2_drop(res);
+        return rc;
+    }
+    if (api_arrays_keep(out, res, bool2_drop)) return api_fail(err, API_ENOMEM, "out of memory");
+    bool2_out bo = {res, r->opt.fields, r};
+    api_lar2_fmt fmt = {.fields = r->opt.fields, .stats_more = put_warnings, .stats_udata = &bo};
+    rc = api_lar2_arrays(out, &res->c, &fmt, err);
+    if (rc != API_OK) return rc;
+    if ((r->opt.fields & API_F_MEMBERSHIP) &&
+        api_arrays_membership(out, res->c.nf, res->ninputs, res->mem_off, res->mem, res->memw))
+        return api_fail(err, API_ENOMEM, "out of memory");
+    if ((r->opt.fields & API_F_RESULT) && bool2_arrays(out, res, r->opt.fields))
+        return api_fail(err, API_ENOMEM, "out of memory");
+    return API_OK;
+}
+
+int api_polygons_make(size_t npoly, const uint32_t *poly_off, const uint32_t *ring_off,
+                      const double *xy, const json_t *op, const json_t *options, void **parsed,
+                      api_error *err)
+{
+    pbuild b = {0};
+    char path[96];
+    int rc = API_OK;
+    *parsed = NULL;
+    if (npoly > BOOL2_MAX_INPUTS)
+        return api_fail(err, API_EINVALID, "polygons: %zu polygons, at most %u allowed", npoly,
+                        (unsigned)BOOL2_MAX_INPUTS);
+    polygons_req *r = calloc(1, sizeof *r);
+    if (!r) return api_fail(err, API_ENOMEM, "out of memory");
+    rc = parse_options(options, r, err);
+    if (rc == API_OK && r->opt.exterior_last)
+        rc = api_fail(err, API_EINVALID, "options.exterior_last: not an option of the library");
+    for (size_t p = 0; rc == API_OK && p < npoly; p++) {
+        if (poly_off[p + 1] <= poly_off[p]) {
+            rc = api_fail(err, API_EINVALID,
+                          "polygons[%zu]: expected at least one ring (poly_off[%zu] = %u, "
+                          "poly_off[%zu] = %u)",
+                          p, p, poly_off[p], p + 1, poly_off[p + 1]);
+            break;
+        }
+        for (uint32_t k = poly_off[p]; rc == API_OK && k < poly_off[p + 1]; k++) {
+            snprintf(path, sizeof path, "polygons[%zu] ring %u", p, k - poly_off[p]);
+            if (ring_off[k + 1] < ring_off[k] + 3) {
+                rc = api_fail(err, API_EINVALID, "%s: expected a ring of at least 3 points", path);
+                break;
+            }
+            for (uint32_t i = ring_off[k]; rc == API_OK && i < ring_off[k + 1]; i++) {
+                if (!isfinite(xy[2 * (size_t)i]) || !isfinite(xy[2 * (size_t)i + 1]))
+                    rc = api_fail(err, API_EINVALID, "%s point %u: expected finite numbers", path,
+                                  i - ring_off[k]);
+                else
+                    rc = add_point(&b, xy[2 * (size_t)i], xy[2 * (size_t)i + 1], err);
+            }
+            if (rc == API_OK) rc = end_ring(&b, path, err);
+        }
+        if (rc == API_OK) rc = end_polygon(&b, npoly, err);
+    }
+    if (rc == API_OK && npoly == 0) rc = end_polygon(&b, 1, err), b.npoly = 0;
+    rc = take_build(&b, rc, r, err);
+    if (rc == API_OK) rc = api_bool_parse(op, r->npoly, &r->op, err);
+    if (rc == API_OK && json_is_string(op))
+        r->named_and = !strcmp(json_string_value(op), "intersection");
+    if (rc != API_OK) {
+        api_polygons_free(r);
+        return rc;
+    }
+    *parsed = r;
+    return API_OK;
 }

@@ -759,10 +759,30 @@ static void membership_tick(void *udata, double f)
     ro->progress(ro->udata, "membership", f);
 }
 
-int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+/* What a run computes, before it is written (api_solids_run) or handed out as arrays
+ * (api_solids_arrays). */
+typedef struct solids_out {
+    lar3 c;
+    bool3_result res;
+    member_rows mem;
+    warn_list *w;
+    api_lar3_fmt fmt;
+} solids_out;
+
+static void solids_out_free(solids_out *o)
+{
+    bool3_result_free(&o->res);
+    member_rows_free(&o->mem);
+    lar3_free(&o->c);
+    free(o->w);
+}
+
+/* Checks the solids, builds the arrangement and, with an op, the membership and the Boolean,
+ * into *o (which the caller frees with solids_out_free, success or not). */
+static int solids_compute(const solids_req *r, const api_run_opts *ro, solids_out *o,
+                          api_error *err)
 {
     static const solid no_solid;
-    const solids_req *r = parsed;
     arr3_opts ao = {.precision = r->step,
                     .threads = ro->threads,
                     .cancel = ro->cancel,
@@ -772,10 +792,7 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
                     .want = api_lar3_want(r->fields)};
     solid *fixed = NULL;
     uint32_t **twin = NULL;
-    warn_list *w = calloc(1, sizeof *w);
-    lar3 c = {0};
-    bool3_result res = {0};
-    member_rows mem = {0};
+    warn_list *w = o->w = calloc(1, sizeof *w);
     char msg[API_ERRMAX] = "";
     int rc;
     if (!w) return api_fail(err, API_ENOMEM, "out of memory");
@@ -797,13 +814,13 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
     if (ro->progress) ro->progress(ro->udata, "check", 1);
     ms_check = ms_now() - t_check;
     if (r->soup)
-        rc = arr3_build(r->s, 1, 1, &ao, &c, msg, sizeof msg);
+        rc = arr3_build(r->s, 1, 1, &ao, &o->c, msg, sizeof msg);
     else {
         /* a solid that needed no change is used as it is (no fixed copy was made) */
         for (size_t i = 0; i < r->ns; i++)
             if (fixed[i].nf == 0) fixed[i] = r->s[i];
         rc = arr3_build_ex(r->ns ? fixed : &no_solid, r->ns, 0, (const uint32_t *const *)twin, &ao,
-                           &c, msg, sizeof msg);
+                           &o->c, msg, sizeof msg);
         for (size_t i = 0; i < r->ns; i++) free(twin[i]);
         free(twin);
         twin = NULL;
@@ -814,8 +831,8 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         rc = api_core_fail(err, rc, msg);
         goto out;
     }
-    for (size_t k = 0; k < c.nselfx; k++) { /* the surfaces that pass through themselves */
-        const arr3_selfx *x = &c.selfx[k];
+    for (size_t k = 0; k < o->c.nselfx; k++) { /* the surfaces that pass through themselves */
+        const arr3_selfx *x = &o->c.selfx[k];
         w->total++;
         if (w->n < SOLIDS_MAX_WARNINGS - 1) {
             snprintf(w->msg[w->n], WARN_LEN,
@@ -828,17 +845,17 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
         }
     }
     warn_finish(w);
-    if (!(c.stats.precision > 0)) c.stats.precision = r->step; /* no faces: nothing snapped */
-    c.stats.ms_check = ms_check;
-    c.stats.ms_total += ms_check;
-    api_lar3_fmt fmt = {
+    if (!(o->c.stats.precision > 0)) o->c.stats.precision = r->step; /* no faces: nothing snapped */
+    o->c.stats.ms_check = ms_check;
+    o->c.stats.ms_total += ms_check;
+    o->fmt = (api_lar3_fmt){
         .fields = r->fields, .warnings = w->ptr, .nwarnings = w->n, .layers = r->layers};
     if (r->has_op) { /* membership of every cell, then the chain of the expression */
         uint32_t bad_face;
         double t_bool = ms_now();
         if (ro->progress) ro->progress(ro->udata, "membership", 0);
-        int m = bool3_membership_ex(&c, &mem, &bad_face, ro->progress ? membership_tick : NULL,
-                                    (void *)ro);
+        int m = bool3_membership_ex(&o->c, &o->mem, &bad_face,
+                                    ro->progress ? membership_tick : NULL, (void *)ro);
         if (!m && ro->progress) ro->progress(ro->udata, "membership", 1);
         if (m) {
             rc = m < 0 ? api_fail(err, API_ENOMEM, "out of memory")
@@ -848,31 +865,54 @@ int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api
                                   bad_face);
             goto out;
         }
-        if (bool3_select_fill(&c, &mem, &r->op, r->fill, &res)) {
+        if (bool3_select_fill(&o->c, &o->mem, &r->op, r->fill, &o->res)) {
             rc = api_fail(err, API_ENOMEM, "out of memory");
             goto out;
         }
-        fmt.membership = &mem;
-        fmt.result = &res;
-        c.stats.ms_boolean = ms_now() - t_bool;
-        c.stats.ms_total += c.stats.ms_boolean;
+        o->fmt.membership = &o->mem;
+        o->fmt.result = &o->res;
+        o->c.stats.ms_boolean = ms_now() - t_bool;
+        o->c.stats.ms_total += o->c.stats.ms_boolean;
     }
     if (ro->cancel && atomic_load(ro->cancel)) {
         rc = api_fail(err, API_ECANCELED, "canceled");
         goto out;
     }
     if (ro->progress) ro->progress(ro->udata, "output", 0);
-    rc = api_lar3_write(out, &c, &fmt, err);
 out:
-    bool3_result_free(&res);
-    member_rows_free(&mem);
-    lar3_free(&c);
     for (size_t i = 0; twin && i < r->ns; i++) free(twin[i]);
     free(twin);
     for (size_t i = 0; fixed && i < r->ns; i++) solid_free(&fixed[i]);
     free(fixed);
-    free(w);
     return rc;
+}
+
+int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err)
+{
+    solids_out o = {0};
+    int rc = solids_compute(parsed, ro, &o, err);
+    if (rc == API_OK) rc = api_lar3_write(out, &o.c, &o.fmt, err);
+    solids_out_free(&o);
+    return rc;
+}
+
+static void solids_out_drop(void *p)
+{
+    solids_out_free(p);
+    free(p);
+}
+
+int api_solids_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err)
+{
+    solids_out *o = calloc(1, sizeof *o);
+    if (!o) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = solids_compute(parsed, ro, o, err);
+    if (rc != API_OK) {
+        solids_out_drop(o);
+        return rc;
+    }
+    if (api_arrays_keep(out, o, solids_out_drop)) return api_fail(err, API_ENOMEM, "out of memory");
+    return api_lar3_arrays(out, &o->c, &o->fmt, err);
 }
 
 /* ---- solids already read -------------------------------------------------------------------- */
@@ -932,17 +972,14 @@ static int check_read_solid(const solid *s, const char *path, int soup, totals *
     return API_OK;
 }
 
-int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const json_t *options,
-                          const api_run_opts *ro, char **out, size_t *outlen, api_error *err)
+/* A request of the solids s (taken over), made as api_solids_run_direct and api_solids_make
+ * need it: the checks of a request's solids, options and op. */
+static int solids_make(solid *s, size_t n, int soup, const json_t *op, const json_t *options,
+                       solids_req **parsed, api_error *err)
 {
-    api_run_opts dflt = {0};
-    api_buf b = {0};
     totals tot = {0};
     int rc;
-    *out = NULL;
-    *outlen = 0;
-    if (err) err->status = API_OK, err->msg[0] = 0;
-    if (!ro) ro = &dflt;
+    *parsed = NULL;
     solids_req *r = calloc(1, sizeof *r);
     if (!r) {
         for (size_t i = 0; i < n; i++) solid_free(&s[i]);
@@ -954,15 +991,15 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
     r->soup = soup;
     if (soup && n != 1) {
         rc = api_fail(err, API_EINTERNAL, "internal error: a face soup is one solid");
-        goto out;
+        goto fail;
     }
     if (!soup && n > SOLIDS_MAX_SOLIDS) {
         rc = api_fail(err, API_EINVALID, "solids: %zu solids, at most %u allowed", n,
                       SOLIDS_MAX_SOLIDS);
-        goto out;
+        goto fail;
     }
     rc = parse_options(options, r, err);
-    if (rc != API_OK) goto out;
+    if (rc != API_OK) goto fail;
     for (size_t i = 0; i < n; i++) {
         char path[32];
         if (soup)
@@ -970,25 +1007,53 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
         else
             snprintf(path, sizeof path, "solids[%zu]", i);
         rc = check_read_solid(&s[i], path, soup, &tot, err);
-        if (rc != API_OK) goto out;
+        if (rc != API_OK) goto fail;
     }
     if (op) {
         if (soup) {
             rc = api_fail(err, API_EINVALID,
                           "op: needs \"solids\" (a face soup has no inside to combine)");
-            goto out;
+            goto fail;
         }
         rc = api_bool_parse(op, n, &r->op, err);
-        if (rc != API_OK) goto out;
+        if (rc != API_OK) goto fail;
         r->has_op = 1;
     }
     {
         char msg[API_ERRMAX];
         if (arr3_solids_step(r->s, r->ns, r->precision, &r->step, msg, sizeof msg) != ARR_OK) {
             rc = api_fail(err, API_EINVALID, "options.%s", msg);
-            goto out;
+            goto fail;
         }
     }
+    *parsed = r;
+    return API_OK;
+fail:
+    api_solids_free(r);
+    return rc;
+}
+
+int api_solids_make(solid *s, size_t n, const json_t *op, const json_t *options, void **parsed,
+                    api_error *err)
+{
+    solids_req *r;
+    int rc = solids_make(s, n, 0, op, options, &r, err);
+    *parsed = r;
+    return rc;
+}
+
+int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const json_t *options,
+                          const api_run_opts *ro, char **out, size_t *outlen, api_error *err)
+{
+    api_run_opts dflt = {0};
+    api_buf b = {0};
+    solids_req *r;
+    *out = NULL;
+    *outlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    if (!ro) ro = &dflt;
+    int rc = solids_make(s, n, soup, op, options, &r, err);
+    if (rc != API_OK) return api_buf_finish(&b, rc, out, outlen, err);
     api_progress pr;
     api_run_opts wr;
     api_progress_wrap(&pr, api_stages_solids, ro, &wr);
@@ -997,7 +1062,6 @@ int api_solids_run_direct(solid *s, size_t n, int soup, const json_t *op, const 
     b.udata = wr.udata;
     b.cancel = ro->cancel;
     rc = api_solids_run(r, &wr, &b, err);
-out:;
     void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
     void *uu = b.udata;
     rc = api_buf_finish(&b, rc, out, outlen, err);

@@ -181,11 +181,11 @@ run:
 	@scripts/run.sh $(BUILD) $(ARGS)
 
 format:
-	clang-format -i core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch] \
+	clang-format -i include/*.h core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] tests/ref/*.[ch] \
 	    tests/ref/*.cpp tests/ref/*.hpp tests/fuzz/*.[ch]
 
 format-check:
-	clang-format --dry-run -Werror core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] \
+	clang-format --dry-run -Werror include/*.h core/*.[ch] api/*.[ch] server/*.[ch] cli/*.c tests/*.[ch] \
 	    tests/ref/*.[ch] tests/ref/*.cpp tests/ref/*.hpp tests/fuzz/*.[ch]
 
 clean:

@@ -32,7 +32,7 @@ RUN apt-get update && apt-get install -y --no-install-recommends \
     && useradd --system --home /data --shell /usr/sbin/nologin cellar \
     && mkdir -p /data && chown cellar:cellar /data
 COPY --from=build /src/build/cellard /src/build/cellar /usr/local/bin/
-ARG VERSION=0.2.0
+ARG VERSION=0.3.0
 ARG SOURCE=unknown
 LABEL org.opencontainers.image.title="cellar" \
       org.opencontainers.image.description="cellular arrangements as a service: LAR complexes and Booleans of 2D drawings and 3D solids" \

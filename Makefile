@@ -30,7 +30,7 @@ DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-
               catatonit debootstrap bc gdal-bin
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
-LIB_VERSION := 0.3.0
+LIB_VERSION := $(shell sed -n 's/^\#define API_VERSION "\(.*\)"/\1/p' api/api.h)
 LIB_SONAME  := libcellar.so.0
 CORE_SRC := $(wildcard core/*.c)
 API_SRC  := $(wildcard api/*.c)

@@ -20,7 +20,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
-#define API_VERSION "0.2.0"
+#define API_VERSION "0.3.0"
 
 /* Statuses: HTTP status codes, so the daemon can send them as they are. */
 enum {

@@ -3,10 +3,10 @@
  *
  *   #include <cellar.h>          cc prog.c $(pkg-config --cflags --libs cellar)
  *
- *   double seg[] = {0, 0, 2, 2,  0, 2, 2, 0};          two segments x1, y1, x2, y2
+ *   double seg[] = {0, 0, 2, 0,  2, 0, 1, 2,  1, 2, 0, 0};   a triangle's sides x1, y1, x2, y2
  *   cellar_result *r;
  *   cellar_error e;
- *   if (cellar_arrangement2d(seg, 2, NULL, &r, &e)) { fprintf(stderr, "%s\n", e.msg); ... }
+ *   if (cellar_arrangement2d(seg, 3, NULL, &r, &e)) { fprintf(stderr, "%s\n", e.msg); ... }
  *   const cellar_array *V = cellar_result_get(r, "V");  V->data: V->rows x 2 doubles
  *   cellar_result_free(r);
  *

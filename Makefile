@@ -27,7 +27,7 @@ DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
               postgresql postgresql-client nginx-light \
               podman podman-compose runc conmon slirp4netns netavark aardvark-dns iptables \
-              catatonit debootstrap bc gdal-bin
+              catatonit debootstrap bc gdal-bin pkgconf binutils
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 LIB_VERSION := $(shell sed -n 's/^\#define API_VERSION "\(.*\)"/\1/p' api/api.h)
@@ -45,10 +45,12 @@ TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_LIB := $(BUILD)/tests/testlib.o $(BUILD)/tests/lar_check.o $(BUILD)/tests/shapes.o \
             $(BUILD)/tests/ref/geos_ref.o $(BUILD)/tests/daemon.o $(BUILD)/tests/pg.o
 
-.PHONY: all deps test check stress bench run clean format format-check tests fuzz
+.PHONY: all deps test check stress bench run clean format format-check tests fuzz install \
+        uninstall
 # the tests' shared objects are not intermediates (two makes at once must find them)
 .SECONDARY: $(TEST_LIB)
-all: $(BUILD)/cellar $(BUILD)/cellard $(BUILD)/lib/libcellar.so.$(LIB_VERSION)
+all: $(BUILD)/cellar $(BUILD)/cellard $(BUILD)/lib/libcellar.so.$(LIB_VERSION) \
+     $(BUILD)/lib/libcellar.a
 
 
 deps:
@@ -74,6 +76,46 @@ $(BUILD)/lib/libcellar.so.$(LIB_VERSION): $(CORE_OBJ) $(API_OBJ)
 	    $(JANSSON_LIBS) -lz $(LDLIBS)
 	ln -sf libcellar.so.$(LIB_VERSION) $(BUILD)/lib/$(LIB_SONAME)
 	ln -sf $(LIB_SONAME) $(BUILD)/lib/libcellar.so
+
+# The users' static library: the same objects as one relocatable object whose hidden symbols
+# are made local, so that only the names of include/cellar.h are global in it and a program
+# linking it cannot clash with our internal names (sort_u64, svg_read, ...).  $(BUILD)/libcellar.a
+# above, the internal archive, keeps them all: the CLI, the daemon and the tests use them.
+$(BUILD)/lib/libcellar.a: $(CORE_OBJ) $(API_OBJ)
+	@mkdir -p $(dir $@)
+	$(LD) -r -o $(BUILD)/lib/cellar.o $^
+	$(OBJCOPY) --localize-hidden $(BUILD)/lib/cellar.o
+	@rm -f $@
+	$(AR) rcs $@ $(BUILD)/lib/cellar.o
+
+# make install [PREFIX=/usr/local] [DESTDIR=]: the CLI and the daemon, the header, the shared
+# library (and its two names), the static one and cellar.pc (from cellar.pc.in, for PREFIX;
+# DESTDIR only stages the files).  Nothing installed refers to the build tree.
+PREFIX  ?= /usr/local
+DESTDIR ?=
+BINDIR  := $(DESTDIR)$(PREFIX)/bin
+INCDIR  := $(DESTDIR)$(PREFIX)/include
+LIBDIR  := $(DESTDIR)$(PREFIX)/lib
+LD      ?= ld
+OBJCOPY ?= objcopy
+INSTALL ?= install
+
+install: all
+	$(INSTALL) -d $(BINDIR) $(INCDIR) $(LIBDIR)/pkgconfig
+	$(INSTALL) -m 755 $(BUILD)/cellar $(BUILD)/cellard $(BINDIR)/
+	$(INSTALL) -m 644 include/cellar.h $(INCDIR)/
+	$(INSTALL) -m 755 $(BUILD)/lib/libcellar.so.$(LIB_VERSION) $(LIBDIR)/
+	ln -sf libcellar.so.$(LIB_VERSION) $(LIBDIR)/$(LIB_SONAME)
+	ln -sf $(LIB_SONAME) $(LIBDIR)/libcellar.so
+	$(INSTALL) -m 644 $(BUILD)/lib/libcellar.a $(LIBDIR)/
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(LIB_VERSION)|g' cellar.pc.in \
+	    > $(LIBDIR)/pkgconfig/cellar.pc
+	chmod 644 $(LIBDIR)/pkgconfig/cellar.pc
+
+uninstall:
+	rm -f $(BINDIR)/cellar $(BINDIR)/cellard $(INCDIR)/cellar.h \
+	    $(LIBDIR)/libcellar.so.$(LIB_VERSION) $(LIBDIR)/$(LIB_SONAME) $(LIBDIR)/libcellar.so \
+	    $(LIBDIR)/libcellar.a $(LIBDIR)/pkgconfig/cellar.pc
 
 $(BUILD)/cellar: $(BUILD)/cli/cellar.o $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(JANSSON_LIBS) -lz $(LDLIBS)
@@ -108,7 +150,7 @@ $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellard.a $(BUILD)/
 	$(CC) $(CFLAGS) -o $@ $^ $(TEST_LIBS) $(LDLIBS)
 
 tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool \
-       $(BUILD)/tests/ref/cgal_nef
+       $(BUILD)/tests/ref/cgal_nef $(BUILD)/lib/libcellar.so.$(LIB_VERSION) $(BUILD)/lib/libcellar.a
 
 # The CGAL reference of the 3D tests (C++, header-only CGAL: about 1.5 min to compile).  Built
 # without sanitizers; make check copies it from $(BUILD) instead of compiling it again.

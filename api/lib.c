@@ -7,9 +7,10 @@
  * named arrays: the core's own arrays where they have the result's layout (V, EV, FE, ...),
  * gathered copies where they do not (FV, holes, operators).
  *
- * Cancel and progress: the caller's cancel is asked at every progress report (the core's few
- * hundred per run) and, once it says stop, sets the flag the core polls; both callbacks are
- * called under a mutex, one at a time, from whichever thread reports.
+ * Cancel and progress: the caller's cancel is asked at every progress report told to the
+ * caller (lib_progress: each new stage, and every thousandth of the run) and, once it says stop,
+ * sets the flag the core polls; both callbacks are called under a mutex, one at a time, from
+ * whichever thread reports.
  *
  * Threads: reentrant; a result is the caller's and is never shared.  Ownership: see cellar.h.
  */
@@ -212,20 +213,29 @@ const char *cellar_stage_name(const char *kind, size_t i)
     return kind ? api_stage_name(kind, i) : NULL;
 }
 
-/* A run's callbacks: the caller's, one at a time, and the flag the core reads. */
+/* A run's callbacks: the caller's, one at a time, and the flag the core reads.  The core may
+ * report tens of thousands of times on a large input; the caller hears a new stage at once and
+ * otherwise every thousandth of the run (and its end), so about a thousand times at most. */
 typedef struct lib_run {
     const cellar_options *o;
     atomic_int stop;
     pthread_mutex_t mu;
+    char stage[32]; /* the last told */
+    double told;    /* the fraction last told */
 } lib_run;
 
 static void lib_progress(void *udata, const char *stage, double fraction)
 {
     lib_run *L = udata;
     pthread_mutex_lock(&L->mu);
-    if (L->o->cancel && !atomic_load(&L->stop) && L->o->cancel(L->o->udata))
-        atomic_store(&L->stop, 1);
-    if (L->o->progress) L->o->progress(L->o->udata, stage, fraction);
+    int tell = fraction >= 1 || fraction >= L->told + 1e-3 || strncmp(stage, L->stage, 31) != 0;
+    if (tell) {
+        snprintf(L->stage, sizeof L->stage, "%s", stage);
+        L->told = fraction;
+        if (L->o->cancel && !atomic_load(&L->stop) && L->o->cancel(L->o->udata))
+            atomic_store(&L->stop, 1);
+        if (L->o->progress) L->o->progress(L->o->udata, stage, fraction);
+    }
     pthread_mutex_unlock(&L->mu);
 }
 
@@ -233,6 +243,8 @@ static void run_opts(lib_run *L, const cellar_options *o, api_run_opts *ro)
 {
     *ro = (api_run_opts){.threads = o ? o->threads : 0};
     L->o = o;
+    L->stage[0] = 0;
+    L->told = -1;
     atomic_init(&L->stop, 0);
     pthread_mutex_init(&L->mu, NULL);
     if (o && (o->cancel || o->progress)) {

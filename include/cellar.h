@@ -79,12 +79,13 @@ typedef struct cellar_options {
                            or a solid's inside is, by its winding number */
     int keep_dangling;  /* 2D: keep bridges and dangling edges */
     int operators;      /* non-zero: the boundary operators too (as fields "operators") */
-    /* may be NULL: asked, from the running threads, now and then (as often as progress is
-     * told, a few hundred times a run); a non-zero answer stops the run, which then returns
+    /* may be NULL: asked, from the running threads, at each report of progress (whether or
+     * not progress is given): each new stage, and every thousandth of the run, about a
+     * thousand times a run at most; a non-zero answer stops the run, which then returns
      * CELLAR_ECANCELED */
     int (*cancel)(void *udata);
-    /* may be NULL: told the stage running and the fraction of the whole run done, 0 to 1,
-     * neither of which goes back (the stages: cellar_stage_name) */
+    /* may be NULL: told, at the same times, the stage running and the fraction of the whole run
+     * done, 0 to 1, neither of which goes back (the stages: cellar_stage_name) */
     void (*progress)(void *udata, const char *stage, double fraction);
     void *udata; /* passed to cancel and progress */
 } cellar_options;

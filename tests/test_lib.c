@@ -578,6 +578,7 @@ TEST(progress_and_cancel)
     CHECK(w.calls > 3 && !w.backwards && w.last == 1 && !strcmp(w.stage, "output"),
           "progress: %d calls, %d backwards, last %g at %s", w.calls, w.backwards, w.last, w.stage);
     CHECK(w.asked == w.calls, "cancel asked %d times of %d", w.asked, w.calls);
+    CHECK(w.calls <= 1000 + 20, "progress told %d times: about a thousand at most", w.calls);
     cellar_result_free(r);
     for (size_t i = 0; cellar_stage_name("lines", i); i++)
         CHECK(i < 20, "stages of lines never end");

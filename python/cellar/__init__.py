@@ -275,21 +275,28 @@ def _call(fn, progress, precision=None, threads=0, fields=None, fill=None,
     err = _lib.Error_()
     box = {}
 
+    done = threading.Event()
+
     def work():
         try:
             box["rc"] = fn(C.byref(o), C.byref(err))
         except BaseException as e:  # noqa: B902
             box["exc"] = e
+        finally:
+            done.set()
 
+    # An Event, not Thread.join(timeout): a KeyboardInterrupt inside join() can leave the
+    # thread seen as ended while it runs (CPython gh-90882).
     t = threading.Thread(target=work, name="cellar", daemon=True)
     t.start()
     interrupted = False
-    while t.is_alive():
+    while not done.is_set():
         try:
-            t.join(0.05)
+            done.wait(0.05)
         except KeyboardInterrupt:
             interrupted = True
             state["stop"] = True
+    t.join()
     del cancel_c, progress_c
     if "exc" in box:
         raise box["exc"]

@@ -23,7 +23,7 @@ TEST_LIBS    := $(SERVER_LIBS) -lcurl $(JANSSON_LIBS) $(GEOS_LIBS)
 DEPS_RUN   := gcc make libc6-dev libjansson-dev libmicrohttpd-dev libsqlite3-dev libssl-dev \
               libxml2-dev libpq-dev zlib1g-dev libzip-dev nodejs npm
 DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-jsonschema \
-              python3-shapely python3-numpy python3-scipy sqlite3 \
+              python3-shapely python3-numpy python3-scipy python3-venv python3-pip sqlite3 \
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
               postgresql postgresql-client nginx-light \
               podman podman-compose runc conmon slirp4netns netavark aardvark-dns iptables \
@@ -149,8 +149,8 @@ $(BUILD)/cellard: $(BUILD)/server/main.o $(BUILD)/libcellard.a $(BUILD)/libcella
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_LIB) $(BUILD)/libcellard.a $(BUILD)/libcellar.a
 	$(CC) $(CFLAGS) -o $@ $^ $(TEST_LIBS) $(LDLIBS)
 
-tests: $(BUILD)/cellar $(BUILD)/cellard $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool \
-       $(BUILD)/tests/ref/cgal_nef $(BUILD)/lib/libcellar.so.$(LIB_VERSION) $(BUILD)/lib/libcellar.a
+tests: $(BUILD)/cellar $(BUILD)/cellard $(BUILD)/lib/libcellar.so.$(LIB_VERSION) \
+       $(BUILD)/lib/libcellar.a $(TEST_BIN) $(BUILD)/tests/ref/cgal_bool $(BUILD)/tests/ref/cgal_nef
 
 # The CGAL reference of the 3D tests (C++, header-only CGAL: about 1.5 min to compile).  Built
 # without sanitizers; make check copies it from $(BUILD) instead of compiling it again.
@@ -190,7 +190,8 @@ stress: deps
 
 bench: deps
 	@scripts/deps.sh $(DEPS_BENCH)
-	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/bench/cgal_arrangement \
+	@$(MAKE) --no-print-directory $(BUILD)/cellar $(BUILD)/lib/libcellar.so.$(LIB_VERSION) \
+	    $(BUILD)/bench/cgal_arrangement \
 	    $(BUILD)/bench/geos_polygonize $(BUILD)/bench/geos_bool2 $(BUILD)/tests/ref/cgal_bool \
 	    $(BUILD)/bench/io
 	@if command -v npm >/dev/null 2>&1 && [ ! -d bench/node_modules/manifold-3d ]; then \
@@ -200,7 +201,8 @@ bench: deps
 	    bench/run3d.sh $(BUILD) || s=1; echo; \
 	    bench/runbool.sh $(BUILD) || s=1; echo; bench/runbool2.sh $(BUILD) || s=1; echo; \
 	    bench/runmany.sh $(BUILD) || s=1; echo; \
-	    python3 bench/mesh3.py $(BUILD) $(BENCH_MESH3_ARGS) || s=1; exit $$s
+	    python3 bench/mesh3.py $(BUILD) $(BENCH_MESH3_ARGS) || s=1; echo; \
+	    python3 bench/lib_bench.py $(BUILD) || s=1; exit $$s
 
 $(BUILD)/bench/cgal_arrangement: bench/cgal_arrangement.cpp
 	@mkdir -p $(dir $@)

@@ -30,7 +30,7 @@ from . import _lib
 from ._lib import lib
 
 __version__ = "0.3.0"
-__all__ = ["arrangement2d", "polygons", "solids", "run_json", "version", "stage_names",
+__all__ = ["arrangement2d", "polygons", "polygons_packed", "solids", "run_json", "version", "stage_names",
            "Result", "Error"]
 
 _DTYPES = {1: np.float64, 2: np.int32, 3: np.uint32, 4: np.int8, 5: np.uint64}
@@ -418,10 +418,34 @@ def polygons(geoms, op="union", *, fill=None, precision=None, fields=None, opera
         poly_off.append(len(rings_all))
     xy = (np.ascontiguousarray(np.concatenate(rings_all)) if rings_all
           else np.zeros((0, 2), np.float64))
-    po = np.asarray(poly_off, np.uint32)
-    ro = np.asarray(ring_off, np.uint32)
-    if ring_off[-1] >= 2**32 or len(rings_all) >= 2**32:
-        raise Error(422, "polygons: too many points")
+    return polygons_packed(xy, ring_off, poly_off, op, fill=fill, precision=precision,
+                           fields=fields, operators=operators, threads=threads,
+                           progress=progress)
+
+
+def polygons_packed(xy, ring_off, poly_off, op="union", *, fill=None, precision=None,
+                    fields=None, operators=False, threads=0, progress=None):
+    """polygons() of inputs already packed in arrays, as the library takes them (no Python
+    object per polygon: the way for millions of rings).
+
+    xy: (n, 2) float64, every ring's points one after the other; ring_off: ring r is
+      xy[ring_off[r] .. ring_off[r+1]) (closed or not, at least 3 points); poly_off: input p is
+      the rings poly_off[p] .. poly_off[p+1] (outer first, then holes).  Offsets of integers
+      below 2^32.  Everything else as polygons().
+    """
+    xy = _f64(xy, "polygons: xy")
+    if xy.ndim != 2 or xy.shape[1] != 2:
+        raise Error(422, "polygons: xy: expected an (n, 2) array, got shape %s" % (xy.shape,))
+    ro = np.asarray(ring_off)
+    po = np.asarray(poly_off)
+    for name, a in (("ring_off", ro), ("poly_off", po)):
+        if a.ndim != 1 or not len(a) or (a.size and (a.min() < 0 or a.max() >= 2**32)):
+            raise Error(422, "polygons: %s: expected offsets below 2^32, from 0" % name)
+    ro = np.ascontiguousarray(ro, np.uint32)
+    po = np.ascontiguousarray(po, np.uint32)
+    if po[-1] >= len(ro) or ro[-1] > len(xy):
+        raise Error(422, "polygons: poly_off ends at ring %d of %d, ring_off at point %d of %d"
+                    % (po[-1], len(ro) - 1, ro[-1], len(xy)))
     npoly = len(po) - 1
     opb = _op(op if op is not None else "union")
     return _run_result(

@@ -27,7 +27,7 @@ DEPS_BUILD := $(DEPS_RUN) libgeos-dev libcurl4-openssl-dev curl python3 python3-
               g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev clang libclang-rt-14-dev \
               postgresql postgresql-client nginx-light \
               podman podman-compose runc conmon slirp4netns netavark aardvark-dns iptables \
-              catatonit debootstrap bc gdal-bin pkgconf binutils
+              catatonit debootstrap bc gdal-bin time pkgconf binutils
 DEPS_BENCH := g++ libcgal-dev libgmp-dev libmpfr-dev libboost-dev time
 
 LIB_VERSION := $(shell sed -n 's/^\#define API_VERSION "\(.*\)"/\1/p' api/api.h)

@@ -442,6 +442,18 @@ int api_arrays_csr(api_arrays *out, const char *name, api_csr *m);
  * their place in it.  0 or -1 (out of memory). */
 int api_arrays_own_vertices(api_arrays *out, const char *name, const double *V, size_t nv, int dim,
                             uint32_t *map);
+/* "name.face" (the row q of each), "name.indptr" and "name.indices" of the holes of n rows:
+ * row q's holes are the cycles ids[off[q] .. off[q+1]) (off may be NULL when n is 0) of the
+ * cycle table cyc_off / cyc, their vertices through map (may be NULL), as the writers'
+ * "holes": {"q": [cycle, ...]} lists them.  Sticky failure as api_arrays_put. */
+void api_arrays_holes(api_arrays *r, int *bad, const char *name, size_t n, const uint32_t *off,
+                      const uint32_t *ids, const uint32_t *cyc_off, const uint32_t *cyc,
+                      const uint32_t *map);
+/* "name" as one double (a result's area or volume).  Sticky failure as api_arrays_put. */
+void api_arrays_f64(api_arrays *r, int *bad, const char *name, double x);
+/* 1 when every winding number of a membership (wind may be NULL: none) is 1, so that the
+ * membership is written without "data". */
+int api_membership_plain(size_t nrows, const uint32_t *off, const int32_t *wind);
 /* The kinds' array runs: as *_run, the result's arrays added to out instead of written. */
 int api_lines_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err);
 int api_polygons_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out,

@@ -546,11 +546,17 @@ void api_put_membership(api_buf *b, size_t nrows, size_t ninputs, const uint32_t
     api_put_membership_w(b, nrows, ninputs, off, idx, NULL);
 }
 
+int api_membership_plain(size_t nrows, const uint32_t *off, const int32_t *wind)
+{
+    for (size_t i = 0; wind && i < off[nrows]; i++)
+        if (wind[i] != 1) return 0;
+    return 1;
+}
+
 void api_put_membership_w(api_buf *b, size_t nrows, size_t ninputs, const uint32_t *off,
                           const uint32_t *idx, const int32_t *wind)
 {
-    int plain = 1;
-    for (size_t i = 0; wind && i < off[nrows] && plain; i++) plain = wind[i] == 1;
+    int plain = api_membership_plain(nrows, off, wind);
     api_buf_section(b);
     api_buf_puts(b, ",\"membership\":{\"format\":\"csr\",\"shape\":[");
     api_buf_u64(b, nrows);
@@ -899,37 +905,25 @@ static int stats_json(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, a
 
 int api_lar2_arrays(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
 {
+    static const uint32_t zero = 0;
     rows r = {.c = c, .nrows = c->nf};
     unsigned fl = fmt->fields;
     int rc = check_complex(c, err), bad = 0;
-    uint32_t *which = NULL;
     if (rc != API_OK) return rc;
-    size_t most = c->nf > c->next ? c->nf : c->next;
-    if (c->nf && most < c->hole_off[c->nf]) most = c->hole_off[c->nf];
-    if (!(which = malloc((most + 1) * sizeof *which))) goto nomem;
-    if (fl & API_F_V) bad = bad || api_arrays_add(out, "V", API_A_F64, c->nv, 2, c->V, 0);
-    if (fl & API_F_EV) bad = bad || api_arrays_add(out, "EV", API_A_U32, c->ne, 2, c->EV, 0);
-    if (fl & API_F_FV) {
-        for (size_t f = 0; f < c->nf; f++) which[f] = c->face_cycle[f];
-        bad = bad || api_arrays_cycles(out, "FV", c->cyc_off, c->cyc, which, NULL, c->nf, NULL);
-    }
+    if (fl & API_F_V) api_arrays_put(out, &bad, "V", API_A_F64, c->nv, 2, c->V, 0);
+    if (fl & API_F_EV) api_arrays_put(out, &bad, "EV", API_A_U32, c->ne, 2, c->EV, 0);
+    if (fl & API_F_FV)
+        bad = bad ||
+              api_arrays_cycles(out, "FV", c->cyc_off, c->cyc, c->face_cycle, NULL, c->nf, NULL);
     if (fl & API_F_FE) {
-        static const uint32_t zero = 0;
-        bad = bad || api_arrays_add(out, "FE.indptr", API_A_U32, c->nf + 1, 1,
-                                    c->nf ? c->fe_off : &zero, 0);
-        bad = bad || api_arrays_add(out, "FE.indices", API_A_I32, c->nf ? c->fe_off[c->nf] : 0, 1,
-                                    c->fe, 0);
+        api_arrays_put(out, &bad, "FE.indptr", API_A_U32, c->nf + 1, 1, c->nf ? c->fe_off : &zero,
+                       0);
+        api_arrays_put(out, &bad, "FE.indices", API_A_I32, c->nf ? c->fe_off[c->nf] : 0, 1, c->fe,
+                       0);
     }
-    if (fl & API_F_HOLES) {
-        size_t nh = c->nf ? c->hole_off[c->nf] : 0;
-        uint32_t *face = malloc((nh + 1) * sizeof *face);
-        if (!face) goto nomem;
-        for (size_t f = 0; f < c->nf; f++)
-            for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) face[h] = (uint32_t)f;
-        api_arrays_put(out, &bad, "holes.face", API_A_U32, nh, 1, face, 1);
-        bad =
-            bad || api_arrays_cycles(out, "holes", c->cyc_off, c->cyc, c->hole_cyc, NULL, nh, NULL);
-    }
+    if (fl & API_F_HOLES)
+        api_arrays_holes(out, &bad, "holes", c->nf, c->hole_off, c->hole_cyc, c->cyc_off, c->cyc,
+                         NULL);
     if (fl & API_F_EXTERIOR)
         bad = bad || api_arrays_cycles(out, "exterior", c->cyc_off, c->cyc, c->ext_cyc, NULL,
                                        c->next, NULL);
@@ -939,17 +933,11 @@ int api_lar2_arrays(api_arrays *out, const lar2 *c, const api_lar2_fmt *fmt, api
         if (rc != API_OK) {
             api_csr_free(&m[0]);
             api_csr_free(&m[1]);
-            free(which);
             return rc;
         }
         bad = api_arrays_csr(out, "operators.d1", &m[0]);
         bad = api_arrays_csr(out, "operators.d2", &m[1]) || bad;
     }
-    free(which);
-    which = NULL;
-    if (bad) goto nomem;
+    if (bad) return api_fail(err, API_ENOMEM, "out of memory");
     return stats_json(out, c, fmt, err);
-nomem:
-    free(which);
-    return api_fail(err, API_ENOMEM, "out of memory");
 }

@@ -541,21 +541,23 @@ static void signed_rows(api_arrays *out, int *bad, const char *name, const uint3
     api_arrays_put(out, bad, nm, API_A_I32, n ? off[n] : 0, 1, a, 0);
 }
 
-/* "holes": the faces i < n with more than one cycle (face fof[i]), each cycle after the first
- * (reversed with rev[i], through map) as a row, and "name.face" the row i of each. */
+/* "holes": the faces i < n with more than one cycle (face fof[i]; fof NULL: face i), each
+ * cycle after the first (reversed with rev[i], through map) as a row, and "name.face" the row
+ * i of each. */
 static void holes_rows(api_arrays *out, int *bad, const char *name, const lar3 *c,
                        const uint32_t *fof, const uint8_t *rev, size_t n, const uint32_t *map)
 {
+#define FOF(i) (fof ? fof[i] : (uint32_t)(i))
     size_t nh = 0;
     char nm[64];
-    for (size_t i = 0; i < n; i++) nh += c->fc_off[fof[i] + 1] - c->fc_off[fof[i]] - 1;
+    for (size_t i = 0; i < n; i++) nh += c->fc_off[FOF(i) + 1] - c->fc_off[FOF(i)] - 1;
     uint32_t *face = *bad ? NULL : malloc((nh + 1) * sizeof *face);
     uint32_t *cyc = face ? malloc((nh + 1) * sizeof *cyc) : NULL;
     uint8_t *r = cyc && rev ? malloc(nh + 1) : NULL;
     *bad = *bad || !face || !cyc || (rev && !r);
     size_t w = 0;
     for (size_t i = 0; !*bad && i < n; i++)
-        for (uint32_t k = c->fc_off[fof[i]] + 1; k < c->fc_off[fof[i] + 1]; k++) {
+        for (uint32_t k = c->fc_off[FOF(i)] + 1; k < c->fc_off[FOF(i) + 1]; k++) {
             face[w] = (uint32_t)i;
             if (r) r[w] = rev[i];
             cyc[w++] = c->fc[k];
@@ -566,6 +568,7 @@ static void holes_rows(api_arrays *out, int *bad, const char *name, const lar3 *
     *bad = *bad || api_arrays_cycles(out, name, c->cyc_off, c->cyc, cyc, r, nh, map);
     free(cyc);
     free(r);
+#undef FOF
 }
 
 /* "result", as put_result writes it. */
@@ -612,10 +615,7 @@ static void result_arrays(api_arrays *out, int *bad, const lar3 *c, const bool3_
         api_arrays_put(out, bad, "result.FE.indices", API_A_I32, w, 1, idx, 1);
     }
     holes_rows(out, bad, "result.holes", c, fof, rev, r->nfaces, map);
-    double *vol = *bad ? NULL : malloc(sizeof *vol);
-    if (vol) *vol = r->volume;
-    *bad = *bad || !vol;
-    api_arrays_put(out, bad, "result.volume", API_A_F64, 1, 1, vol, 1);
+    api_arrays_f64(out, bad, "result.volume", r->volume);
     free(map);
     free(fof);
     free(rev);
@@ -627,15 +627,15 @@ int api_lar3_arrays(api_arrays *out, const lar3 *c, const api_lar3_fmt *fmt, api
     unsigned fl = fmt->fields;
     int rc = check_complex(c, fl, err), bad = 0;
     if (rc != API_OK) return rc;
-    uint32_t *fof = malloc((c->nf + 1) * sizeof *fof), *outer = malloc((c->nf + 1) * sizeof *outer);
-    bad = !fof || !outer;
-    for (size_t f = 0; !bad && f < c->nf; f++) fof[f] = (uint32_t)f, outer[f] = c->fc[c->fc_off[f]];
+    uint32_t *outer = malloc((c->nf + 1) * sizeof *outer); /* each face's first cycle */
+    bad = !outer;
+    for (size_t f = 0; !bad && f < c->nf; f++) outer[f] = c->fc[c->fc_off[f]];
     if (fl & API_F3_V) api_arrays_put(out, &bad, "V", API_A_F64, c->nv, 3, c->V, 0);
     if (fl & API_F3_EV) api_arrays_put(out, &bad, "EV", API_A_U32, c->ne, 2, c->EV, 0);
     if (!bad && (fl & API_F3_FV))
         bad = api_arrays_cycles(out, "FV", c->cyc_off, c->cyc, outer, NULL, c->nf, NULL);
     if (fl & API_F3_FE) signed_rows(out, &bad, "FE", c->fe_off, c->fe, c->nf);
-    if (fl & API_F3_HOLES) holes_rows(out, &bad, "holes", c, fof, NULL, c->nf, NULL);
+    if (fl & API_F3_HOLES) holes_rows(out, &bad, "holes", c, NULL, NULL, c->nf, NULL);
     if (fl & API_F3_CF) signed_rows(out, &bad, "CF", c->cf_off, c->cf, c->nc);
     if (fl & API_F3_CV) {
         static const uint32_t zero = 0;
@@ -646,7 +646,6 @@ int api_lar3_arrays(api_arrays *out, const lar3 *c, const api_lar3_fmt *fmt, api
     }
     if (fl & API_F3_EXTERIOR)
         api_arrays_put(out, &bad, "exterior", API_A_I32, c->next, 1, c->ext, 0);
-    free(fof);
     free(outer);
     if (!bad && (fl & API_F3_OPERATORS)) {
         static const char *const name[3] = {"operators.d1", "operators.d2", "operators.d3"};
@@ -666,12 +665,15 @@ int api_lar3_arrays(api_arrays *out, const lar3 *c, const api_lar3_fmt *fmt, api
     if (bad) return api_fail(err, API_ENOMEM, "out of memory");
     /* the JSON of what is not an array: dim and the stats */
     api_buf b = {0};
-    api_lar3_fmt f = {
-        .fields = fl & API_F3_STATS, .warnings = fmt->warnings, .nwarnings = fmt->nwarnings};
-    rc = api_lar3_write(&b, c, &f, err);
-    if (rc != API_OK) {
+    api_buf_puts(&b, "{\"dim\":3");
+    if (fl & API_F3_STATS) {
+        put_key(&b, "stats");
+        put_stats(&b, c, fmt);
+    }
+    api_buf_putc(&b, '}');
+    if (b.failed) {
         api_buf_free(&b);
-        return rc;
+        return api_fail(err, API_ENOMEM, "out of memory");
     }
     api_arrays_json(out, 3, b.p);
     return API_OK;

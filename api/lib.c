@@ -141,11 +141,33 @@ int api_arrays_own_vertices(api_arrays *out, const char *name, const double *V, 
     return api_arrays_add(out, name, API_A_F64, n, (size_t)dim, W, 1);
 }
 
+void api_arrays_holes(api_arrays *r, int *bad, const char *name, size_t n, const uint32_t *off,
+                      const uint32_t *ids, const uint32_t *cyc_off, const uint32_t *cyc,
+                      const uint32_t *map)
+{
+    size_t nh = n ? off[n] : 0;
+    char nm[96];
+    uint32_t *face = *bad ? NULL : malloc((nh + 1) * sizeof *face);
+    for (size_t q = 0; face && q < n; q++)
+        for (uint32_t h = off[q]; h < off[q + 1]; h++) face[h] = (uint32_t)q;
+    *bad = *bad || !face;
+    snprintf(nm, sizeof nm, "%s.face", name);
+    api_arrays_put(r, bad, nm, API_A_U32, nh, 1, face, 1);
+    *bad = *bad || api_arrays_cycles(r, name, cyc_off, cyc, ids, NULL, nh, map);
+}
+
+void api_arrays_f64(api_arrays *r, int *bad, const char *name, double x)
+{
+    double *p = *bad ? NULL : malloc(sizeof *p);
+    if (p) *p = x;
+    *bad = *bad || !p;
+    api_arrays_put(r, bad, name, API_A_F64, 1, 1, p, 1);
+}
+
 int api_arrays_membership(api_arrays *out, size_t nrows, size_t ninputs, const uint32_t *off,
                           const uint32_t *idx, const int32_t *wind)
 {
-    int plain = 1;
-    for (size_t i = 0; wind && i < off[nrows] && plain; i++) plain = wind[i] == 1;
+    int plain = api_membership_plain(nrows, off, wind);
     uint64_t *shape = malloc(2 * sizeof *shape);
     if (!shape) return -1;
     shape[0] = nrows;

@@ -247,15 +247,10 @@ int api_lines_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out
 {
     const lines_req *r = parsed;
     api_lar2_fmt fmt = {.fields = r->opt.fields};
-    lar2 *c = calloc(1, sizeof *c);
-    if (!c) return api_fail(err, API_ENOMEM, "out of memory");
+    lar2 *c = calloc(1, sizeof *c); /* kept by the result, which frees it, success or not */
+    if (!c || api_arrays_keep(out, c, lar2_drop)) return api_fail(err, API_ENOMEM, "out of memory");
     int rc = lines_compute(r, ro, c, err);
-    if (rc != API_OK) {
-        lar2_drop(c);
-        return rc;
-    }
-    if (api_arrays_keep(out, c, lar2_drop)) return api_fail(err, API_ENOMEM, "out of memory");
-    return api_lar2_arrays(out, c, &fmt, err);
+    return rc == API_OK ? api_lar2_arrays(out, c, &fmt, err) : rc;
 }
 
 int api_lines_make(const double *seg, size_t n, const json_t *options, void **parsed,
@@ -272,8 +267,6 @@ int api_lines_make(const double *seg, size_t n, const json_t *options, void **pa
     lines_req *r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     int rc = api_lar2_options(options, &r->opt, err);
-    if (rc == API_OK && r->opt.exterior_last)
-        rc = api_fail(err, API_EINVALID, "options.exterior_last: not an option of the library");
     if (rc == API_OK && !(r->seg = malloc((4 * n + 1) * sizeof *r->seg)))
         rc = api_fail(err, API_ENOMEM, "out of memory for %zu segments", n);
     if (rc != API_OK) {

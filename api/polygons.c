@@ -575,17 +575,12 @@ static int read_list(const json_t *ps, const char *name, int one_ok, api_packed_
 /* Hands b's arrays to r (empty ones allocated), or frees them on failure. */
 static int take_build(pbuild *b, int rc, polygons_req *r, api_error *err)
 {
-    if (rc == API_OK && !b->ring_off) {
-        b->ring_off = malloc(sizeof *b->ring_off);
-        if (!b->ring_off)
-            rc = api_fail(err, API_ENOMEM, "out of memory");
-        else
-            b->ring_off[0] = 0;
-    }
-    if (rc == API_OK && !b->xy) {
-        b->xy = malloc(2 * sizeof *b->xy);
-        if (!b->xy) rc = api_fail(err, API_ENOMEM, "out of memory");
-    }
+    /* an input without polygons (or points) still has its first offsets, 0 */
+    if (rc == API_OK && !b->poly_off) b->poly_off = calloc(1, sizeof *b->poly_off);
+    if (rc == API_OK && !b->ring_off) b->ring_off = calloc(1, sizeof *b->ring_off);
+    if (rc == API_OK && !b->xy) b->xy = calloc(2, sizeof *b->xy);
+    if (rc == API_OK && (!b->poly_off || !b->ring_off || !b->xy))
+        rc = api_fail(err, API_ENOMEM, "out of memory");
     if (rc != API_OK) {
         pbuild_free(b);
         return rc;
@@ -994,17 +989,9 @@ static int bool2_arrays(api_arrays *out, const bool2_result *r, unsigned fl)
         api_arrays_put(out, &bad, "result.FE.indptr", API_A_U32, g->npoly + 1, 1, ptr, 1);
         api_arrays_put(out, &bad, "result.FE.indices", API_A_I32, w, 1, idx, 1);
     }
-    size_t nh = g->ph_off[g->npoly];
-    uint32_t *face = bad ? NULL : malloc((nh + 1) * sizeof *face);
-    for (size_t q = 0; face && q < g->npoly; q++)
-        for (uint32_t h = g->ph_off[q]; h < g->ph_off[q + 1]; h++) face[h] = (uint32_t)q;
-    bad = bad || !face;
-    api_arrays_put(out, &bad, "result.holes.face", API_A_U32, nh, 1, face, 1);
-    bad = bad || api_arrays_cycles(out, "result.holes", g->rc_off, g->rv, g->ph_cyc, NULL, nh, map);
-    double *area = bad ? NULL : malloc(sizeof *area);
-    if (area) *area = r->area;
-    bad = bad || !area;
-    api_arrays_put(out, &bad, "result.area", API_A_F64, 1, 1, area, 1);
+    api_arrays_holes(out, &bad, "result.holes", g->npoly, g->ph_off, g->ph_cyc, g->rc_off, g->rv,
+                     map);
+    api_arrays_f64(out, &bad, "result.area", r->area);
     free(map);
     return bad ? -1 : 0;
 }
@@ -1012,14 +999,11 @@ static int bool2_arrays(api_arrays *out, const bool2_result *r, unsigned fl)
 int api_polygons_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err)
 {
     const polygons_req *r = parsed;
-    bool2_result *res = calloc(1, sizeof *res);
-    if (!res) return api_fail(err, API_ENOMEM, "out of memory");
+    bool2_result *res = calloc(1, sizeof *res); /* kept by the result, which frees it */
+    if (!res || api_arrays_keep(out, res, bool2_drop))
+        return api_fail(err, API_ENOMEM, "out of memory");
     int rc = polygons_compute(r, ro, res, err);
-    if (rc != API_OK) {
-        bool2_drop(res);
-        return rc;
-    }
-    if (api_arrays_keep(out, res, bool2_drop)) return api_fail(err, API_ENOMEM, "out of memory");
+    if (rc != API_OK) return rc;
     bool2_out bo = {res, r->opt.fields, r};
     api_lar2_fmt fmt = {.fields = r->opt.fields, .stats_more = put_warnings, .stats_udata = &bo};
     rc = api_lar2_arrays(out, &res->c, &fmt, err);
@@ -1046,8 +1030,6 @@ int api_polygons_make(size_t npoly, const uint32_t *poly_off, const uint32_t *ri
     polygons_req *r = calloc(1, sizeof *r);
     if (!r) return api_fail(err, API_ENOMEM, "out of memory");
     rc = parse_options(options, r, err);
-    if (rc == API_OK && r->opt.exterior_last)
-        rc = api_fail(err, API_EINVALID, "options.exterior_last: not an option of the library");
     for (size_t p = 0; rc == API_OK && p < npoly; p++) {
         if (poly_off[p + 1] <= poly_off[p]) {
             rc = api_fail(err, API_EINVALID,
@@ -1073,7 +1055,6 @@ int api_polygons_make(size_t npoly, const uint32_t *poly_off, const uint32_t *ri
         }
         if (rc == API_OK) rc = end_polygon(&b, npoly, err);
     }
-    if (rc == API_OK && npoly == 0) rc = end_polygon(&b, 1, err), b.npoly = 0;
     rc = take_build(&b, rc, r, err);
     if (rc == API_OK) rc = api_bool_parse(op, r->npoly, &r->op, err);
     if (rc == API_OK && json_is_string(op))

@@ -904,15 +904,11 @@ static void solids_out_drop(void *p)
 
 int api_solids_arrays(const void *parsed, const api_run_opts *ro, api_arrays *out, api_error *err)
 {
-    solids_out *o = calloc(1, sizeof *o);
-    if (!o) return api_fail(err, API_ENOMEM, "out of memory");
+    solids_out *o = calloc(1, sizeof *o); /* kept by the result, which frees it, success or not */
+    if (!o || api_arrays_keep(out, o, solids_out_drop))
+        return api_fail(err, API_ENOMEM, "out of memory");
     int rc = solids_compute(parsed, ro, o, err);
-    if (rc != API_OK) {
-        solids_out_drop(o);
-        return rc;
-    }
-    if (api_arrays_keep(out, o, solids_out_drop)) return api_fail(err, API_ENOMEM, "out of memory");
-    return api_lar3_arrays(out, &o->c, &o->fmt, err);
+    return rc == API_OK ? api_lar3_arrays(out, &o->c, &o->fmt, err) : rc;
 }
 
 /* ---- solids already read -------------------------------------------------------------------- */

@@ -207,23 +207,20 @@ TEST(lines_arrays)
 }
 
 /* d1 · d2 = 0 on the arrays of a result (2D) or d2 · d3 (3D): the boundary of a boundary. */
-static void boundary_of_boundary(const cellar_result *r, const char *a, const char *b)
+/* The array "operators.OP.PART" of r. */
+static const cellar_array *op_part(const cellar_result *r, const char *op, const char *part)
 {
     char n[64];
-    snprintf(n, sizeof n, "operators.%s.indptr", a);
-    const cellar_array *pa = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.indices", a);
-    const cellar_array *ia = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.data", a);
-    const cellar_array *da = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.shape", b);
-    const cellar_array *sb = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.indptr", b);
-    const cellar_array *pb = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.indices", b);
-    const cellar_array *ib = get(r, n);
-    snprintf(n, sizeof n, "operators.%s.data", b);
-    const cellar_array *db = get(r, n);
+    snprintf(n, sizeof n, "operators.%s.%s", op, part);
+    return get(r, n);
+}
+
+static void boundary_of_boundary(const cellar_result *r, const char *a, const char *b)
+{
+    const cellar_array *pa = op_part(r, a, "indptr"), *ia = op_part(r, a, "indices"),
+                       *da = op_part(r, a, "data"), *sb = op_part(r, b, "shape"),
+                       *pb = op_part(r, b, "indptr"), *ib = op_part(r, b, "indices"),
+                       *db = op_part(r, b, "data");
     if (!pa || !ia || !da || !sb || !pb || !ib || !db) return;
     size_t rows = pa->rows - 1, cols = (size_t)elem(sb, 1), bad = 0;
     long *acc = calloc(cols + 1, sizeof *acc);

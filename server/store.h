@@ -1,7 +1,9 @@
 /* store.h — where jobs and results live: one small interface of function pointers with two
  * backends, SQLite (server/store_sqlite.c: one file, one daemon) and PostgreSQL
  * (server/store_pg.c: one database shared by many daemons), so the rest of the daemon does not
- * know which it talks to.
+ * know which it talks to.  The operations are implemented once, in server/store.c (the policy:
+ * transactions, checks of what is read back, eviction, the queue's rules), over a narrow
+ * interface of primitives that each backend implements (server/store_be.h).
  *
  * Jobs: one row per accepted job, written before the client hears of it, and the queue itself:
  * daemons claim jobs from the store with a lease (see "The queue" below), so that any daemon
@@ -206,6 +208,11 @@ typedef struct store_ops {
 struct store {
     const store_ops *ops;
     int shared; /* other daemons may use the same store (PostgreSQL): wait_event is set */
+    /* the rest is the store's own (store.c and its backends, server/store_be.h): */
+    const struct store_be_ops *be; /* the backend's primitives, under the policy of store.c */
+    uint64_t budget;               /* result bytes allowed; 0: unlimited */
+    double touch_seconds;          /* result_get leaves marks younger than this */
+    uint64_t put_batch;            /* bytes of chunks a put writes per transaction; 0: all in one */
 };
 
 /* store_sqlite_open flags: STORE_OPEN_INIT makes a store in an empty file or adds the store's

@@ -65,10 +65,12 @@
  */
 #include "server/store.h"
 
+#include "core/util.h"
+#include "server/store_be.h"
+
 #include <openssl/evp.h>
 #include <pthread.h>
 #include <sqlite3.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -185,7 +187,6 @@ enum sq_sql {
     SQ_CHUNKS_ALL,
     SQ_CHUNK_AT,
     SQ_RESULT_TOUCH,
-    SQ_RESULT_EXISTS,
     SQ_INTEGRITY,
     SQ_TOTALS_RECOUNT,
     SQ_PROBE,
@@ -274,9 +275,8 @@ static const char *const sq_sql_text[SQ_NSQL] = {
                     " ORDER BY off DESC LIMIT 1",
     [SQ_PROBE] = "UPDATE result_totals SET count = count WHERE id = 0",
     [SQ_CHUNKS_EVERY] =
-        "SELECT body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
+        "SELECT off, body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
     [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
-    [SQ_RESULT_EXISTS] = "SELECT 1 FROM results WHERE hash = ?1",
     [SQ_INTEGRITY] = "PRAGMA integrity_check",
     /* the totals row, the table's count and sum, the results whose chunks do not add up to
      * their size, the chunks that do not start where the one before ends */
@@ -293,52 +293,41 @@ static const char *const sq_sql_text[SQ_NSQL] = {
 
 typedef struct sq_store sq_store;
 
-typedef struct sq_conn {
+typedef struct store_conn sq_conn;
+
+struct store_conn {
     sqlite3 *db;                 /* used by one thread only (or by close) */
     sqlite3_stmt *stmt[SQ_NSQL]; /* prepared on first use, finalized when the conn closes */
     sq_store *owner;             /* the store whose list holds this conn */
-    struct sq_conn *prev, *next; /* in owner->conns; guarded by owner->mu */
-} sq_conn;
-
-struct sq_store {
-    store base;           /* first member: a store * of this backend is a sq_store * */
-    char *path;           /* the database file */
-    uint64_t budget;      /* result bytes allowed; 0: unlimited */
-    pthread_key_t key;    /* the calling thread's sq_conn */
-    pthread_mutex_t mu;   /* guards conns and last_stamp */
-    sq_conn *conns;       /* every open connection of this store */
-    double last_stamp;    /* the latest last_used handed out (or found at open) */
-    double touch_seconds; /* result_get leaves marks younger than this (immutable) */
-    int key_made;         /* key is valid (for the cleanup path of open) */
-    int lock_fd;          /* path + "-lock", flock'd: one daemon per file (-1: none) */
+    sq_conn *prev, *next;        /* in owner->conns; guarded by owner->mu */
 };
 
-static void sq_errf(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void sq_errf(char *err, size_t errlen, const char *fmt, ...)
-{
-    va_list ap;
-    if (!err || !errlen) return;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
+struct sq_store {
+    store base;         /* first member: a store * of this backend is a sq_store * */
+    char *path;         /* the database file */
+    pthread_key_t key;  /* the calling thread's sq_conn */
+    pthread_mutex_t mu; /* guards conns and last_stamp */
+    sq_conn *conns;     /* every open connection of this store */
+    double last_stamp;  /* the latest last_used handed out (or found at open) */
+    int key_made;       /* key is valid (for the cleanup path of open) */
+    int lock_fd;        /* path + "-lock", flock'd: one daemon per file (-1: none) */
+};
 
 /* "sqlite WHERE: SQLite's message of the connection's last error" */
 static void sq_dberr(char *err, size_t errlen, const char *where, sqlite3 *db)
 {
-    sq_errf(err, errlen, "sqlite %s: %s", where, db ? sqlite3_errmsg(db) : "out of memory");
+    util_seterr(err, errlen, STORE_ERR, "sqlite %s: %s", where,
+                db ? sqlite3_errmsg(db) : "out of memory");
 }
 
 /* An error while opening path; the first read of a file that is no database says so. */
 static void sq_open_err(char *err, size_t errlen, const char *path, sqlite3 *db, int rc)
 {
     if ((rc & 0xff) == SQLITE_NOTADB)
-        sq_errf(err, errlen, "sqlite open %s: not a SQLite database (%s)", path,
-                sqlite3_errmsg(db));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: not a SQLite database (%s)", path,
+                    sqlite3_errmsg(db));
     else
-        sq_errf(err, errlen, "sqlite open %s: %s", path, sqlite3_errmsg(db));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: %s", path, sqlite3_errmsg(db));
 }
 
 /* Resets a statement after use and drops its bindings (borrowed buffers bound SQLITE_STATIC
@@ -411,13 +400,13 @@ static int sq_conn_open(sq_store *s, int create, sq_conn **out, char *err, size_
     sq_conn *c = calloc(1, sizeof *c);
     *out = NULL;
     if (!c) {
-        sq_errf(err, errlen, "sqlite open: out of memory");
+        util_seterr(err, errlen, STORE_ERR, "sqlite open: out of memory");
         return STORE_ERR;
     }
     c->owner = s;
     if (sqlite3_open_v2(s->path, &c->db, flags, NULL) != SQLITE_OK) {
-        sq_errf(err, errlen, "sqlite open %s: %s", s->path,
-                c->db ? sqlite3_errmsg(c->db) : "out of memory");
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: %s", s->path,
+                    c->db ? sqlite3_errmsg(c->db) : "out of memory");
         goto fail;
     }
     sqlite3_extended_result_codes(c->db, 1);
@@ -444,7 +433,7 @@ static sq_conn *sq_conn_get(sq_store *s, char *err, size_t errlen)
     if (c) return c;
     if (sq_conn_open(s, 0, &c, err, errlen)) return NULL;
     if (pthread_setspecific(s->key, c) != 0) {
-        sq_errf(err, errlen, "sqlite open: pthread_setspecific failed");
+        util_seterr(err, errlen, STORE_ERR, "sqlite open: pthread_setspecific failed");
         sq_conn_close(c);
         return NULL;
     }
@@ -457,15 +446,9 @@ static sq_conn *sq_conn_get(sq_store *s, char *err, size_t errlen)
 }
 
 /* A last_used stamp: now, but strictly after every stamp this store handed out before. */
-static double sq_now(void)
+static double sq_stamp(store *base)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
-static double sq_stamp(sq_store *s)
-{
+    sq_store *s = (sq_store *)base;
     struct timespec ts;
     double t;
     clock_gettime(CLOCK_REALTIME, &ts);
@@ -522,87 +505,26 @@ static int sq_column_dup(sqlite3_stmt *st, int col, int null_ok, char **out, siz
     return 0;
 }
 
-/* Binds a NUL-terminated string that must fit a store_job field of cap bytes. */
-static int sq_bind_field(sqlite3_stmt *st, int i, const char *v, size_t cap, const char *what,
-                         char *err, size_t errlen)
-{
-    size_t n = strnlen(v, cap);
-    if (n == cap) {
-        sq_errf(err, errlen, "sqlite job_insert: %s is not a string of at most %zu bytes", what,
-                cap - 1);
-        return STORE_ERR;
-    }
-    sqlite3_bind_text(st, i, v, (int)n, SQLITE_STATIC);
-    return STORE_OK;
-}
-
-static int sq_state_valid(int st)
-{
-    return st >= JOB_QUEUED && st <= JOB_CANCELED;
-}
-
-/* ---- jobs ---- */
-
-/* Inserts sub (inside the caller's transaction): STORE_NOTFOUND when its job is not there. */
-static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, char *err,
+/* Steps a statement bound by the caller to its end: STORE_OK, or STORE_ERR with the message;
+ * *changed (may be NULL) gets whether it changed a row. */
+static int sq_step_done(sq_conn *c, sqlite3_stmt *st, int *changed, const char *where, char *err,
                         size_t errlen)
 {
-    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_INSERT, where, err, errlen);
-    if (!st) return STORE_ERR;
-    if (sq_bind_field(st, 1, sub->id, sizeof sub->id, "id", err, errlen) ||
-        sq_bind_field(st, 2, sub->job, sizeof sub->job, "job", err, errlen)) {
-        sq_done(st);
-        return STORE_ERR;
-    }
-    sq_bind_time(st, 3, sub->created);
-    sq_bind_time(st, 4, sub->canceled);
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, where, c->db);
-        sq_done(st);
-        return STORE_ERR;
-    }
-    int rc = sqlite3_changes(c->db) ? STORE_OK : STORE_NOTFOUND;
-    sq_done(st);
-    if (rc == STORE_NOTFOUND) sq_errf(err, errlen, "sqlite %s: no job %s", where, sub->job);
-    return rc;
-}
-
-/* Inserts job j and its first submission (inside the caller's transaction). */
-static int sq_job_write(sq_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
-{
-    if (!sq_state_valid((int)j->state)) {
-        sq_errf(err, errlen, "sqlite %s: unknown state %d", where, (int)j->state);
-        return STORE_ERR;
-    }
-    if (!j->request && j->request_len) {
-        sq_errf(err, errlen, "sqlite %s: request_len %zu with no request", where, j->request_len);
-        return STORE_ERR;
-    }
-    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_INSERT, where, err, errlen);
-    if (!st) return STORE_ERR;
-    if (sq_bind_field(st, 1, j->id, sizeof j->id, "id", err, errlen) ||
-        sq_bind_field(st, 2, j->hash, sizeof j->hash, "hash", err, errlen) ||
-        sq_bind_field(st, 3, j->kind, sizeof j->kind, "kind", err, errlen)) {
-        sq_done(st);
-        return STORE_ERR;
-    }
-    sqlite3_bind_int(st, 4, (int)j->state);
-    sq_bind_time(st, 5, j->created);
-    sq_bind_time(st, 6, j->started);
-    sq_bind_time(st, 7, j->finished);
-    if (j->error_status) sqlite3_bind_int(st, 8, j->error_status);
-    if (j->error) sqlite3_bind_text(st, 9, j->error, -1, SQLITE_STATIC);
-    /* a non-NULL pointer even for 0 bytes: a NULL one would bind SQL NULL */
-    sqlite3_bind_blob64(st, 10, j->request ? j->request : "", j->request_len, SQLITE_STATIC);
     int rc = sqlite3_step(st);
     if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
     sq_done(st);
-    if (rc != SQLITE_DONE) return STORE_ERR;
-    store_sub first = {.created = j->created,
-                       .canceled = j->state == JOB_CANCELED ? j->finished : 0};
-    memcpy(first.id, j->id, sizeof first.id);
-    memcpy(first.job, j->id, sizeof first.job);
-    return sq_sub_write(c, &first, where, err, errlen) == STORE_OK ? STORE_OK : STORE_ERR;
+    if (changed) *changed = sqlite3_changes(c->db) > 0;
+    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
+}
+
+/* Runs a statement whose ?1 is a text key (a hash, an id) and that returns no row. */
+static int sq_run_key(sq_conn *c, enum sq_sql id, const char *key, int *changed, const char *where,
+                      char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, key, -1, SQLITE_STATIC);
+    return sq_step_done(c, st, changed, where, err, errlen);
 }
 
 /* Runs statement `id` with the text `key` bound to ?1 and reads the first column of its one
@@ -622,7 +544,7 @@ static int sq_lookup(sq_conn *c, enum sq_sql id, const char *key, long long *out
     } else {
         if (out) *out = sqlite3_column_int64(st, 0);
         if (idout && sq_column_fixed(st, 0, idout, 33)) {
-            sq_errf(err, errlen, "sqlite %s: an id too long in the database", where);
+            util_seterr(err, errlen, STORE_ERR, "sqlite %s: an id too long in the database", where);
             out_rc = STORE_ERR;
         }
     }
@@ -630,76 +552,73 @@ static int sq_lookup(sq_conn *c, enum sq_sql id, const char *key, long long *out
     return out_rc;
 }
 
-static int sq_job_insert(store *base, const store_job *j, char *err, size_t errlen)
+/* ---- connections and transactions (store_be.h) ---- */
+
+static store_conn *sq_be_conn(store *s, char *err, size_t errlen)
 {
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "job_insert: begin", err, errlen)) return STORE_ERR;
-    if (sq_job_write(c, j, "job_insert", err, errlen) ||
-        sq_run(c, SQ_COMMIT, "job_insert: commit", err, errlen)) {
-        sq_rollback(c);
-        return STORE_ERR;
-    }
-    return STORE_OK;
+    return sq_conn_get((sq_store *)s, err, errlen);
 }
 
-static int sq_job_submit(store *base, const store_job *j, size_t queue_max, int join_only,
-                         char *job_id, int *joined, char *err, size_t errlen)
+/* Every frame is a transaction: a write one takes the write lock up front (BEGIN IMMEDIATE),
+ * STORE_TX_ONE included, so a writer waits for the lock under the busy timeout instead of
+ * failing to upgrade a read lock half-way (SQLITE_BUSY_SNAPSHOT). */
+static int sq_begin(sq_conn *c, store_tx tx, const char *where, char *err, size_t errlen)
 {
-    long long queued = 0;
-    *joined = 0;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "job_submit: begin", err, errlen)) return STORE_ERR;
-    int rc = sq_lookup(c, SQ_RESULT_EXISTS, j->hash, NULL, NULL, "job_submit", err, errlen);
-    if (rc == STORE_OK) {
-        rc = STORE_CACHED;
-        goto done;
-    }
-    if (rc != STORE_NOTFOUND) goto fail;
-    rc = sq_lookup(c, SQ_JOB_ACTIVE, j->hash, NULL, job_id, "job_submit", err, errlen);
-    if (rc == STORE_OK) { /* joined: a submission of its own */
-        store_sub sub = {.created = j->created};
-        memcpy(sub.id, j->id, sizeof sub.id);
-        memcpy(sub.job, job_id, sizeof sub.job);
-        if (sq_sub_write(c, &sub, "job_submit: join", err, errlen)) goto fail;
-        *joined = 1;
-        goto done;
-    }
-    if (rc != STORE_NOTFOUND) goto fail;
-    if (join_only) goto done; /* STORE_NOTFOUND */
-    if (queue_max) {
-        if (sq_lookup(c, SQ_JOB_COUNTS, NULL, &queued, NULL, "job_submit", err, errlen) != STORE_OK)
-            goto fail;
-        if ((unsigned long long)queued >= queue_max) {
-            rc = STORE_FULL;
-            goto done;
-        }
-    }
-    store_job q = *j;
-    q.state = JOB_QUEUED;
-    q.started = q.finished = 0;
-    q.error_status = 0;
-    q.error = NULL;
-    if (sq_job_write(c, &q, "job_submit", err, errlen)) goto fail;
-    memcpy(job_id, j->id, 33);
-    rc = STORE_OK;
-done:
-    if (sq_run(c, SQ_COMMIT, "job_submit: commit", err, errlen)) goto fail;
-    return rc;
-fail:
-    *joined = 0;
-    sq_rollback(c);
-    return STORE_ERR;
+    return sq_run(c, tx == STORE_TX_READ ? SQ_BEGIN_READ : SQ_BEGIN, where, err, errlen);
 }
 
-/* Reads job id into *out on connection c (no transaction: one statement is one snapshot). */
+static int sq_commit(sq_conn *c, const char *where, char *err, size_t errlen)
+{
+    return sq_run(c, SQ_COMMIT, where, err, errlen);
+}
+
+/* ---- jobs and submissions ---- */
+
+static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, char *err,
+                        size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_SUB_INSERT, where, err, errlen);
+    int changed;
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, sub->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, sub->job, -1, SQLITE_STATIC);
+    sq_bind_time(st, 3, sub->created);
+    sq_bind_time(st, 4, sub->canceled);
+    if (sq_step_done(c, st, &changed, where, err, errlen)) return STORE_ERR;
+    if (changed) return STORE_OK;
+    util_seterr(err, errlen, STORE_ERR, "sqlite %s: no job %s", where, sub->job);
+    return STORE_NOTFOUND;
+}
+
+static int sq_job_write(sq_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_INSERT, where, err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, j->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, j->hash, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 3, j->kind, -1, SQLITE_STATIC);
+    sqlite3_bind_int(st, 4, (int)j->state);
+    sq_bind_time(st, 5, j->created);
+    sq_bind_time(st, 6, j->started);
+    sq_bind_time(st, 7, j->finished);
+    if (j->error_status) sqlite3_bind_int(st, 8, j->error_status);
+    if (j->error) sqlite3_bind_text(st, 9, j->error, -1, SQLITE_STATIC);
+    /* a non-NULL pointer even for 0 bytes: a NULL one would bind SQL NULL */
+    sqlite3_bind_blob64(st, 10, j->request ? j->request : "", j->request_len, SQLITE_STATIC);
+    if (sq_step_done(c, st, NULL, where, err, errlen)) return STORE_ERR;
+    store_sub first = {.created = j->created,
+                       .canceled = j->state == JOB_CANCELED ? j->finished : 0};
+    memcpy(first.id, j->id, sizeof first.id);
+    memcpy(first.job, j->id, sizeof first.job);
+    return sq_sub_write(c, &first, where, err, errlen) == STORE_OK ? STORE_OK : STORE_ERR;
+}
+
+/* Reads job id (one statement is one snapshot: no transaction of its own). */
 static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, size_t errlen)
 {
-    sqlite3_stmt *st;
     int rc;
     memset(out, 0, sizeof *out);
-    st = sq_stmt(c, SQ_JOB_GET, "job_get", err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_GET, "job_get", err, errlen);
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
     rc = sqlite3_step(st);
@@ -716,22 +635,18 @@ static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, si
         sq_column_fixed(st, 2, out->kind, sizeof out->kind) ||
         sq_column_fixed(st, 11, out->owner, sizeof out->owner) ||
         sq_column_fixed(st, 15, out->stage, sizeof out->stage)) {
-        sq_errf(err, errlen, "sqlite job_get %s: a text field too long in the database", id);
+        util_seterr(err, errlen, STORE_ERR,
+                    "sqlite job_get %s: a text field too long in the database", id);
         goto fail;
     }
     out->state = (job_state)sqlite3_column_int(st, 3);
-    if (!sq_state_valid((int)out->state)) {
-        sq_errf(err, errlen, "sqlite job_get %s: unknown state %d in the database", id,
-                (int)out->state);
-        goto fail;
-    }
     out->created = sq_column_time(st, 4);
     out->started = sq_column_time(st, 5);
     out->finished = sq_column_time(st, 6);
     out->error_status = sqlite3_column_int(st, 7);
     if (sq_column_dup(st, 8, 1, &out->error, NULL) ||
         sq_column_dup(st, 9, 0, &out->request, &out->request_len)) {
-        sq_errf(err, errlen, "sqlite job_get %s: out of memory", id);
+        util_seterr(err, errlen, STORE_ERR, "sqlite job_get %s: out of memory", id);
         goto fail;
     }
     out->active_subs = sqlite3_column_int(st, 10);
@@ -747,35 +662,29 @@ fail:
     return STORE_ERR;
 }
 
-static int sq_job_get(store *base, const char *id, store_job *out, char *err, size_t errlen)
+/* The only writer needs no row lock: the write transaction is the lock. */
+static int sq_job_active(sq_conn *c, const char *hash, char *id, char *err, size_t errlen)
 {
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) {
-        memset(out, 0, sizeof *out);
-        return STORE_ERR;
-    }
-    return sq_job_read(c, id, out, err, errlen);
+    return sq_lookup(c, SQ_JOB_ACTIVE, hash, NULL, id, "job_submit", err, errlen);
 }
 
-static int sq_job_claim(store *base, const char *owner, double now, double lease, store_job *out,
+/* An UPDATE ... RETURNING id, then the row read, in one write transaction of its own. */
+static int sq_job_claim(sq_conn *c, const char *owner, double now, double until, store_job *out,
                         char *err, size_t errlen)
 {
     char id[33];
-    memset(out, 0, sizeof *out);
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
     if (sq_run(c, SQ_BEGIN, "job_claim: begin", err, errlen)) return STORE_ERR;
     sqlite3_stmt *st = sq_stmt(c, SQ_JOB_CLAIM, "job_claim", err, errlen);
     if (!st) goto fail;
     sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
     sqlite3_bind_double(st, 2, now);
-    sqlite3_bind_double(st, 3, now + lease);
+    sqlite3_bind_double(st, 3, until);
     int rc = sqlite3_step(st), found = rc == SQLITE_ROW;
     if (found && sq_column_fixed(st, 0, id, sizeof id)) rc = SQLITE_MISMATCH;
     if (found && rc == SQLITE_ROW) rc = sqlite3_step(st); /* to its end: the update is done */
     if (rc != SQLITE_DONE) {
         if (rc == SQLITE_MISMATCH)
-            sq_errf(err, errlen, "sqlite job_claim: an id too long in the database");
+            util_seterr(err, errlen, STORE_ERR, "sqlite job_claim: an id too long in the database");
         else
             sq_dberr(err, errlen, "job_claim", c->db);
         sq_done(st);
@@ -791,200 +700,97 @@ fail:
     return STORE_ERR;
 }
 
-/* One write in a transaction of its own: statement `id`, its parameters bound by bind(st,
- * args); with RETURNING, *col0 (may be NULL) gets the first column of its row.  STORE_NOTFOUND
- * when it changed no row. */
-typedef void (*sq_binder)(sqlite3_stmt *st, const void *args);
-
-static int sq_write1(sq_store *s, enum sq_sql id, sq_binder bind, const void *args, int *col0,
-                     const char *where, char *err, size_t errlen)
+static int sq_job_set(sq_conn *c, const store_set *a, int *cancel, const char *where, char *err,
+                      size_t errlen)
 {
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, where, err, errlen)) return STORE_ERR;
-    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
-    if (!st) goto fail;
-    bind(st, args);
+    static const enum sq_sql sql[] = {[STORE_SET_RENEW] = SQ_JOB_RENEW,
+                                      [STORE_SET_FINISH] = SQ_JOB_FINISH,
+                                      [STORE_SET_RELEASE] = SQ_JOB_RELEASE};
+    sqlite3_stmt *st = sq_stmt(c, sql[a->kind], where, err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, a->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, a->owner, -1, SQLITE_STATIC);
+    if (a->kind == STORE_SET_RENEW) {
+        sqlite3_bind_double(st, 3, a->until);
+        if (a->stage) sqlite3_bind_text(st, 4, a->stage, -1, SQLITE_STATIC);
+        sqlite3_bind_double(st, 5, a->fraction);
+    } else if (a->kind == STORE_SET_FINISH) {
+        sqlite3_bind_int(st, 3, (int)a->state);
+        sq_bind_time(st, 4, a->when);
+        if (a->error_status) sqlite3_bind_int(st, 5, a->error_status);
+        if (a->error) sqlite3_bind_text(st, 6, a->error, -1, SQLITE_STATIC);
+    } else {
+        sqlite3_bind_double(st, 3, a->when);
+    }
     int rc = sqlite3_step(st), changed;
     if (rc == SQLITE_ROW) { /* RETURNING: the first column, then to the end */
-        if (col0) *col0 = sqlite3_column_int(st, 0);
+        if (cancel) *cancel = sqlite3_column_int(st, 0);
         changed = 1;
         rc = sqlite3_step(st);
     } else {
         changed = sqlite3_changes(c->db) > 0;
     }
-    if (rc != SQLITE_DONE) {
-        sq_dberr(err, errlen, where, c->db);
-        sq_done(st);
-        goto fail;
-    }
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
     sq_done(st);
-    if (sq_run(c, SQ_COMMIT, where, err, errlen)) goto fail;
-    return changed ? STORE_OK : STORE_NOTFOUND;
-fail:
-    sq_rollback(c);
-    return STORE_ERR;
+    return rc != SQLITE_DONE ? STORE_ERR : changed ? STORE_OK : STORE_NOTFOUND;
 }
 
-typedef struct sq_renew_args {
-    const char *id, *owner, *stage;
-    double until, fraction;
-} sq_renew_args;
-
-static void sq_bind_renew(sqlite3_stmt *st, const void *p)
+/* No events to make (one daemon per file): ended and *queued are left alone. */
+static int sq_jobs_requeue(sq_conn *c, double now, int all, int max_attempts, const char *msg,
+                           int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
+                           int *queued, char *err, size_t errlen)
 {
-    const sq_renew_args *a = p;
-    sqlite3_bind_text(st, 1, a->id, -1, SQLITE_STATIC);
-    sqlite3_bind_text(st, 2, a->owner, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 3, a->until);
-    if (a->stage) sqlite3_bind_text(st, 4, a->stage, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 5, a->fraction);
-}
-
-static int sq_job_renew(store *base, const char *id, const char *owner, double now, double lease,
-                        const char *stage, double fraction, int *cancel, char *err, size_t errlen)
-{
-    sq_renew_args a = {id, owner, stage, now + lease, fraction};
-    *cancel = 0;
-    return sq_write1((sq_store *)base, SQ_JOB_RENEW, sq_bind_renew, &a, cancel, "job_renew", err,
-                     errlen);
-}
-
-typedef struct sq_finish_args {
-    const char *id, *owner, *error;
-    int state, error_status;
-    double when;
-} sq_finish_args;
-
-static void sq_bind_finish(sqlite3_stmt *st, const void *p)
-{
-    const sq_finish_args *a = p;
-    sqlite3_bind_text(st, 1, a->id, -1, SQLITE_STATIC);
-    sqlite3_bind_text(st, 2, a->owner, -1, SQLITE_STATIC);
-    sqlite3_bind_int(st, 3, a->state);
-    sq_bind_time(st, 4, a->when);
-    if (a->state == JOB_FAILED && a->error_status) sqlite3_bind_int(st, 5, a->error_status);
-    if (a->state == JOB_FAILED && a->error) sqlite3_bind_text(st, 6, a->error, -1, SQLITE_STATIC);
-}
-
-static int sq_job_finish(store *base, const char *id, const char *owner, job_state state,
-                         double when, int error_status, const char *error, char *err, size_t errlen)
-{
-    if (state != JOB_DONE && state != JOB_FAILED && state != JOB_CANCELED) {
-        sq_errf(err, errlen, "sqlite job_finish: %d is not an end state", (int)state);
-        return STORE_ERR;
-    }
-    sq_finish_args a = {id, owner, error, (int)state, error_status, when};
-    return sq_write1((sq_store *)base, SQ_JOB_FINISH, sq_bind_finish, &a, NULL, "job_finish", err,
-                     errlen);
-}
-
-static void sq_bind_release(sqlite3_stmt *st, const void *p)
-{
-    const char *const *a = p;
-    sqlite3_bind_text(st, 1, a[0], -1, SQLITE_STATIC);
-    sqlite3_bind_text(st, 2, a[1], -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 3, sq_now());
-}
-
-static int sq_job_release(store *base, const char *id, const char *owner, char *err, size_t errlen)
-{
-    const char *a[2] = {id, owner};
-    return sq_write1((sq_store *)base, SQ_JOB_RELEASE, sq_bind_release, a, NULL, "job_release", err,
-                     errlen);
-}
-
-#define SQ_REQUEUE_MSG                                                                             \
-    "the job was started " SQ_STR(STORE_MAX_ATTEMPTS) " times, and each time the daemon running "  \
-                                                      "it stopped before it ended"
-#define SQ_STR_(x) #x
-#define SQ_STR(x)  SQ_STR_(x)
-
-static int sq_jobs_requeue(store *base, double now, int all, size_t *n, char *err, size_t errlen)
-{
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    *n = 0;
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "jobs_requeue: begin", err, errlen)) return STORE_ERR;
+    (void)ended;
+    (void)ctx;
+    (void)queued;
     sqlite3_stmt *st = sq_stmt(c, SQ_JOBS_REQUEUE, "jobs_requeue", err, errlen);
-    if (!st) goto fail;
+    if (!st) return STORE_ERR;
     sqlite3_bind_double(st, 1, now);
     sqlite3_bind_int(st, 2, all != 0);
-    sqlite3_bind_int(st, 3, STORE_MAX_ATTEMPTS);
-    sqlite3_bind_text(st, 4, SQ_REQUEUE_MSG, -1, SQLITE_STATIC);
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "jobs_requeue", c->db);
-        sq_done(st);
-        goto fail;
-    }
+    sqlite3_bind_int(st, 3, max_attempts);
+    sqlite3_bind_text(st, 4, msg, -1, SQLITE_STATIC);
+    if (sq_step_done(c, st, NULL, "jobs_requeue", err, errlen)) return STORE_ERR;
     *n = (size_t)sqlite3_changes64(c->db);
-    sq_done(st);
-    if (sq_run(c, SQ_COMMIT, "jobs_requeue: commit", err, errlen)) goto fail;
     return STORE_OK;
-fail:
-    *n = 0;
-    sq_rollback(c);
-    return STORE_ERR;
 }
 
-static int sq_job_counts(store *base, size_t *queued, size_t *running, char *err, size_t errlen)
+static int sq_job_counts(sq_conn *c, size_t *queued, size_t *running, const char *where, char *err,
+                         size_t errlen)
 {
-    *queued = *running = 0;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_COUNTS, "job_counts", err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOB_COUNTS, where, err, errlen);
     if (!st) return STORE_ERR;
     int rc = sqlite3_step(st);
     if (rc == SQLITE_ROW) {
         *queued = (size_t)sqlite3_column_int64(st, 0);
-        *running = (size_t)sqlite3_column_int64(st, 1);
+        if (running) *running = (size_t)sqlite3_column_int64(st, 1);
     } else {
-        sq_dberr(err, errlen, "job_counts", c->db);
+        sq_dberr(err, errlen, where, c->db);
     }
     sq_done(st);
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-static int sq_jobs_prune(store *base, double before, size_t keep, size_t *n, char *err,
+static int sq_jobs_prune(sq_conn *c, double before, size_t keep, size_t *n, char *err,
                          size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
-    sqlite3_stmt *st = NULL;
-    sqlite3_int64 changed;
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    if (n) *n = 0;
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "jobs_prune: begin", err, errlen)) return STORE_ERR;
-    st = sq_stmt(c, SQ_JOBS_PRUNE, "jobs_prune", err, errlen);
-    if (!st) goto fail;
+    sqlite3_stmt *st = sq_stmt(c, SQ_JOBS_PRUNE, "jobs_prune", err, errlen);
+    if (!st) return STORE_ERR;
     sqlite3_bind_double(st, 1, before);
     if (keep && keep < (size_t)INT64_MAX)
         sqlite3_bind_int64(st, 2, (sqlite3_int64)keep);
     else
         sqlite3_bind_int64(st, 2, INT64_MAX); /* past every row: no limit */
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, "jobs_prune", c->db);
-        goto fail;
-    }
-    changed = sqlite3_changes64(c->db);
-    sq_done(st);
-    st = NULL;
-    if (sq_run(c, SQ_COMMIT, "jobs_prune: commit", err, errlen)) goto fail;
-    if (n) *n = (size_t)changed;
+    if (sq_step_done(c, st, NULL, "jobs_prune", err, errlen)) return STORE_ERR;
+    *n = (size_t)sqlite3_changes64(c->db);
     return STORE_OK;
-fail:
-    sq_done(st);
-    sq_rollback(c);
-    return STORE_ERR;
 }
 
-/* ---- submissions ---- */
-
-static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, size_t errlen)
+/* lock_job: nothing to do, the write transaction is the lock. */
+static int sq_sub_read(sq_conn *c, const char *id, int lock_job, store_sub *out, char *err,
+                       size_t errlen)
 {
+    (void)lock_job;
     memset(out, 0, sizeof *out);
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
     sqlite3_stmt *st = sq_stmt(c, SQ_SUB_GET, "sub_get", err, errlen);
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
@@ -996,7 +802,8 @@ static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, si
         out_rc = STORE_ERR;
     } else if (sq_column_fixed(st, 0, out->id, sizeof out->id) ||
                sq_column_fixed(st, 1, out->job, sizeof out->job)) {
-        sq_errf(err, errlen, "sqlite sub_get %s: an id too long in the database", id);
+        util_seterr(err, errlen, STORE_ERR, "sqlite sub_get %s: an id too long in the database",
+                    id);
         out_rc = STORE_ERR;
     } else {
         out->created = sq_column_time(st, 2);
@@ -1006,185 +813,107 @@ static int sq_sub_get(store *base, const char *id, store_sub *out, char *err, si
     return out_rc;
 }
 
-/* Runs statement `id` on job `job` at `when` (?1, ?2): whether it changed a row (-1: error). */
-static int sq_job_step(sq_conn *c, enum sq_sql id, const char *job, double when, const char *where,
+/* Runs statement `id` on job `job` at `when` (?1, ?2): *changed whether it changed a row. */
+static int sq_job_step(sq_conn *c, enum sq_sql id, const char *job, double when, int *changed,
                        char *err, size_t errlen)
 {
-    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
-    if (!st) return -1;
+    sqlite3_stmt *st = sq_stmt(c, id, "sub_cancel", err, errlen);
+    if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, job, -1, SQLITE_STATIC);
     if (sqlite3_bind_parameter_count(st) >= 2) sqlite3_bind_double(st, 2, when);
-    int rc = sqlite3_step(st);
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
-    sq_done(st);
-    return rc != SQLITE_DONE ? -1 : sqlite3_changes(c->db) > 0;
+    return sq_step_done(c, st, changed, "sub_cancel", err, errlen);
 }
 
-static int sq_sub_cancel(store *base, const char *id, double when, int *changed, int *job,
-                         char *err, size_t errlen)
+static int sq_sub_cancel(sq_conn *c, const char *id, double when, int *changed, char *err,
+                         size_t errlen)
 {
-    store_sub sub;
+    return sq_job_step(c, SQ_SUB_CANCEL, id, when, changed, err, errlen);
+}
+
+/* A count, then the cancel of a queued job, or else the stop of a running one. */
+static int sq_job_last_sub(sq_conn *c, const char *job, double when, int *effect, char *err,
+                           size_t errlen)
+{
     long long active = 0;
-    *changed = 0;
-    *job = STORE_JOB_KEPT;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN, "sub_cancel: begin", err, errlen)) return STORE_ERR;
-    int rc = sq_sub_get(base, id, &sub, err, errlen);
-    if (rc == STORE_NOTFOUND) goto done;
-    if (rc != STORE_OK) goto fail;
-    int ch = sq_job_step(c, SQ_SUB_CANCEL, id, when, "sub_cancel", err, errlen);
-    if (ch < 0) goto fail;
-    *changed = ch;
-    if (ch) { /* the last one of its job? */
-        if (sq_lookup(c, SQ_SUB_ACTIVE, sub.job, &active, NULL, "sub_cancel", err, errlen))
-            goto fail;
-        if (active == 0) {
-            int q = sq_job_step(c, SQ_JOB_CANCEL_QUEUED, sub.job, when, "sub_cancel", err, errlen);
-            int r =
-                q ? q
-                  : sq_job_step(c, SQ_JOB_STOP_RUNNING, sub.job, when, "sub_cancel", err, errlen);
-            if (q < 0 || r < 0) goto fail;
-            *job = q ? STORE_JOB_CANCELED : r ? STORE_JOB_STOPPING : STORE_JOB_KEPT;
-        }
-    }
-done:
-    if (sq_run(c, SQ_COMMIT, "sub_cancel: commit", err, errlen)) goto fail;
-    return rc;
-fail:
-    *changed = 0;
-    *job = STORE_JOB_KEPT;
-    sq_rollback(c);
-    return STORE_ERR;
+    int q = 0, r = 0;
+    *effect = STORE_JOB_KEPT;
+    if (sq_lookup(c, SQ_SUB_ACTIVE, job, &active, NULL, "sub_cancel", err, errlen))
+        return STORE_ERR;
+    if (active) return STORE_OK;
+    if (sq_job_step(c, SQ_JOB_CANCEL_QUEUED, job, when, &q, err, errlen) ||
+        (!q && sq_job_step(c, SQ_JOB_STOP_RUNNING, job, when, &r, err, errlen)))
+        return STORE_ERR;
+    *effect = q ? STORE_JOB_CANCELED : r ? STORE_JOB_STOPPING : STORE_JOB_KEPT;
+    return STORE_OK;
 }
 
 /* ---- results ---- */
 
-/* Reads result_totals (inside the caller's transaction, or as one snapshot). */
-static int sq_totals(sq_conn *c, const char *where, size_t *count, uint64_t *bytes, char *err,
-                     size_t errlen)
+static int sq_result_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                          const char *where, char *err, size_t errlen)
 {
-    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOTALS, where, err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_HEAD, where, err, errlen);
     int rc;
     if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
     rc = sqlite3_step(st);
     if (rc == SQLITE_ROW) {
-        if (count) *count = (size_t)sqlite3_column_int64(st, 0);
-        if (bytes) *bytes = (uint64_t)sqlite3_column_int64(st, 1);
-    } else if (rc == SQLITE_DONE) {
-        sq_errf(err, errlen, "sqlite %s: the result_totals row is missing", where);
-    } else {
+        *bytes = (uint64_t)sqlite3_column_int64(st, 0);
+        *used = sq_column_time(st, 1);
+        if (job && sq_column_fixed(st, 2, job, 33)) job[0] = 0;
+    } else if (rc != SQLITE_DONE) {
         sq_dberr(err, errlen, where, c->db);
     }
     sq_done(st);
-    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
+    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
 }
 
-/* Deletes the least recently used results but `keep` until the total is within budget or
- * `keep` is alone; inside the caller's transaction.  Each round is an O(1) read of the total
- * and one indexed delete. */
-static int sq_evict(sq_conn *c, uint64_t budget, const char *keep, char *err, size_t errlen)
+static int sq_result_row(sq_conn *c, const char *hash, uint64_t bytes, double stamp,
+                         const char *job, char *err, size_t errlen)
 {
-    for (;;) {
-        uint64_t total;
-        sqlite3_stmt *st;
-        int rc;
-        if (sq_totals(c, "result_put: total", NULL, &total, err, errlen)) return STORE_ERR;
-        if (total <= budget) return STORE_OK;
-        st = sq_stmt(c, SQ_RESULT_EVICT_ONE, "result_put: evict", err, errlen);
-        if (!st) return STORE_ERR;
-        sqlite3_bind_text(st, 1, keep, -1, SQLITE_STATIC);
-        rc = sqlite3_step(st);
-        if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put: evict", c->db);
-        sq_done(st);
-        if (rc != SQLITE_DONE) return STORE_ERR;
-        if (sqlite3_changes(c->db) == 0) return STORE_OK; /* keep alone exceeds the budget */
-    }
-}
-
-/* Runs a statement whose ?1 is a hash and that returns no row. */
-static int sq_run_hash(sq_conn *c, enum sq_sql id, const char *hash, const char *where, char *err,
-                       size_t errlen)
-{
-    sqlite3_stmt *st = sq_stmt(c, id, where, err, errlen);
-    int rc;
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_UPSERT, "result_put", err, errlen);
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    rc = sqlite3_step(st);
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, where, c->db);
-    sq_done(st);
-    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
+    sqlite3_bind_int64(st, 2, (sqlite3_int64)bytes);
+    sqlite3_bind_double(st, 3, stamp);
+    if (job) sqlite3_bind_text(st, 4, job, -1, SQLITE_STATIC);
+    return sq_step_done(c, st, NULL, "result_put", err, errlen);
 }
 
-/* The SHA-256 of a chunk, stored beside it and checked whenever the chunk is read. */
-static void sq_digest(const void *data, size_t n, unsigned char out[32])
+static int sq_result_delete(sq_conn *c, const char *hash, const char *where, char *err,
+                            size_t errlen)
 {
-    unsigned int len = 0;
-    if (!EVP_Digest(data, n, out, &len, EVP_sha256(), NULL) || len != 32)
-        memset(out, 0, 32); /* cannot happen with OpenSSL's sha256; a wrong digest then shows */
+    return sq_run_key(c, SQ_RESULT_DELETE, hash, NULL, where, err, errlen);
 }
 
-/* Whether column col of st is the digest of data[0..n). */
-static int sq_digest_ok(sqlite3_stmt *st, int col, const void *data, size_t n)
+static int sq_chunks_forget(sq_conn *c, const char *hash, const char *where, char *err,
+                            size_t errlen)
 {
-    unsigned char md[32];
-    if (sqlite3_column_type(st, col) != SQLITE_BLOB || sqlite3_column_bytes(st, col) != 32)
-        return 0;
-    sq_digest(data ? data : "", n, md);
-    return memcmp(md, sqlite3_column_blob(st, col), 32) == 0;
+    return sq_run_key(c, SQ_CHUNKS_DELETE, hash, NULL, where, err, errlen);
 }
 
-/* Drops a damaged result (its row, and with it its chunks), best effort: it can be made again. */
-static void sq_drop(sq_conn *c, const char *hash)
+static int sq_result_touch(sq_conn *c, const char *hash, double stamp, const char *where, char *err,
+                           size_t errlen)
 {
-    if (sq_run(c, SQ_BEGIN, "drop", NULL, 0)) return;
-    if (sq_run_hash(c, SQ_RESULT_DELETE, hash, "drop", NULL, 0) ||
-        sq_run(c, SQ_COMMIT, "drop", NULL, 0))
-        sq_rollback(c);
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOUCH, where, err, errlen);
+    if (!st) return STORE_ERR;
+    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 2, stamp);
+    return sq_step_done(c, st, NULL, where, err, errlen);
 }
 
-/* Where a put's bytes come from: a buffer, or a file read a chunk at a time into buf. */
-typedef struct sq_source {
-    const char *mem;
-    FILE *f;
-    char *buf; /* STORE_CHUNK bytes, for f */
-} sq_source;
-
-/* The next n bytes of the source (pos: how many were taken before). */
-static const char *sq_source_take(sq_source *src, uint64_t pos, size_t n, uint64_t len, char *err,
-                                  size_t errlen)
-{
-    if (src->mem) return src->mem + pos;
-    size_t got = fread(src->buf, 1, n, src->f);
-    if (got == n) return src->buf;
-    if (ferror(src->f))
-        sq_errf(err, errlen, "sqlite result_put: reading the result at byte %llu failed",
-                (unsigned long long)(pos + got));
-    else
-        sq_errf(err, errlen, "sqlite result_put: the file ended after %llu of %llu bytes",
-                (unsigned long long)(pos + got), (unsigned long long)len);
-    return NULL;
-}
-
-static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const char *data, size_t n,
-                        char *err, size_t errlen)
+static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
+                        const unsigned char sha[32], char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_CHUNK_PUT, "result_put: chunk", err, errlen);
-    unsigned char md[32];
-    int rc;
     if (!st) return STORE_ERR;
-    sq_digest(data, n, md);
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
     sqlite3_bind_int64(st, 2, (sqlite3_int64)off);
     sqlite3_bind_blob64(st, 3, data, n, SQLITE_STATIC);
-    sqlite3_bind_blob(st, 4, md, 32, SQLITE_STATIC);
-    rc = sqlite3_step(st);
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put: chunk", c->db);
-    sq_done(st);
-    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
+    sqlite3_bind_blob(st, 4, sha, 32, SQLITE_STATIC);
+    return sq_step_done(c, st, NULL, "result_put: chunk", err, errlen);
 }
 
-/* The chunks now stored under hash: how many and their total bytes. */
 static int sq_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t *bytes, char *err,
                          size_t errlen)
 {
@@ -1203,331 +932,74 @@ static int sq_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-/* A put: the old result of this hash goes, the chunks are written SQ_BATCH bytes per
- * transaction, and the last transaction checks that they are all there (another put of the
- * same hash, or an eviction of it, could have touched them in between), writes the results
- * row and evicts.  A small result is one transaction, as before chunks. */
-static int sq_put(sq_store *s, const char *hash, const char *job, uint64_t len, sq_source *src,
-                  char *err, size_t errlen)
+/* Steps st (columns off, body, sha) to its end, calling fn on each row. */
+static int sq_chunks_each(sq_conn *c, sqlite3_stmt *st, int one, store_chunk_fn fn, void *ctx,
+                          const char *where, char *err, size_t errlen)
 {
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    uint64_t pos = 0, nchunks = 0;
-    int first = 1;
-    if (!c) return STORE_ERR;
-    if (len > (uint64_t)INT64_MAX / 2) {
-        sq_errf(err, errlen, "sqlite result_put: %llu bytes is too large", (unsigned long long)len);
-        return STORE_ERR;
-    }
-    for (;;) {
-        if (sq_run(c, SQ_BEGIN, "result_put: begin", err, errlen)) goto fail_nolock;
-        if (first && (sq_run_hash(c, SQ_RESULT_DELETE, hash, "result_put: replace", err, errlen) ||
-                      sq_run_hash(c, SQ_CHUNKS_DELETE, hash, "result_put: replace", err, errlen)))
-            goto fail;
-        first = 0;
-        uint64_t batch_end = pos + SQ_BATCH;
-        while (pos < len && pos < batch_end) {
-            size_t n = len - pos < STORE_CHUNK ? (size_t)(len - pos) : STORE_CHUNK;
-            const char *data = sq_source_take(src, pos, n, len, err, errlen);
-            if (!data || sq_chunk_put(c, hash, pos, data, n, err, errlen)) goto fail;
-            pos += n;
-            nchunks++;
-        }
-        if (pos == len) break;
-        if (sq_run(c, SQ_COMMIT, "result_put: commit", err, errlen)) goto fail;
-    }
-    uint64_t have_n, have_bytes;
-    if (sq_chunks_sum(c, hash, &have_n, &have_bytes, err, errlen)) goto fail;
-    if (have_n != nchunks || have_bytes != len) {
-        sq_errf(err, errlen,
-                "sqlite result_put: %llu chunks of %llu bytes written, %llu of %llu found "
-                "(another put of the same result meanwhile?)",
-                (unsigned long long)nchunks, (unsigned long long)len, (unsigned long long)have_n,
-                (unsigned long long)have_bytes);
-        goto fail;
-    }
-    /* the stamp is taken under the write lock: stamps of puts follow the commit order */
-    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_UPSERT, "result_put", err, errlen);
-    if (!st) goto fail;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    sqlite3_bind_int64(st, 2, (sqlite3_int64)len);
-    sqlite3_bind_double(st, 3, sq_stamp(s));
-    if (job && *job) sqlite3_bind_text(st, 4, job, -1, SQLITE_STATIC);
-    int rc = sqlite3_step(st);
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "result_put", c->db);
-    sq_done(st);
-    if (rc != SQLITE_DONE) goto fail;
-    if (s->budget && sq_evict(c, s->budget, hash, err, errlen)) goto fail;
-    if (sq_run(c, SQ_COMMIT, "result_put: commit", err, errlen)) goto fail;
-    return STORE_OK;
-fail:
-    sq_rollback(c);
-fail_nolock:
-    /* chunks committed by earlier batches: gone with the put (best effort; opening the store
-     * again deletes any left) */
-    if (pos > 0 && !sq_run(c, SQ_BEGIN, "result_put: clean up", NULL, 0)) {
-        if (sq_run_hash(c, SQ_CHUNKS_DELETE, hash, "result_put: clean up", NULL, 0) ||
-            sq_run(c, SQ_COMMIT, "result_put: clean up", NULL, 0))
-            sq_rollback(c);
-    }
-    return STORE_ERR;
-}
-
-static int sq_result_put(store *base, const char *hash, const char *body, size_t len, char *err,
-                         size_t errlen)
-{
-    if (!body && len) {
-        sq_errf(err, errlen, "sqlite result_put: %zu bytes with no body", len);
-        return STORE_ERR;
-    }
-    sq_source src = {.mem = body ? body : ""};
-    return sq_put((sq_store *)base, hash, NULL, len, &src, err, errlen);
-}
-
-static int sq_result_put_file(store *base, const char *hash, const char *job, FILE *f, uint64_t len,
-                              char *err, size_t errlen)
-{
-    if (!f) {
-        sq_errf(err, errlen, "sqlite result_put: no file");
-        return STORE_ERR;
-    }
-    sq_source src = {.f = f, .buf = malloc(STORE_CHUNK)};
-    if (!src.buf) {
-        sq_errf(err, errlen, "sqlite result_put: out of memory");
-        return STORE_ERR;
-    }
-    int rc = sq_put((sq_store *)base, hash, job, len, &src, err, errlen);
-    free(src.buf);
-    return rc;
-}
-
-/* A result's size and mark (no transaction of its own: the caller's, or one snapshot). */
-static int sq_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
-                   const char *where, char *err, size_t errlen)
-{
-    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_HEAD, where, err, errlen);
-    int rc;
-    if (!st) return STORE_ERR;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
-        *bytes = (uint64_t)sqlite3_column_int64(st, 0);
-        *used = sq_column_time(st, 1);
-        if (job && sq_column_fixed(st, 2, job, 33)) job[0] = 0;
-    } else if (rc != SQLITE_DONE) {
-        sq_dberr(err, errlen, where, c->db);
-    }
-    sq_done(st);
-    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
-}
-
-/* Marks a result used now, unless its mark is younger than touch_seconds: a hot result then
- * costs one write per interval instead of one per read (every write takes the database's
- * write lock, and readers queued behind it showed up as a tail of hundreds of ms under load).
- * The LRU order is exact to that resolution.  A result evicted since it was read is left. */
-static int sq_touch(sq_store *s, sq_conn *c, const char *hash, double used, const char *where,
-                    char *err, size_t errlen)
-{
-    sqlite3_stmt *st = NULL;
-    if (sq_now() - used < s->touch_seconds) return STORE_OK;
-    if (sq_run(c, SQ_BEGIN, where, err, errlen)) return STORE_ERR;
-    st = sq_stmt(c, SQ_RESULT_TOUCH, where, err, errlen);
-    if (!st) goto fail;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 2, sq_stamp(s));
-    if (sqlite3_step(st) != SQLITE_DONE) {
-        sq_dberr(err, errlen, where, c->db);
-        goto fail;
-    }
-    sq_done(st);
-    st = NULL;
-    if (sq_run(c, SQ_COMMIT, where, err, errlen)) goto fail;
-    return STORE_OK;
-fail:
-    sq_done(st);
-    sq_rollback(c);
-    return STORE_ERR;
-}
-
-/* The body is read in one read transaction (readers run in parallel under WAL), then the
- * small results row is marked in a write transaction of its own.  A result evicted in between
- * is still returned: it was there when read, and its content is fixed by its hash. */
-static int sq_result_get(store *base, const char *hash, char **body, size_t *len, char *err,
-                         size_t errlen)
-{
-    sq_store *s = (sq_store *)base;
-    sqlite3_stmt *st = NULL;
-    char *copy = NULL;
-    uint64_t bytes = 0, pos = 0;
-    double used = 0;
-    int rc;
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    *body = NULL;
-    if (len) *len = 0;
-    if (!c) return STORE_ERR;
-    if (sq_run(c, SQ_BEGIN_READ, "result_get: begin", err, errlen)) return STORE_ERR;
-    rc = sq_head(c, hash, &bytes, &used, NULL, "result_get", err, errlen);
-    if (rc) goto out;
-    rc = STORE_ERR;
-    if (bytes >= SIZE_MAX || !(copy = malloc((size_t)bytes + 1))) {
-        sq_errf(err, errlen, "sqlite result_get: out of memory for %llu bytes",
-                (unsigned long long)bytes);
-        goto out;
-    }
-    if (!(st = sq_stmt(c, SQ_CHUNKS_ALL, "result_get", err, errlen))) goto out;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    int step;
-    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
-        uint64_t off = (uint64_t)sqlite3_column_int64(st, 0);
+    int step, rc = STORE_OK, rows = 0;
+    while (rc == STORE_OK && (step = sqlite3_step(st)) == SQLITE_ROW) {
         const void *p = sqlite3_column_blob(st, 1);
-        uint64_t n = (uint64_t)sqlite3_column_bytes(st, 1);
+        size_t n = (size_t)sqlite3_column_bytes(st, 1);
+        rows++;
         if (!p && n) {
-            sq_errf(err, errlen, "sqlite result_get: out of memory");
-            goto out;
+            util_seterr(err, errlen, STORE_ERR, "sqlite %s: out of memory", where);
+            rc = STORE_ERR;
+            break;
         }
-        if (off != pos || n > bytes - pos) {
-            sq_errf(err, errlen,
-                    "sqlite result_get: result %.16s... is damaged: a chunk of %llu bytes at "
-                    "byte %llu, where %llu of %llu bytes were read",
-                    hash, (unsigned long long)n, (unsigned long long)off, (unsigned long long)pos,
-                    (unsigned long long)bytes);
-            rc = STORE_DAMAGED;
-            goto out;
-        }
-        if (!sq_digest_ok(st, 2, p, (size_t)n)) {
-            sq_errf(err, errlen,
-                    "sqlite result_get: result %.16s... is damaged: its chunk at byte %llu does "
-                    "not match its digest",
-                    hash, (unsigned long long)off);
-            rc = STORE_DAMAGED;
-            goto out;
-        }
-        if (n) memcpy(copy + pos, p, (size_t)n);
-        pos += n;
+        const void *sha =
+            sqlite3_column_type(st, 2) == SQLITE_BLOB ? sqlite3_column_blob(st, 2) : NULL;
+        rc = fn(ctx, (uint64_t)sqlite3_column_int64(st, 0), p, n, sha,
+                sha ? (size_t)sqlite3_column_bytes(st, 2) : 0);
     }
-    if (step != SQLITE_DONE) {
-        sq_dberr(err, errlen, "result_get", c->db);
-        goto out;
+    if (rc == STORE_OK && step != SQLITE_DONE) {
+        sq_dberr(err, errlen, where, c->db);
+        rc = STORE_ERR;
     }
-    if (pos != bytes) {
-        sq_errf(err, errlen,
-                "sqlite result_get: result %.16s... is damaged: its chunks hold %llu of its "
-                "%llu bytes",
-                hash, (unsigned long long)pos, (unsigned long long)bytes);
-        rc = STORE_DAMAGED;
-        goto out;
-    }
-    rc = STORE_OK;
-out:
     sq_done(st);
-    sq_run(c, SQ_COMMIT, "result_get: end", NULL, 0);
-    if (rc == STORE_DAMAGED) sq_drop(c, hash);
-    if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_get: mark used", err, errlen);
-    if (rc != STORE_OK) {
-        free(copy);
-        return rc;
-    }
-    copy[bytes] = 0;
-    *body = copy;
-    if (len) *len = (size_t)bytes;
-    return STORE_OK;
+    return rc == STORE_OK && one && !rows ? STORE_NOTFOUND : rc;
 }
 
-static int sq_result_size(store *base, const char *hash, uint64_t *bytes, char *job, char *err,
-                          size_t errlen)
+static int sq_chunks_read(sq_conn *c, const char *hash, long long at, store_chunk_fn fn, void *ctx,
+                          const char *where, char *err, size_t errlen)
 {
-    sq_store *s = (sq_store *)base;
-    double used = 0;
-    sq_conn *c = sq_conn_get(s, err, errlen);
-    *bytes = 0;
-    if (!c) return STORE_ERR;
-    if (job) job[0] = 0;
-    int rc = sq_head(c, hash, bytes, &used, job, "result_size", err, errlen);
-    if (rc == STORE_OK) rc = sq_touch(s, c, hash, used, "result_size: mark used", err, errlen);
-    return rc;
-}
-
-static int sq_result_chunk(store *base, const char *hash, uint64_t pos, char **data, size_t *len,
-                           uint64_t *start, char *err, size_t errlen)
-{
-    sqlite3_stmt *st;
-    int rc;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    *data = NULL;
-    *len = 0;
-    *start = 0;
-    if (!c) return STORE_ERR;
-    if (pos > (uint64_t)INT64_MAX) return STORE_NOTFOUND;
-    st = sq_stmt(c, SQ_CHUNK_AT, "result_chunk", err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, at < 0 ? SQ_CHUNKS_ALL : SQ_CHUNK_AT, where, err, errlen);
     if (!st) return STORE_ERR;
     sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    sqlite3_bind_int64(st, 2, (sqlite3_int64)pos);
+    if (at >= 0) sqlite3_bind_int64(st, 2, (sqlite3_int64)at);
+    return sq_chunks_each(c, st, at >= 0, fn, ctx, where, err, errlen);
+}
+
+/* Reads result_totals (inside the caller's transaction, or as one snapshot). */
+static int sq_totals(sq_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
+                     size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOTALS, where, err, errlen);
+    int rc;
+    if (!st) return STORE_ERR;
     rc = sqlite3_step(st);
     if (rc == SQLITE_ROW) {
-        uint64_t off = (uint64_t)sqlite3_column_int64(st, 0);
-        uint64_t n = (uint64_t)sqlite3_column_bytes(st, 1);
-        if (pos - off >= n) { /* the chunk that held pos is gone */
-            sq_done(st);
-            return STORE_NOTFOUND;
-        }
-        if (sq_column_dup(st, 1, 0, data, len)) {
-            sq_errf(err, errlen, "sqlite result_chunk: out of memory");
-            sq_done(st);
-            return STORE_ERR;
-        }
-        if (!sq_digest_ok(st, 2, *data, *len)) {
-            sq_errf(err, errlen,
-                    "sqlite result_chunk: result %.16s... is damaged: its chunk at byte %llu does "
-                    "not match its digest",
-                    hash, (unsigned long long)off);
-            sq_done(st);
-            free(*data);
-            *data = NULL;
-            *len = 0;
-            sq_drop(c, hash);
-            return STORE_DAMAGED;
-        }
-        *start = off;
-    } else if (rc != SQLITE_DONE) {
-        sq_dberr(err, errlen, "result_chunk", c->db);
+        if (count) *count = (size_t)sqlite3_column_int64(st, 0);
+        if (bytes) *bytes = (uint64_t)sqlite3_column_int64(st, 1);
+    } else if (rc == SQLITE_DONE) {
+        util_seterr(err, errlen, STORE_ERR, "sqlite %s: the result_totals row is missing", where);
+    } else {
+        sq_dberr(err, errlen, where, c->db);
     }
     sq_done(st);
-    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
+    return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-static int sq_result_exists(store *base, const char *hash, char *err, size_t errlen)
+static int sq_evict_one(sq_conn *c, const char *keep, int *gone, char *err, size_t errlen)
 {
-    sqlite3_stmt *st;
-    int rc;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    st = sq_stmt(c, SQ_RESULT_EXISTS, "result_exists", err, errlen);
-    if (!st) return STORE_ERR;
-    sqlite3_bind_text(st, 1, hash, -1, SQLITE_STATIC);
-    rc = sqlite3_step(st);
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) sq_dberr(err, errlen, "result_exists", c->db);
-    sq_done(st);
-    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
+    return sq_run_key(c, SQ_RESULT_EVICT_ONE, keep, gone, "result_put: evict", err, errlen);
 }
 
-static int sq_result_stats(store *base, size_t *count, uint64_t *bytes, char *err, size_t errlen)
+/* PRAGMA integrity_check: every line it reports but "ok", joined with "; ". */
+static int sq_integrity(sq_conn *c, char *err, size_t errlen)
 {
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (count) *count = 0;
-    if (bytes) *bytes = 0;
-    if (!c) return STORE_ERR;
-    return sq_totals(c, "result_stats", count, bytes, err, errlen);
-}
-
-/* PRAGMA integrity_check (every line it reports but "ok", joined with "; "), then the
- * result_totals row against a recount of the table, in one snapshot. */
-static int sq_check(store *base, char *err, size_t errlen)
-{
-    sqlite3_stmt *st;
     int rc, bad = 0;
     size_t used = 0;
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    st = sq_stmt(c, SQ_INTEGRITY, "check", err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, SQ_INTEGRITY, "check", err, errlen);
     if (!st) return STORE_ERR;
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
         const char *line = (const char *)sqlite3_column_text(st, 0);
@@ -1542,61 +1014,41 @@ static int sq_check(store *base, char *err, size_t errlen)
     }
     if (rc != SQLITE_DONE) sq_dberr(err, errlen, "check", c->db);
     sq_done(st);
-    if (rc != SQLITE_DONE || bad) return STORE_ERR;
-    st = sq_stmt(c, SQ_TOTALS_RECOUNT, "check: totals", err, errlen);
+    return rc != SQLITE_DONE || bad ? STORE_ERR : STORE_OK;
+}
+
+/* One snapshot of one statement; the chunks of no result are those of a put under way here. */
+static int sq_recount(sq_conn *c, store_recount *v, char *err, size_t errlen)
+{
+    sqlite3_stmt *st = sq_stmt(c, SQ_TOTALS_RECOUNT, "check: totals", err, errlen);
     if (!st) return STORE_ERR;
-    rc = sqlite3_step(st);
+    int rc = sqlite3_step(st);
     if (rc == SQLITE_ROW) {
-        sqlite3_int64 n0 = sqlite3_column_int64(st, 0), b0 = sqlite3_column_int64(st, 1);
-        sqlite3_int64 n1 = sqlite3_column_int64(st, 2), b1 = sqlite3_column_int64(st, 3);
-        sqlite3_int64 nsize = sqlite3_column_int64(st, 4), noff = sqlite3_column_int64(st, 5);
-        if (n0 != n1 || b0 != b1) {
-            sq_errf(err, errlen,
-                    "sqlite check: result_totals says %lld results of %lld bytes, the table "
-                    "holds %lld of %lld",
-                    (long long)n0, (long long)b0, (long long)n1, (long long)b1);
-            bad = 1;
-        } else if (nsize || noff) {
-            sq_errf(err, errlen,
-                    "sqlite check: of %lld results, %lld have chunks that do not add up to their "
-                    "size; %lld chunks do not start where the one before ends",
-                    (long long)n1, (long long)nsize, (long long)noff);
-            bad = 1;
-        }
-    } else if (rc == SQLITE_DONE) {
-        sq_errf(err, errlen, "sqlite check: the result_totals row is missing");
-        bad = 1;
-    } else {
+        long long *f[6] = {&v->tot_count, &v->tot_bytes, &v->count,
+                           &v->bytes,     &v->bad_size,  &v->bad_off};
+        for (int i = 0; i < 6; i++) *f[i] = sqlite3_column_int64(st, i);
+        v->orphans = -1;
+    } else if (rc != SQLITE_DONE) {
         sq_dberr(err, errlen, "check: totals", c->db);
     }
     sq_done(st);
-    if (rc != SQLITE_ROW || bad) return STORE_ERR;
-    /* every chunk of every result against its digest */
-    long long nbad = 0, nall = 0;
-    st = sq_stmt(c, SQ_CHUNKS_EVERY, "check: digests", err, errlen);
-    if (!st) return STORE_ERR;
-    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
-        nall++;
-        nbad +=
-            !sq_digest_ok(st, 1, sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0));
-    }
-    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "check: digests", c->db);
-    sq_done(st);
-    if (rc == SQLITE_DONE && nbad)
-        sq_errf(err, errlen, "sqlite check: %lld of %lld chunks do not match their digest", nbad,
-                nall);
-    return rc != SQLITE_DONE || nbad ? STORE_ERR : STORE_OK;
+    return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
 }
 
-/* A small write (the totals row rewritten as it is), rolled into the database like any other:
- * it fails when the file is read-only, the disk refuses, or the lock cannot be had. */
-static int sq_writable(store *base, char *err, size_t errlen)
+/* The digests are checked by the caller: SQLite has no SHA-256 of its own. */
+static int sq_chunks_every(sq_conn *c, store_chunk_fn fn, void *ctx, char *err, size_t errlen)
 {
-    sq_conn *c = sq_conn_get((sq_store *)base, err, errlen);
+    sqlite3_stmt *st = sq_stmt(c, SQ_CHUNKS_EVERY, "check: digests", err, errlen);
+    return st ? sq_chunks_each(c, st, 0, fn, ctx, "check: digests", err, errlen) : STORE_ERR;
+}
+
+/* A small write (the totals row rewritten as it is), committed like any other: it fails when
+ * the file is read-only, the disk refuses, or the lock cannot be had.  A probe waits a second
+ * for the lock, not the writers' five: a lock held that long (a put holds it for a batch of
+ * chunks: ~0.1 s) means the store is stuck for writers. */
+static int sq_probe(sq_conn *c, char *err, size_t errlen)
+{
     int rc = STORE_ERR;
-    if (!c) return STORE_ERR;
-    /* a probe waits a second for the lock, not the writers' five: a lock held that long
-     * (a put holds it for a batch of chunks: ~0.1 s) means the store is stuck for writers */
     sqlite3_busy_timeout(c->db, SQ_PROBE_BUSY_MS);
     if (!sq_run(c, SQ_BEGIN, "writable: begin", err, errlen)) {
         if (sq_run(c, SQ_PROBE, "writable", err, errlen) ||
@@ -1633,32 +1085,43 @@ static void sq_close(store *base)
     free(s);
 }
 
-static const store_ops sq_ops = {
-    .job_submit = sq_job_submit,
+static const store_be_ops sq_be = {
+    .name = "sqlite",
+    .conn = sq_be_conn,
+    .begin = sq_begin,
+    .commit = sq_commit,
+    .rollback = sq_rollback,
+    .stamp = sq_stamp,
+    .notify = NULL, /* one daemon per file: nobody else hears events */
+    .wait_event = NULL,
+    .job_write = sq_job_write,
+    .job_read = sq_job_read,
+    .job_active = sq_job_active,
     .job_claim = sq_job_claim,
-    .job_renew = sq_job_renew,
-    .job_finish = sq_job_finish,
-    .job_release = sq_job_release,
+    .job_set = sq_job_set,
     .jobs_requeue = sq_jobs_requeue,
-    .job_insert = sq_job_insert,
-    .job_get = sq_job_get,
     .job_counts = sq_job_counts,
     .jobs_prune = sq_jobs_prune,
-    .sub_get = sq_sub_get,
+    .sub_write = sq_sub_write,
+    .sub_read = sq_sub_read,
     .sub_cancel = sq_sub_cancel,
-    .wait_event = NULL, /* one daemon per file: nobody else makes events */
-    .result_put = sq_result_put,
-    .result_put_file = sq_result_put_file,
-    .result_get = sq_result_get,
-    .result_size = sq_result_size,
-    .result_chunk = sq_result_chunk,
-    .result_exists = sq_result_exists,
-    .result_stats = sq_result_stats,
-    .check = sq_check,
-    .writable = sq_writable,
+    .job_last_sub = sq_job_last_sub,
+    .result_head = sq_result_head,
+    .result_row = sq_result_row,
+    .result_delete = sq_result_delete,
+    .result_touch = sq_result_touch,
+    .chunks_forget = sq_chunks_forget,
+    .chunk_put = sq_chunk_put,
+    .chunks_sum = sq_chunks_sum,
+    .chunks_read = sq_chunks_read,
+    .totals = sq_totals,
+    .evict_one = sq_evict_one,
+    .integrity = sq_integrity,
+    .recount = sq_recount,
+    .chunks_every = sq_chunks_every,
+    .probe = sq_probe,
     .close = sq_close,
 };
-
 /* ---- opening ---- */
 
 /* PRAGMA user_version into *v (the first read of the file: a file that is no database fails
@@ -1675,14 +1138,15 @@ static int sq_user_version(sq_conn *c, const char *path, int *v, char *err, size
     sqlite3_finalize(st);
     if (rc != SQLITE_ROW) return STORE_ERR;
     if (*v > SQ_VERSION) {
-        sq_errf(err, errlen,
-                "sqlite open %s: database schema version %d is newer than this cellard "
-                "(which knows versions up to %d)",
-                path, *v, SQ_VERSION);
+        util_seterr(err, errlen, STORE_ERR,
+                    "sqlite open %s: database schema version %d is newer than this cellard "
+                    "(which knows versions up to %d)",
+                    path, *v, SQ_VERSION);
         return STORE_ERR;
     }
     if (*v < 0) {
-        sq_errf(err, errlen, "sqlite open %s: database schema version %d is not ours", path, *v);
+        util_seterr(err, errlen, STORE_ERR,
+                    "sqlite open %s: database schema version %d is not ours", path, *v);
         return STORE_ERR;
     }
     return STORE_OK;
@@ -1692,7 +1156,7 @@ static int sq_exec(sq_conn *c, const char *sql, const char *where, char *err, si
 {
     char *msg = NULL;
     if (sqlite3_exec(c->db, sql, NULL, NULL, &msg) == SQLITE_OK) return STORE_OK;
-    sq_errf(err, errlen, "sqlite %s: %s", where, msg ? msg : sqlite3_errmsg(c->db));
+    util_seterr(err, errlen, STORE_ERR, "sqlite %s: %s", where, msg ? msg : sqlite3_errmsg(c->db));
     sqlite3_free(msg);
     return STORE_ERR;
 }
@@ -1723,10 +1187,11 @@ static int sq_identify(sq_conn *c, const char *path, int v, int existed, off_t s
     long long app = 0, ntab = 0, ours = 0;
     if (!existed || (flags & STORE_OPEN_INIT)) return STORE_OK;
     if (size == 0) {
-        sq_errf(err, errlen,
-                "sqlite open %s: the file is empty, not a cellar store (truncated?): restore it, "
-                "or start with --init to make a new store in it",
-                path);
+        util_seterr(
+            err, errlen, STORE_ERR,
+            "sqlite open %s: the file is empty, not a cellar store (truncated?): restore it, "
+            "or start with --init to make a new store in it",
+            path);
         return STORE_ERR;
     }
     if (sq_int(c, "PRAGMA application_id", &app, path, err, errlen) ||
@@ -1738,11 +1203,11 @@ static int sq_identify(sq_conn *c, const char *path, int v, int existed, off_t s
                &ours, path, err, errlen))
         return STORE_ERR;
     if (app == SQ_APP_ID || (app == 0 && v >= 1 && ours == 3)) return STORE_OK;
-    sq_errf(err, errlen,
-            "sqlite open %s: a SQLite database of something else (application_id %lld, schema "
-            "version %d, %lld tables), not a cellar store: check --db, or start with --init to "
-            "add cellar's tables to it",
-            path, app, v, ntab);
+    util_seterr(err, errlen, STORE_ERR,
+                "sqlite open %s: a SQLite database of something else (application_id %lld, schema "
+                "version %d, %lld tables), not a cellar store: check --db, or start with --init to "
+                "add cellar's tables to it",
+                path, app, v, ntab);
     return STORE_ERR;
 }
 
@@ -1762,11 +1227,11 @@ static int sq_quick_check(sq_conn *c, const char *path, char *err, size_t errlen
         snprintf(first, sizeof first, "%s", sqlite3_errmsg(c->db));
     sqlite3_finalize(st);
     if (!bad && (rc == SQLITE_DONE || rc == SQLITE_OK)) return STORE_OK;
-    sq_errf(err, errlen,
-            "sqlite open %s: the database is damaged (quick_check: %s%s): restore it from a "
-            "backup, or move it away to start with an empty store (the cached results and the "
-            "queued jobs in it would be lost)",
-            path, first, bad > 1 ? "; and more" : "");
+    util_seterr(err, errlen, STORE_ERR,
+                "sqlite open %s: the database is damaged (quick_check: %s%s): restore it from a "
+                "backup, or move it away to start with an empty store (the cached results and the "
+                "queued jobs in it would be lost)",
+                path, first, bad > 1 ? "; and more" : "");
     return STORE_ERR;
 }
 
@@ -1800,7 +1265,7 @@ static int sq_fill_digests(sq_conn *c, const char *path, char *err, size_t errle
             rc = SQLITE_ERROR;
             break;
         }
-        sq_digest(sqlite3_column_blob(one, 0), (size_t)sqlite3_column_bytes(one, 0), md);
+        store_digest(sqlite3_column_blob(one, 0), (size_t)sqlite3_column_bytes(one, 0), md);
         sqlite3_reset(one);
         sqlite3_bind_int64(upd, 1, ids[i]);
         sqlite3_bind_blob(upd, 2, md, 32, SQLITE_TRANSIENT);
@@ -1809,8 +1274,8 @@ static int sq_fill_digests(sq_conn *c, const char *path, char *err, size_t errle
     }
     if (rc == SQLITE_OK) rc = sqlite3_exec(c->db, "COMMIT", NULL, NULL, NULL);
     if (rc != SQLITE_OK) {
-        sq_errf(err, errlen, "sqlite open %s: digests of the moved results: %s", path,
-                ids ? sqlite3_errmsg(c->db) : "out of memory");
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: digests of the moved results: %s",
+                    path, ids ? sqlite3_errmsg(c->db) : "out of memory");
         if (!sqlite3_get_autocommit(c->db)) sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL);
     }
     sqlite3_finalize(sel);
@@ -1859,10 +1324,12 @@ static int sq_wal(sq_conn *c, const char *path, char *err, size_t errlen)
         const char *mode = (const char *)sqlite3_column_text(st, 0);
         ok = mode && strcmp(mode, "wal") == 0;
         if (!ok)
-            sq_errf(err, errlen, "sqlite open %s: journal_mode=WAL refused (mode is %s)", path,
-                    mode ? mode : "unknown");
+            util_seterr(err, errlen, STORE_ERR,
+                        "sqlite open %s: journal_mode=WAL refused (mode is %s)", path,
+                        mode ? mode : "unknown");
     } else {
-        sq_errf(err, errlen, "sqlite open %s: journal_mode=WAL: %s", path, sqlite3_errmsg(c->db));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: journal_mode=WAL: %s", path,
+                    sqlite3_errmsg(c->db));
     }
     sqlite3_finalize(st);
     return ok ? STORE_OK : STORE_ERR;
@@ -1878,7 +1345,7 @@ static int sq_load_stamp(sq_conn *c, sq_store *s, char *err, size_t errlen)
     if (rc == SQLITE_ROW)
         s->last_stamp = sq_column_time(st, 0);
     else
-        sq_errf(err, errlen, "sqlite open %s: %s", s->path, sqlite3_errmsg(c->db));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: %s", s->path, sqlite3_errmsg(c->db));
     sqlite3_finalize(st);
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
@@ -1893,19 +1360,20 @@ static int sq_lock(sq_store *s, char *err, size_t errlen)
     snprintf(lp, sizeof lp, "%s-lock", s->path);
     s->lock_fd = open(lp, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (s->lock_fd < 0) {
-        sq_errf(err, errlen, "sqlite open %s: cannot open its lock file %s: %s", s->path, lp,
-                strerror(errno));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: cannot open its lock file %s: %s",
+                    s->path, lp, strerror(errno));
         return STORE_ERR;
     }
     if (flock(s->lock_fd, LOCK_EX | LOCK_NB) == 0) return STORE_OK;
     if (errno == EWOULDBLOCK)
-        sq_errf(err, errlen,
-                "sqlite open %s: another cellard is using this database (one daemon per SQLite "
-                "file; to run several daemons, give them one PostgreSQL database: --db "
-                "postgresql://...)",
-                s->path);
+        util_seterr(err, errlen, STORE_ERR,
+                    "sqlite open %s: another cellard is using this database (one daemon per SQLite "
+                    "file; to run several daemons, give them one PostgreSQL database: --db "
+                    "postgresql://...)",
+                    s->path);
     else
-        sq_errf(err, errlen, "sqlite open %s: cannot lock %s: %s", s->path, lp, strerror(errno));
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: cannot lock %s: %s", s->path, lp,
+                    strerror(errno));
     return STORE_ERR;
 }
 
@@ -1917,29 +1385,32 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
     int mu_made = 0, v;
     struct stat sb;
     if (!path || !*path) {
-        sq_errf(err, errlen, "sqlite open: no path");
+        util_seterr(err, errlen, STORE_ERR, "sqlite open: no path");
         return NULL;
     }
     if (!sqlite3_threadsafe()) {
-        sq_errf(err, errlen, "sqlite open: this libsqlite3 was built without thread support");
+        util_seterr(err, errlen, STORE_ERR,
+                    "sqlite open: this libsqlite3 was built without thread support");
         return NULL;
     }
     s = calloc(1, sizeof *s);
     if (!s || !(s->path = strdup(path))) {
-        sq_errf(err, errlen, "sqlite open %s: out of memory", path);
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: out of memory", path);
         goto fail;
     }
-    s->base.ops = &sq_ops;
+    s->base.ops = &store_ops_local;
+    s->base.be = &sq_be;
+    s->base.put_batch = SQ_BATCH;
     s->lock_fd = -1;
-    s->budget = budget_bytes;
-    s->touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
+    s->base.budget = budget_bytes;
+    s->base.touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
     if (pthread_mutex_init(&s->mu, NULL) != 0) {
-        sq_errf(err, errlen, "sqlite open %s: pthread_mutex_init failed", path);
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_mutex_init failed", path);
         goto fail;
     }
     mu_made = 1;
     if (pthread_key_create(&s->key, sq_conn_release) != 0) {
-        sq_errf(err, errlen, "sqlite open %s: pthread_key_create failed", path);
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_key_create failed", path);
         goto fail;
     }
     s->key_made = 1;
@@ -1957,7 +1428,7 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
                 "open: deleting the chunks of unfinished puts", err, errlen))
         goto fail;
     if (pthread_setspecific(s->key, c) != 0) {
-        sq_errf(err, errlen, "sqlite open %s: pthread_setspecific failed", path);
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_setspecific failed", path);
         goto fail;
     }
     s->conns = c; /* this thread's connection from now on */

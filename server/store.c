@@ -92,7 +92,7 @@ static int st_end(store *s, store_conn *c, int rc, const char *where, char *err,
 }
 
 /* Whether a chunk read back is the one written: its stored digest is the body's. */
-static int st_digest_ok(const void *body, size_t n, const void *sha, size_t shalen)
+int store_digest_ok(const void *body, size_t n, const void *sha, size_t shalen)
 {
     unsigned char md[32];
     if (!sha || shalen != 32) return 0;
@@ -560,7 +560,7 @@ static int st_whole_chunk(void *ctx, uint64_t off, const void *p, size_t n, cons
                            "byte %llu, where %llu of %llu bytes were read",
                            name, w->hash, (unsigned long long)n, (unsigned long long)off,
                            (unsigned long long)w->pos, (unsigned long long)w->bytes);
-    if (!st_digest_ok(p, n, sha, shalen))
+    if (!store_digest_ok(p, n, sha, shalen))
         return util_seterr(w->err, w->errlen, STORE_DAMAGED,
                            "%s result_get: result %.16s... is damaged: its chunk at byte %llu "
                            "does not match its digest",
@@ -636,7 +636,7 @@ static int st_piece_chunk(void *ctx, uint64_t off, const void *p, size_t n, cons
 {
     st_piece *q = ctx;
     if (q->pos - off >= n) return STORE_NOTFOUND; /* the chunk that held pos is gone */
-    if (!st_digest_ok(p, n, sha, shalen))
+    if (!store_digest_ok(p, n, sha, shalen))
         return util_seterr(q->err, q->errlen, STORE_DAMAGED,
                            "%s result_chunk: result %.16s... is damaged: its chunk at byte %llu "
                            "does not match its digest",
@@ -693,27 +693,13 @@ static int st_result_stats(store *s, size_t *count, uint64_t *bytes, char *err, 
 
 /* ---- the check, the probe ---- */
 
-typedef struct st_tally {
-    long long all, bad;
-} st_tally;
-
-static int st_tally_chunk(void *ctx, uint64_t off, const void *p, size_t n, const void *sha,
-                          size_t shalen)
-{
-    st_tally *t = ctx;
-    (void)off;
-    t->all++;
-    t->bad += !st_digest_ok(p, n, sha, shalen);
-    return 0;
-}
-
 /* The database's own check, then the totals row against a recount and the chunks' tiling,
  * then every chunk of every result against its digest. */
 static int st_check(store *s, char *err, size_t errlen)
 {
     const store_be_ops *be = s->be;
     store_recount v;
-    st_tally t = {0, 0};
+    long long all = 0, bad = 0;
     store_conn *c = be->conn(s, err, errlen);
     if (!c || (be->integrity && be->integrity(c, err, errlen))) return STORE_ERR;
     int rc = be->recount(c, &v, err, errlen);
@@ -734,11 +720,11 @@ static int st_check(store *s, char *err, size_t errlen)
     if (v.orphans > 0)
         return util_seterr(err, errlen, STORE_ERR, "%s check: %lld chunks of no result", be->name,
                            v.orphans);
-    if (be->chunks_every(c, st_tally_chunk, &t, err, errlen)) return STORE_ERR;
-    if (t.bad)
+    if (be->chunks_digests(c, &all, &bad, err, errlen)) return STORE_ERR;
+    if (bad)
         return util_seterr(err, errlen, STORE_ERR,
-                           "%s check: %lld of %lld chunks do not match their digest", be->name,
-                           t.bad, t.all);
+                           "%s check: %lld of %lld chunks do not match their digest", be->name, bad,
+                           all);
     return STORE_OK;
 }
 

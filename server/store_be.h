@@ -173,8 +173,10 @@ typedef struct store_be_ops {
     /* The database's own check (SQLite integrity_check), NULL when none. */
     int (*integrity)(store_conn *c, char *err, size_t errlen);
     int (*recount)(store_conn *c, store_recount *out, char *err, size_t errlen);
-    /* Calls fn on every chunk of every result (order not given). */
-    int (*chunks_every)(store_conn *c, store_chunk_fn fn, void *ctx, char *err, size_t errlen);
+    /* Counts the chunks of the results (*all) and those that do not match their digest
+     * (*bad).  PostgreSQL hashes in the server (sha256(), no body crosses the wire); SQLite,
+     * which has no SHA-256, in C (store_digest_ok). */
+    int (*chunks_digests)(store_conn *c, long long *all, long long *bad, char *err, size_t errlen);
     /* A small write, rolled back or rewritten as it was, that waits at most about a second
      * for a lock (the readiness probe). */
     int (*probe)(store_conn *c, char *err, size_t errlen);
@@ -187,5 +189,8 @@ extern const store_ops store_ops_local, store_ops_shared;
 
 /* The SHA-256 of a chunk (all zero in the impossible case OpenSSL fails). */
 void store_digest(const void *data, size_t n, unsigned char out[32]);
+
+/* Whether sha (shalen bytes; NULL: none) is the digest of body[0..n). */
+int store_digest_ok(const void *body, size_t n, const void *sha, size_t shalen);
 
 #endif

@@ -35,12 +35,13 @@
  */
 #include "server/store.h"
 
+#include "core/util.h"
+#include "server/store_be.h"
+
 #include <errno.h>
 #include <libpq-fe.h>
 #include <math.h>
-#include <openssl/evp.h>
 #include <pthread.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -96,35 +97,25 @@ static const char *const pg_migrations[] = {
 
 typedef struct pg_store pg_store;
 
-typedef struct pg_conn {
+typedef struct store_conn pg_conn;
+
+struct store_conn {
     PGconn *db;
-    double failed_at;            /* when a connect last failed (0: never) */
-    pg_store *owner;             /* the store whose list holds this conn */
-    struct pg_conn *prev, *next; /* in owner->conns; guarded by owner->mu */
-} pg_conn;
+    int one;              /* in a STORE_TX_ONE frame: autocommit, nothing to end */
+    double failed_at;     /* when a connect last failed (0: never) */
+    pg_store *owner;      /* the store whose list holds this conn */
+    pg_conn *prev, *next; /* in owner->conns; guarded by owner->mu */
+};
 
 struct pg_store {
     store base; /* first member */
     char *conninfo;
-    uint64_t budget;
-    double touch_seconds;
     pthread_key_t key;
     pthread_mutex_t mu; /* guards conns */
     pg_conn *conns;
     int key_made;
     PGconn *listen; /* wait_event's own connection (one thread calls wait_event) */
 };
-
-static void pg_errf(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void pg_errf(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 /* libpq's message, on one line */
 static void pg_dberr(char *err, size_t errlen, const char *where, const char *msg)
@@ -135,7 +126,7 @@ static void pg_dberr(char *err, size_t errlen, const char *where, const char *ms
         if (*p == '\n' || *p == '\r') *p = ' ';
     size_t n = strlen(m);
     while (n && m[n - 1] == ' ') m[--n] = 0;
-    pg_errf(err, errlen, "postgresql %s: %s", where, m);
+    util_seterr(err, errlen, STORE_ERR, "postgresql %s: %s", where, m);
 }
 
 static double pg_now(void)
@@ -179,7 +170,7 @@ static PGconn *pg_connect(pg_store *s, char *err, size_t errlen)
 {
     PGconn *db = PQconnectdb(s->conninfo);
     if (!db) {
-        pg_errf(err, errlen, "postgresql: out of memory");
+        util_seterr(err, errlen, STORE_ERR, "postgresql: out of memory");
         return NULL;
     }
     if (PQstatus(db) != CONNECTION_OK) {
@@ -201,13 +192,13 @@ static pg_conn *pg_conn_get(pg_store *s, char *err, size_t errlen)
     if (!c) {
         c = calloc(1, sizeof *c);
         if (!c) {
-            pg_errf(err, errlen, "postgresql: out of memory");
+            util_seterr(err, errlen, STORE_ERR, "postgresql: out of memory");
             return NULL;
         }
         c->owner = s;
         if (pthread_setspecific(s->key, c) != 0) {
             free(c);
-            pg_errf(err, errlen, "postgresql: pthread_setspecific failed");
+            util_seterr(err, errlen, STORE_ERR, "postgresql: pthread_setspecific failed");
             return NULL;
         }
         pthread_mutex_lock(&s->mu);
@@ -223,7 +214,8 @@ static pg_conn *pg_conn_get(pg_store *s, char *err, size_t errlen)
     if (!c->db) {
         double now = pg_now();
         if (c->failed_at && now - c->failed_at < PG_RECONNECT_S) {
-            pg_errf(err, errlen, "postgresql: the database cannot be reached (trying again)");
+            util_seterr(err, errlen, STORE_ERR,
+                        "postgresql: the database cannot be reached (trying again)");
             return NULL;
         }
         c->db = pg_connect(s, err, errlen);
@@ -328,26 +320,13 @@ static int pg_commit(pg_conn *c, const char *where, char *err, size_t errlen)
 
 static void pg_rollback(pg_conn *c)
 {
+    if (c->one) { /* autocommit: nothing open */
+        c->one = 0;
+        return;
+    }
     if (!c->db) return;
     PGresult *r = PQexec(c->db, "ROLLBACK");
     PQclear(r);
-}
-
-/* NOTIFY cellar, payload (in the caller's transaction: delivered at commit). */
-static int pg_notify(pg_conn *c, const char *payload, char *err, size_t errlen)
-{
-    pg_params p = {0};
-    p_text(&p, payload);
-    PGresult *r = pg_rows(c, "SELECT pg_notify('cellar', $1)", &p, 0, "notify", err, errlen);
-    PQclear(r);
-    return r ? 0 : -1;
-}
-
-static int pg_notify_id(pg_conn *c, char kind, const char *id, char *err, size_t errlen)
-{
-    char payload[40];
-    snprintf(payload, sizeof payload, "%c:%.32s", kind, id);
-    return pg_notify(c, payload, err, errlen);
 }
 
 static double col_num(const PGresult *r, int row, int col)
@@ -364,525 +343,66 @@ static int col_fixed(const PGresult *r, int row, int col, char *dst, size_t cap)
     return 0;
 }
 
-/* ---- jobs ---- */
-
-static const char pg_job_cols[] =
-    "id, hash, kind, state, created, started, finished, error_status, error, request,"
-    " (SELECT count(*) FROM subs WHERE job = jobs.id AND canceled IS NULL), owner, lease_until,"
-    " attempts, cancel::int, stage, fraction";
-
-/* Row `row` of a result of pg_job_cols (text format; the request is bytea in hex) into out. */
-static int pg_job_from(const PGresult *r, int row, store_job *out, char *err, size_t errlen)
+/* The number of rows a command changed. */
+static int pg_changed(pg_conn *c, const char *sql, const pg_params *p, long long *n,
+                      const char *where, char *err, size_t errlen)
 {
-    memset(out, 0, sizeof *out);
-    if (col_fixed(r, row, 0, out->id, sizeof out->id) ||
-        col_fixed(r, row, 1, out->hash, sizeof out->hash) ||
-        col_fixed(r, row, 2, out->kind, sizeof out->kind) ||
-        col_fixed(r, row, 11, out->owner, sizeof out->owner) ||
-        col_fixed(r, row, 15, out->stage, sizeof out->stage)) {
-        pg_errf(err, errlen, "postgresql job_get: a text field too long in the database");
-        return STORE_ERR;
-    }
-    out->state = (job_state)atoi(PQgetvalue(r, row, 3));
-    if (out->state < JOB_QUEUED || out->state > JOB_CANCELED) {
-        pg_errf(err, errlen, "postgresql job_get %s: unknown state %d in the database", out->id,
-                (int)out->state);
-        return STORE_ERR;
-    }
-    out->created = col_num(r, row, 4);
-    out->started = col_num(r, row, 5);
-    out->finished = col_num(r, row, 6);
-    out->error_status = PQgetisnull(r, row, 7) ? 0 : atoi(PQgetvalue(r, row, 7));
-    if (!PQgetisnull(r, row, 8) && !(out->error = strdup(PQgetvalue(r, row, 8)))) goto nomem;
-    size_t n = 0;
-    unsigned char *req = PQunescapeBytea((const unsigned char *)PQgetvalue(r, row, 9), &n);
-    if (!req) goto nomem;
-    out->request = malloc(n + 1);
-    if (!out->request) {
-        PQfreemem(req);
-        goto nomem;
-    }
-    memcpy(out->request, req, n);
-    out->request[n] = 0;
-    out->request_len = n;
-    PQfreemem(req);
-    out->active_subs = atoi(PQgetvalue(r, row, 10));
-    out->lease_until = col_num(r, row, 12);
-    out->attempts = atoi(PQgetvalue(r, row, 13));
-    out->cancel = atoi(PQgetvalue(r, row, 14));
-    out->fraction = col_num(r, row, 16);
-    return STORE_OK;
-nomem:
-    store_job_clear(out);
-    pg_errf(err, errlen, "postgresql job_get: out of memory");
-    return STORE_ERR;
-}
-
-static int pg_job_read(pg_conn *c, const char *id, store_job *out, char *err, size_t errlen)
-{
-    char sql[400];
-    pg_params p = {0};
-    memset(out, 0, sizeof *out);
-    p_text(&p, id);
-    snprintf(sql, sizeof sql, "SELECT %s FROM jobs WHERE id = $1", pg_job_cols);
-    PGresult *r = pg_rows(c, sql, &p, 0, "job_get", err, errlen);
+    PGresult *r = pg_run(c, sql, p, 0, PGRES_COMMAND_OK, where, err, errlen);
     if (!r) return STORE_ERR;
-    int rc = PQntuples(r) ? pg_job_from(r, 0, out, err, errlen) : STORE_NOTFOUND;
+    *n = strtoll(PQcmdTuples(r), NULL, 10);
     PQclear(r);
-    return rc;
+    return STORE_OK;
 }
 
-static int pg_job_get(store *base, const char *id, store_job *out, char *err, size_t errlen)
+/* ---- connections, transactions, events (store_be.h) ---- */
+
+static store_conn *pg_be_conn(store *s, char *err, size_t errlen)
 {
-    memset(out, 0, sizeof *out);
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    return c ? pg_job_read(c, id, out, err, errlen) : STORE_ERR;
+    return pg_conn_get((pg_store *)s, err, errlen);
 }
 
-static int field_ok(const char *v, size_t cap, const char *what, char *err, size_t errlen)
+/* STORE_TX_ONE costs no round trip: the one statement that follows runs in autocommit, atomic
+ * by itself (c->one remembers that commit and rollback have nothing to end).  A read snapshot
+ * is REPEATABLE READ (the chunks seen are those of the row seen). */
+static int pg_be_begin(pg_conn *c, store_tx tx, const char *where, char *err, size_t errlen)
 {
-    if (strnlen(v, cap) < cap) return 0;
-    pg_errf(err, errlen, "postgresql job_insert: %s is not a string of at most %zu bytes", what,
-            cap - 1);
-    return -1;
-}
-
-/* Inserts job j and its first submission (in the caller's transaction). */
-static int pg_job_write(pg_conn *c, const store_job *j, char *err, size_t errlen)
-{
-    if (j->state < JOB_QUEUED || j->state > JOB_CANCELED) {
-        pg_errf(err, errlen, "postgresql job_insert: unknown state %d", (int)j->state);
-        return STORE_ERR;
-    }
-    if ((!j->request && j->request_len) || j->request_len > (size_t)INT32_MAX) {
-        pg_errf(err, errlen, "postgresql job_insert: a request of %zu bytes", j->request_len);
-        return STORE_ERR;
-    }
-    if (field_ok(j->id, sizeof j->id, "id", err, errlen) ||
-        field_ok(j->hash, sizeof j->hash, "hash", err, errlen) ||
-        field_ok(j->kind, sizeof j->kind, "kind", err, errlen))
-        return STORE_ERR;
-    pg_params p = {0};
-    p_text(&p, j->id);
-    p_text(&p, j->hash);
-    p_text(&p, j->kind);
-    p_int(&p, (int)j->state);
-    p_time(&p, j->created);
-    p_time(&p, j->started);
-    p_time(&p, j->finished);
-    if (j->error_status)
-        p_int(&p, j->error_status);
-    else
-        p_text(&p, NULL);
-    p_text(&p, j->error);
-    p_bin(&p, j->request, j->request_len);
-    p_time(&p, j->state == JOB_CANCELED ? j->finished : 0);
-    return pg_cmd(
-               c,
-               "WITH j AS (INSERT INTO jobs(id, hash, kind, state, created, started, finished,"
-               " error_status, error, request) VALUES($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)"
-               " RETURNING id, created)"
-               " INSERT INTO subs(id, job, created, canceled) SELECT id, id, created, $11 FROM j",
-               &p, "job_insert", err, errlen)
+    c->one = tx == STORE_TX_ONE;
+    if (c->one) return STORE_OK;
+    return pg_cmd(c, tx == STORE_TX_READ ? "BEGIN ISOLATION LEVEL REPEATABLE READ" : "BEGIN", NULL,
+                  where, err, errlen)
                ? STORE_ERR
                : STORE_OK;
 }
 
-static int pg_job_insert(store *base, const store_job *j, char *err, size_t errlen)
+static int pg_be_commit(pg_conn *c, const char *where, char *err, size_t errlen)
 {
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (pg_begin(c, "job_insert", err, errlen)) return STORE_ERR;
-    if (pg_job_write(c, j, err, errlen) || pg_commit(c, "job_insert", err, errlen)) {
-        pg_rollback(c);
-        return STORE_ERR;
+    if (c->one) {
+        c->one = 0;
+        return STORE_OK;
     }
-    return STORE_OK;
+    if (!c->db) return util_seterr(err, errlen, STORE_ERR, "postgresql %s: connection lost", where);
+    return pg_commit(c, where, err, errlen) ? STORE_ERR : STORE_OK;
 }
 
-/* One try of job_submit (see pg_job_submit): STORE_* or 2 + STORE_ERR when a concurrent submit
- * made the same job first (unique_violation): then the caller tries again, and joins it. */
-#define PG_RACE 100
-static int pg_submit_once(pg_conn *c, const store_job *j, size_t queue_max, int join_only,
-                          char *job_id, int *joined, char *err, size_t errlen)
+static double pg_stamp(store *s)
 {
+    (void)s;
+    return pg_now();
+}
+
+/* NOTIFY cellar in the caller's transaction (delivered at commit): "q" a job was queued,
+ * "e:ID" job ID ended, "c:ID" job ID is to stop. */
+static int pg_notify(pg_conn *c, store_ev ev, const char *id, char *err, size_t errlen)
+{
+    char payload[40] = "q";
+    if (ev != STORE_EV_QUEUED)
+        snprintf(payload, sizeof payload, "%c:%.32s", ev == STORE_EV_ENDED ? 'e' : 'c', id);
     pg_params p = {0};
-    PGresult *r;
-    int rc;
-    *joined = 0;
-    if (pg_begin(c, "job_submit", err, errlen)) return STORE_ERR;
-    p_text(&p, j->hash);
-    if (!(r = pg_rows(c, "SELECT 1 FROM results WHERE hash = $1", &p, 0, "job_submit", err,
-                      errlen)))
-        goto fail;
-    int cached = PQntuples(r) > 0;
-    PQclear(r);
-    if (cached) {
-        rc = STORE_CACHED;
-        goto done;
-    }
-    /* the job in flight, locked: a cancel of its last submission waits for this join, or
-     * this join sees the job canceled (or being canceled) and makes a new one */
-    if (!(r = pg_rows(c,
-                      "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) AND NOT cancel"
-                      " FOR UPDATE",
-                      &p, 0, "job_submit", err, errlen)))
-        goto fail;
-    int found = PQntuples(r) > 0 && !col_fixed(r, 0, 0, job_id, 33);
-    PQclear(r);
-    if (found) {
-        pg_params q = {0};
-        p_text(&q, j->id);
-        p_text(&q, job_id);
-        p_time(&q, j->created);
-        if (pg_cmd(c, "INSERT INTO subs(id, job, created) VALUES($1, $2, $3)", &q, "job_submit",
-                   err, errlen))
-            goto fail;
-        *joined = 1;
-        rc = STORE_OK;
-        goto done;
-    }
-    if (join_only) {
-        rc = STORE_NOTFOUND;
-        goto done;
-    }
-    if (queue_max) {
-        if (!(r = pg_rows(c, "SELECT count(*) FROM jobs WHERE state = 0", NULL, 0, "job_submit",
-                          err, errlen)))
-            goto fail;
-        unsigned long long queued = strtoull(PQgetvalue(r, 0, 0), NULL, 10);
-        PQclear(r);
-        if (queued >= queue_max) {
-            rc = STORE_FULL;
-            goto done;
-        }
-    }
-    store_job q = *j;
-    q.state = JOB_QUEUED;
-    q.started = q.finished = 0;
-    q.error_status = 0;
-    q.error = NULL;
-    if (pg_job_write(c, &q, err, errlen)) {
-        if (strstr(err, "jobs_active_hash")) { /* made by another submit meanwhile */
-            pg_rollback(c);
-            return PG_RACE;
-        }
-        goto fail;
-    }
-    if (pg_notify(c, "q", err, errlen)) goto fail;
-    memcpy(job_id, j->id, 33);
-    rc = STORE_OK;
-done:
-    if (pg_commit(c, "job_submit", err, errlen)) goto fail;
-    return rc;
-fail:
-    *joined = 0;
-    pg_rollback(c);
-    return STORE_ERR;
-}
-
-static int pg_job_submit(store *base, const store_job *j, size_t queue_max, int join_only,
-                         char *job_id, int *joined, char *err, size_t errlen)
-{
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    *joined = 0;
-    if (!c) return STORE_ERR;
-    for (int t = 0; t < 5; t++) {
-        int rc = pg_submit_once(c, j, queue_max, join_only, job_id, joined, err, errlen);
-        if (rc != PG_RACE) return rc;
-    }
-    pg_errf(err, errlen, "postgresql job_submit: the same request was made and canceled too often");
-    return STORE_ERR;
-}
-
-static int pg_job_claim(store *base, const char *owner, double now, double lease, store_job *out,
-                        char *err, size_t errlen)
-{
-    char sql[900];
-    pg_params p = {0};
-    memset(out, 0, sizeof *out);
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    p_text(&p, owner);
-    p_num(&p, now);
-    p_num(&p, now + lease);
-    snprintf(sql, sizeof sql,
-             "UPDATE jobs SET state = 1, owner = $1, started = $2, lease_until = $3,"
-             " attempts = attempts + 1, cancel = false, stage = 'started', fraction = 0"
-             " WHERE id = (SELECT id FROM jobs WHERE state = 0 ORDER BY created, seq LIMIT 1"
-             " FOR UPDATE SKIP LOCKED) RETURNING %s",
-             pg_job_cols);
-    PGresult *r = pg_rows(c, sql, &p, 0, "job_claim", err, errlen);
-    if (!r) return STORE_ERR;
-    int rc = PQntuples(r) ? pg_job_from(r, 0, out, err, errlen) : STORE_NOTFOUND;
-    PQclear(r);
-    return rc;
-}
-
-static int pg_job_renew(store *base, const char *id, const char *owner, double now, double lease,
-                        const char *stage, double fraction, int *cancel, char *err, size_t errlen)
-{
-    pg_params p = {0};
-    *cancel = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    p_text(&p, id);
-    p_text(&p, owner);
-    p_num(&p, now + lease);
-    p_text(&p, stage);
-    p_num(&p, isfinite(fraction) ? fraction : 0);
-    PGresult *r = pg_rows(c,
-                          "UPDATE jobs SET lease_until = $3, stage = $4, fraction = $5"
-                          " WHERE id = $1 AND owner = $2 AND state = 1 RETURNING cancel::int",
-                          &p, 0, "job_renew", err, errlen);
-    if (!r) return STORE_ERR;
-    int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
-    if (rc == STORE_OK) *cancel = atoi(PQgetvalue(r, 0, 0));
-    PQclear(r);
-    return rc;
-}
-
-/* One write in a transaction of its own, with NOTIFY payload when it changed a row (payload
- * may be NULL): STORE_OK, STORE_NOTFOUND when it changed none. */
-static int pg_write1(pg_store *s, const char *sql, const pg_params *p, char kind, const char *id,
-                     const char *where, char *err, size_t errlen)
-{
-    pg_conn *c = pg_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
-    if (pg_begin(c, where, err, errlen)) return STORE_ERR;
-    PGresult *r = pg_run(c, sql, p, 0, PGRES_COMMAND_OK, where, err, errlen);
-    if (!r) goto fail;
-    int changed = atoi(PQcmdTuples(r)) > 0;
-    PQclear(r);
-    if (changed && kind == 'q' && pg_notify(c, "q", err, errlen)) goto fail;
-    if (changed && kind && kind != 'q' && pg_notify_id(c, kind, id, err, errlen)) goto fail;
-    if (pg_commit(c, where, err, errlen)) goto fail;
-    return changed ? STORE_OK : STORE_NOTFOUND;
-fail:
-    pg_rollback(c);
-    return STORE_ERR;
-}
-
-static int pg_job_finish(store *base, const char *id, const char *owner, job_state st, double when,
-                         int error_status, const char *error, char *err, size_t errlen)
-{
-    if (st != JOB_DONE && st != JOB_FAILED && st != JOB_CANCELED) {
-        pg_errf(err, errlen, "postgresql job_finish: %d is not an end state", (int)st);
-        return STORE_ERR;
-    }
-    pg_params p = {0};
-    p_text(&p, id);
-    p_text(&p, owner);
-    p_int(&p, (int)st);
-    p_time(&p, when);
-    if (st == JOB_FAILED && error_status)
-        p_int(&p, error_status);
-    else
-        p_text(&p, NULL);
-    p_text(&p, st == JOB_FAILED ? error : NULL);
-    return pg_write1((pg_store *)base,
-                     "UPDATE jobs SET state = $3, finished = $4, error_status = $5, error = $6,"
-                     " request = ''::bytea, lease_until = NULL"
-                     " WHERE id = $1 AND owner = $2 AND state = 1",
-                     &p, 'e', id, "job_finish", err, errlen);
-}
-
-static int pg_job_release(store *base, const char *id, const char *owner, char *err, size_t errlen)
-{
-    pg_params p = {0};
-    p_text(&p, id);
-    p_text(&p, owner);
-    p_num(&p, pg_now());
-    return pg_write1(
-        (pg_store *)base,
-        "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
-        " finished = CASE WHEN cancel THEN $3::double precision END,"
-        " request = CASE WHEN cancel THEN ''::bytea ELSE request END,"
-        " started = CASE WHEN cancel THEN started END, stage = NULL,"
-        " fraction = NULL, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1",
-        &p, 'q', id, "job_release", err, errlen);
-}
-
-static int pg_jobs_requeue(store *base, double now, int all, size_t *n, char *err, size_t errlen)
-{
-    char msg[200], attempts[16];
-    pg_params p = {0};
-    *n = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    snprintf(msg, sizeof msg,
-             "the job was started %d times, and each time the daemon running it stopped before "
-             "it ended",
-             STORE_MAX_ATTEMPTS);
-    snprintf(attempts, sizeof attempts, "%d", STORE_MAX_ATTEMPTS);
-    p_num(&p, now);
-    p_text(&p, all ? "true" : "false");
-    p_text(&p, attempts);
-    p_text(&p, msg);
-    if (pg_begin(c, "jobs_requeue", err, errlen)) return STORE_ERR;
-    PGresult *r = pg_rows(
-        c,
-        "UPDATE jobs SET state = CASE WHEN cancel THEN 4 WHEN attempts >= $3::int THEN 3"
-        " ELSE 0 END,"
-        " finished = CASE WHEN cancel OR attempts >= $3::int THEN $1::double precision END,"
-        " error_status = CASE WHEN NOT cancel AND attempts >= $3::int THEN 500 END,"
-        " error = CASE WHEN NOT cancel AND attempts >= $3::int THEN $4 END,"
-        " request = CASE WHEN cancel OR attempts >= $3::int THEN ''::bytea ELSE request END,"
-        " started = CASE WHEN cancel OR attempts >= $3::int THEN started END, stage = NULL,"
-        " fraction = NULL, lease_until = NULL WHERE state = 1 AND ($2::boolean OR lease_until < $1)"
-        " RETURNING id, state",
-        &p, 0, "jobs_requeue", err, errlen);
-    if (!r) goto fail;
-    int queued = 0, bad = 0;
-    for (int i = 0; i < PQntuples(r) && !bad; i++) {
-        if (atoi(PQgetvalue(r, i, 1)) == JOB_QUEUED)
-            queued = 1;
-        else
-            bad = pg_notify_id(c, 'e', PQgetvalue(r, i, 0), err, errlen);
-    }
-    *n = (size_t)PQntuples(r);
-    PQclear(r);
-    if (bad || (queued && pg_notify(c, "q", err, errlen))) goto fail;
-    if (pg_commit(c, "jobs_requeue", err, errlen)) goto fail;
-    return STORE_OK;
-fail:
-    *n = 0;
-    pg_rollback(c);
-    return STORE_ERR;
-}
-
-static int pg_job_counts(store *base, size_t *queued, size_t *running, char *err, size_t errlen)
-{
-    *queued = *running = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    PGresult *r = pg_rows(c,
-                          "SELECT (SELECT count(*) FROM jobs WHERE state = 0),"
-                          " (SELECT count(*) FROM jobs WHERE state = 1)",
-                          NULL, 0, "job_counts", err, errlen);
-    if (!r) return STORE_ERR;
-    *queued = (size_t)strtoull(PQgetvalue(r, 0, 0), NULL, 10);
-    *running = (size_t)strtoull(PQgetvalue(r, 0, 1), NULL, 10);
-    PQclear(r);
-    return STORE_OK;
-}
-
-static int pg_jobs_prune(store *base, double before, size_t keep, size_t *n, char *err,
-                         size_t errlen)
-{
-    pg_params p = {0};
-    if (n) *n = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    p_num(&p, before);
-    if (keep && keep < (size_t)INT64_MAX)
-        p_int(&p, (long long)keep);
-    else
-        p_text(&p, NULL); /* OFFSET NULL: no limit */
-    PGresult *r = pg_run(c,
-                         "DELETE FROM jobs WHERE state IN (2, 3, 4) AND (finished < $1 OR id IN"
-                         " (SELECT id FROM jobs WHERE state IN (2, 3, 4) ORDER BY finished DESC"
-                         " OFFSET coalesce($2::bigint, 9223372036854775807)))",
-                         &p, 0, PGRES_COMMAND_OK, "jobs_prune", err, errlen);
-    if (!r) return STORE_ERR;
-    if (n) *n = (size_t)strtoull(PQcmdTuples(r), NULL, 10);
-    PQclear(r);
-    return STORE_OK;
-}
-
-/* ---- submissions ---- */
-
-static int pg_sub_read(pg_conn *c, const char *id, int lock_job, store_sub *out, char *err,
-                       size_t errlen)
-{
-    pg_params p = {0};
-    memset(out, 0, sizeof *out);
-    p_text(&p, id);
-    PGresult *r = pg_rows(c, "SELECT id, job, created, canceled FROM subs WHERE id = $1", &p, 0,
-                          "sub_get", err, errlen);
-    if (!r) return STORE_ERR;
-    int rc = STORE_NOTFOUND;
-    if (PQntuples(r)) {
-        rc = STORE_OK;
-        if (col_fixed(r, 0, 0, out->id, sizeof out->id) ||
-            col_fixed(r, 0, 1, out->job, sizeof out->job)) {
-            pg_errf(err, errlen, "postgresql sub_get: an id too long in the database");
-            rc = STORE_ERR;
-        }
-        out->created = col_num(r, 0, 2);
-        out->canceled = col_num(r, 0, 3);
-    }
-    PQclear(r);
-    if (rc != STORE_OK || !lock_job) return rc;
-    pg_params q = {0};
-    p_text(&q, out->job);
-    r = pg_rows(c, "SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &q, 0, "sub_cancel", err, errlen);
+    p_text(&p, payload);
+    PGresult *r = pg_rows(c, "SELECT pg_notify('cellar', $1)", &p, 0, "notify", err, errlen);
     PQclear(r);
     return r ? STORE_OK : STORE_ERR;
 }
-
-static int pg_sub_get(store *base, const char *id, store_sub *out, char *err, size_t errlen)
-{
-    memset(out, 0, sizeof *out);
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    return c ? pg_sub_read(c, id, 0, out, err, errlen) : STORE_ERR;
-}
-
-static int pg_sub_cancel(store *base, const char *id, double when, int *changed, int *job,
-                         char *err, size_t errlen)
-{
-    store_sub sub;
-    pg_params p = {0};
-    *changed = 0;
-    *job = STORE_JOB_KEPT;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (pg_begin(c, "sub_cancel", err, errlen)) return STORE_ERR;
-    int rc = pg_sub_read(c, id, 1, &sub, err, errlen); /* its job's row locked: see job_submit */
-    if (rc == STORE_NOTFOUND) goto done;
-    if (rc != STORE_OK) goto fail;
-    p_text(&p, id);
-    p_num(&p, when);
-    PGresult *r = pg_run(c, "UPDATE subs SET canceled = $2 WHERE id = $1 AND canceled IS NULL", &p,
-                         0, PGRES_COMMAND_OK, "sub_cancel", err, errlen);
-    if (!r) goto fail;
-    *changed = atoi(PQcmdTuples(r)) > 0;
-    PQclear(r);
-    if (*changed) {
-        pg_params q = {0};
-        p_text(&q, sub.job);
-        p_num(&q, when);
-        r = pg_rows(c,
-                    "WITH remaining AS (SELECT count(*) AS n FROM subs WHERE job = $1"
-                    " AND canceled IS NULL),"
-                    " q AS (UPDATE jobs SET state = 4, finished = $2, request = ''::bytea"
-                    "  WHERE id = $1 AND state = 0 AND (SELECT n FROM remaining) = 0 RETURNING 1),"
-                    " s AS (UPDATE jobs SET cancel = true WHERE id = $1 AND state = 1"
-                    "  AND (SELECT n FROM remaining) = 0 RETURNING 1)"
-                    " SELECT (SELECT count(*) FROM q), (SELECT count(*) FROM s)",
-                    &q, 0, "sub_cancel", err, errlen);
-        if (!r) goto fail;
-        int canceled = atoi(PQgetvalue(r, 0, 0)), stopping = atoi(PQgetvalue(r, 0, 1));
-        PQclear(r);
-        if (canceled) {
-            *job = STORE_JOB_CANCELED;
-            if (pg_notify_id(c, 'e', sub.job, err, errlen)) goto fail;
-        } else if (stopping) {
-            *job = STORE_JOB_STOPPING;
-            if (pg_notify_id(c, 'c', sub.job, err, errlen)) goto fail;
-        }
-    }
-done:
-    if (pg_commit(c, "sub_cancel", err, errlen)) goto fail;
-    return rc;
-fail:
-    *changed = 0;
-    *job = STORE_JOB_KEPT;
-    pg_rollback(c);
-    return STORE_ERR;
-}
-
-/* ---- events ---- */
 
 static int pg_wait_event(store *base, double timeout, store_ev *ev, char *id, char *err,
                          size_t errlen)
@@ -917,10 +437,9 @@ static int pg_wait_event(store *base, double timeout, store_ev *ev, char *id, ch
         FD_SET(fd, &rd);
         struct timeval tv = {.tv_sec = (time_t)timeout,
                              .tv_usec = (suseconds_t)((timeout - (double)(time_t)timeout) * 1e6)};
-        if (select(fd + 1, &rd, NULL, NULL, &tv) < 0 && errno != EINTR) {
-            pg_errf(err, errlen, "postgresql wait_event: select: %s", strerror(errno));
-            return STORE_ERR;
-        }
+        if (select(fd + 1, &rd, NULL, NULL, &tv) < 0 && errno != EINTR)
+            return util_seterr(err, errlen, STORE_ERR, "postgresql wait_event: select: %s",
+                               strerror(errno));
         if (!PQconsumeInput(s->listen)) {
             pg_dberr(err, errlen, "wait_event", PQerrorMessage(s->listen));
             PQfinish(s->listen);
@@ -941,150 +460,363 @@ static int pg_wait_event(store *base, double timeout, store_ev *ev, char *id, ch
     return STORE_OK;
 }
 
-/* ---- results ---- */
+/* ---- jobs and submissions ---- */
 
-static void pg_digest(const void *data, size_t n, unsigned char out[32])
+static const char pg_job_cols[] =
+    "id, hash, kind, state, created, started, finished, error_status, error, request,"
+    " (SELECT count(*) FROM subs WHERE job = jobs.id AND canceled IS NULL), owner, lease_until,"
+    " attempts, cancel::int, stage, fraction";
+
+/* Row `row` of a result of pg_job_cols (text format; the request is bytea in hex) into out. */
+static int pg_job_from(const PGresult *r, int row, store_job *out, char *err, size_t errlen)
 {
-    unsigned int len = 0;
-    if (!EVP_Digest(data, n, out, &len, EVP_sha256(), NULL) || len != 32) memset(out, 0, 32);
-}
-
-/* Where a put's bytes come from: memory, or a file read a chunk at a time. */
-typedef struct pg_source {
-    const char *mem;
-    FILE *f;
-    char *buf; /* STORE_CHUNK bytes, for f */
-} pg_source;
-
-static const char *pg_take(pg_source *src, uint64_t pos, size_t n, uint64_t len, char *err,
-                           size_t errlen)
-{
-    if (src->mem) return src->mem + pos;
-    size_t got = fread(src->buf, 1, n, src->f);
-    if (got == n) return src->buf;
-    pg_errf(err, errlen, "postgresql result_put: %s after %llu of %llu bytes",
-            ferror(src->f) ? "reading the result failed" : "the file ended",
-            (unsigned long long)(pos + got), (unsigned long long)len);
-    return NULL;
-}
-
-static int pg_evict(pg_conn *c, uint64_t budget, const char *keep, char *err, size_t errlen)
-{
-    pg_params p = {0};
-    p_text(&p, keep);
-    for (;;) {
-        PGresult *r = pg_rows(c, "SELECT bytes FROM result_totals WHERE id = 0", NULL, 0,
-                              "result_put: total", err, errlen);
-        if (!r) return STORE_ERR;
-        uint64_t total = PQntuples(r) ? strtoull(PQgetvalue(r, 0, 0), NULL, 10) : 0;
-        PQclear(r);
-        if (total <= budget) return STORE_OK;
-        r = pg_run(c,
-                   "DELETE FROM results WHERE hash = (SELECT hash FROM results WHERE hash <> $1"
-                   " ORDER BY last_used LIMIT 1 FOR UPDATE SKIP LOCKED)",
-                   &p, 0, PGRES_COMMAND_OK, "result_put: evict", err, errlen);
-        if (!r) return STORE_ERR;
-        int n = atoi(PQcmdTuples(r));
-        PQclear(r);
-        if (n == 0) return STORE_OK; /* keep alone exceeds the budget */
+    memset(out, 0, sizeof *out);
+    if (col_fixed(r, row, 0, out->id, sizeof out->id) ||
+        col_fixed(r, row, 1, out->hash, sizeof out->hash) ||
+        col_fixed(r, row, 2, out->kind, sizeof out->kind) ||
+        col_fixed(r, row, 11, out->owner, sizeof out->owner) ||
+        col_fixed(r, row, 15, out->stage, sizeof out->stage))
+        return util_seterr(err, errlen, STORE_ERR,
+                           "postgresql job_get: a text field too long in the database");
+    out->state = (job_state)atoi(PQgetvalue(r, row, 3));
+    out->created = col_num(r, row, 4);
+    out->started = col_num(r, row, 5);
+    out->finished = col_num(r, row, 6);
+    out->error_status = PQgetisnull(r, row, 7) ? 0 : atoi(PQgetvalue(r, row, 7));
+    if (!PQgetisnull(r, row, 8) && !(out->error = strdup(PQgetvalue(r, row, 8)))) goto nomem;
+    size_t n = 0;
+    unsigned char *req = PQunescapeBytea((const unsigned char *)PQgetvalue(r, row, 9), &n);
+    if (!req) goto nomem;
+    out->request = malloc(n + 1);
+    if (!out->request) {
+        PQfreemem(req);
+        goto nomem;
     }
-}
-
-static int pg_put(pg_store *s, const char *hash, const char *job, uint64_t len, pg_source *src,
-                  char *err, size_t errlen)
-{
-    pg_conn *c = pg_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
-    if (len > (uint64_t)INT64_MAX / 2) {
-        pg_errf(err, errlen, "postgresql result_put: %llu bytes is too large",
-                (unsigned long long)len);
-        return STORE_ERR;
-    }
-    if (pg_begin(c, "result_put", err, errlen)) return STORE_ERR;
-    pg_params p = {0};
-    p_text(&p, hash);
-    if (pg_cmd(c, "DELETE FROM results WHERE hash = $1", &p, "result_put: replace", err, errlen))
-        goto fail;
-    for (uint64_t pos = 0; pos < len;) {
-        size_t n = len - pos < STORE_CHUNK ? (size_t)(len - pos) : STORE_CHUNK;
-        const char *data = pg_take(src, pos, n, len, err, errlen);
-        if (!data) goto fail;
-        unsigned char md[32];
-        pg_digest(data, n, md);
-        pg_params q = {0};
-        p_text(&q, hash);
-        p_int(&q, (long long)pos);
-        p_bin(&q, data, n);
-        p_bin(&q, md, 32);
-        if (pg_cmd(c,
-                   "INSERT INTO result_chunks(hash, off, body, sha) VALUES($1, $2, $3, $4)"
-                   " ON CONFLICT (hash, off) DO UPDATE SET body = excluded.body,"
-                   " sha = excluded.sha",
-                   &q, "result_put: chunk", err, errlen))
-            goto fail;
-        pos += n;
-    }
-    pg_params q = {0};
-    p_text(&q, hash);
-    p_int(&q, (long long)len);
-    p_num(&q, pg_now());
-    p_text(&q, job && *job ? job : NULL);
-    if (pg_cmd(c,
-               "INSERT INTO results(hash, bytes, created, last_used, job)"
-               " VALUES($1, $2, $3, $3, $4) ON CONFLICT (hash) DO UPDATE SET"
-               " bytes = excluded.bytes, created = excluded.created,"
-               " last_used = excluded.last_used, job = excluded.job",
-               &q, "result_put", err, errlen))
-        goto fail;
-    if (s->budget && pg_evict(c, s->budget, hash, err, errlen)) goto fail;
-    if (pg_commit(c, "result_put", err, errlen)) goto fail;
+    memcpy(out->request, req, n);
+    out->request[n] = 0;
+    out->request_len = n;
+    PQfreemem(req);
+    out->active_subs = atoi(PQgetvalue(r, row, 10));
+    out->lease_until = col_num(r, row, 12);
+    out->attempts = atoi(PQgetvalue(r, row, 13));
+    out->cancel = atoi(PQgetvalue(r, row, 14));
+    out->fraction = col_num(r, row, 16);
     return STORE_OK;
-fail:
-    pg_rollback(c);
-    return STORE_ERR;
+nomem:
+    store_job_clear(out);
+    return util_seterr(err, errlen, STORE_ERR, "postgresql job_get: out of memory");
 }
 
-static int pg_result_put(store *base, const char *hash, const char *body, size_t len, char *err,
-                         size_t errlen)
+/* sql (its row pg_job_cols) into out: STORE_NOTFOUND when it gives none. */
+static int pg_job_query(pg_conn *c, const char *sql, const pg_params *p, store_job *out,
+                        const char *where, char *err, size_t errlen)
 {
-    if (!body && len) {
-        pg_errf(err, errlen, "postgresql result_put: %zu bytes with no body", len);
-        return STORE_ERR;
-    }
-    pg_source src = {.mem = body ? body : ""};
-    return pg_put((pg_store *)base, hash, NULL, len, &src, err, errlen);
-}
-
-static int pg_result_put_file(store *base, const char *hash, const char *job, FILE *f, uint64_t len,
-                              char *err, size_t errlen)
-{
-    pg_source src = {.f = f, .buf = malloc(STORE_CHUNK)};
-    if (!src.buf) {
-        pg_errf(err, errlen, "postgresql result_put: out of memory");
-        return STORE_ERR;
-    }
-    int rc = pg_put((pg_store *)base, hash, job, len, &src, err, errlen);
-    free(src.buf);
+    PGresult *r = pg_rows(c, sql, p, 0, where, err, errlen);
+    if (!r) return STORE_ERR;
+    int rc = PQntuples(r) ? pg_job_from(r, 0, out, err, errlen) : STORE_NOTFOUND;
+    PQclear(r);
     return rc;
 }
 
-/* Drops a damaged result (best effort). */
-static void pg_drop(pg_conn *c, const char *hash)
+static int pg_job_read(pg_conn *c, const char *id, store_job *out, char *err, size_t errlen)
+{
+    char sql[400];
+    pg_params p = {0};
+    p_text(&p, id);
+    snprintf(sql, sizeof sql, "SELECT %s FROM jobs WHERE id = $1", pg_job_cols);
+    return pg_job_query(c, sql, &p, out, "job_get", err, errlen);
+}
+
+/* The job and its first submission in one statement; a unique violation of jobs_active_hash is
+ * another daemon's submit of the same request, made first: STORE_RACE. */
+static int pg_job_write(pg_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
+{
+    (void)where;
+    if (j->request_len > (size_t)INT32_MAX)
+        return util_seterr(err, errlen, STORE_ERR, "postgresql job_insert: a request of %zu bytes",
+                           j->request_len);
+    pg_params p = {0};
+    p_text(&p, j->id);
+    p_text(&p, j->hash);
+    p_text(&p, j->kind);
+    p_int(&p, (int)j->state);
+    p_time(&p, j->created);
+    p_time(&p, j->started);
+    p_time(&p, j->finished);
+    if (j->error_status)
+        p_int(&p, j->error_status);
+    else
+        p_text(&p, NULL);
+    p_text(&p, j->error);
+    p_bin(&p, j->request, j->request_len);
+    p_time(&p, j->state == JOB_CANCELED ? j->finished : 0);
+    if (!pg_cmd(c,
+                "WITH j AS (INSERT INTO jobs(id, hash, kind, state, created, started, finished,"
+                " error_status, error, request) VALUES($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)"
+                " RETURNING id, created)"
+                " INSERT INTO subs(id, job, created, canceled) SELECT id, id, created, $11 FROM j",
+                &p, "job_insert", err, errlen))
+        return STORE_OK;
+    return err && strstr(err, "jobs_active_hash") ? STORE_RACE : STORE_ERR;
+}
+
+/* FOR UPDATE: a cancel of its last submission waits for this join, or this join sees the job
+ * canceled (or being canceled) and makes a new one. */
+static int pg_job_active(pg_conn *c, const char *hash, char *id, char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
-    char err[64];
-    if (c->db) pg_cmd(c, "DELETE FROM results WHERE hash = $1", &p, "drop", err, sizeof err);
+    PGresult *r = pg_rows(c,
+                          "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) AND NOT cancel"
+                          " FOR UPDATE",
+                          &p, 0, "job_submit", err, errlen);
+    if (!r) return STORE_ERR;
+    int found = PQntuples(r) > 0 && !col_fixed(r, 0, 0, id, 33);
+    PQclear(r);
+    return found ? STORE_OK : STORE_NOTFOUND;
 }
 
-/* The result's size and last mark: STORE_OK, STORE_NOTFOUND. */
-static int pg_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
-                   char *err, size_t errlen)
+/* One statement: the oldest queued job that no other daemon is claiming (SKIP LOCKED). */
+static int pg_job_claim(pg_conn *c, const char *owner, double now, double until, store_job *out,
+                        char *err, size_t errlen)
+{
+    char sql[900];
+    pg_params p = {0};
+    p_text(&p, owner);
+    p_num(&p, now);
+    p_num(&p, until);
+    snprintf(sql, sizeof sql,
+             "UPDATE jobs SET state = 1, owner = $1, started = $2, lease_until = $3,"
+             " attempts = attempts + 1, cancel = false, stage = 'started', fraction = 0"
+             " WHERE id = (SELECT id FROM jobs WHERE state = 0 ORDER BY created, seq LIMIT 1"
+             " FOR UPDATE SKIP LOCKED) RETURNING %s",
+             pg_job_cols);
+    return pg_job_query(c, sql, &p, out, "job_claim", err, errlen);
+}
+
+static int pg_job_set(pg_conn *c, const store_set *a, int *cancel, const char *where, char *err,
+                      size_t errlen)
+{
+    pg_params p = {0};
+    long long n = 0;
+    p_text(&p, a->id);
+    p_text(&p, a->owner);
+    if (a->kind == STORE_SET_RENEW) {
+        p_num(&p, a->until);
+        p_text(&p, a->stage);
+        p_num(&p, isfinite(a->fraction) ? a->fraction : 0);
+        PGresult *r = pg_rows(c,
+                              "UPDATE jobs SET lease_until = $3, stage = $4, fraction = $5"
+                              " WHERE id = $1 AND owner = $2 AND state = 1 RETURNING cancel::int",
+                              &p, 0, where, err, errlen);
+        if (!r) return STORE_ERR;
+        int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
+        if (rc == STORE_OK && cancel) *cancel = atoi(PQgetvalue(r, 0, 0));
+        PQclear(r);
+        return rc;
+    }
+    const char *sql;
+    if (a->kind == STORE_SET_FINISH) {
+        p_int(&p, (int)a->state);
+        p_time(&p, a->when);
+        if (a->error_status)
+            p_int(&p, a->error_status);
+        else
+            p_text(&p, NULL);
+        p_text(&p, a->error);
+        sql = "UPDATE jobs SET state = $3, finished = $4, error_status = $5, error = $6,"
+              " request = ''::bytea, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1";
+    } else {
+        p_num(&p, a->when);
+        sql = "UPDATE jobs SET state = CASE WHEN cancel THEN 4 ELSE 0 END,"
+              " finished = CASE WHEN cancel THEN $3::double precision END,"
+              " request = CASE WHEN cancel THEN ''::bytea ELSE request END,"
+              " started = CASE WHEN cancel THEN started END, stage = NULL,"
+              " fraction = NULL, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1";
+    }
+    if (pg_changed(c, sql, &p, &n, where, err, errlen)) return STORE_ERR;
+    return n > 0 ? STORE_OK : STORE_NOTFOUND;
+}
+
+/* RETURNING the moved jobs, so that each one that ended is told of (ended). */
+static int pg_jobs_requeue(pg_conn *c, double now, int all, int max_attempts, const char *msg,
+                           int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
+                           int *queued, char *err, size_t errlen)
+{
+    pg_params p = {0};
+    p_num(&p, now);
+    p_text(&p, all ? "true" : "false");
+    p_int(&p, max_attempts);
+    p_text(&p, msg);
+    PGresult *r = pg_rows(
+        c,
+        "UPDATE jobs SET state = CASE WHEN cancel THEN 4 WHEN attempts >= $3::int THEN 3"
+        " ELSE 0 END,"
+        " finished = CASE WHEN cancel OR attempts >= $3::int THEN $1::double precision END,"
+        " error_status = CASE WHEN NOT cancel AND attempts >= $3::int THEN 500 END,"
+        " error = CASE WHEN NOT cancel AND attempts >= $3::int THEN $4 END,"
+        " request = CASE WHEN cancel OR attempts >= $3::int THEN ''::bytea ELSE request END,"
+        " started = CASE WHEN cancel OR attempts >= $3::int THEN started END, stage = NULL,"
+        " fraction = NULL, lease_until = NULL WHERE state = 1 AND ($2::boolean OR lease_until < $1)"
+        " RETURNING id, state",
+        &p, 0, "jobs_requeue", err, errlen);
+    if (!r) return STORE_ERR;
+    int bad = 0;
+    for (int i = 0; i < PQntuples(r) && !bad; i++) {
+        if (atoi(PQgetvalue(r, i, 1)) == JOB_QUEUED)
+            *queued = 1;
+        else if (ended)
+            bad = ended(ctx, PQgetvalue(r, i, 0)) != STORE_OK;
+    }
+    *n = (size_t)PQntuples(r);
+    PQclear(r);
+    return bad ? STORE_ERR : STORE_OK;
+}
+
+static int pg_job_counts(pg_conn *c, size_t *queued, size_t *running, const char *where, char *err,
+                         size_t errlen)
+{
+    PGresult *r = pg_rows(c,
+                          running ? "SELECT (SELECT count(*) FROM jobs WHERE state = 0),"
+                                    " (SELECT count(*) FROM jobs WHERE state = 1)"
+                                  : "SELECT count(*) FROM jobs WHERE state = 0",
+                          NULL, 0, where, err, errlen);
+    if (!r) return STORE_ERR;
+    *queued = (size_t)strtoull(PQgetvalue(r, 0, 0), NULL, 10);
+    if (running) *running = (size_t)strtoull(PQgetvalue(r, 0, 1), NULL, 10);
+    PQclear(r);
+    return STORE_OK;
+}
+
+static int pg_jobs_prune(pg_conn *c, double before, size_t keep, size_t *n, char *err,
+                         size_t errlen)
+{
+    pg_params p = {0};
+    long long k = 0;
+    p_num(&p, before);
+    if (keep && keep < (size_t)INT64_MAX)
+        p_int(&p, (long long)keep);
+    else
+        p_text(&p, NULL); /* OFFSET NULL: no limit */
+    if (pg_changed(c,
+                   "DELETE FROM jobs WHERE state IN (2, 3, 4) AND (finished < $1 OR id IN"
+                   " (SELECT id FROM jobs WHERE state IN (2, 3, 4) ORDER BY finished DESC"
+                   " OFFSET coalesce($2::bigint, 9223372036854775807)))",
+                   &p, &k, "jobs_prune", err, errlen))
+        return STORE_ERR;
+    *n = (size_t)k;
+    return STORE_OK;
+}
+
+/* A foreign key, not a check, refuses a submission of no job (an error, not STORE_NOTFOUND). */
+static int pg_sub_write(pg_conn *c, const store_sub *sub, const char *where, char *err,
+                        size_t errlen)
+{
+    pg_params p = {0};
+    p_text(&p, sub->id);
+    p_text(&p, sub->job);
+    p_time(&p, sub->created);
+    p_time(&p, sub->canceled);
+    return pg_cmd(c, "INSERT INTO subs(id, job, created, canceled) VALUES($1, $2, $3, $4)", &p,
+                  where, err, errlen)
+               ? STORE_ERR
+               : STORE_OK;
+}
+
+/* lock_job: the job's row FOR UPDATE (see pg_job_active). */
+static int pg_sub_read(pg_conn *c, const char *id, int lock_job, store_sub *out, char *err,
+                       size_t errlen)
+{
+    pg_params p = {0};
+    memset(out, 0, sizeof *out);
+    p_text(&p, id);
+    PGresult *r = pg_rows(c, "SELECT id, job, created, canceled FROM subs WHERE id = $1", &p, 0,
+                          "sub_get", err, errlen);
+    if (!r) return STORE_ERR;
+    int rc = STORE_NOTFOUND;
+    if (PQntuples(r)) {
+        rc = STORE_OK;
+        if (col_fixed(r, 0, 0, out->id, sizeof out->id) ||
+            col_fixed(r, 0, 1, out->job, sizeof out->job))
+            rc = util_seterr(err, errlen, STORE_ERR,
+                             "postgresql sub_get: an id too long in the database");
+        out->created = col_num(r, 0, 2);
+        out->canceled = col_num(r, 0, 3);
+    }
+    PQclear(r);
+    if (rc != STORE_OK || !lock_job) return rc;
+    pg_params q = {0};
+    p_text(&q, out->job);
+    r = pg_rows(c, "SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &q, 0, "sub_cancel", err, errlen);
+    PQclear(r);
+    return r ? STORE_OK : STORE_ERR;
+}
+
+static int pg_sub_cancel(pg_conn *c, const char *id, double when, int *changed, char *err,
+                         size_t errlen)
+{
+    pg_params p = {0};
+    long long n = 0;
+    p_text(&p, id);
+    p_num(&p, when);
+    if (pg_changed(c, "UPDATE subs SET canceled = $2 WHERE id = $1 AND canceled IS NULL", &p, &n,
+                   "sub_cancel", err, errlen))
+        return STORE_ERR;
+    *changed = n > 0;
+    return STORE_OK;
+}
+
+/* One statement: the count and both updates. */
+static int pg_job_last_sub(pg_conn *c, const char *job, double when, int *effect, char *err,
+                           size_t errlen)
+{
+    pg_params p = {0};
+    p_text(&p, job);
+    p_num(&p, when);
+    PGresult *r = pg_rows(c,
+                          "WITH remaining AS (SELECT count(*) AS n FROM subs WHERE job = $1"
+                          " AND canceled IS NULL),"
+                          " q AS (UPDATE jobs SET state = 4, finished = $2, request = ''::bytea"
+                          "  WHERE id = $1 AND state = 0 AND (SELECT n FROM remaining) = 0"
+                          "  RETURNING 1),"
+                          " s AS (UPDATE jobs SET cancel = true WHERE id = $1 AND state = 1"
+                          "  AND (SELECT n FROM remaining) = 0 RETURNING 1)"
+                          " SELECT (SELECT count(*) FROM q), (SELECT count(*) FROM s)",
+                          &p, 0, "sub_cancel", err, errlen);
+    if (!r) return STORE_ERR;
+    int canceled = atoi(PQgetvalue(r, 0, 0)), stopping = atoi(PQgetvalue(r, 0, 1));
+    PQclear(r);
+    *effect = canceled ? STORE_JOB_CANCELED : stopping ? STORE_JOB_STOPPING : STORE_JOB_KEPT;
+    return STORE_OK;
+}
+
+/* ---- results ---- */
+
+/* int8 in network order, as a binary result gives it */
+static uint64_t be64(const char *p)
+{
+    const unsigned char *u = (const unsigned char *)p;
+    uint64_t x = 0;
+    for (int i = 0; i < 8; i++) x = x << 8 | u[i];
+    return x;
+}
+
+/* A statement whose one parameter is a hash and whose result is not needed. */
+static int pg_cmd_hash(pg_conn *c, const char *sql, const char *hash, const char *where, char *err,
+                       size_t errlen)
+{
+    pg_params p = {0};
+    p_text(&p, hash);
+    return pg_cmd(c, sql, &p, where, err, errlen) ? STORE_ERR : STORE_OK;
+}
+
+static int pg_result_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                          const char *where, char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
     PGresult *r = pg_rows(c, "SELECT bytes, last_used, job FROM results WHERE hash = $1", &p, 0,
-                          "result", err, errlen);
+                          where, err, errlen);
     if (!r) return STORE_ERR;
     int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
     if (rc == STORE_OK) {
@@ -1096,191 +828,137 @@ static int pg_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, 
     return rc;
 }
 
-/* Marks a result used now, unless its mark is younger than touch_seconds. */
-static int pg_touch(pg_store *s, pg_conn *c, const char *hash, double used, char *err,
-                    size_t errlen)
+static int pg_result_row(pg_conn *c, const char *hash, uint64_t bytes, double stamp,
+                         const char *job, char *err, size_t errlen)
 {
-    double now = pg_now();
-    if (s->touch_seconds > 0 && now - used < s->touch_seconds) return STORE_OK;
     pg_params p = {0};
     p_text(&p, hash);
-    p_num(&p, now);
-    return pg_cmd(c, "UPDATE results SET last_used = $2 WHERE hash = $1", &p, "mark used", err,
-                  errlen)
+    p_int(&p, (long long)bytes);
+    p_num(&p, stamp);
+    p_text(&p, job);
+    return pg_cmd(c,
+                  "INSERT INTO results(hash, bytes, created, last_used, job)"
+                  " VALUES($1, $2, $3, $3, $4) ON CONFLICT (hash) DO UPDATE SET"
+                  " bytes = excluded.bytes, created = excluded.created,"
+                  " last_used = excluded.last_used, job = excluded.job",
+                  &p, "result_put", err, errlen)
                ? STORE_ERR
                : STORE_OK;
 }
 
-/* A chunk's body and digest as returned in binary; 1 when the digest matches. */
-static int pg_chunk_ok(const PGresult *r, int row, int body, int sha)
+/* The trigger deletes its chunks with the row. */
+static int pg_result_delete(pg_conn *c, const char *hash, const char *where, char *err,
+                            size_t errlen)
 {
-    unsigned char md[32];
-    if (PQgetisnull(r, row, sha) || PQgetlength(r, row, sha) != 32) return 0;
-    pg_digest(PQgetvalue(r, row, body), (size_t)PQgetlength(r, row, body), md);
-    return memcmp(md, PQgetvalue(r, row, sha), 32) == 0;
+    return pg_cmd_hash(c, "DELETE FROM results WHERE hash = $1", hash, where, err, errlen);
 }
 
-/* int8 in network order, as a binary result gives it */
-static uint64_t be64(const char *p)
+/* A connection lost since the read leaves the mark (the read was whole: best effort). */
+static int pg_result_touch(pg_conn *c, const char *hash, double stamp, const char *where, char *err,
+                           size_t errlen)
 {
-    const unsigned char *u = (const unsigned char *)p;
-    uint64_t x = 0;
-    for (int i = 0; i < 8; i++) x = x << 8 | u[i];
-    return x;
+    if (!c->db) return STORE_OK;
+    pg_params p = {0};
+    p_text(&p, hash);
+    p_num(&p, stamp);
+    return pg_cmd(c, "UPDATE results SET last_used = $2 WHERE hash = $1", &p, where, err, errlen)
+               ? STORE_ERR
+               : STORE_OK;
 }
 
-static int pg_result_get(store *base, const char *hash, char **body, size_t *len, char *err,
+static int pg_chunk_put(pg_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
+                        const unsigned char sha[32], char *err, size_t errlen)
+{
+    pg_params p = {0};
+    p_text(&p, hash);
+    p_int(&p, (long long)off);
+    p_bin(&p, data, n);
+    p_bin(&p, sha, 32);
+    return pg_cmd(c,
+                  "INSERT INTO result_chunks(hash, off, body, sha) VALUES($1, $2, $3, $4)"
+                  " ON CONFLICT (hash, off) DO UPDATE SET body = excluded.body,"
+                  " sha = excluded.sha",
+                  &p, "result_put: chunk", err, errlen)
+               ? STORE_ERR
+               : STORE_OK;
+}
+
+static int pg_chunks_sum(pg_conn *c, const char *hash, uint64_t *count, uint64_t *bytes, char *err,
                          size_t errlen)
 {
-    pg_store *s = (pg_store *)base;
-    uint64_t bytes = 0, pos = 0;
-    double used = 0;
-    char *copy = NULL;
-    *body = NULL;
-    if (len) *len = 0;
-    pg_conn *c = pg_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
-    if (pg_cmd(c, "BEGIN ISOLATION LEVEL REPEATABLE READ", NULL, "result_get", err, errlen))
-        return STORE_ERR;
-    int rc = pg_head(c, hash, &bytes, &used, NULL, err, errlen);
-    PGresult *r = NULL;
-    if (rc) goto out;
-    rc = STORE_ERR;
-    if (bytes >= SIZE_MAX || !(copy = malloc((size_t)bytes + 1))) {
-        pg_errf(err, errlen, "postgresql result_get: out of memory for %llu bytes",
-                (unsigned long long)bytes);
-        goto out;
-    }
     pg_params p = {0};
     p_text(&p, hash);
-    r = pg_rows(c, "SELECT off, body, sha FROM result_chunks WHERE hash = $1 ORDER BY off", &p, 1,
-                "result_get", err, errlen);
-    if (!r) goto out;
-    for (int i = 0; i < PQntuples(r); i++) {
-        uint64_t off = be64(PQgetvalue(r, i, 0)), n = (uint64_t)PQgetlength(r, i, 1);
-        if (off != pos || n > bytes - pos || !pg_chunk_ok(r, i, 1, 2)) {
-            pg_errf(err, errlen,
-                    "postgresql result_get: result %.16s... is damaged: its chunk at byte %llu "
-                    "(%llu bytes, %llu of %llu read) does not fit or does not match its digest",
-                    hash, (unsigned long long)off, (unsigned long long)n, (unsigned long long)pos,
-                    (unsigned long long)bytes);
-            rc = STORE_DAMAGED;
-            goto out;
-        }
-        if (n) memcpy(copy + pos, PQgetvalue(r, i, 1), (size_t)n);
-        pos += n;
-    }
-    if (pos != bytes) {
-        pg_errf(err, errlen,
-                "postgresql result_get: result %.16s... is damaged: its chunks hold %llu of its "
-                "%llu bytes",
-                hash, (unsigned long long)pos, (unsigned long long)bytes);
-        rc = STORE_DAMAGED;
-        goto out;
-    }
-    rc = STORE_OK;
-out:
-    PQclear(r);
-    if (c->db) pg_commit(c, "result_get", NULL, 0);
-    if (rc == STORE_DAMAGED) pg_drop(c, hash);
-    if (rc == STORE_OK && c->db) rc = pg_touch(s, c, hash, used, err, errlen);
-    if (rc != STORE_OK) {
-        free(copy);
-        return rc;
-    }
-    copy[bytes] = 0;
-    *body = copy;
-    if (len) *len = (size_t)bytes;
-    return STORE_OK;
-}
-
-static int pg_result_size(store *base, const char *hash, uint64_t *bytes, char *job, char *err,
-                          size_t errlen)
-{
-    pg_store *s = (pg_store *)base;
-    double used = 0;
-    *bytes = 0;
-    pg_conn *c = pg_conn_get(s, err, errlen);
-    if (!c) return STORE_ERR;
-    if (job) job[0] = 0;
-    int rc = pg_head(c, hash, bytes, &used, job, err, errlen);
-    if (rc == STORE_OK) rc = pg_touch(s, c, hash, used, err, errlen);
-    return rc;
-}
-
-static int pg_result_chunk(store *base, const char *hash, uint64_t pos, char **data, size_t *len,
-                           uint64_t *start, char *err, size_t errlen)
-{
-    *data = NULL;
-    *len = 0;
-    *start = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    if (pos > (uint64_t)INT64_MAX) return STORE_NOTFOUND;
-    pg_params p = {0};
-    p_text(&p, hash);
-    p_int(&p, (long long)pos);
     PGresult *r = pg_rows(c,
-                          "SELECT off, body, sha FROM result_chunks WHERE hash = $1 AND off <= $2"
-                          " ORDER BY off DESC LIMIT 1",
-                          &p, 1, "result_chunk", err, errlen);
+                          "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks"
+                          " WHERE hash = $1",
+                          &p, 0, "result_put: sum", err, errlen);
     if (!r) return STORE_ERR;
-    int rc = STORE_NOTFOUND;
-    if (PQntuples(r)) {
-        uint64_t off = be64(PQgetvalue(r, 0, 0)), n = (uint64_t)PQgetlength(r, 0, 1);
-        if (pos - off < n) {
-            if (!pg_chunk_ok(r, 0, 1, 2)) {
-                pg_errf(err, errlen,
-                        "postgresql result_chunk: result %.16s... is damaged: its chunk at byte "
-                        "%llu does not match its digest",
-                        hash, (unsigned long long)off);
-                rc = STORE_DAMAGED;
-            } else if (!(*data = malloc((size_t)n + 1))) {
-                pg_errf(err, errlen, "postgresql result_chunk: out of memory");
-                rc = STORE_ERR;
-            } else {
-                memcpy(*data, PQgetvalue(r, 0, 1), (size_t)n);
-                (*data)[n] = 0;
-                *len = (size_t)n;
-                *start = off;
-                rc = STORE_OK;
-            }
-        }
-    }
-    PQclear(r);
-    if (rc == STORE_DAMAGED) pg_drop(c, hash);
-    return rc;
-}
-
-static int pg_result_exists(store *base, const char *hash, char *err, size_t errlen)
-{
-    uint64_t bytes;
-    double used;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    return c ? pg_head(c, hash, &bytes, &used, NULL, err, errlen) : STORE_ERR;
-}
-
-static int pg_result_stats(store *base, size_t *count, uint64_t *bytes, char *err, size_t errlen)
-{
-    *count = 0;
-    *bytes = 0;
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
-    PGresult *r = pg_rows(c, "SELECT count, bytes FROM result_totals WHERE id = 0", NULL, 0,
-                          "result_stats", err, errlen);
-    if (!r) return STORE_ERR;
-    if (PQntuples(r)) {
-        *count = (size_t)strtoull(PQgetvalue(r, 0, 0), NULL, 10);
-        *bytes = strtoull(PQgetvalue(r, 0, 1), NULL, 10);
-    }
+    *count = strtoull(PQgetvalue(r, 0, 0), NULL, 10);
+    *bytes = strtoull(PQgetvalue(r, 0, 1), NULL, 10);
     PQclear(r);
     return STORE_OK;
 }
 
-static int pg_check(store *base, char *err, size_t errlen)
+/* One query, its rows in binary (bytea as bytes, off as int8). */
+static int pg_chunks_read(pg_conn *c, const char *hash, long long at, store_chunk_fn fn, void *ctx,
+                          const char *where, char *err, size_t errlen)
 {
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
+    pg_params p = {0};
+    p_text(&p, hash);
+    if (at >= 0) p_int(&p, at);
+    PGresult *r = pg_rows(c,
+                          at < 0 ? "SELECT off, body, sha FROM result_chunks WHERE hash = $1"
+                                   " ORDER BY off"
+                                 : "SELECT off, body, sha FROM result_chunks WHERE hash = $1"
+                                   " AND off <= $2 ORDER BY off DESC LIMIT 1",
+                          &p, 1, where, err, errlen);
+    if (!r) return STORE_ERR;
+    int rc = at >= 0 && !PQntuples(r) ? STORE_NOTFOUND : STORE_OK;
+    for (int i = 0; rc == STORE_OK && i < PQntuples(r); i++) {
+        int nosha = PQgetisnull(r, i, 2);
+        rc = fn(ctx, be64(PQgetvalue(r, i, 0)), PQgetvalue(r, i, 1), (size_t)PQgetlength(r, i, 1),
+                nosha ? NULL : PQgetvalue(r, i, 2), nosha ? 0 : (size_t)PQgetlength(r, i, 2));
+    }
+    PQclear(r);
+    return rc;
+}
+
+static int pg_totals(pg_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
+                     size_t errlen)
+{
+    PGresult *r = pg_rows(c, "SELECT count, bytes FROM result_totals WHERE id = 0", NULL, 0, where,
+                          err, errlen);
+    if (!r) return STORE_ERR;
+    int rc = PQntuples(r) ? STORE_OK : STORE_ERR;
+    if (rc == STORE_OK) {
+        if (count) *count = (size_t)strtoull(PQgetvalue(r, 0, 0), NULL, 10);
+        if (bytes) *bytes = strtoull(PQgetvalue(r, 0, 1), NULL, 10);
+    } else {
+        util_seterr(err, errlen, STORE_ERR, "postgresql %s: the result_totals row is missing",
+                    where);
+    }
+    PQclear(r);
+    return rc;
+}
+
+/* SKIP LOCKED: a result another daemon is reading or writing is not waited for. */
+static int pg_evict_one(pg_conn *c, const char *keep, int *gone, char *err, size_t errlen)
+{
+    pg_params p = {0};
+    long long n = 0;
+    p_text(&p, keep);
+    if (pg_changed(c,
+                   "DELETE FROM results WHERE hash = (SELECT hash FROM results WHERE hash <> $1"
+                   " ORDER BY last_used LIMIT 1 FOR UPDATE SKIP LOCKED)",
+                   &p, &n, "result_put: evict", err, errlen))
+        return STORE_ERR;
+    *gone = n > 0;
+    return STORE_OK;
+}
+
+/* One statement; chunks of no result are an error here (no put leaves any). */
+static int pg_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
+{
     PGresult *r = pg_rows(
         c,
         "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
@@ -1290,41 +968,34 @@ static int pg_check(store *base, char *err, size_t errlen)
         " (SELECT count(*) FROM (SELECT off, sum(length(body)) OVER (PARTITION BY hash ORDER BY off"
         "  ROWS UNBOUNDED PRECEDING) - length(body) AS start FROM result_chunks"
         "  WHERE hash IN (SELECT hash FROM results)) x WHERE off <> start),"
-        " (SELECT count(*) FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results)),"
-        " (SELECT count(*) FROM result_chunks WHERE sha IS NULL OR sha <> sha256(body))"
+        " (SELECT count(*) FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results))"
         " FROM result_totals t WHERE t.id = 0",
         NULL, 0, "check", err, errlen);
     if (!r) return STORE_ERR;
-    int rc = STORE_OK;
-    if (!PQntuples(r)) {
-        pg_errf(err, errlen, "postgresql check: the result_totals row is missing");
-        rc = STORE_ERR;
-    } else {
-        long long v[8];
-        for (int i = 0; i < 8; i++) v[i] = strtoll(PQgetvalue(r, 0, i), NULL, 10);
-        if (v[0] != v[2] || v[1] != v[3]) {
-            pg_errf(err, errlen,
-                    "postgresql check: result_totals says %lld results of %lld bytes, the table "
-                    "holds %lld of %lld",
-                    v[0], v[1], v[2], v[3]);
-            rc = STORE_ERR;
-        } else if (v[4] || v[5] || v[6] || v[7]) {
-            pg_errf(err, errlen,
-                    "postgresql check: %lld results whose chunks do not add up, %lld chunks out "
-                    "of place, %lld chunks of no result, %lld chunks that do not match their "
-                    "digest",
-                    v[4], v[5], v[6], v[7]);
-            rc = STORE_ERR;
-        }
-    }
+    int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
+    long long *f[7] = {&v->tot_count, &v->tot_bytes, &v->count,  &v->bytes,
+                       &v->bad_size,  &v->bad_off,   &v->orphans};
+    for (int i = 0; rc == STORE_OK && i < 7; i++) *f[i] = strtoll(PQgetvalue(r, 0, i), NULL, 10);
     PQclear(r);
     return rc;
 }
 
-static int pg_writable(store *base, char *err, size_t errlen)
+static int pg_chunks_digests(pg_conn *c, long long *all, long long *bad, char *err, size_t errlen)
 {
-    pg_conn *c = pg_conn_get((pg_store *)base, err, errlen);
-    if (!c) return STORE_ERR;
+    PGresult *r = pg_rows(c,
+                          "SELECT count(*), count(*) FILTER (WHERE sha IS NULL"
+                          " OR sha <> sha256(body)) FROM result_chunks",
+                          NULL, 0, "check", err, errlen);
+    if (!r) return STORE_ERR;
+    *all = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    *bad = strtoll(PQgetvalue(r, 0, 1), NULL, 10);
+    PQclear(r);
+    return STORE_OK;
+}
+
+/* The totals row rewritten as it is, under a statement timeout of a second, rolled back. */
+static int pg_probe(pg_conn *c, char *err, size_t errlen)
+{
     if (pg_begin(c, "writable", err, errlen)) return STORE_ERR;
     int rc = pg_cmd(c, "SET LOCAL statement_timeout = 1000", NULL, "writable", err, errlen) ||
                      pg_cmd(c, "UPDATE result_totals SET count = count WHERE id = 0", NULL,
@@ -1355,29 +1026,41 @@ static void pg_close(store *base)
     free(s);
 }
 
-static const store_ops pg_ops = {
-    .job_submit = pg_job_submit,
+static const store_be_ops pg_be = {
+    .name = "postgresql",
+    .conn = pg_be_conn,
+    .begin = pg_be_begin,
+    .commit = pg_be_commit,
+    .rollback = pg_rollback,
+    .stamp = pg_stamp,
+    .notify = pg_notify,
+    .wait_event = pg_wait_event,
+    .job_write = pg_job_write,
+    .job_read = pg_job_read,
+    .job_active = pg_job_active,
     .job_claim = pg_job_claim,
-    .job_renew = pg_job_renew,
-    .job_finish = pg_job_finish,
-    .job_release = pg_job_release,
+    .job_set = pg_job_set,
     .jobs_requeue = pg_jobs_requeue,
-    .job_insert = pg_job_insert,
-    .job_get = pg_job_get,
     .job_counts = pg_job_counts,
     .jobs_prune = pg_jobs_prune,
-    .sub_get = pg_sub_get,
+    .sub_write = pg_sub_write,
+    .sub_read = pg_sub_read,
     .sub_cancel = pg_sub_cancel,
-    .wait_event = pg_wait_event,
-    .result_put = pg_result_put,
-    .result_put_file = pg_result_put_file,
-    .result_get = pg_result_get,
-    .result_size = pg_result_size,
-    .result_chunk = pg_result_chunk,
-    .result_exists = pg_result_exists,
-    .result_stats = pg_result_stats,
-    .check = pg_check,
-    .writable = pg_writable,
+    .job_last_sub = pg_job_last_sub,
+    .result_head = pg_result_head,
+    .result_row = pg_result_row,
+    .result_delete = pg_result_delete,
+    .result_touch = pg_result_touch,
+    .chunks_forget = NULL, /* a put is one transaction: it leaves no chunk behind */
+    .chunk_put = pg_chunk_put,
+    .chunks_sum = pg_chunks_sum,
+    .chunks_read = pg_chunks_read,
+    .totals = pg_totals,
+    .evict_one = pg_evict_one,
+    .integrity = NULL,
+    .recount = pg_recount,
+    .chunks_digests = pg_chunks_digests,
+    .probe = pg_probe,
     .close = pg_close,
 };
 
@@ -1404,10 +1087,11 @@ static int pg_migrate(pg_conn *c, int flags, char *err, size_t errlen)
     long long ntab = strtoll(PQgetvalue(r, 0, 2), NULL, 10);
     PQclear(r);
     if (!meta && jobs && !(flags & STORE_OPEN_INIT)) {
-        pg_errf(err, errlen,
-                "postgresql open: a database of something else (%lld tables, one named jobs, no "
-                "cellar_meta), not a cellar store: check --db, or use a database of its own",
-                ntab);
+        util_seterr(
+            err, errlen, STORE_ERR,
+            "postgresql open: a database of something else (%lld tables, one named jobs, no "
+            "cellar_meta), not a cellar store: check --db, or use a database of its own",
+            ntab);
         goto fail;
     }
     if (!meta && (pg_cmd(c, "CREATE TABLE cellar_meta(key text PRIMARY KEY, value text NOT NULL)",
@@ -1421,10 +1105,10 @@ static int pg_migrate(pg_conn *c, int flags, char *err, size_t errlen)
     int v = PQntuples(r) ? atoi(PQgetvalue(r, 0, 0)) : -1;
     PQclear(r);
     if (v > PG_VERSION || v < 0) {
-        pg_errf(err, errlen,
-                "postgresql open: database schema version %d is %s this cellard (which knows "
-                "versions up to %d)",
-                v, v < 0 ? "unknown to" : "newer than", PG_VERSION);
+        util_seterr(err, errlen, STORE_ERR,
+                    "postgresql open: database schema version %d is %s this cellard (which knows "
+                    "versions up to %d)",
+                    v, v < 0 ? "unknown to" : "newer than", PG_VERSION);
         goto fail;
     }
     for (; v < PG_VERSION; v++) {
@@ -1453,17 +1137,19 @@ store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_s
     pg_store *s = calloc(1, sizeof *s);
     int mu_made = 0;
     if (!s || !(s->conninfo = strdup(conninfo))) {
-        pg_errf(err, errlen, "postgresql open: out of memory");
+        util_seterr(err, errlen, STORE_ERR, "postgresql open: out of memory");
         goto fail;
     }
-    s->base.ops = &pg_ops;
+    s->base.ops = &store_ops_shared;
+    s->base.be = &pg_be;
     s->base.shared = 1;
-    s->budget = budget_bytes;
-    s->touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
+    s->base.budget = budget_bytes;
+    s->base.touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
+    s->base.put_batch = 0; /* a put is one transaction (see the file comment) */
     if (pthread_mutex_init(&s->mu, NULL) != 0) goto fail;
     mu_made = 1;
     if (pthread_key_create(&s->key, pg_conn_release) != 0) {
-        pg_errf(err, errlen, "postgresql open: pthread_key_create failed");
+        util_seterr(err, errlen, STORE_ERR, "postgresql open: pthread_key_create failed");
         goto fail;
     }
     s->key_made = 1;

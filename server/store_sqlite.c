@@ -275,7 +275,7 @@ static const char *const sq_sql_text[SQ_NSQL] = {
                     " ORDER BY off DESC LIMIT 1",
     [SQ_PROBE] = "UPDATE result_totals SET count = count WHERE id = 0",
     [SQ_CHUNKS_EVERY] =
-        "SELECT off, body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
+        "SELECT body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
     [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
     [SQ_INTEGRITY] = "PRAGMA integrity_check",
     /* the totals row, the table's count and sum, the results whose chunks do not add up to
@@ -1035,11 +1035,23 @@ static int sq_recount(sq_conn *c, store_recount *v, char *err, size_t errlen)
     return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
 }
 
-/* The digests are checked by the caller: SQLite has no SHA-256 of its own. */
-static int sq_chunks_every(sq_conn *c, store_chunk_fn fn, void *ctx, char *err, size_t errlen)
+/* Every chunk of every result against its digest, in C: SQLite has no SHA-256 of its own. */
+static int sq_chunks_digests(sq_conn *c, long long *all, long long *bad, char *err, size_t errlen)
 {
+    int rc;
+    *all = *bad = 0;
     sqlite3_stmt *st = sq_stmt(c, SQ_CHUNKS_EVERY, "check: digests", err, errlen);
-    return st ? sq_chunks_each(c, st, 0, fn, ctx, "check: digests", err, errlen) : STORE_ERR;
+    if (!st) return STORE_ERR;
+    while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+        ++*all;
+        *bad += !store_digest_ok(
+            sqlite3_column_blob(st, 0), (size_t)sqlite3_column_bytes(st, 0),
+            sqlite3_column_type(st, 1) == SQLITE_BLOB ? sqlite3_column_blob(st, 1) : NULL,
+            (size_t)sqlite3_column_bytes(st, 1));
+    }
+    if (rc != SQLITE_DONE) sq_dberr(err, errlen, "check: digests", c->db);
+    sq_done(st);
+    return rc == SQLITE_DONE ? STORE_OK : STORE_ERR;
 }
 
 /* A small write (the totals row rewritten as it is), committed like any other: it fails when
@@ -1118,7 +1130,7 @@ static const store_be_ops sq_be = {
     .evict_one = sq_evict_one,
     .integrity = sq_integrity,
     .recount = sq_recount,
-    .chunks_every = sq_chunks_every,
+    .chunks_digests = sq_chunks_digests,
     .probe = sq_probe,
     .close = sq_close,
 };

@@ -539,20 +539,23 @@ static int st_touch(store *s, store_conn *c, const char *hash, double used, cons
     return st_end(s, c, rc, where, err, errlen);
 }
 
-/* result_get's reading: each chunk must start where the last ended and match its digest. */
-typedef struct st_whole {
+/* A reading of a result's chunks (result_get: all of them into copy; result_chunk: the one
+ * that holds pos into data), each checked against its digest as it comes. */
+typedef struct st_read {
     store *s;
     const char *hash;
-    char *copy;
-    uint64_t bytes, pos;
+    uint64_t bytes, pos, start; /* result_get: its size, the bytes read; result_chunk: pos */
+    char *copy, *data;
+    size_t len;
     char *err;
     size_t errlen;
-} st_whole;
+} st_read;
 
+/* result_get's: each chunk must start where the last ended and fit the size. */
 static int st_whole_chunk(void *ctx, uint64_t off, const void *p, size_t n, const void *sha,
                           size_t shalen)
 {
-    st_whole *w = ctx;
+    st_read *w = ctx;
     const char *name = w->s->be->name;
     if (off != w->pos || n > w->bytes - w->pos)
         return util_seterr(w->err, w->errlen, STORE_DAMAGED,
@@ -577,7 +580,7 @@ static int st_result_get(store *s, const char *hash, char **body, size_t *len, c
                          size_t errlen)
 {
     const store_be_ops *be = s->be;
-    st_whole w = {.s = s, .hash = hash, .err = err, .errlen = errlen};
+    st_read w = {.s = s, .hash = hash, .err = err, .errlen = errlen};
     double used = 0;
     *body = NULL;
     if (len) *len = 0;
@@ -620,21 +623,11 @@ static int st_result_size(store *s, const char *hash, uint64_t *bytes, char *job
     return rc;
 }
 
-/* result_chunk's reading: the chunk that holds pos, checked against its digest. */
-typedef struct st_piece {
-    store *s;
-    const char *hash;
-    uint64_t pos, start;
-    char *data;
-    size_t len;
-    char *err;
-    size_t errlen;
-} st_piece;
-
+/* result_chunk's: the chunk that holds pos. */
 static int st_piece_chunk(void *ctx, uint64_t off, const void *p, size_t n, const void *sha,
                           size_t shalen)
 {
-    st_piece *q = ctx;
+    st_read *q = ctx;
     if (q->pos - off >= n) return STORE_NOTFOUND; /* the chunk that held pos is gone */
     if (!store_digest_ok(p, n, sha, shalen))
         return util_seterr(q->err, q->errlen, STORE_DAMAGED,
@@ -654,7 +647,7 @@ static int st_piece_chunk(void *ctx, uint64_t off, const void *p, size_t n, cons
 static int st_result_chunk(store *s, const char *hash, uint64_t pos, char **data, size_t *len,
                            uint64_t *start, char *err, size_t errlen)
 {
-    st_piece q = {.s = s, .hash = hash, .pos = pos, .err = err, .errlen = errlen};
+    st_read q = {.s = s, .hash = hash, .pos = pos, .err = err, .errlen = errlen};
     *data = NULL;
     *len = 0;
     *start = 0;

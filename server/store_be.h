@@ -183,6 +183,22 @@ typedef struct store_be_ops {
     void (*close)(store *s);
 } store_be_ops;
 
+/* The initializers of a backend's store_be_ops for every primitive but name and the optional
+ * ones (notify, wait_event, chunks_forget, integrity), from its functions named P_conn,
+ * P_begin, ... (P the prefix given). */
+#define STORE_BE_PRIMITIVES(P)                                                                     \
+    .conn = P##_conn, .begin = P##_begin, .commit = P##_commit, .rollback = P##_rollback,          \
+    .stamp = P##_stamp, .job_write = P##_job_write, .job_read = P##_job_read,                      \
+    .job_active = P##_job_active, .job_claim = P##_job_claim, .job_set = P##_job_set,              \
+    .jobs_requeue = P##_jobs_requeue, .job_counts = P##_job_counts, .jobs_prune = P##_jobs_prune,  \
+    .sub_write = P##_sub_write, .sub_read = P##_sub_read, .sub_cancel = P##_sub_cancel,            \
+    .job_last_sub = P##_job_last_sub, .result_head = P##_result_head,                              \
+    .result_row = P##_result_row, .result_delete = P##_result_delete,                              \
+    .result_touch = P##_result_touch, .chunk_put = P##_chunk_put, .chunks_sum = P##_chunks_sum,    \
+    .chunks_read = P##_chunks_read, .totals = P##_totals, .evict_one = P##_evict_one,              \
+    .recount = P##_recount, .chunks_digests = P##_chunks_digests, .probe = P##_probe,              \
+    .close = P##_close
+
 /* The operations of store.h over s->be: what a backend's open sets s->ops to (the second
  * with wait_event, for a store other daemons share). */
 extern const store_ops store_ops_local, store_ops_shared;

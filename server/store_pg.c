@@ -1,5 +1,8 @@
 /* store_pg.c — the PostgreSQL backend of the store (server/store.h): one database that several
- * daemons share, holding the jobs (the queue itself), the submissions and the result cache.
+ * daemons share, holding the jobs (the queue itself), the submissions and the result cache.  It
+ * gives the primitives of server/store_be.h (one statement, one round trip each); the policy
+ * over them is store.c's, the same as SQLite's.  A frame of one statement (STORE_TX_ONE) runs
+ * in autocommit, so job_renew, result_size's touch and job_claim stay one round trip each.
  *
  * Schema (cellar_meta's 'schema' row is the number of migrations applied; pg_migrations below):
  *   jobs(id PRIMARY KEY, seq, hash, kind, state, created, started, finished, error_status,
@@ -318,7 +321,7 @@ static int pg_commit(pg_conn *c, const char *where, char *err, size_t errlen)
     return pg_cmd(c, "COMMIT", NULL, where, err, errlen);
 }
 
-static void pg_rollback(pg_conn *c)
+static void pg_be_rollback(pg_conn *c)
 {
     if (c->one) { /* autocommit: nothing open */
         c->one = 0;
@@ -354,6 +357,15 @@ static int pg_changed(pg_conn *c, const char *sql, const pg_params *p, long long
     return STORE_OK;
 }
 
+/* A query whose one parameter is key (text): its result, or NULL with the message. */
+static PGresult *pg_by_key(pg_conn *c, const char *sql, const char *key, int binary,
+                           const char *where, char *err, size_t errlen)
+{
+    pg_params p = {0};
+    p_text(&p, key);
+    return pg_rows(c, sql, &p, binary, where, err, errlen);
+}
+
 /* ---- connections, transactions, events (store_be.h) ---- */
 
 static store_conn *pg_be_conn(store *s, char *err, size_t errlen)
@@ -384,7 +396,7 @@ static int pg_be_commit(pg_conn *c, const char *where, char *err, size_t errlen)
     return pg_commit(c, where, err, errlen) ? STORE_ERR : STORE_OK;
 }
 
-static double pg_stamp(store *s)
+static double pg_be_stamp(store *s)
 {
     (void)s;
     return pg_now();
@@ -392,7 +404,7 @@ static double pg_stamp(store *s)
 
 /* NOTIFY cellar in the caller's transaction (delivered at commit): "q" a job was queued,
  * "e:ID" job ID ended, "c:ID" job ID is to stop. */
-static int pg_notify(pg_conn *c, store_ev ev, const char *id, char *err, size_t errlen)
+static int pg_be_notify(pg_conn *c, store_ev ev, const char *id, char *err, size_t errlen)
 {
     char payload[40] = "q";
     if (ev != STORE_EV_QUEUED)
@@ -404,8 +416,8 @@ static int pg_notify(pg_conn *c, store_ev ev, const char *id, char *err, size_t 
     return r ? STORE_OK : STORE_ERR;
 }
 
-static int pg_wait_event(store *base, double timeout, store_ev *ev, char *id, char *err,
-                         size_t errlen)
+static int pg_be_wait_event(store *base, double timeout, store_ev *ev, char *id, char *err,
+                            size_t errlen)
 {
     pg_store *s = (pg_store *)base;
     *ev = STORE_EV_NONE;
@@ -518,7 +530,7 @@ static int pg_job_query(pg_conn *c, const char *sql, const pg_params *p, store_j
     return rc;
 }
 
-static int pg_job_read(pg_conn *c, const char *id, store_job *out, char *err, size_t errlen)
+static int pg_be_job_read(pg_conn *c, const char *id, store_job *out, char *err, size_t errlen)
 {
     char sql[400];
     pg_params p = {0};
@@ -529,7 +541,8 @@ static int pg_job_read(pg_conn *c, const char *id, store_job *out, char *err, si
 
 /* The job and its first submission in one statement; a unique violation of jobs_active_hash is
  * another daemon's submit of the same request, made first: STORE_RACE. */
-static int pg_job_write(pg_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
+static int pg_be_job_write(pg_conn *c, const store_job *j, const char *where, char *err,
+                           size_t errlen)
 {
     (void)where;
     if (j->request_len > (size_t)INT32_MAX)
@@ -562,14 +575,12 @@ static int pg_job_write(pg_conn *c, const store_job *j, const char *where, char 
 
 /* FOR UPDATE: a cancel of its last submission waits for this join, or this join sees the job
  * canceled (or being canceled) and makes a new one. */
-static int pg_job_active(pg_conn *c, const char *hash, char *id, char *err, size_t errlen)
+static int pg_be_job_active(pg_conn *c, const char *hash, char *id, char *err, size_t errlen)
 {
-    pg_params p = {0};
-    p_text(&p, hash);
-    PGresult *r = pg_rows(c,
-                          "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) AND NOT cancel"
-                          " FOR UPDATE",
-                          &p, 0, "job_submit", err, errlen);
+    PGresult *r = pg_by_key(c,
+                            "SELECT id FROM jobs WHERE hash = $1 AND state IN (0, 1) AND NOT cancel"
+                            " FOR UPDATE",
+                            hash, 0, "job_submit", err, errlen);
     if (!r) return STORE_ERR;
     int found = PQntuples(r) > 0 && !col_fixed(r, 0, 0, id, 33);
     PQclear(r);
@@ -577,8 +588,8 @@ static int pg_job_active(pg_conn *c, const char *hash, char *id, char *err, size
 }
 
 /* One statement: the oldest queued job that no other daemon is claiming (SKIP LOCKED). */
-static int pg_job_claim(pg_conn *c, const char *owner, double now, double until, store_job *out,
-                        char *err, size_t errlen)
+static int pg_be_job_claim(pg_conn *c, const char *owner, double now, double until, store_job *out,
+                           char *err, size_t errlen)
 {
     char sql[900];
     pg_params p = {0};
@@ -594,8 +605,8 @@ static int pg_job_claim(pg_conn *c, const char *owner, double now, double until,
     return pg_job_query(c, sql, &p, out, "job_claim", err, errlen);
 }
 
-static int pg_job_set(pg_conn *c, const store_set *a, int *cancel, const char *where, char *err,
-                      size_t errlen)
+static int pg_be_job_set(pg_conn *c, const store_set *a, int *cancel, const char *where, char *err,
+                         size_t errlen)
 {
     pg_params p = {0};
     long long n = 0;
@@ -639,9 +650,9 @@ static int pg_job_set(pg_conn *c, const store_set *a, int *cancel, const char *w
 }
 
 /* RETURNING the moved jobs, so that each one that ended is told of (ended). */
-static int pg_jobs_requeue(pg_conn *c, double now, int all, int max_attempts, const char *msg,
-                           int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
-                           int *queued, char *err, size_t errlen)
+static int pg_be_jobs_requeue(pg_conn *c, double now, int all, int max_attempts, const char *msg,
+                              int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
+                              int *queued, char *err, size_t errlen)
 {
     pg_params p = {0};
     p_num(&p, now);
@@ -673,8 +684,8 @@ static int pg_jobs_requeue(pg_conn *c, double now, int all, int max_attempts, co
     return bad ? STORE_ERR : STORE_OK;
 }
 
-static int pg_job_counts(pg_conn *c, size_t *queued, size_t *running, const char *where, char *err,
-                         size_t errlen)
+static int pg_be_job_counts(pg_conn *c, size_t *queued, size_t *running, const char *where,
+                            char *err, size_t errlen)
 {
     PGresult *r = pg_rows(c,
                           running ? "SELECT (SELECT count(*) FROM jobs WHERE state = 0),"
@@ -688,8 +699,8 @@ static int pg_job_counts(pg_conn *c, size_t *queued, size_t *running, const char
     return STORE_OK;
 }
 
-static int pg_jobs_prune(pg_conn *c, double before, size_t keep, size_t *n, char *err,
-                         size_t errlen)
+static int pg_be_jobs_prune(pg_conn *c, double before, size_t keep, size_t *n, char *err,
+                            size_t errlen)
 {
     pg_params p = {0};
     long long k = 0;
@@ -709,8 +720,8 @@ static int pg_jobs_prune(pg_conn *c, double before, size_t keep, size_t *n, char
 }
 
 /* A foreign key, not a check, refuses a submission of no job (an error, not STORE_NOTFOUND). */
-static int pg_sub_write(pg_conn *c, const store_sub *sub, const char *where, char *err,
-                        size_t errlen)
+static int pg_be_sub_write(pg_conn *c, const store_sub *sub, const char *where, char *err,
+                           size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, sub->id);
@@ -723,15 +734,13 @@ static int pg_sub_write(pg_conn *c, const store_sub *sub, const char *where, cha
                : STORE_OK;
 }
 
-/* lock_job: the job's row FOR UPDATE (see pg_job_active). */
-static int pg_sub_read(pg_conn *c, const char *id, int lock_job, store_sub *out, char *err,
-                       size_t errlen)
+/* lock_job: the job's row FOR UPDATE (see pg_be_job_active). */
+static int pg_be_sub_read(pg_conn *c, const char *id, int lock_job, store_sub *out, char *err,
+                          size_t errlen)
 {
-    pg_params p = {0};
     memset(out, 0, sizeof *out);
-    p_text(&p, id);
-    PGresult *r = pg_rows(c, "SELECT id, job, created, canceled FROM subs WHERE id = $1", &p, 0,
-                          "sub_get", err, errlen);
+    PGresult *r = pg_by_key(c, "SELECT id, job, created, canceled FROM subs WHERE id = $1", id, 0,
+                            "sub_get", err, errlen);
     if (!r) return STORE_ERR;
     int rc = STORE_NOTFOUND;
     if (PQntuples(r)) {
@@ -745,15 +754,14 @@ static int pg_sub_read(pg_conn *c, const char *id, int lock_job, store_sub *out,
     }
     PQclear(r);
     if (rc != STORE_OK || !lock_job) return rc;
-    pg_params q = {0};
-    p_text(&q, out->job);
-    r = pg_rows(c, "SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &q, 0, "sub_cancel", err, errlen);
+    r = pg_by_key(c, "SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", out->job, 0, "sub_cancel", err,
+                  errlen);
     PQclear(r);
     return r ? STORE_OK : STORE_ERR;
 }
 
-static int pg_sub_cancel(pg_conn *c, const char *id, double when, int *changed, char *err,
-                         size_t errlen)
+static int pg_be_sub_cancel(pg_conn *c, const char *id, double when, int *changed, char *err,
+                            size_t errlen)
 {
     pg_params p = {0};
     long long n = 0;
@@ -767,8 +775,8 @@ static int pg_sub_cancel(pg_conn *c, const char *id, double when, int *changed, 
 }
 
 /* One statement: the count and both updates. */
-static int pg_job_last_sub(pg_conn *c, const char *job, double when, int *effect, char *err,
-                           size_t errlen)
+static int pg_be_job_last_sub(pg_conn *c, const char *job, double when, int *effect, char *err,
+                              size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, job);
@@ -810,13 +818,11 @@ static int pg_cmd_hash(pg_conn *c, const char *sql, const char *hash, const char
     return pg_cmd(c, sql, &p, where, err, errlen) ? STORE_ERR : STORE_OK;
 }
 
-static int pg_result_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
-                          const char *where, char *err, size_t errlen)
+static int pg_be_result_head(pg_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                             const char *where, char *err, size_t errlen)
 {
-    pg_params p = {0};
-    p_text(&p, hash);
-    PGresult *r = pg_rows(c, "SELECT bytes, last_used, job FROM results WHERE hash = $1", &p, 0,
-                          where, err, errlen);
+    PGresult *r = pg_by_key(c, "SELECT bytes, last_used, job FROM results WHERE hash = $1", hash, 0,
+                            where, err, errlen);
     if (!r) return STORE_ERR;
     int rc = PQntuples(r) ? STORE_OK : STORE_NOTFOUND;
     if (rc == STORE_OK) {
@@ -828,8 +834,8 @@ static int pg_result_head(pg_conn *c, const char *hash, uint64_t *bytes, double 
     return rc;
 }
 
-static int pg_result_row(pg_conn *c, const char *hash, uint64_t bytes, double stamp,
-                         const char *job, char *err, size_t errlen)
+static int pg_be_result_row(pg_conn *c, const char *hash, uint64_t bytes, double stamp,
+                            const char *job, char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
@@ -847,15 +853,15 @@ static int pg_result_row(pg_conn *c, const char *hash, uint64_t bytes, double st
 }
 
 /* The trigger deletes its chunks with the row. */
-static int pg_result_delete(pg_conn *c, const char *hash, const char *where, char *err,
-                            size_t errlen)
+static int pg_be_result_delete(pg_conn *c, const char *hash, const char *where, char *err,
+                               size_t errlen)
 {
     return pg_cmd_hash(c, "DELETE FROM results WHERE hash = $1", hash, where, err, errlen);
 }
 
 /* A connection lost since the read leaves the mark (the read was whole: best effort). */
-static int pg_result_touch(pg_conn *c, const char *hash, double stamp, const char *where, char *err,
-                           size_t errlen)
+static int pg_be_result_touch(pg_conn *c, const char *hash, double stamp, const char *where,
+                              char *err, size_t errlen)
 {
     if (!c->db) return STORE_OK;
     pg_params p = {0};
@@ -866,8 +872,8 @@ static int pg_result_touch(pg_conn *c, const char *hash, double stamp, const cha
                : STORE_OK;
 }
 
-static int pg_chunk_put(pg_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
-                        const unsigned char sha[32], char *err, size_t errlen)
+static int pg_be_chunk_put(pg_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
+                           const unsigned char sha[32], char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
@@ -883,15 +889,13 @@ static int pg_chunk_put(pg_conn *c, const char *hash, uint64_t off, const void *
                : STORE_OK;
 }
 
-static int pg_chunks_sum(pg_conn *c, const char *hash, uint64_t *count, uint64_t *bytes, char *err,
-                         size_t errlen)
+static int pg_be_chunks_sum(pg_conn *c, const char *hash, uint64_t *count, uint64_t *bytes,
+                            char *err, size_t errlen)
 {
-    pg_params p = {0};
-    p_text(&p, hash);
-    PGresult *r = pg_rows(c,
-                          "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks"
-                          " WHERE hash = $1",
-                          &p, 0, "result_put: sum", err, errlen);
+    PGresult *r = pg_by_key(c,
+                            "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks"
+                            " WHERE hash = $1",
+                            hash, 0, "result_put: sum", err, errlen);
     if (!r) return STORE_ERR;
     *count = strtoull(PQgetvalue(r, 0, 0), NULL, 10);
     *bytes = strtoull(PQgetvalue(r, 0, 1), NULL, 10);
@@ -900,8 +904,8 @@ static int pg_chunks_sum(pg_conn *c, const char *hash, uint64_t *count, uint64_t
 }
 
 /* One query, its rows in binary (bytea as bytes, off as int8). */
-static int pg_chunks_read(pg_conn *c, const char *hash, long long at, store_chunk_fn fn, void *ctx,
-                          const char *where, char *err, size_t errlen)
+static int pg_be_chunks_read(pg_conn *c, const char *hash, long long at, store_chunk_fn fn,
+                             void *ctx, const char *where, char *err, size_t errlen)
 {
     pg_params p = {0};
     p_text(&p, hash);
@@ -923,8 +927,8 @@ static int pg_chunks_read(pg_conn *c, const char *hash, long long at, store_chun
     return rc;
 }
 
-static int pg_totals(pg_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
-                     size_t errlen)
+static int pg_be_totals(pg_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
+                        size_t errlen)
 {
     PGresult *r = pg_rows(c, "SELECT count, bytes FROM result_totals WHERE id = 0", NULL, 0, where,
                           err, errlen);
@@ -942,7 +946,7 @@ static int pg_totals(pg_conn *c, size_t *count, uint64_t *bytes, const char *whe
 }
 
 /* SKIP LOCKED: a result another daemon is reading or writing is not waited for. */
-static int pg_evict_one(pg_conn *c, const char *keep, int *gone, char *err, size_t errlen)
+static int pg_be_evict_one(pg_conn *c, const char *keep, int *gone, char *err, size_t errlen)
 {
     pg_params p = {0};
     long long n = 0;
@@ -957,7 +961,7 @@ static int pg_evict_one(pg_conn *c, const char *keep, int *gone, char *err, size
 }
 
 /* One statement; chunks of no result are an error here (no put leaves any). */
-static int pg_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
+static int pg_be_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
 {
     PGresult *r = pg_rows(
         c,
@@ -980,7 +984,8 @@ static int pg_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
     return rc;
 }
 
-static int pg_chunks_digests(pg_conn *c, long long *all, long long *bad, char *err, size_t errlen)
+static int pg_be_chunks_digests(pg_conn *c, long long *all, long long *bad, char *err,
+                                size_t errlen)
 {
     PGresult *r = pg_rows(c,
                           "SELECT count(*), count(*) FILTER (WHERE sha IS NULL"
@@ -994,7 +999,7 @@ static int pg_chunks_digests(pg_conn *c, long long *all, long long *bad, char *e
 }
 
 /* The totals row rewritten as it is, under a statement timeout of a second, rolled back. */
-static int pg_probe(pg_conn *c, char *err, size_t errlen)
+static int pg_be_probe(pg_conn *c, char *err, size_t errlen)
 {
     if (pg_begin(c, "writable", err, errlen)) return STORE_ERR;
     int rc = pg_cmd(c, "SET LOCAL statement_timeout = 1000", NULL, "writable", err, errlen) ||
@@ -1002,11 +1007,11 @@ static int pg_probe(pg_conn *c, char *err, size_t errlen)
                             "writable", err, errlen)
                  ? STORE_ERR
                  : STORE_OK;
-    pg_rollback(c);
+    pg_be_rollback(c);
     return rc;
 }
 
-static void pg_close(store *base)
+static void pg_be_close(store *base)
 {
     pg_store *s = (pg_store *)base;
     if (!s) return;
@@ -1026,43 +1031,11 @@ static void pg_close(store *base)
     free(s);
 }
 
-static const store_be_ops pg_be = {
-    .name = "postgresql",
-    .conn = pg_be_conn,
-    .begin = pg_be_begin,
-    .commit = pg_be_commit,
-    .rollback = pg_rollback,
-    .stamp = pg_stamp,
-    .notify = pg_notify,
-    .wait_event = pg_wait_event,
-    .job_write = pg_job_write,
-    .job_read = pg_job_read,
-    .job_active = pg_job_active,
-    .job_claim = pg_job_claim,
-    .job_set = pg_job_set,
-    .jobs_requeue = pg_jobs_requeue,
-    .job_counts = pg_job_counts,
-    .jobs_prune = pg_jobs_prune,
-    .sub_write = pg_sub_write,
-    .sub_read = pg_sub_read,
-    .sub_cancel = pg_sub_cancel,
-    .job_last_sub = pg_job_last_sub,
-    .result_head = pg_result_head,
-    .result_row = pg_result_row,
-    .result_delete = pg_result_delete,
-    .result_touch = pg_result_touch,
-    .chunks_forget = NULL, /* a put is one transaction: it leaves no chunk behind */
-    .chunk_put = pg_chunk_put,
-    .chunks_sum = pg_chunks_sum,
-    .chunks_read = pg_chunks_read,
-    .totals = pg_totals,
-    .evict_one = pg_evict_one,
-    .integrity = NULL,
-    .recount = pg_recount,
-    .chunks_digests = pg_chunks_digests,
-    .probe = pg_probe,
-    .close = pg_close,
-};
+/* events by NOTIFY; a put is one transaction and leaves no chunk behind (no chunks_forget);
+ * no check of the database's own */
+static const store_be_ops pg_be = {STORE_BE_PRIMITIVES(pg_be), .name = "postgresql",
+                                   .notify = pg_be_notify,     .wait_event = pg_be_wait_event,
+                                   .chunks_forget = NULL,      .integrity = NULL};
 
 /* ---- opening ---- */
 
@@ -1127,7 +1100,7 @@ static int pg_migrate(pg_conn *c, int flags, char *err, size_t errlen)
         goto fail;
     return STORE_OK;
 fail:
-    pg_rollback(c);
+    pg_be_rollback(c);
     return STORE_ERR;
 }
 

@@ -1,5 +1,10 @@
 /* store_sqlite.c — the SQLite backend of the store (server/store.h): one database file in WAL
- * mode holding the jobs and the result cache.
+ * mode holding the jobs and the result cache.  It gives the primitives of server/store_be.h
+ * (one statement each, on the calling thread's connection); the policy over them (which
+ * statements make an operation, reading results back against their digests, eviction, the
+ * queue's rules) is store.c's.  What is SQLite's own stays here: the schema and its migrations,
+ * opening and identifying the file, the lock of one daemon per file, the strictly increasing
+ * stamps, and every write frame taking the write lock up front (BEGIN IMMEDIATE).
  *
  * Schema (PRAGMA user_version is the number of migrations applied; sq_migrations below):
  *   jobs(id TEXT PRIMARY KEY, hash, kind, state, created, started, finished, error_status,
@@ -43,7 +48,7 @@
  *     result_get refuses a body that does not add up.
  *   - After a committed result_put with a budget, SUM(bytes) <= budget, or the new result is
  *     the only one left (a result larger than the budget is still stored, alone).
- *   - last_used stamps handed out by one store strictly increase (sq_stamp: the clock, or a
+ *   - last_used stamps handed out by one store strictly increase (sq_be_stamp: the clock, or a
  *     microsecond past the last stamp when the clock has not moved or went back), so "least
  *     recently used" is a total order even within one clock tick.
  *   - Every write is one BEGIN IMMEDIATE ... COMMIT, rolled back on any error: a writer takes
@@ -364,7 +369,7 @@ static int sq_run(sq_conn *c, enum sq_sql id, const char *where, char *err, size
 }
 
 /* Rolls back the open transaction, if any (SQLite ends some on its own, e.g. on SQLITE_FULL). */
-static void sq_rollback(sq_conn *c)
+static void sq_be_rollback(sq_conn *c)
 {
     if (!sqlite3_get_autocommit(c->db)) sq_run(c, SQ_ROLLBACK, "rollback", NULL, 0);
 }
@@ -446,7 +451,7 @@ static sq_conn *sq_conn_get(sq_store *s, char *err, size_t errlen)
 }
 
 /* A last_used stamp: now, but strictly after every stamp this store handed out before. */
-static double sq_stamp(store *base)
+static double sq_be_stamp(store *base)
 {
     sq_store *s = (sq_store *)base;
     struct timespec ts;
@@ -562,20 +567,20 @@ static store_conn *sq_be_conn(store *s, char *err, size_t errlen)
 /* Every frame is a transaction: a write one takes the write lock up front (BEGIN IMMEDIATE),
  * STORE_TX_ONE included, so a writer waits for the lock under the busy timeout instead of
  * failing to upgrade a read lock half-way (SQLITE_BUSY_SNAPSHOT). */
-static int sq_begin(sq_conn *c, store_tx tx, const char *where, char *err, size_t errlen)
+static int sq_be_begin(sq_conn *c, store_tx tx, const char *where, char *err, size_t errlen)
 {
     return sq_run(c, tx == STORE_TX_READ ? SQ_BEGIN_READ : SQ_BEGIN, where, err, errlen);
 }
 
-static int sq_commit(sq_conn *c, const char *where, char *err, size_t errlen)
+static int sq_be_commit(sq_conn *c, const char *where, char *err, size_t errlen)
 {
     return sq_run(c, SQ_COMMIT, where, err, errlen);
 }
 
 /* ---- jobs and submissions ---- */
 
-static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, char *err,
-                        size_t errlen)
+static int sq_be_sub_write(sq_conn *c, const store_sub *sub, const char *where, char *err,
+                           size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_SUB_INSERT, where, err, errlen);
     int changed;
@@ -590,7 +595,8 @@ static int sq_sub_write(sq_conn *c, const store_sub *sub, const char *where, cha
     return STORE_NOTFOUND;
 }
 
-static int sq_job_write(sq_conn *c, const store_job *j, const char *where, char *err, size_t errlen)
+static int sq_be_job_write(sq_conn *c, const store_job *j, const char *where, char *err,
+                           size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_JOB_INSERT, where, err, errlen);
     if (!st) return STORE_ERR;
@@ -610,11 +616,11 @@ static int sq_job_write(sq_conn *c, const store_job *j, const char *where, char 
                        .canceled = j->state == JOB_CANCELED ? j->finished : 0};
     memcpy(first.id, j->id, sizeof first.id);
     memcpy(first.job, j->id, sizeof first.job);
-    return sq_sub_write(c, &first, where, err, errlen) == STORE_OK ? STORE_OK : STORE_ERR;
+    return sq_be_sub_write(c, &first, where, err, errlen) == STORE_OK ? STORE_OK : STORE_ERR;
 }
 
 /* Reads job id (one statement is one snapshot: no transaction of its own). */
-static int sq_job_read(sq_conn *c, const char *id, store_job *out, char *err, size_t errlen)
+static int sq_be_job_read(sq_conn *c, const char *id, store_job *out, char *err, size_t errlen)
 {
     int rc;
     memset(out, 0, sizeof *out);
@@ -663,14 +669,14 @@ fail:
 }
 
 /* The only writer needs no row lock: the write transaction is the lock. */
-static int sq_job_active(sq_conn *c, const char *hash, char *id, char *err, size_t errlen)
+static int sq_be_job_active(sq_conn *c, const char *hash, char *id, char *err, size_t errlen)
 {
     return sq_lookup(c, SQ_JOB_ACTIVE, hash, NULL, id, "job_submit", err, errlen);
 }
 
 /* An UPDATE ... RETURNING id, then the row read, in one write transaction of its own. */
-static int sq_job_claim(sq_conn *c, const char *owner, double now, double until, store_job *out,
-                        char *err, size_t errlen)
+static int sq_be_job_claim(sq_conn *c, const char *owner, double now, double until, store_job *out,
+                           char *err, size_t errlen)
 {
     char id[33];
     if (sq_run(c, SQ_BEGIN, "job_claim: begin", err, errlen)) return STORE_ERR;
@@ -691,17 +697,17 @@ static int sq_job_claim(sq_conn *c, const char *owner, double now, double until,
         goto fail;
     }
     sq_done(st);
-    if (found && sq_job_read(c, id, out, err, errlen) != STORE_OK) goto fail;
+    if (found && sq_be_job_read(c, id, out, err, errlen) != STORE_OK) goto fail;
     if (sq_run(c, SQ_COMMIT, "job_claim: commit", err, errlen)) goto fail;
     return found ? STORE_OK : STORE_NOTFOUND;
 fail:
     store_job_clear(out);
-    sq_rollback(c);
+    sq_be_rollback(c);
     return STORE_ERR;
 }
 
-static int sq_job_set(sq_conn *c, const store_set *a, int *cancel, const char *where, char *err,
-                      size_t errlen)
+static int sq_be_job_set(sq_conn *c, const store_set *a, int *cancel, const char *where, char *err,
+                         size_t errlen)
 {
     static const enum sq_sql sql[] = {[STORE_SET_RENEW] = SQ_JOB_RENEW,
                                       [STORE_SET_FINISH] = SQ_JOB_FINISH,
@@ -736,9 +742,9 @@ static int sq_job_set(sq_conn *c, const store_set *a, int *cancel, const char *w
 }
 
 /* No events to make (one daemon per file): ended and *queued are left alone. */
-static int sq_jobs_requeue(sq_conn *c, double now, int all, int max_attempts, const char *msg,
-                           int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
-                           int *queued, char *err, size_t errlen)
+static int sq_be_jobs_requeue(sq_conn *c, double now, int all, int max_attempts, const char *msg,
+                              int (*ended)(void *ctx, const char *id), void *ctx, size_t *n,
+                              int *queued, char *err, size_t errlen)
 {
     (void)ended;
     (void)ctx;
@@ -754,8 +760,8 @@ static int sq_jobs_requeue(sq_conn *c, double now, int all, int max_attempts, co
     return STORE_OK;
 }
 
-static int sq_job_counts(sq_conn *c, size_t *queued, size_t *running, const char *where, char *err,
-                         size_t errlen)
+static int sq_be_job_counts(sq_conn *c, size_t *queued, size_t *running, const char *where,
+                            char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_JOB_COUNTS, where, err, errlen);
     if (!st) return STORE_ERR;
@@ -770,8 +776,8 @@ static int sq_job_counts(sq_conn *c, size_t *queued, size_t *running, const char
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-static int sq_jobs_prune(sq_conn *c, double before, size_t keep, size_t *n, char *err,
-                         size_t errlen)
+static int sq_be_jobs_prune(sq_conn *c, double before, size_t keep, size_t *n, char *err,
+                            size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_JOBS_PRUNE, "jobs_prune", err, errlen);
     if (!st) return STORE_ERR;
@@ -786,8 +792,8 @@ static int sq_jobs_prune(sq_conn *c, double before, size_t keep, size_t *n, char
 }
 
 /* lock_job: nothing to do, the write transaction is the lock. */
-static int sq_sub_read(sq_conn *c, const char *id, int lock_job, store_sub *out, char *err,
-                       size_t errlen)
+static int sq_be_sub_read(sq_conn *c, const char *id, int lock_job, store_sub *out, char *err,
+                          size_t errlen)
 {
     (void)lock_job;
     memset(out, 0, sizeof *out);
@@ -824,15 +830,15 @@ static int sq_job_step(sq_conn *c, enum sq_sql id, const char *job, double when,
     return sq_step_done(c, st, changed, "sub_cancel", err, errlen);
 }
 
-static int sq_sub_cancel(sq_conn *c, const char *id, double when, int *changed, char *err,
-                         size_t errlen)
+static int sq_be_sub_cancel(sq_conn *c, const char *id, double when, int *changed, char *err,
+                            size_t errlen)
 {
     return sq_job_step(c, SQ_SUB_CANCEL, id, when, changed, err, errlen);
 }
 
 /* A count, then the cancel of a queued job, or else the stop of a running one. */
-static int sq_job_last_sub(sq_conn *c, const char *job, double when, int *effect, char *err,
-                           size_t errlen)
+static int sq_be_job_last_sub(sq_conn *c, const char *job, double when, int *effect, char *err,
+                              size_t errlen)
 {
     long long active = 0;
     int q = 0, r = 0;
@@ -849,8 +855,8 @@ static int sq_job_last_sub(sq_conn *c, const char *job, double when, int *effect
 
 /* ---- results ---- */
 
-static int sq_result_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
-                          const char *where, char *err, size_t errlen)
+static int sq_be_result_head(sq_conn *c, const char *hash, uint64_t *bytes, double *used, char *job,
+                             const char *where, char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_HEAD, where, err, errlen);
     int rc;
@@ -868,8 +874,8 @@ static int sq_result_head(sq_conn *c, const char *hash, uint64_t *bytes, double 
     return rc == SQLITE_ROW ? STORE_OK : rc == SQLITE_DONE ? STORE_NOTFOUND : STORE_ERR;
 }
 
-static int sq_result_row(sq_conn *c, const char *hash, uint64_t bytes, double stamp,
-                         const char *job, char *err, size_t errlen)
+static int sq_be_result_row(sq_conn *c, const char *hash, uint64_t bytes, double stamp,
+                            const char *job, char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_UPSERT, "result_put", err, errlen);
     if (!st) return STORE_ERR;
@@ -880,20 +886,20 @@ static int sq_result_row(sq_conn *c, const char *hash, uint64_t bytes, double st
     return sq_step_done(c, st, NULL, "result_put", err, errlen);
 }
 
-static int sq_result_delete(sq_conn *c, const char *hash, const char *where, char *err,
-                            size_t errlen)
+static int sq_be_result_delete(sq_conn *c, const char *hash, const char *where, char *err,
+                               size_t errlen)
 {
     return sq_run_key(c, SQ_RESULT_DELETE, hash, NULL, where, err, errlen);
 }
 
-static int sq_chunks_forget(sq_conn *c, const char *hash, const char *where, char *err,
-                            size_t errlen)
+static int sq_be_chunks_forget(sq_conn *c, const char *hash, const char *where, char *err,
+                               size_t errlen)
 {
     return sq_run_key(c, SQ_CHUNKS_DELETE, hash, NULL, where, err, errlen);
 }
 
-static int sq_result_touch(sq_conn *c, const char *hash, double stamp, const char *where, char *err,
-                           size_t errlen)
+static int sq_be_result_touch(sq_conn *c, const char *hash, double stamp, const char *where,
+                              char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOUCH, where, err, errlen);
     if (!st) return STORE_ERR;
@@ -902,8 +908,8 @@ static int sq_result_touch(sq_conn *c, const char *hash, double stamp, const cha
     return sq_step_done(c, st, NULL, where, err, errlen);
 }
 
-static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
-                        const unsigned char sha[32], char *err, size_t errlen)
+static int sq_be_chunk_put(sq_conn *c, const char *hash, uint64_t off, const void *data, size_t n,
+                           const unsigned char sha[32], char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_CHUNK_PUT, "result_put: chunk", err, errlen);
     if (!st) return STORE_ERR;
@@ -914,8 +920,8 @@ static int sq_chunk_put(sq_conn *c, const char *hash, uint64_t off, const void *
     return sq_step_done(c, st, NULL, "result_put: chunk", err, errlen);
 }
 
-static int sq_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t *bytes, char *err,
-                         size_t errlen)
+static int sq_be_chunks_sum(sq_conn *c, const char *hash, uint64_t *count, uint64_t *bytes,
+                            char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_CHUNKS_SUM, "result_put: sum", err, errlen);
     int rc;
@@ -959,8 +965,8 @@ static int sq_chunks_each(sq_conn *c, sqlite3_stmt *st, int one, store_chunk_fn 
     return rc == STORE_OK && one && !rows ? STORE_NOTFOUND : rc;
 }
 
-static int sq_chunks_read(sq_conn *c, const char *hash, long long at, store_chunk_fn fn, void *ctx,
-                          const char *where, char *err, size_t errlen)
+static int sq_be_chunks_read(sq_conn *c, const char *hash, long long at, store_chunk_fn fn,
+                             void *ctx, const char *where, char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, at < 0 ? SQ_CHUNKS_ALL : SQ_CHUNK_AT, where, err, errlen);
     if (!st) return STORE_ERR;
@@ -970,8 +976,8 @@ static int sq_chunks_read(sq_conn *c, const char *hash, long long at, store_chun
 }
 
 /* Reads result_totals (inside the caller's transaction, or as one snapshot). */
-static int sq_totals(sq_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
-                     size_t errlen)
+static int sq_be_totals(sq_conn *c, size_t *count, uint64_t *bytes, const char *where, char *err,
+                        size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_RESULT_TOTALS, where, err, errlen);
     int rc;
@@ -989,13 +995,13 @@ static int sq_totals(sq_conn *c, size_t *count, uint64_t *bytes, const char *whe
     return rc == SQLITE_ROW ? STORE_OK : STORE_ERR;
 }
 
-static int sq_evict_one(sq_conn *c, const char *keep, int *gone, char *err, size_t errlen)
+static int sq_be_evict_one(sq_conn *c, const char *keep, int *gone, char *err, size_t errlen)
 {
     return sq_run_key(c, SQ_RESULT_EVICT_ONE, keep, gone, "result_put: evict", err, errlen);
 }
 
 /* PRAGMA integrity_check: every line it reports but "ok", joined with "; ". */
-static int sq_integrity(sq_conn *c, char *err, size_t errlen)
+static int sq_be_integrity(sq_conn *c, char *err, size_t errlen)
 {
     int rc, bad = 0;
     size_t used = 0;
@@ -1018,7 +1024,7 @@ static int sq_integrity(sq_conn *c, char *err, size_t errlen)
 }
 
 /* One snapshot of one statement; the chunks of no result are those of a put under way here. */
-static int sq_recount(sq_conn *c, store_recount *v, char *err, size_t errlen)
+static int sq_be_recount(sq_conn *c, store_recount *v, char *err, size_t errlen)
 {
     sqlite3_stmt *st = sq_stmt(c, SQ_TOTALS_RECOUNT, "check: totals", err, errlen);
     if (!st) return STORE_ERR;
@@ -1036,7 +1042,8 @@ static int sq_recount(sq_conn *c, store_recount *v, char *err, size_t errlen)
 }
 
 /* Every chunk of every result against its digest, in C: SQLite has no SHA-256 of its own. */
-static int sq_chunks_digests(sq_conn *c, long long *all, long long *bad, char *err, size_t errlen)
+static int sq_be_chunks_digests(sq_conn *c, long long *all, long long *bad, char *err,
+                                size_t errlen)
 {
     int rc;
     *all = *bad = 0;
@@ -1058,14 +1065,14 @@ static int sq_chunks_digests(sq_conn *c, long long *all, long long *bad, char *e
  * the file is read-only, the disk refuses, or the lock cannot be had.  A probe waits a second
  * for the lock, not the writers' five: a lock held that long (a put holds it for a batch of
  * chunks: ~0.1 s) means the store is stuck for writers. */
-static int sq_probe(sq_conn *c, char *err, size_t errlen)
+static int sq_be_probe(sq_conn *c, char *err, size_t errlen)
 {
     int rc = STORE_ERR;
     sqlite3_busy_timeout(c->db, SQ_PROBE_BUSY_MS);
     if (!sq_run(c, SQ_BEGIN, "writable: begin", err, errlen)) {
         if (sq_run(c, SQ_PROBE, "writable", err, errlen) ||
             sq_run(c, SQ_COMMIT, "writable: commit", err, errlen))
-            sq_rollback(c);
+            sq_be_rollback(c);
         else
             rc = STORE_OK;
     }
@@ -1075,7 +1082,7 @@ static int sq_probe(sq_conn *c, char *err, size_t errlen)
 
 /* Finalizes and closes every connection of the store, on whichever thread opened it (see the
  * file comment: no other thread may be using the store). */
-static void sq_close(store *base)
+static void sq_be_close(store *base)
 {
     sq_store *s = (sq_store *)base;
     sq_conn *c;
@@ -1097,43 +1104,14 @@ static void sq_close(store *base)
     free(s);
 }
 
-static const store_be_ops sq_be = {
-    .name = "sqlite",
-    .conn = sq_be_conn,
-    .begin = sq_begin,
-    .commit = sq_commit,
-    .rollback = sq_rollback,
-    .stamp = sq_stamp,
-    .notify = NULL, /* one daemon per file: nobody else hears events */
-    .wait_event = NULL,
-    .job_write = sq_job_write,
-    .job_read = sq_job_read,
-    .job_active = sq_job_active,
-    .job_claim = sq_job_claim,
-    .job_set = sq_job_set,
-    .jobs_requeue = sq_jobs_requeue,
-    .job_counts = sq_job_counts,
-    .jobs_prune = sq_jobs_prune,
-    .sub_write = sq_sub_write,
-    .sub_read = sq_sub_read,
-    .sub_cancel = sq_sub_cancel,
-    .job_last_sub = sq_job_last_sub,
-    .result_head = sq_result_head,
-    .result_row = sq_result_row,
-    .result_delete = sq_result_delete,
-    .result_touch = sq_result_touch,
-    .chunks_forget = sq_chunks_forget,
-    .chunk_put = sq_chunk_put,
-    .chunks_sum = sq_chunks_sum,
-    .chunks_read = sq_chunks_read,
-    .totals = sq_totals,
-    .evict_one = sq_evict_one,
-    .integrity = sq_integrity,
-    .recount = sq_recount,
-    .chunks_digests = sq_chunks_digests,
-    .probe = sq_probe,
-    .close = sq_close,
-};
+/* one daemon per file: nobody else hears events (no NOTIFY); a put in batches may leave chunks
+ * behind, which chunks_forget deletes; the file has a check of its own (integrity_check) */
+static const store_be_ops sq_be = {STORE_BE_PRIMITIVES(sq_be),
+                                   .name = "sqlite",
+                                   .notify = NULL,
+                                   .wait_event = NULL,
+                                   .chunks_forget = sq_be_chunks_forget,
+                                   .integrity = sq_be_integrity};
 /* ---- opening ---- */
 
 /* PRAGMA user_version into *v (the first read of the file: a file that is no database fails

@@ -260,6 +260,15 @@ static void p_int(pg_params *p, long long x)
     p_text(p, p->buf[p->n]);
 }
 
+/* an HTTP status: NULL for 0 */
+static void p_status(pg_params *p, int status)
+{
+    if (status)
+        p_int(p, status);
+    else
+        p_text(p, NULL);
+}
+
 /* a time: NULL for 0 */
 static void p_time(pg_params *p, double t)
 {
@@ -556,10 +565,7 @@ static int pg_be_job_write(pg_conn *c, const store_job *j, const char *where, ch
     p_time(&p, j->created);
     p_time(&p, j->started);
     p_time(&p, j->finished);
-    if (j->error_status)
-        p_int(&p, j->error_status);
-    else
-        p_text(&p, NULL);
+    p_status(&p, j->error_status);
     p_text(&p, j->error);
     p_bin(&p, j->request, j->request_len);
     p_time(&p, j->state == JOB_CANCELED ? j->finished : 0);
@@ -630,10 +636,7 @@ static int pg_be_job_set(pg_conn *c, const store_set *a, int *cancel, const char
     if (a->kind == STORE_SET_FINISH) {
         p_int(&p, (int)a->state);
         p_time(&p, a->when);
-        if (a->error_status)
-            p_int(&p, a->error_status);
-        else
-            p_text(&p, NULL);
+        p_status(&p, a->error_status);
         p_text(&p, a->error);
         sql = "UPDATE jobs SET state = $3, finished = $4, error_status = $5, error = $6,"
               " request = ''::bytea, lease_until = NULL WHERE id = $1 AND owner = $2 AND state = 1";
@@ -889,18 +892,30 @@ static int pg_be_chunk_put(pg_conn *c, const char *hash, uint64_t off, const voi
                : STORE_OK;
 }
 
+/* The two numbers of the one row of sql (key its $1, or NULL for none). */
+static int pg_two(pg_conn *c, const char *sql, const char *key, long long *x, long long *y,
+                  const char *where, char *err, size_t errlen)
+{
+    PGresult *r = key ? pg_by_key(c, sql, key, 0, where, err, errlen)
+                      : pg_rows(c, sql, NULL, 0, where, err, errlen);
+    if (!r) return STORE_ERR;
+    *x = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    *y = strtoll(PQgetvalue(r, 0, 1), NULL, 10);
+    PQclear(r);
+    return STORE_OK;
+}
+
 static int pg_be_chunks_sum(pg_conn *c, const char *hash, uint64_t *count, uint64_t *bytes,
                             char *err, size_t errlen)
 {
-    PGresult *r = pg_by_key(c,
-                            "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks"
-                            " WHERE hash = $1",
-                            hash, 0, "result_put: sum", err, errlen);
-    if (!r) return STORE_ERR;
-    *count = strtoull(PQgetvalue(r, 0, 0), NULL, 10);
-    *bytes = strtoull(PQgetvalue(r, 0, 1), NULL, 10);
-    PQclear(r);
-    return STORE_OK;
+    long long n = 0, b = 0;
+    int rc = pg_two(c,
+                    "SELECT count(*), coalesce(sum(length(body)), 0) FROM result_chunks"
+                    " WHERE hash = $1",
+                    hash, &n, &b, "result_put: sum", err, errlen);
+    *count = (uint64_t)n;
+    *bytes = (uint64_t)b;
+    return rc;
 }
 
 /* One query, its rows in binary (bytea as bytes, off as int8). */
@@ -987,15 +1002,10 @@ static int pg_be_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
 static int pg_be_chunks_digests(pg_conn *c, long long *all, long long *bad, char *err,
                                 size_t errlen)
 {
-    PGresult *r = pg_rows(c,
-                          "SELECT count(*), count(*) FILTER (WHERE sha IS NULL"
-                          " OR sha <> sha256(body)) FROM result_chunks",
-                          NULL, 0, "check", err, errlen);
-    if (!r) return STORE_ERR;
-    *all = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
-    *bad = strtoll(PQgetvalue(r, 0, 1), NULL, 10);
-    PQclear(r);
-    return STORE_OK;
+    return pg_two(c,
+                  "SELECT count(*), count(*) FILTER (WHERE sha IS NULL OR sha <> sha256(body))"
+                  " FROM result_chunks",
+                  NULL, all, bad, "check", err, errlen);
 }
 
 /* The totals row rewritten as it is, under a statement timeout of a second, rolled back. */

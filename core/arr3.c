@@ -29,7 +29,6 @@
 
 #include <float.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,6 +39,7 @@
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/util.h"
 
 /* ------------------------------------------------------------------ shared tools */
 
@@ -48,19 +48,6 @@ static double now_ms(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
 }
 
 #ifdef A3_PROF
@@ -97,26 +84,6 @@ void a3_span_tick(void *span, double f)
 {
     const a3_span *sp = span;
     a3_progress(sp->A, sp->stage, sp->lo + (sp->hi - sp->lo) * f);
-}
-
-uint32_t a3_uf_find(uint32_t *p, uint32_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
-
-void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
-{
-    a = a3_uf_find(p, a);
-    b = a3_uf_find(p, b);
-    if (a == b) return;
-    if (a < b)
-        p[b] = a;
-    else
-        p[a] = b;
 }
 
 size_t a3_solid_end(const a3 *A, size_t i)
@@ -779,12 +746,6 @@ static i128 tri_dot(const a3 *A, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
 
 static int add_contact(a3 *A, uint32_t plane, uint32_t p);
 
-int a3_cmp_u32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
-
 /* Is grid point c strictly inside the segment from u to w? (exact; coordinates below 2^31) */
 static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
 {
@@ -808,7 +769,7 @@ static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
  * vertices of its left-out faces (sorted here).  Returns -1 out of memory. */
 static int mend_dropped(a3 *A, size_t pc0, size_t pc1, uint32_t *drop, size_t n)
 {
-    qsort(drop, n, sizeof *drop, a3_cmp_u32);
+    qsort(drop, n, sizeof *drop, u32_cmp);
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         if (!m || drop[i] != drop[m - 1]) drop[m++] = drop[i];
@@ -1033,7 +994,7 @@ static void in_task(void *ctx, size_t item, int worker)
     double step = A->step;
 #define TASK_FAIL(code, ...)                                                                       \
     do {                                                                                           \
-        B->rc = seterr(B->msg, sizeof B->msg, code, __VA_ARGS__);                                  \
+        B->rc = util_seterr(B->msg, sizeof B->msg, code, __VA_ARGS__);                             \
         return;                                                                                    \
     } while (0)
 #define TASK_OOM TASK_FAIL(ARR_ENOMEM, "%s", "out of memory")
@@ -1511,8 +1472,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
             for (int a = 0; a < 3; a++) {
                 double x = solids[s].V[3 * i + a];
                 if (!isfinite(x))
-                    return seterr(err, el, ARR_EINVAL, "solids[%zu]: vertex %zu is not finite", s,
-                                  i);
+                    return util_seterr(err, el, ARR_EINVAL, "solids[%zu]: vertex %zu is not finite",
+                                       s, i);
                 if (x < lo[a]) lo[a] = x;
                 if (x > hi[a]) hi[a] = x;
             }
@@ -1525,8 +1486,8 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     A->st->input_solids = ns;
     A->st->input_faces = nfaces;
     if (nfaces > ARR3_MAX_FACES)
-        return seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u", nfaces,
-                      ARR3_MAX_FACES);
+        return util_seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u",
+                           nfaces, ARR3_MAX_FACES);
     {
         size_t avail = A->o->max_bytes;
         if (!avail) {
@@ -1534,15 +1495,16 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
             avail = pages > 0 && size > 0 ? (size_t)pages * (size_t)size : SIZE_MAX;
         }
         if (nfaces > avail / ARR3_BYTES_PER_FACE)
-            return seterr(err, el, ARR_ELIMIT,
-                          "solids: %zu faces need about %.1f GB (%u bytes a face), more than the "
-                          "%.1f GB of memory this run may take",
-                          nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
-                          (double)avail / 1e9);
+            return util_seterr(
+                err, el, ARR_ELIMIT,
+                "solids: %zu faces need about %.1f GB (%u bytes a face), more than the "
+                "%.1f GB of memory this run may take",
+                nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
+                (double)avail / 1e9);
     }
     A->solid_face_off = mem_calloc(ns + 1, sizeof *A->solid_face_off);
     A->twinned = mem_calloc(ns + 1, 1);
-    if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    if (!A->solid_face_off || !A->twinned) return util_seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
     for (size_t s = 0; s < ns; s++)
         A->solid_face_off[s + 1] = A->solid_face_off[s] + (uint32_t)solids[s].nf;
@@ -1556,10 +1518,10 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     A->st->precision = step;
     for (int a = 0; a < 3; a++)
         if (!(fabs(lo[a]) / step < 0x1p62) || !(fabs(hi[a]) / step < 0x1p62))
-            return seterr(err, el, ARR_ELIMIT,
-                          "solids: a coordinate is too large for the grid of step %g (at most "
-                          "2^62 steps from the origin)",
-                          step);
+            return util_seterr(err, el, ARR_ELIMIT,
+                               "solids: a coordinate is too large for the grid of step %g (at most "
+                               "2^62 steps from the origin)",
+                               step);
     for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
     voff = mem_malloc((ns + 1) * sizeof *voff);
     eoff = mem_malloc((ns + 1) * sizeof *eoff);
@@ -1616,7 +1578,7 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     size_t npc = 0, npcyc = 0, npcv = 0;
     for (size_t t = 0; t < ntask; t++) {
         if (buf[t].rc != ARR_OK) {
-            rc = seterr(err, el, buf[t].rc, "%s", buf[t].msg);
+            rc = util_seterr(err, el, buf[t].rc, "%s", buf[t].msg);
             goto fail;
         }
         npc += buf[t].npc, npcyc += buf[t].npcyc, npcv += buf[t].npcv;
@@ -1692,10 +1654,10 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
     }
     goto fail; /* rc == ARR_OK: just free */
 cancel:
-    rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+    rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
     goto fail;
 oom:
-    rc = seterr(err, el, ARR_ENOMEM, "out of memory");
+    rc = util_seterr(err, el, ARR_ENOMEM, "out of memory");
 fail:
     for (size_t i = 0; buf && i < ntask; i++) pbuf_free(&buf[i]);
     free(buf);
@@ -1845,7 +1807,7 @@ const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp)
 int arr3_grid_step(double extent, double precision, double *step, char *err, size_t errlen)
 {
     if (precision < 0 || !isfinite(precision))
-        return seterr(err, errlen, ARR_EINVAL, "precision: expected a positive number");
+        return util_seterr(err, errlen, ARR_EINVAL, "precision: expected a positive number");
     if (!(extent > 0) || !isfinite(extent)) {
         *step = precision > 0 ? precision : 1; /* nothing to snap: any step gives the same */
         return ARR_OK;
@@ -1856,10 +1818,11 @@ int arr3_grid_step(double extent, double precision, double *step, char *err, siz
         return ARR_OK;
     }
     if (extent / precision > exp2(ARR3_GRID_BITS))
-        return seterr(err, errlen, ARR_ELIMIT,
-                      "precision: %g is finer than the input allows: its extent %g divided by the "
-                      "precision must be at most 2^%d",
-                      precision, extent, ARR3_GRID_BITS);
+        return util_seterr(
+            err, errlen, ARR_ELIMIT,
+            "precision: %g is finer than the input allows: its extent %g divided by the "
+            "precision must be at most 2^%d",
+            precision, extent, ARR3_GRID_BITS);
     *step = precision;
     return ARR_OK;
 }
@@ -2492,7 +2455,7 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         A->pc[pi].reached = 1;
     }
     if (A->nfold) { /* ascending, each once */
-        qsort(A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32);
+        qsort(A->fold, A->nfold, sizeof *A->fold, u32_cmp);
         size_t m = 1;
         for (size_t i = 1; i < A->nfold; i++)
             if (A->fold[i] != A->fold[m - 1]) A->fold[m++] = A->fold[i];
@@ -2653,7 +2616,7 @@ A3_STAGE static int plane_inputs(a3 *A)
 
 int a3_plane_fold(const a3 *A, uint32_t P)
 {
-    return A->nfold && bsearch(&P, A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32) != NULL;
+    return A->nfold && bsearch(&P, A->fold, A->nfold, sizeof *A->fold, u32_cmp) != NULL;
 }
 
 int a3_plane_simple(const a3 *A, uint32_t P)
@@ -3255,10 +3218,10 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     a3_free(&A);
     return ARR_OK;
 cancel:
-    rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");
+    rc = util_seterr(err, errlen, ARR_ECANCELED, "cancelled");
     goto fail;
 oom:
-    rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+    rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
 fail : {
     arr3_stats keep = out->stats;
     lar3_free(out);

@@ -65,6 +65,7 @@
 #include <string.h>
 
 #include "core/arr2.h"
+#include "core/mem.h"
 
 #define SVG_NS               "http://www.w3.org/2000/svg"
 #define XLINK_NS             "http://www.w3.org/1999/xlink"
@@ -247,13 +248,8 @@ static int push_seg(reader *r, double x1, double y1, double x2, double y2)
     }
     if (r->nseg >= r->max_segs)
         return fail(r, ARR_ELIMIT, "more than %zu segments (limit max_segments)", r->max_segs);
-    if (r->nseg == r->capseg) {
-        size_t cap = r->capseg ? 2 * r->capseg : 1024;
-        double *p = realloc(r->seg, cap * 4 * sizeof *p);
-        if (!p) return fail(r, ARR_ENOMEM, "out of memory for %zu segments", cap);
-        r->seg = p;
-        r->capseg = cap;
-    }
+    if (mem_grow(&r->seg, &r->capseg, r->nseg + 1, 4 * sizeof *r->seg))
+        return fail(r, ARR_ENOMEM, "out of memory for %zu segments", r->nseg + 1);
     double *s = r->seg + 4 * r->nseg++;
     s[0] = x1, s[1] = y1, s[2] = x2, s[3] = y2;
     return ARR_OK;
@@ -275,13 +271,8 @@ static int push_curve(reader *r, const curve *c, int npts)
             r->nonfinite = 1;
             return ARR_OK;
         }
-    if (r->ncur == r->capcur) {
-        size_t cap = r->capcur ? 2 * r->capcur : 256;
-        curve *p = realloc(r->cur, cap * sizeof *p);
-        if (!p) return fail(r, ARR_ENOMEM, "out of memory for %zu curves", cap);
-        r->cur = p;
-        r->capcur = cap;
-    }
+    if (mem_grow(&r->cur, &r->capcur, r->ncur + 1, sizeof *r->cur))
+        return fail(r, ARR_ENOMEM, "out of memory for %zu curves", r->ncur + 1);
     r->cur[r->ncur++] = *c;
     return ARR_OK;
 }
@@ -1281,13 +1272,8 @@ static int index_ids(reader *r, const xmlNode *root)
             if (!a) a = attr_find(n, "id", (const char *)XML_XML_NAMESPACE);
             if (a && a->children && a->children->type == XML_TEXT_NODE && !a->children->next &&
                 a->children->content) {
-                if (r->nids == cap) {
-                    size_t nc = cap ? 2 * cap : 64;
-                    id_entry *p = realloc(r->ids, nc * sizeof *p);
-                    if (!p) return fail(r, ARR_ENOMEM, "out of memory for the id index");
-                    r->ids = p;
-                    cap = nc;
-                }
+                if (mem_grow(&r->ids, &cap, r->nids + 1, sizeof *r->ids))
+                    return fail(r, ARR_ENOMEM, "out of memory for the id index");
                 r->ids[r->nids++] = (id_entry){(const char *)a->children->content, n, order};
             }
             order++;

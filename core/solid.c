@@ -76,8 +76,7 @@
 #define SOLID_MAX_VERTICES 64000000u /* a reader's limits, see above */
 #define SOLID_MAX_FACES    64000000u
 #define SOLID_MAX_FACE_LEN 1000000u
-#define GRID_LIMIT         4611686018427387904.0 /* 2^62: |coordinate / precision| below this */
-#define NUMBER_MAX         128                   /* longest number token a reader takes */
+#define NUMBER_MAX         128 /* longest number token a reader takes */
 #define NONE               UINT32_MAX
 
 void solid_free(solid *s)
@@ -250,7 +249,7 @@ vertices:;
                 note(c, 1, SOLID_AT_VERTEX, v, "coordinate %d is not finite", a);
                 bad = 1;
                 break;
-            } else if (!(fabs(x[a]) / c->p < GRID_LIMIT)) {
+            } else if (!(fabs(x[a]) / c->p < SOLID_GRID_RANGE)) {
                 note(c, 1, SOLID_AT_VERTEX, v, "coordinate %.17g is too large for precision %g",
                      x[a], c->p);
                 bad = 1;

@@ -102,10 +102,17 @@ size_t a3_solid_end(const a3 *A, size_t i)
 
 /* ------------------------------------------------------------------ point sets */
 
-/* Approximations are within 2^-20 grid units of the point (|x| < 2^30, XPT_REL = 2^-50); two
- * equal points are within twice that.  A point is stored in the cell of its approximation and
- * searched in every cell within PSET_R of it. */
-#define PSET_R 0x1p-18
+/* PSET_R: a bound, with a factor 2 to spare, on how far apart two approximations (xpt.x) of one
+ * exact point lie, coordinate by coordinate, in grid units.  A point is stored in the cell of
+ * its approximation and searched in every cell within PSET_R of it; so equal points always meet.
+ * Derivation.  Every point the pipeline makes lies in the input's box (a vertex; an LPI on a
+ * piece's edge; a TPI where cuts cross inside a piece), and the box spans at most
+ * 2^ARR3_GRID_BITS grid steps on each axis (arr3_grid_step), centred on the origin oi: every
+ * coordinate has |x| <= 2^(ARR3_GRID_BITS - 1) + 1 < 2^ARR3_GRID_BITS.  An approximation is within
+ * XPT_REL |x| of the exact coordinate (core/pred.h), so two approximations of one point are within
+ * 2 XPT_REL 2^ARR3_GRID_BITS of each other; PSET_R is twice that (2^-18 with the grid's 30 bits
+ * and XPT_REL = 2^-50). */
+#define PSET_R (4 * XPT_REL * (double)(1u << ARR3_GRID_BITS))
 
 static uint64_t cell_key(int64_t x, int64_t y, int64_t z)
 {

@@ -520,6 +520,66 @@ done:
     return rc;
 }
 
+/* a3_triangulate's splice: the passage i of the loop L at a vertex of hole h (hn vertices,
+ * walked backwards when flip) whose inner wedge holds the hole's edge from there; SIZE_MAX if
+ * none.  *sb: that vertex's place in h. */
+static size_t splice_at(const a3 *A, int k, const ring *L, const uint32_t *h, size_t hn, int flip,
+                        size_t *sb)
+{
+    for (size_t t = 0; t < hn; t++)
+        for (size_t i = 0; i < L->n; i++) {
+            uint32_t hx = h[flip ? (t + hn - 1) % hn : (t + 1) % hn];
+            if (L->v[i] == h[t] &&
+                in_wedge(A, k, L->v[(i + L->n - 1) % L->n], L->v[i], L->v[(i + 1) % L->n], hx)) {
+                *sb = t;
+                return i;
+            }
+        }
+    return SIZE_MAX;
+}
+
+/* a3_triangulate's bridge: the place i on the loop L of the nearest vertex p (in the projection)
+ * that hole cyc[best]'s vertex m = cyc[best][bi] sees: p inside the loop's wedge and m's outer
+ * wedge, the segment pm meeting no edge of the loop or of a hole not yet bridged (used).
+ * SIZE_MAX if none. */
+static size_t bridge_at(const a3 *A, int k, const ring *L, uint32_t **cyc, const size_t *len,
+                        size_t nc, const uint8_t *used, size_t best, size_t bi, int flip)
+{
+    size_t hn = len[best], bp = SIZE_MAX;
+    uint32_t m = cyc[best][bi];
+    double bd = DBL_MAX;
+    for (size_t i = 0; i < L->n; i++) {
+        uint32_t p = L->v[i];
+        int64_t a[2], b[2];
+        proj2(A, p, k, a);
+        proj2(A, m, k, b);
+        double dd = (double)(a[0] - b[0]) * (double)(a[0] - b[0]) +
+                    (double)(a[1] - b[1]) * (double)(a[1] - b[1]);
+        if (dd >= bd || p == m) continue;
+        if (!in_wedge(A, k, L->v[(i + L->n - 1) % L->n], p, L->v[(i + 1) % L->n], m)) continue;
+        /* the hole's own wedge at m (the region outside the hole) */
+        uint32_t hp = cyc[best][flip ? (bi + 1) % hn : (bi + hn - 1) % hn];
+        uint32_t hx = cyc[best][flip ? (bi + hn - 1) % hn : (bi + 1) % hn];
+        if (!in_wedge(A, k, hp, m, hx, p)) continue;
+        int ok = 1;
+        for (size_t j = 0; j < L->n && ok; j++) {
+            uint32_t a0 = L->v[j], a1 = L->v[(j + 1) % L->n];
+            if (a0 == p || a1 == p) continue;
+            if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
+        }
+        for (size_t c = 1; c < nc && ok; c++) {
+            if (used[c] && c != best) continue;
+            for (size_t j = 0; j < len[c] && ok; j++) {
+                uint32_t a0 = cyc[c][j], a1 = cyc[c][(j + 1) % len[c]];
+                if (a0 == m || a1 == m) continue;
+                if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
+            }
+        }
+        if (ok) bd = dd, bp = i;
+    }
+    return bp;
+}
+
 /* a3_triangulate (arr3_int.h): holes are bridged into the outer loop (each from its vertex of
  * largest u to the nearest loop vertex it sees: no edge met, inside both wedges), or spliced in
  * at a vertex they share with it; the loop is split where it then passes a vertex twice the
@@ -559,18 +619,9 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
         int flip = area2(A, k, cyc[best], len[best]) > 0;
         size_t hn = len[best];
         /* a hole touching the loop at a vertex they share is spliced in there (the loop then
-         * passes that vertex twice, the hole in between), at the passage of the loop whose
-         * inner wedge holds the hole's edges; no bridge is needed, and none might be found */
-        size_t sp = SIZE_MAX, sb = 0;
-        for (size_t t = 0; t < hn && sp == SIZE_MAX; t++)
-            for (size_t i = 0; i < L.n; i++) {
-                uint32_t hx = cyc[best][flip ? (t + hn - 1) % hn : (t + 1) % hn];
-                if (L.v[i] == cyc[best][t] &&
-                    in_wedge(A, k, L.v[(i + L.n - 1) % L.n], L.v[i], L.v[(i + 1) % L.n], hx)) {
-                    sp = i, sb = t;
-                    break;
-                }
-            }
+         * passes that vertex twice, the hole in between); no bridge is needed, and none might
+         * be found */
+        size_t sb = 0, sp = splice_at(A, k, &L, cyc[best], hn, flip, &sb);
         if (sp != SIZE_MAX) {
             if (mem_grow(&L.v, &L.cap, L.n + hn, sizeof *L.v)) goto done;
             memmove(L.v + sp + 1 + hn, L.v + sp + 1, (L.n - sp - 1) * sizeof *L.v);
@@ -579,39 +630,7 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
             L.n += hn;
             continue;
         }
-        uint32_t m = cyc[best][bi];
-        /* candidates on the loop, nearest first */
-        double bd = DBL_MAX;
-        size_t bp = SIZE_MAX;
-        for (size_t i = 0; i < L.n; i++) {
-            uint32_t p = L.v[i];
-            int64_t a[2], b[2];
-            proj2(A, p, k, a);
-            proj2(A, m, k, b);
-            double dd = (double)(a[0] - b[0]) * (double)(a[0] - b[0]) +
-                        (double)(a[1] - b[1]) * (double)(a[1] - b[1]);
-            if (dd >= bd || p == m) continue;
-            if (!in_wedge(A, k, L.v[(i + L.n - 1) % L.n], p, L.v[(i + 1) % L.n], m)) continue;
-            /* the hole's own wedge at m (the region outside the hole) */
-            uint32_t hp = cyc[best][flip ? (bi + 1) % hn : (bi + hn - 1) % hn];
-            uint32_t hx = cyc[best][flip ? (bi + hn - 1) % hn : (bi + 1) % hn];
-            if (!in_wedge(A, k, hp, m, hx, p)) continue;
-            int ok = 1;
-            for (size_t j = 0; j < L.n && ok; j++) {
-                uint32_t a0 = L.v[j], a1 = L.v[(j + 1) % L.n];
-                if (a0 == p || a1 == p) continue;
-                if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
-            }
-            for (size_t c = 1; c < nc && ok; c++) {
-                if (used[c] && c != best) continue;
-                for (size_t j = 0; j < len[c] && ok; j++) {
-                    uint32_t a0 = cyc[c][j], a1 = cyc[c][(j + 1) % len[c]];
-                    if (a0 == m || a1 == m) continue;
-                    if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
-                }
-            }
-            if (ok) bd = dd, bp = i;
-        }
+        size_t bp = bridge_at(A, k, &L, cyc, len, nc, used, best, bi, flip);
         if (bp == SIZE_MAX) {
             rc = -2;
             goto done;

@@ -9,6 +9,11 @@
  *           that is not exactly planar on the grid is split into triangles (ear clipping in its
  *           projection, exact orientation tests), each a piece with its own exact plane.  So no
  *           plane is ever chosen for a group of faces: coplanarity is equality of exact planes.
+ *           stage_input runs in four steps over one state (inrun): input_count (box, counts,
+ *           limits), input_snap (grid, vertices), input_pieces (a task of faces a thread:
+ *           in_task, face by face in_face = in_triangle | in_cycles, then a piece or in_split),
+ *           input_join (the runs in order, the check's twins).  A caller that checked the solids
+ *           (arr3_opts.checked: the API) spares it the re-tests of coordinates and indices.
  *   pairs   a box-kd-tree of the pieces' boxes (closed boxes: touching counts) gives the pairs
  *           of pieces of different solids (in a soup: of different faces) in different planes.
  *   cuts    for each pair, the line where the two planes meet, and on it the part of each
@@ -20,6 +25,9 @@
  *   points  the points made by the cuts are deduplicated by position (pset: a hash over grid
  *           cells, exact equality inside), keeping the simplest definition (a vertex before an
  *           LPI); each plane's new points are deduplicated again after the planes.
+ *
+ * Tools: util_seterr, uf_find/uf_union, u32_cmp of core/util.h and mem_grow of core/mem.h (the
+ * a3_uf_* and a3_cmp_u32 of arr3_int.h are their old names, kept for the other arr3 files).
  *
  * Threads: the cuts (in chunks of pairs), the planes and parts of the cells (arr3_cells.c) run
  * on par_for(); everything else runs on the calling thread.  Results do not depend on the

@@ -38,7 +38,8 @@
  * conditional attributes: only a non-empty requiredExtensions excludes an element.
  * Reading stops only at a limit, malformed XML or out of memory; an element that cannot be read
  * (a bad number, an odd coordinate count, a bad transform) is skipped and described in a
- * warning, and path data is drawn up to its first error as the SVG specification says.
+ * warning, and path data is drawn up to its first error as the SVG specification says
+ * (path_draw: each command's numbers read by path_args, drawn from the pen by path_command).
  *
  * Counts: `elements` are the shapes drawn without error (once per drawing, so a shape used
  * twice counts twice), `skipped` the shapes and containers with an error (read in part or not

@@ -28,6 +28,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/mem.h"
+
 /* ---- triangulation --------------------------------------------------------------------------- */
 
 typedef struct pnode {
@@ -45,15 +47,9 @@ typedef struct tri_buf {
 static void tri_add(tri_buf *b, uint32_t a, uint32_t c, uint32_t d)
 {
     if (b->failed) return;
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 256;
-        uint32_t *t = realloc(b->t, 3 * cap * sizeof *t);
-        if (!t) {
-            b->failed = 1;
-            return;
-        }
-        b->t = t;
-        b->cap = cap;
+    if (mem_grow(&b->t, &b->cap, b->n + 1, 3 * sizeof *b->t)) {
+        b->failed = 1;
+        return;
     }
     b->t[3 * b->n] = a;
     b->t[3 * b->n + 1] = c;

@@ -789,7 +789,8 @@ static int solids_compute(const solids_req *r, const api_run_opts *ro, solids_ou
                     .progress = ro->progress,
                     .udata = ro->udata,
                     /* only the parts of the complex the fields print */
-                    .want = api_lar3_want(r->fields)};
+                    .want = api_lar3_want(r->fields),
+                    .checked = 1 /* validate() below checks every solid at r->step */};
     solid *fixed = NULL;
     uint32_t **twin = NULL;
     warn_list *w = o->w = calloc(1, sizeof *w);

@@ -9,6 +9,11 @@
  *           that is not exactly planar on the grid is split into triangles (ear clipping in its
  *           projection, exact orientation tests), each a piece with its own exact plane.  So no
  *           plane is ever chosen for a group of faces: coplanarity is equality of exact planes.
+ *           stage_input runs in four steps over one state (inrun): input_count (box, counts,
+ *           limits), input_snap (grid, vertices), input_pieces (a task of faces a thread:
+ *           in_task, face by face in_face = in_triangle | in_cycles, then a piece or in_split),
+ *           input_join (the runs in order, the check's twins).  A caller that checked the solids
+ *           (arr3_opts.checked: the API) spares it the re-tests of coordinates and indices.
  *   pairs   a box-kd-tree of the pieces' boxes (closed boxes: touching counts) gives the pairs
  *           of pieces of different solids (in a soup: of different faces) in different planes.
  *   cuts    for each pair, the line where the two planes meet, and on it the part of each
@@ -21,6 +26,9 @@
  *           cells, exact equality inside), keeping the simplest definition (a vertex before an
  *           LPI); each plane's new points are deduplicated again after the planes.
  *
+ * Tools: util_seterr, uf_find/uf_union, u32_cmp of core/util.h and mem_grow of core/mem.h (the
+ * a3_uf_* and a3_cmp_u32 of arr3_int.h are their old names, kept for the other arr3 files).
+ *
  * Threads: the cuts (in chunks of pairs), the planes and parts of the cells (arr3_cells.c) run
  * on par_for(); everything else runs on the calling thread.  Results do not depend on the
  * number of threads: the chunks' and the planes' outputs are merged in their order.
@@ -29,7 +37,6 @@
 
 #include <float.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,6 +47,7 @@
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/util.h"
 
 /* ------------------------------------------------------------------ shared tools */
 
@@ -48,19 +56,6 @@ static double now_ms(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
 }
 
 #ifdef A3_PROF
@@ -99,26 +94,6 @@ void a3_span_tick(void *span, double f)
     a3_progress(sp->A, sp->stage, sp->lo + (sp->hi - sp->lo) * f);
 }
 
-uint32_t a3_uf_find(uint32_t *p, uint32_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
-
-void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
-{
-    a = a3_uf_find(p, a);
-    b = a3_uf_find(p, b);
-    if (a == b) return;
-    if (a < b)
-        p[b] = a;
-    else
-        p[a] = b;
-}
-
 size_t a3_solid_end(const a3 *A, size_t i)
 {
     size_t lo = i + 1, hi = A->npc;
@@ -135,10 +110,17 @@ size_t a3_solid_end(const a3 *A, size_t i)
 
 /* ------------------------------------------------------------------ point sets */
 
-/* Approximations are within 2^-20 grid units of the point (|x| < 2^30, XPT_REL = 2^-50); two
- * equal points are within twice that.  A point is stored in the cell of its approximation and
- * searched in every cell within PSET_R of it. */
-#define PSET_R 0x1p-18
+/* PSET_R: a bound, with a factor 2 to spare, on how far apart two approximations (xpt.x) of one
+ * exact point lie, coordinate by coordinate, in grid units.  A point is stored in the cell of
+ * its approximation and searched in every cell within PSET_R of it; so equal points always meet.
+ * Derivation.  Every point the pipeline makes lies in the input's box (a vertex; an LPI on a
+ * piece's edge; a TPI where cuts cross inside a piece), and the box spans at most
+ * 2^ARR3_GRID_BITS grid steps on each axis (arr3_grid_step), centred on the origin oi: every
+ * coordinate has |x| <= 2^(ARR3_GRID_BITS - 1) + 1 < 2^ARR3_GRID_BITS.  An approximation is within
+ * XPT_REL |x| of the exact coordinate (core/pred.h), so two approximations of one point are within
+ * 2 XPT_REL 2^ARR3_GRID_BITS of each other; PSET_R is twice that (2^-18 with the grid's 30 bits
+ * and XPT_REL = 2^-50). */
+#define PSET_R (4 * XPT_REL * (double)(1u << ARR3_GRID_BITS))
 
 static uint64_t cell_key(int64_t x, int64_t y, int64_t z)
 {
@@ -546,6 +528,66 @@ done:
     return rc;
 }
 
+/* a3_triangulate's splice: the passage i of the loop L at a vertex of hole h (hn vertices,
+ * walked backwards when flip) whose inner wedge holds the hole's edge from there; SIZE_MAX if
+ * none.  *sb: that vertex's place in h. */
+static size_t splice_at(const a3 *A, int k, const ring *L, const uint32_t *h, size_t hn, int flip,
+                        size_t *sb)
+{
+    for (size_t t = 0; t < hn; t++)
+        for (size_t i = 0; i < L->n; i++) {
+            uint32_t hx = h[flip ? (t + hn - 1) % hn : (t + 1) % hn];
+            if (L->v[i] == h[t] &&
+                in_wedge(A, k, L->v[(i + L->n - 1) % L->n], L->v[i], L->v[(i + 1) % L->n], hx)) {
+                *sb = t;
+                return i;
+            }
+        }
+    return SIZE_MAX;
+}
+
+/* a3_triangulate's bridge: the place i on the loop L of the nearest vertex p (in the projection)
+ * that hole cyc[best]'s vertex m = cyc[best][bi] sees: p inside the loop's wedge and m's outer
+ * wedge, the segment pm meeting no edge of the loop or of a hole not yet bridged (used).
+ * SIZE_MAX if none. */
+static size_t bridge_at(const a3 *A, int k, const ring *L, uint32_t **cyc, const size_t *len,
+                        size_t nc, const uint8_t *used, size_t best, size_t bi, int flip)
+{
+    size_t hn = len[best], bp = SIZE_MAX;
+    uint32_t m = cyc[best][bi];
+    double bd = DBL_MAX;
+    for (size_t i = 0; i < L->n; i++) {
+        uint32_t p = L->v[i];
+        int64_t a[2], b[2];
+        proj2(A, p, k, a);
+        proj2(A, m, k, b);
+        double dd = (double)(a[0] - b[0]) * (double)(a[0] - b[0]) +
+                    (double)(a[1] - b[1]) * (double)(a[1] - b[1]);
+        if (dd >= bd || p == m) continue;
+        if (!in_wedge(A, k, L->v[(i + L->n - 1) % L->n], p, L->v[(i + 1) % L->n], m)) continue;
+        /* the hole's own wedge at m (the region outside the hole) */
+        uint32_t hp = cyc[best][flip ? (bi + 1) % hn : (bi + hn - 1) % hn];
+        uint32_t hx = cyc[best][flip ? (bi + hn - 1) % hn : (bi + 1) % hn];
+        if (!in_wedge(A, k, hp, m, hx, p)) continue;
+        int ok = 1;
+        for (size_t j = 0; j < L->n && ok; j++) {
+            uint32_t a0 = L->v[j], a1 = L->v[(j + 1) % L->n];
+            if (a0 == p || a1 == p) continue;
+            if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
+        }
+        for (size_t c = 1; c < nc && ok; c++) {
+            if (used[c] && c != best) continue;
+            for (size_t j = 0; j < len[c] && ok; j++) {
+                uint32_t a0 = cyc[c][j], a1 = cyc[c][(j + 1) % len[c]];
+                if (a0 == m || a1 == m) continue;
+                if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
+            }
+        }
+        if (ok) bd = dd, bp = i;
+    }
+    return bp;
+}
+
 /* a3_triangulate (arr3_int.h): holes are bridged into the outer loop (each from its vertex of
  * largest u to the nearest loop vertex it sees: no edge met, inside both wedges), or spliced in
  * at a vertex they share with it; the loop is split where it then passes a vertex twice the
@@ -585,18 +627,9 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
         int flip = area2(A, k, cyc[best], len[best]) > 0;
         size_t hn = len[best];
         /* a hole touching the loop at a vertex they share is spliced in there (the loop then
-         * passes that vertex twice, the hole in between), at the passage of the loop whose
-         * inner wedge holds the hole's edges; no bridge is needed, and none might be found */
-        size_t sp = SIZE_MAX, sb = 0;
-        for (size_t t = 0; t < hn && sp == SIZE_MAX; t++)
-            for (size_t i = 0; i < L.n; i++) {
-                uint32_t hx = cyc[best][flip ? (t + hn - 1) % hn : (t + 1) % hn];
-                if (L.v[i] == cyc[best][t] &&
-                    in_wedge(A, k, L.v[(i + L.n - 1) % L.n], L.v[i], L.v[(i + 1) % L.n], hx)) {
-                    sp = i, sb = t;
-                    break;
-                }
-            }
+         * passes that vertex twice, the hole in between); no bridge is needed, and none might
+         * be found */
+        size_t sb = 0, sp = splice_at(A, k, &L, cyc[best], hn, flip, &sb);
         if (sp != SIZE_MAX) {
             if (mem_grow(&L.v, &L.cap, L.n + hn, sizeof *L.v)) goto done;
             memmove(L.v + sp + 1 + hn, L.v + sp + 1, (L.n - sp - 1) * sizeof *L.v);
@@ -605,39 +638,7 @@ int a3_triangulate(const a3 *A, int k, uint32_t **cyc, const size_t *len, size_t
             L.n += hn;
             continue;
         }
-        uint32_t m = cyc[best][bi];
-        /* candidates on the loop, nearest first */
-        double bd = DBL_MAX;
-        size_t bp = SIZE_MAX;
-        for (size_t i = 0; i < L.n; i++) {
-            uint32_t p = L.v[i];
-            int64_t a[2], b[2];
-            proj2(A, p, k, a);
-            proj2(A, m, k, b);
-            double dd = (double)(a[0] - b[0]) * (double)(a[0] - b[0]) +
-                        (double)(a[1] - b[1]) * (double)(a[1] - b[1]);
-            if (dd >= bd || p == m) continue;
-            if (!in_wedge(A, k, L.v[(i + L.n - 1) % L.n], p, L.v[(i + 1) % L.n], m)) continue;
-            /* the hole's own wedge at m (the region outside the hole) */
-            uint32_t hp = cyc[best][flip ? (bi + 1) % hn : (bi + hn - 1) % hn];
-            uint32_t hx = cyc[best][flip ? (bi + hn - 1) % hn : (bi + 1) % hn];
-            if (!in_wedge(A, k, hp, m, hx, p)) continue;
-            int ok = 1;
-            for (size_t j = 0; j < L.n && ok; j++) {
-                uint32_t a0 = L.v[j], a1 = L.v[(j + 1) % L.n];
-                if (a0 == p || a1 == p) continue;
-                if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
-            }
-            for (size_t c = 1; c < nc && ok; c++) {
-                if (used[c] && c != best) continue;
-                for (size_t j = 0; j < len[c] && ok; j++) {
-                    uint32_t a0 = cyc[c][j], a1 = cyc[c][(j + 1) % len[c]];
-                    if (a0 == m || a1 == m) continue;
-                    if (seg_meets(A, k, p, m, a0, a1)) ok = 0;
-                }
-            }
-            if (ok) bd = dd, bp = i;
-        }
+        size_t bp = bridge_at(A, k, &L, cyc, len, nc, used, best, bi, flip);
         if (bp == SIZE_MAX) {
             rc = -2;
             goto done;
@@ -779,12 +780,6 @@ static i128 tri_dot(const a3 *A, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
 
 static int add_contact(a3 *A, uint32_t plane, uint32_t p);
 
-int a3_cmp_u32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
-
 /* Is grid point c strictly inside the segment from u to w? (exact; coordinates below 2^31) */
 static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
 {
@@ -808,7 +803,7 @@ static int inside_segment(const a3 *A, uint32_t u, uint32_t c, uint32_t w)
  * vertices of its left-out faces (sorted here).  Returns -1 out of memory. */
 static int mend_dropped(a3 *A, size_t pc0, size_t pc1, uint32_t *drop, size_t n)
 {
-    qsort(drop, n, sizeof *drop, a3_cmp_u32);
+    qsort(drop, n, sizeof *drop, u32_cmp);
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         if (!m || drop[i] != drop[m - 1]) drop[m++] = drop[i];
@@ -1017,9 +1012,204 @@ static inline int in_pairs(pbuf *B, uint32_t in, uint32_t base, uint32_t n)
     return 0;
 }
 
-/* The faces of one task into its pbuf: each face's vertices, without repeats; a face whose
- * vertices lie in one plane on the grid a piece as it is (its entries recorded for the check's
- * pairing when none was dropped), one that does not split into triangles. */
+/* Records a task's error in its pbuf (a task stops at its first) and is -1: `return IN_FAIL(B,
+ * ARR_EINVAL, "...", ...)` in the stages of in_task below. */
+#define IN_FAIL(B, code, ...)                                                                      \
+    ((B)->rc = util_seterr((B)->msg, sizeof(B)->msg, code, __VA_ARGS__), -1)
+#define IN_OOM(B) IN_FAIL(B, ARR_ENOMEM, "%s", "out of memory")
+
+/* in_face's first case: face f of solid s (so, its vertices mapped by map) a single cycle of
+ * three entries, three points apart and not flat on the grid: a piece as it is, its entries
+ * paired.  1 done, 0 not such a face (in_face goes on), -1 out of memory (B->rc). */
+static int in_triangle(const a3 *A, pbuf *B, const solid *so, const uint32_t *map, size_t s,
+                       size_t f)
+{
+    uint32_t face = A->solid_face_off[s] + (uint32_t)f;
+    uint32_t i0 = so->cyc_off[so->face_off[f]];
+    if (so->cyc_off[so->face_off[f] + 1] - i0 != 3 || so->cyc[i0] >= so->nv ||
+        so->cyc[i0 + 1] >= so->nv || so->cyc[i0 + 2] >= so->nv)
+        return 0;
+    uint32_t t[3] = {map[so->cyc[i0]], map[so->cyc[i0 + 1]], map[so->cyc[i0 + 2]]};
+    int64_t n[3];
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0] ||
+        grid_normal(A->g + 3 * (size_t)t[0], A->g + 3 * (size_t)t[1], A->g + 3 * (size_t)t[2], n))
+        return 0;
+    uint32_t base = (uint32_t)B->npcv;
+    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t, n) || in_pairs(B, i0, base, 3))
+        return IN_OOM(B);
+    return 1;
+}
+
+/* The cycles of face f on the grid, into B's scratch: each cycle's vertices without repeats
+ * (B->cyc[c], B->len[c], c < *nc), with its first input entry in B->inlo[c] when every entry went
+ * as it is (else NONE).  *nc is 0 when the face is left out (a soup's face that vanishes, a face
+ * of two points whose edges are its neighbours').  The vertex indices are checked unless the
+ * caller said the input is checked (arr3_opts.checked).  0, or -1 (B->rc). */
+static int in_cycles(const a3 *A, pbuf *B, const solid *so, const uint32_t *map, size_t s, size_t f,
+                     size_t *nc)
+{
+    size_t ncy = so->face_off[f + 1] - so->face_off[f], ntv = 0, k = 0;
+    size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
+    int checked = A->o->checked;
+    *nc = 0;
+    if (mem_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
+        mem_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
+        mem_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo) ||
+        mem_grow(&B->tv, &B->captv, total + 1, sizeof *B->tv))
+        return IN_OOM(B);
+    uint32_t *tv = B->tv;
+    for (uint32_t cy = so->face_off[f]; cy < so->face_off[f + 1]; cy++) {
+        size_t start = ntv;
+        for (uint32_t i = so->cyc_off[cy]; i < so->cyc_off[cy + 1]; i++) {
+            uint32_t vi = so->cyc[i];
+            if (!checked && vi >= so->nv)
+                return IN_FAIL(B, ARR_EINVAL, "solids[%zu]: face %zu: vertex index %u out of range",
+                               s, f, vi);
+            uint32_t v = map[vi];
+            if (ntv > start && tv[ntv - 1] == v) continue;
+            tv[ntv++] = v;
+        }
+        while (ntv - start > 1 && tv[ntv - 1] == tv[start]) ntv--;
+        if (ntv - start < 3) {
+            if (A->soup && cy == so->face_off[f]) return 0; /* a soup face may vanish */
+            if (A->soup) {
+                ntv = start;
+                continue;
+            }
+            /* a face of two points on the grid: its edges are its neighbours' edges between the
+             * same two points; left out */
+            if (cy == so->face_off[f] && ncy == 1) return 0;
+            return IN_FAIL(B, ARR_EINVAL,
+                           "solids[%zu]: face %zu: fewer than 3 distinct vertices on the grid of "
+                           "step %g",
+                           s, f, A->step);
+        }
+        /* its input entries, when they all went as they are */
+        B->inlo[k] = ntv - start == so->cyc_off[cy + 1] - so->cyc_off[cy] ? so->cyc_off[cy] : NONE;
+        B->len[k++] = ntv - start;
+    }
+    for (size_t c = 0, off = 0; c < k; off += B->len[c], c++) B->cyc[c] = tv + off;
+    *nc = k;
+    return 0;
+}
+
+/* in_face's last case: a face of nc cycles (in B's scratch) not planar on the grid, split into
+ * triangles (a quad by the better diagonal, else a3_triangulate), each a piece with its own exact
+ * plane; a triangle collinear in space is left out, its vertices to mend_dropped.  0, or -1
+ * (B->rc). */
+static int in_split(const a3 *A, pbuf *B, uint32_t sol, size_t s, size_t f, size_t nc)
+{
+    uint32_t face = A->solid_face_off[s] + (uint32_t)f, **cyc = B->cyc;
+    const size_t *len = B->len;
+    int k = face_newell_axis(A->g, cyc[0], len[0]); /* as solid_check's */
+    size_t ntri = 0;
+    int r;
+    int quad = nc == 1 && len[0] == 4;
+    if (quad) {
+        /* a quad: the diagonal whose two triangles' normals agree best (the larger dot product
+         * of their normals), as CGAL's triangulate_faces chooses.  Both keep the quad's order,
+         * whatever its projection looks like: two triangles in different planes (no three of
+         * the four points are on one line) that share the diagonal, walked once each way */
+        if (mem_grow(&B->tri, &B->captri, 6, sizeof *B->tri)) return IN_OOM(B);
+        const uint32_t *q = cyc[0];
+        i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
+        i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
+        int a = d02 > d13 ? 0 : 1;
+        uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
+        memcpy(B->tri, t, sizeof t);
+        ntri = 2;
+        r = 0;
+    } else {
+        r = a3_triangulate(A, k, cyc, len, nc, &B->tri, &ntri, &B->captri);
+    }
+    if (r == -1) return IN_OOM(B);
+    if (r == -2 || ntri == 0)
+        return IN_FAIL(B, ARR_EINVAL,
+                       "solids[%zu]: face %zu: not planar on the grid of step %g, and its "
+                       "projection is not a simple polygon to split into triangles",
+                       s, f, A->step);
+    B->split_faces++;
+    /* a3_triangulate's triangles come counter-clockwise in the projection: turned as the face's
+     * outer cycle turns there */
+    int ccw = quad || area2(A, k, cyc[0], len[0]) > 0;
+    for (size_t t = 0; t < ntri; t++) {
+        uint32_t *tc = B->tri + 3 * t;
+        if (!ccw) {
+            uint32_t x = tc[1];
+            tc[1] = tc[2], tc[2] = x;
+        }
+        size_t tl = 3;
+        plane3 tp;
+        if (grid_normal(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
+                        A->g + 3 * (size_t)tc[2], tp.n)) {
+            /* collinear in space: no surface, but its middle vertex may lie inside an edge of
+             * a neighbour (mend_dropped) */
+            if (!A->soup)
+                for (int q = 0; q < 3; q++)
+                    if (A3_PUSH(B->drop, B->ndrop, B->capdrop, tc[q])) return IN_OOM(B);
+            continue;
+        }
+        if ((r = add_piece(A, B, sol, face, tc, tp.n, 1, &tc, &tl, 1)))
+            return r == -1 ? IN_OOM(B)
+                           : IN_FAIL(B, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
+    }
+    return 0;
+}
+
+/* Face f of solid s into B: a triangle as it is (in_triangle); else its cycles (in_cycles), and
+ * a face whose vertices lie in one plane on the grid a piece as it is (its entries recorded for
+ * the check's pairing when none was dropped), one all on a line left out (its vertices to
+ * mend_dropped), one that is not planar split into triangles (in_split).  0, or -1 (B->rc). */
+static int in_face(const a3 *A, pbuf *B, const solid *so, const uint32_t *map, size_t s, size_t f)
+{
+    uint32_t face = A->solid_face_off[s] + (uint32_t)f;
+    size_t nc;
+    if (so->face_off[f + 1] - so->face_off[f] == 1) {
+        int r = in_triangle(A, B, so, map, s, f);
+        if (r) return r < 0 ? -1 : 0;
+    }
+    if (in_cycles(A, B, so, map, s, f, &nc)) return -1;
+    if (nc == 0) return 0;
+    uint32_t **cyc = B->cyc, *inlo = B->inlo;
+    const size_t *len = B->len;
+    plane3 p;
+    uint32_t sol = A->soup ? face : (uint32_t)s, av[3];
+    int planar;
+    if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
+        planar = grid_normal(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
+                             A->g + 3 * (size_t)cyc[0][2], p.n);
+        memcpy(av, cyc[0], sizeof av);
+    } else {
+        planar = face_plane(A, cyc, len, nc, &p, av);
+    }
+    if (planar < 0) {
+        if (A->soup) return 0;
+        if (nc > 1)
+            return IN_FAIL(B, ARR_EINVAL,
+                           "solids[%zu]: face %zu: zero area on the grid of step %g (a face with "
+                           "holes whose vertices lie on one line)",
+                           s, f, A->step);
+        /* all on one line: left out; where its vertices lie inside its neighbours' edges, those
+         * edges are split there (mend_dropped) */
+        for (size_t i = 0; i < len[0]; i++)
+            if (A3_PUSH(B->drop, B->ndrop, B->capdrop, cyc[0][i])) return IN_OOM(B);
+        return 0;
+    }
+    if (planar > 0) return in_split(A, B, sol, s, f, nc);
+    int k = normal_axis(p.n), r;
+    int sgn =
+        nc == 1 && len[0] == 3 ? 1 : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
+    uint32_t base = (uint32_t)B->npcv;
+    if ((r = add_piece(A, B, sol, face, av, p.n, sgn, cyc, len, nc)))
+        return r == -1 ? IN_OOM(B)
+                       : IN_FAIL(B, ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
+    for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++)
+        if (inlo[c] != NONE && in_pairs(B, inlo[c], base, (uint32_t)len[c])) return IN_OOM(B);
+    return 0;
+}
+
+/* The faces of one task into its pbuf (in_face, face by face), written in place in a3's arrays
+ * while they go as they are; the first error stops the task (B->rc). */
 static void in_task(void *ctx, size_t item, int worker)
 {
     (void)worker;
@@ -1029,14 +1219,6 @@ static void in_task(void *ctx, size_t item, int worker)
     const solid *so = &j->solids[T->s];
     const uint32_t *map = j->vmap + j->voff[T->s];
     pbuf *B = &j->buf[item];
-    size_t s = T->s;
-    double step = A->step;
-#define TASK_FAIL(code, ...)                                                                       \
-    do {                                                                                           \
-        B->rc = seterr(B->msg, sizeof B->msg, code, __VA_ARGS__);                                  \
-        return;                                                                                    \
-    } while (0)
-#define TASK_OOM TASK_FAIL(ARR_ENOMEM, "%s", "out of memory")
     { /* room for the run's faces as they are (a face split into triangles grows them) */
         size_t ncy = so->face_off[T->f1] - so->face_off[T->f0];
         size_t nent = so->cyc_off[so->face_off[T->f1]] - so->cyc_off[so->face_off[T->f0]];
@@ -1050,167 +1232,8 @@ static void in_task(void *ctx, size_t item, int worker)
         B->lazy = 1;
         B->in0 = so->cyc_off[so->face_off[T->f0]];
     }
-    for (size_t f = T->f0; f < T->f1; f++) {
-        uint32_t face = A->solid_face_off[s] + (uint32_t)f;
-        size_t nc = 0, ntv = 0;
-        int gone = 0;
-        size_t ncy = so->face_off[f + 1] - so->face_off[f];
-        if (ncy == 1) { /* a triangle of three points apart, not flat: as the loop below */
-            uint32_t i0 = so->cyc_off[so->face_off[f]];
-            if (so->cyc_off[so->face_off[f] + 1] - i0 == 3 && so->cyc[i0] < so->nv &&
-                so->cyc[i0 + 1] < so->nv && so->cyc[i0 + 2] < so->nv) {
-                uint32_t t[3] = {map[so->cyc[i0]], map[so->cyc[i0 + 1]], map[so->cyc[i0 + 2]]};
-                int64_t n[3];
-                if (t[0] != t[1] && t[1] != t[2] && t[2] != t[0] &&
-                    !grid_normal(A->g + 3 * (size_t)t[0], A->g + 3 * (size_t)t[1],
-                                 A->g + 3 * (size_t)t[2], n)) {
-                    uint32_t base = (uint32_t)B->npcv;
-                    if (add_tri(A, B, A->soup ? face : (uint32_t)s, face, t, n) ||
-                        in_pairs(B, i0, base, 3))
-                        TASK_OOM;
-                    continue;
-                }
-            }
-        }
-        if (mem_grow(&B->cyc, &B->capcyc, ncy + 1, sizeof *B->cyc) ||
-            mem_grow(&B->len, &B->caplen, ncy + 1, sizeof *B->len) ||
-            mem_grow(&B->inlo, &B->capinlo, ncy + 1, sizeof *B->inlo))
-            TASK_OOM;
-        size_t total = so->cyc_off[so->face_off[f + 1]] - so->cyc_off[so->face_off[f]];
-        if (mem_grow(&B->tv, &B->captv, total + 1, sizeof *B->tv)) TASK_OOM;
-        uint32_t *tv = B->tv, **cyc = B->cyc, *inlo = B->inlo;
-        size_t *len = B->len;
-        for (uint32_t cy = so->face_off[f]; cy < so->face_off[f + 1]; cy++) {
-            size_t start = ntv;
-            for (uint32_t i = so->cyc_off[cy]; i < so->cyc_off[cy + 1]; i++) {
-                uint32_t vi = so->cyc[i];
-                if (vi >= so->nv)
-                    TASK_FAIL(ARR_EINVAL, "solids[%zu]: face %zu: vertex index %u out of range", s,
-                              f, vi);
-                uint32_t v = map[vi];
-                if (ntv > start && tv[ntv - 1] == v) continue;
-                tv[ntv++] = v;
-            }
-            while (ntv - start > 1 && tv[ntv - 1] == tv[start]) ntv--;
-            if (ntv - start < 3) {
-                if (A->soup && cy == so->face_off[f]) break; /* a soup face may vanish */
-                if (A->soup) {
-                    ntv = start;
-                    continue;
-                }
-                if (cy == so->face_off[f] && ncy == 1) {
-                    /* a face of two points on the grid: its edges are its neighbours' edges
-                     * between the same two points; left out */
-                    gone = 1;
-                    break;
-                }
-                TASK_FAIL(ARR_EINVAL,
-                          "solids[%zu]: face %zu: fewer than 3 distinct vertices on the grid of "
-                          "step %g",
-                          s, f, step);
-            }
-            /* its input entries, when they all went as they are */
-            inlo[nc] =
-                ntv - start == so->cyc_off[cy + 1] - so->cyc_off[cy] ? so->cyc_off[cy] : NONE;
-            len[nc++] = ntv - start;
-        }
-        if (nc == 0 || gone) continue;
-        for (size_t c = 0, off = 0; c < nc; off += len[c], c++) cyc[c] = tv + off;
-        plane3 p;
-        uint32_t sol = A->soup ? face : (uint32_t)s, av[3];
-        int planar;
-        if (nc == 1 && len[0] == 3) { /* a triangle: planar, or flat */
-            planar = grid_normal(A->g + 3 * (size_t)cyc[0][0], A->g + 3 * (size_t)cyc[0][1],
-                                 A->g + 3 * (size_t)cyc[0][2], p.n);
-            memcpy(av, cyc[0], sizeof av);
-        } else {
-            planar = face_plane(A, cyc, len, nc, &p, av);
-        }
-        if (planar < 0) {
-            if (A->soup) continue;
-            if (nc > 1)
-                TASK_FAIL(ARR_EINVAL,
-                          "solids[%zu]: face %zu: zero area on the grid of step %g (a face with "
-                          "holes whose vertices lie on one line)",
-                          s, f, step);
-            /* all on one line: left out; where its vertices lie inside its neighbours' edges,
-             * those edges are split there (mend_dropped) */
-            for (size_t i = 0; i < len[0]; i++)
-                if (A3_PUSH(B->drop, B->ndrop, B->capdrop, cyc[0][i])) TASK_OOM;
-            continue;
-        }
-        if (planar == 0) {
-            int k = normal_axis(p.n), r;
-            int sgn = nc == 1 && len[0] == 3
-                          ? 1
-                          : ((area2(A, k, cyc[0], len[0]) > 0) == (p.n[k] > 0) ? 1 : -1);
-            uint32_t base = (uint32_t)B->npcv;
-            if ((r = add_piece(A, B, sol, face, av, p.n, sgn, cyc, len, nc))) {
-                if (r == -1) TASK_OOM;
-                TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
-            }
-            for (size_t c = 0; c < nc; base += (uint32_t)len[c], c++)
-                if (inlo[c] != NONE && in_pairs(B, inlo[c], base, (uint32_t)len[c])) TASK_OOM;
-            continue;
-        }
-        /* not planar on the grid: triangles, each with its own exact plane */
-        int k = face_newell_axis(A->g, cyc[0], len[0]); /* as solid_check's */
-        size_t ntri = 0;
-        int r;
-        int quad = nc == 1 && len[0] == 4;
-        if (quad) {
-            /* a quad: the diagonal whose two triangles' normals agree best (the larger dot
-             * product of their normals), as CGAL's triangulate_faces chooses.  Both keep the
-             * quad's order, whatever its projection looks like: two triangles in different
-             * planes (no three of the four points are on one line) that share the diagonal,
-             * walked once each way */
-            if (mem_grow(&B->tri, &B->captri, 6, sizeof *B->tri)) TASK_OOM;
-            const uint32_t *q = cyc[0];
-            i128 d02 = tri_dot(A, q[0], q[1], q[2], q[2], q[3], q[0]);
-            i128 d13 = tri_dot(A, q[1], q[2], q[3], q[3], q[0], q[1]);
-            int a = d02 > d13 ? 0 : 1;
-            uint32_t t[6] = {q[a], q[a + 1], q[a + 2], q[a + 2], q[(a + 3) % 4], q[a]};
-            memcpy(B->tri, t, sizeof t);
-            ntri = 2;
-            r = 0;
-        } else {
-            r = a3_triangulate(A, k, cyc, len, nc, &B->tri, &ntri, &B->captri);
-        }
-        if (r == -1) TASK_OOM;
-        if (r == -2 || ntri == 0)
-            TASK_FAIL(ARR_EINVAL,
-                      "solids[%zu]: face %zu: not planar on the grid of step %g, and its "
-                      "projection is not a simple polygon to split into triangles",
-                      s, f, step);
-        B->split_faces++;
-        /* a3_triangulate's triangles come counter-clockwise in the projection: turned as the
-         * face's outer cycle turns there */
-        int ccw = quad || area2(A, k, cyc[0], len[0]) > 0;
-        for (size_t t = 0; t < ntri; t++) {
-            uint32_t *tc = B->tri + 3 * t;
-            if (!ccw) {
-                uint32_t x = tc[1];
-                tc[1] = tc[2], tc[2] = x;
-            }
-            size_t tl = 3;
-            plane3 tp;
-            if (grid_normal(A->g + 3 * (size_t)tc[0], A->g + 3 * (size_t)tc[1],
-                            A->g + 3 * (size_t)tc[2], tp.n)) {
-                /* collinear in space: no surface, but its middle vertex may lie inside an edge
-                 * of a neighbour (mend_dropped) */
-                if (!A->soup)
-                    for (int q = 0; q < 3; q++)
-                        if (A3_PUSH(B->drop, B->ndrop, B->capdrop, tc[q])) TASK_OOM;
-                continue;
-            }
-            if ((r = add_piece(A, B, sol, face, tc, tp.n, 1, &tc, &tl, 1))) {
-                if (r == -1) TASK_OOM;
-                TASK_FAIL(ARR_EINTERNAL, "solids[%zu]: face %zu: bad plane", s, f);
-            }
-        }
-    }
-#undef TASK_FAIL
-#undef TASK_OOM
+    for (size_t f = T->f0; f < T->f1; f++)
+        if (in_face(A, B, so, map, T->s, f)) return;
 }
 
 /* The grid points of a chunk of the input's vertices. */
@@ -1490,139 +1513,200 @@ static int bounds_step(const double *lo, const double *hi, double precision, dou
     return arr3_grid_step(ext, precision, step, err, errlen);
 }
 
-A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
-                                char *err, size_t el)
+/* stage_input's state, passed from step to step and freed by inrun_free. */
+typedef struct inrun {
+    const solid *solids;
+    size_t ns;
+    const uint32_t *const *twins;
+    double lo[3], hi[3];                     /* the box of every input vertex */
+    size_t nfaces, nvin, nein, ncyin, ntask; /* input faces, vertices, entries, cycles; tasks */
+    size_t *voff,
+        *eoff;      /* by solid: its first vertex and entry among all solids' (and the totals) */
+    uint32_t *vmap; /* by input vertex of all solids (voff): its vertex */
+    intask *task;
+    pbuf *buf;               /* by task */
+    size_t *place, *at;      /* 3 by task: its place were every face as it is (injob.place);
+                                where the join puts its pieces (joinjob.at); then the totals */
+    size_t npc, npcyc, npcv; /* the pieces, their cycles and entries the tasks made */
+    piece *old_pc;           /* the arrays the tasks wrote in place, when the join moves them */
+    uint32_t *old_off, *old_pcv;
+    uint32_t *in2pcv; /* by input entry of all solids (eoff): its entry in a3 (NONE: none) */
+    uint8_t *ident;   /* by solid: joinjob.ident */
+    uint32_t *drop;   /* one solid's vertices of faces left out (mend_dropped) */
+} inrun;
+
+static void inrun_free(inrun *R)
 {
-    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
-    size_t nfaces = 0, nvin = 0, nein = 0, ntask = 0, ncyin = 0;
-    int rc = ARR_OK;
-    size_t *voff = NULL, *eoff = NULL;
-    int64_t *gin = NULL;
-    uint32_t *vmap = NULL, *in2pcv = NULL, *drop = NULL;
-    uint8_t *ident = NULL;
-    size_t ndrop = 0, capdrop = 0;
-    intask *task = NULL;
-    pbuf *buf = NULL;
-    size_t *at = NULL, *place = NULL;
-    piece *old_pc = NULL;
-    uint32_t *old_off = NULL, *old_pcv = NULL;
+    for (size_t i = 0; R->buf && i < R->ntask; i++) pbuf_free(&R->buf[i]);
+    free(R->buf);
+    free(R->task);
+    free(R->at);
+    free(R->place);
+    free(R->old_pc), free(R->old_off), free(R->old_pcv);
+    free(R->voff);
+    free(R->eoff);
+    free(R->vmap);
+    free(R->in2pcv);
+    free(R->ident);
+    free(R->drop);
+}
+
+/* stage_input's first step: the input's box (each coordinate finite, unless arr3_opts.checked)
+ * and counts, the limits of faces and memory, A's solid_face_off, twinned and nfaces.  ARR_OK
+ * or the error (err). */
+static int input_count(a3 *A, inrun *R, char *err, size_t el)
+{
+    const solid *solids = R->solids;
+    size_t ns = R->ns, nfaces = 0;
+    int checked = A->o->checked;
+    for (int a = 0; a < 3; a++) R->lo[a] = DBL_MAX, R->hi[a] = -DBL_MAX;
     for (size_t s = 0; s < ns; s++) {
         for (size_t i = 0; i < solids[s].nv; i++)
             for (int a = 0; a < 3; a++) {
                 double x = solids[s].V[3 * i + a];
-                if (!isfinite(x))
-                    return seterr(err, el, ARR_EINVAL, "solids[%zu]: vertex %zu is not finite", s,
-                                  i);
-                if (x < lo[a]) lo[a] = x;
-                if (x > hi[a]) hi[a] = x;
+                if (!checked && !isfinite(x))
+                    return util_seterr(err, el, ARR_EINVAL, "solids[%zu]: vertex %zu is not finite",
+                                       s, i);
+                if (x < R->lo[a]) R->lo[a] = x;
+                if (x > R->hi[a]) R->hi[a] = x;
             }
         nfaces += solids[s].nf;
-        nvin += solids[s].nv;
-        nein += solids[s].cyc_off[solids[s].ncyc];
-        ncyin += solids[s].ncyc;
-        ntask += (solids[s].nf + IN_CHUNK - 1) / IN_CHUNK;
+        R->nvin += solids[s].nv;
+        R->nein += solids[s].cyc_off[solids[s].ncyc];
+        R->ncyin += solids[s].ncyc;
+        R->ntask += (solids[s].nf + IN_CHUNK - 1) / IN_CHUNK;
     }
+    R->nfaces = nfaces;
     A->st->input_solids = ns;
     A->st->input_faces = nfaces;
     if (nfaces > ARR3_MAX_FACES)
-        return seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u", nfaces,
-                      ARR3_MAX_FACES);
-    {
-        size_t avail = A->o->max_bytes;
-        if (!avail) {
-            long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-            avail = pages > 0 && size > 0 ? (size_t)pages * (size_t)size : SIZE_MAX;
-        }
-        if (nfaces > avail / ARR3_BYTES_PER_FACE)
-            return seterr(err, el, ARR_ELIMIT,
-                          "solids: %zu faces need about %.1f GB (%u bytes a face), more than the "
-                          "%.1f GB of memory this run may take",
-                          nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
-                          (double)avail / 1e9);
+        return util_seterr(err, el, ARR_ELIMIT, "solids: %zu faces, more than the limit of %u",
+                           nfaces, ARR3_MAX_FACES);
+    size_t avail = A->o->max_bytes;
+    if (!avail) {
+        long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+        avail = pages > 0 && size > 0 ? (size_t)pages * (size_t)size : SIZE_MAX;
     }
+    if (nfaces > avail / ARR3_BYTES_PER_FACE)
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "solids: %zu faces need about %.1f GB (%u bytes a face), more than the "
+                           "%.1f GB of memory this run may take",
+                           nfaces, (double)nfaces * ARR3_BYTES_PER_FACE / 1e9, ARR3_BYTES_PER_FACE,
+                           (double)avail / 1e9);
     A->solid_face_off = mem_calloc(ns + 1, sizeof *A->solid_face_off);
     A->twinned = mem_calloc(ns + 1, 1);
-    if (!A->solid_face_off || !A->twinned) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    if (!A->solid_face_off || !A->twinned) return util_seterr(err, el, ARR_ENOMEM, "out of memory");
     A->nsolids = ns;
     for (size_t s = 0; s < ns; s++)
         A->solid_face_off[s + 1] = A->solid_face_off[s] + (uint32_t)solids[s].nf;
     A->nfaces = nfaces;
-    if (!nfaces) return ARR_OK;
+    return ARR_OK;
+}
+
+/* stage_input's second step: the grid (its step from the box, its origin oi at the box's
+ * centre; every coordinate within SOLID_GRID_RANGE steps of the origin, unless arr3_opts.checked),
+ * the input vertices snapped (on the threads), one vertex per grid point (A->g, A->nv; R->vmap).
+ * ARR_OK or the error (err). */
+static int input_snap(a3 *A, inrun *R, char *err, size_t el)
+{
+    const solid *solids = R->solids;
+    size_t ns = R->ns;
     double step;
-    A3_TICK("in/bounds");
+    int rc;
     /* arr3_solids_step's rule, on the bounds just taken */
-    if ((rc = bounds_step(lo, hi, A->o->precision, &step, err, el)) != ARR_OK) return rc;
+    if ((rc = bounds_step(R->lo, R->hi, A->o->precision, &step, err, el)) != ARR_OK) return rc;
     A->step = step;
     A->st->precision = step;
-    for (int a = 0; a < 3; a++)
-        if (!(fabs(lo[a]) / step < 0x1p62) || !(fabs(hi[a]) / step < 0x1p62))
-            return seterr(err, el, ARR_ELIMIT,
-                          "solids: a coordinate is too large for the grid of step %g (at most "
-                          "2^62 steps from the origin)",
-                          step);
-    for (int a = 0; a < 3; a++) A->oi[a] = llround((lo[a] + hi[a]) / 2 / step);
-    voff = mem_malloc((ns + 1) * sizeof *voff);
-    eoff = mem_malloc((ns + 1) * sizeof *eoff);
-    gin = mem_malloc((3 * nvin + 1) * sizeof *gin);
-    vmap = mem_malloc((nvin + 1) * sizeof *vmap);
-    task = mem_malloc((ntask + 1) * sizeof *task);
-    buf = mem_calloc(ntask + 1, sizeof *buf);
-    if (!voff || !eoff || !gin || !vmap || !task || !buf) goto oom;
-    voff[0] = eoff[0] = 0;
+    for (int a = 0; a < 3 && !A->o->checked; a++)
+        if (!(fabs(R->lo[a]) / step < SOLID_GRID_RANGE) ||
+            !(fabs(R->hi[a]) / step < SOLID_GRID_RANGE))
+            return util_seterr(err, el, ARR_ELIMIT,
+                               "solids: a coordinate is too large for the grid of step %g (at most "
+                               "2^62 steps from the origin)",
+                               step);
+    for (int a = 0; a < 3; a++) A->oi[a] = llround((R->lo[a] + R->hi[a]) / 2 / step);
+    R->voff = mem_malloc((ns + 1) * sizeof *R->voff);
+    R->eoff = mem_malloc((ns + 1) * sizeof *R->eoff);
+    R->vmap = mem_malloc((R->nvin + 1) * sizeof *R->vmap);
+    int64_t *gin = mem_malloc((3 * R->nvin + 1) * sizeof *gin);
+    if (!R->voff || !R->eoff || !R->vmap || !gin) goto oom;
+    R->voff[0] = R->eoff[0] = 0;
     for (size_t s = 0; s < ns; s++) {
-        voff[s + 1] = voff[s] + solids[s].nv;
-        eoff[s + 1] = eoff[s] + solids[s].cyc_off[solids[s].ncyc];
+        R->voff[s + 1] = R->voff[s] + solids[s].nv;
+        R->eoff[s + 1] = R->eoff[s] + solids[s].cyc_off[solids[s].ncyc];
     }
     /* the vertices on the grid (on the threads), then one vertex per grid point (in order) */
-    {
-        snapjob j = {A, solids, voff, ns, nvin, gin};
-        par_for(A->threads, (nvin + SNAP_CHUNK - 1) / SNAP_CHUNK, snap_chunk, &j);
-    }
+    snapjob j = {A, solids, R->voff, ns, R->nvin, gin};
+    par_for(A->threads, (R->nvin + SNAP_CHUNK - 1) / SNAP_CHUNK, snap_chunk, &j);
     A3_TICK("in/snap");
-    if (dedup_vertices(A, gin, nvin, vmap)) goto oom;
-    if (a3_cancelled(A)) goto cancel;
+    if (dedup_vertices(A, gin, R->nvin, R->vmap)) goto oom;
     free(gin);
-    gin = NULL;
+    if (a3_cancelled(A)) return util_seterr(err, el, ARR_ECANCELED, "cancelled");
     A3_TICK("in/vertex_at");
-    /* the faces into pieces, a run of faces a task on the threads, joined in order.  Each run
-     * writes in place, where its faces as they are go (the common case: then the join only
-     * shifts numbers); a run that needs more room goes on in arrays of its own, and the join
-     * copies every run to new arrays */
-    ntask = 0;
-    for (size_t s = 0; s < ns; s++)
+    return ARR_OK;
+oom:
+    free(gin);
+    return util_seterr(err, el, ARR_ENOMEM, "out of memory");
+}
+
+/* stage_input's third step: the faces into pieces, a run of faces a task on the threads
+ * (in_task).  Each run writes in place, where its faces as they are go (the common case: then
+ * the join only shifts numbers); a run that needs more room goes on in arrays of its own.
+ * R->npc, npcyc, npcv: what the runs made.  ARR_OK or the error (err: a task's first). */
+static int input_pieces(a3 *A, inrun *R, char *err, size_t el)
+{
+    const solid *solids = R->solids;
+    size_t ntask = 0, nfaces = R->nfaces;
+    R->task = mem_malloc((R->ntask + 1) * sizeof *R->task);
+    R->buf = mem_calloc(R->ntask + 1, sizeof *R->buf);
+    R->place = mem_malloc((3 * R->ntask + 3) * sizeof *R->place);
+    if (!R->task || !R->buf || !R->place) goto oom;
+    for (size_t s = 0; s < R->ns; s++)
         for (size_t f0 = 0; f0 < solids[s].nf; f0 += IN_CHUNK)
-            task[ntask++] =
+            R->task[ntask++] =
                 (intask){(uint32_t)s, (uint32_t)f0,
                          (uint32_t)(f0 + IN_CHUNK < solids[s].nf ? f0 + IN_CHUNK : solids[s].nf)};
-    place = mem_malloc((3 * ntask + 3) * sizeof *place);
-    if (!place || mem_grow(&A->pc, &A->cappc, nfaces + 1, sizeof *A->pc) ||
-        mem_grow(&A->pc_off, &A->cappc_off, ncyin + 2, sizeof *A->pc_off) ||
-        mem_grow(&A->pcv, &A->cappcv, nein + 1, sizeof *A->pcv))
+    R->ntask = ntask;
+    const intask *task = R->task;
+    size_t *place = R->place;
+    if (mem_grow(&A->pc, &A->cappc, nfaces + 1, sizeof *A->pc) ||
+        mem_grow(&A->pc_off, &A->cappc_off, R->ncyin + 2, sizeof *A->pc_off) ||
+        mem_grow(&A->pcv, &A->cappcv, R->nein + 1, sizeof *A->pcv))
         goto oom;
     for (size_t t = 0, cy0 = 0, s = 0; t < ntask; t++) {
         const solid *so = &solids[task[t].s];
         for (; s < task[t].s; s++) cy0 += solids[s].ncyc;
         place[3 * t] = A->solid_face_off[task[t].s] + task[t].f0;
         place[3 * t + 1] = cy0 + so->face_off[task[t].f0];
-        place[3 * t + 2] = eoff[task[t].s] + so->cyc_off[so->face_off[task[t].f0]];
+        place[3 * t + 2] = R->eoff[task[t].s] + so->cyc_off[so->face_off[task[t].f0]];
     }
-    place[3 * ntask] = nfaces, place[3 * ntask + 1] = ncyin, place[3 * ntask + 2] = nein;
-    {
-        injob j = {A, solids, vmap, voff, task, buf, place};
-        par_for(A->threads, ntask, in_task, &j);
-    }
+    place[3 * ntask] = nfaces, place[3 * ntask + 1] = R->ncyin, place[3 * ntask + 2] = R->nein;
+    injob j = {A, solids, R->vmap, R->voff, task, R->buf, place};
+    par_for(A->threads, ntask, in_task, &j);
     A3_TICK("in/tasks");
-    if (a3_cancelled(A)) goto cancel;
-    size_t npc = 0, npcyc = 0, npcv = 0;
+    if (a3_cancelled(A)) return util_seterr(err, el, ARR_ECANCELED, "cancelled");
+    R->npc = R->npcyc = R->npcv = 0;
     for (size_t t = 0; t < ntask; t++) {
-        if (buf[t].rc != ARR_OK) {
-            rc = seterr(err, el, buf[t].rc, "%s", buf[t].msg);
-            goto fail;
-        }
-        npc += buf[t].npc, npcyc += buf[t].npcyc, npcv += buf[t].npcv;
+        if (R->buf[t].rc != ARR_OK) return util_seterr(err, el, R->buf[t].rc, "%s", R->buf[t].msg);
+        R->npc += R->buf[t].npc, R->npcyc += R->buf[t].npcyc, R->npcv += R->buf[t].npcv;
     }
-    at = mem_malloc((3 * ntask + 3) * sizeof *at);
-    if (!at) goto oom;
+    return ARR_OK;
+oom:
+    return util_seterr(err, el, ARR_ENOMEM, "out of memory");
+}
+
+/* stage_input's last step: the runs' pieces joined in order into a3's arrays (join_task, on the
+ * threads: in place only numbers to shift, else copied to new arrays), which solids take their
+ * check's twins (twinned: given, and no face split), the faces left out mended into their
+ * neighbours (mend_dropped), and the check's twins carried over (twin_chunk).  0, or -1 out of
+ * memory. */
+static int input_join(a3 *A, inrun *R)
+{
+    const intask *task = R->task;
+    const pbuf *buf = R->buf;
+    size_t ntask = R->ntask, ns = R->ns, *at, ndrop = 0, capdrop = 0;
+    at = R->at = mem_malloc((3 * ntask + 3) * sizeof *R->at);
+    if (!at) return -1;
     at[0] = at[1] = at[2] = 0;
     int inplace = 1;
     for (size_t t = 0; t < ntask; t++) {
@@ -1630,23 +1714,23 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         at[3 * t + 4] = at[3 * t + 1] + buf[t].npcyc;
         at[3 * t + 5] = at[3 * t + 2] + buf[t].npcv;
         A->split_faces += buf[t].split_faces;
-        if (!buf[t].direct || memcmp(at + 3 * t + 3, place + 3 * t + 3, 3 * sizeof *at))
+        if (!buf[t].direct || memcmp(at + 3 * t + 3, R->place + 3 * t + 3, 3 * sizeof *at))
             inplace = 0; /* every run wrote exactly its faces as they are */
     }
     if (!inplace) { /* the runs' pieces (in place or their own) to new arrays */
-        old_pc = A->pc, old_off = A->pc_off, old_pcv = A->pcv;
+        R->old_pc = A->pc, R->old_off = A->pc_off, R->old_pcv = A->pcv;
         A->pc = NULL, A->pc_off = A->pcv = NULL;
         A->cappc = A->cappc_off = A->cappcv = 0;
     }
-    if (mem_grow(&A->pc, &A->cappc, npc + 1, sizeof *A->pc) ||
-        mem_grow(&A->pc_off, &A->cappc_off, npcyc + 2, sizeof *A->pc_off) ||
-        mem_grow(&A->pcv, &A->cappcv, npcv + 1, sizeof *A->pcv) ||
-        mem_grow(&A->pcvp, &A->cappcvp, npcv + 1, sizeof *A->pcvp) ||
-        mem_grow(&A->ptwin, &A->capptwin, npcv + 1, sizeof *A->ptwin))
-        goto oom;
+    if (mem_grow(&A->pc, &A->cappc, R->npc + 1, sizeof *A->pc) ||
+        mem_grow(&A->pc_off, &A->cappc_off, R->npcyc + 2, sizeof *A->pc_off) ||
+        mem_grow(&A->pcv, &A->cappcv, R->npcv + 1, sizeof *A->pcv) ||
+        mem_grow(&A->pcvp, &A->cappcvp, R->npcv + 1, sizeof *A->pcvp) ||
+        mem_grow(&A->ptwin, &A->capptwin, R->npcv + 1, sizeof *A->ptwin))
+        return -1;
     /* by solid: the check's twins are taken (no split face), and its entries are its input's */
-    ident = mem_calloc(ns + 1, 1);
-    if (!ident) goto oom;
+    R->ident = mem_calloc(ns + 1, 1);
+    if (!R->ident) return -1;
     int need_map = 0;
     for (size_t s = 0, t = 0; s < ns; s++) {
         size_t split = 0;
@@ -1654,27 +1738,25 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         for (; t < ntask && task[t].s == s; t++) {
             split += buf[t].split_faces;
             /* in place, its counts are its input's: every entry went as it is? */
-            if (buf[t].nin != place[3 * t + 5] - place[3 * t + 2] || buf[t].ndrop) asis = 0;
+            if (buf[t].nin != R->place[3 * t + 5] - R->place[3 * t + 2] || buf[t].ndrop) asis = 0;
         }
         /* the check paired the input's edges; a face split into triangles has edges of its own
          * (and its input edges in other entries): such a solid's twins all come from its
          * pieces (stage_twins), so that its patches reach across the split faces */
-        if (twins && twins[s] && !split) A->twinned[s] = 1;
-        ident[s] = A->twinned[s] && asis;
+        if (R->twins && R->twins[s] && !split) A->twinned[s] = 1;
+        R->ident[s] = A->twinned[s] && asis;
         need_map |= A->twinned[s] && !asis;
     }
     if (need_map) {
-        in2pcv = mem_malloc((nein + 1) * sizeof *in2pcv);
-        if (!in2pcv) goto oom;
-        memset(in2pcv, 0xff, (nein + 1) * sizeof *in2pcv);
+        R->in2pcv = mem_malloc((R->nein + 1) * sizeof *R->in2pcv);
+        if (!R->in2pcv) return -1;
+        memset(R->in2pcv, 0xff, (R->nein + 1) * sizeof *R->in2pcv);
     }
-    {
-        joinjob j = {A, buf, task, at, eoff, twins, in2pcv, inplace, ident};
-        par_for(A->threads, ntask, join_task, &j);
-    }
-    free(old_pc), free(old_off), free(old_pcv);
-    old_pc = NULL, old_off = old_pcv = NULL;
-    A->npc = npc, A->npcyc = npcyc, A->npcv = npcv;
+    joinjob j = {A, R->buf, task, at, R->eoff, R->twins, R->in2pcv, inplace, R->ident};
+    par_for(A->threads, ntask, join_task, &j);
+    free(R->old_pc), free(R->old_off), free(R->old_pcv);
+    R->old_pc = NULL, R->old_off = R->old_pcv = NULL;
+    A->npc = R->npc, A->npcyc = R->npcyc, A->npcv = R->npcv;
     A->pc_off[A->npcyc] = (uint32_t)A->npcv;
     /* the faces left out, solid by solid: their vertices inside the solid's edges */
     for (size_t s = 0, t = 0; s < ns; s++) {
@@ -1682,34 +1764,32 @@ A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uin
         ndrop = 0;
         for (; t < ntask && task[t].s == s; t++)
             for (size_t i = 0; i < buf[t].ndrop; i++)
-                if (A3_PUSH(drop, ndrop, capdrop, buf[t].drop[i])) goto oom;
-        if (ndrop && mend_dropped(A, at[3 * t0], at[3 * t], drop, ndrop)) goto oom;
+                if (A3_PUSH(R->drop, ndrop, capdrop, buf[t].drop[i])) return -1;
+        if (ndrop && mend_dropped(A, at[3 * t0], at[3 * t], R->drop, ndrop)) return -1;
     }
     A3_TICK("in/join");
-    if (in2pcv) { /* the twins the check found, between entries that went as they are */
-        twinjob j = {A, twins, in2pcv, eoff, ns, nein};
-        par_for(A->threads, (nein + SNAP_CHUNK - 1) / SNAP_CHUNK, twin_chunk, &j);
+    if (R->in2pcv) { /* the twins the check found, between entries that went as they are */
+        twinjob tj = {A, R->twins, R->in2pcv, R->eoff, ns, R->nein};
+        par_for(A->threads, (R->nein + SNAP_CHUNK - 1) / SNAP_CHUNK, twin_chunk, &tj);
     }
-    goto fail; /* rc == ARR_OK: just free */
-cancel:
-    rc = seterr(err, el, ARR_ECANCELED, "cancelled");
-    goto fail;
-oom:
-    rc = seterr(err, el, ARR_ENOMEM, "out of memory");
-fail:
-    for (size_t i = 0; buf && i < ntask; i++) pbuf_free(&buf[i]);
-    free(buf);
-    free(task);
-    free(at);
-    free(place);
-    free(old_pc), free(old_off), free(old_pcv);
-    free(voff);
-    free(eoff);
-    free(gin);
-    free(vmap);
-    free(in2pcv);
-    free(ident);
-    free(drop);
+    return 0;
+}
+
+/* The input: the solids' box and limits (input_count), the grid and its vertices (input_snap),
+ * the faces into pieces on the threads (input_pieces), joined in order with the check's twins
+ * (input_join).  ARR_OK or the error (err). */
+A3_STAGE static int stage_input(a3 *A, const solid *solids, size_t ns, const uint32_t *const *twins,
+                                char *err, size_t el)
+{
+    inrun R = {.solids = solids, .ns = ns, .twins = twins};
+    int rc = input_count(A, &R, err, el);
+    if (rc != ARR_OK || !R.nfaces) goto done;
+    A3_TICK("in/bounds");
+    if ((rc = input_snap(A, &R, err, el)) != ARR_OK) goto done;
+    if ((rc = input_pieces(A, &R, err, el)) != ARR_OK) goto done;
+    if (input_join(A, &R)) rc = util_seterr(err, el, ARR_ENOMEM, "out of memory");
+done:
+    inrun_free(&R);
     return rc;
 }
 
@@ -1845,7 +1925,7 @@ const plane3 *a3_face_plane(const a3 *A, uint32_t f, plane3 *tmp)
 int arr3_grid_step(double extent, double precision, double *step, char *err, size_t errlen)
 {
     if (precision < 0 || !isfinite(precision))
-        return seterr(err, errlen, ARR_EINVAL, "precision: expected a positive number");
+        return util_seterr(err, errlen, ARR_EINVAL, "precision: expected a positive number");
     if (!(extent > 0) || !isfinite(extent)) {
         *step = precision > 0 ? precision : 1; /* nothing to snap: any step gives the same */
         return ARR_OK;
@@ -1856,10 +1936,11 @@ int arr3_grid_step(double extent, double precision, double *step, char *err, siz
         return ARR_OK;
     }
     if (extent / precision > exp2(ARR3_GRID_BITS))
-        return seterr(err, errlen, ARR_ELIMIT,
-                      "precision: %g is finer than the input allows: its extent %g divided by the "
-                      "precision must be at most 2^%d",
-                      precision, extent, ARR3_GRID_BITS);
+        return util_seterr(
+            err, errlen, ARR_ELIMIT,
+            "precision: %g is finer than the input allows: its extent %g divided by the "
+            "precision must be at most 2^%d",
+            precision, extent, ARR3_GRID_BITS);
     *step = precision;
     return ARR_OK;
 }
@@ -2492,7 +2573,7 @@ A3_STAGE static int stage_cuts(a3 *A, const uint64_t *pairs, size_t np)
         A->pc[pi].reached = 1;
     }
     if (A->nfold) { /* ascending, each once */
-        qsort(A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32);
+        qsort(A->fold, A->nfold, sizeof *A->fold, u32_cmp);
         size_t m = 1;
         for (size_t i = 1; i < A->nfold; i++)
             if (A->fold[i] != A->fold[m - 1]) A->fold[m++] = A->fold[i];
@@ -2653,7 +2734,7 @@ A3_STAGE static int plane_inputs(a3 *A)
 
 int a3_plane_fold(const a3 *A, uint32_t P)
 {
-    return A->nfold && bsearch(&P, A->fold, A->nfold, sizeof *A->fold, a3_cmp_u32) != NULL;
+    return A->nfold && bsearch(&P, A->fold, A->nfold, sizeof *A->fold, u32_cmp) != NULL;
 }
 
 int a3_plane_simple(const a3 *A, uint32_t P)
@@ -3255,10 +3336,10 @@ int arr3_build_ex(const solid *solids, size_t ns, int soup, const uint32_t *cons
     a3_free(&A);
     return ARR_OK;
 cancel:
-    rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");
+    rc = util_seterr(err, errlen, ARR_ECANCELED, "cancelled");
     goto fail;
 oom:
-    rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+    rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
 fail : {
     arr3_stats keep = out->stats;
     lar3_free(out);

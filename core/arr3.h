@@ -58,6 +58,11 @@ typedef struct arr3_opts {
      * and their numbering are always made */
     unsigned want;
     size_t max_bytes; /* the memory the run may take (0: the machine's physical memory) */
+    /* 1: the caller has checked the solids (solid_check or solid_check_faces at this precision,
+     * as api/solids.c does): every coordinate finite and less than 2^62 steps from the origin,
+     * every vertex index in range.  The input stage then does not test these again.  0 (the
+     * default): it does, and reports them as errors. */
+    int checked;
 } arr3_opts;
 
 enum {

@@ -2,6 +2,7 @@
 #include "core/bool3.h"
 
 #include "core/mem.h"
+#include "core/util.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -27,12 +28,6 @@ static int face_sides(const lar3 *c, uint32_t *minus, uint32_t *plus)
         }
     }
     return 0;
-}
-
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
 }
 
 int bool3_membership(const lar3 *c, member_rows *rows, uint32_t *bad_face)
@@ -77,7 +72,7 @@ static int membership_units(const lar3 *c, member_rows *rows, uint32_t *bad_face
             toff[u + 1] = w + n;
             continue;
         }
-        qsort(tags + w, n, sizeof *tags, cmp_u32);
+        qsort(tags + w, n, sizeof *tags, u32_cmp);
         uint32_t k = 0;
         for (uint32_t i = 0; i < n;) {
             uint32_t j = i;
@@ -135,7 +130,7 @@ int bool3_membership_ex(const lar3 *c, member_rows *rows, uint32_t *bad_face,
         uint32_t w = toff[f], n = 0;
         for (uint32_t j = c->fsol_off[f]; j < c->fsol_off[f + 1]; j++)
             if (c->fsol[j] < ns) tags[w + n++] = c->fsol[j];
-        qsort(tags + w, n, sizeof *tags, cmp_u32);
+        qsort(tags + w, n, sizeof *tags, u32_cmp);
         uint32_t k = 0;
         for (uint32_t i = 0; i < n;) {
             uint32_t j = i;

@@ -4,15 +4,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/mem.h"
+#include "core/util.h"
+
 int bool_expr_push(bool_expr *e, int32_t instr)
 {
     if (e->n >= BOOL_MAX_CODE) return -1;
-    if ((e->n & (e->n - 1)) == 0) { /* capacity: powers of two */
-        size_t cap = e->n ? 2 * e->n : 8;
-        int32_t *c = realloc(e->code, cap * sizeof *c);
-        if (!c) return -1;
-        e->code = c;
-    }
+    if (mem_grow(&e->code, &e->cap, e->n + 1, sizeof *e->code)) return -1;
     e->code[e->n++] = instr;
     return 0;
 }
@@ -123,18 +121,6 @@ void bool_tree_free(bool_tree *t)
     memset(t, 0, sizeof *t);
 }
 
-static uint32_t merged_find(uint32_t *fwd, uint32_t x)
-{
-    uint32_t r = x;
-    while (fwd[r] != r) r = fwd[r];
-    while (fwd[x] != r) {
-        uint32_t n = fwd[x];
-        fwd[x] = r;
-        x = n;
-    }
-    return r;
-}
-
 static int associative(int32_t op)
 {
     return op == BOOL_OR || op == BOOL_AND || op == BOOL_XOR;
@@ -198,14 +184,14 @@ int bool_tree_build(const bool_expr *e, size_t ninputs, bool_tree *t)
     /* parents through the merges, then depths */
     uint32_t root = sp == 1 ? stack[0] : 0;
     for (size_t v = 0; v < nn; v++)
-        if (merged_find(fwd, (uint32_t)v) == v && t->parent[v] != UINT32_MAX)
-            t->parent[v] = merged_find(fwd, t->parent[v]);
+        if (uf_find(fwd, (uint32_t)v) == v && t->parent[v] != UINT32_MAX)
+            t->parent[v] = uf_find(fwd, t->parent[v]);
     t->parent[root] = UINT32_MAX;
     t->nnodes = nn;
     /* depth: walk up to a node whose depth is known, then down again (each node once) */
     for (size_t v = 0; v < nn; v++) {
         uint32_t u = (uint32_t)v, d, w;
-        if (merged_find(fwd, u) != u || t->queued[u]) continue;
+        if (uf_find(fwd, u) != u || t->queued[u]) continue;
         while (t->parent[u] != UINT32_MAX && !t->queued[u]) u = t->parent[u];
         d = t->queued[u] ? t->depth[u] : 0;
         t->depth[u] = d;
@@ -221,10 +207,10 @@ int bool_tree_build(const bool_expr *e, size_t ninputs, bool_tree *t)
     memset(t->queued, 0, n + 1);
     /* the leaves of each input */
     for (size_t v = 0; v < nn; v++)
-        if (t->op[v] >= 0 && merged_find(fwd, (uint32_t)v) == v) t->occ_off[t->op[v] + 1]++;
+        if (t->op[v] >= 0 && uf_find(fwd, (uint32_t)v) == v) t->occ_off[t->op[v] + 1]++;
     for (size_t i = 0; i < ninputs; i++) t->occ_off[i + 1] += t->occ_off[i];
     for (size_t v = 0; v < nn; v++)
-        if (t->op[v] >= 0 && merged_find(fwd, (uint32_t)v) == v)
+        if (t->op[v] >= 0 && uf_find(fwd, (uint32_t)v) == v)
             t->occ[t->occ_off[t->op[v]]++] = (uint32_t)v;
     for (size_t i = ninputs; i > 0; i--) t->occ_off[i] = t->occ_off[i - 1];
     t->occ_off[0] = 0;

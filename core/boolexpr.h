@@ -28,6 +28,7 @@ typedef struct bool_expr {
     size_t n;
     int32_t *code; /* >= 0: push input i; < 0: a BOOL_* operator on the two top values */
     size_t depth;  /* stack depth the program needs */
+    size_t cap;    /* room in code (mem_grow); a bool_expr starts zeroed */
 } bool_expr;
 
 /* The program of a named variadic operation ("union", "intersection", "difference", "xor") over

@@ -76,8 +76,7 @@
 #define SOLID_MAX_VERTICES 64000000u /* a reader's limits, see above */
 #define SOLID_MAX_FACES    64000000u
 #define SOLID_MAX_FACE_LEN 1000000u
-#define GRID_LIMIT         4611686018427387904.0 /* 2^62: |coordinate / precision| below this */
-#define NUMBER_MAX         128                   /* longest number token a reader takes */
+#define NUMBER_MAX         128 /* longest number token a reader takes */
 #define NONE               UINT32_MAX
 
 void solid_free(solid *s)
@@ -250,7 +249,7 @@ vertices:;
                 note(c, 1, SOLID_AT_VERTEX, v, "coordinate %d is not finite", a);
                 bad = 1;
                 break;
-            } else if (!(fabs(x[a]) / c->p < GRID_LIMIT)) {
+            } else if (!(fabs(x[a]) / c->p < SOLID_GRID_RANGE)) {
                 note(c, 1, SOLID_AT_VERTEX, v, "coordinate %.17g is too large for precision %g",
                      x[a], c->p);
                 bad = 1;
@@ -820,12 +819,7 @@ static int check_edges(ck *c, int *bad)
                  "edge %u-%u lies on %zu faces, %zu walking it each way: the surface touches or "
                  "overlaps itself there",
                  half_a(c, h), half_b(c, h), j - i, fwd);
-            if (c->nmulti == c->capmulti) {
-                size_t cap = c->capmulti ? 2 * c->capmulti : 64;
-                uint32_t *m = realloc(c->multi, cap * sizeof *m);
-                if (!m) return -1;
-                c->multi = m, c->capmulti = cap;
-            }
+            if (mem_grow(&c->multi, &c->capmulti, c->nmulti + 1, sizeof *c->multi)) return -1;
             c->multi[c->nmulti++] = (uint32_t)i;
         } else if (j - i == 1) {
             note(c, 1, SOLID_AT_FACE, h->face, "open surface (edge %u-%u has no other face)",
@@ -1470,12 +1464,7 @@ static int read_obj(const char *txt, size_t len, int groups, uint32_t **starts, 
             if (build_face(&b)) goto oom;
         } else if (starts && (tok_is(tok, "o") || (groups && tok_is(tok, "g"))) && b.nf &&
                    (!*nstarts || (*starts)[*nstarts - 1] != b.nf)) {
-            if (*nstarts >= capst) {
-                size_t c = capst ? 2 * capst : 16;
-                uint32_t *x = realloc(*starts, c * sizeof *x);
-                if (!x) goto oom;
-                *starts = x, capst = c;
-            }
+            if (mem_grow(starts, &capst, *nstarts + 1, sizeof **starts)) goto oom;
             (*starts)[(*nstarts)++] = (uint32_t)b.nf;
         }
         /* anything else (vt, vn, vp, s, usemtl, mtllib, l, p, ...) is not geometry */

@@ -52,6 +52,13 @@ void solid_free(solid *s); /* frees the arrays, zeroes the struct; safe twice */
 
 #define SOLID_MAX_MESSAGES 32
 
+/* The grid's range: a coordinate x is taken at precision p only when |x / p| < 2^62 (the check
+ * reports it otherwise, and so does the arrangement's input stage).  Its grid point, x / p
+ * rounded, is then an integer of magnitude at most 2^62 - 2^9 (the largest double below 2^62),
+ * so it and the difference of two of them (at most 2^63 - 2^10) are int64 values without
+ * overflow. */
+#define SOLID_GRID_RANGE 0x1p62
+
 enum { SOLID_AT_SOLID = 0, SOLID_AT_FACE = 1, SOLID_AT_VERTEX = 2, SOLID_AT_HOLE = 3 };
 
 /* What a message is, as fields: callers never need to read the text to tell them apart. */

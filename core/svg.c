@@ -38,7 +38,8 @@
  * conditional attributes: only a non-empty requiredExtensions excludes an element.
  * Reading stops only at a limit, malformed XML or out of memory; an element that cannot be read
  * (a bad number, an odd coordinate count, a bad transform) is skipped and described in a
- * warning, and path data is drawn up to its first error as the SVG specification says.
+ * warning, and path data is drawn up to its first error as the SVG specification says
+ * (path_draw: each command's numbers read by path_args, drawn from the pen by path_command).
  *
  * Counts: `elements` are the shapes drawn without error (once per drawing, so a shape used
  * twice counts twice), `skipped` the shapes and containers with an error (read in part or not
@@ -65,6 +66,7 @@
 #include <string.h>
 
 #include "core/arr2.h"
+#include "core/mem.h"
 
 #define SVG_NS               "http://www.w3.org/2000/svg"
 #define XLINK_NS             "http://www.w3.org/1999/xlink"
@@ -247,13 +249,8 @@ static int push_seg(reader *r, double x1, double y1, double x2, double y2)
     }
     if (r->nseg >= r->max_segs)
         return fail(r, ARR_ELIMIT, "more than %zu segments (limit max_segments)", r->max_segs);
-    if (r->nseg == r->capseg) {
-        size_t cap = r->capseg ? 2 * r->capseg : 1024;
-        double *p = realloc(r->seg, cap * 4 * sizeof *p);
-        if (!p) return fail(r, ARR_ENOMEM, "out of memory for %zu segments", cap);
-        r->seg = p;
-        r->capseg = cap;
-    }
+    if (mem_grow(&r->seg, &r->capseg, r->nseg + 1, 4 * sizeof *r->seg))
+        return fail(r, ARR_ENOMEM, "out of memory for %zu segments", r->nseg + 1);
     double *s = r->seg + 4 * r->nseg++;
     s[0] = x1, s[1] = y1, s[2] = x2, s[3] = y2;
     return ARR_OK;
@@ -275,13 +272,8 @@ static int push_curve(reader *r, const curve *c, int npts)
             r->nonfinite = 1;
             return ARR_OK;
         }
-    if (r->ncur == r->capcur) {
-        size_t cap = r->capcur ? 2 * r->capcur : 256;
-        curve *p = realloc(r->cur, cap * sizeof *p);
-        if (!p) return fail(r, ARR_ENOMEM, "out of memory for %zu curves", cap);
-        r->cur = p;
-        r->capcur = cap;
-    }
+    if (mem_grow(&r->cur, &r->capcur, r->ncur + 1, sizeof *r->cur))
+        return fail(r, ARR_ENOMEM, "out of memory for %zu curves", r->ncur + 1);
     r->cur[r->ncur++] = *c;
     return ARR_OK;
 }
@@ -780,14 +772,148 @@ static int is_command(char c)
     return c && strchr("MmZzLlHhVvCcSsQqTtAa", c) != NULL;
 }
 
-/* Reads the path data d of element n and draws it with m.  Drawn up to the first error (then
- * warned and counted as skipped).  Returns ARR_OK or a fatal code. */
+/* How many numbers path command up (upper case) takes. */
+static int path_nargs(char up)
+{
+    switch (up) {
+    case 'Z':
+        return 0;
+    case 'H':
+    case 'V':
+        return 1;
+    case 'M':
+    case 'L':
+    case 'T':
+        return 2;
+    case 'S':
+    case 'Q':
+        return 4;
+    case 'C':
+        return 6;
+    default: /* 'A' */
+        return 7;
+    }
+}
+
+/* Reads the na arguments of command up at *s into a (an arc's flags one character each).
+ * 0, or -1 with *why (and *bad_number when a number was beyond the range of doubles). */
+static int path_args(reader *r, const char **s, char up, int na, double *a, const char **why,
+                     int *bad_number)
+{
+    for (int i = 0; i < na; i++) {
+        int got;
+        skip_sep(s);
+        if (up == 'A' && (i == 3 || i == 4)) { /* flags: one character each */
+            if (**s != '0' && **s != '1') {
+                *why = "expected an arc flag 0 or 1";
+                return -1;
+            }
+            a[i] = *(*s)++ - '0';
+            continue;
+        }
+        got = scan_number(r, s, &a[i]);
+        if (got != 1) {
+            *why = "expected a number";
+            *bad_number = got < 0;
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* Where a path's drawing stands: the current point, its subpath's start, the last control
+ * point (for S and T) and the last command (upper case). */
+typedef struct pen {
+    double x, y, sx, sy, qx, qy;
+    char prev;
+} pen;
+
+/* Draws command up (relative when rel) with its arguments a from the pen p, which it moves.
+ * ARR_OK or a fatal code. */
+static int path_command(reader *r, const mat *m, pen *p, char up, int rel, const double *a)
+{
+    double x = p->x, y = p->y;
+    int rc = ARR_OK;
+    switch (up) {
+    case 'Z':
+        rc = line_local(r, m, x, y, p->sx, p->sy);
+        p->x = p->sx, p->y = p->sy;
+        break;
+    case 'M':
+        p->x = rel ? x + a[0] : a[0];
+        p->y = rel ? y + a[1] : a[1];
+        p->sx = p->x, p->sy = p->y;
+        break;
+    case 'L':
+    case 'H':
+    case 'V': {
+        double nx = x, ny = y;
+        if (up == 'L') nx = rel ? x + a[0] : a[0], ny = rel ? y + a[1] : a[1];
+        if (up == 'H') nx = rel ? x + a[0] : a[0];
+        if (up == 'V') ny = rel ? y + a[0] : a[0];
+        rc = line_local(r, m, x, y, nx, ny);
+        p->x = nx, p->y = ny;
+        break;
+    }
+    case 'C':
+    case 'S': {
+        double c[8] = {x, y};
+        int k = 0;
+        if (up == 'C') {
+            c[2] = a[0], c[3] = a[1];
+            k = 2;
+        } else if (p->prev == 'C' || p->prev == 'S') {
+            c[2] = 2 * x - p->qx, c[3] = 2 * y - p->qy;
+        } else {
+            c[2] = x, c[3] = y;
+        }
+        c[4] = a[k], c[5] = a[k + 1], c[6] = a[k + 2], c[7] = a[k + 3];
+        if (rel) {
+            if (up == 'C') c[2] += x, c[3] += y;
+            c[4] += x, c[5] += y, c[6] += x, c[7] += y;
+        }
+        rc = bezier_local(r, m, c, 4);
+        p->qx = c[4], p->qy = c[5];
+        p->x = c[6], p->y = c[7];
+        break;
+    }
+    case 'Q':
+    case 'T': {
+        double c[6] = {x, y};
+        if (up == 'Q') {
+            c[2] = rel ? x + a[0] : a[0], c[3] = rel ? y + a[1] : a[1];
+            c[4] = rel ? x + a[2] : a[2], c[5] = rel ? y + a[3] : a[3];
+        } else {
+            if (p->prev == 'Q' || p->prev == 'T')
+                c[2] = 2 * x - p->qx, c[3] = 2 * y - p->qy;
+            else
+                c[2] = x, c[3] = y;
+            c[4] = rel ? x + a[0] : a[0], c[5] = rel ? y + a[1] : a[1];
+        }
+        rc = bezier_local(r, m, c, 3);
+        p->qx = c[2], p->qy = c[3];
+        p->x = c[4], p->y = c[5];
+        break;
+    }
+    default: { /* 'A' */
+        double nx = rel ? x + a[5] : a[5], ny = rel ? y + a[6] : a[6];
+        rc = path_arc(r, m, x, y, a[0], a[1], a[2], a[3] != 0, a[4] != 0, nx, ny);
+        p->x = nx, p->y = ny;
+        break;
+    }
+    }
+    p->prev = up;
+    return rc;
+}
+
+/* Reads the path data d of element n and draws it with m: command by command, each with its
+ * arguments (path_args) from the pen (path_command).  Drawn up to the first error (then warned
+ * and counted as skipped).  Returns ARR_OK or a fatal code. */
 static int path_draw(reader *r, const xmlNode *n, const char *d, const mat *m)
 {
     const char *s = d, *cmd_at = d;
-    double x = 0, y = 0, sx = 0, sy = 0; /* current point, subpath start */
-    double qx = 0, qy = 0;               /* last control point, for S and T */
-    char cmd = 0, prev = 0;
+    pen p = {0};
+    char cmd = 0;
     const char *why = NULL;
     int rc = ARR_OK, bad_number = 0;
     skip_sep(&s);
@@ -798,8 +924,6 @@ static int path_draw(reader *r, const xmlNode *n, const char *d, const mat *m)
     }
     for (;;) {
         double a[7];
-        int na, rel;
-        char up;
         skip_sep(&s);
         if (!*s) break;
         cmd_at = s;
@@ -814,121 +938,11 @@ static int path_draw(reader *r, const xmlNode *n, const char *d, const mat *m)
                         "line %ld: more than %zu path commands (limit "
                         "max_path_commands)",
                         xmlGetLineNo(n), r->max_cmds);
-        rel = cmd >= 'a';
-        up = rel ? (char)(cmd - 32) : cmd;
-        switch (up) {
-        case 'Z':
-            na = 0;
-            break;
-        case 'H':
-        case 'V':
-            na = 1;
-            break;
-        case 'M':
-        case 'L':
-        case 'T':
-            na = 2;
-            break;
-        case 'S':
-        case 'Q':
-            na = 4;
-            break;
-        case 'C':
-            na = 6;
-            break;
-        default: /* 'A' */
-            na = 7;
-            break;
-        }
-        for (int i = 0; i < na; i++) {
-            int got;
-            skip_sep(&s);
-            if (up == 'A' && (i == 3 || i == 4)) { /* flags: one character each */
-                if (*s != '0' && *s != '1') {
-                    why = "expected an arc flag 0 or 1";
-                    goto bad;
-                }
-                a[i] = *s++ - '0';
-                continue;
-            }
-            got = scan_number(r, &s, &a[i]);
-            if (got != 1) {
-                why = "expected a number";
-                bad_number = got < 0;
-                goto bad;
-            }
-        }
-        switch (up) {
-        case 'Z':
-            rc = line_local(r, m, x, y, sx, sy);
-            x = sx, y = sy;
-            break;
-        case 'M':
-            x = rel ? x + a[0] : a[0];
-            y = rel ? y + a[1] : a[1];
-            sx = x, sy = y;
-            cmd = rel ? 'l' : 'L'; /* pairs that follow are implicit lineto */
-            break;
-        case 'L':
-        case 'H':
-        case 'V': {
-            double nx = x, ny = y;
-            if (up == 'L') nx = rel ? x + a[0] : a[0], ny = rel ? y + a[1] : a[1];
-            if (up == 'H') nx = rel ? x + a[0] : a[0];
-            if (up == 'V') ny = rel ? y + a[0] : a[0];
-            rc = line_local(r, m, x, y, nx, ny);
-            x = nx, y = ny;
-            break;
-        }
-        case 'C':
-        case 'S': {
-            double p[8] = {x, y};
-            int k = 0;
-            if (up == 'C') {
-                p[2] = a[0], p[3] = a[1];
-                k = 2;
-            } else if (prev == 'C' || prev == 'S') {
-                p[2] = 2 * x - qx, p[3] = 2 * y - qy;
-            } else {
-                p[2] = x, p[3] = y;
-            }
-            p[4] = a[k], p[5] = a[k + 1], p[6] = a[k + 2], p[7] = a[k + 3];
-            if (rel) {
-                if (up == 'C') p[2] += x, p[3] += y;
-                p[4] += x, p[5] += y, p[6] += x, p[7] += y;
-            }
-            rc = bezier_local(r, m, p, 4);
-            qx = p[4], qy = p[5];
-            x = p[6], y = p[7];
-            break;
-        }
-        case 'Q':
-        case 'T': {
-            double p[6] = {x, y};
-            if (up == 'Q') {
-                p[2] = rel ? x + a[0] : a[0], p[3] = rel ? y + a[1] : a[1];
-                p[4] = rel ? x + a[2] : a[2], p[5] = rel ? y + a[3] : a[3];
-            } else {
-                if (prev == 'Q' || prev == 'T')
-                    p[2] = 2 * x - qx, p[3] = 2 * y - qy;
-                else
-                    p[2] = x, p[3] = y;
-                p[4] = rel ? x + a[0] : a[0], p[5] = rel ? y + a[1] : a[1];
-            }
-            rc = bezier_local(r, m, p, 3);
-            qx = p[2], qy = p[3];
-            x = p[4], y = p[5];
-            break;
-        }
-        default: { /* 'A' */
-            double nx = rel ? x + a[5] : a[5], ny = rel ? y + a[6] : a[6];
-            rc = path_arc(r, m, x, y, a[0], a[1], a[2], a[3] != 0, a[4] != 0, nx, ny);
-            x = nx, y = ny;
-            break;
-        }
-        }
-        if (rc != ARR_OK) return rc;
-        prev = up;
+        int rel = cmd >= 'a';
+        char up = rel ? (char)(cmd - 32) : cmd;
+        if (path_args(r, &s, up, path_nargs(up), a, &why, &bad_number)) goto bad;
+        if (up == 'M') cmd = rel ? 'l' : 'L'; /* pairs that follow are implicit lineto */
+        if ((rc = path_command(r, m, &p, up, rel, a)) != ARR_OK) return rc;
     }
     return ARR_OK;
 bad : {
@@ -1281,13 +1295,8 @@ static int index_ids(reader *r, const xmlNode *root)
             if (!a) a = attr_find(n, "id", (const char *)XML_XML_NAMESPACE);
             if (a && a->children && a->children->type == XML_TEXT_NODE && !a->children->next &&
                 a->children->content) {
-                if (r->nids == cap) {
-                    size_t nc = cap ? 2 * cap : 64;
-                    id_entry *p = realloc(r->ids, nc * sizeof *p);
-                    if (!p) return fail(r, ARR_ENOMEM, "out of memory for the id index");
-                    r->ids = p;
-                    cap = nc;
-                }
+                if (mem_grow(&r->ids, &cap, r->nids + 1, sizeof *r->ids))
+                    return fail(r, ARR_ENOMEM, "out of memory for the id index");
                 r->ids[r->nids++] = (id_entry){(const char *)a->children->content, n, order};
             }
             order++;

@@ -33,6 +33,7 @@
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/util.h"
 
 #include <float.h>
 #include <math.h>
@@ -41,38 +42,11 @@
 #include <string.h>
 #include <time.h>
 
-#define U (DBL_EPSILON / 2)
-
 /* ---- small tools ------------------------------------------------------------------------ */
-
-static int cmpu32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
 
 static int sgn128(i128 v)
 {
     return (v > 0) - (v < 0);
-}
-
-/* sign(a/b - c/d) for b, d != 0 */
-static int cmp_frac(i128 a, i128 b, i128 c, i128 d)
-{
-    double l = (double)a * (double)d, r = (double)c * (double)b;
-    double e = (fabs(l) + fabs(r)) * (8 * U);
-    int s;
-    if (l - r > e)
-        s = 1;
-    else if (r - l > e)
-        s = -1;
-    else {
-        xint x, y;
-        xi_mul_i128(&x, a, d);
-        xi_mul_i128(&y, c, b);
-        s = xi_cmp(&x, &y);
-    }
-    return s * sgn128(b) * sgn128(d);
 }
 
 /* ---- fans ----------------------------------------------------------------------------------- */
@@ -252,54 +226,6 @@ typedef struct probe {
     int k, i, j;
 } probe;
 
-/* sign(p_ax - Q_ax / 3) */
-static int cmp_q(const a3 *A, const xpt *p, const probe *pr, int ax)
-{
-    if (p->kind == PT_GRID) {
-        i128 v = 3 * (i128)A->g[3 * (size_t)p->a + ax] - pr->Q[ax];
-        return sgn128(v);
-    }
-    double v = 3 * p->x[ax] - (double)pr->Q[ax];
-    double e = (3 * fabs(p->x[ax]) + fabs((double)pr->Q[ax])) * (XPT_REL + 8 * U);
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xhom h;
-    xint l, r, q;
-    xpt_hom(&A->G, p, &h);
-    xi_set_i64(&q, 3);
-    xi_mul(&l, &q, &h.X[ax]);
-    xi_set_i64(&q, pr->Q[ax]);
-    xi_mul(&r, &q, &h.W);
-    return xi_cmp(&l, &r);
-}
-
-/* Sign of the plane through line (P, S) parallel to e_k at the probe point, and the sign of that
- * plane's i coefficient. */
-static int pi_side(const a3 *A, const plane3 *P, const plane3 *S, const probe *pr, int *si)
-{
-    int k = pr->k, i = pr->i, j = pr->j;
-    i128 pi_i = (i128)S->n[k] * P->n[i] - (i128)P->n[k] * S->n[i];
-    i128 pi_j = (i128)S->n[k] * P->n[j] - (i128)P->n[k] * S->n[j];
-    *si = sgn128(pi_i);
-    /* value = pi_i Q_i + pi_j Q_j + 3 (S_k d_P - P_k d_S) */
-    double t0 = (double)pi_i * (double)pr->Q[i], t1 = (double)pi_j * (double)pr->Q[j];
-    double t2 = 3 * (double)S->n[k] * (double)P->d, t3 = 3 * (double)P->n[k] * (double)S->d;
-    double v = t0 + t1 + t2 - t3;
-    double e = (fabs(t0) + fabs(t1) + fabs(t2) + fabs(t3)) * (16 * U);
-    (void)A;
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xint s, t, a, b;
-    xi_mul_i128(&s, pi_i, pr->Q[i]);
-    xi_mul_i128(&t, pi_j, pr->Q[j]);
-    xi_add(&s, &s, &t);
-    xi_mul_i128(&a, (i128)3 * S->n[k], P->d);
-    xi_mul_i128(&b, (i128)3 * P->n[k], S->d);
-    xi_add(&s, &s, &a);
-    xi_sub(&s, &s, &b);
-    return xi_sign(&s);
-}
-
 /* Does the perturbed probe line meet face f? */
 static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
 {
@@ -312,12 +238,13 @@ static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
         if (n < 2) continue;
         for (uint32_t t = 0; t < n; t++) {
             uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n], S = A->side[o + t];
-            int sa = cmp_q(A, &A->pt[a], pr, pr->j) > 0, sb = cmp_q(A, &A->pt[b], pr, pr->j) > 0;
+            int sa = xpt_cmp_q3_exact(&A->G, &A->pt[a], pr->j, pr->Q[pr->j]) > 0,
+                sb = xpt_cmp_q3_exact(&A->G, &A->pt[b], pr->j, pr->Q[pr->j]) > 0;
             if (sa == sb || S == NONE) continue;
             plane3 tmp;
             const plane3 *SP = a3_side(A, P, a, b, S, &tmp);
             if (!SP) continue;
-            int si, s = pi_side(A, P, SP, pr, &si);
+            int si, s = axis_plane_side_exact(P, SP, pr->k, pr->Q, &si);
             if (s == 0) s = si;
             par ^= s == -si;
         }
@@ -340,11 +267,11 @@ static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
     i128 nf, df, ng, dg;
     probe_t(F, pr, &nf, &df);
     probe_t(G, pr, &ng, &dg);
-    int c = cmp_frac(nf, df, ng, dg);
+    int c = cmp_frac_exact(nf, df, ng, dg);
     if (c) return c;
-    c = cmp_frac(-F->n[pr->i], F->n[pr->k], -G->n[pr->i], G->n[pr->k]);
+    c = cmp_frac_exact(-F->n[pr->i], F->n[pr->k], -G->n[pr->i], G->n[pr->k]);
     if (c) return c;
-    return cmp_frac(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
+    return cmp_frac_exact(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
 }
 
 typedef struct probe_sort {
@@ -593,7 +520,7 @@ static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, siz
     for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
     if (inside)
         for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
-    qsort(*out, k, sizeof **out, a3_cmp_u32);
+    qsort(*out, k, sizeof **out, u32_cmp);
     *n = k;
     return 0;
 }
@@ -808,8 +735,8 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
         size_t n = E->ioff[e + 1] - E->ioff[e];
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
-            a3_uf_union(sp, fnode(A, f0->f, f0->s > 0 ? 0 : 1), fnode(A, f1->f, f1->s > 0 ? 1 : 0));
-            if (k + 1 < n) a3_uf_union(uu, A->f_unit[f0->f], A->f_unit[f1->f]);
+            uf_union(sp, fnode(A, f0->f, f0->s > 0 ? 0 : 1), fnode(A, f1->f, f1->s > 0 ? 1 : 0));
+            if (k + 1 < n) uf_union(uu, A->f_unit[f0->f], A->f_unit[f1->f]);
         }
     }
     /* shells and parts numbered in order of their first node (a root's number kept at the
@@ -817,13 +744,13 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
     size_t nsh = 0, ncomp = 0;
     for (size_t i = 0; i < nn; i++) S->shell[i] = NONE;
     for (size_t i = 0; i < nn; i++) {
-        uint32_t r = a3_uf_find(sp, (uint32_t)i);
+        uint32_t r = uf_find(sp, (uint32_t)i);
         if (S->shell[r] == NONE) S->shell[r] = (uint32_t)nsh++;
         S->shell[i] = S->shell[r];
     }
     for (size_t u = 0; u < nu; u++) S->ucomp[u] = NONE;
     for (size_t u = 0; u < nu; u++) {
-        uint32_t r = a3_uf_find(uu, (uint32_t)u);
+        uint32_t r = uf_find(uu, (uint32_t)u);
         if (S->ucomp[r] == NONE) S->ucomp[r] = (uint32_t)ncomp++;
         S->ucomp[u] = S->ucomp[r];
     }
@@ -858,11 +785,11 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
                 if (pf[p] == NONE)
                     pf[p] = c;
                 else if (pf[p] != c)
-                    a3_uf_union(vu, pf[p], c);
+                    uf_union(vu, pf[p], c);
             }
         }
         size_t nvc = 0;
-        for (size_t c = 0; c < ncomp; c++) nvc += a3_uf_find(vu, (uint32_t)c) == c;
+        for (size_t c = 0; c < ncomp; c++) nvc += uf_find(vu, (uint32_t)c) == c;
         free(pf), free(vu);
         A->st->components = nvc;
     }
@@ -955,7 +882,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
                     memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
                     nff += n;
                 }
-                if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
+                if (nff > 1) qsort(ff, nff, sizeof *ff, u32_cmp);
             } else {
                 for (size_t f = 0; f < nf; f++) {
                     /* a face lies inside each piece covering it, so inside its box */
@@ -1021,7 +948,7 @@ A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, ch
             }
             if (!depth) host = s_up;
         }
-        a3_uf_union(cu, outer[c], host);
+        uf_union(cu, outer[c], host);
     }
     rc = ARR_OK;
 done:
@@ -1166,7 +1093,7 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
     if (!cellof) goto done;
     /* the cell of every shell: its class's number (the exterior's class: NONE) */
     {
-        uint32_t ext_root = a3_uf_find(cu, (uint32_t)nsh);
+        uint32_t ext_root = uf_find(cu, (uint32_t)nsh);
         uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
         if (!lab) goto done;
         for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
@@ -1174,10 +1101,10 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         /* in order of the faces' sides: a unit's faces come together, its first face first */
         for (size_t u = 0; u < A->nunit; u++)
             for (int sd = 0; sd < 2; sd++) {
-                uint32_t r = a3_uf_find(cu, fshell(A, S, A->u_off[u], sd));
+                uint32_t r = uf_find(cu, fshell(A, S, A->u_off[u], sd));
                 if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
             }
-        for (size_t s = 0; s < nsh; s++) cellof[s] = lab[a3_uf_find(cu, (uint32_t)s)];
+        for (size_t s = 0; s < nsh; s++) cellof[s] = lab[uf_find(cu, (uint32_t)s)];
         free(lab);
         out->nc = nc;
     }
@@ -1671,7 +1598,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
                 for (uint32_t v = 0; v < out->nv; v++)
                     if (stamp[v] == k + 1) cv[w++] = v;
             } else if (m > 1) {
-                qsort(cv + start, m, sizeof *cv, cmpu32);
+                qsort(cv + start, m, sizeof *cv, u32_cmp);
             }
             out->cv_off[k + 1] = (uint32_t)ncv;
         }

@@ -30,6 +30,7 @@
  * in fixed chunks, each writing only its own items; the rest runs on the calling thread.
  */
 #include "core/arr3_int.h"
+#include "core/box.h"
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
@@ -236,10 +237,13 @@ static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
     for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
         uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
         if (n < 2) continue;
+        /* each point's side of the line's j coordinate, once: an edge's end is the next's
+         * start */
+        int s0 = xpt_cmp_q3_exact(&A->G, &A->pt[A->ent[o]], pr->j, pr->Q[pr->j]) > 0, sb = s0;
         for (uint32_t t = 0; t < n; t++) {
             uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n], S = A->side[o + t];
-            int sa = xpt_cmp_q3_exact(&A->G, &A->pt[a], pr->j, pr->Q[pr->j]) > 0,
-                sb = xpt_cmp_q3_exact(&A->G, &A->pt[b], pr->j, pr->Q[pr->j]) > 0;
+            int sa = sb;
+            sb = t + 1 < n ? xpt_cmp_q3_exact(&A->G, &A->pt[b], pr->j, pr->Q[pr->j]) > 0 : s0;
             if (sa == sb || S == NONE) continue;
             plane3 tmp;
             const plane3 *SP = a3_side(A, P, a, b, S, &tmp);
@@ -420,108 +424,99 @@ static void points_dd(void *ctx, size_t item, int worker)
         if (!isnan(j->dh[3 * p])) xpt_dd(&A->G, &A->pt[p], j->dh + 3 * p, j->dl + 3 * p);
 }
 
-/* ---- a grid over the pieces' boxes in a probe's projection ----------------------------------
- * Which faces may a ray along -k through (qi, qj) cross?  Those whose projected box holds the
- * point: a uniform grid over the boxes (about two faces per cell) answers with the boxes of one
- * cell plus the few big ones, instead of every face for every part (parts x faces grew faster
- * than the arrangement on scenes of many solids).  Only a filter: the exact test follows. */
-typedef struct fgrid {
-    double x0, y0, cw, ch;
-    int nx, ny;
-    uint32_t *off, *items; /* cell c holds items[off[c] .. off[c+1]) */
-    uint32_t *big;         /* boxes over more than FGRID_BIG cells: checked for every query */
-    size_t nbig;
-} fgrid;
-#define FGRID_BIG 64
+/* ---- the probes' index ----------------------------------------------------------------------
+ * Which faces may a ray along -k through (Q_i, Q_j) / 3 cross?  Those whose covering pieces'
+ * boxes hold the point in projection (a face lies inside each piece covering it).  Few parts:
+ * every face is looked at.  Many: a box index (core/box.h) over the pieces' boxes projected
+ * along k, scaled by 3 so that the point Q is exact as doubles and the leaf box_tree_locate
+ * gives holds every box containing it (no margin); its boxes are then tested exactly and their
+ * pieces' faces taken (a list of faces by first piece).  Built once per axis, when a probe first
+ * needs it.  Only a filter: probe_hits decides. */
+#define PROBE_LEAF 256 /* boxes a leaf aimed at: few probes query many boxes */
 
-static void fgrid_free(fgrid *g)
+typedef struct pindex {
+    int use_tree;          /* 0: every face is a candidate */
+    uint32_t *pf_off, *pf; /* the faces by their first piece: pf[pf_off[q] .. pf_off[q + 1]) */
+    box_tree tree[3];      /* by axis k: the pieces' boxes projected along k (dim 0: not built) */
+} pindex;
+
+static void pindex_free(pindex *X)
 {
-    free(g->off);
-    free(g->items);
-    free(g->big);
-    memset(g, 0, sizeof *g);
+    free(X->pf_off), free(X->pf);
+    for (int k = 0; k < 3; k++) box_tree_free(&X->tree[k]);
+    memset(X, 0, sizeof *X);
 }
 
-static void fgrid_span(const fgrid *g, const double *bx, int *c0, int *r0, int *c1, int *r1)
+/* The index of the probes: the tree when there are more than 8 parts.  -1 out of memory. */
+static int pindex_make(const a3 *A, size_t ncomp, pindex *X)
 {
-    double a = (bx[0] - g->x0) / g->cw, b = (bx[2] - g->x0) / g->cw;
-    double c = (bx[1] - g->y0) / g->ch, d = (bx[3] - g->y0) / g->ch;
-    *c0 = a < 0 ? 0 : a >= g->nx ? g->nx - 1 : (int)a;
-    *c1 = b < 0 ? 0 : b >= g->nx ? g->nx - 1 : (int)b;
-    *r0 = c < 0 ? 0 : c >= g->ny ? g->ny - 1 : (int)c;
-    *r1 = d < 0 ? 0 : d >= g->ny ? g->ny - 1 : (int)d;
-}
-
-static int fgrid_build(fgrid *g, const double *box, size_t n)
-{
-    double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
-    fgrid_free(g);
-    for (size_t f = 0; f < n; f++) {
-        const double *b = box + 4 * f;
-        if (b[0] < x0) x0 = b[0];
-        if (b[1] < y0) y0 = b[1];
-        if (b[2] > x1) x1 = b[2];
-        if (b[3] > y1) y1 = b[3];
-    }
-    int side = (int)sqrt((double)n / 2) + 1;
-    if (side > 4096) side = 4096;
-    g->nx = g->ny = side;
-    g->x0 = x0, g->y0 = y0;
-    g->cw = x1 > x0 ? (x1 - x0) / side : 1;
-    g->ch = y1 > y0 ? (y1 - y0) / side : 1;
-    if (!(g->cw > 0) || !isfinite(g->cw)) g->cw = 1;
-    if (!(g->ch > 0) || !isfinite(g->ch)) g->ch = 1;
-    size_t ncell = (size_t)side * (size_t)side, total = 0;
-    g->off = mem_calloc(ncell + 2, sizeof *g->off);
-    g->big = mem_malloc((n + 1) * sizeof *g->big);
-    if (!g->off || !g->big) return -1;
-    for (int pass = 0; pass < 2; pass++) {
-        g->nbig = 0;
-        for (size_t f = 0; f < n; f++) {
-            int c0, r0, c1, r1;
-            fgrid_span(g, box + 4 * f, &c0, &r0, &c1, &r1);
-            if ((size_t)(c1 - c0 + 1) * (size_t)(r1 - r0 + 1) > FGRID_BIG) {
-                g->big[g->nbig++] = (uint32_t)f;
-                continue;
-            }
-            for (int r = r0; r <= r1; r++)
-                for (int c = c0; c <= c1; c++) {
-                    size_t cell = (size_t)r * (size_t)side + (size_t)c;
-                    if (pass == 0)
-                        g->off[cell + 2]++;
-                    else
-                        g->items[g->off[cell + 1]++] = (uint32_t)f;
-                }
-        }
-        if (pass == 0) {
-            for (size_t c = 0; c < ncell; c++) g->off[c + 2] += g->off[c + 1];
-            total = g->off[ncell + 1];
-            if (total > UINT32_MAX) return -1;
-            g->items = mem_malloc((total + 1) * sizeof *g->items);
-            if (!g->items) return -1;
-        }
-    }
+    size_t nf = A->nf;
+    memset(X, 0, sizeof *X);
+    X->use_tree = ncomp > 8;
+    if (!X->use_tree) return 0;
+    X->pf_off = mem_calloc(A->npc + 2, sizeof *X->pf_off);
+    X->pf = mem_malloc((nf + 1) * sizeof *X->pf);
+    if (!X->pf_off || !X->pf) return -1;
+    for (size_t f = 0; f < nf; f++) X->pf_off[A->cov[A->f_cov[f]] + 2]++;
+    for (size_t q = 0; q < A->npc; q++) X->pf_off[q + 2] += X->pf_off[q + 1];
+    for (size_t f = 0; f < nf; f++) X->pf[X->pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
     return 0;
 }
 
-/* The faces whose boxes may hold (qi, qj), ascending, into *out (grown as needed). */
-static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap, size_t *n)
+/* The tree of axis k, built on first use.  -1 out of memory. */
+static int pindex_tree(const a3 *A, pindex *X, int k)
 {
-    size_t k = 0, m = g->nbig;
-    double a = (qi - g->x0) / g->cw, b = (qj - g->y0) / g->ch;
-    int inside = a >= 0 && b >= 0 && a <= g->nx && b <= g->ny;
-    size_t cell = 0;
-    if (inside) {
-        int c = a >= g->nx ? g->nx - 1 : (int)a, r = b >= g->ny ? g->ny - 1 : (int)b;
-        cell = (size_t)r * (size_t)g->nx + (size_t)c;
-        m += g->off[cell + 1] - g->off[cell];
+    if (X->tree[k].dim) return 0;
+    int i = (k + 1) % 3, j = (k + 2) % 3;
+    int64_t *box = mem_malloc((4 * A->npc + 1) * sizeof *box);
+    if (!box) return -1;
+    for (size_t q = 0; q < A->npc; q++) {
+        const int32_t *b = A->pc[q].box;
+        int64_t *bx = box + 4 * q;
+        bx[0] = 3 * (int64_t)b[i], bx[1] = 3 * (int64_t)b[j];
+        bx[2] = 3 * (int64_t)b[3 + i], bx[3] = 3 * (int64_t)b[3 + j];
     }
-    if (mem_grow(out, cap, m + 1, sizeof **out)) return -1;
-    for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
-    if (inside)
-        for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
-    qsort(*out, k, sizeof **out, u32_cmp);
-    *n = k;
+    int rc = box_tree_build_dim(&X->tree[k], 2, box, A->npc, PROBE_LEAF, 1);
+    free(box);
+    return rc;
+}
+
+/* Does piece q's box hold the probe's point in projection? (exact) */
+static inline int box_holds(const int32_t *b, const probe *pr)
+{
+    return (int64_t)pr->Q[pr->i] >= 3 * (int64_t)b[pr->i] &&
+           (int64_t)pr->Q[pr->i] <= 3 * (int64_t)b[3 + pr->i] &&
+           (int64_t)pr->Q[pr->j] >= 3 * (int64_t)b[pr->j] &&
+           (int64_t)pr->Q[pr->j] <= 3 * (int64_t)b[3 + pr->j];
+}
+
+/* The faces the probe's ray may cross, ascending, into *ff (grown as needed).  -1 out of
+ * memory. */
+static int probe_candidates(const a3 *A, pindex *X, const probe *pr, uint32_t **ff, size_t *capff,
+                            size_t *nff)
+{
+    size_t n = 0;
+    if (!X->use_tree) {
+        for (size_t f = 0; f < A->nf; f++)
+            if (box_holds(A->pc[A->cov[A->f_cov[f]]].box, pr) &&
+                A3_PUSH(*ff, n, *capff, (uint32_t)f))
+                return -1;
+        *nff = n;
+        return 0;
+    }
+    if (pindex_tree(A, X, pr->k)) return -1;
+    const box_tree *t = &X->tree[pr->k];
+    double q[2] = {(double)pr->Q[pr->i], (double)pr->Q[pr->j]};
+    uint32_t l = box_tree_locate_pt(t, q);
+    for (uint32_t x = t->leaf_off[l]; x < t->leaf_off[l + 1]; x++) {
+        uint32_t pc = t->items[x], m = X->pf_off[pc + 1] - X->pf_off[pc];
+        if (!box_holds(A->pc[pc].box, pr)) continue;
+        if (mem_grow(ff, capff, n + m + 1, sizeof **ff)) return -1;
+        memcpy(*ff + n, X->pf + X->pf_off[pc], m * sizeof **ff);
+        n += m;
+    }
+    if (n > 1) qsort(*ff, n, sizeof **ff, u32_cmp);
+    *nff = n;
     return 0;
 }
 
@@ -800,165 +795,141 @@ done:
     return rc;
 }
 
+/* The nesting stage's work: the probes, each part's outside shell, the faces of other parts
+ * each probe hits beyond its part's first face (hits[hoff[c] .. hoff[c + 1])), and scratch. */
+typedef struct nest {
+    const a3 *A;
+    const cshells *S;
+    pindex X;
+    probe *probes;   /* by part */
+    uint32_t *outer; /* by part: its outside shell */
+    uint32_t *hits, *hoff;
+    size_t nhit, caphits;
+    uint32_t *ptri, *ff, *stack;
+    size_t nptri, capptri, capff, capstack;
+} nest;
+
+static void nest_free(nest *N)
+{
+    pindex_free(&N->X);
+    free(N->probes), free(N->outer), free(N->hits), free(N->hoff), free(N->ptri), free(N->ff);
+    free(N->stack);
+}
+
+/* Pass 1 for part c: its probe (through the centroid of its lowest piece's first triangle, or
+ * of the next one while the line misses every face of the part: a piece whose inside is in two
+ * parts, holes touching each other and the outer cycle across it, may lie in two parts of the
+ * complex), its first own face along -k (beyond it lies its outside: outer[c]), and the faces
+ * of other parts it hits beyond that, appended to hits.  Returns an ARR_* code. */
+static int part_probe(nest *N, size_t c, char *err, size_t errlen)
+{
+    const a3 *A = N->A;
+    const cshells *S = N->S;
+    probe *pr = &N->probes[c];
+    int pk, r = piece_tris(A, S->cpiece[c], &N->ptri, &N->nptri, &N->capptri, &pk);
+    if (r == -1) return ARR_ENOMEM;
+    if (r) {
+        snprintf(err, errlen, "solids: no point found inside input face %u",
+                 A->pc[S->cpiece[c]].face);
+        return ARR_EINTERNAL;
+    }
+    uint32_t own = NONE;
+    size_t h0 = N->nhit;
+    for (size_t t = 0; t < N->nptri && own == NONE; t++) {
+        tri_probe(A, N->ptri + 3 * t, pk, pr);
+        N->nhit = h0;
+        size_t nff;
+        if (probe_candidates(A, &N->X, pr, &N->ff, &N->capff, &nff)) return ARR_ENOMEM;
+        for (size_t ci = 0; ci < nff; ci++) {
+            uint32_t f = N->ff[ci];
+            if (S->ncomp == 1 && fcomp(A, S, f) != c) continue;
+            if (!probe_hits(A, f, pr)) continue;
+            if (fcomp(A, S, f) == c) {
+                if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
+            } else {
+                if (mem_grow(&N->hits, &N->caphits, N->nhit + 1, sizeof *N->hits))
+                    return ARR_ENOMEM;
+                N->hits[N->nhit++] = f;
+            }
+        }
+    }
+    if (own == NONE) {
+        snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
+        return ARR_EINTERNAL;
+    }
+    plane3 town;
+    int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
+    N->outer[c] = fshell(A, S, own, up ? 1 : 0); /* the side facing -k */
+    size_t m = h0;
+    for (size_t h = h0; h < N->nhit; h++)
+        if (probe_cmp(A, N->hits[h], own, pr) < 0) N->hits[m++] = N->hits[h];
+    N->nhit = m;
+    N->hoff[c + 1] = (uint32_t)m;
+    return ARR_OK;
+}
+
+/* Pass 2 for part c: down its ray from just beyond its first face.  Entering another part from
+ * its outside (the side we come from is that part's outer shell) and leaving it again are
+ * skipped (a stack of parts); the first face met outside every part whose side toward us is not
+ * an outer shell is the wall of the cell holding the part: its shell, into *host.  No such
+ * face: the part lies in the exterior (*host unchanged).  -1 out of memory. */
+static int part_host(nest *N, size_t c, uint32_t *host)
+{
+    const a3 *A = N->A;
+    const cshells *S = N->S;
+    const probe *pr = &N->probes[c];
+    uint32_t *H = N->hits ? N->hits + N->hoff[c] : NULL, nh = N->hoff[c + 1] - N->hoff[c];
+    size_t depth = 0;
+    if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
+    for (uint32_t h = 0; h < nh; h++) {
+        uint32_t f = H[h], d = fcomp(A, S, f);
+        plane3 tf;
+        int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
+        uint32_t s_up = fshell(A, S, f, fup ? 0 : 1), s_down = fshell(A, S, f, fup ? 1 : 0);
+        if (depth && s_down == N->outer[N->stack[depth - 1]] && d == N->stack[depth - 1]) {
+            depth--; /* leaving the part we were inside */
+            continue;
+        }
+        if (s_up == N->outer[d]) { /* entering part d from its outside */
+            if (mem_grow(&N->stack, &N->capstack, depth + 1, sizeof *N->stack)) return -1;
+            N->stack[depth++] = d;
+            continue;
+        }
+        if (!depth) {
+            *host = s_up;
+            break;
+        }
+    }
+    return 0;
+}
+
 /* Stage "nesting": into cu (a union-find over the shells and the exterior, nsh + 1 entries, the
  * exterior last), each part's outside shell joined to the cell holding the part.  Returns an
  * ARR_* code. */
 A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, char *err,
                                  size_t errlen)
 {
-    size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
-    uint32_t EXT = (uint32_t)nsh;
+    size_t ncomp = S->ncomp, nsh = S->nsh;
+    nest N = {.A = A, .S = S};
     int rc = ARR_ENOMEM;
-    uint32_t *outer = mem_malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
-    uint32_t *pf_off = NULL, *pf = NULL, *ff = NULL, *hits = NULL, *hoff = NULL, *stack = NULL;
-    size_t nptri = 0, capptri = 0, capcand = 0, capff = 0, caphits = 0, capstack = 0;
-    probe *probes = mem_malloc((ncomp + 1) * sizeof *probes);
-    fgrid fgk[3] = {{0}};
-    double *fboxk[3] = {NULL, NULL, NULL};
-    /* few parts: each probe looks at every face (whose covering piece's box holds its point);
-     * many: through a grid over the pieces' boxes, and the faces by their first piece */
-    int use_grid = ncomp > 8;
-    hoff = mem_calloc(ncomp + 2, sizeof *hoff);
-    if (!outer || !probes || !hoff) goto done;
+    N.outer = mem_malloc((ncomp + 1) * sizeof *N.outer);
+    N.probes = mem_malloc((ncomp + 1) * sizeof *N.probes);
+    N.hoff = mem_calloc(ncomp + 2, sizeof *N.hoff);
+    if (!N.outer || !N.probes || !N.hoff || pindex_make(A, ncomp, &N.X)) goto done;
     for (uint32_t s = 0; s <= nsh; s++) cu[s] = s;
-    if (use_grid) {
-        pf_off = mem_calloc(A->npc + 2, sizeof *pf_off);
-        pf = mem_malloc((nf + 1) * sizeof *pf);
-        if (!pf_off || !pf) goto done;
-        for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
-        for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
-        for (size_t f = 0; f < nf; f++) pf[pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
-    }
-    /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
-     * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
-    size_t nhit = 0;
-    for (size_t c = 0; c < ncomp; c++) {
-        probe *pr = &probes[c];
-        int pk, r = piece_tris(A, S->cpiece[c], &ptri, &nptri, &capptri, &pk);
-        if (r == -1) goto done;
-        if (r) {
-            rc = ARR_EINTERNAL;
-            snprintf(err, errlen, "solids: no point found inside input face %u",
-                     A->pc[S->cpiece[c]].face);
-            goto done;
-        }
-        /* the centroid of the piece's first triangle, or of the next one while the line misses
-         * every face of the part: a piece whose inside is in two parts (holes touching each
-         * other and the outer cycle across it) may lie in two parts of the complex */
-        uint32_t own = NONE;
-        size_t h0 = nhit;
-        for (size_t t = 0; t < nptri && own == NONE; t++) {
-            tri_probe(A, ptri + 3 * t, pk, pr);
-            nhit = h0;
-            size_t nff = 0;
-            if (use_grid) {
-                if (!fgk[pr->k].off) { /* the pieces' boxes in this projection: once per axis */
-                    double *fbox = fboxk[pr->k] = mem_malloc((4 * A->npc + 1) * sizeof *fbox);
-                    if (!fbox) goto done;
-                    for (size_t q = 0; q < A->npc; q++) {
-                        const int32_t *b = A->pc[q].box;
-                        double *bx = fbox + 4 * q;
-                        bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
-                        bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
-                        /* widened by more than the rounding of the conversions */
-                        double m =
-                            (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
-                        bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
-                    }
-                    if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
-                }
-                double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
-                size_t ncand;
-                if (fgrid_query(&fgk[pr->k], qi, qj, &cand, &capcand, &ncand)) goto done;
-                for (size_t ci = 0; ci < ncand; ci++) {
-                    const int32_t *b = A->pc[cand[ci]].box;
-                    if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
-                        (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
-                        (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
-                        (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
-                        continue;
-                    uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
-                    if (mem_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
-                    memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
-                    nff += n;
-                }
-                if (nff > 1) qsort(ff, nff, sizeof *ff, u32_cmp);
-            } else {
-                for (size_t f = 0; f < nf; f++) {
-                    /* a face lies inside each piece covering it, so inside its box */
-                    const int32_t *b = A->pc[A->cov[A->f_cov[f]]].box;
-                    if ((int64_t)pr->Q[pr->i] < 3 * (int64_t)b[pr->i] ||
-                        (int64_t)pr->Q[pr->i] > 3 * (int64_t)b[3 + pr->i] ||
-                        (int64_t)pr->Q[pr->j] < 3 * (int64_t)b[pr->j] ||
-                        (int64_t)pr->Q[pr->j] > 3 * (int64_t)b[3 + pr->j])
-                        continue;
-                    if (A3_PUSH(ff, nff, capff, (uint32_t)f)) goto done;
-                }
-            }
-            for (size_t ci = 0; ci < nff; ci++) {
-                uint32_t f = ff[ci];
-                if (ncomp == 1 && fcomp(A, S, f) != c) continue;
-                if (!probe_hits(A, f, pr)) continue;
-                if (fcomp(A, S, f) == c) {
-                    if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
-                } else {
-                    if (mem_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
-                    hits[nhit++] = f;
-                }
-            }
-        }
-        if (own == NONE) {
-            rc = ARR_EINTERNAL;
-            snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
-            goto done;
-        }
-        plane3 town;
-        int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
-        outer[c] = fshell(A, S, own, up ? 1 : 0); /* the side facing -k */
-        size_t m = h0;
-        for (size_t h = h0; h < nhit; h++)
-            if (probe_cmp(A, hits[h], own, pr) < 0) hits[m++] = hits[h];
-        nhit = m;
-        hoff[c + 1] = (uint32_t)nhit;
-    }
+    for (size_t c = 0; c < ncomp; c++)
+        if ((rc = part_probe(&N, c, err, errlen)) != ARR_OK) goto done;
     a3_progress(A, "cells", 0.45);
-    /* pass 2: walk down each part's ray from just beyond its first face.  Entering another
-     * part from its outside (the side we come from is that part's outer shell) and leaving it
-     * again are skipped (a stack of parts); the first face met outside every part whose side
-     * toward us is not an outer shell is the wall of the cell holding the part.  No such face:
-     * the part lies in the exterior. */
+    rc = ARR_ENOMEM;
     for (size_t c = 0; c < ncomp; c++) {
-        probe *pr = &probes[c];
-        uint32_t *H = hits ? hits + hoff[c] : NULL, nh = hoff[c + 1] - hoff[c], host = EXT;
-        size_t depth = 0;
-        if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
-        for (uint32_t h = 0; h < nh && host == EXT; h++) {
-            uint32_t f = H[h], d = fcomp(A, S, f);
-            plane3 tf;
-            int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
-            uint32_t s_up = fshell(A, S, f, fup ? 0 : 1), s_down = fshell(A, S, f, fup ? 1 : 0);
-            if (depth && s_down == outer[stack[depth - 1]] && d == stack[depth - 1]) {
-                depth--; /* leaving the part we were inside */
-                continue;
-            }
-            if (s_up == outer[d]) { /* entering part d from its outside */
-                if (mem_grow(&stack, &capstack, depth + 1, sizeof *stack)) goto done;
-                stack[depth++] = d;
-                continue;
-            }
-            if (!depth) host = s_up;
-        }
-        uf_union(cu, outer[c], host);
+        uint32_t host = (uint32_t)nsh; /* the exterior */
+        if (part_host(&N, c, &host)) goto done;
+        uf_union(cu, N.outer[c], host);
     }
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(outer), free(ptri), free(cand), free(pf_off), free(pf), free(ff), free(hits);
-    free(hoff), free(stack), free(probes);
-    for (int k = 0; k < 3; k++) {
-        fgrid_free(&fgk[k]);
-        free(fboxk[k]);
-    }
+    nest_free(&N);
     return rc;
 }
 

@@ -328,7 +328,7 @@ static inline int dot3_fast(const i128 *a, const i128 *b)
     return sign_fast(t0 + t1 + t2, (fabs(t0) + fabs(t1) + fabs(t2)) * ERR_INT_SUM);
 }
 
-static int dot3_exact(const i128 *a, const i128 *b)
+static inline int dot3_exact(const i128 *a, const i128 *b)
 {
     int s = dot3_fast(a, b);
     if (s != PRED_UNKNOWN) return s;

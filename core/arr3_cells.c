@@ -1048,56 +1048,55 @@ static dd dd_of(i128 v)
     return r;
 }
 
-/* Stage "cells": cell ids from cu (the class of the exterior is none), each cell's faces (CF,
- * in order of face: the - side first) and the exterior's, and the volumes.  Returns an ARR_*
- * code. */
-A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
-                               double **dl_out, char *err, size_t errlen)
+/* The cell of every shell, into cellof (nsh entries): its class's number in cu, numbered in
+ * order of the faces' sides (a unit's faces come together, its first face first); the
+ * exterior's class is NONE.  Sets out->nc.  -1 out of memory. */
+static int cells_number(const a3 *A, const cshells *S, uint32_t *cu, uint32_t *cellof, lar3 *out)
 {
-    size_t nf = A->nf, nsh = S->nsh;
-    int want_coords = !A->o->want || (A->o->want & ARR3_WANT_COORDS);
-    uint32_t *cellof = mem_malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
-    double *dh = NULL, *dl = NULL;
-    size_t *roff = NULL;
-    volrun *run = NULL;
-    int rc = ARR_ENOMEM;
-    if (!cellof) goto done;
-    /* the cell of every shell: its class's number (the exterior's class: NONE) */
-    {
-        uint32_t ext_root = uf_find(cu, (uint32_t)nsh);
-        uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
-        if (!lab) goto done;
-        for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
-        size_t nc = 0;
-        /* in order of the faces' sides: a unit's faces come together, its first face first */
-        for (size_t u = 0; u < A->nunit; u++)
-            for (int sd = 0; sd < 2; sd++) {
-                uint32_t r = uf_find(cu, fshell(A, S, A->u_off[u], sd));
-                if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
-            }
-        for (size_t s = 0; s < nsh; s++) cellof[s] = lab[uf_find(cu, (uint32_t)s)];
-        free(lab);
-        out->nc = nc;
-    }
+    size_t nsh = S->nsh, nc = 0;
+    uint32_t ext_root = uf_find(cu, (uint32_t)nsh);
+    uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
+    if (!lab) return -1;
+    for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t r = uf_find(cu, fshell(A, S, A->u_off[u], sd));
+            if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
+        }
+    for (size_t s = 0; s < nsh; s++) cellof[s] = lab[uf_find(cu, (uint32_t)s)];
+    free(lab);
+    out->nc = nc;
+    return 0;
+}
+
+/* The units and the cells on their two sides (out->u_off, ucell: the exterior is nc) and the
+ * faces turned against their unit (frev).  -1 out of memory. */
+static int cells_units(const a3 *A, const cshells *S, const uint32_t *cellof, lar3 *out)
+{
     size_t nc = out->nc;
-    /* the units and their cells */
     out->nunit = A->nunit;
     out->u_off = mem_malloc((A->nunit + 1) * sizeof *out->u_off);
     out->ucell = mem_malloc((2 * A->nunit + 1) * sizeof *out->ucell);
-    out->frev = mem_malloc(nf + 1);
-    if (!out->u_off || !out->ucell || !out->frev) goto done;
+    out->frev = mem_malloc(A->nf + 1);
+    if (!out->u_off || !out->ucell || !out->frev) return -1;
     memcpy(out->u_off, A->u_off, (A->nunit + 1) * sizeof *out->u_off);
     for (size_t u = 0; u < A->nunit; u++)
         for (int sd = 0; sd < 2; sd++) {
             uint32_t k = cellof[S->shell[2 * u + (uint32_t)sd]];
             out->ucell[2 * u + (uint32_t)sd] = k == NONE ? (uint32_t)nc : k;
         }
-    for (size_t f = 0; f < nf; f++)
+    for (size_t f = 0; f < A->nf; f++)
         out->frev[f] = (uint8_t)(A->f_unit[f] < A->npatch && !A->f_out[f]);
-    /* closed solids: a face across which some solid's winding number changes has two cells
-     * on its sides; one cell on both sides is only for a face whose solids' faces cancel (a
-     * surface touching itself face to face inside itself, as a tube whose two end caps meet):
-     * else the arrangement is broken */
+    return 0;
+}
+
+/* Closed solids: a face across which some solid's winding number changes has two cells on its
+ * sides; one cell on both sides is only for a face whose solids' faces cancel (a surface
+ * touching itself face to face inside itself, as a tube whose two end caps meet): else the
+ * arrangement is broken (ARR_EINTERNAL, with where).  ARR_OK otherwise. */
+static int cells_check_sides(const a3 *A, const cshells *S, const uint32_t *cellof, const lar3 *out,
+                             char *err, size_t errlen)
+{
     for (size_t u = 0; u < A->nunit && !A->soup; u++) {
         uint32_t f = A->u_off[u]; /* a unit's faces share its two sides */
         if (cellof[fshell(A, S, f, 0)] != cellof[fshell(A, S, f, 1)]) continue;
@@ -1111,61 +1110,70 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         if (cancel) continue;
         const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
         const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
-        rc = ARR_EINTERNAL;
         snprintf(err, errlen,
                  "solids[%u]: face %u: one cell on both sides near (%.9g, %.9g, %.9g) on the "
                  "grid of step %g (a bug: please report it)",
                  pc->solid, pc->face - out->solid_face_off[pc->solid],
                  ((double)A->oi[0] + x->x[0]) * A->step, ((double)A->oi[1] + x->x[1]) * A->step,
                  ((double)A->oi[2] + x->x[2]) * A->step, A->step);
-        goto done;
+        return ARR_EINTERNAL;
     }
-    /* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then
-     * the + entries by rising face); the exterior's likewise.  Only when asked for. */
-    unsigned want = A->o->want ? A->o->want : ~0u;
-    out->cvol = mem_calloc(nc + 1, sizeof *out->cvol);
-    if (!out->cvol) goto done;
-    if (want & ARR3_WANT_CF) {
-        out->cf_off = mem_calloc(nc + 2, sizeof *out->cf_off);
-        if (!out->cf_off) goto done;
-        size_t next = 0;
-        for (size_t i = 0; i < 2 * nf; i++) {
-            uint32_t f = (uint32_t)(i / 2);
-            uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))],
-                     o = cellof[fshell(A, S, f, !(i & 1))];
-            if (k == o) continue;
+    return ARR_OK;
+}
+
+/* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then the
+ * + entries by rising face); the exterior's likewise (out->ext).  -1 out of memory. */
+static int cells_cf(const a3 *A, const cshells *S, const uint32_t *cellof, lar3 *out)
+{
+    size_t nf = A->nf, nc = out->nc, next = 0;
+    uint32_t *fill = NULL;
+    out->cf_off = mem_calloc(nc + 2, sizeof *out->cf_off);
+    if (!out->cf_off) return -1;
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t f = (uint32_t)(i / 2);
+        uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))], o = cellof[fshell(A, S, f, !(i & 1))];
+        if (k == o) continue;
+        if (k == NONE)
+            next++;
+        else
+            out->cf_off[k + 1]++;
+    }
+    for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
+    out->cf = mem_malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
+    out->ext = mem_malloc((next + 1) * sizeof *out->ext);
+    fill = mem_calloc(nc + 1, sizeof *fill);
+    if (!out->cf || !out->ext || !fill) {
+        free(fill);
+        return -1;
+    }
+    out->next = 0;
+    /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t t = 0; t < nf; t++) {
+            size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
+            uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
+            if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
+            int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
             if (k == NONE)
-                next++;
+                out->ext[out->next++] = sf;
             else
-                out->cf_off[k + 1]++;
+                out->cf[out->cf_off[k] + fill[k]++] = sf;
         }
-        for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
-        out->cf = mem_malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
-        out->ext = mem_malloc((next + 1) * sizeof *out->ext);
-        fill = mem_calloc(nc + 1, sizeof *fill);
-        if (!out->cf || !out->ext || !fill) goto done;
-        out->next = 0;
-        /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
-        for (int pass = 0; pass < 2; pass++)
-            for (size_t t = 0; t < nf; t++) {
-                size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
-                uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
-                if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
-                int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
-                if (k == NONE)
-                    out->ext[out->next++] = sf;
-                else
-                    out->cf[out->cf_off[k] + fill[k]++] = sf;
-            }
-    }
-    /* the points to 2^-100 (volumes and the written coordinates come from these) */
-    dh = mem_malloc((3 * A->npt + 1) * sizeof *dh);
-    dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
-    orgv = mem_malloc((nc + 1) * sizeof *orgv);
-    if (!dh || !dl || !orgv) goto done;
-    /* each cell's origin: a point of the first face that bounds it (in unit order), on the grid
-     * when one is; the double-double cones start from it (a vertex of the cell: the terms are as
-     * small as the cell, so a sliver keeps its volume) */
+    free(fill);
+    return 0;
+}
+
+/* Each cell's origin (orgv, nc entries): a point of the first face that bounds it (in unit
+ * order), on the grid when one is; the double-double cones start from it (a vertex of the cell:
+ * the terms are as small as the cell, so a sliver keeps its volume).  Then the points wanted to
+ * 2^-100 into dh, dl (NAN in dh[3p]: not wanted): every point of a face when the coordinates
+ * are written, else only those of the faces of no patch (the cones in double-double are
+ * theirs) and the cells' origins (a patch's faces are summed exactly from their grid points).
+ * ARR_OK, or ARR_ECANCELED. */
+static int cells_points(const a3 *A, const lar3 *out, uint32_t *orgv, double *dh, double *dl)
+{
+    size_t nc = out->nc, nf = A->nf;
+    int want_coords = !A->o->want || (A->o->want & ARR3_WANT_COORDS);
     for (size_t k = 0; k < nc; k++) orgv[k] = NONE;
     for (size_t u = 0; u < A->nunit; u++)
         for (int sd = 0; sd < 2; sd++) {
@@ -1180,9 +1188,6 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                     break;
                 }
         }
-    /* the points wanted to 2^-100: every point of a face when the coordinates are written, else
-     * only those of the faces of no patch (the cones in double-double are theirs) and the cells'
-     * origins: a patch's faces are summed exactly from their grid points */
     for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN; /* not wanted */
     if (want_coords) {
         for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0;
@@ -1193,105 +1198,139 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         for (size_t k = 0; k < nc; k++)
             if (orgv[k] != NONE) dh[3 * (size_t)orgv[k]] = 0;
     }
-    {
-        ddjob j = {A, dh, dl, NULL, 0};
-        a3_span span = {A, "cells", 0.45, 0.5};
-        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
-                   &span);
+    ddjob j = {A, dh, dl, NULL, 0};
+    a3_span span = {A, "cells", 0.45, 0.5};
+    par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick, &span);
+    /* a bounded part of the stage: the cancel is read here */
+    return a3_cancelled(A) ? ARR_ECANCELED : ARR_OK;
+}
+
+/* The grid cycles summed per unit into UC (4 a unit: C, S; on the threads, in fixed chunks of
+ * faces, the chunks' runs then added in chunk order).  ARR_OK, ARR_ENOMEM or ARR_ECANCELED. */
+static int volumes_grid(const a3 *A, i128 *UC)
+{
+    size_t nf = A->nf, nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
+    size_t *roff = mem_malloc((nch + 1) * sizeof *roff);
+    volrun *run = NULL;
+    int rc = ARR_ENOMEM;
+    if (!roff) goto done;
+    for (size_t c = 0; c < nch; c++) {
+        size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
+        roff[c] = nrun;
+        nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
     }
-    if (a3_cancelled(A)) { /* a bounded part of the stage: the cancel is read here */
+    run = mem_calloc(nrun + 1, sizeof *run);
+    if (!run) goto done;
+    voljob j = {A, roff, run};
+    par_for(A->threads, nch, vol_chunk, &j);
+    if (a3_cancelled(A)) {
         rc = ARR_ECANCELED;
         goto done;
     }
-    {
-        /* the grid cycles, per unit (on the threads, in fixed chunks of faces) */
-        size_t nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
-        roff = mem_malloc((nch + 1) * sizeof *roff);
-        if (!roff) goto done;
-        for (size_t c = 0; c < nch; c++) {
-            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
-            roff[c] = nrun;
-            nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
+    for (size_t c = 0; c < nch; c++) {
+        size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
+        for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
+            const volrun *r = &run[roff[c] + (u - A->f_unit[f0])];
+            UC[4 * u] += r->C;
+            for (int a = 0; a < 3; a++) UC[4 * u + 1 + a] += r->S[a];
         }
-        run = mem_calloc(nrun + 1, sizeof *run);
-        i128 *UC = mem_calloc(4 * A->nunit + 1, sizeof *UC);
-        dd *X = mem_calloc(nc + 1, sizeof *X);
-        if (!run || !UC || !X) {
-            free(UC), free(X);
-            goto done;
-        }
-        voljob j = {A, roff, run};
-        par_for(A->threads, nch, vol_chunk, &j);
-        if (a3_cancelled(A)) {
-            free(UC), free(X);
-            rc = ARR_ECANCELED;
-            goto done;
-        }
-        for (size_t c = 0; c < nch; c++) {
-            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
-            for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
-                const volrun *r = &run[roff[c] + (u - A->f_unit[f0])];
-                UC[4 * u] += r->C;
-                for (int a = 0; a < 3; a++) UC[4 * u + 1 + a] += r->S[a];
-            }
-        }
-        /* the cycles with made points (faces of no patch: few), in double-double per cell */
-        for (size_t f = A->npatch ? A->u_off[A->npatch] : 0; f < nf; f++)
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
-                while (t < m && A->ent[o + t] < A->nv) t++;
-                if (m < 3 || t == m) continue;
-                uint32_t u = A->f_unit[f];
-                for (int sd = 0; sd < 2; sd++) {
-                    /* into 2u (its normal's side: -) and out of 2u + 1 (+) */
-                    uint32_t k = out->ucell[2 * u + (uint32_t)sd];
-                    if (k >= nc) continue;
-                    dd org[3];
-                    for (int a = 0; a < 3; a++)
-                        org[a].hi = dh[3 * (size_t)orgv[k] + a],
-                        org[a].lo = dl[3 * (size_t)orgv[k] + a];
-                    dd c = cycle_cone6(A, dh, dl, cy, org);
-                    X[k] = dd_add(X[k], sd ? c : dd_neg(c));
-                }
-            }
-        double h3 = A->step * A->step * A->step / 6;
-        i128 *V6 = mem_calloc(nc + 1, sizeof *V6);
-        if (!V6) {
-            free(UC), free(X);
-            goto done;
-        }
-        /* each unit's grid part into its two cells, from each cell's own origin when it is on
-         * the grid (C - o . S, exact), else from the grid's origin and o . S in double-double */
-        for (size_t u = 0; u < A->nunit; u++)
+    }
+    rc = ARR_OK;
+done:
+    free(roff), free(run);
+    return rc;
+}
+
+/* The cells' volumes (out->cvol, allocated): the grid cycles per unit (volumes_grid), the
+ * cycles with made points (faces of no patch: few) in double-double per cell from its origin,
+ * and each unit's grid part into its two cells, from each cell's own origin when it is on the
+ * grid (C - o . S, exact), else from the grid's origin and o . S in double-double.  ARR_OK,
+ * ARR_ENOMEM or ARR_ECANCELED. */
+static int cells_volumes(const a3 *A, lar3 *out, const uint32_t *orgv, const double *dh,
+                         const double *dl)
+{
+    size_t nf = A->nf, nc = out->nc;
+    i128 *UC = mem_calloc(4 * A->nunit + 1, sizeof *UC), *V6 = mem_calloc(nc + 1, sizeof *V6);
+    dd *X = mem_calloc(nc + 1, sizeof *X);
+    int rc = ARR_ENOMEM;
+    out->cvol = mem_calloc(nc + 1, sizeof *out->cvol);
+    if (!UC || !V6 || !X || !out->cvol) goto done;
+    if ((rc = volumes_grid(A, UC)) != ARR_OK) goto done;
+    for (size_t f = A->npatch ? A->u_off[A->npatch] : 0; f < nf; f++)
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
+            while (t < m && A->ent[o + t] < A->nv) t++;
+            if (m < 3 || t == m) continue;
+            uint32_t u = A->f_unit[f];
             for (int sd = 0; sd < 2; sd++) {
+                /* into 2u (its normal's side: -) and out of 2u + 1 (+) */
                 uint32_t k = out->ucell[2 * u + (uint32_t)sd];
                 if (k >= nc) continue;
-                const i128 *Uu = UC + 4 * u;
-                i128 v = Uu[0];
-                if (orgv[k] < A->nv) {
-                    const int64_t *g = A->g + 3 * (size_t)orgv[k];
-                    v -= g[0] * Uu[1] + g[1] * Uu[2] + g[2] * Uu[3];
-                } else {
-                    for (int a = 0; a < 3; a++) {
-                        dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
-                        dd t = dd_mul(oa, dd_of(Uu[1 + a]));
-                        X[k] = dd_add(X[k], sd ? dd_neg(t) : t);
-                    }
-                }
-                V6[k] += sd ? v : -v;
+                dd org[3];
+                for (int a = 0; a < 3; a++)
+                    org[a].hi = dh[3 * (size_t)orgv[k] + a],
+                    org[a].lo = dl[3 * (size_t)orgv[k] + a];
+                dd c = cycle_cone6(A, dh, dl, cy, org);
+                X[k] = dd_add(X[k], sd ? c : dd_neg(c));
             }
-        for (size_t k = 0; k < nc; k++) {
-            dd vol = dd_add(X[k], dd_of(V6[k]));
-            out->cvol[k] = (vol.hi + vol.lo) * h3;
         }
-        free(UC), free(X), free(V6);
+    double h3 = A->step * A->step * A->step / 6;
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t k = out->ucell[2 * u + (uint32_t)sd];
+            if (k >= nc) continue;
+            const i128 *Uu = UC + 4 * u;
+            i128 v = Uu[0];
+            if (orgv[k] < A->nv) {
+                const int64_t *g = A->g + 3 * (size_t)orgv[k];
+                v -= g[0] * Uu[1] + g[1] * Uu[2] + g[2] * Uu[3];
+            } else {
+                for (int a = 0; a < 3; a++) {
+                    dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
+                    dd t = dd_mul(oa, dd_of(Uu[1 + a]));
+                    X[k] = dd_add(X[k], sd ? dd_neg(t) : t);
+                }
+            }
+            V6[k] += sd ? v : -v;
+        }
+    for (size_t k = 0; k < nc; k++) {
+        dd vol = dd_add(X[k], dd_of(V6[k]));
+        out->cvol[k] = (vol.hi + vol.lo) * h3;
     }
+    rc = ARR_OK;
+done:
+    free(UC), free(V6), free(X);
+    return rc;
+}
+
+/* Stage "cells": cell ids from cu (the class of the exterior is none: cells_number), the units'
+ * cells (cells_units, checked: cells_check_sides), each cell's faces (CF, in order of face: the
+ * - side first) and the exterior's when asked for (cells_cf), the points to 2^-100
+ * (cells_points: volumes and the written coordinates come from these, handed back in *dh_out,
+ * *dl_out) and the volumes (cells_volumes).  Returns an ARR_* code. */
+A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
+                               double **dl_out, char *err, size_t errlen)
+{
+    uint32_t *cellof = mem_malloc((S->nsh + 2) * sizeof *cellof), *orgv = NULL;
+    double *dh = NULL, *dl = NULL;
+    unsigned want = A->o->want ? A->o->want : ~0u;
+    int rc = ARR_ENOMEM;
+    if (!cellof || cells_number(A, S, cu, cellof, out) || cells_units(A, S, cellof, out)) goto done;
+    if ((rc = cells_check_sides(A, S, cellof, out, err, errlen)) != ARR_OK) goto done;
+    rc = ARR_ENOMEM;
+    if ((want & ARR3_WANT_CF) && cells_cf(A, S, cellof, out)) goto done;
+    dh = mem_malloc((3 * A->npt + 1) * sizeof *dh);
+    dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
+    orgv = mem_malloc((out->nc + 1) * sizeof *orgv);
+    if (!dh || !dl || !orgv) goto done;
+    if ((rc = cells_points(A, out, orgv, dh, dl)) != ARR_OK) goto done;
+    if ((rc = cells_volumes(A, out, orgv, dh, dl)) != ARR_OK) goto done;
     *dh_out = dh, *dl_out = dl;
     dh = dl = NULL;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(cellof), free(fill), free(orgv), free(dh), free(dl), free(roff), free(run);
+    free(cellof), free(orgv), free(dh), free(dl);
     return rc;
 }
 
@@ -1399,15 +1438,169 @@ static void out_faces(void *ctx, size_t item, int worker)
     }
 }
 
+/* The used points numbered in order of position (newid: from 0 for used, NONE for the others,
+ * to their number) and, when asked for, their coordinates V from dh + dl.  -1 out of memory. */
+static int output_points(const a3 *A, uint32_t *newid, size_t nu, const double *dh,
+                         const double *dl, lar3 *out, unsigned want)
+{
+    uint32_t *used = mem_malloc((nu + 1) * sizeof *used);
+    int rc = -1;
+    if (!used) goto done;
+    nu = 0;
+    for (size_t p = 0; p < A->npt; p++)
+        if (newid[p] == 0) used[nu++] = (uint32_t)p;
+    if (sort_points(A, used, nu)) goto done;
+    A3_TICK("out/sort points");
+    for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+    if (want & ARR3_WANT_COORDS) {
+        out->V = mem_malloc((3 * nu + 1) * sizeof *out->V);
+        if (!out->V) goto done;
+        for (size_t i = 0; i < nu; i++)
+            for (int k = 0; k < 3; k++)
+                out->V[3 * i + k] =
+                    ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
+                    A->step;
+    }
+    rc = 0;
+done:
+    free(used);
+    return rc;
+}
+
+/* The edges inside the patches (one a twin pair, after the ne edges of E) added to E, then
+ * every edge numbered in the order of its new ends: EV, and newe (by old edge: its number).
+ * -1 out of memory. */
+static int output_edges(const a3 *A, cedges *E, const uint32_t *newid, size_t nin, uint32_t *newe,
+                        lar3 *out)
+{
+    size_t ne = E->ne, pe = A->npatch ? A->u_off[A->npatch] : 0;
+    uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
+    if (!ev) return -1;
+    E->ev = ev;
+    for (size_t f = 0; f < pe; f++) {
+        uint32_t o = A->cyc_off[A->f_cyc[f]], n = A->cyc_off[A->f_cyc[f] + 1] - o;
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t x = o + t, y = A->etwin[x];
+            if (y == NONE || x > y) continue;
+            uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
+            ev[2 * ne] = a < b ? a : b, ev[2 * ne + 1] = a < b ? b : a;
+            E->ent_e[x] = E->ent_e[y] = (uint32_t)ne++;
+        }
+    }
+    E->ne = ne;
+    kv *ek = mem_malloc((ne + 1) * sizeof *ek);
+    out->EV = mem_malloc((2 * ne + 1) * sizeof *out->EV);
+    if (!ek || !out->EV) {
+        free(ek);
+        return -1;
+    }
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
+        ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
+    }
+    if (sort_kv(ek, ne)) {
+        free(ek);
+        return -1;
+    }
+    for (size_t i = 0; i < ne; i++) {
+        out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
+        out->EV[2 * i + 1] = (uint32_t)ek[i].k;
+        newe[ek[i].v] = (uint32_t)i;
+    }
+    free(ek);
+    return 0;
+}
+
+/* The faces' cycles in the new numbering (fc_off, fc, cyc_off, cyc) and the room of their
+ * edges (fe_off, fe; out_faces fills them).  -1 out of memory. */
+static int output_cycles(const a3 *A, const uint32_t *newid, lar3 *out)
+{
+    size_t nf = A->nf;
+    out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
+    out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
+    out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
+    out->ncyc = A->ncyc;
+    out->cyc_off = mem_malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = mem_malloc((A->nent + 1) * sizeof *out->cyc);
+    if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) return -1;
+    out->fc_off[0] = out->fe_off[0] = 0;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t nfe = 0;
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
+            nfe += n < 2 ? 0 : n;
+        }
+        out->fc_off[f + 1] = A->f_cyc[f + 1];
+        out->fe_off[f + 1] = out->fe_off[f] + nfe;
+    }
+    out->fe = mem_malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
+    if (!out->fe) return -1;
+    for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
+    for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+    return 0;
+}
+
+/* fsol: the room a face with several pieces left unused (NONE) closed up. */
+static void output_fsol_close(size_t nf, lar3 *out)
+{
+    uint32_t w = 0;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
+        out->fsol_off[f] = w;
+        for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
+            out->fsol[w] = out->fsol[i], out->fwind[w++] = out->fwind[i];
+    }
+    out->fsol_off[nf] = w;
+}
+
+/* CV: the sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
+ * read off in vertex order, a small one sorted).  -1 out of memory. */
+static int output_cv(const a3 *A, lar3 *out)
+{
+    size_t nc = out->nc, ncv = 0, capcv = 0, step = nc / 50 + 1;
+    uint32_t *cv = NULL, *stamp = mem_calloc(out->nv + 1, sizeof *stamp);
+    out->cv_off = mem_calloc(nc + 1, sizeof *out->cv_off);
+    if (!out->cv_off || !stamp) goto fail;
+    for (size_t k = 0; k < nc; k++) {
+        size_t start = ncv;
+        if (k % step == 0) a3_progress(A, "cells", 0.8 + 0.2 * (double)k / (double)nc);
+        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
+            uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
+            for (uint32_t x = out->cyc_off[out->fc_off[f]]; x < out->cyc_off[out->fc_off[f + 1]];
+                 x++) {
+                uint32_t v = out->cyc[x];
+                if (stamp[v] == k + 1) continue;
+                stamp[v] = (uint32_t)k + 1;
+                if (A3_PUSH(cv, ncv, capcv, v)) goto fail;
+            }
+        }
+        size_t m = ncv - start;
+        if (m > out->nv / 16) {
+            size_t w = start;
+            for (uint32_t v = 0; v < out->nv; v++)
+                if (stamp[v] == k + 1) cv[w++] = v;
+        } else if (m > 1) {
+            qsort(cv + start, m, sizeof *cv, u32_cmp);
+        }
+        out->cv_off[k + 1] = (uint32_t)ncv;
+    }
+    free(stamp);
+    out->cv = cv ? cv : mem_malloc(sizeof *out->cv);
+    return out->cv ? 0 : -1;
+fail:
+    free(stamp), free(cv);
+    return -1;
+}
+
 /* Stage "output": the faces' solids (fsol); with ARR3_WANT_FACES the points numbered in order
- * of position and the edges in order of their ends, EV, and the faces' cycles and edges; V, FN
- * and fsrc, CV when asked for.  Returns -1 out of memory. */
+ * of position and V (output_points), the edges in order of their ends and EV (output_edges),
+ * and the faces' cycles and edges (output_cycles, out_faces); FN and fsrc, CV when asked for
+ * (output_cv).  Returns 0, -1 out of memory, -3 cancelled. */
 A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double *dl, lar3 *out)
 {
-    size_t nf = A->nf, ne = E->ne, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
+    size_t nf = A->nf, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
     unsigned want = A->o->want ? A->o->want : ~0u;
-    uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
-    kv *ek = NULL;
+    uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *newe = NULL;
     int rc = -1;
 /* Between the bounded parts of the output: a cancel ends it (-3). */
 #define OUTPUT_CANCEL_POINT                                                                        \
@@ -1427,7 +1620,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++)
             nin += A->etwin[x] != NONE && x < A->etwin[x];
     out->nv = nu;
-    out->ne = ne + nin;
+    out->ne = E->ne + nin;
     out->nf = nf;
     /* the faces' solids: those covering it an odd number of times (room first, then closed up) */
     out->fsol_off = mem_malloc((nf + 1) * sizeof *out->fsol_off);
@@ -1440,80 +1633,16 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     if (!out->fsol || !out->fwind) goto done;
     A3_TICK("out/points used");
     if (want & ARR3_WANT_FACES) {
-        used = mem_malloc((nu + 1) * sizeof *used);
-        if (!used) goto done;
-        nu = 0;
-        for (size_t p = 0; p < A->npt; p++)
-            if (newid[p] == 0) used[nu++] = (uint32_t)p;
-        if (sort_points(A, used, nu)) goto done;
-        A3_TICK("out/sort points");
         OUTPUT_CANCEL_POINT;
-        for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+        if (output_points(A, newid, nu, dh, dl, out, want)) goto done;
         a3_progress(A, "cells", 0.6);
-        if (want & ARR3_WANT_COORDS) {
-            out->V = mem_malloc((3 * nu + 1) * sizeof *out->V);
-            if (!out->V) goto done;
-            for (size_t i = 0; i < nu; i++)
-                for (int k = 0; k < 3; k++)
-                    out->V[3 * i + k] = ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] +
-                                         dl[3 * (size_t)used[i] + k]) *
-                                        A->step;
-        }
         OUTPUT_CANCEL_POINT;
-        uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
-        if (!ev) goto done;
-        E->ev = ev;
-        for (size_t f = 0; f < pe; f++) {
-            uint32_t o = A->cyc_off[A->f_cyc[f]], n = A->cyc_off[A->f_cyc[f] + 1] - o;
-            for (uint32_t t = 0; t < n; t++) {
-                uint32_t x = o + t, y = A->etwin[x];
-                if (y == NONE || x > y) continue;
-                uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
-                ev[2 * ne] = a < b ? a : b, ev[2 * ne + 1] = a < b ? b : a;
-                E->ent_e[x] = E->ent_e[y] = (uint32_t)ne++;
-            }
-        }
-        E->ne = ne;
-        /* edges in the order of their new ends */
-        ek = mem_malloc((ne + 1) * sizeof *ek);
-        newe = mem_malloc((ne + 1) * sizeof *newe);
-        out->EV = mem_malloc((2 * ne + 1) * sizeof *out->EV);
-        if (!ek || !newe || !out->EV) goto done;
-        for (size_t e = 0; e < ne; e++) {
-            uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
-            ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
-        }
-        if (sort_kv(ek, ne)) goto done;
+        newe = mem_malloc((E->ne + nin + 1) * sizeof *newe);
+        if (!newe || output_edges(A, E, newid, nin, newe, out)) goto done;
         A3_TICK("out/edges");
         OUTPUT_CANCEL_POINT;
-        for (size_t i = 0; i < ne; i++) {
-            out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
-            out->EV[2 * i + 1] = (uint32_t)ek[i].k;
-            newe[ek[i].v] = (uint32_t)i;
-        }
         a3_progress(A, "cells", 0.7);
-        OUTPUT_CANCEL_POINT;
-        out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
-        out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
-        out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
-        out->ncyc = A->ncyc;
-        out->cyc_off = mem_malloc((A->ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = mem_malloc((A->nent + 1) * sizeof *out->cyc);
-        if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) goto done;
-        out->fc_off[0] = out->fe_off[0] = 0;
-        for (size_t f = 0; f < nf; f++) {
-            uint32_t nfe = 0;
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
-                nfe += n < 2 ? 0 : n;
-            }
-            out->fc_off[f + 1] = A->f_cyc[f + 1];
-            out->fe_off[f + 1] = out->fe_off[f] + nfe;
-        }
-        out->fe = mem_malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
-        if (!out->fe) goto done;
-        for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
-        for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+        if (output_cycles(A, newid, out)) goto done;
     }
     if (want & ARR3_WANT_NORMALS) {
         out->FN = mem_malloc((3 * nf + 1) * sizeof *out->FN);
@@ -1526,57 +1655,9 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         A3_TICK("out/faces");
         OUTPUT_CANCEL_POINT;
     }
-    /* fsol: the room a face with several pieces left unused (NONE) closed up */
-    {
-        uint32_t w = 0;
-        for (size_t f = 0; f < nf; f++) {
-            uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
-            out->fsol_off[f] = w;
-            for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
-                out->fsol[w] = out->fsol[i], out->fwind[w++] = out->fwind[i];
-        }
-        out->fsol_off[nf] = w;
-    }
+    output_fsol_close(nf, out);
     a3_progress(A, "cells", 0.8);
-    /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
-     * read off in vertex order, a small one sorted) */
-    size_t nc = out->nc;
-    if ((want & ARR3_WANT_CV) && out->cyc && out->cf) {
-        out->cv_off = mem_calloc(nc + 1, sizeof *out->cv_off);
-        if (!out->cv_off) goto done;
-        uint32_t *cv = NULL, *stamp = mem_calloc(out->nv + 1, sizeof *stamp);
-        size_t ncv = 0, capcv = 0, step = nc / 50 + 1;
-        if (!stamp) goto done;
-        for (size_t k = 0; k < nc; k++) {
-            size_t start = ncv;
-            if (k % step == 0) a3_progress(A, "cells", 0.8 + 0.2 * (double)k / (double)nc);
-            for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
-                uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
-                for (uint32_t x = out->cyc_off[out->fc_off[f]];
-                     x < out->cyc_off[out->fc_off[f + 1]]; x++) {
-                    uint32_t v = out->cyc[x];
-                    if (stamp[v] == k + 1) continue;
-                    stamp[v] = (uint32_t)k + 1;
-                    if (A3_PUSH(cv, ncv, capcv, v)) {
-                        free(stamp), free(cv);
-                        goto done;
-                    }
-                }
-            }
-            size_t m = ncv - start;
-            if (m > out->nv / 16) {
-                size_t w = start;
-                for (uint32_t v = 0; v < out->nv; v++)
-                    if (stamp[v] == k + 1) cv[w++] = v;
-            } else if (m > 1) {
-                qsort(cv + start, m, sizeof *cv, u32_cmp);
-            }
-            out->cv_off[k + 1] = (uint32_t)ncv;
-        }
-        free(stamp);
-        out->cv = cv ? cv : mem_malloc(sizeof *out->cv);
-        if (!out->cv) goto done;
-    }
+    if ((want & ARR3_WANT_CV) && out->cyc && out->cf && output_cv(A, out)) goto done;
     out->stats.nv = out->nv;
     out->stats.ne = out->ne;
     out->stats.nf = out->nf;
@@ -1584,7 +1665,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     rc = 0;
 #undef OUTPUT_CANCEL_POINT
 done:
-    free(newid), free(used), free(newe), free(ek);
+    free(newid), free(newe);
     return rc;
 }
 

@@ -36,7 +36,7 @@
 #include "core/sort.h"
 #include "core/util.h"
 
-#include <float.h>
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -1336,9 +1336,9 @@ done:
 
 /* ---- output ------------------------------------------------------------------------------ */
 
-/* The used points sorted by position: the grid points by an LSD radix sort on z, y, x (stable:
- * equal points cannot occur, they are one point), the others (few: where surfaces meet) by the
- * exact comparison, then the two runs merged by it. */
+/* The used points sorted by position: the grid points by sort_kv_xyz (point ids below nv are
+ * the vertices, pt[v] the grid point v; equal points cannot occur, they are one point), the
+ * others (few: where surfaces meet) by the exact comparison, then the two runs merged by it. */
 static int sort_points(const a3 *A, uint32_t *used, size_t nu)
 {
     size_t ng = 0, nx = 0;
@@ -1347,15 +1347,12 @@ static int sort_points(const a3 *A, uint32_t *used, size_t nu)
     int rc = -1;
     if (!g || !x) goto done;
     for (size_t i = 0; i < nu; i++)
-        if (A->pt[used[i]].kind == PT_GRID)
+        if (A->pt[used[i]].kind == PT_GRID) {
+            assert(A->pt[used[i]].a == used[i]);
             g[ng++] = (kv){0, used[i]};
-        else
+        } else
             x[nx++] = used[i];
-    for (int k = 2; k >= 0; k--) {
-        for (size_t i = 0; i < ng; i++)
-            g[i].k = (uint64_t)(A->g[3 * (size_t)A->pt[g[i].v].a + k] + ((int64_t)1 << 40));
-        if (sort_kv(g, ng)) goto done;
-    }
+    if (sort_kv_xyz(g, ng, A->g)) goto done;
     if (nx > 1) qsort_r(x, nx, sizeof *x, vcmp, (void *)A);
     size_t i = 0, j = 0, m = 0;
     while (i < ng || j < nx) {

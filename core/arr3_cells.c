@@ -20,8 +20,16 @@
  * broken by the perturbation's derivatives).  The part's own first hit from -infinity shows its
  * outside shell; the nearest hit of another part below q shows the cell holding the part.
  *
- * The probes find the faces they may hit through a grid over the input pieces' boxes (a face
- * lies inside each piece covering it).
+ * The probes find the faces they may hit through the box index of core/box.h over the input
+ * pieces' boxes in the probe's projection (a face lies inside each piece covering it).  Every
+ * predicate here (the fans' det3_sign and dot signs, the probes' xpt_cmp_q3_exact,
+ * axis_plane_side_exact and cmp_frac_exact) is core/pred.c's: this file holds no error bound.
+ *
+ * Stages, each a function with its contract: edges_make, fans_make, shells_make, nesting_make
+ * (pindex_make, probe_candidates, part_probe, part_host), cells_make (cells_number,
+ * cells_units, cells_check_sides, cells_cf, cells_points, volumes_grid, cells_volumes) and
+ * output_make (output_points, output_edges, output_cycles, out_faces, output_fsol_close,
+ * output_cv); a3_cells runs them in order with a cancel point between each.
  *
  * Volumes are sums of cones over the faces' cycles from the points' approximations (each within
  * 2^-50 of the exact point), so a cell's volume is exact up to rounding.

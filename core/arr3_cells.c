@@ -20,8 +20,16 @@
  * broken by the perturbation's derivatives).  The part's own first hit from -infinity shows its
  * outside shell; the nearest hit of another part below q shows the cell holding the part.
  *
- * The probes find the faces they may hit through a grid over the input pieces' boxes (a face
- * lies inside each piece covering it).
+ * The probes find the faces they may hit through the box index of core/box.h over the input
+ * pieces' boxes in the probe's projection (a face lies inside each piece covering it).  Every
+ * predicate here (the fans' det3_sign and dot signs, the probes' xpt_cmp_q3_exact,
+ * axis_plane_side_exact and cmp_frac_exact) is core/pred.c's: this file holds no error bound.
+ *
+ * Stages, each a function with its contract: edges_make, fans_make, shells_make, nesting_make
+ * (pindex_make, probe_candidates, part_probe, part_host), cells_make (cells_number,
+ * cells_units, cells_check_sides, cells_cf, cells_points, volumes_grid, cells_volumes) and
+ * output_make (output_points, output_edges, output_cycles, out_faces, output_fsol_close,
+ * output_cv); a3_cells runs them in order with a cancel point between each.
  *
  * Volumes are sums of cones over the faces' cycles from the points' approximations (each within
  * 2^-50 of the exact point), so a cell's volume is exact up to rounding.
@@ -30,49 +38,24 @@
  * in fixed chunks, each writing only its own items; the rest runs on the calling thread.
  */
 #include "core/arr3_int.h"
+#include "core/box.h"
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/util.h"
 
-#include <float.h>
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#define U (DBL_EPSILON / 2)
-
 /* ---- small tools ------------------------------------------------------------------------ */
-
-static int cmpu32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
 
 static int sgn128(i128 v)
 {
     return (v > 0) - (v < 0);
-}
-
-/* sign(a/b - c/d) for b, d != 0 */
-static int cmp_frac(i128 a, i128 b, i128 c, i128 d)
-{
-    double l = (double)a * (double)d, r = (double)c * (double)b;
-    double e = (fabs(l) + fabs(r)) * (8 * U);
-    int s;
-    if (l - r > e)
-        s = 1;
-    else if (r - l > e)
-        s = -1;
-    else {
-        xint x, y;
-        xi_mul_i128(&x, a, d);
-        xi_mul_i128(&y, c, b);
-        s = xi_cmp(&x, &y);
-    }
-    return s * sgn128(b) * sgn128(d);
 }
 
 /* ---- fans ----------------------------------------------------------------------------------- */
@@ -252,54 +235,6 @@ typedef struct probe {
     int k, i, j;
 } probe;
 
-/* sign(p_ax - Q_ax / 3) */
-static int cmp_q(const a3 *A, const xpt *p, const probe *pr, int ax)
-{
-    if (p->kind == PT_GRID) {
-        i128 v = 3 * (i128)A->g[3 * (size_t)p->a + ax] - pr->Q[ax];
-        return sgn128(v);
-    }
-    double v = 3 * p->x[ax] - (double)pr->Q[ax];
-    double e = (3 * fabs(p->x[ax]) + fabs((double)pr->Q[ax])) * (XPT_REL + 8 * U);
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xhom h;
-    xint l, r, q;
-    xpt_hom(&A->G, p, &h);
-    xi_set_i64(&q, 3);
-    xi_mul(&l, &q, &h.X[ax]);
-    xi_set_i64(&q, pr->Q[ax]);
-    xi_mul(&r, &q, &h.W);
-    return xi_cmp(&l, &r);
-}
-
-/* Sign of the plane through line (P, S) parallel to e_k at the probe point, and the sign of that
- * plane's i coefficient. */
-static int pi_side(const a3 *A, const plane3 *P, const plane3 *S, const probe *pr, int *si)
-{
-    int k = pr->k, i = pr->i, j = pr->j;
-    i128 pi_i = (i128)S->n[k] * P->n[i] - (i128)P->n[k] * S->n[i];
-    i128 pi_j = (i128)S->n[k] * P->n[j] - (i128)P->n[k] * S->n[j];
-    *si = sgn128(pi_i);
-    /* value = pi_i Q_i + pi_j Q_j + 3 (S_k d_P - P_k d_S) */
-    double t0 = (double)pi_i * (double)pr->Q[i], t1 = (double)pi_j * (double)pr->Q[j];
-    double t2 = 3 * (double)S->n[k] * (double)P->d, t3 = 3 * (double)P->n[k] * (double)S->d;
-    double v = t0 + t1 + t2 - t3;
-    double e = (fabs(t0) + fabs(t1) + fabs(t2) + fabs(t3)) * (16 * U);
-    (void)A;
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xint s, t, a, b;
-    xi_mul_i128(&s, pi_i, pr->Q[i]);
-    xi_mul_i128(&t, pi_j, pr->Q[j]);
-    xi_add(&s, &s, &t);
-    xi_mul_i128(&a, (i128)3 * S->n[k], P->d);
-    xi_mul_i128(&b, (i128)3 * P->n[k], S->d);
-    xi_add(&s, &s, &a);
-    xi_sub(&s, &s, &b);
-    return xi_sign(&s);
-}
-
 /* Does the perturbed probe line meet face f? */
 static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
 {
@@ -310,14 +245,18 @@ static int probe_hits(const a3 *A, uint32_t f, const probe *pr)
     for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
         uint32_t o = A->cyc_off[cy], n = A->cyc_off[cy + 1] - o;
         if (n < 2) continue;
+        /* each point's side of the line's j coordinate, once: an edge's end is the next's
+         * start */
+        int s0 = xpt_cmp_q3_exact(&A->G, &A->pt[A->ent[o]], pr->j, pr->Q[pr->j]) > 0, sb = s0;
         for (uint32_t t = 0; t < n; t++) {
             uint32_t a = A->ent[o + t], b = A->ent[o + (t + 1) % n], S = A->side[o + t];
-            int sa = cmp_q(A, &A->pt[a], pr, pr->j) > 0, sb = cmp_q(A, &A->pt[b], pr, pr->j) > 0;
+            int sa = sb;
+            sb = t + 1 < n ? xpt_cmp_q3_exact(&A->G, &A->pt[b], pr->j, pr->Q[pr->j]) > 0 : s0;
             if (sa == sb || S == NONE) continue;
             plane3 tmp;
             const plane3 *SP = a3_side(A, P, a, b, S, &tmp);
             if (!SP) continue;
-            int si, s = pi_side(A, P, SP, pr, &si);
+            int si, s = axis_plane_side_exact(P, SP, pr->k, pr->Q, &si);
             if (s == 0) s = si;
             par ^= s == -si;
         }
@@ -340,11 +279,11 @@ static int probe_cmp(const a3 *A, uint32_t f, uint32_t g, const probe *pr)
     i128 nf, df, ng, dg;
     probe_t(F, pr, &nf, &df);
     probe_t(G, pr, &ng, &dg);
-    int c = cmp_frac(nf, df, ng, dg);
+    int c = cmp_frac_exact(nf, df, ng, dg);
     if (c) return c;
-    c = cmp_frac(-F->n[pr->i], F->n[pr->k], -G->n[pr->i], G->n[pr->k]);
+    c = cmp_frac_exact(-F->n[pr->i], F->n[pr->k], -G->n[pr->i], G->n[pr->k]);
     if (c) return c;
-    return cmp_frac(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
+    return cmp_frac_exact(-F->n[pr->j], F->n[pr->k], -G->n[pr->j], G->n[pr->k]);
 }
 
 typedef struct probe_sort {
@@ -493,108 +432,99 @@ static void points_dd(void *ctx, size_t item, int worker)
         if (!isnan(j->dh[3 * p])) xpt_dd(&A->G, &A->pt[p], j->dh + 3 * p, j->dl + 3 * p);
 }
 
-/* ---- a grid over the pieces' boxes in a probe's projection ----------------------------------
- * Which faces may a ray along -k through (qi, qj) cross?  Those whose projected box holds the
- * point: a uniform grid over the boxes (about two faces per cell) answers with the boxes of one
- * cell plus the few big ones, instead of every face for every part (parts x faces grew faster
- * than the arrangement on scenes of many solids).  Only a filter: the exact test follows. */
-typedef struct fgrid {
-    double x0, y0, cw, ch;
-    int nx, ny;
-    uint32_t *off, *items; /* cell c holds items[off[c] .. off[c+1]) */
-    uint32_t *big;         /* boxes over more than FGRID_BIG cells: checked for every query */
-    size_t nbig;
-} fgrid;
-#define FGRID_BIG 64
+/* ---- the probes' index ----------------------------------------------------------------------
+ * Which faces may a ray along -k through (Q_i, Q_j) / 3 cross?  Those whose covering pieces'
+ * boxes hold the point in projection (a face lies inside each piece covering it).  Few parts:
+ * every face is looked at.  Many: a box index (core/box.h) over the pieces' boxes projected
+ * along k, scaled by 3 so that the point Q is exact as doubles and the leaf box_tree_locate
+ * gives holds every box containing it (no margin); its boxes are then tested exactly and their
+ * pieces' faces taken (a list of faces by first piece).  Built once per axis, when a probe first
+ * needs it.  Only a filter: probe_hits decides. */
+#define PROBE_LEAF 256 /* boxes a leaf aimed at: few probes query many boxes */
 
-static void fgrid_free(fgrid *g)
+typedef struct pindex {
+    int use_tree;          /* 0: every face is a candidate */
+    uint32_t *pf_off, *pf; /* the faces by their first piece: pf[pf_off[q] .. pf_off[q + 1]) */
+    box_tree tree[3];      /* by axis k: the pieces' boxes projected along k (dim 0: not built) */
+} pindex;
+
+static void pindex_free(pindex *X)
 {
-    free(g->off);
-    free(g->items);
-    free(g->big);
-    memset(g, 0, sizeof *g);
+    free(X->pf_off), free(X->pf);
+    for (int k = 0; k < 3; k++) box_tree_free(&X->tree[k]);
+    memset(X, 0, sizeof *X);
 }
 
-static void fgrid_span(const fgrid *g, const double *bx, int *c0, int *r0, int *c1, int *r1)
+/* The index of the probes: the tree when there are more than 8 parts.  -1 out of memory. */
+static int pindex_make(const a3 *A, size_t ncomp, pindex *X)
 {
-    double a = (bx[0] - g->x0) / g->cw, b = (bx[2] - g->x0) / g->cw;
-    double c = (bx[1] - g->y0) / g->ch, d = (bx[3] - g->y0) / g->ch;
-    *c0 = a < 0 ? 0 : a >= g->nx ? g->nx - 1 : (int)a;
-    *c1 = b < 0 ? 0 : b >= g->nx ? g->nx - 1 : (int)b;
-    *r0 = c < 0 ? 0 : c >= g->ny ? g->ny - 1 : (int)c;
-    *r1 = d < 0 ? 0 : d >= g->ny ? g->ny - 1 : (int)d;
-}
-
-static int fgrid_build(fgrid *g, const double *box, size_t n)
-{
-    double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
-    fgrid_free(g);
-    for (size_t f = 0; f < n; f++) {
-        const double *b = box + 4 * f;
-        if (b[0] < x0) x0 = b[0];
-        if (b[1] < y0) y0 = b[1];
-        if (b[2] > x1) x1 = b[2];
-        if (b[3] > y1) y1 = b[3];
-    }
-    int side = (int)sqrt((double)n / 2) + 1;
-    if (side > 4096) side = 4096;
-    g->nx = g->ny = side;
-    g->x0 = x0, g->y0 = y0;
-    g->cw = x1 > x0 ? (x1 - x0) / side : 1;
-    g->ch = y1 > y0 ? (y1 - y0) / side : 1;
-    if (!(g->cw > 0) || !isfinite(g->cw)) g->cw = 1;
-    if (!(g->ch > 0) || !isfinite(g->ch)) g->ch = 1;
-    size_t ncell = (size_t)side * (size_t)side, total = 0;
-    g->off = mem_calloc(ncell + 2, sizeof *g->off);
-    g->big = mem_malloc((n + 1) * sizeof *g->big);
-    if (!g->off || !g->big) return -1;
-    for (int pass = 0; pass < 2; pass++) {
-        g->nbig = 0;
-        for (size_t f = 0; f < n; f++) {
-            int c0, r0, c1, r1;
-            fgrid_span(g, box + 4 * f, &c0, &r0, &c1, &r1);
-            if ((size_t)(c1 - c0 + 1) * (size_t)(r1 - r0 + 1) > FGRID_BIG) {
-                g->big[g->nbig++] = (uint32_t)f;
-                continue;
-            }
-            for (int r = r0; r <= r1; r++)
-                for (int c = c0; c <= c1; c++) {
-                    size_t cell = (size_t)r * (size_t)side + (size_t)c;
-                    if (pass == 0)
-                        g->off[cell + 2]++;
-                    else
-                        g->items[g->off[cell + 1]++] = (uint32_t)f;
-                }
-        }
-        if (pass == 0) {
-            for (size_t c = 0; c < ncell; c++) g->off[c + 2] += g->off[c + 1];
-            total = g->off[ncell + 1];
-            if (total > UINT32_MAX) return -1;
-            g->items = mem_malloc((total + 1) * sizeof *g->items);
-            if (!g->items) return -1;
-        }
-    }
+    size_t nf = A->nf;
+    memset(X, 0, sizeof *X);
+    X->use_tree = ncomp > 8;
+    if (!X->use_tree) return 0;
+    X->pf_off = mem_calloc(A->npc + 2, sizeof *X->pf_off);
+    X->pf = mem_malloc((nf + 1) * sizeof *X->pf);
+    if (!X->pf_off || !X->pf) return -1;
+    for (size_t f = 0; f < nf; f++) X->pf_off[A->cov[A->f_cov[f]] + 2]++;
+    for (size_t q = 0; q < A->npc; q++) X->pf_off[q + 2] += X->pf_off[q + 1];
+    for (size_t f = 0; f < nf; f++) X->pf[X->pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
     return 0;
 }
 
-/* The faces whose boxes may hold (qi, qj), ascending, into *out (grown as needed). */
-static int fgrid_query(const fgrid *g, double qi, double qj, uint32_t **out, size_t *cap, size_t *n)
+/* The tree of axis k, built on first use.  -1 out of memory. */
+static int pindex_tree(const a3 *A, pindex *X, int k)
 {
-    size_t k = 0, m = g->nbig;
-    double a = (qi - g->x0) / g->cw, b = (qj - g->y0) / g->ch;
-    int inside = a >= 0 && b >= 0 && a <= g->nx && b <= g->ny;
-    size_t cell = 0;
-    if (inside) {
-        int c = a >= g->nx ? g->nx - 1 : (int)a, r = b >= g->ny ? g->ny - 1 : (int)b;
-        cell = (size_t)r * (size_t)g->nx + (size_t)c;
-        m += g->off[cell + 1] - g->off[cell];
+    if (X->tree[k].dim) return 0;
+    int i = (k + 1) % 3, j = (k + 2) % 3;
+    int64_t *box = mem_malloc((4 * A->npc + 1) * sizeof *box);
+    if (!box) return -1;
+    for (size_t q = 0; q < A->npc; q++) {
+        const int32_t *b = A->pc[q].box;
+        int64_t *bx = box + 4 * q;
+        bx[0] = 3 * (int64_t)b[i], bx[1] = 3 * (int64_t)b[j];
+        bx[2] = 3 * (int64_t)b[3 + i], bx[3] = 3 * (int64_t)b[3 + j];
     }
-    if (mem_grow(out, cap, m + 1, sizeof **out)) return -1;
-    for (size_t i = 0; i < g->nbig; i++) (*out)[k++] = g->big[i];
-    if (inside)
-        for (uint32_t i = g->off[cell]; i < g->off[cell + 1]; i++) (*out)[k++] = g->items[i];
-    qsort(*out, k, sizeof **out, a3_cmp_u32);
-    *n = k;
+    int rc = box_tree_build_dim(&X->tree[k], 2, box, A->npc, PROBE_LEAF, 1);
+    free(box);
+    return rc;
+}
+
+/* Does piece q's box hold the probe's point in projection? (exact) */
+static inline int box_holds(const int32_t *b, const probe *pr)
+{
+    return (int64_t)pr->Q[pr->i] >= 3 * (int64_t)b[pr->i] &&
+           (int64_t)pr->Q[pr->i] <= 3 * (int64_t)b[3 + pr->i] &&
+           (int64_t)pr->Q[pr->j] >= 3 * (int64_t)b[pr->j] &&
+           (int64_t)pr->Q[pr->j] <= 3 * (int64_t)b[3 + pr->j];
+}
+
+/* The faces the probe's ray may cross, ascending, into *ff (grown as needed).  -1 out of
+ * memory. */
+static int probe_candidates(const a3 *A, pindex *X, const probe *pr, uint32_t **ff, size_t *capff,
+                            size_t *nff)
+{
+    size_t n = 0;
+    if (!X->use_tree) {
+        for (size_t f = 0; f < A->nf; f++)
+            if (box_holds(A->pc[A->cov[A->f_cov[f]]].box, pr) &&
+                A3_PUSH(*ff, n, *capff, (uint32_t)f))
+                return -1;
+        *nff = n;
+        return 0;
+    }
+    if (pindex_tree(A, X, pr->k)) return -1;
+    const box_tree *t = &X->tree[pr->k];
+    double q[2] = {(double)pr->Q[pr->i], (double)pr->Q[pr->j]};
+    uint32_t l = box_tree_locate_pt(t, q);
+    for (uint32_t x = t->leaf_off[l]; x < t->leaf_off[l + 1]; x++) {
+        uint32_t pc = t->items[x], m = X->pf_off[pc + 1] - X->pf_off[pc];
+        if (!box_holds(A->pc[pc].box, pr)) continue;
+        if (mem_grow(ff, capff, n + m + 1, sizeof **ff)) return -1;
+        memcpy(*ff + n, X->pf + X->pf_off[pc], m * sizeof **ff);
+        n += m;
+    }
+    if (n > 1) qsort(*ff, n, sizeof **ff, u32_cmp);
+    *nff = n;
     return 0;
 }
 
@@ -808,8 +738,8 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
         size_t n = E->ioff[e + 1] - E->ioff[e];
         for (size_t k = 0; k < n; k++) {
             const inc *f0 = &F[k], *f1 = &F[k + 1 < n ? k + 1 : 0];
-            a3_uf_union(sp, fnode(A, f0->f, f0->s > 0 ? 0 : 1), fnode(A, f1->f, f1->s > 0 ? 1 : 0));
-            if (k + 1 < n) a3_uf_union(uu, A->f_unit[f0->f], A->f_unit[f1->f]);
+            uf_union(sp, fnode(A, f0->f, f0->s > 0 ? 0 : 1), fnode(A, f1->f, f1->s > 0 ? 1 : 0));
+            if (k + 1 < n) uf_union(uu, A->f_unit[f0->f], A->f_unit[f1->f]);
         }
     }
     /* shells and parts numbered in order of their first node (a root's number kept at the
@@ -817,13 +747,13 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
     size_t nsh = 0, ncomp = 0;
     for (size_t i = 0; i < nn; i++) S->shell[i] = NONE;
     for (size_t i = 0; i < nn; i++) {
-        uint32_t r = a3_uf_find(sp, (uint32_t)i);
+        uint32_t r = uf_find(sp, (uint32_t)i);
         if (S->shell[r] == NONE) S->shell[r] = (uint32_t)nsh++;
         S->shell[i] = S->shell[r];
     }
     for (size_t u = 0; u < nu; u++) S->ucomp[u] = NONE;
     for (size_t u = 0; u < nu; u++) {
-        uint32_t r = a3_uf_find(uu, (uint32_t)u);
+        uint32_t r = uf_find(uu, (uint32_t)u);
         if (S->ucomp[r] == NONE) S->ucomp[r] = (uint32_t)ncomp++;
         S->ucomp[u] = S->ucomp[r];
     }
@@ -858,11 +788,11 @@ A3_STAGE static int shells_make(a3 *A, const cedges *E, cshells *S)
                 if (pf[p] == NONE)
                     pf[p] = c;
                 else if (pf[p] != c)
-                    a3_uf_union(vu, pf[p], c);
+                    uf_union(vu, pf[p], c);
             }
         }
         size_t nvc = 0;
-        for (size_t c = 0; c < ncomp; c++) nvc += a3_uf_find(vu, (uint32_t)c) == c;
+        for (size_t c = 0; c < ncomp; c++) nvc += uf_find(vu, (uint32_t)c) == c;
         free(pf), free(vu);
         A->st->components = nvc;
     }
@@ -873,165 +803,141 @@ done:
     return rc;
 }
 
+/* The nesting stage's work: the probes, each part's outside shell, the faces of other parts
+ * each probe hits beyond its part's first face (hits[hoff[c] .. hoff[c + 1])), and scratch. */
+typedef struct nest {
+    const a3 *A;
+    const cshells *S;
+    pindex X;
+    probe *probes;   /* by part */
+    uint32_t *outer; /* by part: its outside shell */
+    uint32_t *hits, *hoff;
+    size_t nhit, caphits;
+    uint32_t *ptri, *ff, *stack;
+    size_t nptri, capptri, capff, capstack;
+} nest;
+
+static void nest_free(nest *N)
+{
+    pindex_free(&N->X);
+    free(N->probes), free(N->outer), free(N->hits), free(N->hoff), free(N->ptri), free(N->ff);
+    free(N->stack);
+}
+
+/* Pass 1 for part c: its probe (through the centroid of its lowest piece's first triangle, or
+ * of the next one while the line misses every face of the part: a piece whose inside is in two
+ * parts, holes touching each other and the outer cycle across it, may lie in two parts of the
+ * complex), its first own face along -k (beyond it lies its outside: outer[c]), and the faces
+ * of other parts it hits beyond that, appended to hits.  Returns an ARR_* code. */
+static int part_probe(nest *N, size_t c, char *err, size_t errlen)
+{
+    const a3 *A = N->A;
+    const cshells *S = N->S;
+    probe *pr = &N->probes[c];
+    int pk, r = piece_tris(A, S->cpiece[c], &N->ptri, &N->nptri, &N->capptri, &pk);
+    if (r == -1) return ARR_ENOMEM;
+    if (r) {
+        snprintf(err, errlen, "solids: no point found inside input face %u",
+                 A->pc[S->cpiece[c]].face);
+        return ARR_EINTERNAL;
+    }
+    uint32_t own = NONE;
+    size_t h0 = N->nhit;
+    for (size_t t = 0; t < N->nptri && own == NONE; t++) {
+        tri_probe(A, N->ptri + 3 * t, pk, pr);
+        N->nhit = h0;
+        size_t nff;
+        if (probe_candidates(A, &N->X, pr, &N->ff, &N->capff, &nff)) return ARR_ENOMEM;
+        for (size_t ci = 0; ci < nff; ci++) {
+            uint32_t f = N->ff[ci];
+            if (S->ncomp == 1 && fcomp(A, S, f) != c) continue;
+            if (!probe_hits(A, f, pr)) continue;
+            if (fcomp(A, S, f) == c) {
+                if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
+            } else {
+                if (mem_grow(&N->hits, &N->caphits, N->nhit + 1, sizeof *N->hits))
+                    return ARR_ENOMEM;
+                N->hits[N->nhit++] = f;
+            }
+        }
+    }
+    if (own == NONE) {
+        snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
+        return ARR_EINTERNAL;
+    }
+    plane3 town;
+    int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
+    N->outer[c] = fshell(A, S, own, up ? 1 : 0); /* the side facing -k */
+    size_t m = h0;
+    for (size_t h = h0; h < N->nhit; h++)
+        if (probe_cmp(A, N->hits[h], own, pr) < 0) N->hits[m++] = N->hits[h];
+    N->nhit = m;
+    N->hoff[c + 1] = (uint32_t)m;
+    return ARR_OK;
+}
+
+/* Pass 2 for part c: down its ray from just beyond its first face.  Entering another part from
+ * its outside (the side we come from is that part's outer shell) and leaving it again are
+ * skipped (a stack of parts); the first face met outside every part whose side toward us is not
+ * an outer shell is the wall of the cell holding the part: its shell, into *host.  No such
+ * face: the part lies in the exterior (*host unchanged).  -1 out of memory. */
+static int part_host(nest *N, size_t c, uint32_t *host)
+{
+    const a3 *A = N->A;
+    const cshells *S = N->S;
+    const probe *pr = &N->probes[c];
+    uint32_t *H = N->hits ? N->hits + N->hoff[c] : NULL, nh = N->hoff[c + 1] - N->hoff[c];
+    size_t depth = 0;
+    if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
+    for (uint32_t h = 0; h < nh; h++) {
+        uint32_t f = H[h], d = fcomp(A, S, f);
+        plane3 tf;
+        int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
+        uint32_t s_up = fshell(A, S, f, fup ? 0 : 1), s_down = fshell(A, S, f, fup ? 1 : 0);
+        if (depth && s_down == N->outer[N->stack[depth - 1]] && d == N->stack[depth - 1]) {
+            depth--; /* leaving the part we were inside */
+            continue;
+        }
+        if (s_up == N->outer[d]) { /* entering part d from its outside */
+            if (mem_grow(&N->stack, &N->capstack, depth + 1, sizeof *N->stack)) return -1;
+            N->stack[depth++] = d;
+            continue;
+        }
+        if (!depth) {
+            *host = s_up;
+            break;
+        }
+    }
+    return 0;
+}
+
 /* Stage "nesting": into cu (a union-find over the shells and the exterior, nsh + 1 entries, the
  * exterior last), each part's outside shell joined to the cell holding the part.  Returns an
  * ARR_* code. */
 A3_STAGE static int nesting_make(const a3 *A, const cshells *S, uint32_t *cu, char *err,
                                  size_t errlen)
 {
-    size_t nf = A->nf, ncomp = S->ncomp, nsh = S->nsh;
-    uint32_t EXT = (uint32_t)nsh;
+    size_t ncomp = S->ncomp, nsh = S->nsh;
+    nest N = {.A = A, .S = S};
     int rc = ARR_ENOMEM;
-    uint32_t *outer = mem_malloc((ncomp + 1) * sizeof *outer), *ptri = NULL, *cand = NULL;
-    uint32_t *pf_off = NULL, *pf = NULL, *ff = NULL, *hits = NULL, *hoff = NULL, *stack = NULL;
-    size_t nptri = 0, capptri = 0, capcand = 0, capff = 0, caphits = 0, capstack = 0;
-    probe *probes = mem_malloc((ncomp + 1) * sizeof *probes);
-    fgrid fgk[3] = {{0}};
-    double *fboxk[3] = {NULL, NULL, NULL};
-    /* few parts: each probe looks at every face (whose covering piece's box holds its point);
-     * many: through a grid over the pieces' boxes, and the faces by their first piece */
-    int use_grid = ncomp > 8;
-    hoff = mem_calloc(ncomp + 2, sizeof *hoff);
-    if (!outer || !probes || !hoff) goto done;
+    N.outer = mem_malloc((ncomp + 1) * sizeof *N.outer);
+    N.probes = mem_malloc((ncomp + 1) * sizeof *N.probes);
+    N.hoff = mem_calloc(ncomp + 2, sizeof *N.hoff);
+    if (!N.outer || !N.probes || !N.hoff || pindex_make(A, ncomp, &N.X)) goto done;
     for (uint32_t s = 0; s <= nsh; s++) cu[s] = s;
-    if (use_grid) {
-        pf_off = mem_calloc(A->npc + 2, sizeof *pf_off);
-        pf = mem_malloc((nf + 1) * sizeof *pf);
-        if (!pf_off || !pf) goto done;
-        for (size_t f = 0; f < nf; f++) pf_off[A->cov[A->f_cov[f]] + 2]++;
-        for (size_t q = 0; q < A->npc; q++) pf_off[q + 2] += pf_off[q + 1];
-        for (size_t f = 0; f < nf; f++) pf[pf_off[A->cov[A->f_cov[f]] + 1]++] = (uint32_t)f;
-    }
-    /* pass 1: each part's probe, its first own face (beyond it, toward -k, lies its outside:
-     * outer[c]), and the faces of other parts beyond that, to be walked in pass 2 */
-    size_t nhit = 0;
-    for (size_t c = 0; c < ncomp; c++) {
-        probe *pr = &probes[c];
-        int pk, r = piece_tris(A, S->cpiece[c], &ptri, &nptri, &capptri, &pk);
-        if (r == -1) goto done;
-        if (r) {
-            rc = ARR_EINTERNAL;
-            snprintf(err, errlen, "solids: no point found inside input face %u",
-                     A->pc[S->cpiece[c]].face);
-            goto done;
-        }
-        /* the centroid of the piece's first triangle, or of the next one while the line misses
-         * every face of the part: a piece whose inside is in two parts (holes touching each
-         * other and the outer cycle across it) may lie in two parts of the complex */
-        uint32_t own = NONE;
-        size_t h0 = nhit;
-        for (size_t t = 0; t < nptri && own == NONE; t++) {
-            tri_probe(A, ptri + 3 * t, pk, pr);
-            nhit = h0;
-            size_t nff = 0;
-            if (use_grid) {
-                if (!fgk[pr->k].off) { /* the pieces' boxes in this projection: once per axis */
-                    double *fbox = fboxk[pr->k] = mem_malloc((4 * A->npc + 1) * sizeof *fbox);
-                    if (!fbox) goto done;
-                    for (size_t q = 0; q < A->npc; q++) {
-                        const int32_t *b = A->pc[q].box;
-                        double *bx = fbox + 4 * q;
-                        bx[0] = (double)b[pr->i], bx[1] = (double)b[pr->j];
-                        bx[2] = (double)b[3 + pr->i], bx[3] = (double)b[3 + pr->j];
-                        /* widened by more than the rounding of the conversions */
-                        double m =
-                            (fabs(bx[0]) + fabs(bx[2]) + fabs(bx[1]) + fabs(bx[3]) + 1) * 0x1p-40;
-                        bx[0] -= m, bx[1] -= m, bx[2] += m, bx[3] += m;
-                    }
-                    if (fgrid_build(&fgk[pr->k], fbox, A->npc)) goto done;
-                }
-                double qi = (double)pr->Q[pr->i] / 3, qj = (double)pr->Q[pr->j] / 3;
-                size_t ncand;
-                if (fgrid_query(&fgk[pr->k], qi, qj, &cand, &capcand, &ncand)) goto done;
-                for (size_t ci = 0; ci < ncand; ci++) {
-                    const int32_t *b = A->pc[cand[ci]].box;
-                    if ((i128)pr->Q[pr->i] < (i128)3 * b[pr->i] ||
-                        (i128)pr->Q[pr->i] > (i128)3 * b[3 + pr->i] ||
-                        (i128)pr->Q[pr->j] < (i128)3 * b[pr->j] ||
-                        (i128)pr->Q[pr->j] > (i128)3 * b[3 + pr->j])
-                        continue;
-                    uint32_t n = pf_off[cand[ci] + 1] - pf_off[cand[ci]];
-                    if (mem_grow(&ff, &capff, nff + n + 1, sizeof *ff)) goto done;
-                    memcpy(ff + nff, pf + pf_off[cand[ci]], n * sizeof *ff);
-                    nff += n;
-                }
-                if (nff > 1) qsort(ff, nff, sizeof *ff, a3_cmp_u32);
-            } else {
-                for (size_t f = 0; f < nf; f++) {
-                    /* a face lies inside each piece covering it, so inside its box */
-                    const int32_t *b = A->pc[A->cov[A->f_cov[f]]].box;
-                    if ((int64_t)pr->Q[pr->i] < 3 * (int64_t)b[pr->i] ||
-                        (int64_t)pr->Q[pr->i] > 3 * (int64_t)b[3 + pr->i] ||
-                        (int64_t)pr->Q[pr->j] < 3 * (int64_t)b[pr->j] ||
-                        (int64_t)pr->Q[pr->j] > 3 * (int64_t)b[3 + pr->j])
-                        continue;
-                    if (A3_PUSH(ff, nff, capff, (uint32_t)f)) goto done;
-                }
-            }
-            for (size_t ci = 0; ci < nff; ci++) {
-                uint32_t f = ff[ci];
-                if (ncomp == 1 && fcomp(A, S, f) != c) continue;
-                if (!probe_hits(A, f, pr)) continue;
-                if (fcomp(A, S, f) == c) {
-                    if (own == NONE || probe_cmp(A, f, own, pr) < 0) own = f;
-                } else {
-                    if (mem_grow(&hits, &caphits, nhit + 1, sizeof *hits)) goto done;
-                    hits[nhit++] = f;
-                }
-            }
-        }
-        if (own == NONE) {
-            rc = ARR_EINTERNAL;
-            snprintf(err, errlen, "solids: a part's own ray hits none of its faces (a bug)");
-            goto done;
-        }
-        plane3 town;
-        int up = a3_face_plane(A, own, &town)->n[pr->k] > 0;
-        outer[c] = fshell(A, S, own, up ? 1 : 0); /* the side facing -k */
-        size_t m = h0;
-        for (size_t h = h0; h < nhit; h++)
-            if (probe_cmp(A, hits[h], own, pr) < 0) hits[m++] = hits[h];
-        nhit = m;
-        hoff[c + 1] = (uint32_t)nhit;
-    }
+    for (size_t c = 0; c < ncomp; c++)
+        if ((rc = part_probe(&N, c, err, errlen)) != ARR_OK) goto done;
     a3_progress(A, "cells", 0.45);
-    /* pass 2: walk down each part's ray from just beyond its first face.  Entering another
-     * part from its outside (the side we come from is that part's outer shell) and leaving it
-     * again are skipped (a stack of parts); the first face met outside every part whose side
-     * toward us is not an outer shell is the wall of the cell holding the part.  No such face:
-     * the part lies in the exterior. */
+    rc = ARR_ENOMEM;
     for (size_t c = 0; c < ncomp; c++) {
-        probe *pr = &probes[c];
-        uint32_t *H = hits ? hits + hoff[c] : NULL, nh = hoff[c + 1] - hoff[c], host = EXT;
-        size_t depth = 0;
-        if (nh > 1) qsort_r(H, nh, sizeof *H, probe_desc, &(probe_sort){A, pr});
-        for (uint32_t h = 0; h < nh && host == EXT; h++) {
-            uint32_t f = H[h], d = fcomp(A, S, f);
-            plane3 tf;
-            int fup = a3_face_plane(A, f, &tf)->n[pr->k] > 0;
-            uint32_t s_up = fshell(A, S, f, fup ? 0 : 1), s_down = fshell(A, S, f, fup ? 1 : 0);
-            if (depth && s_down == outer[stack[depth - 1]] && d == stack[depth - 1]) {
-                depth--; /* leaving the part we were inside */
-                continue;
-            }
-            if (s_up == outer[d]) { /* entering part d from its outside */
-                if (mem_grow(&stack, &capstack, depth + 1, sizeof *stack)) goto done;
-                stack[depth++] = d;
-                continue;
-            }
-            if (!depth) host = s_up;
-        }
-        a3_uf_union(cu, outer[c], host);
+        uint32_t host = (uint32_t)nsh; /* the exterior */
+        if (part_host(&N, c, &host)) goto done;
+        uf_union(cu, N.outer[c], host);
     }
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(outer), free(ptri), free(cand), free(pf_off), free(pf), free(ff), free(hits);
-    free(hoff), free(stack), free(probes);
-    for (int k = 0; k < 3; k++) {
-        fgrid_free(&fgk[k]);
-        free(fboxk[k]);
-    }
+    nest_free(&N);
     return rc;
 }
 
@@ -1150,56 +1056,55 @@ static dd dd_of(i128 v)
     return r;
 }
 
-/* Stage "cells": cell ids from cu (the class of the exterior is none), each cell's faces (CF,
- * in order of face: the - side first) and the exterior's, and the volumes.  Returns an ARR_*
- * code. */
-A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
-                               double **dl_out, char *err, size_t errlen)
+/* The cell of every shell, into cellof (nsh entries): its class's number in cu, numbered in
+ * order of the faces' sides (a unit's faces come together, its first face first); the
+ * exterior's class is NONE.  Sets out->nc.  -1 out of memory. */
+static int cells_number(const a3 *A, const cshells *S, uint32_t *cu, uint32_t *cellof, lar3 *out)
 {
-    size_t nf = A->nf, nsh = S->nsh;
-    int want_coords = !A->o->want || (A->o->want & ARR3_WANT_COORDS);
-    uint32_t *cellof = mem_malloc((nsh + 2) * sizeof *cellof), *fill = NULL, *orgv = NULL;
-    double *dh = NULL, *dl = NULL;
-    size_t *roff = NULL;
-    volrun *run = NULL;
-    int rc = ARR_ENOMEM;
-    if (!cellof) goto done;
-    /* the cell of every shell: its class's number (the exterior's class: NONE) */
-    {
-        uint32_t ext_root = a3_uf_find(cu, (uint32_t)nsh);
-        uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
-        if (!lab) goto done;
-        for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
-        size_t nc = 0;
-        /* in order of the faces' sides: a unit's faces come together, its first face first */
-        for (size_t u = 0; u < A->nunit; u++)
-            for (int sd = 0; sd < 2; sd++) {
-                uint32_t r = a3_uf_find(cu, fshell(A, S, A->u_off[u], sd));
-                if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
-            }
-        for (size_t s = 0; s < nsh; s++) cellof[s] = lab[a3_uf_find(cu, (uint32_t)s)];
-        free(lab);
-        out->nc = nc;
-    }
+    size_t nsh = S->nsh, nc = 0;
+    uint32_t ext_root = uf_find(cu, (uint32_t)nsh);
+    uint32_t *lab = mem_malloc((nsh + 2) * sizeof *lab);
+    if (!lab) return -1;
+    for (size_t s = 0; s <= nsh; s++) lab[s] = NONE - 1;
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t r = uf_find(cu, fshell(A, S, A->u_off[u], sd));
+            if (lab[r] == NONE - 1) lab[r] = r == ext_root ? NONE : (uint32_t)nc++;
+        }
+    for (size_t s = 0; s < nsh; s++) cellof[s] = lab[uf_find(cu, (uint32_t)s)];
+    free(lab);
+    out->nc = nc;
+    return 0;
+}
+
+/* The units and the cells on their two sides (out->u_off, ucell: the exterior is nc) and the
+ * faces turned against their unit (frev).  -1 out of memory. */
+static int cells_units(const a3 *A, const cshells *S, const uint32_t *cellof, lar3 *out)
+{
     size_t nc = out->nc;
-    /* the units and their cells */
     out->nunit = A->nunit;
     out->u_off = mem_malloc((A->nunit + 1) * sizeof *out->u_off);
     out->ucell = mem_malloc((2 * A->nunit + 1) * sizeof *out->ucell);
-    out->frev = mem_malloc(nf + 1);
-    if (!out->u_off || !out->ucell || !out->frev) goto done;
+    out->frev = mem_malloc(A->nf + 1);
+    if (!out->u_off || !out->ucell || !out->frev) return -1;
     memcpy(out->u_off, A->u_off, (A->nunit + 1) * sizeof *out->u_off);
     for (size_t u = 0; u < A->nunit; u++)
         for (int sd = 0; sd < 2; sd++) {
             uint32_t k = cellof[S->shell[2 * u + (uint32_t)sd]];
             out->ucell[2 * u + (uint32_t)sd] = k == NONE ? (uint32_t)nc : k;
         }
-    for (size_t f = 0; f < nf; f++)
+    for (size_t f = 0; f < A->nf; f++)
         out->frev[f] = (uint8_t)(A->f_unit[f] < A->npatch && !A->f_out[f]);
-    /* closed solids: a face across which some solid's winding number changes has two cells
-     * on its sides; one cell on both sides is only for a face whose solids' faces cancel (a
-     * surface touching itself face to face inside itself, as a tube whose two end caps meet):
-     * else the arrangement is broken */
+    return 0;
+}
+
+/* Closed solids: a face across which some solid's winding number changes has two cells on its
+ * sides; one cell on both sides is only for a face whose solids' faces cancel (a surface
+ * touching itself face to face inside itself, as a tube whose two end caps meet): else the
+ * arrangement is broken (ARR_EINTERNAL, with where).  ARR_OK otherwise. */
+static int cells_check_sides(const a3 *A, const cshells *S, const uint32_t *cellof, const lar3 *out,
+                             char *err, size_t errlen)
+{
     for (size_t u = 0; u < A->nunit && !A->soup; u++) {
         uint32_t f = A->u_off[u]; /* a unit's faces share its two sides */
         if (cellof[fshell(A, S, f, 0)] != cellof[fshell(A, S, f, 1)]) continue;
@@ -1213,61 +1118,70 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         if (cancel) continue;
         const piece *pc = &A->pc[A->cov[A->f_cov[f]]];
         const xpt *x = &A->pt[A->ent[A->cyc_off[A->f_cyc[f]]]];
-        rc = ARR_EINTERNAL;
         snprintf(err, errlen,
                  "solids[%u]: face %u: one cell on both sides near (%.9g, %.9g, %.9g) on the "
                  "grid of step %g (a bug: please report it)",
                  pc->solid, pc->face - out->solid_face_off[pc->solid],
                  ((double)A->oi[0] + x->x[0]) * A->step, ((double)A->oi[1] + x->x[1]) * A->step,
                  ((double)A->oi[2] + x->x[2]) * A->step, A->step);
-        goto done;
+        return ARR_EINTERNAL;
     }
-    /* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then
-     * the + entries by rising face); the exterior's likewise.  Only when asked for. */
-    unsigned want = A->o->want ? A->o->want : ~0u;
-    out->cvol = mem_calloc(nc + 1, sizeof *out->cvol);
-    if (!out->cvol) goto done;
-    if (want & ARR3_WANT_CF) {
-        out->cf_off = mem_calloc(nc + 2, sizeof *out->cf_off);
-        if (!out->cf_off) goto done;
-        size_t next = 0;
-        for (size_t i = 0; i < 2 * nf; i++) {
-            uint32_t f = (uint32_t)(i / 2);
-            uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))],
-                     o = cellof[fshell(A, S, f, !(i & 1))];
-            if (k == o) continue;
+    return ARR_OK;
+}
+
+/* CF: each cell's signed faces, ascending as integers (the - entries by falling face, then the
+ * + entries by rising face); the exterior's likewise (out->ext).  -1 out of memory. */
+static int cells_cf(const a3 *A, const cshells *S, const uint32_t *cellof, lar3 *out)
+{
+    size_t nf = A->nf, nc = out->nc, next = 0;
+    uint32_t *fill = NULL;
+    out->cf_off = mem_calloc(nc + 2, sizeof *out->cf_off);
+    if (!out->cf_off) return -1;
+    for (size_t i = 0; i < 2 * nf; i++) {
+        uint32_t f = (uint32_t)(i / 2);
+        uint32_t k = cellof[fshell(A, S, f, (int)(i & 1))], o = cellof[fshell(A, S, f, !(i & 1))];
+        if (k == o) continue;
+        if (k == NONE)
+            next++;
+        else
+            out->cf_off[k + 1]++;
+    }
+    for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
+    out->cf = mem_malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
+    out->ext = mem_malloc((next + 1) * sizeof *out->ext);
+    fill = mem_calloc(nc + 1, sizeof *fill);
+    if (!out->cf || !out->ext || !fill) {
+        free(fill);
+        return -1;
+    }
+    out->next = 0;
+    /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t t = 0; t < nf; t++) {
+            size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
+            uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
+            if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
+            int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
             if (k == NONE)
-                next++;
+                out->ext[out->next++] = sf;
             else
-                out->cf_off[k + 1]++;
+                out->cf[out->cf_off[k] + fill[k]++] = sf;
         }
-        for (size_t k = 0; k < nc; k++) out->cf_off[k + 1] += out->cf_off[k];
-        out->cf = mem_malloc((out->cf_off[nc] + 1) * sizeof *out->cf);
-        out->ext = mem_malloc((next + 1) * sizeof *out->ext);
-        fill = mem_calloc(nc + 1, sizeof *fill);
-        if (!out->cf || !out->ext || !fill) goto done;
-        out->next = 0;
-        /* the - sides (face normal out of the cell: +(f+1)) are odd i; -(f+1) for the + sides */
-        for (int pass = 0; pass < 2; pass++)
-            for (size_t t = 0; t < nf; t++) {
-                size_t f = pass == 0 ? nf - 1 - t : t, i = 2 * f + (pass == 0 ? 0 : 1);
-                uint32_t k = cellof[fshell(A, S, (uint32_t)f, (int)(i & 1))];
-                if (k == cellof[fshell(A, S, (uint32_t)f, !(i & 1))]) continue;
-                int32_t sf = pass == 0 ? -(int32_t)(f + 1) : (int32_t)(f + 1);
-                if (k == NONE)
-                    out->ext[out->next++] = sf;
-                else
-                    out->cf[out->cf_off[k] + fill[k]++] = sf;
-            }
-    }
-    /* the points to 2^-100 (volumes and the written coordinates come from these) */
-    dh = mem_malloc((3 * A->npt + 1) * sizeof *dh);
-    dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
-    orgv = mem_malloc((nc + 1) * sizeof *orgv);
-    if (!dh || !dl || !orgv) goto done;
-    /* each cell's origin: a point of the first face that bounds it (in unit order), on the grid
-     * when one is; the double-double cones start from it (a vertex of the cell: the terms are as
-     * small as the cell, so a sliver keeps its volume) */
+    free(fill);
+    return 0;
+}
+
+/* Each cell's origin (orgv, nc entries): a point of the first face that bounds it (in unit
+ * order), on the grid when one is; the double-double cones start from it (a vertex of the cell:
+ * the terms are as small as the cell, so a sliver keeps its volume).  Then the points wanted to
+ * 2^-100 into dh, dl (NAN in dh[3p]: not wanted): every point of a face when the coordinates
+ * are written, else only those of the faces of no patch (the cones in double-double are
+ * theirs) and the cells' origins (a patch's faces are summed exactly from their grid points).
+ * ARR_OK, or ARR_ECANCELED. */
+static int cells_points(const a3 *A, const lar3 *out, uint32_t *orgv, double *dh, double *dl)
+{
+    size_t nc = out->nc, nf = A->nf;
+    int want_coords = !A->o->want || (A->o->want & ARR3_WANT_COORDS);
     for (size_t k = 0; k < nc; k++) orgv[k] = NONE;
     for (size_t u = 0; u < A->nunit; u++)
         for (int sd = 0; sd < 2; sd++) {
@@ -1282,9 +1196,6 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
                     break;
                 }
         }
-    /* the points wanted to 2^-100: every point of a face when the coordinates are written, else
-     * only those of the faces of no patch (the cones in double-double are theirs) and the cells'
-     * origins: a patch's faces are summed exactly from their grid points */
     for (size_t p = 0; p < A->npt; p++) dh[3 * p] = NAN; /* not wanted */
     if (want_coords) {
         for (size_t i = 0; i < A->nent; i++) dh[3 * (size_t)A->ent[i]] = 0;
@@ -1295,113 +1206,147 @@ A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out,
         for (size_t k = 0; k < nc; k++)
             if (orgv[k] != NONE) dh[3 * (size_t)orgv[k]] = 0;
     }
-    {
-        ddjob j = {A, dh, dl, NULL, 0};
-        a3_span span = {A, "cells", 0.45, 0.5};
-        par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick,
-                   &span);
+    ddjob j = {A, dh, dl, NULL, 0};
+    a3_span span = {A, "cells", 0.45, 0.5};
+    par_for_ex(A->threads, (A->npt + DD_CHUNK - 1) / DD_CHUNK, points_dd, &j, a3_span_tick, &span);
+    /* a bounded part of the stage: the cancel is read here */
+    return a3_cancelled(A) ? ARR_ECANCELED : ARR_OK;
+}
+
+/* The grid cycles summed per unit into UC (4 a unit: C, S; on the threads, in fixed chunks of
+ * faces, the chunks' runs then added in chunk order).  ARR_OK, ARR_ENOMEM or ARR_ECANCELED. */
+static int volumes_grid(const a3 *A, i128 *UC)
+{
+    size_t nf = A->nf, nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
+    size_t *roff = mem_malloc((nch + 1) * sizeof *roff);
+    volrun *run = NULL;
+    int rc = ARR_ENOMEM;
+    if (!roff) goto done;
+    for (size_t c = 0; c < nch; c++) {
+        size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
+        roff[c] = nrun;
+        nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
     }
-    if (a3_cancelled(A)) { /* a bounded part of the stage: the cancel is read here */
+    run = mem_calloc(nrun + 1, sizeof *run);
+    if (!run) goto done;
+    voljob j = {A, roff, run};
+    par_for(A->threads, nch, vol_chunk, &j);
+    if (a3_cancelled(A)) {
         rc = ARR_ECANCELED;
         goto done;
     }
-    {
-        /* the grid cycles, per unit (on the threads, in fixed chunks of faces) */
-        size_t nch = (nf + VOL_CHUNK - 1) / VOL_CHUNK, nrun = 0;
-        roff = mem_malloc((nch + 1) * sizeof *roff);
-        if (!roff) goto done;
-        for (size_t c = 0; c < nch; c++) {
-            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
-            roff[c] = nrun;
-            nrun += A->f_unit[f1 - 1] - A->f_unit[f0] + 1;
+    for (size_t c = 0; c < nch; c++) {
+        size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
+        for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
+            const volrun *r = &run[roff[c] + (u - A->f_unit[f0])];
+            UC[4 * u] += r->C;
+            for (int a = 0; a < 3; a++) UC[4 * u + 1 + a] += r->S[a];
         }
-        run = mem_calloc(nrun + 1, sizeof *run);
-        i128 *UC = mem_calloc(4 * A->nunit + 1, sizeof *UC);
-        dd *X = mem_calloc(nc + 1, sizeof *X);
-        if (!run || !UC || !X) {
-            free(UC), free(X);
-            goto done;
-        }
-        voljob j = {A, roff, run};
-        par_for(A->threads, nch, vol_chunk, &j);
-        if (a3_cancelled(A)) {
-            free(UC), free(X);
-            rc = ARR_ECANCELED;
-            goto done;
-        }
-        for (size_t c = 0; c < nch; c++) {
-            size_t f0 = c * VOL_CHUNK, f1 = f0 + VOL_CHUNK < nf ? f0 + VOL_CHUNK : nf;
-            for (uint32_t u = A->f_unit[f0]; u <= A->f_unit[f1 - 1]; u++) {
-                const volrun *r = &run[roff[c] + (u - A->f_unit[f0])];
-                UC[4 * u] += r->C;
-                for (int a = 0; a < 3; a++) UC[4 * u + 1 + a] += r->S[a];
-            }
-        }
-        /* the cycles with made points (faces of no patch: few), in double-double per cell */
-        for (size_t f = A->npatch ? A->u_off[A->npatch] : 0; f < nf; f++)
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
-                while (t < m && A->ent[o + t] < A->nv) t++;
-                if (m < 3 || t == m) continue;
-                uint32_t u = A->f_unit[f];
-                for (int sd = 0; sd < 2; sd++) {
-                    /* into 2u (its normal's side: -) and out of 2u + 1 (+) */
-                    uint32_t k = out->ucell[2 * u + (uint32_t)sd];
-                    if (k >= nc) continue;
-                    dd org[3];
-                    for (int a = 0; a < 3; a++)
-                        org[a].hi = dh[3 * (size_t)orgv[k] + a],
-                        org[a].lo = dl[3 * (size_t)orgv[k] + a];
-                    dd c = cycle_cone6(A, dh, dl, cy, org);
-                    X[k] = dd_add(X[k], sd ? c : dd_neg(c));
-                }
-            }
-        double h3 = A->step * A->step * A->step / 6;
-        i128 *V6 = mem_calloc(nc + 1, sizeof *V6);
-        if (!V6) {
-            free(UC), free(X);
-            goto done;
-        }
-        /* each unit's grid part into its two cells, from each cell's own origin when it is on
-         * the grid (C - o . S, exact), else from the grid's origin and o . S in double-double */
-        for (size_t u = 0; u < A->nunit; u++)
+    }
+    rc = ARR_OK;
+done:
+    free(roff), free(run);
+    return rc;
+}
+
+/* The cells' volumes (out->cvol, allocated): the grid cycles per unit (volumes_grid), the
+ * cycles with made points (faces of no patch: few) in double-double per cell from its origin,
+ * and each unit's grid part into its two cells, from each cell's own origin when it is on the
+ * grid (C - o . S, exact), else from the grid's origin and o . S in double-double.  ARR_OK,
+ * ARR_ENOMEM or ARR_ECANCELED. */
+static int cells_volumes(const a3 *A, lar3 *out, const uint32_t *orgv, const double *dh,
+                         const double *dl)
+{
+    size_t nf = A->nf, nc = out->nc;
+    i128 *UC = mem_calloc(4 * A->nunit + 1, sizeof *UC), *V6 = mem_calloc(nc + 1, sizeof *V6);
+    dd *X = mem_calloc(nc + 1, sizeof *X);
+    int rc = ARR_ENOMEM;
+    out->cvol = mem_calloc(nc + 1, sizeof *out->cvol);
+    if (!UC || !V6 || !X || !out->cvol) goto done;
+    if ((rc = volumes_grid(A, UC)) != ARR_OK) goto done;
+    for (size_t f = A->npatch ? A->u_off[A->npatch] : 0; f < nf; f++)
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t o = A->cyc_off[cy], m = A->cyc_off[cy + 1] - o, t = 0;
+            while (t < m && A->ent[o + t] < A->nv) t++;
+            if (m < 3 || t == m) continue;
+            uint32_t u = A->f_unit[f];
             for (int sd = 0; sd < 2; sd++) {
+                /* into 2u (its normal's side: -) and out of 2u + 1 (+) */
                 uint32_t k = out->ucell[2 * u + (uint32_t)sd];
                 if (k >= nc) continue;
-                const i128 *Uu = UC + 4 * u;
-                i128 v = Uu[0];
-                if (orgv[k] < A->nv) {
-                    const int64_t *g = A->g + 3 * (size_t)orgv[k];
-                    v -= g[0] * Uu[1] + g[1] * Uu[2] + g[2] * Uu[3];
-                } else {
-                    for (int a = 0; a < 3; a++) {
-                        dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
-                        dd t = dd_mul(oa, dd_of(Uu[1 + a]));
-                        X[k] = dd_add(X[k], sd ? dd_neg(t) : t);
-                    }
-                }
-                V6[k] += sd ? v : -v;
+                dd org[3];
+                for (int a = 0; a < 3; a++)
+                    org[a].hi = dh[3 * (size_t)orgv[k] + a],
+                    org[a].lo = dl[3 * (size_t)orgv[k] + a];
+                dd c = cycle_cone6(A, dh, dl, cy, org);
+                X[k] = dd_add(X[k], sd ? c : dd_neg(c));
             }
-        for (size_t k = 0; k < nc; k++) {
-            dd vol = dd_add(X[k], dd_of(V6[k]));
-            out->cvol[k] = (vol.hi + vol.lo) * h3;
         }
-        free(UC), free(X), free(V6);
+    double h3 = A->step * A->step * A->step / 6;
+    for (size_t u = 0; u < A->nunit; u++)
+        for (int sd = 0; sd < 2; sd++) {
+            uint32_t k = out->ucell[2 * u + (uint32_t)sd];
+            if (k >= nc) continue;
+            const i128 *Uu = UC + 4 * u;
+            i128 v = Uu[0];
+            if (orgv[k] < A->nv) {
+                const int64_t *g = A->g + 3 * (size_t)orgv[k];
+                v -= g[0] * Uu[1] + g[1] * Uu[2] + g[2] * Uu[3];
+            } else {
+                for (int a = 0; a < 3; a++) {
+                    dd oa = {dh[3 * (size_t)orgv[k] + a], dl[3 * (size_t)orgv[k] + a]};
+                    dd t = dd_mul(oa, dd_of(Uu[1 + a]));
+                    X[k] = dd_add(X[k], sd ? dd_neg(t) : t);
+                }
+            }
+            V6[k] += sd ? v : -v;
+        }
+    for (size_t k = 0; k < nc; k++) {
+        dd vol = dd_add(X[k], dd_of(V6[k]));
+        out->cvol[k] = (vol.hi + vol.lo) * h3;
     }
+    rc = ARR_OK;
+done:
+    free(UC), free(V6), free(X);
+    return rc;
+}
+
+/* Stage "cells": cell ids from cu (the class of the exterior is none: cells_number), the units'
+ * cells (cells_units, checked: cells_check_sides), each cell's faces (CF, in order of face: the
+ * - side first) and the exterior's when asked for (cells_cf), the points to 2^-100
+ * (cells_points: volumes and the written coordinates come from these, handed back in *dh_out,
+ * *dl_out) and the volumes (cells_volumes).  Returns an ARR_* code. */
+A3_STAGE static int cells_make(a3 *A, const cshells *S, uint32_t *cu, lar3 *out, double **dh_out,
+                               double **dl_out, char *err, size_t errlen)
+{
+    uint32_t *cellof = mem_malloc((S->nsh + 2) * sizeof *cellof), *orgv = NULL;
+    double *dh = NULL, *dl = NULL;
+    unsigned want = A->o->want ? A->o->want : ~0u;
+    int rc = ARR_ENOMEM;
+    if (!cellof || cells_number(A, S, cu, cellof, out) || cells_units(A, S, cellof, out)) goto done;
+    if ((rc = cells_check_sides(A, S, cellof, out, err, errlen)) != ARR_OK) goto done;
+    rc = ARR_ENOMEM;
+    if ((want & ARR3_WANT_CF) && cells_cf(A, S, cellof, out)) goto done;
+    dh = mem_malloc((3 * A->npt + 1) * sizeof *dh);
+    dl = mem_malloc((3 * A->npt + 1) * sizeof *dl);
+    orgv = mem_malloc((out->nc + 1) * sizeof *orgv);
+    if (!dh || !dl || !orgv) goto done;
+    if ((rc = cells_points(A, out, orgv, dh, dl)) != ARR_OK) goto done;
+    if ((rc = cells_volumes(A, out, orgv, dh, dl)) != ARR_OK) goto done;
     *dh_out = dh, *dl_out = dl;
     dh = dl = NULL;
     rc = ARR_OK;
 done:
     if (rc == ARR_ENOMEM && err && errlen) snprintf(err, errlen, "out of memory");
-    free(cellof), free(fill), free(orgv), free(dh), free(dl), free(roff), free(run);
+    free(cellof), free(orgv), free(dh), free(dl);
     return rc;
 }
 
 /* ---- output ------------------------------------------------------------------------------ */
 
-/* The used points sorted by position: the grid points by an LSD radix sort on z, y, x (stable:
- * equal points cannot occur, they are one point), the others (few: where surfaces meet) by the
- * exact comparison, then the two runs merged by it. */
+/* The used points sorted by position: the grid points by sort_kv_xyz (point ids below nv are
+ * the vertices, pt[v] the grid point v; equal points cannot occur, they are one point), the
+ * others (few: where surfaces meet) by the exact comparison, then the two runs merged by it. */
 static int sort_points(const a3 *A, uint32_t *used, size_t nu)
 {
     size_t ng = 0, nx = 0;
@@ -1410,15 +1355,12 @@ static int sort_points(const a3 *A, uint32_t *used, size_t nu)
     int rc = -1;
     if (!g || !x) goto done;
     for (size_t i = 0; i < nu; i++)
-        if (A->pt[used[i]].kind == PT_GRID)
+        if (A->pt[used[i]].kind == PT_GRID) {
+            assert(A->pt[used[i]].a == used[i]);
             g[ng++] = (kv){0, used[i]};
-        else
+        } else
             x[nx++] = used[i];
-    for (int k = 2; k >= 0; k--) {
-        for (size_t i = 0; i < ng; i++)
-            g[i].k = (uint64_t)(A->g[3 * (size_t)A->pt[g[i].v].a + k] + ((int64_t)1 << 40));
-        if (sort_kv(g, ng)) goto done;
-    }
+    if (sort_kv_xyz(g, ng, A->g)) goto done;
     if (nx > 1) qsort_r(x, nx, sizeof *x, vcmp, (void *)A);
     size_t i = 0, j = 0, m = 0;
     while (i < ng || j < nx) {
@@ -1501,15 +1443,169 @@ static void out_faces(void *ctx, size_t item, int worker)
     }
 }
 
+/* The used points numbered in order of position (newid: from 0 for used, NONE for the others,
+ * to their number) and, when asked for, their coordinates V from dh + dl.  -1 out of memory. */
+static int output_points(const a3 *A, uint32_t *newid, size_t nu, const double *dh,
+                         const double *dl, lar3 *out, unsigned want)
+{
+    uint32_t *used = mem_malloc((nu + 1) * sizeof *used);
+    int rc = -1;
+    if (!used) goto done;
+    nu = 0;
+    for (size_t p = 0; p < A->npt; p++)
+        if (newid[p] == 0) used[nu++] = (uint32_t)p;
+    if (sort_points(A, used, nu)) goto done;
+    A3_TICK("out/sort points");
+    for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+    if (want & ARR3_WANT_COORDS) {
+        out->V = mem_malloc((3 * nu + 1) * sizeof *out->V);
+        if (!out->V) goto done;
+        for (size_t i = 0; i < nu; i++)
+            for (int k = 0; k < 3; k++)
+                out->V[3 * i + k] =
+                    ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] + dl[3 * (size_t)used[i] + k]) *
+                    A->step;
+    }
+    rc = 0;
+done:
+    free(used);
+    return rc;
+}
+
+/* The edges inside the patches (one a twin pair, after the ne edges of E) added to E, then
+ * every edge numbered in the order of its new ends: EV, and newe (by old edge: its number).
+ * -1 out of memory. */
+static int output_edges(const a3 *A, cedges *E, const uint32_t *newid, size_t nin, uint32_t *newe,
+                        lar3 *out)
+{
+    size_t ne = E->ne, pe = A->npatch ? A->u_off[A->npatch] : 0;
+    uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
+    if (!ev) return -1;
+    E->ev = ev;
+    for (size_t f = 0; f < pe; f++) {
+        uint32_t o = A->cyc_off[A->f_cyc[f]], n = A->cyc_off[A->f_cyc[f] + 1] - o;
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t x = o + t, y = A->etwin[x];
+            if (y == NONE || x > y) continue;
+            uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
+            ev[2 * ne] = a < b ? a : b, ev[2 * ne + 1] = a < b ? b : a;
+            E->ent_e[x] = E->ent_e[y] = (uint32_t)ne++;
+        }
+    }
+    E->ne = ne;
+    kv *ek = mem_malloc((ne + 1) * sizeof *ek);
+    out->EV = mem_malloc((2 * ne + 1) * sizeof *out->EV);
+    if (!ek || !out->EV) {
+        free(ek);
+        return -1;
+    }
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
+        ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
+    }
+    if (sort_kv(ek, ne)) {
+        free(ek);
+        return -1;
+    }
+    for (size_t i = 0; i < ne; i++) {
+        out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
+        out->EV[2 * i + 1] = (uint32_t)ek[i].k;
+        newe[ek[i].v] = (uint32_t)i;
+    }
+    free(ek);
+    return 0;
+}
+
+/* The faces' cycles in the new numbering (fc_off, fc, cyc_off, cyc) and the room of their
+ * edges (fe_off, fe; out_faces fills them).  -1 out of memory. */
+static int output_cycles(const a3 *A, const uint32_t *newid, lar3 *out)
+{
+    size_t nf = A->nf;
+    out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
+    out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
+    out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
+    out->ncyc = A->ncyc;
+    out->cyc_off = mem_malloc((A->ncyc + 1) * sizeof *out->cyc_off);
+    out->cyc = mem_malloc((A->nent + 1) * sizeof *out->cyc);
+    if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) return -1;
+    out->fc_off[0] = out->fe_off[0] = 0;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t nfe = 0;
+        for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
+            uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
+            nfe += n < 2 ? 0 : n;
+        }
+        out->fc_off[f + 1] = A->f_cyc[f + 1];
+        out->fe_off[f + 1] = out->fe_off[f] + nfe;
+    }
+    out->fe = mem_malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
+    if (!out->fe) return -1;
+    for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
+    for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+    return 0;
+}
+
+/* fsol: the room a face with several pieces left unused (NONE) closed up. */
+static void output_fsol_close(size_t nf, lar3 *out)
+{
+    uint32_t w = 0;
+    for (size_t f = 0; f < nf; f++) {
+        uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
+        out->fsol_off[f] = w;
+        for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
+            out->fsol[w] = out->fsol[i], out->fwind[w++] = out->fwind[i];
+    }
+    out->fsol_off[nf] = w;
+}
+
+/* CV: the sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
+ * read off in vertex order, a small one sorted).  -1 out of memory. */
+static int output_cv(const a3 *A, lar3 *out)
+{
+    size_t nc = out->nc, ncv = 0, capcv = 0, step = nc / 50 + 1;
+    uint32_t *cv = NULL, *stamp = mem_calloc(out->nv + 1, sizeof *stamp);
+    out->cv_off = mem_calloc(nc + 1, sizeof *out->cv_off);
+    if (!out->cv_off || !stamp) goto fail;
+    for (size_t k = 0; k < nc; k++) {
+        size_t start = ncv;
+        if (k % step == 0) a3_progress(A, "cells", 0.8 + 0.2 * (double)k / (double)nc);
+        for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
+            uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
+            for (uint32_t x = out->cyc_off[out->fc_off[f]]; x < out->cyc_off[out->fc_off[f + 1]];
+                 x++) {
+                uint32_t v = out->cyc[x];
+                if (stamp[v] == k + 1) continue;
+                stamp[v] = (uint32_t)k + 1;
+                if (A3_PUSH(cv, ncv, capcv, v)) goto fail;
+            }
+        }
+        size_t m = ncv - start;
+        if (m > out->nv / 16) {
+            size_t w = start;
+            for (uint32_t v = 0; v < out->nv; v++)
+                if (stamp[v] == k + 1) cv[w++] = v;
+        } else if (m > 1) {
+            qsort(cv + start, m, sizeof *cv, u32_cmp);
+        }
+        out->cv_off[k + 1] = (uint32_t)ncv;
+    }
+    free(stamp);
+    out->cv = cv ? cv : mem_malloc(sizeof *out->cv);
+    return out->cv ? 0 : -1;
+fail:
+    free(stamp), free(cv);
+    return -1;
+}
+
 /* Stage "output": the faces' solids (fsol); with ARR3_WANT_FACES the points numbered in order
- * of position and the edges in order of their ends, EV, and the faces' cycles and edges; V, FN
- * and fsrc, CV when asked for.  Returns -1 out of memory. */
+ * of position and V (output_points), the edges in order of their ends and EV (output_edges),
+ * and the faces' cycles and edges (output_cycles, out_faces); FN and fsrc, CV when asked for
+ * (output_cv).  Returns 0, -1 out of memory, -3 cancelled. */
 A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double *dl, lar3 *out)
 {
-    size_t nf = A->nf, ne = E->ne, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
+    size_t nf = A->nf, nin = 0, pe = A->npatch ? A->u_off[A->npatch] : 0;
     unsigned want = A->o->want ? A->o->want : ~0u;
-    uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *used = NULL, *newe = NULL;
-    kv *ek = NULL;
+    uint32_t *newid = mem_malloc((A->npt + 1) * sizeof *newid), *newe = NULL;
     int rc = -1;
 /* Between the bounded parts of the output: a cancel ends it (-3). */
 #define OUTPUT_CANCEL_POINT                                                                        \
@@ -1529,7 +1625,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         for (uint32_t x = A->cyc_off[A->f_cyc[f]]; x < A->cyc_off[A->f_cyc[f + 1]]; x++)
             nin += A->etwin[x] != NONE && x < A->etwin[x];
     out->nv = nu;
-    out->ne = ne + nin;
+    out->ne = E->ne + nin;
     out->nf = nf;
     /* the faces' solids: those covering it an odd number of times (room first, then closed up) */
     out->fsol_off = mem_malloc((nf + 1) * sizeof *out->fsol_off);
@@ -1542,80 +1638,16 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     if (!out->fsol || !out->fwind) goto done;
     A3_TICK("out/points used");
     if (want & ARR3_WANT_FACES) {
-        used = mem_malloc((nu + 1) * sizeof *used);
-        if (!used) goto done;
-        nu = 0;
-        for (size_t p = 0; p < A->npt; p++)
-            if (newid[p] == 0) used[nu++] = (uint32_t)p;
-        if (sort_points(A, used, nu)) goto done;
-        A3_TICK("out/sort points");
         OUTPUT_CANCEL_POINT;
-        for (size_t i = 0; i < nu; i++) newid[used[i]] = (uint32_t)i;
+        if (output_points(A, newid, nu, dh, dl, out, want)) goto done;
         a3_progress(A, "cells", 0.6);
-        if (want & ARR3_WANT_COORDS) {
-            out->V = mem_malloc((3 * nu + 1) * sizeof *out->V);
-            if (!out->V) goto done;
-            for (size_t i = 0; i < nu; i++)
-                for (int k = 0; k < 3; k++)
-                    out->V[3 * i + k] = ((double)A->oi[k] + dh[3 * (size_t)used[i] + k] +
-                                         dl[3 * (size_t)used[i] + k]) *
-                                        A->step;
-        }
         OUTPUT_CANCEL_POINT;
-        uint32_t *ev = mem_realloc(E->ev, (2 * (ne + nin) + 2) * sizeof *ev);
-        if (!ev) goto done;
-        E->ev = ev;
-        for (size_t f = 0; f < pe; f++) {
-            uint32_t o = A->cyc_off[A->f_cyc[f]], n = A->cyc_off[A->f_cyc[f] + 1] - o;
-            for (uint32_t t = 0; t < n; t++) {
-                uint32_t x = o + t, y = A->etwin[x];
-                if (y == NONE || x > y) continue;
-                uint32_t a = A->ent[x], b = A->ent[t + 1 < n ? x + 1 : o];
-                ev[2 * ne] = a < b ? a : b, ev[2 * ne + 1] = a < b ? b : a;
-                E->ent_e[x] = E->ent_e[y] = (uint32_t)ne++;
-            }
-        }
-        E->ne = ne;
-        /* edges in the order of their new ends */
-        ek = mem_malloc((ne + 1) * sizeof *ek);
-        newe = mem_malloc((ne + 1) * sizeof *newe);
-        out->EV = mem_malloc((2 * ne + 1) * sizeof *out->EV);
-        if (!ek || !newe || !out->EV) goto done;
-        for (size_t e = 0; e < ne; e++) {
-            uint32_t a = newid[E->ev[2 * e]], b = newid[E->ev[2 * e + 1]];
-            ek[e] = (kv){a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a, (uint32_t)e};
-        }
-        if (sort_kv(ek, ne)) goto done;
+        newe = mem_malloc((E->ne + nin + 1) * sizeof *newe);
+        if (!newe || output_edges(A, E, newid, nin, newe, out)) goto done;
         A3_TICK("out/edges");
         OUTPUT_CANCEL_POINT;
-        for (size_t i = 0; i < ne; i++) {
-            out->EV[2 * i] = (uint32_t)(ek[i].k >> 32);
-            out->EV[2 * i + 1] = (uint32_t)ek[i].k;
-            newe[ek[i].v] = (uint32_t)i;
-        }
         a3_progress(A, "cells", 0.7);
-        OUTPUT_CANCEL_POINT;
-        out->fc_off = mem_malloc((nf + 1) * sizeof *out->fc_off);
-        out->fc = mem_malloc((A->ncyc + 1) * sizeof *out->fc);
-        out->fe_off = mem_malloc((nf + 1) * sizeof *out->fe_off);
-        out->ncyc = A->ncyc;
-        out->cyc_off = mem_malloc((A->ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = mem_malloc((A->nent + 1) * sizeof *out->cyc);
-        if (!out->fc_off || !out->fc || !out->fe_off || !out->cyc_off || !out->cyc) goto done;
-        out->fc_off[0] = out->fe_off[0] = 0;
-        for (size_t f = 0; f < nf; f++) {
-            uint32_t nfe = 0;
-            for (uint32_t cy = A->f_cyc[f]; cy < A->f_cyc[f + 1]; cy++) {
-                uint32_t n = A->cyc_off[cy + 1] - A->cyc_off[cy];
-                nfe += n < 2 ? 0 : n;
-            }
-            out->fc_off[f + 1] = A->f_cyc[f + 1];
-            out->fe_off[f + 1] = out->fe_off[f] + nfe;
-        }
-        out->fe = mem_malloc((out->fe_off[nf] + 1) * sizeof *out->fe);
-        if (!out->fe) goto done;
-        for (size_t cy = 0; cy <= A->ncyc; cy++) out->cyc_off[cy] = A->cyc_off[cy];
-        for (size_t i = 0; i < A->nent; i++) out->cyc[i] = newid[A->ent[i]];
+        if (output_cycles(A, newid, out)) goto done;
     }
     if (want & ARR3_WANT_NORMALS) {
         out->FN = mem_malloc((3 * nf + 1) * sizeof *out->FN);
@@ -1628,57 +1660,9 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
         A3_TICK("out/faces");
         OUTPUT_CANCEL_POINT;
     }
-    /* fsol: the room a face with several pieces left unused (NONE) closed up */
-    {
-        uint32_t w = 0;
-        for (size_t f = 0; f < nf; f++) {
-            uint32_t r0 = out->fsol_off[f], r1 = out->fsol_off[f + 1];
-            out->fsol_off[f] = w;
-            for (uint32_t i = r0; i < r1 && out->fsol[i] != NONE; i++)
-                out->fsol[w] = out->fsol[i], out->fwind[w++] = out->fwind[i];
-        }
-        out->fsol_off[nf] = w;
-    }
+    output_fsol_close(nf, out);
     a3_progress(A, "cells", 0.8);
-    /* CV: sorted vertices of each cell's faces (each once: a stamp per vertex; a large cell is
-     * read off in vertex order, a small one sorted) */
-    size_t nc = out->nc;
-    if ((want & ARR3_WANT_CV) && out->cyc && out->cf) {
-        out->cv_off = mem_calloc(nc + 1, sizeof *out->cv_off);
-        if (!out->cv_off) goto done;
-        uint32_t *cv = NULL, *stamp = mem_calloc(out->nv + 1, sizeof *stamp);
-        size_t ncv = 0, capcv = 0, step = nc / 50 + 1;
-        if (!stamp) goto done;
-        for (size_t k = 0; k < nc; k++) {
-            size_t start = ncv;
-            if (k % step == 0) a3_progress(A, "cells", 0.8 + 0.2 * (double)k / (double)nc);
-            for (uint32_t i = out->cf_off[k]; i < out->cf_off[k + 1]; i++) {
-                uint32_t f = (uint32_t)abs(out->cf[i]) - 1;
-                for (uint32_t x = out->cyc_off[out->fc_off[f]];
-                     x < out->cyc_off[out->fc_off[f + 1]]; x++) {
-                    uint32_t v = out->cyc[x];
-                    if (stamp[v] == k + 1) continue;
-                    stamp[v] = (uint32_t)k + 1;
-                    if (A3_PUSH(cv, ncv, capcv, v)) {
-                        free(stamp), free(cv);
-                        goto done;
-                    }
-                }
-            }
-            size_t m = ncv - start;
-            if (m > out->nv / 16) {
-                size_t w = start;
-                for (uint32_t v = 0; v < out->nv; v++)
-                    if (stamp[v] == k + 1) cv[w++] = v;
-            } else if (m > 1) {
-                qsort(cv + start, m, sizeof *cv, cmpu32);
-            }
-            out->cv_off[k + 1] = (uint32_t)ncv;
-        }
-        free(stamp);
-        out->cv = cv ? cv : mem_malloc(sizeof *out->cv);
-        if (!out->cv) goto done;
-    }
+    if ((want & ARR3_WANT_CV) && out->cyc && out->cf && output_cv(A, out)) goto done;
     out->stats.nv = out->nv;
     out->stats.ne = out->ne;
     out->stats.nf = out->nf;
@@ -1686,7 +1670,7 @@ A3_STAGE static int output_make(a3 *A, cedges *E, const double *dh, const double
     rc = 0;
 #undef OUTPUT_CANCEL_POINT
 done:
-    free(newid), free(used), free(newe), free(ek);
+    free(newid), free(newe);
     return rc;
 }
 

@@ -18,6 +18,19 @@
  * pairs it meets share a vertex whose star is certified (stars, below), settled by vertex ids.
  * In a face soup each face is a solid (and nothing is walked against itself).
  *
+ * Why not the box index of core/box.h (the bucket index arr2, facecheck and the cells' probes
+ * share, generic over dimension): that index answers "which boxes may hold this point" and
+ * "which pairs share a bucket", duplicating every box that straddles a split into both sides
+ * and stopping where no split separates the boxes.  The pair walk here needs a hierarchy of
+ * nested boxes walked tree against tree: two surfaces far apart are dismissed at the first
+ * node pair whose boxes miss, whole subtrees at once; the Morton order always splits (many
+ * pieces in one plane, a shell inside its mesh: there a bucket index keeps one large bucket
+ * and compares all its pairs); the chart classes in the sort key let the self-walk skip node
+ * pairs inside one flat chart; and the trees of all solids are built at once, one per solid.
+ * A bucket index would compare each pair in the bucket holding its corner instead, with the
+ * straddling copies and without the per-solid and per-chart pruning: not without loss on the
+ * 3D bench rows, so this BVH stays.
+ *
  * Threads: the trees are built on par_for() (a solid each, in chunks), and the walks of the
  * solid pairs are cut into tasks (node pairs, breadth first, until there are enough of them)
  * that run on par_for(), each writing its own list; the lists are concatenated and sorted, so
@@ -35,6 +48,7 @@
 #include "core/mem.h"
 #include "core/par.h"
 #include "core/sort.h"
+#include "core/util.h"
 
 #define BVH_LEAF 8
 #define LEAFBIT  0x80000000u
@@ -891,12 +905,12 @@ static int settle_parts(solchart *C, uint32_t *list, uint32_t n, int depth)
         uint32_t i = list[t];
         for (uint32_t x = ent_lo(C, i); x < ent_hi(C, i); x++) {
             uint32_t q = twin_piece(C, x);
-            if (q != NONE && q > i && C->grp[q] == st) a3_uf_union(C->uf, i, q);
+            if (q != NONE && q > i && C->grp[q] == st) uf_union(C->uf, i, q);
         }
     }
     /* parts numbered by their first pieces in list; cnt[] counts them */
     for (uint32_t t = 0; t < n; t++) {
-        uint32_t i = list[t], r = a3_uf_find(C->uf, i);
+        uint32_t i = list[t], r = uf_find(C->uf, i);
         if (r == i) C->grp[i] = np++; /* a root: its part's number (grp is re-stamped below) */
     }
     uint32_t *part = mem_malloc(((size_t)n + 1) * sizeof *part);
@@ -904,7 +918,7 @@ static int settle_parts(solchart *C, uint32_t *list, uint32_t n, int depth)
     int rc = -1;
     if (!part || !off) goto done;
     for (uint32_t t = 0; t < n; t++) {
-        part[t] = C->grp[a3_uf_find(C->uf, list[t])];
+        part[t] = C->grp[uf_find(C->uf, list[t])];
         off[part[t] + 2]++;
     }
     for (uint32_t k = 0; k < np; k++) off[k + 2] += off[k + 1];

@@ -1,9 +1,13 @@
 /* box.c — the box-kd-tree buckets; see box.h for the splitting rule and the invariants.
- * Built iteratively (an explicit stack), so depth never costs C stack. */
+ * Built iteratively (an explicit stack), so depth never costs C stack.  One code for every
+ * dimension: the build takes the dimension as a constant (build_dim is inlined into build once
+ * for 2 and once for 3), so the 2D tree compiles to what it was before the 3D one shared its
+ * code, and the 2D candidates' count keeps its unrolled loop. */
 #include "core/box.h"
 #include "core/mem.h"
 #include "core/par.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,19 +15,20 @@
 /* What split_candidates needs of a bucket, gathered in the order of its ids: the sum of its
  * boxes' centres (twice) and their extent per axis. */
 typedef struct bstats {
-    double sum[2];
-    double mn[2], mx[2];
+    double sum[BOX_DIM_MAX];
+    double mn[BOX_DIM_MAX], mx[BOX_DIM_MAX];
 } bstats;
 
-static const bstats stats0 = {{0, 0}, {INFINITY, INFINITY}, {-INFINITY, -INFINITY}};
+static const bstats stats0 = {
+    {0, 0, 0}, {INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
 
-/* b: a box as doubles (exact: grid coordinates are below 2^53) */
-static inline void stats_add(bstats *st, const double *b)
+/* b: a box of dimension dim as doubles (exact: grid coordinates are below 2^53) */
+static inline void stats_add(bstats *st, const double *b, int dim)
 {
-    for (int a = 0; a < 2; a++) {
-        st->sum[a] += b[a] + b[a + 2];
+    for (int a = 0; a < dim; a++) {
+        st->sum[a] += b[a] + b[a + dim];
         st->mn[a] = b[a] < st->mn[a] ? b[a] : st->mn[a];
-        st->mx[a] = b[a + 2] > st->mx[a] ? b[a + 2] : st->mx[a];
+        st->mx[a] = b[a + dim] > st->mx[a] ? b[a + dim] : st->mx[a];
     }
 }
 
@@ -31,24 +36,24 @@ typedef struct pending {
     int32_t node;    /* index of the node to fill, or -1 for the root */
     int32_t side;    /* which child slot of node */
     size_t off, cnt; /* the bucket: pool[off .. off+cnt) */
-    double lo[2], hi[2];
+    double lo[BOX_DIM_MAX], hi[BOX_DIM_MAX];
     int depth;
     bstats st; /* of its boxes, taken as its parent split (one pass for the root) */
 } pending;
 
 typedef struct leafrec {
     size_t off, cnt;
-    double lo[2], hi[2];
+    double lo[BOX_DIM_MAX], hi[BOX_DIM_MAX];
 } leafrec;
 
-/* The candidate thresholds of a bucket of cnt boxes with statistics st, for both axes: the mean
- * of the box centres (the seeds' rule) and the middle of the region clipped to the boxes'
+/* The candidate thresholds of a bucket of cnt boxes with statistics st, for every axis: the
+ * mean of the box centres (the seeds' rule) and the middle of the region clipped to the boxes'
  * extent, which still halves the short boxes where the mean fails (long boxes all centred
- * alike). */
-static void split_candidates(const bstats *st, size_t cnt, const double lo[2], const double hi[2],
-                             double cand[4])
+ * alike).  cand[2a] and cand[2a + 1] are axis a's. */
+static inline void split_candidates(const bstats *st, size_t cnt, const double *lo,
+                                    const double *hi, double *cand, int dim)
 {
-    for (int a = 0; a < 2; a++) {
+    for (int a = 0; a < dim; a++) {
         double l = st->mn[a] > lo[a] ? st->mn[a] : lo[a];
         double h = st->mx[a] < hi[a] ? st->mx[a] : hi[a];
         cand[2 * a] = st->sum[a] / (2.0 * (double)cnt);
@@ -56,9 +61,9 @@ static void split_candidates(const bstats *st, size_t cnt, const double lo[2], c
     }
 }
 
-/* Sizes of both sides for the four candidates (two per axis).  One pass. */
-static void split_counts(const double *box, const uint32_t *ids, size_t cnt, const double cand[4],
-                         size_t nb[4], size_t na[4])
+/* Sizes of both sides for the four candidates of a 2D bucket (two per axis).  One pass. */
+static void split_counts2(const double *box, const uint32_t *ids, size_t cnt, const double cand[4],
+                          size_t nb[4], size_t na[4])
 {
     size_t b0 = 0, b1 = 0, b2 = 0, b3 = 0, a0 = 0, a1 = 0, a2 = 0, a3 = 0;
     const double c0 = cand[0], c1 = cand[1], c2 = cand[2], c3 = cand[3];
@@ -72,11 +77,25 @@ static void split_counts(const double *box, const uint32_t *ids, size_t cnt, con
     na[0] = a0, na[1] = a1, na[2] = a2, na[3] = a3;
 }
 
+/* The same for the six candidates of a 3D bucket. */
+static void split_counts3(const double *box, const uint32_t *ids, size_t cnt, const double cand[6],
+                          size_t nb[6], size_t na[6])
+{
+    size_t b[6] = {0}, a[6] = {0};
+    for (size_t i = 0; i < cnt; i++) {
+        const double *x = box + 6 * (size_t)ids[i];
+        for (int k = 0; k < 6; k++) b[k] += x[k / 2] <= cand[k], a[k] += x[3 + k / 2] > cand[k];
+    }
+    memcpy(nb, b, sizeof b);
+    memcpy(na, a, sizeof a);
+}
+
 /* One build: the buckets still to split (stack), the nodes and leaves made, the ids of every
  * bucket (pool).  A builder may build a whole tree or one subtree (root: its root's reference,
  * a node index or ~leaf). */
 typedef struct builder {
-    const double *dbox;
+    const double *dbox; /* 2 dim a box: lo[dim], hi[dim] */
+    int dim;
     size_t leaf_max;
     uint32_t *pool;
     size_t pool_n, pool_cap;
@@ -99,20 +118,24 @@ static void builder_free(builder *b)
 }
 
 /* Splits buckets until the stack is empty (or, with one_split, after the first split: its two
- * sides are left on the stack).  0, or -1 out of memory. */
-static int build(builder *b, int one_split)
+ * sides are left on the stack).  0, or -1 out of memory.  dim is b->dim, a constant where this
+ * is inlined (build). */
+static inline __attribute__((always_inline)) int build_dim(builder *b, int one_split, const int dim)
 {
     while (b->sn) {
         pending p = b->stack[--b->sn];
         int axis = -1;
         double thr = 0;
-        size_t best = p.cnt, nbelow = 0;
+        size_t best = p.cnt, nbelow = 0, nabove = 0;
         if (p.cnt > b->leaf_max && p.depth < BOX_DEPTH_MAX) {
-            double cand[4];
-            size_t nb[4], na[4];
-            split_candidates(&p.st, p.cnt, p.lo, p.hi, cand);
-            split_counts(b->dbox, b->pool + p.off, p.cnt, cand, nb, na);
-            for (int k = 0; k < 4; k++) {
+            double cand[2 * BOX_DIM_MAX];
+            size_t nb[2 * BOX_DIM_MAX], na[2 * BOX_DIM_MAX];
+            split_candidates(&p.st, p.cnt, p.lo, p.hi, cand, dim);
+            if (dim == 2)
+                split_counts2(b->dbox, b->pool + p.off, p.cnt, cand, nb, na);
+            else
+                split_counts3(b->dbox, b->pool + p.off, p.cnt, cand, nb, na);
+            for (int k = 0; k < 2 * dim; k++) {
                 int a = k / 2;
                 size_t worst = nb[k] > na[k] ? nb[k] : na[k];
                 if (worst < best && cand[k] > p.lo[a] && cand[k] < p.hi[a]) {
@@ -120,6 +143,7 @@ static int build(builder *b, int one_split)
                     axis = a;
                     thr = cand[k];
                     nbelow = nb[k];
+                    nabove = na[k];
                 }
             }
             if (best + p.cnt / 8 + 1 > p.cnt) axis = -1; /* not worth a split */
@@ -148,11 +172,20 @@ static int build(builder *b, int one_split)
         /* both sides in one pass, in order, each gathering its statistics as it grows */
         size_t boff = b->pool_n, aoff = b->pool_n + nbelow, bn = 0, an = 0;
         bstats sb = stats0, sa = stats0;
+        /* a side that will be a leaf needs no statistics (only a split reads them) */
+        int split_b = nbelow > b->leaf_max && p.depth + 1 < BOX_DEPTH_MAX;
+        int split_a = nabove > b->leaf_max && p.depth + 1 < BOX_DEPTH_MAX;
         for (size_t i = 0; i < p.cnt; i++) {
             uint32_t id = b->pool[p.off + i];
-            const double *bx = b->dbox + 4 * (size_t)id;
-            if (bx[axis] <= thr) b->pool[boff + bn++] = id, stats_add(&sb, bx);
-            if (bx[axis + 2] > thr) b->pool[aoff + an++] = id, stats_add(&sa, bx);
+            const double *bx = b->dbox + 2 * dim * (size_t)id;
+            if (bx[axis] <= thr) {
+                b->pool[boff + bn++] = id;
+                if (split_b) stats_add(&sb, bx, dim);
+            }
+            if (bx[axis + dim] > thr) {
+                b->pool[aoff + an++] = id;
+                if (split_a) stats_add(&sa, bx, dim);
+            }
         }
         b->pool_n = aoff + an;
         if (mem_grow(&b->stack, &b->scap, b->sn + 2, sizeof *b->stack)) return -1;
@@ -175,11 +208,17 @@ static int build(builder *b, int one_split)
     return 0;
 }
 
+static int build(builder *b, int one_split)
+{
+    return b->dim == 2 ? build_dim(b, one_split, 2) : build_dim(b, one_split, 3);
+}
+
 /* A subtree's builder: the bucket p of parent's pool, copied into its own, as its root. */
 static int sub_builder(builder *s, const builder *parent, pending p)
 {
     memset(s, 0, sizeof *s);
     s->dbox = parent->dbox;
+    s->dim = parent->dim;
     s->leaf_max = parent->leaf_max;
     if (mem_grow(&s->pool, &s->pool_cap, p.cnt ? p.cnt : 1, sizeof *s->pool) ||
         mem_grow(&s->stack, &s->scap, 1, sizeof *s->stack))
@@ -210,14 +249,22 @@ static int32_t moved(int32_t ref, size_t node0, size_t leaf0)
 
 int box_tree_build(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max)
 {
-    return box_tree_build_par(t, ibox, n, leaf_max, 1);
+    return box_tree_build_dim(t, 2, ibox, n, leaf_max, 1);
 }
 
 int box_tree_build_par(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_max, int threads)
 {
+    return box_tree_build_dim(t, 2, ibox, n, leaf_max, threads);
+}
+
+int box_tree_build_dim(box_tree *t, int dim, const int64_t *ibox, size_t n, size_t leaf_max,
+                       int threads)
+{
     /* the boxes as doubles, once: every pass compares them with the thresholds */
-    double *dbox = mem_malloc((4 * n + 1) * sizeof *dbox);
-    builder m = {.dbox = dbox, .leaf_max = leaf_max}, sub[2];
+    assert(dim == 2 || dim == 3);
+    size_t bw = 2 * (size_t)dim;
+    double *dbox = mem_malloc((bw * n + 1) * sizeof *dbox);
+    builder m = {.dbox = dbox, .dim = dim, .leaf_max = leaf_max}, sub[2];
     size_t nsub = 0;
     memset(t, 0, sizeof *t);
     memset(sub, 0, sizeof sub);
@@ -229,11 +276,11 @@ int box_tree_build_par(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_m
     m.stack[m.sn++] = (pending){.node = -1,
                                 .off = 0,
                                 .cnt = n,
-                                .lo = {-INFINITY, -INFINITY},
-                                .hi = {INFINITY, INFINITY},
+                                .lo = {-INFINITY, -INFINITY, -INFINITY},
+                                .hi = {INFINITY, INFINITY, INFINITY},
                                 .st = stats0};
-    for (size_t i = 0; i < 4 * n; i++) dbox[i] = (double)ibox[i];
-    for (size_t i = 0; i < n; i++) stats_add(&m.stack[0].st, dbox + 4 * i);
+    for (size_t i = 0; i < bw * n; i++) dbox[i] = (double)ibox[i];
+    for (size_t i = 0; i < n; i++) stats_add(&m.stack[0].st, dbox + bw * i, dim);
     if (threads > 1 && n >= BOX_PAR_MIN) {
         /* the root split here, then its two sides on two threads: the same nodes and leaves,
          * numbered as one thread numbers them (depth first, below before above) */
@@ -263,7 +310,7 @@ int box_tree_build_par(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_m
     t->nodes = malloc(nn * sizeof *t->nodes);
     t->leaf_off = malloc((ln + 1) * sizeof *t->leaf_off);
     t->items = malloc((total ? total : 1) * sizeof *t->items);
-    t->region = malloc((ln ? ln : 1) * 4 * sizeof *t->region);
+    t->region = malloc((ln ? ln : 1) * bw * sizeof *t->region);
     if (!t->nodes || !t->leaf_off || !t->items || !t->region) goto fail;
     if (m.nn == 0) {
         t->nodes[0] = (box_node){.t = INFINITY, .axis = 0, .child = {m.root, m.root}};
@@ -285,14 +332,15 @@ int box_tree_build_par(box_tree *t, const int64_t *ibox, size_t n, size_t leaf_m
             t->leaf_off[l0] = (uint32_t)total;
             memcpy(t->items + total, parts[k]->pool + lr->off, lr->cnt * sizeof *t->items);
             total += lr->cnt;
-            t->region[4 * l0 + 0] = lr->lo[0];
-            t->region[4 * l0 + 1] = lr->lo[1];
-            t->region[4 * l0 + 2] = lr->hi[0];
-            t->region[4 * l0 + 3] = lr->hi[1];
+            for (int a = 0; a < dim; a++) {
+                t->region[bw * l0 + (size_t)a] = lr->lo[a];
+                t->region[bw * l0 + (size_t)dim + (size_t)a] = lr->hi[a];
+            }
         }
     t->leaf_off[ln] = (uint32_t)total;
     t->nleaves = ln;
     t->nnodes = nn;
+    t->dim = dim;
     builder_free(&m);
     builder_free(&sub[0]);
     builder_free(&sub[1]);
@@ -314,6 +362,17 @@ uint32_t box_tree_locate(const box_tree *t, double x, double y)
         const box_node *nd = &t->nodes[i];
         double c = nd->axis ? y : x;
         int32_t next = nd->child[c <= nd->t ? 0 : 1];
+        if (next < 0) return (uint32_t)~next;
+        i = next;
+    }
+}
+
+uint32_t box_tree_locate_pt(const box_tree *t, const double *p)
+{
+    int32_t i = 0;
+    for (;;) {
+        const box_node *nd = &t->nodes[i];
+        int32_t next = nd->child[p[nd->axis] <= nd->t ? 0 : 1];
         if (next < 0) return (uint32_t)~next;
         i = next;
     }

@@ -1,11 +1,35 @@
 /* pred.c — see pred.h.
  *
- * Filters.  An LPI's or TPI's approximation is the exact value rounded three times (numerator,
- * denominator, quotient), so each coordinate is within XPT_REL |x|.  A sum of k products of
- * such coordinates with integer coefficients (themselves rounded once to doubles) is then within
- * (XPT_REL + (k + 2) u) of the sum of the absolute values of its terms; the filters below use
- * (XPT_REL + 16 u) times that sum, which covers every sum here with room to spare.  When the
- * computed value is not farther from zero than that, the exact path decides.
+ * Filters, and their error bounds derived once.  u = 2^-53 is the unit roundoff.  A filter
+ * computes a value v in doubles from terms t_1 .. t_m and a bound e = B (|t_1| + ... + |t_m|)
+ * from the computed terms; its *_fast function returns the sign of v when |v| > e, else
+ * PRED_UNKNOWN, and the *_exact function beside it then rebuilds the operands as integers
+ * (xint, core/xint.h) and decides exactly.  B covers the error of v relative to T = sum |t_i|,
+ * and the roundings of T and e themselves; there are three, each named once:
+ *
+ * ERR_INT_SUM = 8u.  v is a sum or difference of at most four terms, each a product of
+ *   integers with at most four roundings in all (an integer converted to a double rounds once
+ *   when it exceeds 2^53, each multiplication once; multiplying by 3 rounds too).  A term then
+ *   carries a relative error below (1 + u)^4 - 1 < 4.01u, the at most three additions add at
+ *   most 3u (1 + 4.01u) T, so |v - exact| < 7.02u T; the computed T and e lose at most five
+ *   more roundings, e >= 8u (1 - u)^5 T > 7.9u T.  Used by dot3 (three terms of three
+ *   roundings: dot_sign, det3_sign), prod2_diff (two of three: orient_plane of an LPI,
+ *   cmp_frac_exact) and axis_plane_side_exact (four of at most four).
+ *
+ * ERR_APPROX_DIFF = XPT_REL + 4u.  v = a - b where each of a and b is exact or an LPI's or
+ *   TPI's approximated coordinate (within XPT_REL of the exact, pred.h) or 3 times one (one
+ *   more rounding); T sums only the approximated ones.  The operands err by at most
+ *   (XPT_REL + u + u^2) T, the subtraction by u |v| <= u T: (XPT_REL + 2.01u) T in all, and the
+ *   roundings of T and e cost less than the 2u to spare.  Used by cmp_coord and
+ *   xpt_cmp_q3_exact.
+ *
+ * ERR_APPROX_SUM = XPT_REL + 16u.  v = n . x + d with n and d a plane's coefficients (each
+ *   rounded once) and x an approximated point: each product within XPT_REL + 2.01u of its
+ *   exact value, the offset within u, the three additions 3u T: below (XPT_REL + 5.01u) T,
+ *   with room to spare.  Used by orient_plane of a TPI.
+ *
+ * When the filter cannot decide, the exact path does; so a bound too large costs time only,
+ * one too small would be a wrong answer: each is derived above with its largest case.
  */
 #include "core/pred.h"
 
@@ -13,8 +37,16 @@
 #include <math.h>
 #include <stdlib.h>
 
-#define U   (DBL_EPSILON / 2)
-#define REL (XPT_REL + 16 * U)
+#define U               (DBL_EPSILON / 2)
+#define ERR_INT_SUM     (8 * U)
+#define ERR_APPROX_DIFF (XPT_REL + 4 * U)
+#define ERR_APPROX_SUM  (XPT_REL + 16 * U)
+
+/* The sign of v when the bound e decides it, else PRED_UNKNOWN: every filter's last step. */
+static inline int sign_fast(double v, double e)
+{
+    return v > e ? 1 : v < -e ? -1 : PRED_UNKNOWN;
+}
 
 /* ---- small integer tools ---------------------------------------------------------------- */
 
@@ -269,13 +301,53 @@ void xpt_dd(const geo *G, const xpt *p, double hi[3], double lo[3])
 
 /* ---- predicates ------------------------------------------------------------------------- */
 
-static int sign_xint_sum_i128(i128 a, i128 b, i128 c, i128 d)
+/* sign(a b - c d) of 128-bit integers: in doubles (ERR_INT_SUM: two terms of three roundings),
+ * may say PRED_UNKNOWN; exactly. */
+static inline int prod2_diff_fast(i128 a, i128 b, i128 c, i128 d)
 {
-    /* sign(a * b - c * d) */
+    double t1 = (double)a * (double)b, t2 = (double)c * (double)d;
+    return sign_fast(t1 - t2, (fabs(t1) + fabs(t2)) * ERR_INT_SUM);
+}
+
+static int prod2_diff_exact(i128 a, i128 b, i128 c, i128 d)
+{
+    int s = prod2_diff_fast(a, b, c, d);
+    if (s != PRED_UNKNOWN) return s;
     xint x, y;
     xi_mul_i128(&x, a, b);
     xi_mul_i128(&y, c, d);
     return xi_cmp(&x, &y);
+}
+
+/* sign(a . b) of 3-vectors of 128-bit integers: in doubles (ERR_INT_SUM: three terms of three
+ * roundings), may say PRED_UNKNOWN; exactly. */
+static inline int dot3_fast(const i128 *a, const i128 *b)
+{
+    double t0 = (double)a[0] * (double)b[0], t1 = (double)a[1] * (double)b[1],
+           t2 = (double)a[2] * (double)b[2];
+    return sign_fast(t0 + t1 + t2, (fabs(t0) + fabs(t1) + fabs(t2)) * ERR_INT_SUM);
+}
+
+static inline int dot3_exact(const i128 *a, const i128 *b)
+{
+    int s = dot3_fast(a, b);
+    if (s != PRED_UNKNOWN) return s;
+    xint x, t;
+    xi_zero(&x);
+    for (int i = 0; i < 3; i++) {
+        xi_mul_i128(&t, a[i], b[i]);
+        xi_add(&x, &x, &t);
+    }
+    return xi_sign(&x);
+}
+
+/* n . x + d of plane P at a TPI's approximation, in doubles (ERR_APPROX_SUM): may say
+ * PRED_UNKNOWN. */
+static inline int orient_plane_tpi_fast(const plane3 *P, const xpt *p)
+{
+    double t0 = P->nd[0] * p->x[0], t1 = P->nd[1] * p->x[1], t2 = P->nd[2] * p->x[2];
+    double v = t0 + t1 + t2 + P->dd;
+    return sign_fast(v, (fabs(t0) + fabs(t1) + fabs(t2) + fabs(P->dd)) * ERR_APPROX_SUM);
 }
 
 int orient_plane(const geo *G, const xpt *p, uint32_t pl)
@@ -290,21 +362,11 @@ int orient_plane(const geo *G, const xpt *p, uint32_t pl)
         if (oa == 0 && ob == 0) return 0;
         const plane3 *C = G->pl + p->c;
         i128 sa = plane_eval(C, ga), sb = plane_eval(C, gb);
-        int sw = sgn128(sa - sb);
-        double t1 = (double)sa * (double)ob, t2 = (double)sb * (double)oa;
-        double v = t1 - t2, e = (fabs(t1) + fabs(t2)) * (8 * U);
-        if (v > e) return sw;
-        if (v < -e) return -sw;
-        return sign_xint_sum_i128(sa, ob, sb, oa) * sw;
+        return prod2_diff_exact(sa, ob, sb, oa) * sgn128(sa - sb);
     }
     if (p->a == pl || p->b == pl || p->c == pl) return 0;
-    {
-        double t0 = P->nd[0] * p->x[0], t1 = P->nd[1] * p->x[1], t2 = P->nd[2] * p->x[2];
-        double v = t0 + t1 + t2 + P->dd;
-        double e = (fabs(t0) + fabs(t1) + fabs(t2) + fabs(P->dd)) * REL;
-        if (v > e) return 1;
-        if (v < -e) return -1;
-    }
+    int f = orient_plane_tpi_fast(P, p);
+    if (f != PRED_UNKNOWN) return f;
     xhom h;
     xint s, t, c;
     xpt_hom(G, p, &h);
@@ -320,20 +382,22 @@ int orient_plane(const geo *G, const xpt *p, uint32_t pl)
     return xi_sign(&s);
 }
 
+/* p_k - q_k from the approximations (ERR_APPROX_DIFF): may say PRED_UNKNOWN. */
+static inline int cmp_coord_fast(const xpt *p, const xpt *q, int k)
+{
+    double a = p->x[k], b = q->x[k];
+    double e = (p->kind == PT_GRID ? 0 : fabs(a)) + (q->kind == PT_GRID ? 0 : fabs(b));
+    return sign_fast(a - b, e * ERR_APPROX_DIFF);
+}
+
 int cmp_coord(const geo *G, const xpt *p, const xpt *q, int k)
 {
     if (p->kind == PT_GRID && q->kind == PT_GRID) {
         int64_t a = G->g[3 * (size_t)p->a + k], b = G->g[3 * (size_t)q->a + k];
         return (a > b) - (a < b);
     }
-    {
-        double a = p->x[k], b = q->x[k];
-        double e = (p->kind == PT_GRID ? 0 : fabs(a)) + (q->kind == PT_GRID ? 0 : fabs(b));
-        e = e * (XPT_REL + 4 * U);
-        double v = a - b;
-        if (v > e) return 1;
-        if (v < -e) return -1;
-    }
+    int f = cmp_coord_fast(p, q, k);
+    if (f != PRED_UNKNOWN) return f;
     if (p->kind == PT_LPI && q->kind == PT_GRID) {
         i128 X[3], W;
         lpi_parts(G, p, X, &W);
@@ -367,37 +431,80 @@ void cross_ll(const int64_t *a, const int64_t *b, i128 *out)
 
 int dot_sign(const int64_t *a, const i128 *b)
 {
-    double t0 = (double)a[0] * (double)b[0], t1 = (double)a[1] * (double)b[1],
-           t2 = (double)a[2] * (double)b[2];
-    double v = t0 + t1 + t2, e = (fabs(t0) + fabs(t1) + fabs(t2)) * (8 * U);
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xint s, t;
-    xi_zero(&s);
-    for (int i = 0; i < 3; i++) {
-        xi_mul_i128(&t, a[i], b[i]);
-        xi_add(&s, &s, &t);
-    }
-    return xi_sign(&s);
+    const i128 a128[3] = {a[0], a[1], a[2]};
+    return dot3_exact(a128, b);
 }
 
 int det3_sign(const int64_t *a, const int64_t *b, const i128 *c)
 {
     i128 ab[3];
     cross_ll(a, b, ab); /* det(a, b, c) = (a x b) . c */
-    double t0 = (double)ab[0] * (double)c[0], t1 = (double)ab[1] * (double)c[1],
-           t2 = (double)ab[2] * (double)c[2];
-    double v = t0 + t1 + t2, e = (fabs(t0) + fabs(t1) + fabs(t2)) * (8 * U);
-    if (v > e) return 1;
-    if (v < -e) return -1;
-    xint s, t;
-    xi_zero(&s);
-    for (int i = 0; i < 3; i++) {
-        xi_mul_i128(&t, ab[i], c[i]);
-        xi_add(&s, &s, &t);
-    }
+    return dot3_exact(ab, c);
+}
+
+/* ---- predicates of the cells stage (core/arr3_cells.c): fans and probes ----------------- */
+
+int cmp_frac_exact(i128 a, i128 b, i128 c, i128 d)
+{
+    /* a/b - c/d has the sign of (a d - c b) b d */
+    return prod2_diff_exact(a, d, c, b) * sgn128(b) * sgn128(d);
+}
+
+/* 3 p_k - q from p's approximation (ERR_APPROX_DIFF; q is exact): may say PRED_UNKNOWN. */
+static inline int xpt_cmp_q3_fast(const xpt *p, int k, int64_t q)
+{
+    double v = 3 * p->x[k] - (double)q;
+    return sign_fast(v, (3 * fabs(p->x[k]) + fabs((double)q)) * ERR_APPROX_DIFF);
+}
+
+int xpt_cmp_q3_exact(const geo *G, const xpt *p, int k, int64_t q)
+{
+    if (p->kind == PT_GRID) return sgn128(3 * (i128)G->g[3 * (size_t)p->a + k] - q);
+    int f = xpt_cmp_q3_fast(p, k, q);
+    if (f != PRED_UNKNOWN) return f;
+    xhom h;
+    xint l, r, t;
+    xpt_hom(G, p, &h);
+    xi_set_i64(&t, 3);
+    xi_mul(&l, &t, &h.X[k]);
+    xi_set_i64(&t, q);
+    xi_mul(&r, &t, &h.W);
+    return xi_cmp(&l, &r);
+}
+
+/* The plane through the line of P and S parallel to e_k: Pi = S_k P - P_k S (its k coefficient
+ * is 0); |Pi_i| < 2^125, |S_k d_P| < 2^156.  3 Pi(Q / 3) = Pi_i Q_i + Pi_j Q_j + 3 (S_k d_P -
+ * P_k d_S), in doubles (ERR_INT_SUM: four terms, the last two of four roundings): may say
+ * PRED_UNKNOWN. */
+static inline int axis_plane_side_fast(const plane3 *P, const plane3 *S, int k, int i, int j,
+                                       i128 pi_i, i128 pi_j, const int64_t *Q)
+{
+    double t0 = (double)pi_i * (double)Q[i], t1 = (double)pi_j * (double)Q[j];
+    double t2 = 3 * (double)S->n[k] * (double)P->d, t3 = 3 * (double)P->n[k] * (double)S->d;
+    double v = t0 + t1 + t2 - t3;
+    return sign_fast(v, (fabs(t0) + fabs(t1) + fabs(t2) + fabs(t3)) * ERR_INT_SUM);
+}
+
+int axis_plane_side_exact(const plane3 *P, const plane3 *S, int k, const int64_t *Q, int *si)
+{
+    int i = (k + 1) % 3, j = (k + 2) % 3;
+    i128 pi_i = (i128)S->n[k] * P->n[i] - (i128)P->n[k] * S->n[i];
+    i128 pi_j = (i128)S->n[k] * P->n[j] - (i128)P->n[k] * S->n[j];
+    *si = sgn128(pi_i);
+    int f = axis_plane_side_fast(P, S, k, i, j, pi_i, pi_j, Q);
+    if (f != PRED_UNKNOWN) return f;
+    xint s, t, a, b;
+    xi_mul_i128(&s, pi_i, Q[i]);
+    xi_mul_i128(&t, pi_j, Q[j]);
+    xi_add(&s, &s, &t);
+    xi_mul_i128(&a, (i128)3 * S->n[k], P->d);
+    xi_mul_i128(&b, (i128)3 * P->n[k], S->d);
+    xi_add(&s, &s, &a);
+    xi_sub(&s, &s, &b);
     return xi_sign(&s);
 }
+
+/* ---- predicates of triangles ------------------------------------------------------------ */
 
 /* The index (0..2) of the sign that differs from the other two (s has both signs, no zero). */
 static int lone(const int *s)

@@ -18,14 +18,18 @@
  *   No point is ever built from a built point: every LPI and TPI refers to input vertices and
  *   planes only, so the sizes above hold whatever the depth of the computation.
  *
- * Predicates name their contract as Shewchuk's do: a *_fast function may be wrong (doubles,
- * used only where a wrong answer costs time, never correctness); every other predicate is
- * exact.  Each exact predicate first evaluates in doubles with a forward error bound and
- * returns that sign when the value is farther from zero than the bound; only then does it
- * rebuild the operands in xint (core/xint.h) and decide exactly.  Known zeros are symbolic: a
- * point defined by plane p lies on p, and a point of the segment ab (a, b, or an LPI of ab) lies
- * on every plane through a and b, without arithmetic.  The largest exact quantity is a
- * coordinate comparison of two TPIs, X1 W2 - X2 W1 < 2^406, well inside XI_LIMBS.
+ * Predicates name their contract as Shewchuk's do.  A *_fast function may be wrong or say
+ * PRED_UNKNOWN (doubles and an error bound: a filter); a *_exact function is exact.  The exact
+ * predicates are those named *_exact and, keeping the names the other modules call them by,
+ * orient_plane, cmp_coord, xpt_equal, det3_sign, dot_sign, orient3_grid and tri_tri_apart; no
+ * *_fast function is exported today (each filter is a static *_fast beside its *_exact in
+ * pred.c, which derives every error bound once, with its proof).  Each exact predicate first
+ * evaluates in doubles with a forward error bound and returns that sign when the value is
+ * farther from zero than the bound; only then does it rebuild the operands in xint
+ * (core/xint.h) and decide exactly.  Known zeros are symbolic: a point defined by plane p lies
+ * on p, and a point of the segment ab (a, b, or an LPI of ab) lies on every plane through a
+ * and b, without arithmetic.  The largest exact quantity is a coordinate comparison of two
+ * TPIs, X1 W2 - X2 W1 < 2^406, well inside XI_LIMBS.
  *
  * Threads: everything here is reentrant and reads only what it is given.
  */
@@ -105,6 +109,9 @@ void xpt_dd(const geo *G, const xpt *p, double hi[3], double lo[3]);
 
 /* ---- exact predicates ------------------------------------------------------------------ */
 
+/* What a *_fast predicate returns when its error bound cannot decide. */
+#define PRED_UNKNOWN 2
+
 /* Sign of n . p + d for plane id pl: which side of the plane p lies on (0: on it). */
 int orient_plane(const geo *G, const xpt *p, uint32_t pl);
 
@@ -122,6 +129,19 @@ void cross_ll(const int64_t *a, const int64_t *b, i128 *out);
 
 /* Sign of a . b for an integer vector a and b (|b_i| < 2^127). */
 int dot_sign(const int64_t *a, const i128 *b);
+
+/* Of the cells stage (core/arr3_cells.c: the fans about an edge, the probes' rays). */
+
+/* Sign of a/b - c/d for b, d != 0 (|a|, |b|, |c|, |d| < 2^127). */
+int cmp_frac_exact(i128 a, i128 b, i128 c, i128 d);
+
+/* Sign of 3 p_k - q: p's coordinate k against the rational q / 3 (|q| < 2^53). */
+int xpt_cmp_q3_exact(const geo *G, const xpt *p, int k, int64_t q);
+
+/* P and S meet in a line; Pi = S_k P - P_k S is the plane through that line parallel to e_k.
+ * Returns the sign of Pi at the point Q / 3 (|Q_i| < 2^53; Q_k does not matter), and in *si the
+ * sign of Pi's coefficient (k + 1) % 3. */
+int axis_plane_side_exact(const plane3 *P, const plane3 *S, int k, const int64_t *Q, int *si);
 
 /* Sign of det(b - a, c - a, d - a) for grid points (coordinates below 2^30 in magnitude: the
  * differences below 2^31, their cross product in 64 bits, the product in 128), exactly. */

@@ -166,3 +166,13 @@ int sort_ipt_stop(ipt *a, size_t n, const atomic_int *stop)
     free(cnt);
     return 0;
 }
+
+int sort_kv_xyz(kv *a, size_t n, const int64_t *xyz)
+{
+    for (int k = 2; k >= 0; k--) {
+        for (size_t i = 0; i < n; i++)
+            a[i].k = (uint64_t)(xyz[3 * (size_t)a[i].v + k] + ((int64_t)1 << 40));
+        if (sort_kv(a, n)) return -1;
+    }
+    return 0;
+}

@@ -26,5 +26,8 @@ int sort_ipt(ipt *a, size_t n);
 /* The same, reading *stop (may be NULL) before each of its passes: -2 once it is set (a is then
  * left in some order). */
 int sort_ipt_stop(ipt *a, size_t n, const atomic_int *stop);
+/* By the grid point xyz + 3 a[i].v (|coordinates| < 2^40), lexicographic (x, then y, then z):
+ * an LSD pass of sort_kv per coordinate, z first; stable.  The keys a[i].k are overwritten. */
+int sort_kv_xyz(kv *a, size_t n, const int64_t *xyz);
 
 #endif

@@ -782,3 +782,63 @@ TEST(box_tree_parallel_build_is_the_serial_one)
         free(box);
     }
 }
+
+/* The same index in 3D (box_tree_build_dim, dim 3): serial and parallel builds agree, it
+ * splits along z too, every leaf holds exactly the boxes that meet its region, and the leaf a
+ * point locates to holds every box containing it (checked against every box). */
+TEST(box_tree_3d_locates_every_box_holding_a_point)
+{
+    uint64_t seed = 23;
+    size_t n = 30000;
+    int64_t *box = malloc(6 * n * sizeof *box);
+    REQUIRE(box, "malloc");
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            int64_t lo = (int64_t)(test_rnd(&seed) * 1e5), w = (int64_t)(test_rnd(&seed) * 3e3);
+            if (i % 7 == 0 && a == 2) w *= 30; /* tall boxes */
+            box[6 * i + a] = lo, box[6 * i + 3 + a] = lo + w;
+        }
+    box_tree a, b;
+    REQUIRE(box_tree_build_dim(&a, 3, box, n, 16, 1) == 0, "serial build");
+    REQUIRE(box_tree_build_dim(&b, 3, box, n, 16, 2) == 0, "parallel build");
+    CHECK(a.dim == 3 && a.nleaves == b.nleaves && a.nnodes == b.nnodes && a.nnodes > 100,
+          "%zu/%zu leaves, %zu/%zu nodes", a.nleaves, b.nleaves, a.nnodes, b.nnodes);
+    size_t zsplits = 0, diff = 0;
+    for (size_t k = 0; k < a.nnodes && a.nnodes == b.nnodes; k++) {
+        zsplits += a.nodes[k].axis == 2;
+        diff += a.nodes[k].t != b.nodes[k].t || a.nodes[k].axis != b.nodes[k].axis;
+    }
+    CHECK(zsplits > 0 && diff == 0, "%zu splits along z, %zu nodes differ", zsplits, diff);
+    size_t wrong = 0;
+    for (size_t l = 0; l < a.nleaves && l < 40; l++) { /* the leaf holds what meets its region */
+        const double *r = a.region + 6 * l;
+        size_t meet = 0;
+        for (size_t i = 0; i < n; i++) {
+            int m = 1;
+            for (int d = 0; d < 3; d++)
+                m &= (double)box[6 * i + d] <= r[3 + d] && (double)box[6 * i + 3 + d] > r[d];
+            meet += (size_t)m;
+        }
+        wrong += meet != a.leaf_off[l + 1] - a.leaf_off[l];
+    }
+    CHECK(wrong == 0, "%zu leaves whose items are not the boxes meeting their region", wrong);
+    size_t bad = 0;
+    for (int q = 0; q < 300; q++) {
+        double p[3];
+        for (int d = 0; d < 3; d++) p[d] = floor(test_rnd(&seed) * 1.1e5);
+        uint32_t l = box_tree_locate_pt(&a, p);
+        for (size_t i = 0; i < n; i++) {
+            int in = 1;
+            for (int d = 0; d < 3; d++)
+                in &= (double)box[6 * i + d] <= p[d] && p[d] <= (double)box[6 * i + 3 + d];
+            if (!in) continue;
+            uint32_t found = 0;
+            for (uint32_t k = a.leaf_off[l]; k < a.leaf_off[l + 1]; k++) found |= a.items[k] == i;
+            bad += !found;
+        }
+    }
+    CHECK(bad == 0, "%zu boxes holding a point but not in its leaf", bad);
+    box_tree_free(&a);
+    box_tree_free(&b);
+    free(box);
+}

@@ -352,6 +352,7 @@ static void completed(void *cls, struct MHD_Connection *mc, void **con_cls,
     /* kept alive: the next request's headers are due within the idle time and the header time */
     http_set_deadline(h, mc, h->cfg->idle_timeout + h->cfg->header_timeout, "headers");
     http_body_release(c);
+    free(c->plan.body);
     free(c);
     *con_cls = NULL;
 }
@@ -373,6 +374,7 @@ static void http_free(http_server *h)
     pthread_mutex_destroy(&h->memo_mu);
     pthread_mutex_destroy(&h->in_mu);
     pthread_cond_destroy(&h->in_cv);
+    pthread_cond_destroy(&h->in_idle);
     pthread_cond_destroy(&h->reaper_cv);
     free(h->in_threads);
     free(h->memo);
@@ -411,6 +413,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     pthread_mutex_init(&h->memo_mu, NULL);
     pthread_mutex_init(&h->in_mu, NULL);
     pthread_cond_init(&h->in_cv, NULL);
+    pthread_cond_init(&h->in_idle, NULL);
     pthread_cond_init(&h->reaper_cv, NULL);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG | (ai->ai_family == AF_INET6 ? MHD_USE_IPv6 : 0);
@@ -466,12 +469,14 @@ void http_set_draining(http_server *h)
 void http_stop(http_server *h)
 {
     if (!h) return;
-    /* the intake finishes what it holds (the engine drains: new jobs are refused), then the
-     * waits that the drain woke are answered before every connection is closed (for 5 s at
-     * most: a client that does not read its answer cannot hold the exit) */
-    http_intake_stop(h);
+    /* the intake finishes the bodies it holds (the engine drains: new jobs are refused), then
+     * the waits that the drain woke are answered (their pictures drawn) before every
+     * connection is closed (for 5 s at most: a client that does not read its answer cannot
+     * hold the exit) */
+    http_intake_close(h);
     for (int i = 0; i < 500 && atomic_load(&h->parked) > 0; i++)
         nanosleep(&(struct timespec){0, 10000000}, NULL);
+    http_intake_stop(h);
     http_reaper_stop(h);
     MHD_stop_daemon(h->d);
     http_free(h);

@@ -57,23 +57,43 @@ struct http_server {
     struct memo_slot *memo;  /* MEMO_SLOTS: request bodies seen lately (http_intake.c) */
     /* the intake pool: POST bodies parsed, validated and submitted off the HTTP threads */
     pthread_mutex_t in_mu;
-    pthread_cond_t in_cv;
+    pthread_cond_t in_cv;           /* a connection was queued, or the threads are to end */
+    pthread_cond_t in_idle;         /* in_bodies came down to 0 */
     struct conn *in_head, *in_tail; /* FIFO, guarded by in_mu */
     size_t in_n;
-    int in_stop;
+    size_t in_bodies; /* POST bodies queued or being worked on, guarded by in_mu */
+    int in_stop;      /* no more POST bodies (results are still drawn) */
+    int in_quit;      /* the threads end once the queue is empty */
     pthread_t *in_threads;
     int in_nthreads;
 };
 
-/* What a POST's intake decided (intake_work), answered once its connection is resumed. */
-typedef enum { PLAN_PROBLEM = 0, PLAN_STORED, PLAN_RESULT, PLAN_SUBMITTED } plan_kind;
+/* What the intake pool is to do for a suspended connection, and what it decided, answered once
+ * the connection is resumed (http_answer_plan).  A POST's body comes with a zeroed plan and
+ * leaves as PLAN_PROBLEM, _STORED, _RESULT or _SUBMITTED (intake_work); a result to draw comes
+ * as PLAN_DRAW and leaves as PLAN_DRAWN or PLAN_PROBLEM (http_draw). */
+typedef enum {
+    PLAN_PROBLEM = 0,
+    PLAN_STORED,
+    PLAN_RESULT,
+    PLAN_SUBMITTED,
+    PLAN_DRAW,
+    PLAN_DRAWN
+} plan_kind;
 typedef struct plan {
     plan_kind kind;
     unsigned status;   /* PLAN_PROBLEM */
     char msg[320];     /* PLAN_PROBLEM */
     const char *retry; /* PLAN_PROBLEM: Retry-After, static */
-    char hash[65];     /* PLAN_STORED, PLAN_RESULT */
+    char hash[65];     /* PLAN_STORED, PLAN_RESULT, PLAN_DRAW, PLAN_DRAWN */
     uint64_t size;     /* PLAN_STORED */
+    /* PLAN_DRAW, PLAN_DRAWN: the answer's X-Cellar-Job ("": none), X-Cellar-Cache (static),
+     * whether it answers a POST (see store_problem) */
+    char job_id[33];
+    const char *cache;
+    int post;
+    char *body; /* PLAN_DRAWN: the picture (gzipped for c->gz), malloc'd; NULL once sent */
+    size_t len;
 } plan;
 
 /* The body of a POST /v1/jobs, by its Content-Type. */
@@ -105,7 +125,8 @@ typedef struct conn {
     size_t len, cap;
     char job[33]; /* the job a POST waits on */
     int waiting;  /* suspended, waiting for job */
-    int intake;   /* suspended, its body with the intake pool (2: done, plan made) */
+    int intake;   /* suspended, with the intake pool (its body, or a result to draw; 2: done,
+                     plan made) */
     plan plan;
     struct conn *next_intake; /* h->in's queue */
     int parked;               /* counted in h->parked until completed */
@@ -191,6 +212,8 @@ enum MHD_Result http_submitted(conn *c);
 enum MHD_Result http_route_result(conn *c);
 enum MHD_Result http_route_job(conn *c, int want_result);
 enum MHD_Result http_route_cancel(conn *c);
+void http_draw(conn *c);
+enum MHD_Result http_send_drawn(conn *c);
 
 /* ---- http_intake.c ---- */
 int http_body_reserve(conn *c, uint64_t n);
@@ -205,7 +228,9 @@ enum MHD_Result http_part_data(void *cls, enum MHD_ValueKind kind, const char *k
 enum MHD_Result http_body_piece(conn *c, const char *upload, size_t n);
 enum MHD_Result http_intake_push(conn *c);
 enum MHD_Result http_answer_plan(conn *c);
+void http_plan_problem(plan *pl, unsigned status, const char *msg, const char *retry);
 int http_intake_start(http_server *h, int n);
+void http_intake_close(http_server *h);
 void http_intake_stop(http_server *h);
 
 /* ---- http_conn.c ---- */

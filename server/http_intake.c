@@ -249,7 +249,7 @@ out:
     return rc;
 }
 
-static void plan_problem(plan *pl, unsigned status, const char *msg, const char *retry)
+void http_plan_problem(plan *pl, unsigned status, const char *msg, const char *retry)
 {
     pl->kind = PLAN_PROBLEM;
     pl->status = status;
@@ -260,10 +260,10 @@ static void plan_problem(plan *pl, unsigned status, const char *msg, const char 
 /* A POST that no new job can be made for: ENG_FULL or ENG_DRAINING. */
 static void plan_refused(plan *pl, int why)
 {
-    plan_problem(pl, 503,
-                 why == ENG_DRAINING ? "the service is shutting down"
-                                     : "the job queue is full: try again later",
-                 "5");
+    http_plan_problem(pl, 503,
+                      why == ENG_DRAINING ? "the service is shutting down"
+                                          : "the job queue is full: try again later",
+                      "5");
 }
 
 static void plan_result(plan *pl, plan_kind kind, const char *hash, uint64_t size)
@@ -308,7 +308,7 @@ static void intake_work(conn *c)
     int full = engine_full(h->e, err, sizeof err);
     if (full == ENG_ERR) {
         http_body_release(c);
-        return plan_problem(pl, 503, err, "5");
+        return http_plan_problem(pl, 503, err, "5");
     }
     if (full != ENG_OK) { /* no new job: answer without parsing (see memo_slot) */
         http_body_release(c);
@@ -318,7 +318,7 @@ static void intake_work(conn *c)
         if (hit == STORE_OK) return plan_result(pl, PLAN_STORED, hash, size);
         rc = engine_join(h->e, hash, c->job_id, c->job, err, sizeof err);
         if (rc == ENG_NOTFOUND) return plan_refused(pl, full);
-        if (rc != ENG_OK) return plan_problem(pl, 503, err, "5");
+        if (rc != ENG_OK) return http_plan_problem(pl, 503, err, "5");
         pl->kind = PLAN_SUBMITTED;
         return;
     }
@@ -329,7 +329,7 @@ static void intake_work(conn *c)
         rc = mesh_body_request(c, &json, &jlen, &ae);
         http_body_release(c);
         if (rc != API_OK)
-            return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
+            return http_plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
         if (jlen > h->cfg->max_body) { /* the request the files make, as a JSON body is held */
             char msg[200];
             snprintf(msg, sizeof msg,
@@ -337,14 +337,15 @@ static void intake_work(conn *c)
                      "a request may hold (--max-body)",
                      jlen, (unsigned long long)h->cfg->max_body);
             free(json);
-            return plan_problem(pl, 413, msg, NULL);
+            return http_plan_problem(pl, 413, msg, NULL);
         }
         c->body = json;
         c->len = jlen;
     }
     rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
     http_body_release(c);
-    if (rc != API_OK) return plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
+    if (rc != API_OK)
+        return http_plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
     engine_hash(canon, clen, hash);
     memo_put(h, raw, hash);
 
@@ -362,7 +363,7 @@ static void intake_work(conn *c)
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */
         return plan_result(pl, PLAN_RESULT, hash, 0);
     if (rc == ENG_FULL || rc == ENG_DRAINING) return plan_refused(pl, rc);
-    if (rc != ENG_OK) return plan_problem(pl, 503, err, "5");
+    if (rc != ENG_OK) return http_plan_problem(pl, 503, err, "5");
     pl->kind = PLAN_SUBMITTED;
 }
 
@@ -377,19 +378,22 @@ enum MHD_Result http_answer_plan(conn *c)
         return http_get_result(c, pl->hash, NULL, "hit", 1);
     case PLAN_SUBMITTED:
         return http_submitted(c);
+    case PLAN_DRAWN:
+        return http_send_drawn(c);
     default:
         return http_problem(c, pl->status, pl->msg, pl->retry, NULL);
     }
 }
 
-/* Hands a POST to the intake pool: the connection is suspended until an intake thread has
- * decided its answer (c->plan) and resumes it.  Suspended before it is queued, so that no
- * thread can resume it before it is suspended. */
+/* Hands a POST (or, c->plan PLAN_DRAW, a result to draw) to the intake pool: the connection is
+ * suspended until an intake thread has decided its answer (c->plan) and resumes it.
+ * Suspended before it is queued, so that no thread can resume it before it is suspended. */
 enum MHD_Result http_intake_push(conn *c)
 {
     http_server *h = c->h;
+    int draw = c->plan.kind == PLAN_DRAW;
     pthread_mutex_lock(&h->in_mu);
-    if (h->in_n >= INTAKE_MAX || h->in_stop) {
+    if (h->in_n >= INTAKE_MAX || (h->in_stop && !draw) || h->in_quit) {
         pthread_mutex_unlock(&h->in_mu);
         http_body_release(c);
         return http_problem(c, 503, "too many requests are being read: try again", "1", NULL);
@@ -404,6 +408,7 @@ enum MHD_Result http_intake_push(conn *c)
         h->in_head = c;
     h->in_tail = c;
     h->in_n++;
+    h->in_bodies += !draw;
     pthread_cond_signal(&h->in_cv);
     pthread_mutex_unlock(&h->in_mu);
     return MHD_YES;
@@ -414,17 +419,22 @@ static void *intake_main(void *arg)
     http_server *h = arg;
     pthread_mutex_lock(&h->in_mu);
     for (;;) {
-        while (!h->in_head && !h->in_stop) pthread_cond_wait(&h->in_cv, &h->in_mu);
+        while (!h->in_head && !h->in_quit) pthread_cond_wait(&h->in_cv, &h->in_mu);
         conn *c = h->in_head;
         if (!c) break; /* stopping, and nothing left */
         h->in_head = c->next_intake;
         if (!h->in_head) h->in_tail = NULL;
         h->in_n--;
         pthread_mutex_unlock(&h->in_mu);
-        intake_work(c);
+        int draw = c->plan.kind == PLAN_DRAW;
+        if (draw)
+            http_draw(c);
+        else
+            intake_work(c);
         c->intake = 2;
         MHD_resume_connection(c->mc);
         pthread_mutex_lock(&h->in_mu);
+        if (!draw && --h->in_bodies == 0) pthread_cond_broadcast(&h->in_idle);
     }
     pthread_mutex_unlock(&h->in_mu);
     return NULL;
@@ -482,12 +492,22 @@ int http_intake_start(http_server *h, int n)
     return h->in_nthreads ? 0 : -1;
 }
 
-/* Stops the intake: what it holds is finished first (the engine drains: new jobs are
- * refused), then its threads are joined; a POST pushed after is answered 503. */
-void http_intake_stop(http_server *h)
+/* Closes the intake to POST bodies (one pushed from now on is answered 503) and returns once
+ * those it holds are answered (the engine drains: new jobs are refused).  Results are still
+ * drawn, for the waits the drain wakes. */
+void http_intake_close(http_server *h)
 {
     pthread_mutex_lock(&h->in_mu);
     h->in_stop = 1;
+    while (h->in_bodies > 0 && h->in_nthreads > 0) pthread_cond_wait(&h->in_idle, &h->in_mu);
+    pthread_mutex_unlock(&h->in_mu);
+}
+
+/* Stops the intake: what it holds is finished, then its threads are joined. */
+void http_intake_stop(http_server *h)
+{
+    pthread_mutex_lock(&h->in_mu);
+    h->in_stop = h->in_quit = 1;
     pthread_cond_broadcast(&h->in_cv);
     pthread_mutex_unlock(&h->in_mu);
     for (int i = 0; i < h->in_nthreads; i++) pthread_join(h->in_threads[i], NULL);

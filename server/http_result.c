@@ -44,14 +44,19 @@ static enum MHD_Result send_result(conn *c, const char *hash, struct MHD_Respons
     return http_queue(c, 200, ctype, r, hs, sizeof hs / sizeof *hs);
 }
 
-/* 422 for a picture or map of a result too large to draw here. */
-static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
+/* Why a picture or map of a result of len bytes is not drawn here (a 422), into msg (200). */
+static void too_large_msg(const conn *c, uint64_t len, char *msg)
 {
-    char msg[200];
-    snprintf(msg, sizeof msg,
+    snprintf(msg, 200,
              "the result is %llu bytes: its %s form is made of results up to %lu bytes; "
              "ask for application/json",
              (unsigned long long)len, c->fmt->name, c->fmt->max);
+}
+
+static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
+{
+    char msg[200];
+    too_large_msg(c, len, msg);
     return http_problem(c, 422, msg, NULL, NULL);
 }
 
@@ -61,26 +66,12 @@ static int rendered(const conn *c)
     return c->fmt && c->fmt->render;
 }
 
-/* A result body (taken) with its cache headers, as JSON or rendered (c->fmt). */
+/* A result's JSON (taken) with its cache headers (a rendering is drawn by http_draw, on an
+ * intake thread, and sent by http_send_drawn). */
 static enum MHD_Result respond_result(conn *c, const char *hash, char *body, size_t len,
                                       const char *job_id, const char *cache)
 {
     const char *ctype = "application/json";
-    if (rendered(c)) {
-        char *pic = NULL;
-        size_t piclen = 0;
-        api_error ae;
-        if (len > c->fmt->max) {
-            free(body);
-            return too_large_to_draw(c, len);
-        }
-        int rc = c->fmt->render(body, len, &c->ro, &pic, &piclen, &ae);
-        free(body);
-        if (rc != API_OK) return http_problem(c, (unsigned)rc, ae.msg, NULL, NULL);
-        body = pic;
-        len = piclen;
-        ctype = c->fmt->media;
-    }
     if (c->gz) { /* every result goes gzipped to such a client (its ETag says so) */
         size_t zl = 0;
         char *z = http_gzip_buf(body, len, 1, &zl);
@@ -190,28 +181,84 @@ static void gz_reader_free(void *cls)
     free(g);
 }
 
-/* The answer to a store error rc (not STORE_OK, err its message) about result `hash`.  post:
- * the answer to a POST (a result evicted since it was found or made is then "try again", not
- * "not found"). */
-static enum MHD_Result store_problem(conn *c, int rc, const char *err, const char *hash,
-                                     const char *job_id, int post)
+/* The answer to a store error rc (not STORE_OK, err its message) about result `hash`, into
+ * *pl (PLAN_PROBLEM).  post: the answer to a POST (a result evicted since it was found or made
+ * is then "try again", not "not found"). */
+static void store_plan(plan *pl, int rc, const char *err, const char *hash, const char *job_id,
+                       int post)
 {
     if (rc == STORE_DAMAGED) {
         log_kv(LOG_ERROR, "a stored result was damaged: dropped", "hash", hash, "error", err, NULL);
-        return http_problem(
-            c, 500,
-            "the stored result was damaged (it no longer matches its digest) and has "
-            "been dropped: post the request again",
-            NULL, NULL);
+        return http_plan_problem(pl, 500,
+                                 "the stored result was damaged (it no longer matches its "
+                                 "digest) and has been dropped: post the request again",
+                                 NULL);
     }
     if (rc == STORE_NOTFOUND && post)
-        return http_problem(c, 503, "the result was evicted as it was read: try again", "1", NULL);
+        return http_plan_problem(pl, 503, "the result was evicted as it was read: try again", "1");
     if (rc == STORE_NOTFOUND)
-        return http_problem(c, 404,
-                            job_id ? "the result was evicted from the cache: post the request again"
-                                   : "no result with this hash",
-                            NULL, NULL);
-    return http_problem(c, 503, err, "5", NULL);
+        return http_plan_problem(pl, 404,
+                                 job_id ? "the result was evicted from the cache: post the "
+                                          "request again"
+                                        : "no result with this hash",
+                                 NULL);
+    http_plan_problem(pl, 503, err, "5");
+}
+
+static enum MHD_Result store_problem(conn *c, int rc, const char *err, const char *hash,
+                                     const char *job_id, int post)
+{
+    plan pl;
+    store_plan(&pl, rc, err, hash, job_id, post);
+    return http_problem(c, pl.status, pl.msg, pl.retry, NULL);
+}
+
+/* Draws the stored result c->plan names (PLAN_DRAW), on an intake thread (no MHD call): reads
+ * it, parses and draws it (c->fmt, c->ro), gzips the picture for a client that takes gzip.
+ * c->plan becomes PLAN_DRAWN (the bytes to send) or PLAN_PROBLEM. */
+void http_draw(conn *c)
+{
+    plan *pl = &c->plan;
+    store *st = c->h->st;
+    char err[256], msg[200], *body = NULL, *pic = NULL;
+    size_t len = 0, piclen = 0;
+    api_error ae;
+    int rc = st->ops->result_get(st, pl->hash, &body, &len, err, sizeof err);
+    if (rc != STORE_OK)
+        return store_plan(pl, rc, err, pl->hash, pl->job_id[0] ? pl->job_id : NULL, pl->post);
+    if (len > c->fmt->max) {
+        free(body);
+        too_large_msg(c, len, msg);
+        return http_plan_problem(pl, 422, msg, NULL);
+    }
+    rc = c->fmt->render(body, len, &c->ro, &pic, &piclen, &ae);
+    free(body);
+    if (rc != API_OK) return http_plan_problem(pl, (unsigned)rc, ae.msg, NULL);
+    if (c->gz) { /* every result goes gzipped to such a client (its ETag says so) */
+        size_t zl = 0;
+        char *z = http_gzip_buf(pic, piclen, 1, &zl);
+        free(pic);
+        if (!z) return http_plan_problem(pl, 503, "out of memory", "5");
+        pic = z;
+        piclen = zl;
+    }
+    pl->kind = PLAN_DRAWN;
+    pl->body = pic;
+    pl->len = piclen;
+}
+
+/* The picture http_draw made (c->plan PLAN_DRAWN), with its cache headers. */
+enum MHD_Result http_send_drawn(conn *c)
+{
+    plan *pl = &c->plan;
+    char *body = pl->body;
+    pl->body = NULL;
+    struct MHD_Response *r = MHD_create_response_from_buffer(pl->len, body, MHD_RESPMEM_MUST_FREE);
+    if (!r) {
+        free(body);
+        return MHD_NO;
+    }
+    return send_result(c, pl->hash, r, c->fmt->media, pl->job_id[0] ? pl->job_id : NULL, pl->cache);
 }
 
 /* A stored result of `size` bytes (from result_size), as JSON (streamed when larger than a
@@ -224,6 +271,17 @@ enum MHD_Result http_serve_stored(conn *c, const char *hash, uint64_t size, cons
     size_t len = 0;
     store *st = c->h->st;
     if (rendered(c) && size > c->fmt->max) return too_large_to_draw(c, size);
+    if (rendered(c)) { /* drawn on an intake thread: parsing never runs on an HTTP thread */
+        plan *pl = &c->plan;
+        char h[65];
+        snprintf(h, sizeof h, "%s", hash); /* hash may be pl->hash */
+        memcpy(pl->hash, h, sizeof h);
+        snprintf(pl->job_id, sizeof pl->job_id, "%s", job_id ? job_id : "");
+        pl->cache = cache;
+        pl->post = post;
+        pl->kind = PLAN_DRAW;
+        return http_intake_push(c);
+    }
     if (!rendered(c) && size > STORE_CHUNK) {
         result_reader *rr = calloc(1, sizeof *rr);
         if (!rr) return http_problem(c, 503, "out of memory", "5", NULL);

@@ -13,13 +13,15 @@
  *   parse   the shape of the request, with the JSON path of every problem (422): types, vertex
  *           indices in range, finite coordinates, cycles of at least 3 indices, the limits below;
  *           copies each solid into a `solid` (core/solid.h) so the JSON tree can be freed.
- *   check   (the daemon's submit, and again at run) the geometry: solid_check() of each solid,
- *           or solid_check_faces() of a soup (no closedness asked), at the grid step.  The
- *           first error is the 422; its location (solid_report's info: a face or a vertex)
- *           becomes the JSON path, "solids[2].FV[5]: ...".
- *   run     check again keeping solid_check's fixed copies (orientation made consistent and
- *           outward) and its warnings (told apart by info, never by their text), arr3_build()
- *           them, write the complex (api/larjson3.c) with the warnings in stats.warnings.
+ *   check   (the daemon's submit, or at run when the request was not checked) the geometry:
+ *           solid_check() of each solid, or solid_check_faces() of a soup (no closedness
+ *           asked), at the grid step, keeping solid_check's fixed copies (orientation made
+ *           consistent and outward), the edges' pairings and the warnings (told apart by info,
+ *           never by their text) for the run.  The first error is the 422; its location
+ *           (solid_report's info: a face or a vertex) becomes the JSON path,
+ *           "solids[2].FV[5]: ...".
+ *   run     arr3_build() the checked solids, write the complex (api/larjson3.c) with the
+ *           warnings in stats.warnings.
  *
  * The grid step: arr3_solids_step() of the solids and options.precision, at parse; its refusal
  * (a precision finer than the input allows) is the 422 at options.precision.  The rule lives in
@@ -85,6 +87,7 @@ typedef struct solids_req {
     char **lname, **lkey;
     uint32_t *lfirst;
     char *layers;
+    struct solids_checked *checked; /* owned: what api_solids_check made (NULL: not checked) */
 } solids_req;
 
 /* The name of solid i in messages: "solids[i]", "layers.NAME[j]" or "faces". */
@@ -412,10 +415,14 @@ too_many:
                     path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
 }
 
+static void checked_free(struct solids_checked *ck, size_t ns);
+
 void api_solids_free(void *parsed)
 {
     solids_req *r = parsed;
     if (!r) return;
+    checked_free(r->checked, r->ns);
+    free(r->checked);
     bool_expr_free(&r->op);
     for (size_t i = 0; i < r->ns; i++) solid_free(&r->s[i]);
     free(r->s);
@@ -739,17 +746,67 @@ out:
     return rc;
 }
 
-int api_solids_check(const void *parsed, api_error *err)
-{
-    const solids_req *r = parsed;
-    return validate(r, NULL, NULL, NULL, NULL, err);
-}
-
 static double ms_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* What the check of a request makes for its run: the fixed copies (NULL for a soup; an entry
+ * with no faces: the solid needed no change), the edges' pairings (NULL for a soup), the
+ * warnings, and how long the check took. */
+typedef struct solids_checked {
+    solid *fixed;
+    uint32_t **twin;
+    warn_list *w;
+    double ms;
+} solids_checked;
+
+static void checked_free(solids_checked *ck, size_t ns)
+{
+    if (!ck) return;
+    for (size_t i = 0; ck->twin && i < ns; i++) free(ck->twin[i]);
+    free(ck->twin);
+    for (size_t i = 0; ck->fixed && i < ns; i++) solid_free(&ck->fixed[i]);
+    free(ck->fixed);
+    free(ck->w);
+    memset(ck, 0, sizeof *ck);
+}
+
+/* The check stage: the geometry of r's solids checked (validate) into *ck (which the caller
+ * frees with checked_free, success or not); ro may be NULL (one thread, no progress). */
+static int check_stage(const solids_req *r, const api_run_opts *ro, solids_checked *ck,
+                       api_error *err)
+{
+    double t = ms_now();
+    if (!(ck->w = calloc(1, sizeof *ck->w))) return api_fail(err, API_ENOMEM, "out of memory");
+    if (ro && ro->progress) ro->progress(ro->udata, "check", 0);
+    if (!r->soup && (!(ck->fixed = calloc(r->ns ? r->ns : 1, sizeof *ck->fixed)) ||
+                     !(ck->twin = calloc(r->ns ? r->ns : 1, sizeof *ck->twin))))
+        return api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+    /* the checks' pairings of the edges, handed to the arrangement (arr3_build_ex) */
+    for (size_t i = 0; ck->twin && i < r->ns; i++)
+        if (!(ck->twin[i] = malloc((r->s[i].cyc_off[r->s[i].ncyc] + 1) * sizeof *ck->twin[i])))
+            return api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+    int rc = validate(r, r->soup ? NULL : ck->fixed, ck->twin, ck->w, ro, err);
+    ck->ms = ms_now() - t;
+    return rc;
+}
+
+int api_solids_check(void *parsed, api_error *err)
+{
+    solids_req *r = parsed;
+    solids_checked *ck = calloc(1, sizeof *ck);
+    if (!ck) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = check_stage(r, NULL, ck, err);
+    if (rc != API_OK) {
+        checked_free(ck, r->ns);
+        free(ck);
+        return rc;
+    }
+    r->checked = ck; /* kept for the run */
+    return API_OK;
 }
 
 /* Progress inside the membership walk. */
@@ -790,29 +847,24 @@ static int solids_compute(const solids_req *r, const api_run_opts *ro, solids_ou
                     .udata = ro->udata,
                     /* only the parts of the complex the fields print */
                     .want = api_lar3_want(r->fields)};
-    solid *fixed = NULL;
-    uint32_t **twin = NULL;
-    warn_list *w = o->w = calloc(1, sizeof *w);
     char msg[API_ERRMAX] = "";
-    int rc;
-    if (!w) return api_fail(err, API_ENOMEM, "out of memory");
-    double t_check = ms_now(), ms_check;
-    if (ro->progress) ro->progress(ro->udata, "check", 0);
-    if (!r->soup && (!(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed)) ||
-                     !(twin = calloc(r->ns ? r->ns : 1, sizeof *twin)))) {
-        rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
-        goto out;
+    int rc = API_OK;
+    /* checked once: by api_solids_check (taken from the request: a second run checks again),
+     * or here */
+    solids_checked ck = {0};
+    if (r->checked) {
+        ck = *r->checked;
+        memset(r->checked, 0, sizeof *r->checked);
+        if (ro->progress) ro->progress(ro->udata, "check", 0);
+    } else {
+        rc = check_stage(r, ro, &ck, err);
     }
-    /* the checks' pairings of the edges, handed to the arrangement (arr3_build_ex) */
-    for (size_t i = 0; twin && i < r->ns; i++)
-        if (!(twin[i] = malloc((r->s[i].cyc_off[r->s[i].ncyc] + 1) * sizeof *twin[i]))) {
-            rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
-            goto out;
-        }
-    rc = validate(r, r->soup ? NULL : fixed, twin, w, ro, err);
+    solid *fixed = ck.fixed;
+    uint32_t **twin = ck.twin;
+    warn_list *w = o->w = ck.w;
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "check", 1);
-    ms_check = ms_now() - t_check;
+    double ms_check = ck.ms;
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &o->c, msg, sizeof msg);
     else {

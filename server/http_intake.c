@@ -342,7 +342,8 @@ static void intake_work(conn *c)
         c->body = json;
         c->len = jlen;
     }
-    rc = api_check_request(c->body ? c->body : "", c->len, &canon, &clen, &kind, &ae);
+    api_request *checked = NULL; /* parsed and checked once: handed to the worker */
+    rc = api_check_request_ex(c->body ? c->body : "", c->len, &canon, &clen, &kind, &checked, &ae);
     http_body_release(c);
     if (rc != API_OK)
         return http_plan_problem(pl, (unsigned)rc, ae.msg, rc == API_ENOMEM ? "5" : NULL);
@@ -354,10 +355,11 @@ static void intake_work(conn *c)
     metrics_cache(h->m, hit == STORE_OK);
     if (hit == STORE_OK) {
         free(canon);
+        api_request_free(checked);
         return plan_result(pl, PLAN_STORED, hash, size);
     }
     int coalesced = 0;
-    rc = engine_submit(h->e, canon, clen, kind, hash, c->job_id, c->job, &coalesced, err,
+    rc = engine_submit(h->e, canon, clen, kind, hash, checked, c->job_id, c->job, &coalesced, err,
                        sizeof err);
     free(canon);
     if (rc == ENG_CACHED) /* an identical job ended between our two looks */

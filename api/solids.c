@@ -243,6 +243,133 @@ static const uint32_t *packed_row(const api_packed *a, size_t f, size_t *n)
     return a->idx + a->off[f];
 }
 
+/* parse_solid's cycles: the shape and size of every cycle of FV (or of the packed pf) and of
+ * holes, checked before anything is allocated; *ncyc_out and *nidx_out get their counts. */
+static int check_cycles(const json_t *FV, const json_t *holes, const api_packed *pf, size_t nv,
+                        size_t nf, const char *path, const totals *tot, size_t *ncyc_out,
+                        size_t *nidx_out, api_error *err)
+{
+    size_t ncyc = nf, nidx = 0;
+    const char *key;
+    const json_t *val;
+    for (size_t f = 0; pf && f < nf; f++) { /* the checks of read_cycle */
+        size_t n;
+        const uint32_t *row = packed_row(pf, f, &n);
+        if (n < 3 || n > SOLIDS_MAX_CYCLE)
+            return api_fail(err, API_EINVALID, "%s.FV[%zu]: cycle length", path, f);
+        for (size_t i = 0; i < n; i++)
+            if (row[i] >= nv)
+                return api_fail(err, API_EINVALID, "%s.FV[%zu][%zu]: index", path, f, i);
+        nidx += n;
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    for (size_t f = 0; !pf && f < nf; f++) {
+        int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
+        if (rc != API_OK) return rc;
+        nidx += json_array_size(json_array_get(FV, f));
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    if (holes) {
+        if (!json_is_object(holes))
+            return api_fail(err, API_EINVALID,
+                            "%s.holes: expected an object {\"f\": [[v, ...], ...]} keyed by face "
+                            "index",
+                            path);
+        json_object_foreach((json_t *)holes, key, val)
+        {
+            size_t f;
+            if (!api_face_key(key, nf, &f))
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
+                                "rows of FV)",
+                                path, key, nf);
+            if (!json_is_array(val) || json_array_size(val) == 0)
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%s: expected a non-empty array of cycles", path, key);
+            for (size_t h = 0; h < json_array_size(val); h++) {
+                int rc = read_cycle(json_array_get(val, h), nv, NULL, path, f, key, h, err);
+                if (rc != API_OK) return rc;
+                nidx += json_array_size(json_array_get(val, h));
+                if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+                ncyc++;
+            }
+        }
+    }
+    *ncyc_out = ncyc;
+    *nidx_out = nidx;
+    return API_OK;
+too_many:
+    return api_fail(err, API_EINVALID, "%s: %zu vertex indices in the cycles in all, at most %u",
+                    path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
+}
+
+/* parse_solid's copy: the checked solid (nv vertices, nf faces, ncyc cycles of nidx indices in
+ * all) into *out; a packed V, and a packed FV without holes, are taken as they are. */
+static int copy_solid(const json_t *V, const json_t *FV, const json_t *holes, api_packed *pv,
+                      api_packed *pf, size_t nv, size_t nf, size_t ncyc, size_t nidx,
+                      const char *path, solid *out, api_error *err)
+{
+    size_t c, w;
+    /* copy (a packed V, and a packed FV without holes, are taken as they are) */
+    if (pv && pv->V) {
+        out->V = pv->V;
+        pv->taken = 1;
+    } else {
+        out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
+    }
+    out->face_off = malloc((nf + 1) * sizeof *out->face_off);
+    if (pf && ncyc == nf) {
+        out->cyc_off = pf->off;
+        out->cyc = pf->idx;
+        pf->taken = 1;
+    } else {
+        out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
+    }
+    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
+        solid_free(out);
+        return api_fail(err, API_ENOMEM, "out of memory for %s", path);
+    }
+    out->nv = nv;
+    out->nf = nf;
+    out->ncyc = ncyc;
+    if (pf && ncyc == nf) {
+        for (size_t f = 0; f <= nf; f++) out->face_off[f] = (uint32_t)f;
+        return API_OK;
+    }
+    for (size_t v = 0; !pv && v < nv; v++)
+        for (size_t a = 0; a < 3; a++)
+            out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
+    c = w = 0;
+    for (size_t f = 0; f < nf; f++) {
+        const json_t *row = pf ? NULL : json_array_get(FV, f), *hs = holes_of(holes, f);
+        out->face_off[f] = (uint32_t)c;
+        out->cyc_off[c++] = (uint32_t)w;
+        if (pf) {
+            size_t n;
+            const uint32_t *r = packed_row(pf, f, &n);
+            memcpy(out->cyc + w, r, n * sizeof *r);
+            w += n;
+        } else {
+            read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
+            w += json_array_size(row);
+        }
+        for (size_t h = 0; h < json_array_size(hs); h++) {
+            row = json_array_get(hs, h);
+            out->cyc_off[c++] = (uint32_t)w;
+            read_cycle(row, nv, out->cyc + w, path, f, "", h, NULL);
+            w += json_array_size(row);
+        }
+    }
+    out->face_off[nf] = (uint32_t)c;
+    out->cyc_off[c] = (uint32_t)w;
+    if (c != ncyc || w != nidx) { /* cannot happen: the keys were checked canonical and < nf */
+        solid_free(out);
+        return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
+    }
+    return API_OK;
+}
+
 /* Reads o, the solid at path ("solids[2]", or "faces" for a soup), into *out.  With pk, its V
  * and FV may be placeholders of arrays read beforehand (solid si's, api/packed.h): those are
  * taken as they are (checked here as the JSON ones are, but the messages are not kept: the
@@ -252,7 +379,7 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
 {
     const json_t *V, *FV, *holes, *val;
     const char *key;
-    size_t nv, nf, ncyc, nidx = 0, c, w;
+    size_t nv, nf, ncyc = 0, nidx = 0;
     api_packed *pv = NULL, *pf = NULL;
     if (!json_is_object(o))
         return api_fail(err, API_EINVALID,
@@ -303,116 +430,13 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
                                 v, a);
         }
     }
-    /* shapes and sizes of every cycle, before anything is allocated */
-    ncyc = nf;
-    for (size_t f = 0; pf && f < nf; f++) { /* the checks of read_cycle */
-        size_t n;
-        const uint32_t *row = packed_row(pf, f, &n);
-        if (n < 3 || n > SOLIDS_MAX_CYCLE)
-            return api_fail(err, API_EINVALID, "%s.FV[%zu]: cycle length", path, f);
-        for (size_t i = 0; i < n; i++)
-            if (row[i] >= nv)
-                return api_fail(err, API_EINVALID, "%s.FV[%zu][%zu]: index", path, f, i);
-        nidx += n;
-        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-    }
-    for (size_t f = 0; !pf && f < nf; f++) {
-        int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
-        if (rc != API_OK) return rc;
-        nidx += json_array_size(json_array_get(FV, f));
-        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-    }
-    if (holes) {
-        if (!json_is_object(holes))
-            return api_fail(err, API_EINVALID,
-                            "%s.holes: expected an object {\"f\": [[v, ...], ...]} keyed by face "
-                            "index",
-                            path);
-        json_object_foreach((json_t *)holes, key, val)
-        {
-            size_t f;
-            if (!api_face_key(key, nf, &f))
-                return api_fail(err, API_EINVALID,
-                                "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
-                                "rows of FV)",
-                                path, key, nf);
-            if (!json_is_array(val) || json_array_size(val) == 0)
-                return api_fail(err, API_EINVALID,
-                                "%s.holes.%s: expected a non-empty array of cycles", path, key);
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                int rc = read_cycle(json_array_get(val, h), nv, NULL, path, f, key, h, err);
-                if (rc != API_OK) return rc;
-                nidx += json_array_size(json_array_get(val, h));
-                if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-                ncyc++;
-            }
-        }
-    }
-    /* copy (a packed V, and a packed FV without holes, are taken as they are) */
-    if (pv && pv->V) {
-        out->V = pv->V;
-        pv->taken = 1;
-    } else {
-        out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
-    }
-    out->face_off = malloc((nf + 1) * sizeof *out->face_off);
-    if (pf && ncyc == nf) {
-        out->cyc_off = pf->off;
-        out->cyc = pf->idx;
-        pf->taken = 1;
-    } else {
-        out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
-    }
-    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
-        solid_free(out);
-        return api_fail(err, API_ENOMEM, "out of memory for %s", path);
-    }
-    out->nv = nv;
-    out->nf = nf;
-    out->ncyc = ncyc;
-    if (pf && ncyc == nf) {
-        for (size_t f = 0; f <= nf; f++) out->face_off[f] = (uint32_t)f;
-        goto copied;
-    }
-    for (size_t v = 0; !pv && v < nv; v++)
-        for (size_t a = 0; a < 3; a++)
-            out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
-    c = w = 0;
-    for (size_t f = 0; f < nf; f++) {
-        const json_t *row = pf ? NULL : json_array_get(FV, f), *hs = holes_of(holes, f);
-        out->face_off[f] = (uint32_t)c;
-        out->cyc_off[c++] = (uint32_t)w;
-        if (pf) {
-            size_t n;
-            const uint32_t *r = packed_row(pf, f, &n);
-            memcpy(out->cyc + w, r, n * sizeof *r);
-            w += n;
-        } else {
-            read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
-            w += json_array_size(row);
-        }
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            out->cyc_off[c++] = (uint32_t)w;
-            read_cycle(row, nv, out->cyc + w, path, f, "", h, NULL);
-            w += json_array_size(row);
-        }
-    }
-    out->face_off[nf] = (uint32_t)c;
-    out->cyc_off[c] = (uint32_t)w;
-    if (c != ncyc || w != nidx) { /* cannot happen: the keys were checked canonical and < nf */
-        solid_free(out);
-        return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
-    }
-copied:
+    int rc = check_cycles(FV, holes, pf, nv, nf, path, tot, &ncyc, &nidx, err);
+    if (rc == API_OK) rc = copy_solid(V, FV, holes, pv, pf, nv, nf, ncyc, nidx, path, out, err);
+    if (rc != API_OK) return rc;
     tot->nv += nv;
     tot->nf += nf;
     tot->nidx += nidx;
     return API_OK;
-too_many:
-    return api_fail(err, API_EINVALID, "%s: %zu vertex indices in the cycles in all, at most %u",
-                    path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
 }
 
 static void checked_free(struct solids_checked *ck, size_t ns);

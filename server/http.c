@@ -372,6 +372,8 @@ static void http_free(http_server *h)
     pthread_mutex_destroy(&h->ready_mu);
     pthread_mutex_destroy(&h->conns_mu);
     pthread_mutex_destroy(&h->memo_mu);
+    pthread_mutex_destroy(&h->drawn_mu);
+    http_drawn_free(h);
     pthread_mutex_destroy(&h->in_mu);
     pthread_cond_destroy(&h->in_cv);
     pthread_cond_destroy(&h->in_idle);
@@ -411,6 +413,7 @@ http_server *http_start(const config *cfg, engine *e, store *st, metrics *m, cha
     pthread_mutex_init(&h->ready_mu, NULL);
     pthread_mutex_init(&h->conns_mu, NULL);
     pthread_mutex_init(&h->memo_mu, NULL);
+    pthread_mutex_init(&h->drawn_mu, NULL);
     pthread_mutex_init(&h->in_mu, NULL);
     pthread_cond_init(&h->in_cv, NULL);
     pthread_cond_init(&h->in_idle, NULL);

@@ -53,8 +53,10 @@ struct http_server {
     double ready_at; /* when the store was last probed for writes (0: never) */
     int ready_ok;
     char ready_err[256];
-    pthread_mutex_t memo_mu; /* guards memo */
-    struct memo_slot *memo;  /* MEMO_SLOTS: request bodies seen lately (http_intake.c) */
+    pthread_mutex_t drawn_mu; /* guards drawn */
+    struct drawn_slot *drawn; /* DRAWN_SLOTS: pictures drawn lately (http_result.c) */
+    pthread_mutex_t memo_mu;  /* guards memo */
+    struct memo_slot *memo;   /* MEMO_SLOTS: request bodies seen lately (http_intake.c) */
     /* the intake pool: POST bodies parsed, validated and submitted off the HTTP threads */
     pthread_mutex_t in_mu;
     pthread_cond_t in_cv;           /* a connection was queued, or the threads are to end */
@@ -213,6 +215,7 @@ enum MHD_Result http_route_result(conn *c);
 enum MHD_Result http_route_job(conn *c, int want_result);
 enum MHD_Result http_route_cancel(conn *c);
 void http_draw(conn *c);
+void http_drawn_free(http_server *h);
 enum MHD_Result http_send_drawn(conn *c);
 
 /* ---- http_intake.c ---- */

@@ -60,6 +60,66 @@ static enum MHD_Result too_large_to_draw(conn *c, uint64_t len)
     return http_problem(c, 422, msg, NULL, NULL);
 }
 
+/* Pictures drawn lately, by the ETag of their representation (the result's hash, the format,
+ * the options, gzip): a picture asked for again is sent as it was made, with no second draw.
+ * A result is immutable, so a kept picture is never stale; it is sent only after the result
+ * was found in the store (result_size), as a drawn one is.  Direct-mapped, as the memo. */
+#define DRAWN_SLOTS     64
+#define DRAWN_MAX_BYTES ((size_t)1 << 20) /* a larger picture is not kept */
+typedef struct drawn_slot {
+    char etag[120]; /* "" when empty */
+    char *body;     /* malloc'd */
+    size_t len;
+} drawn_slot;
+
+static size_t drawn_index(const char *etag)
+{
+    uint64_t h = 1469598103934665603ull; /* FNV-1a */
+    for (const char *p = etag; *p; p++) h = (h ^ (unsigned char)*p) * 1099511628211ull;
+    return (size_t)(h % DRAWN_SLOTS);
+}
+
+/* Keeps a copy of the picture body[0..len) of etag (nothing when out of memory). */
+static void drawn_put(http_server *h, const char *etag, const char *body, size_t len)
+{
+    char *copy = len <= DRAWN_MAX_BYTES ? malloc(len ? len : 1) : NULL;
+    if (!copy) return;
+    memcpy(copy, body, len);
+    pthread_mutex_lock(&h->drawn_mu);
+    if (!h->drawn) h->drawn = calloc(DRAWN_SLOTS, sizeof *h->drawn);
+    drawn_slot *s = h->drawn ? &h->drawn[drawn_index(etag)] : NULL;
+    if (s) {
+        free(s->body);
+        snprintf(s->etag, sizeof s->etag, "%s", etag);
+        s->body = copy;
+        s->len = len;
+        copy = NULL;
+    }
+    pthread_mutex_unlock(&h->drawn_mu);
+    free(copy);
+}
+
+/* A copy of the picture of etag when it is kept (malloc'd, *len its bytes), else NULL. */
+static char *drawn_get(http_server *h, const char *etag, size_t *len)
+{
+    char *copy = NULL;
+    pthread_mutex_lock(&h->drawn_mu);
+    const drawn_slot *s = h->drawn ? &h->drawn[drawn_index(etag)] : NULL;
+    if (s && s->body && !strcmp(s->etag, etag) && (copy = malloc(s->len ? s->len : 1))) {
+        memcpy(copy, s->body, s->len);
+        *len = s->len;
+    }
+    pthread_mutex_unlock(&h->drawn_mu);
+    return copy;
+}
+
+void http_drawn_free(http_server *h)
+{
+    for (size_t i = 0; h->drawn && i < DRAWN_SLOTS; i++) free(h->drawn[i].body);
+    free(h->drawn);
+    h->drawn = NULL;
+}
+
 /* Whether c asks for a rendering of the result rather than its JSON. */
 static int rendered(const conn *c)
 {
@@ -242,6 +302,9 @@ void http_draw(conn *c)
         pic = z;
         piclen = zl;
     }
+    char etag[120];
+    result_etag(c, pl->hash, etag, sizeof etag);
+    drawn_put(c->h, etag, pic, piclen);
     pl->kind = PLAN_DRAWN;
     pl->body = pic;
     pl->len = piclen;
@@ -272,6 +335,19 @@ enum MHD_Result http_serve_stored(conn *c, const char *hash, uint64_t size, cons
     store *st = c->h->st;
     if (rendered(c) && size > c->fmt->max) return too_large_to_draw(c, size);
     if (rendered(c)) { /* drawn on an intake thread: parsing never runs on an HTTP thread */
+        char etag[120];
+        size_t dlen = 0;
+        result_etag(c, hash, etag, sizeof etag);
+        char *d = drawn_get(c->h, etag, &dlen);
+        if (d) { /* drawn lately: sent as it was made */
+            struct MHD_Response *r =
+                MHD_create_response_from_buffer(dlen, d, MHD_RESPMEM_MUST_FREE);
+            if (!r) {
+                free(d);
+                return MHD_NO;
+            }
+            return send_result(c, hash, r, c->fmt->media, job_id, cache);
+        }
         plan *pl = &c->plan;
         char h[65];
         snprintf(h, sizeof h, "%s", hash); /* hash may be pl->hash */

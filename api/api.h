@@ -99,6 +99,27 @@ int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen,
 int api_check_request(const char *body, size_t len, char **canon, size_t *canonlen,
                       const char **kind_name, api_error *err);
 
+/* A request parsed and checked by api_check_request_ex, ready to run without being read or
+ * checked again (the daemon's intake hands it to the worker that runs the job). */
+typedef struct api_request api_request;
+
+/* api_check_request, and, when checked is not NULL and the request is valid, *checked gets
+ * the request as parsed and checked (caller runs it with api_request_run or frees it with
+ * api_request_free) -- or NULL when the canonical form would not parse to the same request
+ * (a "layers" object or a feature's "properties" whose keys are not in sorted order: the
+ * canonical form sorts them, and their order shows in the result).  The job then runs from
+ * its canonical form, parsed and checked there, as a job from the store does. */
+int api_check_request_ex(const char *body, size_t len, char **canon, size_t *canonlen,
+                         const char **kind_name, api_request **checked, api_error *err);
+
+/* Runs a checked request (taken: freed here, success or not) as api_run_json_ex runs its
+ * body, with the same result bytes, without parsing or checking it again. */
+int api_request_run(api_request *q, const api_run_opts *ro, char **out, size_t *outlen,
+                    api_error *err);
+
+/* Frees a checked request that will not run; safe on NULL. */
+void api_request_free(api_request *q);
+
 /* Writes the shortest of %.15g, %.16g, %.17g that reads back as x (x finite) into buf, which
  * must hold API_DOUBLE_MAX bytes; returns the length.  The format of every number we print. */
 #define API_DOUBLE_MAX 32

@@ -163,8 +163,11 @@ typedef struct api_kind {
     int (*run)(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
     void (*free)(void *parsed);
     /* optional, run by api_check_request() only (the daemon's submit, before queueing): the
-     * checks that parse leaves to run but a client should hear about at once (svg: the XML) */
-    int (*check)(const void *parsed, api_error *err);
+     * checks that parse leaves to run but a client should hear about at once (svg: the XML,
+     * solids: the surfaces).  What they make that run needs (svg: the segments; solids: the
+     * fixed copies, pairings and warnings) is kept in *parsed, so that run, handed a checked
+     * request (api_request_run), does not check it again. */
+    int (*check)(void *parsed, api_error *err);
     const api_stage *stages; /* its stages, for progress */
     /* optional: parse with the big arrays read beforehand (api/packed.h); req is the rest's
      * tree.  Any failure sends the caller back to parse() on the whole text, whose message
@@ -183,14 +186,14 @@ void api_lines_free(void *parsed);
 int api_svg_parse(const json_t *req, void **parsed, api_error *err);
 int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_svg_free(void *parsed);
-int api_svg_check(const void *parsed, api_error *err);
+int api_svg_check(void *parsed, api_error *err);
 
 /* The "solids" kind (api/solids.c). */
 int api_solids_parse(const json_t *req, void **parsed, api_error *err);
 int api_solids_parse_packed(const json_t *req, api_packed_set *pk, void **parsed, api_error *err);
 int api_solids_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_error *err);
 void api_solids_free(void *parsed);
-int api_solids_check(const void *parsed, api_error *err);
+int api_solids_check(void *parsed, api_error *err);
 
 /* The "polygons" kind (api/polygons.c): 2D Booleans. */
 int api_polygons_parse(const json_t *req, void **parsed, api_error *err);

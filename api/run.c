@@ -351,22 +351,24 @@ static int parse(const char *body, size_t len, const api_kind **kind, void **par
     return rc;
 }
 
-int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,
-                    size_t *outlen, api_error *err)
+/* A request parsed (and, from api_check_request_ex, checked): its kind, its parsed form and
+ * the arrays the fast reader took (which the parsed form may point into). */
+struct api_request {
+    const api_kind *kind;
+    void *req;
+    api_packed_set pk;
+};
+
+/* Runs a parsed request (rc: API_OK, or the status its parse failed with, err filled) and
+ * frees it: the one run path of api_run_json_ex and api_request_run. */
+static int run_parsed(int rc, const api_kind *kind, void *req, api_packed_set *pk,
+                      const api_run_opts *ro, char **out, size_t *outlen, api_error *err)
 {
     api_run_opts dflt = {0};
     api_buf b = {0};
-    const api_kind *kind = NULL;
-    void *req = NULL;
     api_progress pr;
     api_run_opts wr;
-    int rc;
-    *out = NULL;
-    *outlen = 0;
-    if (err) err->status = API_OK, err->msg[0] = 0;
     if (!ro) ro = &dflt;
-    api_packed_set pk = {0};
-    rc = parse(body, len, &kind, &req, NULL, &pk, err);
     if (rc != API_OK) goto fail;
     api_progress_wrap(&pr, kind->stages, ro, &wr);
     b.sink = wr.stream;
@@ -376,12 +378,98 @@ int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char *
     rc = kind->run(req, &wr, &b, err);
 fail:
     if (kind) kind->free(req);
-    api_packed_free(&pk);
+    api_packed_free(pk);
     void (*up)(void *, const char *, double) = b.progress; /* b goes in api_buf_finish */
     void *uu = b.udata;
     rc = api_buf_finish(&b, rc, out, outlen, err);
     if (rc == API_OK && up) up(uu, "output", 1);
     return rc;
+}
+
+int api_run_json_ex(const char *body, size_t len, const api_run_opts *ro, char **out,
+                    size_t *outlen, api_error *err)
+{
+    const api_kind *kind = NULL;
+    void *req = NULL;
+    api_packed_set pk = {0};
+    *out = NULL;
+    *outlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    int rc = parse(body, len, &kind, &req, NULL, &pk, err);
+    return run_parsed(rc, kind, req, &pk, ro, out, outlen, err);
+}
+
+int api_request_run(api_request *q, const api_run_opts *ro, char **out, size_t *outlen,
+                    api_error *err)
+{
+    *out = NULL;
+    *outlen = 0;
+    if (err) err->status = API_OK, err->msg[0] = 0;
+    int rc = run_parsed(API_OK, q->kind, q->req, &q->pk, ro, out, outlen, err);
+    free(q);
+    return rc;
+}
+
+void api_request_free(api_request *q)
+{
+    if (!q) return;
+    q->kind->free(q->req);
+    api_packed_free(&q->pk);
+    free(q);
+}
+
+/* Whether every object under v has its keys in sorted (strcmp) order, as the canonical form
+ * writes them. */
+static int keys_sorted(const json_t *v)
+{
+    if (json_is_array(v)) {
+        for (size_t i = 0; i < json_array_size(v); i++)
+            if (!keys_sorted(json_array_get(v, i))) return 0;
+        return 1;
+    }
+    if (!json_is_object(v)) return 1;
+    const char *key, *prev = NULL;
+    json_t *m;
+    json_object_foreach((json_t *)v, key, m)
+    {
+        if ((prev && strcmp(prev, key) > 0) || !keys_sorted(m)) return 0;
+        prev = key;
+    }
+    return 1;
+}
+
+/* Whether the "properties" of every feature under v keep their order in the canonical form. */
+static int properties_sorted(const json_t *v)
+{
+    if (json_is_array(v)) {
+        for (size_t i = 0; i < json_array_size(v); i++)
+            if (!properties_sorted(json_array_get(v, i))) return 0;
+        return 1;
+    }
+    if (!json_is_object(v)) return 1;
+    const char *key;
+    json_t *m;
+    json_object_foreach((json_t *)v, key, m)
+    {
+        if (!(strcmp(key, "properties") ? properties_sorted(m) : keys_sorted(m))) return 0;
+    }
+    return 1;
+}
+
+/* Whether the canonical form of root parses to the request root parsed to: a parse reads
+ * objects by key, except "layers" (in order: the result's layers) and the features'
+ * "properties" (written back as they are); numbers and strings read back the same. */
+static int canon_same_request(const json_t *root)
+{
+    const json_t *ls = json_object_get(root, "layers");
+    const char *key, *prev = NULL;
+    json_t *m;
+    if (json_is_object(ls)) json_object_foreach((json_t *)ls, key, m)
+        {
+            if (prev && strcmp(prev, key) > 0) return 0;
+            prev = key;
+        }
+    return properties_sorted(root);
 }
 
 int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,
@@ -391,8 +479,8 @@ int api_run_json(const char *body, size_t len, int threads, char **out, size_t *
     return api_run_json_ex(body, len, &ro, out, outlen, err);
 }
 
-int api_check_request(const char *body, size_t len, char **canon, size_t *canonlen,
-                      const char **kind_name, api_error *err)
+int api_check_request_ex(const char *body, size_t len, char **canon, size_t *canonlen,
+                         const char **kind_name, api_request **checked, api_error *err)
 {
     const api_kind *kind = NULL;
     void *req = NULL;
@@ -402,8 +490,9 @@ int api_check_request(const char *body, size_t len, char **canon, size_t *canonl
     if (canonlen) *canonlen = 0;
     if (err) err->status = API_OK, err->msg[0] = 0;
     if (kind_name) *kind_name = NULL;
+    if (checked) *checked = NULL;
     api_packed_set pk = {0};
-    rc = parse(body, len, &kind, &req, canon ? &root : NULL, &pk, err);
+    rc = parse(body, len, &kind, &req, canon || checked ? &root : NULL, &pk, err);
     if (rc == API_OK && kind->check) rc = kind->check(req, err);
     if (rc == API_OK && kind_name) *kind_name = kind->name;
     if (rc == API_OK && canon) {
@@ -421,10 +510,22 @@ int api_check_request(const char *body, size_t len, char **canon, size_t *canonl
         if (!dump)
             rc = api_fail(err, API_ENOMEM, "out of memory while writing the canonical request");
     }
+    if (rc == API_OK && checked && canon_same_request(root) &&
+        (*checked = malloc(sizeof **checked))) { /* handed over: kept for its run */
+        **checked = (api_request){kind, req, pk};
+        kind = NULL;
+        pk = (api_packed_set){0};
+    }
     if (kind) kind->free(req);
     api_packed_free(&pk);
     json_decref(root);
     return rc;
+}
+
+int api_check_request(const char *body, size_t len, char **canon, size_t *canonlen,
+                      const char **kind_name, api_error *err)
+{
+    return api_check_request_ex(body, len, canon, canonlen, kind_name, NULL, err);
 }
 
 int api_check_json(const char *body, size_t len, char **canon, size_t *canonlen, api_error *err)

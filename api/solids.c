@@ -13,13 +13,15 @@
  *   parse   the shape of the request, with the JSON path of every problem (422): types, vertex
  *           indices in range, finite coordinates, cycles of at least 3 indices, the limits below;
  *           copies each solid into a `solid` (core/solid.h) so the JSON tree can be freed.
- *   check   (the daemon's submit, and again at run) the geometry: solid_check() of each solid,
- *           or solid_check_faces() of a soup (no closedness asked), at the grid step.  The
- *           first error is the 422; its location (solid_report's info: a face or a vertex)
- *           becomes the JSON path, "solids[2].FV[5]: ...".
- *   run     check again keeping solid_check's fixed copies (orientation made consistent and
- *           outward) and its warnings (told apart by info, never by their text), arr3_build()
- *           them, write the complex (api/larjson3.c) with the warnings in stats.warnings.
+ *   check   (the daemon's submit, or at run when the request was not checked) the geometry:
+ *           solid_check() of each solid, or solid_check_faces() of a soup (no closedness
+ *           asked), at the grid step, keeping solid_check's fixed copies (orientation made
+ *           consistent and outward), the edges' pairings and the warnings (told apart by info,
+ *           never by their text) for the run.  The first error is the 422; its location
+ *           (solid_report's info: a face or a vertex) becomes the JSON path,
+ *           "solids[2].FV[5]: ...".
+ *   run     arr3_build() the checked solids, write the complex (api/larjson3.c) with the
+ *           warnings in stats.warnings.
  *
  * The grid step: arr3_solids_step() of the solids and options.precision, at parse; its refusal
  * (a precision finer than the input allows) is the 422 at options.precision.  The rule lives in
@@ -85,6 +87,7 @@ typedef struct solids_req {
     char **lname, **lkey;
     uint32_t *lfirst;
     char *layers;
+    struct solids_checked *checked; /* owned: what api_solids_check made (NULL: not checked) */
 } solids_req;
 
 /* The name of solid i in messages: "solids[i]", "layers.NAME[j]" or "faces". */
@@ -240,6 +243,133 @@ static const uint32_t *packed_row(const api_packed *a, size_t f, size_t *n)
     return a->idx + a->off[f];
 }
 
+/* parse_solid's cycles: the shape and size of every cycle of FV (or of the packed pf) and of
+ * holes, checked before anything is allocated; *ncyc_out and *nidx_out get their counts. */
+static int check_cycles(const json_t *FV, const json_t *holes, const api_packed *pf, size_t nv,
+                        size_t nf, const char *path, const totals *tot, size_t *ncyc_out,
+                        size_t *nidx_out, api_error *err)
+{
+    size_t ncyc = nf, nidx = 0;
+    const char *key;
+    const json_t *val;
+    for (size_t f = 0; pf && f < nf; f++) { /* the checks of read_cycle */
+        size_t n;
+        const uint32_t *row = packed_row(pf, f, &n);
+        if (n < 3 || n > SOLIDS_MAX_CYCLE)
+            return api_fail(err, API_EINVALID, "%s.FV[%zu]: cycle length", path, f);
+        for (size_t i = 0; i < n; i++)
+            if (row[i] >= nv)
+                return api_fail(err, API_EINVALID, "%s.FV[%zu][%zu]: index", path, f, i);
+        nidx += n;
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    for (size_t f = 0; !pf && f < nf; f++) {
+        int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
+        if (rc != API_OK) return rc;
+        nidx += json_array_size(json_array_get(FV, f));
+        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+    }
+    if (holes) {
+        if (!json_is_object(holes))
+            return api_fail(err, API_EINVALID,
+                            "%s.holes: expected an object {\"f\": [[v, ...], ...]} keyed by face "
+                            "index",
+                            path);
+        json_object_foreach((json_t *)holes, key, val)
+        {
+            size_t f;
+            if (!api_face_key(key, nf, &f))
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
+                                "rows of FV)",
+                                path, key, nf);
+            if (!json_is_array(val) || json_array_size(val) == 0)
+                return api_fail(err, API_EINVALID,
+                                "%s.holes.%s: expected a non-empty array of cycles", path, key);
+            for (size_t h = 0; h < json_array_size(val); h++) {
+                int rc = read_cycle(json_array_get(val, h), nv, NULL, path, f, key, h, err);
+                if (rc != API_OK) return rc;
+                nidx += json_array_size(json_array_get(val, h));
+                if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
+                ncyc++;
+            }
+        }
+    }
+    *ncyc_out = ncyc;
+    *nidx_out = nidx;
+    return API_OK;
+too_many:
+    return api_fail(err, API_EINVALID, "%s: %zu vertex indices in the cycles in all, at most %u",
+                    path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
+}
+
+/* parse_solid's copy: the checked solid (nv vertices, nf faces, ncyc cycles of nidx indices in
+ * all) into *out; a packed V, and a packed FV without holes, are taken as they are. */
+static int copy_solid(const json_t *V, const json_t *FV, const json_t *holes, api_packed *pv,
+                      api_packed *pf, size_t nv, size_t nf, size_t ncyc, size_t nidx,
+                      const char *path, solid *out, api_error *err)
+{
+    size_t c, w;
+    /* copy (a packed V, and a packed FV without holes, are taken as they are) */
+    if (pv && pv->V) {
+        out->V = pv->V;
+        pv->taken = 1;
+    } else {
+        out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
+    }
+    out->face_off = malloc((nf + 1) * sizeof *out->face_off);
+    if (pf && ncyc == nf) {
+        out->cyc_off = pf->off;
+        out->cyc = pf->idx;
+        pf->taken = 1;
+    } else {
+        out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
+        out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
+    }
+    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
+        solid_free(out);
+        return api_fail(err, API_ENOMEM, "out of memory for %s", path);
+    }
+    out->nv = nv;
+    out->nf = nf;
+    out->ncyc = ncyc;
+    if (pf && ncyc == nf) {
+        for (size_t f = 0; f <= nf; f++) out->face_off[f] = (uint32_t)f;
+        return API_OK;
+    }
+    for (size_t v = 0; !pv && v < nv; v++)
+        for (size_t a = 0; a < 3; a++)
+            out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
+    c = w = 0;
+    for (size_t f = 0; f < nf; f++) {
+        const json_t *row = pf ? NULL : json_array_get(FV, f), *hs = holes_of(holes, f);
+        out->face_off[f] = (uint32_t)c;
+        out->cyc_off[c++] = (uint32_t)w;
+        if (pf) {
+            size_t n;
+            const uint32_t *r = packed_row(pf, f, &n);
+            memcpy(out->cyc + w, r, n * sizeof *r);
+            w += n;
+        } else {
+            read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
+            w += json_array_size(row);
+        }
+        for (size_t h = 0; h < json_array_size(hs); h++) {
+            row = json_array_get(hs, h);
+            out->cyc_off[c++] = (uint32_t)w;
+            read_cycle(row, nv, out->cyc + w, path, f, "", h, NULL);
+            w += json_array_size(row);
+        }
+    }
+    out->face_off[nf] = (uint32_t)c;
+    out->cyc_off[c] = (uint32_t)w;
+    if (c != ncyc || w != nidx) { /* cannot happen: the keys were checked canonical and < nf */
+        solid_free(out);
+        return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
+    }
+    return API_OK;
+}
+
 /* Reads o, the solid at path ("solids[2]", or "faces" for a soup), into *out.  With pk, its V
  * and FV may be placeholders of arrays read beforehand (solid si's, api/packed.h): those are
  * taken as they are (checked here as the JSON ones are, but the messages are not kept: the
@@ -249,7 +379,7 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
 {
     const json_t *V, *FV, *holes, *val;
     const char *key;
-    size_t nv, nf, ncyc, nidx = 0, c, w;
+    size_t nv, nf, ncyc = 0, nidx = 0;
     api_packed *pv = NULL, *pf = NULL;
     if (!json_is_object(o))
         return api_fail(err, API_EINVALID,
@@ -300,122 +430,23 @@ static int parse_solid(const json_t *o, const char *path, int soup, totals *tot,
                                 v, a);
         }
     }
-    /* shapes and sizes of every cycle, before anything is allocated */
-    ncyc = nf;
-    for (size_t f = 0; pf && f < nf; f++) { /* the checks of read_cycle */
-        size_t n;
-        const uint32_t *row = packed_row(pf, f, &n);
-        if (n < 3 || n > SOLIDS_MAX_CYCLE)
-            return api_fail(err, API_EINVALID, "%s.FV[%zu]: cycle length", path, f);
-        for (size_t i = 0; i < n; i++)
-            if (row[i] >= nv)
-                return api_fail(err, API_EINVALID, "%s.FV[%zu][%zu]: index", path, f, i);
-        nidx += n;
-        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-    }
-    for (size_t f = 0; !pf && f < nf; f++) {
-        int rc = read_cycle(json_array_get(FV, f), nv, NULL, path, f, NULL, 0, err);
-        if (rc != API_OK) return rc;
-        nidx += json_array_size(json_array_get(FV, f));
-        if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-    }
-    if (holes) {
-        if (!json_is_object(holes))
-            return api_fail(err, API_EINVALID,
-                            "%s.holes: expected an object {\"f\": [[v, ...], ...]} keyed by face "
-                            "index",
-                            path);
-        json_object_foreach((json_t *)holes, key, val)
-        {
-            size_t f;
-            if (!api_face_key(key, nf, &f))
-                return api_fail(err, API_EINVALID,
-                                "%s.holes.%.40s: expected a face index in decimal, below %zu (the "
-                                "rows of FV)",
-                                path, key, nf);
-            if (!json_is_array(val) || json_array_size(val) == 0)
-                return api_fail(err, API_EINVALID,
-                                "%s.holes.%s: expected a non-empty array of cycles", path, key);
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                int rc = read_cycle(json_array_get(val, h), nv, NULL, path, f, key, h, err);
-                if (rc != API_OK) return rc;
-                nidx += json_array_size(json_array_get(val, h));
-                if (nidx > SOLIDS_MAX_INDICES - tot->nidx) goto too_many;
-                ncyc++;
-            }
-        }
-    }
-    /* copy (a packed V, and a packed FV without holes, are taken as they are) */
-    if (pv && pv->V) {
-        out->V = pv->V;
-        pv->taken = 1;
-    } else {
-        out->V = malloc((nv ? 3 * nv : 1) * sizeof *out->V);
-    }
-    out->face_off = malloc((nf + 1) * sizeof *out->face_off);
-    if (pf && ncyc == nf) {
-        out->cyc_off = pf->off;
-        out->cyc = pf->idx;
-        pf->taken = 1;
-    } else {
-        out->cyc_off = malloc((ncyc + 1) * sizeof *out->cyc_off);
-        out->cyc = malloc((nidx ? nidx : 1) * sizeof *out->cyc);
-    }
-    if (!out->V || !out->face_off || !out->cyc_off || !out->cyc) {
-        solid_free(out);
-        return api_fail(err, API_ENOMEM, "out of memory for %s", path);
-    }
-    out->nv = nv;
-    out->nf = nf;
-    out->ncyc = ncyc;
-    if (pf && ncyc == nf) {
-        for (size_t f = 0; f <= nf; f++) out->face_off[f] = (uint32_t)f;
-        goto copied;
-    }
-    for (size_t v = 0; !pv && v < nv; v++)
-        for (size_t a = 0; a < 3; a++)
-            out->V[3 * v + a] = json_number_value(json_array_get(json_array_get(V, v), a));
-    c = w = 0;
-    for (size_t f = 0; f < nf; f++) {
-        const json_t *row = pf ? NULL : json_array_get(FV, f), *hs = holes_of(holes, f);
-        out->face_off[f] = (uint32_t)c;
-        out->cyc_off[c++] = (uint32_t)w;
-        if (pf) {
-            size_t n;
-            const uint32_t *r = packed_row(pf, f, &n);
-            memcpy(out->cyc + w, r, n * sizeof *r);
-            w += n;
-        } else {
-            read_cycle(row, nv, out->cyc + w, path, f, NULL, 0, NULL);
-            w += json_array_size(row);
-        }
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            out->cyc_off[c++] = (uint32_t)w;
-            read_cycle(row, nv, out->cyc + w, path, f, "", h, NULL);
-            w += json_array_size(row);
-        }
-    }
-    out->face_off[nf] = (uint32_t)c;
-    out->cyc_off[c] = (uint32_t)w;
-    if (c != ncyc || w != nidx) { /* cannot happen: the keys were checked canonical and < nf */
-        solid_free(out);
-        return api_fail(err, API_EINTERNAL, "internal error: %s: holes counted differently", path);
-    }
-copied:
+    int rc = check_cycles(FV, holes, pf, nv, nf, path, tot, &ncyc, &nidx, err);
+    if (rc == API_OK) rc = copy_solid(V, FV, holes, pv, pf, nv, nf, ncyc, nidx, path, out, err);
+    if (rc != API_OK) return rc;
     tot->nv += nv;
     tot->nf += nf;
     tot->nidx += nidx;
     return API_OK;
-too_many:
-    return api_fail(err, API_EINVALID, "%s: %zu vertex indices in the cycles in all, at most %u",
-                    path, tot->nidx + nidx, SOLIDS_MAX_INDICES);
 }
+
+static void checked_free(struct solids_checked *ck, size_t ns);
 
 void api_solids_free(void *parsed)
 {
     solids_req *r = parsed;
     if (!r) return;
+    checked_free(r->checked, r->ns);
+    free(r->checked);
     bool_expr_free(&r->op);
     for (size_t i = 0; i < r->ns; i++) solid_free(&r->s[i]);
     free(r->s);
@@ -739,17 +770,67 @@ out:
     return rc;
 }
 
-int api_solids_check(const void *parsed, api_error *err)
-{
-    const solids_req *r = parsed;
-    return validate(r, NULL, NULL, NULL, NULL, err);
-}
-
 static double ms_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* What the check of a request makes for its run: the fixed copies (NULL for a soup; an entry
+ * with no faces: the solid needed no change), the edges' pairings (NULL for a soup), the
+ * warnings, and how long the check took. */
+typedef struct solids_checked {
+    solid *fixed;
+    uint32_t **twin;
+    warn_list *w;
+    double ms;
+} solids_checked;
+
+static void checked_free(solids_checked *ck, size_t ns)
+{
+    if (!ck) return;
+    for (size_t i = 0; ck->twin && i < ns; i++) free(ck->twin[i]);
+    free(ck->twin);
+    for (size_t i = 0; ck->fixed && i < ns; i++) solid_free(&ck->fixed[i]);
+    free(ck->fixed);
+    free(ck->w);
+    memset(ck, 0, sizeof *ck);
+}
+
+/* The check stage: the geometry of r's solids checked (validate) into *ck (which the caller
+ * frees with checked_free, success or not); ro may be NULL (one thread, no progress). */
+static int check_stage(const solids_req *r, const api_run_opts *ro, solids_checked *ck,
+                       api_error *err)
+{
+    double t = ms_now();
+    if (!(ck->w = calloc(1, sizeof *ck->w))) return api_fail(err, API_ENOMEM, "out of memory");
+    if (ro && ro->progress) ro->progress(ro->udata, "check", 0);
+    if (!r->soup && (!(ck->fixed = calloc(r->ns ? r->ns : 1, sizeof *ck->fixed)) ||
+                     !(ck->twin = calloc(r->ns ? r->ns : 1, sizeof *ck->twin))))
+        return api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+    /* the checks' pairings of the edges, handed to the arrangement (arr3_build_ex) */
+    for (size_t i = 0; ck->twin && i < r->ns; i++)
+        if (!(ck->twin[i] = malloc((r->s[i].cyc_off[r->s[i].ncyc] + 1) * sizeof *ck->twin[i])))
+            return api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
+    int rc = validate(r, r->soup ? NULL : ck->fixed, ck->twin, ck->w, ro, err);
+    ck->ms = ms_now() - t;
+    return rc;
+}
+
+int api_solids_check(void *parsed, api_error *err)
+{
+    solids_req *r = parsed;
+    solids_checked *ck = calloc(1, sizeof *ck);
+    if (!ck) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = check_stage(r, NULL, ck, err);
+    if (rc != API_OK) {
+        checked_free(ck, r->ns);
+        free(ck);
+        return rc;
+    }
+    r->checked = ck; /* kept for the run */
+    return API_OK;
 }
 
 /* Progress inside the membership walk. */
@@ -790,30 +871,26 @@ static int solids_compute(const solids_req *r, const api_run_opts *ro, solids_ou
                     .udata = ro->udata,
                     /* only the parts of the complex the fields print */
                     .want = api_lar3_want(r->fields),
-                    .checked = 1 /* validate() below checks every solid at r->step */};
-    solid *fixed = NULL;
-    uint32_t **twin = NULL;
-    warn_list *w = o->w = calloc(1, sizeof *w);
+                    /* check_stage (here or at intake) checked every solid at r->step */
+                    .checked = 1};
     char msg[API_ERRMAX] = "";
-    int rc;
-    if (!w) return api_fail(err, API_ENOMEM, "out of memory");
-    double t_check = ms_now(), ms_check;
-    if (ro->progress) ro->progress(ro->udata, "check", 0);
-    if (!r->soup && (!(fixed = calloc(r->ns ? r->ns : 1, sizeof *fixed)) ||
-                     !(twin = calloc(r->ns ? r->ns : 1, sizeof *twin)))) {
-        rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
-        goto out;
+    int rc = API_OK;
+    /* checked once: by api_solids_check (taken from the request: a second run checks again),
+     * or here */
+    solids_checked ck = {0};
+    if (r->checked) {
+        ck = *r->checked;
+        memset(r->checked, 0, sizeof *r->checked);
+        if (ro->progress) ro->progress(ro->udata, "check", 0);
+    } else {
+        rc = check_stage(r, ro, &ck, err);
     }
-    /* the checks' pairings of the edges, handed to the arrangement (arr3_build_ex) */
-    for (size_t i = 0; twin && i < r->ns; i++)
-        if (!(twin[i] = malloc((r->s[i].cyc_off[r->s[i].ncyc] + 1) * sizeof *twin[i]))) {
-            rc = api_fail(err, API_ENOMEM, "out of memory for %zu solids", r->ns);
-            goto out;
-        }
-    rc = validate(r, r->soup ? NULL : fixed, twin, w, ro, err);
+    solid *fixed = ck.fixed;
+    uint32_t **twin = ck.twin;
+    warn_list *w = o->w = ck.w;
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "check", 1);
-    ms_check = ms_now() - t_check;
+    double ms_check = ck.ms;
     if (r->soup)
         rc = arr3_build(r->s, 1, 1, &ao, &o->c, msg, sizeof msg);
     else {

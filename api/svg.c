@@ -6,8 +6,8 @@
  * stats.svg = {"elements", "skipped", "warnings": [...], "segments", "transform": [a..f]}.
  * Malformed XML, a document that is not SVG, or one beyond a limit of the reader is a 422 whose
  * message starts "svg: " and names line and column ("svg: line 3, column 7: ..."): at submit
- * (api_svg_check, through api_check_request: the daemon refuses it before queueing) and again
- * when the job runs.
+ * (api_svg_check, through api_check_request: the daemon refuses it before queueing, and hands
+ * the segments read to the run), or when the job runs from its text.
  *
  * Options: those of "lines" (precision, keep_dangling, exterior_last, operators, fields; read by
  * api_lar2_option() in api/lines.c; precision is in output units, so after normalize a fraction
@@ -32,6 +32,7 @@
 typedef struct svg_req {
     char *text; /* owned: the drawing, len bytes (and a NUL) */
     size_t len;
+    svg_result *read; /* owned: the drawing as api_svg_check read it (NULL: not read yet) */
     api_lar2_opts opt;
     svg_opts so;
 } svg_req;
@@ -83,6 +84,8 @@ void api_svg_free(void *parsed)
     svg_req *r = parsed;
     if (!r) return;
     free(r->text);
+    if (r->read) svg_result_free(r->read);
+    free(r->read);
     free(r);
 }
 
@@ -141,12 +144,19 @@ static int read_drawing(const svg_req *r, const api_run_opts *ro, svg_result *sr
                     "svg: %s", *msg ? msg : "unreadable drawing");
 }
 
-int api_svg_check(const void *parsed, api_error *err)
+int api_svg_check(void *parsed, api_error *err)
 {
-    svg_result sr = {0};
-    int rc = read_drawing(parsed, NULL, &sr, err);
-    svg_result_free(&sr);
-    return rc;
+    svg_req *r = parsed;
+    svg_result *sr = calloc(1, sizeof *sr);
+    if (!sr) return api_fail(err, API_ENOMEM, "out of memory");
+    int rc = read_drawing(r, NULL, sr, err);
+    if (rc != API_OK) {
+        svg_result_free(sr);
+        free(sr);
+        return rc;
+    }
+    r->read = sr; /* kept for the run */
+    return API_OK;
 }
 
 /* Writes ,"svg":{...} into the stats object (api_lar2_fmt.stats_more). */
@@ -189,19 +199,19 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
                     .cancel = ro->cancel,
                     .progress = ro->progress,
                     .udata = ro->udata};
-    svg_result sr = {0};
+    svg_result own = {0}, *sr = r->read ? r->read : &own;
     api_lar2_fmt fmt = {.fields = r->opt.fields,
                         .exterior_last = r->opt.exterior_last,
                         .stats_more = put_svg_stats,
-                        .stats_udata = &sr};
+                        .stats_udata = sr};
     lar2 c = {0};
     char msg[API_ERRMAX] = "";
     int rc;
     if (ro->progress) ro->progress(ro->udata, "svg", 0);
-    rc = read_drawing(r, ro, &sr, err);
+    rc = r->read ? API_OK : read_drawing(r, ro, sr, err); /* read once: at check, or here */
     if (rc != API_OK) goto out;
     if (ro->progress) ro->progress(ro->udata, "svg", 1);
-    rc = arr2_build(sr.n ? sr.seg : no_segment, sr.n, &ao, &c, msg, sizeof msg);
+    rc = arr2_build(sr->n ? sr->seg : no_segment, sr->n, &ao, &c, msg, sizeof msg);
     if (rc != ARR_OK) {
         rc = api_core_fail(err, rc, msg);
         goto out;
@@ -210,6 +220,6 @@ int api_svg_run(const void *parsed, const api_run_opts *ro, api_buf *out, api_er
     rc = api_lar2_write(out, &c, &fmt, err);
 out:
     lar2_free(&c);
-    svg_result_free(&sr);
+    svg_result_free(&own);
     return rc;
 }

@@ -45,6 +45,10 @@ typedef struct run {
     struct run *next;  /* lock: e->running */
 } run;
 
+/* Checked requests kept for the workers here at most, and the bytes of their canonical texts. */
+#define STASH_MAX   64
+#define STASH_BYTES ((size_t)256 << 20)
+
 struct engine {
     engine_cfg cfg;
     char owner[STORE_OWNER_MAX];
@@ -60,6 +64,13 @@ struct engine {
     int nthreads;
     pthread_t timer, listener;
     int timer_started, listener_started;
+    /* checked requests (lock): see stash_put */
+    struct stash_ent {
+        char hash[65];
+        api_request *q;
+        size_t bytes; /* its canonical text's, a proxy for its size */
+    } stash[STASH_MAX];
+    size_t nstash, stash_bytes;
 };
 
 /* How long an idle worker waits before it looks at the queue again (a job queued by another
@@ -254,6 +265,49 @@ static int finish(engine *e, run *r, job_state st, double when, int status, cons
     }
 }
 
+/* ---- checked requests ----
+ * The intake parses and checks a request once (api_check_request_ex) and hands the checked
+ * form to engine_submit, which keeps it here by request hash for the worker of this daemon
+ * that claims the job: that worker runs it without reading or checking it again.  A job run
+ * from the store (claimed by another daemon, requeued, resumed after a restart) or whose
+ * checked form was dropped runs from its stored canonical text, parsed and checked then,
+ * once.  The oldest are dropped past STASH_MAX or STASH_BYTES (a job queued long, or taken by
+ * another daemon, never holds memory for long). */
+
+/* Keeps q (taken) for the job with this hash. */
+static void stash_put(engine *e, const char *hash, api_request *q, size_t bytes)
+{
+    pthread_mutex_lock(&e->lock);
+    while (e->nstash && (e->nstash == STASH_MAX || e->stash_bytes + bytes > STASH_BYTES)) {
+        api_request_free(e->stash[0].q); /* the oldest */
+        e->stash_bytes -= e->stash[0].bytes;
+        memmove(e->stash, e->stash + 1, --e->nstash * sizeof *e->stash);
+    }
+    struct stash_ent *s = &e->stash[e->nstash++];
+    snprintf(s->hash, sizeof s->hash, "%s", hash);
+    s->q = q;
+    s->bytes = bytes;
+    e->stash_bytes += bytes;
+    pthread_mutex_unlock(&e->lock);
+}
+
+/* Takes the checked request kept for hash (only: that one), or NULL. */
+static api_request *stash_take(engine *e, const char *hash, const api_request *only)
+{
+    api_request *q = NULL;
+    pthread_mutex_lock(&e->lock);
+    for (size_t i = 0; i < e->nstash; i++) {
+        struct stash_ent *s = &e->stash[i];
+        if (strcmp(s->hash, hash) || (only && s->q != only)) continue;
+        q = s->q;
+        e->stash_bytes -= s->bytes;
+        memmove(s, s + 1, (--e->nstash - i) * sizeof *s);
+        break;
+    }
+    pthread_mutex_unlock(&e->lock);
+    return q;
+}
+
 /* Runs the claimed job r on this worker thread.  The result is written to a spool file as it
  * is made, then copied into the store a chunk at a time: a large result never sits whole in
  * memory. */
@@ -270,11 +324,15 @@ static int run_job(engine *e, run *r)
     api_run_opts ro = {
         .threads = e->cfg.job_threads, .cancel = &r->cancel, .progress = progress_cb, .udata = &pc};
     int rc;
+    api_request *q = stash_take(e, r->sj.hash, NULL); /* checked at the intake here */
     ro.stream = spool_open(e->cfg.spool_dir, err, sizeof err);
     if (!ro.stream) {
         log_kv(LOG_ERROR, "spool failed", "job", r->sj.id, "error", err, NULL);
+        api_request_free(q);
         rc = API_ENOMEM;
         snprintf(ae.msg, sizeof ae.msg, "the result could not be spooled: %.200s", err);
+    } else if (q) {
+        rc = api_request_run(q, &ro, &out, &outlen, &ae);
     } else {
         rc = api_run_json_ex(r->sj.request, r->sj.request_len, &ro, &out, &outlen, &ae);
     }
@@ -679,6 +737,7 @@ void engine_stop(engine *e)
         return;
     }
     for (int i = 0; i < e->nthreads; i++) pthread_join(e->threads[i], NULL);
+    for (size_t i = 0; i < e->nstash; i++) api_request_free(e->stash[i].q);
     free(e->threads);
     pthread_mutex_destroy(&e->lock);
     pthread_cond_destroy(&e->work);
@@ -698,19 +757,28 @@ static int draining(engine *e)
 }
 
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
-                  char *sub, char *job, int *coalesced, char *err, size_t errlen)
+                  api_request *checked, char *sub, char *job, int *coalesced, char *err,
+                  size_t errlen)
 {
     *coalesced = 0;
-    if (draining(e)) return ENG_DRAINING;
+    if (draining(e)) {
+        api_request_free(checked);
+        return ENG_DRAINING;
+    }
     store_job j = {.created = engine_now(), .request = (char *)canon, .request_len = len};
     if (new_id(j.id)) {
+        api_request_free(checked);
         snprintf(err, errlen, "no random bytes for an id");
         return ENG_ERR;
     }
     snprintf(j.hash, sizeof j.hash, "%s", hash);
     snprintf(j.kind, sizeof j.kind, "%s", kind);
+    /* kept before the job is queued, so that the worker that claims it finds it */
+    if (checked) stash_put(e, hash, checked, len);
     int rc =
         e->cfg.st->ops->job_submit(e->cfg.st, &j, e->cfg.queue_max, 0, job, coalesced, err, errlen);
+    if (checked && (rc != STORE_OK || *coalesced)) /* no new job: not needed */
+        api_request_free(stash_take(e, hash, checked));
     if (rc == STORE_CACHED) return ENG_CACHED;
     if (rc == STORE_FULL) return ENG_FULL;
     if (rc != STORE_OK) return ENG_ERR;

@@ -29,6 +29,7 @@
 #define CELLAR_ALGO_VERSION "cellar-algo-2"
 
 typedef struct engine engine;
+struct api_request;
 
 typedef struct engine_cfg {
     store *st;       /* borrowed; outlives the engine */
@@ -75,12 +76,15 @@ void engine_hash(const char *canon, size_t len, char *out);
 engine *engine_start(const engine_cfg *cfg, char *err, size_t errlen);
 
 /* Accepts a request (canon: its canonical JSON, borrowed; kind: its kind; hash: engine_hash of
- * canon): a new job, or a new submission of the identical job queued or running (*coalesced =
- * 1).  ENG_OK: sub (33 bytes) gets the submission's id, the client's to poll and cancel with,
- * and job (33 bytes) the job's; ENG_CACHED: the result is in the store (nothing was made);
- * ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err). */
+ * canon; checked: the request as the intake parsed and checked it, taken, may be NULL): a new
+ * job, or a new submission of the identical job queued or running (*coalesced = 1).  A worker
+ * here that claims the job runs the checked request (engine.c, "checked requests"); any other
+ * runs it from canon.  ENG_OK: sub (33 bytes) gets the submission's id, the client's to poll and
+ * cancel with, and job (33 bytes) the job's; ENG_CACHED: the result is in the store (nothing was
+ * made); ENG_FULL / ENG_DRAINING: refused; ENG_ERR: the store failed (err). */
 int engine_submit(engine *e, const char *canon, size_t len, const char *kind, const char *hash,
-                  char *sub, char *job, int *coalesced, char *err, size_t errlen);
+                  struct api_request *checked, char *sub, char *job, int *coalesced, char *err,
+                  size_t errlen);
 
 /* Joins the queued or running job with this request hash, as engine_submit does for an
  * identical request (a new submission, its id in sub, the job's in job): ENG_OK, or

@@ -21,6 +21,8 @@
  * Threads: reentrant, no globals.  Ownership: the complex is borrowed; the buffer is the
  * caller's (api_buf_free() frees it).
  */
+#include "api/larjson.h"
+
 #include "api/api_int.h"
 
 #include <errno.h>
@@ -380,6 +382,28 @@ void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint3
         if (n) api_buf_putc(b, ',');
         api_buf_point(b, V + (size_t)dim * v, dim);
         map[v] = n++;
+    }
+    api_buf_putc(b, ']');
+}
+
+void api_buf_point_rows(api_buf *b, const double *V, size_t n, int dim)
+{
+    api_buf_putc(b, '[');
+    for (size_t v = 0; v < n; v++) {
+        if (api_buf_tick(b, v, n)) break; /* failed, or canceled */
+        if (v) api_buf_putc(b, ',');
+        api_buf_point(b, V + (size_t)dim * v, dim);
+    }
+    api_buf_putc(b, ']');
+}
+
+void api_buf_u32_rows(api_buf *b, const uint32_t *a, size_t n, size_t k)
+{
+    api_buf_putc(b, '[');
+    for (size_t e = 0; e < n; e++) {
+        if (api_buf_tick(b, e, n)) break; /* failed, or canceled */
+        if (e) api_buf_putc(b, ',');
+        api_buf_u32_list(b, a + k * e, k);
     }
     api_buf_putc(b, ']');
 }
@@ -749,6 +773,70 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
     return rc;
 }
 
+/* FV's rows (with exterior_last the exterior cycles after the faces'). */
+static void put_fv_rows(api_buf *b, const rows *r)
+{
+    api_buf_putc(b, '[');
+    for (size_t f = 0; f < r->nrows; f++) {
+        const uint32_t *v;
+        if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
+        size_t k = fv_row(r, f, &v);
+        if (f) api_buf_putc(b, ',');
+        api_buf_u32_list(b, v, k);
+    }
+    api_buf_putc(b, ']');
+}
+
+/* FE's rows, as FV's. */
+static void put_fe_rows(api_buf *b, const rows *r)
+{
+    api_buf_putc(b, '[');
+    for (size_t f = 0; f < r->nrows; f++) {
+        const int32_t *e;
+        if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
+        size_t k = fe_row(r, f, &e);
+        if (f) api_buf_putc(b, ',');
+        api_buf_i32_list(b, e, k);
+    }
+    api_buf_putc(b, ']');
+}
+
+/* "holes": {"f": [cycle, ...]} of the faces with holes. */
+static void put_holes(api_buf *b, const lar2 *c)
+{
+    int first = 1;
+    api_buf_putc(b, '{');
+    for (size_t f = 0; f < c->nf; f++) {
+        if (c->hole_off[f] == c->hole_off[f + 1]) continue;
+        if (!first) api_buf_putc(b, ',');
+        first = 0;
+        api_buf_putc(b, '"');
+        api_buf_u64(b, f);
+        api_buf_puts(b, "\":[");
+        for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
+            const uint32_t *v;
+            size_t k = cycle_of(c, c->hole_cyc[h], &v);
+            if (h > c->hole_off[f]) api_buf_putc(b, ',');
+            api_buf_u32_list(b, v, k);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_putc(b, '}');
+}
+
+/* "exterior": the exterior cycles. */
+static void put_exterior(api_buf *b, const lar2 *c)
+{
+    api_buf_putc(b, '[');
+    for (size_t x = 0; x < c->next; x++) {
+        const uint32_t *v;
+        size_t k = cycle_of(c, c->ext_cyc[x], &v);
+        if (x) api_buf_putc(b, ',');
+        api_buf_u32_list(b, v, k);
+    }
+    api_buf_putc(b, ']');
+}
+
 int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
 {
     rows r = {.c = c, .nrows = c->nf};
@@ -765,83 +853,27 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
     api_buf_puts(b, "{\"dim\":2");
     if (fl & API_F_V) {
         put_field(b, &first, "V");
-        api_buf_putc(b, '[');
-        for (size_t v = 0; v < c->nv; v++) {
-            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            if (v) api_buf_putc(b, ',');
-            api_buf_point(b, c->V + 2 * v, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_point_rows(b, c->V, c->nv, 2);
     }
     if (fl & API_F_EV) {
         put_field(b, &first, "EV");
-        api_buf_putc(b, '[');
-        for (size_t e = 0; e < c->ne; e++) {
-            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
-            if (e) api_buf_putc(b, ',');
-            api_buf_u32_list(b, c->EV + 2 * e, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_u32_rows(b, c->EV, c->ne, 2);
     }
     if (fl & API_F_FV) {
         put_field(b, &first, "FV");
-        api_buf_putc(b, '[');
-        for (size_t f = 0; f < r.nrows; f++) {
-            const uint32_t *v;
-            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
-            size_t k = fv_row(&r, f, &v);
-            if (f) api_buf_putc(b, ',');
-            api_buf_u32_list(b, v, k);
-        }
-        api_buf_putc(b, ']');
+        put_fv_rows(b, &r);
     }
     if (fl & API_F_FE) {
         put_field(b, &first, "FE");
-        api_buf_putc(b, '[');
-        for (size_t f = 0; f < r.nrows; f++) {
-            const int32_t *e;
-            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
-            size_t k = fe_row(&r, f, &e);
-            api_buf_puts(b, f ? ",[" : "[");
-            for (size_t i = 0; i < k; i++) {
-                if (i) api_buf_putc(b, ',');
-                api_buf_i64(b, e[i]);
-            }
-            api_buf_putc(b, ']');
-        }
-        api_buf_putc(b, ']');
+        put_fe_rows(b, &r);
     }
     if (fl & API_F_HOLES) {
-        int hfirst = 1;
         put_field(b, &first, "holes");
-        api_buf_putc(b, '{');
-        for (size_t f = 0; f < c->nf; f++) {
-            if (c->hole_off[f] == c->hole_off[f + 1]) continue;
-            if (!hfirst) api_buf_putc(b, ',');
-            hfirst = 0;
-            api_buf_putc(b, '"');
-            api_buf_u64(b, f);
-            api_buf_puts(b, "\":[");
-            for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
-                const uint32_t *v;
-                size_t k = cycle_of(c, c->hole_cyc[h], &v);
-                if (h > c->hole_off[f]) api_buf_putc(b, ',');
-                api_buf_u32_list(b, v, k);
-            }
-            api_buf_putc(b, ']');
-        }
-        api_buf_putc(b, '}');
+        put_holes(b, c);
     }
     if (fl & API_F_EXTERIOR) {
         put_field(b, &first, "exterior");
-        api_buf_putc(b, '[');
-        for (size_t x = 0; x < c->next; x++) {
-            const uint32_t *v;
-            size_t k = cycle_of(c, c->ext_cyc[x], &v);
-            if (x) api_buf_putc(b, ',');
-            api_buf_u32_list(b, v, k);
-        }
-        api_buf_putc(b, ']');
+        put_exterior(b, c);
     }
     if (fl & API_F_OPERATORS) {
         put_field(b, &first, "operators");

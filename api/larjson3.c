@@ -24,6 +24,8 @@
  * Threads: reentrant, no globals.  Ownership: the complex and the warnings are borrowed; the
  * buffer is the caller's (api_buf_free() frees it).
  */
+#include "api/larjson.h"
+
 #include "api/api_int.h"
 
 #include <math.h>
@@ -433,23 +435,11 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
     api_buf_puts(b, "{\"dim\":3");
     if (fl & API_F3_V) {
         put_key(b, "V");
-        api_buf_putc(b, '[');
-        for (size_t v = 0; v < c->nv; v++) {
-            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            if (v) api_buf_putc(b, ',');
-            api_buf_point(b, c->V + 3 * v, 3);
-        }
-        api_buf_putc(b, ']');
+        api_buf_point_rows(b, c->V, c->nv, 3);
     }
     if (fl & API_F3_EV) {
         put_key(b, "EV");
-        api_buf_putc(b, '[');
-        for (size_t e = 0; e < c->ne; e++) {
-            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
-            if (e) api_buf_putc(b, ',');
-            api_buf_u32_list(b, c->EV + 2 * e, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_u32_rows(b, c->EV, c->ne, 2);
     }
     if (fl & API_F3_FV) {
         put_key(b, "FV");

@@ -386,24 +386,25 @@ void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint3
     api_buf_putc(b, ']');
 }
 
-void api_buf_point_rows(api_buf *b, const double *V, size_t n, int dim)
+void api_buf_key_open(api_buf *b, int *first, uint64_t k)
 {
-    api_buf_putc(b, '[');
-    for (size_t v = 0; v < n; v++) {
-        if (api_buf_tick(b, v, n)) break; /* failed, or canceled */
-        if (v) api_buf_putc(b, ',');
-        api_buf_point(b, V + (size_t)dim * v, dim);
-    }
-    api_buf_putc(b, ']');
+    if (!*first) api_buf_putc(b, ',');
+    *first = 0;
+    api_buf_putc(b, '"');
+    api_buf_u64(b, k);
+    api_buf_puts(b, "\":[");
 }
 
-void api_buf_u32_rows(api_buf *b, const uint32_t *a, size_t n, size_t k)
+void api_buf_rows(api_buf *b, const double *V, const uint32_t *ix, size_t n, size_t k)
 {
     api_buf_putc(b, '[');
-    for (size_t e = 0; e < n; e++) {
-        if (api_buf_tick(b, e, n)) break; /* failed, or canceled */
-        if (e) api_buf_putc(b, ',');
-        api_buf_u32_list(b, a + k * e, k);
+    for (size_t i = 0; i < n; i++) {
+        if (api_buf_tick(b, i, n)) break; /* failed, or canceled */
+        if (i) api_buf_putc(b, ',');
+        if (V)
+            api_buf_point(b, V + k * i, (int)k);
+        else
+            api_buf_u32_list(b, ix + k * i, k);
     }
     api_buf_putc(b, ']');
 }
@@ -773,30 +774,19 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
     return rc;
 }
 
-/* FV's rows (with exterior_last the exterior cycles after the faces'). */
-static void put_fv_rows(api_buf *b, const rows *r)
+/* FV's rows, or with fe FE's (with exterior_last the exterior cycles after the faces'). */
+static void put_face_rows(api_buf *b, const rows *r, int fe)
 {
     api_buf_putc(b, '[');
     for (size_t f = 0; f < r->nrows; f++) {
         const uint32_t *v;
-        if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
-        size_t k = fv_row(r, f, &v);
-        if (f) api_buf_putc(b, ',');
-        api_buf_u32_list(b, v, k);
-    }
-    api_buf_putc(b, ']');
-}
-
-/* FE's rows, as FV's. */
-static void put_fe_rows(api_buf *b, const rows *r)
-{
-    api_buf_putc(b, '[');
-    for (size_t f = 0; f < r->nrows; f++) {
         const int32_t *e;
         if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
-        size_t k = fe_row(r, f, &e);
         if (f) api_buf_putc(b, ',');
-        api_buf_i32_list(b, e, k);
+        if (fe)
+            api_buf_i32_list(b, e, fe_row(r, f, &e));
+        else
+            api_buf_u32_list(b, v, fv_row(r, f, &v));
     }
     api_buf_putc(b, ']');
 }
@@ -808,11 +798,7 @@ static void put_holes(api_buf *b, const lar2 *c)
     api_buf_putc(b, '{');
     for (size_t f = 0; f < c->nf; f++) {
         if (c->hole_off[f] == c->hole_off[f + 1]) continue;
-        if (!first) api_buf_putc(b, ',');
-        first = 0;
-        api_buf_putc(b, '"');
-        api_buf_u64(b, f);
-        api_buf_puts(b, "\":[");
+        api_buf_key_open(b, &first, f);
         for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
             const uint32_t *v;
             size_t k = cycle_of(c, c->hole_cyc[h], &v);
@@ -853,19 +839,19 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
     api_buf_puts(b, "{\"dim\":2");
     if (fl & API_F_V) {
         put_field(b, &first, "V");
-        api_buf_point_rows(b, c->V, c->nv, 2);
+        api_buf_rows(b, c->V, NULL, c->nv, 2);
     }
     if (fl & API_F_EV) {
         put_field(b, &first, "EV");
-        api_buf_u32_rows(b, c->EV, c->ne, 2);
+        api_buf_rows(b, NULL, c->EV, c->ne, 2);
     }
     if (fl & API_F_FV) {
         put_field(b, &first, "FV");
-        put_fv_rows(b, &r);
+        put_face_rows(b, &r, 0);
     }
     if (fl & API_F_FE) {
         put_field(b, &first, "FE");
-        put_fe_rows(b, &r);
+        put_face_rows(b, &r, 1);
     }
     if (fl & API_F_HOLES) {
         put_field(b, &first, "holes");

@@ -637,6 +637,16 @@ static int parse_positive(const char *flag, const char *val, double *out)
     return 0;
 }
 
+/* The request req as one line of compact JSON into *body (malloc'd; req NULL: out of memory
+ * already): 0, or 1 with the message printed. */
+static int dump_request(const json_t *req, char **body)
+{
+    *body = req ? json_dumps(req, JSON_COMPACT) : NULL;
+    if (*body) return 0;
+    fprintf(stderr, "cellar: out of memory\n");
+    return 1;
+}
+
 static int svg_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
                        int threads, const out_format *of)
 {
@@ -670,11 +680,7 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
     }
     req = json_pack("{s:s, s:o, s:O}", "kind", "svg", "svg", str, "options", opts);
     str = NULL; /* the "o" format took it, also on failure */
-    body = req ? json_dumps(req, JSON_COMPACT) : NULL;
-    if (!body) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
+    if (dump_request(req, &body)) goto out;
     if (of->kind == OUT_REQUEST) {
         rc = write_request(body, strlen(body));
         goto out;
@@ -1161,11 +1167,7 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
     json_object_set(req, "layers", layers);
     json_object_set(req, "op", op);
     if (json_object_size(opts)) json_object_set(req, "options", opts);
-    body = json_dumps(req, JSON_COMPACT);
-    if (!body) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
+    if (dump_request(req, &body)) goto out;
     if (of->kind == OUT_REQUEST) {
         rc = write_request(body, strlen(body));
         goto out;

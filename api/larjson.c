@@ -363,7 +363,8 @@ void api_buf_double(api_buf *b, double x)
     b->len += api_format_double(x, p);
 }
 
-void api_buf_point(api_buf *b, const double *x, int dim)
+/* api_buf_point's body, inline where rows of points are written (api_buf_rows). */
+static inline void point_inline(api_buf *b, const double *x, int dim)
 {
     api_buf_putc(b, '[');
     for (int k = 0; k < dim; k++) {
@@ -371,6 +372,11 @@ void api_buf_point(api_buf *b, const double *x, int dim)
         api_buf_double(b, x[k]);
     }
     api_buf_putc(b, ']');
+}
+
+void api_buf_point(api_buf *b, const double *x, int dim)
+{
+    point_inline(b, x, dim);
 }
 
 void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint32_t *map)
@@ -402,7 +408,7 @@ void api_buf_rows(api_buf *b, const double *V, const uint32_t *ix, size_t n, siz
         if (api_buf_tick(b, i, n)) break; /* failed, or canceled */
         if (i) api_buf_putc(b, ',');
         if (V)
-            api_buf_point(b, V + k * i, (int)k);
+            point_inline(b, V + k * i, (int)k);
         else
             api_buf_u32_list(b, ix + k * i, k);
     }
@@ -598,7 +604,8 @@ void api_put_membership_w(api_buf *b, size_t nrows, size_t ninputs, const uint32
     api_buf_putc(b, '}');
 }
 
-void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
+/* api_buf_i32_list's body, inline where rows of them are written (put_face_rows). */
+static inline void i32_list_inline(api_buf *b, const int32_t *a, size_t n)
 {
     api_buf_putc(b, '[');
     for (size_t i = 0; i < n; i++) {
@@ -606,6 +613,11 @@ void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
         api_buf_i64(b, a[i]);
     }
     api_buf_putc(b, ']');
+}
+
+void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
+{
+    i32_list_inline(b, a, n);
 }
 
 static void put_key(api_buf *b, int *first, const char *key)
@@ -784,7 +796,7 @@ static void put_face_rows(api_buf *b, const rows *r, int fe)
         if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
         if (f) api_buf_putc(b, ',');
         if (fe)
-            api_buf_i32_list(b, e, fe_row(r, f, &e));
+            i32_list_inline(b, e, fe_row(r, f, &e));
         else
             api_buf_u32_list(b, v, fv_row(r, f, &v));
     }

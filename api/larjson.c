@@ -18,6 +18,11 @@
  * costs ten times the memory of the complex itself.  Numbers are formatted here directly, doubles
  * as the shortest of %.15g/%.16g/%.17g that reads back equal, so clients get the exact doubles.
  *
+ * The writers both dimensions share are here: numbers and lists (api/api_int.h), the rows of V
+ * and EV (api_buf_rows) and a holes entry's opening (api_buf_key_open, api/larjson.h);
+ * api_lar2_write() writes each field by a function of its own (put_face_rows, put_holes,
+ * put_exterior, put_operators, put_stats).
+ *
  * Threads: reentrant, no globals.  Ownership: the complex is borrowed; the buffer is the
  * caller's (api_buf_free() frees it).
  */

@@ -18,9 +18,16 @@
  * costs ten times the memory of the complex itself.  Numbers are formatted here directly, doubles
  * as the shortest of %.15g/%.16g/%.17g that reads back equal, so clients get the exact doubles.
  *
+ * The writers both dimensions share are here: numbers and lists (api/api_int.h), the rows of V
+ * and EV (api_buf_rows) and a holes entry's opening (api_buf_key_open, api/larjson.h);
+ * api_lar2_write() writes each field by a function of its own (put_face_rows, put_holes,
+ * put_exterior, put_operators, put_stats).
+ *
  * Threads: reentrant, no globals.  Ownership: the complex is borrowed; the buffer is the
  * caller's (api_buf_free() frees it).
  */
+#include "api/larjson.h"
+
 #include "api/api_int.h"
 
 #include <errno.h>
@@ -361,7 +368,8 @@ void api_buf_double(api_buf *b, double x)
     b->len += api_format_double(x, p);
 }
 
-void api_buf_point(api_buf *b, const double *x, int dim)
+/* api_buf_point's body, inline where rows of points are written (api_buf_rows). */
+static inline void point_inline(api_buf *b, const double *x, int dim)
 {
     api_buf_putc(b, '[');
     for (int k = 0; k < dim; k++) {
@@ -369,6 +377,11 @@ void api_buf_point(api_buf *b, const double *x, int dim)
         api_buf_double(b, x[k]);
     }
     api_buf_putc(b, ']');
+}
+
+void api_buf_point(api_buf *b, const double *x, int dim)
+{
+    point_inline(b, x, dim);
 }
 
 void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint32_t *map)
@@ -380,6 +393,29 @@ void api_buf_own_vertices(api_buf *b, const double *V, size_t nv, int dim, uint3
         if (n) api_buf_putc(b, ',');
         api_buf_point(b, V + (size_t)dim * v, dim);
         map[v] = n++;
+    }
+    api_buf_putc(b, ']');
+}
+
+void api_buf_key_open(api_buf *b, int *first, uint64_t k)
+{
+    if (!*first) api_buf_putc(b, ',');
+    *first = 0;
+    api_buf_putc(b, '"');
+    api_buf_u64(b, k);
+    api_buf_puts(b, "\":[");
+}
+
+void api_buf_rows(api_buf *b, const double *V, const uint32_t *ix, size_t n, size_t k)
+{
+    api_buf_putc(b, '[');
+    for (size_t i = 0; i < n; i++) {
+        if (api_buf_tick(b, i, n)) break; /* failed, or canceled */
+        if (i) api_buf_putc(b, ',');
+        if (V)
+            point_inline(b, V + k * i, (int)k);
+        else
+            api_buf_u32_list(b, ix + k * i, k);
     }
     api_buf_putc(b, ']');
 }
@@ -573,7 +609,8 @@ void api_put_membership_w(api_buf *b, size_t nrows, size_t ninputs, const uint32
     api_buf_putc(b, '}');
 }
 
-void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
+/* api_buf_i32_list's body, inline where rows of them are written (put_face_rows). */
+static inline void i32_list_inline(api_buf *b, const int32_t *a, size_t n)
 {
     api_buf_putc(b, '[');
     for (size_t i = 0; i < n; i++) {
@@ -581,6 +618,11 @@ void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
         api_buf_i64(b, a[i]);
     }
     api_buf_putc(b, ']');
+}
+
+void api_buf_i32_list(api_buf *b, const int32_t *a, size_t n)
+{
+    i32_list_inline(b, a, n);
 }
 
 static void put_key(api_buf *b, int *first, const char *key)
@@ -749,6 +791,55 @@ static int put_operators(api_buf *b, const rows *r, api_error *err)
     return rc;
 }
 
+/* FV's rows, or with fe FE's (with exterior_last the exterior cycles after the faces'). */
+static void put_face_rows(api_buf *b, const rows *r, int fe)
+{
+    api_buf_putc(b, '[');
+    for (size_t f = 0; f < r->nrows; f++) {
+        const uint32_t *v;
+        const int32_t *e;
+        if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
+        if (f) api_buf_putc(b, ',');
+        if (fe)
+            i32_list_inline(b, e, fe_row(r, f, &e));
+        else
+            api_buf_u32_list(b, v, fv_row(r, f, &v));
+    }
+    api_buf_putc(b, ']');
+}
+
+/* "holes": {"f": [cycle, ...]} of the faces with holes. */
+static void put_holes(api_buf *b, const lar2 *c)
+{
+    int first = 1;
+    api_buf_putc(b, '{');
+    for (size_t f = 0; f < c->nf; f++) {
+        if (c->hole_off[f] == c->hole_off[f + 1]) continue;
+        api_buf_key_open(b, &first, f);
+        for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
+            const uint32_t *v;
+            size_t k = cycle_of(c, c->hole_cyc[h], &v);
+            if (h > c->hole_off[f]) api_buf_putc(b, ',');
+            api_buf_u32_list(b, v, k);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_putc(b, '}');
+}
+
+/* "exterior": the exterior cycles. */
+static void put_exterior(api_buf *b, const lar2 *c)
+{
+    api_buf_putc(b, '[');
+    for (size_t x = 0; x < c->next; x++) {
+        const uint32_t *v;
+        size_t k = cycle_of(c, c->ext_cyc[x], &v);
+        if (x) api_buf_putc(b, ',');
+        api_buf_u32_list(b, v, k);
+    }
+    api_buf_putc(b, ']');
+}
+
 int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error *err)
 {
     rows r = {.c = c, .nrows = c->nf};
@@ -765,83 +856,27 @@ int api_lar2_write(api_buf *b, const lar2 *c, const api_lar2_fmt *fmt, api_error
     api_buf_puts(b, "{\"dim\":2");
     if (fl & API_F_V) {
         put_field(b, &first, "V");
-        api_buf_putc(b, '[');
-        for (size_t v = 0; v < c->nv; v++) {
-            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            if (v) api_buf_putc(b, ',');
-            api_buf_point(b, c->V + 2 * v, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_rows(b, c->V, NULL, c->nv, 2);
     }
     if (fl & API_F_EV) {
         put_field(b, &first, "EV");
-        api_buf_putc(b, '[');
-        for (size_t e = 0; e < c->ne; e++) {
-            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
-            if (e) api_buf_putc(b, ',');
-            api_buf_u32_list(b, c->EV + 2 * e, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_rows(b, NULL, c->EV, c->ne, 2);
     }
     if (fl & API_F_FV) {
         put_field(b, &first, "FV");
-        api_buf_putc(b, '[');
-        for (size_t f = 0; f < r.nrows; f++) {
-            const uint32_t *v;
-            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
-            size_t k = fv_row(&r, f, &v);
-            if (f) api_buf_putc(b, ',');
-            api_buf_u32_list(b, v, k);
-        }
-        api_buf_putc(b, ']');
+        put_face_rows(b, &r, 0);
     }
     if (fl & API_F_FE) {
         put_field(b, &first, "FE");
-        api_buf_putc(b, '[');
-        for (size_t f = 0; f < r.nrows; f++) {
-            const int32_t *e;
-            if (api_buf_tick(b, f, r.nrows)) break; /* failed, or canceled */
-            size_t k = fe_row(&r, f, &e);
-            api_buf_puts(b, f ? ",[" : "[");
-            for (size_t i = 0; i < k; i++) {
-                if (i) api_buf_putc(b, ',');
-                api_buf_i64(b, e[i]);
-            }
-            api_buf_putc(b, ']');
-        }
-        api_buf_putc(b, ']');
+        put_face_rows(b, &r, 1);
     }
     if (fl & API_F_HOLES) {
-        int hfirst = 1;
         put_field(b, &first, "holes");
-        api_buf_putc(b, '{');
-        for (size_t f = 0; f < c->nf; f++) {
-            if (c->hole_off[f] == c->hole_off[f + 1]) continue;
-            if (!hfirst) api_buf_putc(b, ',');
-            hfirst = 0;
-            api_buf_putc(b, '"');
-            api_buf_u64(b, f);
-            api_buf_puts(b, "\":[");
-            for (size_t h = c->hole_off[f]; h < c->hole_off[f + 1]; h++) {
-                const uint32_t *v;
-                size_t k = cycle_of(c, c->hole_cyc[h], &v);
-                if (h > c->hole_off[f]) api_buf_putc(b, ',');
-                api_buf_u32_list(b, v, k);
-            }
-            api_buf_putc(b, ']');
-        }
-        api_buf_putc(b, '}');
+        put_holes(b, c);
     }
     if (fl & API_F_EXTERIOR) {
         put_field(b, &first, "exterior");
-        api_buf_putc(b, '[');
-        for (size_t x = 0; x < c->next; x++) {
-            const uint32_t *v;
-            size_t k = cycle_of(c, c->ext_cyc[x], &v);
-            if (x) api_buf_putc(b, ',');
-            api_buf_u32_list(b, v, k);
-        }
-        api_buf_putc(b, ']');
+        put_exterior(b, c);
     }
     if (fl & API_F_OPERATORS) {
         put_field(b, &first, "operators");

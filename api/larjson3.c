@@ -24,6 +24,8 @@
  * Threads: reentrant, no globals.  Ownership: the complex and the warnings are borrowed; the
  * buffer is the caller's (api_buf_free() frees it).
  */
+#include "api/larjson.h"
+
 #include "api/api_int.h"
 
 #include <math.h>
@@ -407,11 +409,7 @@ static void put_result(api_buf *b, const lar3 *c, const bool3_result *r, unsigne
     for (size_t i = 0; i < r->nfaces; i++) {
         uint32_t f = (uint32_t)(r->faces[i] > 0 ? r->faces[i] : -r->faces[i]) - 1;
         if (c->fc_off[f + 1] - c->fc_off[f] < 2) continue;
-        if (!first) api_buf_putc(b, ',');
-        first = 0;
-        api_buf_putc(b, '"');
-        api_buf_u64(b, i);
-        api_buf_puts(b, "\":[");
+        api_buf_key_open(b, &first, i);
         for (uint32_t k = c->fc_off[f] + 1; k < c->fc_off[f + 1]; k++) {
             if (k > c->fc_off[f] + 1) api_buf_putc(b, ',');
             put_cycle_dir(b, c, c->fc[k], r->faces[i] < 0, map);
@@ -433,23 +431,11 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
     api_buf_puts(b, "{\"dim\":3");
     if (fl & API_F3_V) {
         put_key(b, "V");
-        api_buf_putc(b, '[');
-        for (size_t v = 0; v < c->nv; v++) {
-            if (api_buf_tick(b, v, c->nv)) break; /* failed, or canceled */
-            if (v) api_buf_putc(b, ',');
-            api_buf_point(b, c->V + 3 * v, 3);
-        }
-        api_buf_putc(b, ']');
+        api_buf_rows(b, c->V, NULL, c->nv, 3);
     }
     if (fl & API_F3_EV) {
         put_key(b, "EV");
-        api_buf_putc(b, '[');
-        for (size_t e = 0; e < c->ne; e++) {
-            if (api_buf_tick(b, e, c->ne)) break; /* failed, or canceled */
-            if (e) api_buf_putc(b, ',');
-            api_buf_u32_list(b, c->EV + 2 * e, 2);
-        }
-        api_buf_putc(b, ']');
+        api_buf_rows(b, NULL, c->EV, c->ne, 2);
     }
     if (fl & API_F3_FV) {
         put_key(b, "FV");
@@ -471,11 +457,7 @@ int api_lar3_write(api_buf *b, const lar3 *c, const api_lar3_fmt *fmt, api_error
         api_buf_putc(b, '{');
         for (size_t f = 0; f < c->nf; f++) {
             if (c->fc_off[f + 1] - c->fc_off[f] < 2) continue;
-            if (!first) api_buf_putc(b, ',');
-            first = 0;
-            api_buf_putc(b, '"');
-            api_buf_u64(b, f);
-            api_buf_puts(b, "\":[");
+            api_buf_key_open(b, &first, f);
             for (size_t k = c->fc_off[f] + 1; k < c->fc_off[f + 1]; k++) {
                 if (k > c->fc_off[f] + 1) api_buf_putc(b, ',');
                 put_cycle(b, c, c->fc[k]);

@@ -6,7 +6,10 @@
  * count may lie), then handed over as a solid.  STL welds its vertices through an open
  * addressing table keyed by the three coordinates' bits; PLY and 3MF index theirs already.
  * Indices are checked against the vertex count before a solid leaves here, so a solid read is
- * well formed (every index < nv, every cycle of 3 or more entries).
+ * well formed (every index < nv, every cycle of 3 or more entries).  The growable arrays are
+ * mem_grow's (core/mem.h) and the messages util_seterr's (core/util.h); PLY is read in stages:
+ * ply_header (a function per kind of line), then per element ply_columns and per item ply_item
+ * (ply_list for a list property).
  *
  * Threads: reentrant, no globals (libxml2's reader with its errors sent to a handler of the
  * reader's own, so nothing is printed).  Ownership: meshio.h. */
@@ -14,11 +17,11 @@
 
 #include "api/api_int.h"
 #include "core/fastfloat.h"
+#include "core/util.h"
 
 #include <jansson.h>
 #include <libxml/xmlreader.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdatomic.h>
@@ -105,22 +108,10 @@ static void mb_free(mbuild *b)
     *b = (mbuild){0};
 }
 
-static int grow(void **p, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap) return 0;
-    size_t c = *cap ? *cap : 64;
-    while (c < need) c *= 2;
-    void *q = realloc(*p, c * size);
-    if (!q) return -1;
-    *p = q;
-    *cap = c;
-    return 0;
-}
-
 static int mb_vertex(mbuild *b, const double x[3])
 {
     if (b->nv >= MESH_MAX_VERTICES) return -2;
-    if (grow((void **)&b->V, &b->vcap, b->nv + 1, 3 * sizeof(double))) return -1;
+    if (mem_grow(&b->V, &b->vcap, b->nv + 1, 3 * sizeof(double))) return -1;
     memcpy(b->V + 3 * b->nv, x, 3 * sizeof(double));
     b->nv++;
     return 0;
@@ -130,7 +121,7 @@ static int mb_vertex(mbuild *b, const double x[3])
 static int mb_face(mbuild *b)
 {
     if (b->ncyc >= MESH_MAX_TRIANGLES) return -2;
-    if (grow((void **)&b->cyc_off, &b->ccap, b->ncyc + 2, sizeof(uint32_t))) return -1;
+    if (mem_grow(&b->cyc_off, &b->ccap, b->ncyc + 2, sizeof(uint32_t))) return -1;
     if (b->ni > UINT32_MAX - MESH_PLY_POLYGON) return -2;
     b->cyc_off[b->ncyc++] = (uint32_t)b->ni;
     return 0;
@@ -138,7 +129,7 @@ static int mb_face(mbuild *b)
 
 static int mb_index(mbuild *b, uint32_t v)
 {
-    if (grow((void **)&b->cyc, &b->icap, b->ni + 1, sizeof(uint32_t))) return -1;
+    if (mem_grow(&b->cyc, &b->icap, b->ni + 1, sizeof(uint32_t))) return -1;
     b->cyc[b->ni++] = v;
     return 0;
 }
@@ -147,7 +138,7 @@ static int mb_index(mbuild *b, uint32_t v)
 static int mb_finish(mbuild *b, solid *out)
 {
     uint32_t *fo = malloc((b->ncyc + 1) * sizeof *fo);
-    if (!fo || grow((void **)&b->cyc_off, &b->ccap, b->ncyc + 1, sizeof(uint32_t))) {
+    if (!fo || mem_grow(&b->cyc_off, &b->ccap, b->ncyc + 1, sizeof(uint32_t))) {
         free(fo);
         return -1;
     }
@@ -210,15 +201,6 @@ static int mb_weld(mbuild *b, const double x[3], uint32_t *v)
     return 0;
 }
 
-static int say(char *err, size_t errlen, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    if (errlen) vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-    return -1;
-}
-
 static const char *limit_msg(int rc)
 {
     return rc == -2 ? "more than the vertices or faces a file may have (2^26)" : "out of memory";
@@ -276,7 +258,8 @@ static int expect_word(tok *k, const char *w, char *err, size_t errlen)
     char g[40];
     next_token(k);
     if (token_is(k, w)) return 0;
-    return say(err, errlen, "line %zu: expected \"%s\", got %s", k->line, w, got(k, g, sizeof g));
+    return util_seterr(err, errlen, -1, "line %zu: expected \"%s\", got %s", k->line, w,
+                       got(k, g, sizeof g));
 }
 
 static int read_number(tok *k, double *x, char *err, size_t errlen)
@@ -284,8 +267,8 @@ static int read_number(tok *k, double *x, char *err, size_t errlen)
     char g[40];
     next_token(k);
     if (k->n && ff_parse(k->t, k->t + k->n, x) == 0) return 0;
-    return say(err, errlen, "line %zu: expected a finite number, got %s", k->line,
-               got(k, g, sizeof g));
+    return util_seterr(err, errlen, -1, "line %zu: expected a finite number, got %s", k->line,
+                       got(k, g, sizeof g));
 }
 
 static int stl_ascii(const char *data, size_t len, mbuild *b, char *err, size_t errlen)
@@ -303,41 +286,45 @@ static int stl_ascii(const char *data, size_t len, mbuild *b, char *err, size_t 
             next_token(&k);
             if (!k.n) return 0;
             if (!token_is(&k, "solid"))
-                return say(err, errlen, "line %zu: expected \"solid\" or the end, got %s", k.line,
-                           got(&k, g, sizeof g));
+                return util_seterr(err, errlen, -1,
+                                   "line %zu: expected \"solid\" or the end, got %s", k.line,
+                                   got(&k, g, sizeof g));
             skip_line(&k);
             continue;
         }
         if (!token_is(&k, "facet"))
-            return say(err, errlen, "line %zu: expected \"facet\" or \"endsolid\", got %s", k.line,
-                       got(&k, g, sizeof g));
+            return util_seterr(err, errlen, -1,
+                               "line %zu: expected \"facet\" or \"endsolid\", got %s", k.line,
+                               got(&k, g, sizeof g));
         double x[3];
         if (expect_word(&k, "normal", err, errlen)) return -1;
         for (int a = 0; a < 3; a++)
             if (read_number(&k, &x[a], err, errlen)) return -1;
         if (expect_word(&k, "outer", err, errlen) || expect_word(&k, "loop", err, errlen))
             return -1;
-        if ((rc = mb_face(b))) return say(err, errlen, "line %zu: %s", k.line, limit_msg(rc));
+        if ((rc = mb_face(b)))
+            return util_seterr(err, errlen, -1, "line %zu: %s", k.line, limit_msg(rc));
         int nvert = 0;
         for (;;) {
             next_token(&k);
             if (token_is(&k, "endloop")) break;
             if (!token_is(&k, "vertex"))
-                return say(err, errlen, "line %zu: expected \"vertex\" or \"endloop\", got %s",
-                           k.line, got(&k, g, sizeof g));
+                return util_seterr(err, errlen, -1,
+                                   "line %zu: expected \"vertex\" or \"endloop\", got %s", k.line,
+                                   got(&k, g, sizeof g));
             if (nvert >= MESH_PLY_POLYGON)
-                return say(err, errlen, "line %zu: facet %zu: more than %d vertices", k.line, facet,
-                           MESH_PLY_POLYGON);
+                return util_seterr(err, errlen, -1, "line %zu: facet %zu: more than %d vertices",
+                                   k.line, facet, MESH_PLY_POLYGON);
             for (int a = 0; a < 3; a++)
                 if (read_number(&k, &x[a], err, errlen)) return -1;
             uint32_t v;
             if ((rc = mb_weld(b, x, &v)) || (rc = mb_index(b, v)))
-                return say(err, errlen, "line %zu: %s", k.line, limit_msg(rc));
+                return util_seterr(err, errlen, -1, "line %zu: %s", k.line, limit_msg(rc));
             nvert++;
         }
         if (nvert < 3)
-            return say(err, errlen, "line %zu: facet %zu: %d vertices (3 needed)", k.line, facet,
-                       nvert);
+            return util_seterr(err, errlen, -1, "line %zu: facet %zu: %d vertices (3 needed)",
+                               k.line, facet, nvert);
         if (expect_word(&k, "endfacet", err, errlen)) return -1;
         facet++;
     }
@@ -354,11 +341,12 @@ static int stl_binary(const char *data, size_t len, mbuild *b, char *err, size_t
     size_t n = le32(p + 80);
     int rc;
     if (n > MESH_MAX_TRIANGLES)
-        return say(err, errlen, "%zu triangles: more than %u", n, MESH_MAX_TRIANGLES);
+        return util_seterr(err, errlen, -1, "%zu triangles: more than %u", n, MESH_MAX_TRIANGLES);
     (void)len;
     for (size_t t = 0; t < n; t++) {
         const unsigned char *q = p + 84 + 50 * t + 12;
-        if ((rc = mb_face(b))) return say(err, errlen, "triangle %zu: %s", t, limit_msg(rc));
+        if ((rc = mb_face(b)))
+            return util_seterr(err, errlen, -1, "triangle %zu: %s", t, limit_msg(rc));
         for (int c = 0; c < 3; c++) {
             double x[3];
             for (int a = 0; a < 3; a++) {
@@ -367,11 +355,12 @@ static int stl_binary(const char *data, size_t len, mbuild *b, char *err, size_t
                 memcpy(&f, &u, sizeof f);
                 x[a] = f;
                 if (!isfinite(x[a]))
-                    return say(err, errlen, "triangle %zu: vertex %d: coordinate not finite", t, c);
+                    return util_seterr(err, errlen, -1,
+                                       "triangle %zu: vertex %d: coordinate not finite", t, c);
             }
             uint32_t v;
             if ((rc = mb_weld(b, x, &v)) || (rc = mb_index(b, v)))
-                return say(err, errlen, "triangle %zu: %s", t, limit_msg(rc));
+                return util_seterr(err, errlen, -1, "triangle %zu: %s", t, limit_msg(rc));
         }
     }
     return 0;
@@ -391,19 +380,21 @@ int mesh_read_stl(const char *data, size_t len, solid *out, char *err, size_t er
     if (ascii) {
         if (stl_ascii(data, len, &b, aerr, sizeof aerr) == 0) goto done;
         mb_free(&b);
-        if (!sized) return say(err, errlen, "%s", aerr);
+        if (!sized) return util_seterr(err, errlen, -1, "%s", aerr);
     }
     if (!sized) {
         if (len < 84)
-            return say(err, errlen,
-                       "not an STL file: %zu bytes, neither ASCII (\"solid\" ...) nor binary (84 "
-                       "bytes of header and count at least)",
-                       len);
-        return say(err, errlen,
-                   "not an STL file: binary STL of %lu triangles is %llu bytes, this is %zu "
-                   "(and it does not start with \"solid\")",
-                   (unsigned long)le32((const unsigned char *)data + 80),
-                   (unsigned long long)le32((const unsigned char *)data + 80) * 50 + 84, len);
+            return util_seterr(
+                err, errlen, -1,
+                "not an STL file: %zu bytes, neither ASCII (\"solid\" ...) nor binary (84 "
+                "bytes of header and count at least)",
+                len);
+        return util_seterr(
+            err, errlen, -1,
+            "not an STL file: binary STL of %lu triangles is %llu bytes, this is %zu "
+            "(and it does not start with \"solid\")",
+            (unsigned long)le32((const unsigned char *)data + 80),
+            (unsigned long long)le32((const unsigned char *)data + 80) * 50 + 84, len);
     }
     if (stl_binary(data, len, &b, err, errlen)) {
         mb_free(&b);
@@ -412,7 +403,7 @@ int mesh_read_stl(const char *data, size_t len, solid *out, char *err, size_t er
 done:
     if (mb_finish(&b, out)) {
         mb_free(&b);
-        return say(err, errlen, "out of memory");
+        return util_seterr(err, errlen, -1, "out of memory");
     }
     return 0;
 }
@@ -468,104 +459,139 @@ static const char *word(const char **p, const char *end, size_t *n)
     return w;
 }
 
+/* The rest [*p, nl) of header line `line` after "format": ascii, binary_little_endian or
+ * binary_big_endian, then 1.0, into h->fmt; 0 or -1 with the message. */
+static int ply_format_line(ply *h, const char **p, const char *nl, size_t line, char *err,
+                           size_t errlen)
+{
+    size_t n;
+    const char *f = word(p, nl, &n);
+    if (n == 5 && !strncmp(f, "ascii", 5))
+        h->fmt = 0;
+    else if (n == 20 && !strncmp(f, "binary_little_endian", 20))
+        h->fmt = 1;
+    else if (n == 17 && !strncmp(f, "binary_big_endian", 17))
+        h->fmt = 2;
+    else
+        return util_seterr(err, errlen, -1,
+                           "line %zu: format: expected ascii, binary_little_endian or "
+                           "binary_big_endian",
+                           line);
+    f = word(p, nl, &n);
+    if (n != 3 || strncmp(f, "1.0", 3))
+        return util_seterr(err, errlen, -1, "line %zu: format: version 1.0 expected", line);
+    return 0;
+}
+
+/* The rest of an "element" line: a name and a decimal count, as a new element of h. */
+static int ply_element_line(ply *h, const char **p, const char *nl, size_t line, char *err,
+                            size_t errlen)
+{
+    size_t n;
+    uint64_t v = 0;
+    if (h->ne >= MESH_PLY_ELEMENTS)
+        return util_seterr(err, errlen, -1, "line %zu: more than %d elements", line,
+                           MESH_PLY_ELEMENTS);
+    ply_elem *e = &h->e[h->ne++];
+    const char *nm = word(p, nl, &n);
+    if (!n || n >= sizeof e->name)
+        return util_seterr(err, errlen, -1,
+                           "line %zu: element: expected a name (of at most %zu "
+                           "bytes) and a count",
+                           line, sizeof e->name - 1);
+    memcpy(e->name, nm, n);
+    e->name[n] = 0;
+    const char *c = word(p, nl, &n);
+    if (!n)
+        return util_seterr(err, errlen, -1, "line %zu: element %s: expected a count", line,
+                           e->name);
+    for (size_t i = 0; i < n; i++) {
+        if (c[i] < '0' || c[i] > '9' || v > UINT64_MAX / 20)
+            return util_seterr(err, errlen, -1, "line %zu: element %s: expected a count", line,
+                               e->name);
+        v = 10 * v + (uint64_t)(c[i] - '0');
+    }
+    e->count = v;
+    return 0;
+}
+
+/* The rest of a "property" line: a type (or "list", a count type and an item type) and a name,
+ * as a new property of the last element. */
+static int ply_property_line(ply *h, const char **p, const char *nl, size_t line, char *err,
+                             size_t errlen)
+{
+    size_t n;
+    if (!h->ne)
+        return util_seterr(err, errlen, -1, "line %zu: a property before any element", line);
+    ply_elem *e = &h->e[h->ne - 1];
+    if (e->np >= MESH_PLY_ELEMENTS)
+        return util_seterr(err, errlen, -1, "line %zu: element %s: more than %d properties", line,
+                           e->name, MESH_PLY_ELEMENTS);
+    ply_prop *q = &e->p[e->np++];
+    const char *t = word(p, nl, &n);
+    q->count = -1;
+    if (n == 4 && !strncmp(t, "list", 4)) {
+        t = word(p, nl, &n);
+        if ((q->count = ply_type(t, n)) < 0 || q->count >= PLY_F32)
+            return util_seterr(err, errlen, -1,
+                               "line %zu: property list: expected an integer count "
+                               "type",
+                               line);
+        t = word(p, nl, &n);
+    }
+    if ((q->type = ply_type(t, n)) < 0)
+        return util_seterr(err, errlen, -1, "line %zu: property: unknown type \"%.*s\"", line,
+                           (int)(n > 16 ? 16 : n), t);
+    const char *nm = word(p, nl, &n);
+    if (!n || n >= sizeof q->name)
+        return util_seterr(err, errlen, -1, "line %zu: property: expected a name", line);
+    memcpy(q->name, nm, n);
+    q->name[n] = 0;
+    return 0;
+}
+
+/* The header of data[0..len) (at most MESH_PLY_HEADER bytes, up to its end_header line) into
+ * *h, h->p at the data after it; 0 or -1 with the message naming the line. */
 static int ply_header(ply *h, const char *data, size_t len, char *err, size_t errlen)
 {
     const char *p = data, *end = data + (len < MESH_PLY_HEADER ? len : MESH_PLY_HEADER);
     size_t line = 0;
-    int have_fmt = 0;
+    int have_fmt = 0, rc = 0;
     for (;;) {
         const char *nl = memchr(p, '\n', (size_t)(end - p));
         line++;
         if (!nl)
-            return say(err, errlen,
-                       len > MESH_PLY_HEADER ? "header: longer than %d bytes"
-                                             : "header: no end_header line",
-                       MESH_PLY_HEADER);
+            return util_seterr(err, errlen, -1,
+                               len > MESH_PLY_HEADER ? "header: longer than %d bytes"
+                                                     : "header: no end_header line",
+                               MESH_PLY_HEADER);
         size_t n;
         const char *w = word(&p, nl, &n);
         if (line == 1) {
             size_t more;
             if (n != 3 || strncmp(w, "ply", 3) || (word(&p, nl, &more), more))
-                return say(err, errlen, "line 1: expected \"ply\"");
+                return util_seterr(err, errlen, -1, "line 1: expected \"ply\"");
         } else if (n == 6 && !strncmp(w, "format", 6)) {
-            const char *f = word(&p, nl, &n);
-            if (n == 5 && !strncmp(f, "ascii", 5))
-                h->fmt = 0;
-            else if (n == 20 && !strncmp(f, "binary_little_endian", 20))
-                h->fmt = 1;
-            else if (n == 17 && !strncmp(f, "binary_big_endian", 17))
-                h->fmt = 2;
-            else
-                return say(err, errlen,
-                           "line %zu: format: expected ascii, binary_little_endian or "
-                           "binary_big_endian",
-                           line);
-            f = word(&p, nl, &n);
-            if (n != 3 || strncmp(f, "1.0", 3))
-                return say(err, errlen, "line %zu: format: version 1.0 expected", line);
+            rc = ply_format_line(h, &p, nl, line, err, errlen);
             have_fmt = 1;
         } else if ((n == 7 && !strncmp(w, "comment", 7)) ||
                    (n == 8 && !strncmp(w, "obj_info", 8)) || n == 0) {
             /* nothing */
         } else if (n == 7 && !strncmp(w, "element", 7)) {
-            if (h->ne >= MESH_PLY_ELEMENTS)
-                return say(err, errlen, "line %zu: more than %d elements", line, MESH_PLY_ELEMENTS);
-            ply_elem *e = &h->e[h->ne++];
-            const char *nm = word(&p, nl, &n);
-            if (!n || n >= sizeof e->name)
-                return say(err, errlen,
-                           "line %zu: element: expected a name (of at most %zu "
-                           "bytes) and a count",
-                           line, sizeof e->name - 1);
-            memcpy(e->name, nm, n);
-            e->name[n] = 0;
-            const char *c = word(&p, nl, &n);
-            uint64_t v = 0;
-            if (!n)
-                return say(err, errlen, "line %zu: element %s: expected a count", line, e->name);
-            for (size_t i = 0; i < n; i++) {
-                if (c[i] < '0' || c[i] > '9' || v > UINT64_MAX / 20)
-                    return say(err, errlen, "line %zu: element %s: expected a count", line,
-                               e->name);
-                v = 10 * v + (uint64_t)(c[i] - '0');
-            }
-            e->count = v;
+            rc = ply_element_line(h, &p, nl, line, err, errlen);
         } else if (n == 8 && !strncmp(w, "property", 8)) {
-            if (!h->ne) return say(err, errlen, "line %zu: a property before any element", line);
-            ply_elem *e = &h->e[h->ne - 1];
-            if (e->np >= MESH_PLY_ELEMENTS)
-                return say(err, errlen, "line %zu: element %s: more than %d properties", line,
-                           e->name, MESH_PLY_ELEMENTS);
-            ply_prop *q = &e->p[e->np++];
-            const char *t = word(&p, nl, &n);
-            q->count = -1;
-            if (n == 4 && !strncmp(t, "list", 4)) {
-                t = word(&p, nl, &n);
-                if ((q->count = ply_type(t, n)) < 0 || q->count >= PLY_F32)
-                    return say(err, errlen,
-                               "line %zu: property list: expected an integer count "
-                               "type",
-                               line);
-                t = word(&p, nl, &n);
-            }
-            if ((q->type = ply_type(t, n)) < 0)
-                return say(err, errlen, "line %zu: property: unknown type \"%.*s\"", line,
-                           (int)(n > 16 ? 16 : n), t);
-            const char *nm = word(&p, nl, &n);
-            if (!n || n >= sizeof q->name)
-                return say(err, errlen, "line %zu: property: expected a name", line);
-            memcpy(q->name, nm, n);
-            q->name[n] = 0;
+            rc = ply_property_line(h, &p, nl, line, err, errlen);
         } else if (n == 10 && !strncmp(w, "end_header", 10)) {
-            if (!have_fmt) return say(err, errlen, "header: no format line");
+            if (!have_fmt) return util_seterr(err, errlen, -1, "header: no format line");
             h->p = (const unsigned char *)nl + 1;
             h->hlines = line;
             h->end = (const unsigned char *)data + len;
             return 0;
         } else {
-            return say(err, errlen, "line %zu: unknown header line \"%.*s\"", line,
-                       (int)(n > 16 ? 16 : n), w);
+            return util_seterr(err, errlen, -1, "line %zu: unknown header line \"%.*s\"", line,
+                               (int)(n > 16 ? 16 : n), w);
         }
+        if (rc) return rc;
         p = nl + 1;
     }
 }
@@ -619,119 +645,144 @@ static int ply_value(ply *h, int t, double *x)
     return isfinite(*x) ? 0 : -1;
 }
 
+/* The columns of an element the solid is made of: "vertex"'s scalar x, y, z, "face"'s list
+ * vertex_indices (or vertex_index); -1 where there is none. */
+typedef struct ply_cols {
+    int vert, face;
+    int ix, iy, iz, il;
+} ply_cols;
+
+/* The columns of element e, checked: a vertex element has x, y and z, a face element its list,
+ * and neither more items than a solid may have; 0 or -1 with the message. */
+static int ply_columns(const ply_elem *e, ply_cols *c, char *err, size_t errlen)
+{
+    *c = (ply_cols){!strcmp(e->name, "vertex"), !strcmp(e->name, "face"), -1, -1, -1, -1};
+    for (size_t q = 0; q < e->np; q++) {
+        const char *nm = e->p[q].name;
+        if (c->vert && e->p[q].count < 0 && !strcmp(nm, "x")) c->ix = (int)q;
+        if (c->vert && e->p[q].count < 0 && !strcmp(nm, "y")) c->iy = (int)q;
+        if (c->vert && e->p[q].count < 0 && !strcmp(nm, "z")) c->iz = (int)q;
+        if (c->face && e->p[q].count >= 0 &&
+            (!strcmp(nm, "vertex_indices") || !strcmp(nm, "vertex_index")))
+            c->il = (int)q;
+    }
+    if (c->vert && (c->ix < 0 || c->iy < 0 || c->iz < 0))
+        return util_seterr(err, errlen, -1, "element vertex: no scalar property x, y and z");
+    if (c->face && c->il < 0)
+        return util_seterr(err, errlen, -1, "element face: no list property vertex_indices");
+    if (c->vert && e->count > MESH_MAX_VERTICES)
+        return util_seterr(err, errlen, -1, "element vertex: %llu vertices: more than %u",
+                           (unsigned long long)e->count, MESH_MAX_VERTICES);
+    if (c->face && e->count > MESH_MAX_TRIANGLES)
+        return util_seterr(err, errlen, -1, "element face: %llu faces: more than %u",
+                           (unsigned long long)e->count, MESH_MAX_TRIANGLES);
+    return 0;
+}
+
+/* Where item i of element e is, for messages: "vertex 12". */
+static const char *ply_where(char where[96], const ply_elem *e, uint64_t i)
+{
+    snprintf(where, 96, "%s %llu", e->name, (unsigned long long)i);
+    return where;
+}
+
+/* The message of a value of property pp of item i of e that ply_value() refused (got: -2 the
+ * file ends, -1 not a number of its type); -1. */
+static int ply_bad_value(const ply *h, const ply_elem *e, uint64_t i, const ply_prop *pp, int got,
+                         char *err, size_t errlen)
+{
+    char where[96];
+    ply_where(where, e, i);
+    if (got == -2) return util_seterr(err, errlen, -1, "%s: %s: the file ends", where, pp->name);
+    if (h->fmt == 0)
+        return util_seterr(err, errlen, -1, "%s: %s: line %zu: expected %s number", where, pp->name,
+                           h->k.line, pp->type < PLY_F32 ? "an integer" : "a finite");
+    return util_seterr(err, errlen, -1, "%s: %s: not a finite number", where, pp->name);
+}
+
+/* The list property q of item i of e: its count and items read; of the face's index list
+ * (q == c->il), the indices into b.  0 or -1 with the message. */
+static int ply_list(ply *h, const ply_elem *e, const ply_cols *c, uint64_t i, size_t q, mbuild *b,
+                    char *err, size_t errlen)
+{
+    const ply_prop *pp = &e->p[q];
+    char where[96];
+    double n, v;
+    int got, rc;
+    if ((got = ply_value(h, pp->count, &n))) return ply_bad_value(h, e, i, pp, got, err, errlen);
+    if (n < 0 || n > MESH_PLY_POLYGON)
+        return util_seterr(err, errlen, -1, "%s: %s: a list of %g items (0 to %d)",
+                           ply_where(where, e, i), pp->name, n, MESH_PLY_POLYGON);
+    if ((int)q == c->il && n < 3)
+        return util_seterr(err, errlen, -1, "%s: %g vertices (3 or more needed)",
+                           ply_where(where, e, i), n);
+    for (int j = 0; j < (int)n; j++) {
+        if ((got = ply_value(h, pp->type, &v))) return ply_bad_value(h, e, i, pp, got, err, errlen);
+        if ((int)q != c->il) continue;
+        if (!(v >= 0 && v < 4294967295.0) || v != floor(v))
+            return util_seterr(err, errlen, -1, "%s: vertex_indices[%d]: %g is not a vertex index",
+                               ply_where(where, e, i), j, v);
+        if ((rc = mb_index(b, (uint32_t)v)))
+            return util_seterr(err, errlen, -1, "%s: %s", ply_where(where, e, i), limit_msg(rc));
+    }
+    return 0;
+}
+
+/* Item i of element e: its values read in order; a vertex's x, y, z or a face's indices into
+ * b, the other properties skipped.  0 or -1 with the message. */
+static int ply_item(ply *h, const ply_elem *e, const ply_cols *c, uint64_t i, mbuild *b, char *err,
+                    size_t errlen)
+{
+    double x[3] = {0, 0, 0};
+    char where[96];
+    int rc, got;
+    if (c->face && (rc = mb_face(b)))
+        return util_seterr(err, errlen, -1, "%s: %s", ply_where(where, e, i), limit_msg(rc));
+    for (size_t q = 0; q < e->np; q++) {
+        const ply_prop *pp = &e->p[q];
+        double v;
+        if (pp->count >= 0) {
+            if (ply_list(h, e, c, i, q, b, err, errlen)) return -1;
+            continue;
+        }
+        if ((got = ply_value(h, pp->type, &v))) return ply_bad_value(h, e, i, pp, got, err, errlen);
+        if ((int)q == c->ix) x[0] = v;
+        if ((int)q == c->iy) x[1] = v;
+        if ((int)q == c->iz) x[2] = v;
+    }
+    if (c->vert && (rc = mb_vertex(b, x)))
+        return util_seterr(err, errlen, -1, "%s: %s", ply_where(where, e, i), limit_msg(rc));
+    return 0;
+}
+
 int mesh_read_ply(const char *data, size_t len, solid *out, char *err, size_t errlen)
 {
     if (errlen) err[0] = 0;
     ply *h = calloc(1, sizeof *h);
     mbuild b = {0};
-    char where[96];
-    int rc;
     *out = (solid){0};
-    if (!h) return say(err, errlen, "out of memory");
+    if (!h) return util_seterr(err, errlen, -1, "out of memory");
     if (ply_header(h, data, len, err, errlen)) goto fail;
     h->k = (tok){(const char *)h->p, data + len, h->hlines + 1, NULL, 0};
     for (size_t ei = 0; ei < h->ne; ei++) {
-        ply_elem *e = &h->e[ei];
-        int vert = !strcmp(e->name, "vertex"), face = !strcmp(e->name, "face");
-        int ix = -1, iy = -1, iz = -1, il = -1;
-        for (size_t q = 0; q < e->np; q++) {
-            const char *nm = e->p[q].name;
-            if (vert && e->p[q].count < 0 && !strcmp(nm, "x")) ix = (int)q;
-            if (vert && e->p[q].count < 0 && !strcmp(nm, "y")) iy = (int)q;
-            if (vert && e->p[q].count < 0 && !strcmp(nm, "z")) iz = (int)q;
-            if (face && e->p[q].count >= 0 &&
-                (!strcmp(nm, "vertex_indices") || !strcmp(nm, "vertex_index")))
-                il = (int)q;
-        }
-        if (vert && (ix < 0 || iy < 0 || iz < 0)) {
-            say(err, errlen, "element vertex: no scalar property x, y and z");
-            goto fail;
-        }
-        if (face && il < 0) {
-            say(err, errlen, "element face: no list property vertex_indices");
-            goto fail;
-        }
-        if (vert && e->count > MESH_MAX_VERTICES) {
-            say(err, errlen, "element vertex: %llu vertices: more than %u",
-                (unsigned long long)e->count, MESH_MAX_VERTICES);
-            goto fail;
-        }
-        if (face && e->count > MESH_MAX_TRIANGLES) {
-            say(err, errlen, "element face: %llu faces: more than %u", (unsigned long long)e->count,
-                MESH_MAX_TRIANGLES);
-            goto fail;
-        }
+        const ply_elem *e = &h->e[ei];
+        ply_cols c;
+        if (ply_columns(e, &c, err, errlen)) goto fail;
         if (!e->np) continue;
-        for (uint64_t i = 0; i < e->count; i++) {
-            double x[3] = {0, 0, 0};
-            snprintf(where, sizeof where, "%s %llu", e->name, (unsigned long long)i);
-            if (face && (rc = mb_face(&b))) {
-                say(err, errlen, "%s: %s", where, limit_msg(rc));
-                goto fail;
-            }
-            for (size_t q = 0; q < e->np; q++) {
-                const ply_prop *pp = &e->p[q];
-                double v;
-                int got;
-                if (pp->count < 0) {
-                    if ((got = ply_value(h, pp->type, &v))) goto bad_value;
-                    if ((int)q == ix) x[0] = v;
-                    if ((int)q == iy) x[1] = v;
-                    if ((int)q == iz) x[2] = v;
-                    continue;
-                }
-                double c;
-                if ((got = ply_value(h, pp->count, &c))) goto bad_value;
-                if (c < 0 || c > MESH_PLY_POLYGON) {
-                    say(err, errlen, "%s: %s: a list of %g items (0 to %d)", where, pp->name, c,
-                        MESH_PLY_POLYGON);
-                    goto fail;
-                }
-                if ((int)q == il && c < 3) {
-                    say(err, errlen, "%s: %g vertices (3 or more needed)", where, c);
-                    goto fail;
-                }
-                for (int j = 0; j < (int)c; j++) {
-                    if ((got = ply_value(h, pp->type, &v))) goto bad_value;
-                    if ((int)q != il) continue;
-                    if (!(v >= 0 && v < 4294967295.0) || v != floor(v)) {
-                        say(err, errlen, "%s: vertex_indices[%d]: %g is not a vertex index", where,
-                            j, v);
-                        goto fail;
-                    }
-                    if ((rc = mb_index(&b, (uint32_t)v))) {
-                        say(err, errlen, "%s: %s", where, limit_msg(rc));
-                        goto fail;
-                    }
-                }
-                continue;
-            bad_value:
-                if (got == -2)
-                    say(err, errlen, "%s: %s: the file ends", where, pp->name);
-                else if (h->fmt == 0)
-                    say(err, errlen, "%s: %s: line %zu: expected %s number", where, pp->name,
-                        h->k.line, pp->type < PLY_F32 ? "an integer" : "a finite");
-                else
-                    say(err, errlen, "%s: %s: not a finite number", where, pp->name);
-                goto fail;
-            }
-            if (vert && (rc = mb_vertex(&b, x))) {
-                say(err, errlen, "%s: %s", where, limit_msg(rc));
-                goto fail;
-            }
-        }
+        for (uint64_t i = 0; i < e->count; i++)
+            if (ply_item(h, e, &c, i, &b, err, errlen)) goto fail;
     }
     for (size_t f = 0; f < b.ncyc; f++) {
         size_t end = f + 1 < b.ncyc ? b.cyc_off[f + 1] : b.ni;
         for (size_t i = b.cyc_off[f]; i < end; i++)
             if (b.cyc[i] >= b.nv) {
-                say(err, errlen, "face %zu: vertex index %u not below the %zu vertices", f,
-                    b.cyc[i], b.nv);
+                util_seterr(err, errlen, -1, "face %zu: vertex index %u not below the %zu vertices",
+                            f, b.cyc[i], b.nv);
                 goto fail;
             }
     }
     if (mb_finish(&b, out)) {
-        say(err, errlen, "out of memory");
+        util_seterr(err, errlen, -1, "out of memory");
         goto fail;
     }
     free(h);
@@ -835,16 +886,17 @@ static int model_element(xmlTextReaderPtr r, model3 *m, long *cur, int in_build,
     if (!(is_obj || is_v || is_t || is_c || is_i || is_mesh)) return 0;
     obj3 *o = *cur >= 0 ? &m->o[*cur] : NULL;
     if ((is_v || is_t || is_c || is_mesh) && !o)
-        return say(err, errlen, "%s: line %d: <%s> outside an <object>", m->part, line, name);
+        return util_seterr(err, errlen, -1, "%s: line %d: <%s> outside an <object>", m->part, line,
+                           name);
     if (is_mesh) {
         o->has_mesh = 1;
         return 0;
     }
     if (is_obj) {
         if (m->no >= MESH_3MF_OBJECTS)
-            return say(err, errlen, "%s: line %d: more than %d objects", m->part, line,
-                       MESH_3MF_OBJECTS);
-        if (grow((void **)&m->o, &m->ocap, m->no + 1, sizeof *m->o)) goto nomem;
+            return util_seterr(err, errlen, -1, "%s: line %d: more than %d objects", m->part, line,
+                               MESH_3MF_OBJECTS);
+        if (mem_grow(&m->o, &m->ocap, m->no + 1, sizeof *m->o)) goto nomem;
         o = &m->o[m->no];
         *o = (obj3){0};
         o->id = UINT32_MAX;
@@ -870,52 +922,55 @@ static int model_element(xmlTextReaderPtr r, model3 *m, long *cur, int in_build,
             continue;
         if (bad) {
             xmlTextReaderMoveToElement(r);
-            return say(err, errlen, "%s: line %d: <%s> %s: expected %s", m->part, line, name, a,
-                       !strcmp(a, "transform") ? "12 numbers"
-                       : is_v                  ? "a finite number"
-                                               : "an index");
+            return util_seterr(err, errlen, -1, "%s: line %d: <%s> %s: expected %s", m->part, line,
+                               name, a,
+                               !strcmp(a, "transform") ? "12 numbers"
+                               : is_v                  ? "a finite number"
+                                                       : "an index");
         }
     }
     xmlTextReaderMoveToElement(r);
     if (is_obj) {
         if (id == UINT32_MAX)
-            return say(err, errlen, "%s: line %d: <object> without an id", m->part, line);
+            return util_seterr(err, errlen, -1, "%s: line %d: <object> without an id", m->part,
+                               line);
         o->id = id;
     } else if (is_v) {
         for (int a = 0; a < 3; a++)
             if (isnan(x[a]))
-                return say(err, errlen, "%s: line %d: vertex %zu: no %c", m->part, line, o->nv,
-                           'x' + a);
+                return util_seterr(err, errlen, -1, "%s: line %d: vertex %zu: no %c", m->part, line,
+                                   o->nv, 'x' + a);
         if (o->nv >= MESH_MAX_VERTICES)
-            return say(err, errlen, "%s: line %d: more than %u vertices", m->part, line,
-                       MESH_MAX_VERTICES);
-        if (grow((void **)&o->V, &o->vcap, o->nv + 1, 3 * sizeof(double))) goto nomem;
+            return util_seterr(err, errlen, -1, "%s: line %d: more than %u vertices", m->part, line,
+                               MESH_MAX_VERTICES);
+        if (mem_grow(&o->V, &o->vcap, o->nv + 1, 3 * sizeof(double))) goto nomem;
         memcpy(o->V + 3 * o->nv++, x, sizeof x);
     } else if (is_t) {
         for (int a = 0; a < 3; a++)
             if (v[a] == UINT32_MAX)
-                return say(err, errlen, "%s: line %d: triangle %zu: no v%d", m->part, line, o->nt,
-                           a + 1);
+                return util_seterr(err, errlen, -1, "%s: line %d: triangle %zu: no v%d", m->part,
+                                   line, o->nt, a + 1);
         if (o->nt >= MESH_MAX_TRIANGLES)
-            return say(err, errlen, "%s: line %d: more than %u triangles", m->part, line,
-                       MESH_MAX_TRIANGLES);
-        if (grow((void **)&o->T, &o->tcap, o->nt + 1, 3 * sizeof(uint32_t))) goto nomem;
+            return util_seterr(err, errlen, -1, "%s: line %d: more than %u triangles", m->part,
+                               line, MESH_MAX_TRIANGLES);
+        if (mem_grow(&o->T, &o->tcap, o->nt + 1, 3 * sizeof(uint32_t))) goto nomem;
         memcpy(o->T + 3 * o->nt++, v, sizeof v);
     } else {
         if (id == UINT32_MAX)
-            return say(err, errlen, "%s: line %d: <%s> without an objectid", m->part, line, name);
+            return util_seterr(err, errlen, -1, "%s: line %d: <%s> without an objectid", m->part,
+                               line, name);
         comp3 **arr = is_c ? &o->c : &m->items;
         size_t *n = is_c ? &o->nc : &m->ni, *cap = is_c ? &o->ccap : &m->icap;
         if (*n >= MESH_3MF_SOLIDS)
-            return say(err, errlen, "%s: line %d: more than %d <%s>s", m->part, line,
-                       MESH_3MF_SOLIDS, name);
-        if (grow((void **)arr, cap, *n + 1, sizeof **arr)) goto nomem;
+            return util_seterr(err, errlen, -1, "%s: line %d: more than %d <%s>s", m->part, line,
+                               MESH_3MF_SOLIDS, name);
+        if (mem_grow(arr, cap, *n + 1, sizeof **arr)) goto nomem;
         (*arr)[*n].id = id;
         memcpy((*arr)[(*n)++].t, t, sizeof t);
     }
     return 0;
 nomem:
-    return say(err, errlen, "out of memory");
+    return util_seterr(err, errlen, -1, "out of memory");
 }
 
 static int model_parse(const char *xml, size_t len, model3 *m, char *err, size_t errlen)
@@ -925,17 +980,17 @@ static int model_parse(const char *xml, size_t len, model3 *m, char *err, size_t
                                                 XML_PARSE_NOWARNING | XML_PARSE_BIG_LINES);
     long cur = -1;
     int in_build = 0, rc = 0, ret;
-    if (!r) return say(err, errlen, "out of memory");
+    if (!r) return util_seterr(err, errlen, -1, "out of memory");
     xmlTextReaderSetStructuredErrorHandler(r, xml_error, m);
     while ((ret = xmlTextReaderRead(r)) == 1) {
         int type = xmlTextReaderNodeType(r);
         if (type == XML_READER_TYPE_DOCUMENT_TYPE) {
-            rc = say(err, errlen, "%s: a DTD (<!DOCTYPE>) is not allowed", m->part);
+            rc = util_seterr(err, errlen, -1, "%s: a DTD (<!DOCTYPE>) is not allowed", m->part);
             goto out;
         }
         if (xmlTextReaderDepth(r) > MESH_3MF_DEPTH) {
-            rc = say(err, errlen, "%s: line %d: nested deeper than %d", m->part,
-                     xmlTextReaderGetParserLineNumber(r), MESH_3MF_DEPTH);
+            rc = util_seterr(err, errlen, -1, "%s: line %d: nested deeper than %d", m->part,
+                             xmlTextReaderGetParserLineNumber(r), MESH_3MF_DEPTH);
             goto out;
         }
         const char *name = (const char *)xmlTextReaderConstLocalName(r);
@@ -949,8 +1004,8 @@ static int model_parse(const char *xml, size_t len, model3 *m, char *err, size_t
         }
     }
     if (ret < 0)
-        rc = say(err, errlen, "%s: line %d: malformed XML: %s", m->part, m->xline,
-                 m->xerr[0] ? m->xerr : "cannot parse");
+        rc = util_seterr(err, errlen, -1, "%s: line %d: malformed XML: %s", m->part, m->xline,
+                         m->xerr[0] ? m->xerr : "cannot parse");
 out:
     xmlFreeTextReader(r);
     return rc;
@@ -981,21 +1036,26 @@ static int zip_member(zip_t *za, const char *name, size_t max, char **buf, size_
     zip_stat_t st;
     if (zip_stat_index(za, (zip_uint64_t)i, 0, &st) == 0 && (st.valid & ZIP_STAT_SIZE) &&
         st.size > max)
-        return say(err, errlen, "%s: inflates to more than %zu bytes (%llu, its directory says)",
-                   name, max, (unsigned long long)st.size);
+        return util_seterr(err, errlen, -1,
+                           "%s: inflates to more than %zu bytes (%llu, its directory says)", name,
+                           max, (unsigned long long)st.size);
     zip_file_t *zf = zip_fopen_index(za, (zip_uint64_t)i, 0);
-    if (!zf) return say(err, errlen, "%s: cannot open: %s", name, zip_strerror(za));
+    if (!zf) return util_seterr(err, errlen, -1, "%s: cannot open: %s", name, zip_strerror(za));
     size_t cap = 0, len = 0;
     char *b = NULL;
     for (;;) {
-        if (grow((void **)&b, &cap, len + 65537, 1)) {
+        /* room doubled with plain realloc, not mem_grow: its huge-page hint has the kernel back
+         * the whole doubled block, twice the bytes read (t_meshio bounds a lying zip's memory) */
+        char *q = len + 65537 > cap ? realloc(b, cap = cap ? 2 * cap : 1 << 17) : b;
+        if (!q) {
             zip_fclose(zf);
             free(b);
-            return say(err, errlen, "out of memory");
+            return util_seterr(err, errlen, -1, "out of memory");
         }
+        b = q;
         zip_int64_t got = zip_fread(zf, b + len, 65536);
         if (got < 0) {
-            say(err, errlen, "%s: cannot inflate: %s", name, zip_file_strerror(zf));
+            util_seterr(err, errlen, -1, "%s: cannot inflate: %s", name, zip_file_strerror(zf));
             zip_fclose(zf);
             free(b);
             return -1;
@@ -1005,7 +1065,7 @@ static int zip_member(zip_t *za, const char *name, size_t max, char **buf, size_
         if (len > max) {
             zip_fclose(zf);
             free(b);
-            return say(err, errlen, "%s: inflates to more than %zu bytes", name, max);
+            return util_seterr(err, errlen, -1, "%s: inflates to more than %zu bytes", name, max);
         }
     }
     zip_fclose(zf);
@@ -1027,7 +1087,7 @@ static int find_model(zip_t *za, char *name, size_t cap, char *err, size_t errle
         rels, (int)n, NULL, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
     if (!r) {
         free(rels);
-        return say(err, errlen, "out of memory");
+        return util_seterr(err, errlen, -1, "out of memory");
     }
     while (xmlTextReaderRead(r) == 1) {
         if (xmlTextReaderNodeType(r) == XML_READER_TYPE_DOCUMENT_TYPE ||
@@ -1088,17 +1148,17 @@ static int instance(model3 *m, uint32_t id, const double t[12], int depth, out3 
                     const char *where, char *err, size_t errlen)
 {
     obj3 *ob = find_obj(m, id);
-    if (!ob) return say(err, errlen, "%s: object %u: no such object", where, id);
+    if (!ob) return util_seterr(err, errlen, -1, "%s: object %u: no such object", where, id);
     if (depth > MESH_3MF_NESTING)
-        return say(err, errlen, "%s: components nested deeper than %d (a cycle?)", where,
-                   MESH_3MF_NESTING);
+        return util_seterr(err, errlen, -1, "%s: components nested deeper than %d (a cycle?)",
+                           where, MESH_3MF_NESTING);
     if (ob->has_mesh && ob->nt) {
         mbuild b = {0};
         if (o->n >= MESH_3MF_SOLIDS)
-            return say(err, errlen, "%s: more than %d solids", where, MESH_3MF_SOLIDS);
+            return util_seterr(err, errlen, -1, "%s: more than %d solids", where, MESH_3MF_SOLIDS);
         if (o->verts + ob->nv > MESH_MAX_VERTICES || o->tris + ob->nt > MESH_MAX_TRIANGLES)
-            return say(err, errlen, "%s: more than %u vertices or triangles in all", where,
-                       MESH_MAX_VERTICES);
+            return util_seterr(err, errlen, -1, "%s: more than %u vertices or triangles in all",
+                               where, MESH_MAX_VERTICES);
         double det = t[0] * (t[4] * t[8] - t[5] * t[7]) - t[1] * (t[3] * t[8] - t[5] * t[6]) +
                      t[2] * (t[3] * t[7] - t[4] * t[6]);
         for (size_t v = 0; v < ob->nv; v++) {
@@ -1108,8 +1168,8 @@ static int instance(model3 *m, uint32_t id, const double t[12], int depth, out3 
                 q[j] = p[0] * t[j] + p[1] * t[3 + j] + p[2] * t[6 + j] + t[9 + j];
                 if (!isfinite(q[j])) {
                     mb_free(&b);
-                    return say(err, errlen, "object %u: vertex %zu: not finite once transformed",
-                               id, v);
+                    return util_seterr(err, errlen, -1,
+                                       "object %u: vertex %zu: not finite once transformed", id, v);
                 }
             }
             if (mb_vertex(&b, q)) goto nomem;
@@ -1121,15 +1181,15 @@ static int instance(model3 *m, uint32_t id, const double t[12], int depth, out3 
                 uint32_t v = tr[det < 0 ? (3 - j) % 3 : j];
                 if (v >= ob->nv) {
                     mb_free(&b);
-                    return say(err, errlen,
-                               "object %u: triangle %zu: v%d = %u not below the %zu "
-                               "vertices",
-                               id, k, (det < 0 ? (3 - j) % 3 : j) + 1, v, ob->nv);
+                    return util_seterr(err, errlen, -1,
+                                       "object %u: triangle %zu: v%d = %u not below the %zu "
+                                       "vertices",
+                                       id, k, (det < 0 ? (3 - j) % 3 : j) + 1, v, ob->nv);
                 }
                 if (mb_index(&b, v)) goto nomem;
             }
         }
-        if (grow((void **)&o->s, &o->cap, o->n + 1, sizeof *o->s) || mb_finish(&b, &o->s[o->n]))
+        if (mem_grow(&o->s, &o->cap, o->n + 1, sizeof *o->s) || mb_finish(&b, &o->s[o->n]))
             goto nomem;
         o->n++;
         o->verts += ob->nv;
@@ -1137,7 +1197,7 @@ static int instance(model3 *m, uint32_t id, const double t[12], int depth, out3 
         goto comps;
     nomem:
         mb_free(&b);
-        return say(err, errlen, "out of memory");
+        return util_seterr(err, errlen, -1, "out of memory");
     }
 comps:
     for (size_t i = 0; i < ob->nc; i++) {
@@ -1164,20 +1224,20 @@ int mesh_read_3mf(const char *data, size_t len, solid **parts, size_t *nparts, c
     *nparts = 0;
     zip_error_init(&ze);
     if (!(src = zip_source_buffer_create(data, len, 0, &ze))) {
-        say(err, errlen, "out of memory");
+        util_seterr(err, errlen, -1, "out of memory");
         goto out;
     }
     if (!(za = zip_open_from_source(src, ZIP_RDONLY, &ze))) {
-        say(err, errlen, "not a 3MF file: not a zip (%s)", zip_error_strerror(&ze));
+        util_seterr(err, errlen, -1, "not a 3MF file: not a zip (%s)", zip_error_strerror(&ze));
         zip_source_free(src);
         goto out;
     }
     if (find_model(za, name, sizeof name, err, errlen)) goto out;
     int r = zip_member(za, name, mesh_max_part(), &xml, &n, err, errlen);
-    if (r > 0) say(err, errlen, "not a 3MF file: no model part %s", name);
+    if (r > 0) util_seterr(err, errlen, -1, "not a 3MF file: no model part %s", name);
     if (r) goto out;
     if (n > INT32_MAX) {
-        say(err, errlen, "%s: too large", name);
+        util_seterr(err, errlen, -1, "%s: too large", name);
         goto out;
     }
     m.part = name;
@@ -1185,7 +1245,7 @@ int mesh_read_3mf(const char *data, size_t len, solid **parts, size_t *nparts, c
     if (m.no > 1) qsort(m.o, m.no, sizeof *m.o, cmp_obj);
     for (size_t i = 1; i < m.no; i++)
         if (m.o[i].id == m.o[i - 1].id) {
-            say(err, errlen, "%s: object id %u twice", name, m.o[i].id);
+            util_seterr(err, errlen, -1, "%s: object id %u twice", name, m.o[i].id);
             goto out;
         }
     if (m.ni) {
@@ -1240,12 +1300,12 @@ int mesh_read(mesh_format f, const char *data, size_t len, int groups, solid **p
         rc = mesh_read_ply(data, len, &one, err, errlen);
         break;
     default:
-        return say(err, errlen, "not a mesh format this reads");
+        return util_seterr(err, errlen, -1, "not a mesh format this reads");
     }
     if (rc) return -1;
     if (!(*parts = malloc(sizeof **parts))) {
         solid_free(&one);
-        return say(err, errlen, "out of memory");
+        return util_seterr(err, errlen, -1, "out of memory");
     }
     **parts = one;
     *nparts = 1;

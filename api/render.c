@@ -14,7 +14,10 @@
  * api_format_double.  The faces and the edges are written into buffers of their own, and the
  * label points kept, before the SVG's header: the viewBox (and with it the stroke width and the
  * font size in user units) must fit every coordinate drawn, exploded faces and labels included,
- * which is known only at the end.
+ * which is known only at the end: svg_write() runs svg_place, svg_faces, svg_edges, svg_labels,
+ * then svg_frame_of, and writes svg_head, svg_body and svg_numbers around the parts.  A layers
+ * result's GeoJSON is read (lay_read, lp_read) and written a piece at a time (layer_geometry once,
+ * layer_features per choice of parents).
  *
  * Geometry here is for pictures, not for the complex: floating point, no exact predicates.
  * The face label point is the one place that must be right: the midpoint of the widest
@@ -30,6 +33,7 @@
 #include "api/render.h"
 
 #include "api/api_int.h"
+#include "core/sort.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -593,12 +597,6 @@ static void xml_escape(api_buf *b, const char *text)
     }
 }
 
-static int cmp_u64(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 static uint64_t edge_key(uint32_t a, uint32_t b)
 {
     return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
@@ -615,7 +613,10 @@ static uint64_t *face_edge_keys(const api_result *m, size_t *n)
         size_t len = ring_len(m, r);
         for (size_t i = 0; i < len; i++) k[w++] = edge_key(v[i], v[(i + 1) % len]);
     }
-    qsort(k, w, sizeof *k, cmp_u64);
+    if (sort_u64(k, w)) {
+        free(k);
+        return NULL;
+    }
     *n = w;
     return k;
 }
@@ -692,111 +693,122 @@ static int svg_edges(const api_result *m, const render_opts *o, svg_ctx *c, svg_
     return API_OK;
 }
 
-static int svg_write(const api_result *m, const render_opts *o, api_buf *out, api_error *err)
+/* The centre of the box of V (p->cx, p->cy), the vertices' text and each face's translation
+ * (p->off: (explode - 1) times its centroid's offset from the centre; 0 in place); API_ENOMEM. */
+static int svg_place(const api_result *m, const render_opts *o, svg_parts *p)
 {
-    svg_parts p = {0};
-    svg_ctx c = {0};
     double k1 = o->explode - 1;
-    size_t maxv = 0;
-    double vx, vy, vw, vh, s, margin, unit, stroke_px, font_px;
-    long height;
-    int rc = API_OK;
-
     if (m->nv > 0) {
         double x0 = m->V[0], x1 = m->V[0], y0 = m->V[1], y1 = m->V[1];
         for (size_t i = 1; i < m->nv; i++) {
             x0 = fmin(x0, m->V[2 * i]), x1 = fmax(x1, m->V[2 * i]);
             y0 = fmin(y0, m->V[2 * i + 1]), y1 = fmax(y1, m->V[2 * i + 1]);
         }
-        p.cx = x0 / 2 + x1 / 2;
-        p.cy = y0 / 2 + y1 / 2;
+        p->cx = x0 / 2 + x1 / 2;
+        p->cy = y0 / 2 + y1 / 2;
     }
-    p.off = calloc(2 * m->nf + 1, sizeof *p.off);
-    if (!p.off || vtext_make(m, 1, ' ', &p.vt) != API_OK) goto nomem;
+    p->off = calloc(2 * m->nf + 1, sizeof *p->off);
+    if (!p->off || vtext_make(m, 1, ' ', &p->vt) != API_OK) return API_ENOMEM;
     for (size_t f = 0; k1 > 0 && f < m->nf; f++) {
         double x, y;
         face_centroid(m, f, &x, &y);
-        p.off[2 * f] = k1 * (x - p.cx);
-        p.off[2 * f + 1] = k1 * (y - p.cy);
+        p->off[2 * f] = k1 * (x - p->cx);
+        p->off[2 * f + 1] = k1 * (y - p->cy);
     }
+    return API_OK;
+}
 
+/* The faces' <path> elements (each its own fill, its rings moved by its translation). */
+static void svg_faces(const api_result *m, svg_ctx *c, svg_parts *p)
+{
     for (size_t f = 0; f < m->nf; f++) {
         char fill[8];
         face_colour(f, fill);
-        api_buf_puts(&p.faces, "<path id=\"face-");
-        api_buf_u64(&p.faces, f);
-        api_buf_puts(&p.faces, "\" fill=\"");
-        api_buf_puts(&p.faces, fill);
-        api_buf_puts(&p.faces, "\" fill-rule=\"evenodd\" d=\"");
+        api_buf_puts(&p->faces, "<path id=\"face-");
+        api_buf_u64(&p->faces, f);
+        api_buf_puts(&p->faces, "\" fill=\"");
+        api_buf_puts(&p->faces, fill);
+        api_buf_puts(&p->faces, "\" fill-rule=\"evenodd\" d=\"");
         for (size_t r = m->face_ring[f]; r < m->face_ring[f + 1]; r++)
-            svg_ring(&c, &p.faces, m, &p.vt, r, p.off[2 * f], p.off[2 * f + 1]);
-        api_buf_puts(&p.faces, "\"/>\n");
+            svg_ring(c, &p->faces, m, &p->vt, r, p->off[2 * f], p->off[2 * f + 1]);
+        api_buf_puts(&p->faces, "\"/>\n");
     }
-    if (o->edges && svg_edges(m, o, &c, &p) != API_OK) goto nomem;
-    /* a Boolean's result region, on top, where the faces are (not exploded) */
-    if (m->has_result && !(k1 > 0))
-        for (size_t r = m->nface_rings; r < m->nrings; r++)
-            svg_ring(&c, &p.result, m, &p.vt, r, 0, 0);
-    if (o->numbers) {
-        double sx, sy;
-        for (size_t v = 0; v < m->nv; v++) svg_track(&c, m->V[2 * v], m->V[2 * v + 1], &sx, &sy);
-        for (size_t f = 0; f < m->nf; f++) {
-            size_t n = m->ring_off[m->face_ring[f + 1]] - m->ring_off[m->face_ring[f]];
-            if (n > maxv) maxv = n;
-        }
-        p.ys = malloc(maxv * sizeof *p.ys + 1);
-        p.xs = malloc(maxv * sizeof *p.xs + 1);
-        p.label = malloc(2 * m->nf * sizeof *p.label + 1);
-        if (!p.ys || !p.xs || !p.label) goto nomem;
-        for (size_t f = 0; f < m->nf; f++) {
-            double x, y;
-            face_label_point(m, f, p.ys, p.xs, &x, &y);
-            svg_track(&c, x + p.off[2 * f], y + p.off[2 * f + 1], p.label + 2 * f,
-                      p.label + 2 * f + 1);
-        }
-    }
-    if (p.faces.failed || p.edges.failed || p.result.failed) goto nomem;
-    if (c.overflow) {
-        rc = api_fail(err, API_EINVALID,
-                      "explode: the exploded drawing does not fit in doubles (coordinates too "
-                      "large)");
-        goto fail;
-    }
+}
 
-    /* the frame: every coordinate written, plus a margin of 5% of the larger side */
-    if (!c.any) {
-        c.x0 = c.x1 = p.cx;
-        c.y0 = c.y1 = -p.cy;
+/* With numbers: every vertex tracked into the frame, and each face's label point
+ * (face_label_point(), moved with the face) into p->label, tracked too; API_ENOMEM. */
+static int svg_labels(const api_result *m, svg_ctx *c, svg_parts *p)
+{
+    size_t maxv = 0;
+    double sx, sy;
+    for (size_t v = 0; v < m->nv; v++) svg_track(c, m->V[2 * v], m->V[2 * v + 1], &sx, &sy);
+    for (size_t f = 0; f < m->nf; f++) {
+        size_t n = m->ring_off[m->face_ring[f + 1]] - m->ring_off[m->face_ring[f]];
+        if (n > maxv) maxv = n;
     }
-    s = fmax(c.x1 - c.x0, c.y1 - c.y0);
-    margin = s > 0 ? 0.05 * s : fmax(1.0, 1e-3 * fmax(fabs(c.x0), fabs(c.y0)));
-    vx = c.x0 - margin;
-    vy = c.y0 - margin;
-    vw = (c.x1 - c.x0) + 2 * margin;
-    vh = (c.y1 - c.y0) + 2 * margin;
-    if (!isfinite(vx) || !isfinite(vy) || !isfinite(vw) || !isfinite(vh) || !(vw > 0) ||
-        !(vh > 0)) {
-        rc = api_fail(err, API_EINVALID, "V: the drawing's extent does not fit in doubles");
-        goto fail;
+    p->ys = malloc(maxv * sizeof *p->ys + 1);
+    p->xs = malloc(maxv * sizeof *p->xs + 1);
+    p->label = malloc(2 * m->nf * sizeof *p->label + 1);
+    if (!p->ys || !p->xs || !p->label) return API_ENOMEM;
+    for (size_t f = 0; f < m->nf; f++) {
+        double x, y;
+        face_label_point(m, f, p->ys, p->xs, &x, &y);
+        svg_track(c, x + p->off[2 * f], y + p->off[2 * f + 1], p->label + 2 * f,
+                  p->label + 2 * f + 1);
     }
-    unit = vw / o->width; /* user units per pixel */
-    height = lround(o->width * (vh / vw));
-    if (height < 1) height = 1;
-    stroke_px = o->stroke > 0 ? o->stroke : fmin(4, fmax(0.5, o->width / 800.0));
-    font_px = fmin(24, fmax(6, 11 * o->width / 800.0));
+    return API_OK;
+}
 
+/* The picture's frame in user units and its sizes in pixels. */
+typedef struct svg_frame {
+    double vx, vy, vw, vh; /* the viewBox */
+    double unit;           /* user units per pixel */
+    double stroke_px, font_px;
+    long height; /* in pixels */
+} svg_frame;
+
+/* The frame of everything tracked in c (the centre of V when nothing was), with a margin of
+ * 5% of the larger side; API_EINVALID when it does not fit in doubles. */
+static int svg_frame_of(svg_ctx *c, const svg_parts *p, const render_opts *o, svg_frame *fr,
+                        api_error *err)
+{
+    double s, margin;
+    if (!c->any) {
+        c->x0 = c->x1 = p->cx;
+        c->y0 = c->y1 = -p->cy;
+    }
+    s = fmax(c->x1 - c->x0, c->y1 - c->y0);
+    margin = s > 0 ? 0.05 * s : fmax(1.0, 1e-3 * fmax(fabs(c->x0), fabs(c->y0)));
+    fr->vx = c->x0 - margin;
+    fr->vy = c->y0 - margin;
+    fr->vw = (c->x1 - c->x0) + 2 * margin;
+    fr->vh = (c->y1 - c->y0) + 2 * margin;
+    if (!isfinite(fr->vx) || !isfinite(fr->vy) || !isfinite(fr->vw) || !isfinite(fr->vh) ||
+        !(fr->vw > 0) || !(fr->vh > 0))
+        return api_fail(err, API_EINVALID, "V: the drawing's extent does not fit in doubles");
+    fr->unit = fr->vw / o->width;
+    fr->height = lround(o->width * (fr->vh / fr->vw));
+    if (fr->height < 1) fr->height = 1;
+    fr->stroke_px = o->stroke > 0 ? o->stroke : fmin(4, fmax(0.5, o->width / 800.0));
+    fr->font_px = fmin(24, fmax(6, 11 * o->width / 800.0));
+    return API_OK;
+}
+
+/* The document's head: the XML declaration, <svg> with its size and viewBox, the <title>. */
+static void svg_head(api_buf *out, const api_result *m, const render_opts *o, const svg_frame *fr)
+{
     api_buf_puts(out, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
                       "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\"");
     svg_number_attr(out, "width", o->width);
-    svg_number_attr(out, "height", (double)height);
+    svg_number_attr(out, "height", (double)fr->height);
     api_buf_puts(out, " viewBox=\"");
-    api_buf_double(out, vx);
+    api_buf_double(out, fr->vx);
     api_buf_putc(out, ' ');
-    api_buf_double(out, vy);
+    api_buf_double(out, fr->vy);
     api_buf_putc(out, ' ');
-    api_buf_double(out, vw);
+    api_buf_double(out, fr->vw);
     api_buf_putc(out, ' ');
-    api_buf_double(out, vh);
+    api_buf_double(out, fr->vh);
     api_buf_puts(out, "\">\n<title>");
     if (o->title) {
         xml_escape(out, o->title);
@@ -809,47 +821,86 @@ static int svg_write(const api_result *m, const render_opts *o, api_buf *out, ap
         api_buf_u64(out, m->nv);
         api_buf_puts(out, m->nv == 1 ? " vertex" : " vertices");
     }
-    api_buf_puts(out, "</title>\n<g id=\"faces\" stroke=\"none\">\n");
-    api_buf_put(out, p.faces.p ? p.faces.p : "", p.faces.len);
+    api_buf_puts(out, "</title>\n");
+}
+
+/* The parts, in drawing order: the faces' group, the edges' path, a Boolean's result region. */
+static void svg_body(api_buf *out, const svg_parts *p, const svg_frame *fr)
+{
+    api_buf_puts(out, "<g id=\"faces\" stroke=\"none\">\n");
+    api_buf_put(out, p->faces.p ? p->faces.p : "", p->faces.len);
     api_buf_puts(out, "</g>\n");
-    if (p.edges.len > 0) {
+    if (p->edges.len > 0) {
         api_buf_puts(out, "<path id=\"edges\" fill=\"none\" stroke=\"#1a1a1a\"");
-        svg_number_attr(out, "stroke-width", round4(stroke_px * unit));
+        svg_number_attr(out, "stroke-width", round4(fr->stroke_px * fr->unit));
         api_buf_puts(out, " stroke-linecap=\"round\" stroke-linejoin=\"round\" d=\"");
-        api_buf_put(out, p.edges.p, p.edges.len);
+        api_buf_put(out, p->edges.p, p->edges.len);
         api_buf_puts(out, "\"/>\n");
     }
-    if (p.result.len > 0) {
+    if (p->result.len > 0) {
         api_buf_puts(out, "<path id=\"result\" fill=\"#d62728\" fill-opacity=\"0.35\" "
                           "fill-rule=\"evenodd\" stroke=\"#d62728\"");
-        svg_number_attr(out, "stroke-width", round4(2 * stroke_px * unit));
+        svg_number_attr(out, "stroke-width", round4(2 * fr->stroke_px * fr->unit));
         api_buf_puts(out, " stroke-linejoin=\"round\" d=\"");
-        api_buf_put(out, p.result.p, p.result.len);
+        api_buf_put(out, p->result.p, p->result.len);
         api_buf_puts(out, "\"/>\n");
     }
-    if (o->numbers) {
-        /* Text lives in a group scaled to about a pixel per unit (a power of two, so positions
-         * divide exactly): renderers that size glyphs in whole units, or apply a minimum font
-         * size, draw a font of 0.005 user units badly or not at all. */
-        double scale = ldexp(1.0, (int)lround(log2(unit)));
-        for (int i = 0; i < 2; i++) {
-            api_buf_puts(out, i == 0 ? "<g id=\"vertex-numbers\" fill=\"#8b0000\""
-                                     : "<g id=\"face-numbers\" fill=\"#000000\" "
-                                       "font-weight=\"bold\"");
-            api_buf_puts(out, " transform=\"scale(");
-            api_buf_double(out, scale);
-            api_buf_puts(out, ")\" font-family=\"sans-serif\"");
-            svg_number_attr(out, "font-size", round4(font_px * unit / scale));
-            api_buf_puts(out, " text-anchor=\"middle\" dominant-baseline=\"central\">\n");
-            if (i == 0)
-                for (size_t v = 0; v < m->nv; v++)
-                    svg_label(out, m->V[2 * v], -m->V[2 * v + 1], scale, v);
-            else
-                for (size_t f = 0; f < m->nf; f++)
-                    svg_label(out, p.label[2 * f], p.label[2 * f + 1], scale, f);
-            api_buf_puts(out, "</g>\n");
-        }
+}
+
+/* The vertex numbers' and the face numbers' groups (p->label: svg_labels()). */
+static void svg_numbers(api_buf *out, const api_result *m, const svg_parts *p, const svg_frame *fr)
+{
+    /* Text lives in a group scaled to about a pixel per unit (a power of two, so positions
+     * divide exactly): renderers that size glyphs in whole units, or apply a minimum font
+     * size, draw a font of 0.005 user units badly or not at all. */
+    double scale = ldexp(1.0, (int)lround(log2(fr->unit)));
+    for (int i = 0; i < 2; i++) {
+        api_buf_puts(out, i == 0 ? "<g id=\"vertex-numbers\" fill=\"#8b0000\""
+                                 : "<g id=\"face-numbers\" fill=\"#000000\" "
+                                   "font-weight=\"bold\"");
+        api_buf_puts(out, " transform=\"scale(");
+        api_buf_double(out, scale);
+        api_buf_puts(out, ")\" font-family=\"sans-serif\"");
+        svg_number_attr(out, "font-size", round4(fr->font_px * fr->unit / scale));
+        api_buf_puts(out, " text-anchor=\"middle\" dominant-baseline=\"central\">\n");
+        if (i == 0)
+            for (size_t v = 0; v < m->nv; v++)
+                svg_label(out, m->V[2 * v], -m->V[2 * v + 1], scale, v);
+        else
+            for (size_t f = 0; f < m->nf; f++)
+                svg_label(out, p->label[2 * f], p->label[2 * f + 1], scale, f);
+        api_buf_puts(out, "</g>\n");
     }
+}
+
+/* The picture of m: the parts drawn into their buffers first (tracking the frame), then the
+ * document written into out around them. */
+static int svg_write(const api_result *m, const render_opts *o, api_buf *out, api_error *err)
+{
+    svg_parts p = {0};
+    svg_ctx c = {0};
+    svg_frame fr = {0};
+    int rc = API_OK;
+    if (svg_place(m, o, &p) != API_OK) goto nomem;
+    svg_faces(m, &c, &p);
+    if (o->edges && svg_edges(m, o, &c, &p) != API_OK) goto nomem;
+    /* a Boolean's result region, on top, where the faces are (not exploded) */
+    if (m->has_result && !(o->explode - 1 > 0))
+        for (size_t r = m->nface_rings; r < m->nrings; r++)
+            svg_ring(&c, &p.result, m, &p.vt, r, 0, 0);
+    if (o->numbers && svg_labels(m, &c, &p) != API_OK) goto nomem;
+    if (p.faces.failed || p.edges.failed || p.result.failed) goto nomem;
+    if (c.overflow) {
+        rc = api_fail(err, API_EINVALID,
+                      "explode: the exploded drawing does not fit in doubles (coordinates too "
+                      "large)");
+        goto fail;
+    }
+    rc = svg_frame_of(&c, &p, o, &fr, err);
+    if (rc != API_OK) goto fail;
+    svg_head(out, m, o, &fr);
+    svg_body(out, &p, &fr);
+    if (o->numbers) svg_numbers(out, m, &p, &fr);
     api_buf_puts(out, "</svg>\n");
     if (out->failed) goto nomem;
     goto fail; /* the common exit: rc is API_OK */
@@ -1130,173 +1181,243 @@ static int piece_props(api_buf *b, const lay *L, const size_t *choice, double ar
     return API_OK;
 }
 
+/* A layers result's "result".pieces: the polygons (FV, holes) and the piece of each (piece),
+ * the inputs each piece lies in (inputs, CSR); np polygons, nk pieces. */
+typedef struct lpieces {
+    const json_t *FV, *holes, *piece, *ip, *ix;
+    size_t np, nk;
+    size_t most; /* the longest ring */
+} lpieces;
+
+/* The polygon q's rings: its shell (h 0), then its holes (h 1 ..). */
+static const json_t *lp_holes(const lpieces *lp, size_t q)
+{
+    char key[24];
+    snprintf(key, sizeof key, "%zu", q);
+    return json_object_get(lp->holes, key);
+}
+
+/* "result".pieces of m read into *lp and checked: its members there, the inputs' offsets
+ * non-decreasing from 0 to their end, every input < m->ninputs, every polygon's piece < nk
+ * (the rings are checked as they are written: layer_geometry()). */
+static int lp_read(lpieces *lp, const api_result *m, api_error *err)
+{
+    const json_t *pc = json_object_get(json_object_get(m->root, "result"), "pieces");
+    const json_t *in = json_object_get(pc, "inputs");
+    *lp = (lpieces){.FV = json_object_get(pc, "FV"),
+                    .holes = json_object_get(pc, "holes"),
+                    .piece = json_object_get(pc, "piece"),
+                    .ip = json_object_get(in, "indptr"),
+                    .ix = json_object_get(in, "indices")};
+    lp->np = json_array_size(lp->FV);
+    lp->nk = json_array_size(lp->ip) ? json_array_size(lp->ip) - 1 : 0;
+    if (!json_is_array(lp->FV) || !json_is_object(lp->holes) ||
+        json_array_size(lp->piece) != lp->np || !json_is_array(lp->ip) || !json_is_array(lp->ix))
+        return api_fail(err, API_EINVALID,
+                        "result.pieces: required with \"layers\": {\"FV\", \"holes\", "
+                        "\"piece\", \"inputs\"}");
+    size_t nix = json_array_size(lp->ix);
+    for (size_t k = 0; k <= lp->nk; k++) { /* the pieces' rows: offsets, inputs ascending */
+        const json_t *x = json_array_get(lp->ip, k);
+        json_int_t v = json_integer_value(x);
+        if (!json_is_integer(x) || v < 0 || (size_t)v > nix || (k == 0 && v != 0) ||
+            (k == lp->nk && (size_t)v != nix) ||
+            (k > 0 && v < json_integer_value(json_array_get(lp->ip, k - 1))))
+            return api_fail(err, API_EINVALID, "result.pieces.inputs.indptr[%zu]: bad offset", k);
+    }
+    for (size_t i = 0; i < nix; i++) {
+        const json_t *x = json_array_get(lp->ix, i);
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (size_t)json_integer_value(x) >= m->ninputs)
+            return api_fail(err, API_EINVALID,
+                            "result.pieces.inputs.indices[%zu]: expected an input < %zu", i,
+                            m->ninputs);
+    }
+    for (size_t q = 0; q < lp->np; q++) {
+        const json_t *x = json_array_get(lp->piece, q), *hs;
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (size_t)json_integer_value(x) >= lp->nk)
+            return api_fail(err, API_EINVALID, "result.pieces.piece[%zu]: expected a piece < %zu",
+                            q, lp->nk);
+        size_t n = json_array_size(json_array_get(lp->FV, q));
+        if (n > lp->most) lp->most = n;
+        hs = lp_holes(lp, q);
+        for (size_t h = 0; h < json_array_size(hs); h++)
+            if (json_array_size(json_array_get(hs, h)) > lp->most)
+                lp->most = json_array_size(json_array_get(hs, h));
+    }
+    return API_OK;
+}
+
+/* The geometry of piece k, its polygons plist[poff[k] .. poff[k+1]), as a MultiPolygon into
+ * g, twice its area into *area2 (idx: room for the longest ring); API_EINVALID for a ring that
+ * is not a cycle of 3 or more vertex indices. */
+static int layer_geometry(api_buf *g, const lpieces *lp, const api_result *m, const vtext *vt,
+                          const size_t *poff, const size_t *plist, size_t k, uint32_t *idx,
+                          double *area2, api_error *err)
+{
+    *area2 = 0;
+    api_buf_puts(g, "{\"type\":\"MultiPolygon\",\"coordinates\":[");
+    for (size_t i = poff[k]; i < poff[k + 1]; i++) {
+        size_t q = plist[i], n;
+        const json_t *hs = lp_holes(lp, q);
+        api_buf_puts(g, i > poff[k] ? ",[" : "[");
+        for (size_t h = 0; h <= json_array_size(hs); h++) {
+            const json_t *row = h ? json_array_get(hs, h - 1) : json_array_get(lp->FV, q);
+            if (piece_cycle(row, m->nv, idx, &n))
+                return api_fail(err, API_EINVALID,
+                                "result.pieces.%s[%zu]: expected a cycle of vertex indices < "
+                                "%zu",
+                                h ? "holes" : "FV", q, m->nv);
+            if (h) api_buf_putc(g, ',');
+            geojson_cycle(g, vt, idx, n);
+            *area2 += cycle_area2(m, idx, n);
+        }
+        api_buf_putc(g, ']');
+    }
+    api_buf_puts(g, "]}");
+    return API_OK;
+}
+
+/* The Features of piece k (its geometry g, its area): one per choice of one parent in each
+ * layer its inputs fall in (none where they fall in none), the choices counted in *nfeat
+ * (at most RENDER_MAX_FEATURES); lo, hi, choice: room for L->n.  API_ENOMEM bare. */
+static int layer_features(api_buf *b, const lpieces *lp, const lay *L, size_t k, const api_buf *g,
+                          double area, size_t *lo, size_t *hi, size_t *choice, size_t *nfeat,
+                          int *any, api_error *err)
+{
+    /* its parents per layer: the inputs of its row within each layer's range */
+    size_t a = (size_t)json_integer_value(json_array_get(lp->ip, k));
+    size_t z = (size_t)json_integer_value(json_array_get(lp->ip, k + 1));
+    size_t at[64] = {0};
+    for (size_t l = 0; l < L->n; l++) {
+        lo[l] = a;
+        while (lo[l] < z && (size_t)json_integer_value(json_array_get(lp->ix, lo[l])) < L->first[l])
+            lo[l]++;
+        hi[l] = lo[l];
+        while (hi[l] < z &&
+               (size_t)json_integer_value(json_array_get(lp->ix, hi[l])) < L->first[l + 1])
+            hi[l]++;
+    }
+    if (L->n > 64) return api_fail(err, API_EINVALID, "layers: more than 64");
+    for (;;) { /* every choice of one parent per layer, as an odometer */
+        for (size_t l = 0; l < L->n; l++)
+            choice[l] = lo[l] == hi[l]
+                            ? SIZE_MAX
+                            : (size_t)json_integer_value(json_array_get(lp->ix, lo[l] + at[l])) -
+                                  L->first[l];
+        if (++*nfeat > RENDER_MAX_FEATURES)
+            return api_fail(err, API_EINVALID, "result: more than %d pieces and parents to write",
+                            RENDER_MAX_FEATURES);
+        if (*any) api_buf_putc(b, ',');
+        *any = 1;
+        api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":");
+        api_buf_put(b, g->p, g->len);
+        api_buf_puts(b, ",\"properties\":");
+        if (piece_props(b, L, choice, area) != API_OK) return API_ENOMEM;
+        api_buf_putc(b, '}');
+        size_t l = 0;
+        for (; l < L->n; l++) {
+            if (lo[l] + at[l] + 1 < hi[l]) {
+                at[l]++;
+                break;
+            }
+            at[l] = 0;
+        }
+        if (l == L->n) return API_OK;
+    }
+}
+
+/* A layers result's Features (the section's comment above): per piece its geometry once, then
+ * a Feature per choice of parents. */
 static int geojson_layers(api_buf *b, const api_result *m, const vtext *vt, int *any,
                           api_error *err)
 {
-    const json_t *res = json_object_get(m->root, "result");
-    const json_t *pc = json_object_get(res, "pieces");
-    const json_t *FV = json_object_get(pc, "FV"), *holes = json_object_get(pc, "holes");
-    const json_t *piece = json_object_get(pc, "piece"), *in = json_object_get(pc, "inputs");
-    const json_t *ip = json_object_get(in, "indptr"), *ix = json_object_get(in, "indices");
-    size_t np = json_array_size(FV), nk = json_array_size(ip) ? json_array_size(ip) - 1 : 0;
-    size_t most = 0;
+    lpieces lp;
     lay L;
+    size_t *poff = NULL, *plist = NULL, *choice = NULL, *lo = NULL, *hi = NULL, nfeat = 0;
+    uint32_t *idx = NULL;
     int rc = lay_read(m->root, m->ninputs, &L, err);
+    if (rc == API_OK) rc = lp_read(&lp, m, err);
     if (rc != API_OK) goto done;
-    if (!json_is_array(FV) || !json_is_object(holes) || json_array_size(piece) != np ||
-        !json_is_array(ip) || !json_is_array(ix)) {
-        rc = api_fail(err, API_EINVALID,
-                      "result.pieces: required with \"layers\": {\"FV\", \"holes\", "
-                      "\"piece\", \"inputs\"}");
-        goto done;
-    }
-    for (size_t k = 0; k <= nk; k++) { /* the pieces' rows: offsets, inputs ascending */
-        const json_t *x = json_array_get(ip, k);
-        json_int_t v = json_integer_value(x);
-        if (!json_is_integer(x) || v < 0 || (size_t)v > json_array_size(ix) || (k == 0 && v != 0) ||
-            (k == nk && (size_t)v != json_array_size(ix)) ||
-            (k > 0 && v < json_integer_value(json_array_get(ip, k - 1)))) {
-            rc = api_fail(err, API_EINVALID, "result.pieces.inputs.indptr[%zu]: bad offset", k);
-            goto done;
-        }
-    }
-    for (size_t i = 0; i < json_array_size(ix); i++) {
-        const json_t *x = json_array_get(ix, i);
-        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
-            (size_t)json_integer_value(x) >= m->ninputs) {
-            rc = api_fail(err, API_EINVALID,
-                          "result.pieces.inputs.indices[%zu]: expected an input < %zu", i,
-                          m->ninputs);
-            goto done;
-        }
-    }
-    for (size_t q = 0; q < np; q++) {
-        const json_t *x = json_array_get(piece, q);
-        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
-            (size_t)json_integer_value(x) >= nk) {
-            rc = api_fail(err, API_EINVALID, "result.pieces.piece[%zu]: expected a piece < %zu", q,
-                          nk);
-            goto done;
-        }
-        size_t n = json_array_size(json_array_get(FV, q));
-        if (n > most) most = n;
-        char key[24];
-        snprintf(key, sizeof key, "%zu", q);
-        const json_t *hs = json_object_get(holes, key);
-        for (size_t h = 0; h < json_array_size(hs); h++)
-            if (json_array_size(json_array_get(hs, h)) > most)
-                most = json_array_size(json_array_get(hs, h));
-    }
     /* the polygons of each piece, in order (CSR) */
-    size_t *poff = calloc(nk + 2, sizeof *poff), *plist = malloc((np + 1) * sizeof *plist);
-    uint32_t *idx = malloc((most + 1) * sizeof *idx);
-    size_t *choice = malloc((L.n + 1) * sizeof *choice), *lo = malloc((L.n + 1) * sizeof *lo);
-    size_t *hi = malloc((L.n + 1) * sizeof *hi), nfeat = 0;
+    poff = calloc(lp.nk + 2, sizeof *poff);
+    plist = malloc((lp.np + 1) * sizeof *plist);
+    idx = malloc((lp.most + 1) * sizeof *idx);
+    choice = malloc((L.n + 1) * sizeof *choice);
+    lo = malloc((L.n + 1) * sizeof *lo);
+    hi = malloc((L.n + 1) * sizeof *hi);
     if (!poff || !plist || !idx || !choice || !lo || !hi) {
         rc = API_ENOMEM;
-        goto free_all;
+        goto done;
     }
-    for (size_t q = 0; q < np; q++) poff[json_integer_value(json_array_get(piece, q)) + 2]++;
-    for (size_t k = 0; k < nk; k++) poff[k + 2] += poff[k + 1];
-    for (size_t q = 0; q < np; q++)
-        plist[poff[json_integer_value(json_array_get(piece, q)) + 1]++] = q;
-    for (size_t k = 0; k < nk; k++) {
-        /* the piece's geometry, once, as text; its area */
+    for (size_t q = 0; q < lp.np; q++) poff[json_integer_value(json_array_get(lp.piece, q)) + 2]++;
+    for (size_t k = 0; k < lp.nk; k++) poff[k + 2] += poff[k + 1];
+    for (size_t q = 0; q < lp.np; q++)
+        plist[poff[json_integer_value(json_array_get(lp.piece, q)) + 1]++] = q;
+    for (size_t k = 0; k < lp.nk && rc == API_OK; k++) {
         api_buf g = {0};
-        double area2 = 0;
-        api_buf_puts(&g, "{\"type\":\"MultiPolygon\",\"coordinates\":[");
-        for (size_t i = poff[k]; i < poff[k + 1] && rc == API_OK; i++) {
-            size_t q = plist[i], n;
-            char key[24];
-            snprintf(key, sizeof key, "%zu", q);
-            const json_t *hs = json_object_get(holes, key);
-            api_buf_puts(&g, i > poff[k] ? ",[" : "[");
-            for (size_t h = 0; h <= json_array_size(hs); h++) {
-                const json_t *row = h ? json_array_get(hs, h - 1) : json_array_get(FV, q);
-                if (piece_cycle(row, m->nv, idx, &n)) {
-                    rc = api_fail(err, API_EINVALID,
-                                  "result.pieces.%s[%zu]: expected a cycle of vertex indices < "
-                                  "%zu",
-                                  h ? "holes" : "FV", q, m->nv);
-                    break;
-                }
-                if (h) api_buf_putc(&g, ',');
-                geojson_cycle(&g, vt, idx, n);
-                area2 += cycle_area2(m, idx, n);
-            }
-            api_buf_putc(&g, ']');
-        }
-        api_buf_puts(&g, "]}");
-        if (rc != API_OK || g.failed) {
-            if (rc == API_OK) rc = API_ENOMEM;
-            api_buf_free(&g);
-            goto free_all;
-        }
-        /* its parents per layer: the inputs of its row within each layer's range */
-        size_t a = (size_t)json_integer_value(json_array_get(ip, k));
-        size_t z = (size_t)json_integer_value(json_array_get(ip, k + 1));
-        for (size_t l = 0; l < L.n; l++) {
-            lo[l] = hi[l] = a;
-            while (lo[l] < z && (size_t)json_integer_value(json_array_get(ix, lo[l])) < L.first[l])
-                lo[l]++;
-            hi[l] = lo[l];
-            while (hi[l] < z &&
-                   (size_t)json_integer_value(json_array_get(ix, hi[l])) < L.first[l + 1])
-                hi[l]++;
-        }
-        /* every choice of one parent per layer (none where the piece lies in none) */
-        size_t at[64] = {0};
-        if (L.n > 64) {
-            api_buf_free(&g);
-            rc = api_fail(err, API_EINVALID, "layers: more than 64");
-            goto free_all;
-        }
-        for (;;) {
-            for (size_t l = 0; l < L.n; l++)
-                choice[l] = lo[l] == hi[l]
-                                ? SIZE_MAX
-                                : (size_t)json_integer_value(json_array_get(ix, lo[l] + at[l])) -
-                                      L.first[l];
-            if (++nfeat > RENDER_MAX_FEATURES) {
-                api_buf_free(&g);
-                rc = api_fail(err, API_EINVALID, "result: more than %d pieces and parents to write",
-                              RENDER_MAX_FEATURES);
-                goto free_all;
-            }
-            if (*any) api_buf_putc(b, ',');
-            *any = 1;
-            api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":");
-            api_buf_put(b, g.p, g.len);
-            api_buf_puts(b, ",\"properties\":");
-            if (piece_props(b, &L, choice, area2 / 2) != API_OK) {
-                api_buf_free(&g);
-                rc = API_ENOMEM;
-                goto free_all;
-            }
-            api_buf_putc(b, '}');
-            size_t l = 0; /* the next choice, as an odometer */
-            for (; l < L.n; l++) {
-                if (lo[l] + at[l] + 1 < hi[l]) {
-                    at[l]++;
-                    break;
-                }
-                at[l] = 0;
-            }
-            if (l == L.n) break;
-        }
+        double area2;
+        rc = layer_geometry(&g, &lp, m, vt, poff, plist, k, idx, &area2, err);
+        if (rc == API_OK && g.failed) rc = API_ENOMEM;
+        if (rc == API_OK)
+            rc = layer_features(b, &lp, &L, k, &g, area2 / 2, lo, hi, choice, &nfeat, any, err);
         api_buf_free(&g);
     }
-free_all:
+done:
     free(poff);
     free(plist);
     free(idx);
     free(choice);
     free(lo);
     free(hi);
-done:
     lay_free(&L);
     if (rc == API_ENOMEM) rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
     return rc;
+}
+
+/* A Boolean's result region as one MultiPolygon Feature (its rings' edges added to keys). */
+static void geojson_result(api_buf *b, const api_result *m, const vtext *vt, uint64_t *keys,
+                           size_t *nkeys)
+{
+    api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"MultiPolygon\","
+                    "\"coordinates\":[");
+    for (size_t q = 0; q < m->npoly; q++) {
+        api_buf_puts(b, q ? ",[" : "[");
+        for (size_t r = m->poly_ring[q]; r < m->poly_ring[q + 1]; r++) {
+            const uint32_t *v = ring_idx(m, r);
+            size_t n = ring_len(m, r);
+            if (r > m->poly_ring[q]) api_buf_putc(b, ',');
+            geojson_ring(b, m, vt, r);
+            for (size_t i = 0; i < n; i++) keys[(*nkeys)++] = edge_key(v[i], v[(i + 1) % n]);
+        }
+        api_buf_putc(b, ']');
+    }
+    api_buf_puts(b, "]},\"properties\":{\"result\":true,\"area\":");
+    api_buf_double(b, m->res_area);
+    api_buf_puts(b, "}}");
+}
+
+/* The edges on no ring (keys: the rings' edges, nkeys of them, sorted here) as LineString
+ * Features: dangling edges (kept on request), also those inside a face; API_ENOMEM. */
+static int geojson_dangling(api_buf *b, const api_result *m, const vtext *vt, uint64_t *keys,
+                            size_t nkeys, int *any)
+{
+    if (sort_u64(keys, nkeys)) return API_ENOMEM;
+    for (size_t e = 0; e < m->ne; e++) {
+        if (has_key(keys, nkeys, edge_key(m->ev[2 * e], m->ev[2 * e + 1]))) continue;
+        if (*any) api_buf_putc(b, ',');
+        *any = 1;
+        api_buf_puts(b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"LineString\","
+                        "\"coordinates\":[[");
+        vtext_put(b, vt, m->ev[2 * e]);
+        api_buf_puts(b, "],[");
+        vtext_put(b, vt, m->ev[2 * e + 1]);
+        api_buf_puts(b, "]]},\"properties\":{\"edge\":");
+        api_buf_u64(b, e);
+        api_buf_puts(b, ",\"dangling\":true}}");
+    }
+    return API_OK;
 }
 
 int render_geojson(const char *result_json, size_t len, const render_opts *o, char **out,
@@ -1346,22 +1467,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
         rc = geojson_layers(&b, &m, &vt, &any, err);
         if (rc != API_OK) goto done;
     } else if (m.has_result) {
-        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"MultiPolygon\","
-                         "\"coordinates\":[");
-        for (size_t q = 0; q < m.npoly; q++) {
-            api_buf_puts(&b, q ? ",[" : "[");
-            for (size_t r = m.poly_ring[q]; r < m.poly_ring[q + 1]; r++) {
-                const uint32_t *v = ring_idx(&m, r);
-                size_t n = ring_len(&m, r);
-                if (r > m.poly_ring[q]) api_buf_putc(&b, ',');
-                geojson_ring(&b, &m, &vt, r);
-                for (size_t i = 0; i < n; i++) keys[nkeys++] = edge_key(v[i], v[(i + 1) % n]);
-            }
-            api_buf_putc(&b, ']');
-        }
-        api_buf_puts(&b, "]},\"properties\":{\"result\":true,\"area\":");
-        api_buf_double(&b, m.res_area);
-        api_buf_puts(&b, "}}");
+        geojson_result(&b, &m, &vt, keys, &nkeys);
         any = 1;
     }
     for (size_t f = 0; f < m.nf; f++) {
@@ -1376,20 +1482,9 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
         any = 1;
         geojson_face(&b, &m, &vt, f, &pc);
     }
-    /* edges on no ring: dangling (kept on request), also those inside a face */
-    qsort(keys, nkeys, sizeof *keys, cmp_u64);
-    for (size_t e = 0; e < m.ne; e++) {
-        if (has_key(keys, nkeys, edge_key(m.ev[2 * e], m.ev[2 * e + 1]))) continue;
-        if (any) api_buf_putc(&b, ',');
-        any = 1;
-        api_buf_puts(&b, "{\"type\":\"Feature\",\"geometry\":{\"type\":\"LineString\","
-                         "\"coordinates\":[[");
-        vtext_put(&b, &vt, m.ev[2 * e]);
-        api_buf_puts(&b, "],[");
-        vtext_put(&b, &vt, m.ev[2 * e + 1]);
-        api_buf_puts(&b, "]]},\"properties\":{\"edge\":");
-        api_buf_u64(&b, e);
-        api_buf_puts(&b, ",\"dangling\":true}}");
+    if (geojson_dangling(&b, &m, &vt, keys, nkeys, &any) != API_OK) {
+        rc = api_fail(err, API_ENOMEM, "out of memory writing the GeoJSON");
+        goto done;
     }
     api_buf_puts(&b, "]}\n");
 done:

@@ -91,18 +91,21 @@ typedef struct render_opts {
     }
 void render_opts_init(render_opts *o);
 
+/* A renderer: the result result_json[0..len) (need not be NUL-terminated) written in its format
+ * into *out (*outlen bytes) with the options o (may be NULL: the defaults); the ones below. */
+typedef int render_func(const char *result_json, size_t len, const render_opts *o, char **out,
+                        size_t *outlen, api_error *err);
+
 /* Draws the 2D result result_json[0..len) (need not be NUL-terminated) as an SVG document
  * (o may be NULL: the defaults).  Returns API_OK and sets *out (*outlen bytes, ending in "\n"),
  * or API_EINVALID for a result it cannot draw or options out of range (the message names the
  * key or option), API_ENOMEM. */
-int render_svg(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
+render_func render_svg;
 
 /* Writes the 2D result result_json[0..len) as a GeoJSON FeatureCollection (one line, ending in
  * "\n"; o may be NULL: the defaults, only o->cells is read).  Returns API_OK, API_EINVALID or
  * API_ENOMEM as render_svg(). */
-int render_geojson(const char *result_json, size_t len, const render_opts *o, char **out,
-                   size_t *outlen, api_error *err);
+render_func render_geojson;
 
 /* Writes the bounded cells of the 3D result result_json[0..len) (dim 3; "V", "FV" and "CF"
  * required, "holes" optional) as Wavefront OBJ (api/render_obj.c): a comment line, every
@@ -114,8 +117,7 @@ int render_geojson(const char *result_json, size_t len, const render_opts *o, ch
  * NULL: the defaults).  Returns API_OK, API_EINVALID (a result it cannot read: the message names
  * the JSON path, "CF[2][0]:
  * ...", "dim: expected 3 ..."; explode out of range) or API_ENOMEM. */
-int render_obj(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
+render_func render_obj;
 
 /* Meshes of a 3D result for other tools (api/render_mesh.c), of the triangles render_obj
  * writes (api/rmesh.c), each holding only the vertices its triangles use:
@@ -131,14 +133,10 @@ int render_obj(const char *result_json, size_t len, const render_opts *o, char *
  * (not moved by explode).  Of any other result STL and OFF hold every cell's triangles (a face
  * two cells share twice, facing out of each).  Only o->explode is read, by glb (o may be
  * NULL).  Returns API_OK, API_EINVALID (as render_obj) or API_ENOMEM. */
-int render_stl(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
-int render_off(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
-int render_3mf(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
-int render_glb(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
+render_func render_stl;
+render_func render_off;
+render_func render_3mf;
+render_func render_glb;
 
 /* Writes the result result_json[0..len) (2D or 3D, any kind, any fields) as NumPy arrays in one
  * .npz: a zip of .npy files (format 1.0, little-endian), stored as numpy.savez writes it, so
@@ -158,8 +156,7 @@ int render_glb(const char *result_json, size_t len, const render_opts *o, char *
  * result only (the zip's times are 1980-01-01).  o is not read (may be NULL).  Returns API_OK,
  * API_EINVALID (a result it cannot read: the message names the JSON path; more than 4 GiB) or
  * API_ENOMEM.  See api/npz.c. */
-int render_npz(const char *result_json, size_t len, const render_opts *o, char **out,
-               size_t *outlen, api_error *err);
+render_func render_npz;
 
 /* Results of more than this many bytes of JSON are not rendered by the daemon (on an HTTP thread,
  * rendering costs about ten times the result's size in memory and ~0.2 s per MB); npz costs
@@ -169,8 +166,7 @@ int render_npz(const char *result_json, size_t len, const render_opts *o, char *
 
 /* The representations of a result, in one table: what the daemon serves (Accept and ?format=)
  * and what the command-line tool writes (--format).  A new one is a row here. */
-typedef int (*render_fn)(const char *result_json, size_t len, const render_opts *o, char **out,
-                         size_t *outlen, api_error *err);
+typedef render_func *render_fn;
 typedef struct render_format {
     const char *name;  /* "json", "svg", "geojson", "obj", "npz", "stl", "off", "3mf", "glb":
                           ?format= and --format */

@@ -13,6 +13,10 @@
  * unit; 3MF's default is the millimetre).  The 3MF zip is made by libzip (deflated); its
  * entries' times are fixed.
  *
+ * glb is written in stages: glb_nodes (the scene's nodes), glb_scene (their JSON), glb_meshes
+ * (glb_mesh per node with triangles: its binary data, its mesh, accessors and views), glb_pack
+ * (the container's chunks).
+ *
  * Threads: reentrant, no globals.  Ownership: as the other renderers (render.h).
  */
 #include "api/render.h"
@@ -398,15 +402,168 @@ typedef struct gnode {
     double shift[3];
 } gnode;
 
+/* The scene's nodes (room for nc + 2): a node per cell of cells, moved by explode as render_obj
+ * moves it, then the result (res) of a Boolean; returns how many. */
+static size_t glb_nodes(mctx *x, const render_opts *o, const rmesh_cells *cells,
+                        const rmesh_cells *res, gnode *nodes)
+{
+    double centre[3];
+    size_t nn = 0;
+    rmesh_centre(&x->m, centre);
+    for (size_t c = 0; c < x->m.nc; c++) {
+        nodes[nn] = (gnode){cells, c, 0, 0, rmesh_cell_ntri(&x->rm, cells, c), {0, 0, 0}};
+        if (o->explode > 1) rmesh_cell_shift(&x->rm, cells, c, o->explode, centre, nodes[nn].shift);
+        nn++;
+    }
+    if (x->m.has_result) nodes[nn++] = (gnode){res, 0, 1, 0, rmesh_cell_ntri(&x->rm, res, 0), {0}};
+    return nn;
+}
+
+/* The JSON's "scene", "scenes" and "nodes" (a node with triangles names its mesh, in order). */
+static void glb_scene(api_buf *js, const gnode *nodes, size_t nn)
+{
+    size_t nmesh = 0;
+    api_buf_puts(js, "{\"asset\":{\"version\":\"2.0\",\"generator\":\"cellar\"},\"scene\":0,"
+                     "\"scenes\":[{\"nodes\":[");
+    for (size_t i = 0; i < nn; i++) {
+        if (i) api_buf_putc(js, ',');
+        api_buf_u64(js, i);
+    }
+    api_buf_puts(js, "]}],\"nodes\":[");
+    for (size_t i = 0; i < nn; i++) {
+        const gnode *g = &nodes[i];
+        api_buf_puts(js, i ? ",{\"name\":\"" : "{\"name\":\"");
+        api_buf_puts(js, g->result ? "result" : "cell");
+        if (!g->result) api_buf_u64(js, g->c);
+        api_buf_putc(js, '"');
+        if (g->nt) {
+            api_buf_puts(js, ",\"mesh\":");
+            api_buf_u64(js, nmesh++);
+        }
+        if (g->shift[0] != 0 || g->shift[1] != 0 || g->shift[2] != 0) {
+            api_buf_puts(js, ",\"translation\":");
+            api_buf_point(js, g->shift, 3);
+        }
+        api_buf_putc(js, '}');
+    }
+}
+
+/* The k-th mesh, of node g (with triangles): into bin its positions (float32 VEC3, their box
+ * kept for the accessor), then its indices (uint32), both 4-byte aligned by construction; its
+ * entry of "meshes" into js, its two accessors into acc and its two views into views. */
+static void glb_mesh(mctx *x, const gnode *g, size_t k, api_buf *js, api_buf *acc, api_buf *views,
+                     api_buf *bin)
+{
+    size_t nl = part_vertices(x, g->cl, g->c, g->c + 1);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    size_t pos_off = bin->len;
+    for (size_t v = 0; v < nl; v++)
+        for (int a = 0; a < 3; a++) {
+            float f = (float)x->m.V[3 * (size_t)x->list[v] + a];
+            lo[a] = fminf(lo[a], f);
+            hi[a] = fmaxf(hi[a], f);
+            put_f32(bin, f);
+        }
+    size_t idx_off = bin->len;
+    const rmesh_cells *cl = g->cl;
+    for (size_t f = cl->off[g->c]; f < cl->off[g->c + 1]; f++)
+        for (size_t j = 0, nj = rmesh_ntri(&x->rm, cl->cf[f]); j < nj; j++) {
+            uint32_t t[3];
+            rmesh_triangle(&x->rm, cl->cf[f], j, t);
+            for (int q = 0; q < 3; q++) put_le32(bin, x->local[t[q]]);
+        }
+    part_done(x, nl);
+    if (k) api_buf_putc(js, ',');
+    api_buf_puts(js, "{\"name\":\"");
+    api_buf_puts(js, g->result ? "result" : "cell");
+    if (!g->result) api_buf_u64(js, g->c);
+    api_buf_puts(js, "\",\"primitives\":[{\"attributes\":{\"POSITION\":");
+    api_buf_u64(js, 2 * k);
+    api_buf_puts(js, "},\"indices\":");
+    api_buf_u64(js, 2 * k + 1);
+    api_buf_puts(js, ",\"mode\":4}]}");
+    /* accessors and views, in step */
+    double dlo[3] = {lo[0], lo[1], lo[2]}, dhi[3] = {hi[0], hi[1], hi[2]};
+    api_buf_puts(acc, k ? ",{\"bufferView\":" : "{\"bufferView\":");
+    api_buf_u64(acc, 2 * k);
+    api_buf_puts(acc, ",\"componentType\":5126,\"count\":");
+    api_buf_u64(acc, nl);
+    api_buf_puts(acc, ",\"type\":\"VEC3\",\"min\":");
+    api_buf_point(acc, dlo, 3);
+    api_buf_puts(acc, ",\"max\":");
+    api_buf_point(acc, dhi, 3);
+    api_buf_puts(acc, "},{\"bufferView\":");
+    api_buf_u64(acc, 2 * k + 1);
+    api_buf_puts(acc, ",\"componentType\":5125,\"count\":");
+    api_buf_u64(acc, 3 * g->nt);
+    api_buf_puts(acc, ",\"type\":\"SCALAR\"}");
+    api_buf_puts(views, k ? ",{\"buffer\":0,\"byteOffset\":" : "{\"buffer\":0,\"byteOffset\":");
+    api_buf_u64(views, pos_off);
+    api_buf_puts(views, ",\"byteLength\":");
+    api_buf_u64(views, idx_off - pos_off);
+    api_buf_puts(views, ",\"target\":34962},{\"buffer\":0,\"byteOffset\":");
+    api_buf_u64(views, idx_off);
+    api_buf_puts(views, ",\"byteLength\":");
+    api_buf_u64(views, bin->len - idx_off);
+    api_buf_puts(views, ",\"target\":34963}");
+}
+
+/* The JSON's "meshes" (and with any, "accessors", "bufferViews" and "buffers") of the nodes'
+ * meshes, their data into bin; API_ENOMEM. */
+static int glb_meshes(mctx *x, const gnode *nodes, size_t nn, api_buf *js, api_buf *bin)
+{
+    api_buf acc = {0}, views = {0};
+    size_t k = 0;
+    api_buf_puts(js, "],\"meshes\":[");
+    for (size_t i = 0; i < nn; i++)
+        if (nodes[i].nt) glb_mesh(x, &nodes[i], k++, js, &acc, &views, bin);
+    api_buf_puts(js, "]");
+    if (k) {
+        api_buf_puts(js, ",\"accessors\":[");
+        api_buf_put(js, acc.p ? acc.p : "", acc.len);
+        api_buf_puts(js, "],\"bufferViews\":[");
+        api_buf_put(js, views.p ? views.p : "", views.len);
+        api_buf_puts(js, "],\"buffers\":[{\"byteLength\":");
+        api_buf_u64(js, bin->len);
+        api_buf_puts(js, "}]");
+    }
+    api_buf_putc(js, '}');
+    int failed = acc.failed || views.failed;
+    api_buf_free(&acc);
+    api_buf_free(&views);
+    return failed ? API_ENOMEM : API_OK;
+}
+
+/* The GLB container into b: the 12-byte header, the JSON chunk (js, padded with spaces to 4
+ * bytes), the binary chunk (bin, when not empty); API_EINVALID past 4 GiB. */
+static int glb_pack(api_buf *b, api_buf *js, const api_buf *bin, api_error *err)
+{
+    while (js->len % 4) api_buf_putc(js, ' ');
+    if (bin->len > UINT32_MAX - 64 - js->len)
+        return api_fail(err, API_EINVALID, "glTF: more than 4 GiB");
+    size_t total = 12 + 8 + js->len + (bin->len ? 8 + bin->len : 0);
+    put_le32(b, 0x46546C67u); /* "glTF" */
+    put_le32(b, 2);
+    put_le32(b, (uint32_t)total);
+    put_le32(b, (uint32_t)js->len);
+    put_le32(b, 0x4E4F534Au); /* "JSON" */
+    api_buf_put(b, js->p, js->len);
+    if (bin->len) {
+        put_le32(b, (uint32_t)bin->len);
+        put_le32(b, 0x004E4942u); /* "BIN\0" */
+        api_buf_put(b, bin->p, bin->len);
+    }
+    return API_OK;
+}
+
 int render_glb(const char *result_json, size_t len, const render_opts *o, char **out,
                size_t *outlen, api_error *err)
 {
     render_opts def = RENDER_OPTS_INIT;
     mctx x;
     api_buf js = {0}, bin = {0}, b = {0};
-    size_t one[2], nn = 0, nmesh = 0;
+    size_t one[2], nn;
     gnode *nodes = NULL;
-    double centre[3];
     *out = NULL;
     *outlen = 0;
     if (!o) o = &def;
@@ -418,132 +575,10 @@ int render_glb(const char *result_json, size_t len, const render_opts *o, char *
     rmesh_cells cells = rmesh_all_cells(&x.m), res = rmesh_cells_of(&x.m, one);
     nodes = calloc(x.m.nc + 2, sizeof *nodes);
     if (!nodes) goto nomem;
-    rmesh_centre(&x.m, centre);
-    for (size_t c = 0; c < x.m.nc; c++) {
-        nodes[nn] = (gnode){&cells, c, 0, 0, rmesh_cell_ntri(&x.rm, &cells, c), {0, 0, 0}};
-        if (o->explode > 1) rmesh_cell_shift(&x.rm, &cells, c, o->explode, centre, nodes[nn].shift);
-        nn++;
-    }
-    if (x.m.has_result) nodes[nn++] = (gnode){&res, 0, 1, 0, rmesh_cell_ntri(&x.rm, &res, 0), {0}};
-
-    /* the binary buffer: per node with triangles, its positions (float32 VEC3), then its
-     * indices (uint32); both 4-byte aligned by construction */
-    api_buf_puts(&js, "{\"asset\":{\"version\":\"2.0\",\"generator\":\"cellar\"},\"scene\":0,"
-                      "\"scenes\":[{\"nodes\":[");
-    for (size_t i = 0; i < nn; i++) {
-        if (i) api_buf_putc(&js, ',');
-        api_buf_u64(&js, i);
-    }
-    api_buf_puts(&js, "]}],\"nodes\":[");
-    for (size_t i = 0; i < nn; i++) {
-        gnode *g = &nodes[i];
-        api_buf_puts(&js, i ? ",{\"name\":\"" : "{\"name\":\"");
-        api_buf_puts(&js, g->result ? "result" : "cell");
-        if (!g->result) api_buf_u64(&js, g->c);
-        api_buf_putc(&js, '"');
-        if (g->nt) {
-            api_buf_puts(&js, ",\"mesh\":");
-            api_buf_u64(&js, nmesh++);
-        }
-        if (g->shift[0] != 0 || g->shift[1] != 0 || g->shift[2] != 0) {
-            api_buf_puts(&js, ",\"translation\":");
-            api_buf_point(&js, g->shift, 3);
-        }
-        api_buf_putc(&js, '}');
-    }
-    api_buf_puts(&js, "],\"meshes\":[");
-    api_buf acc = {0}, views = {0};
-    size_t k = 0;
-    for (size_t i = 0; i < nn; i++) {
-        gnode *g = &nodes[i];
-        if (!g->nt) continue;
-        size_t nl = part_vertices(&x, g->cl, g->c, g->c + 1);
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        size_t pos_off = bin.len;
-        for (size_t v = 0; v < nl; v++)
-            for (int a = 0; a < 3; a++) {
-                float f = (float)x.m.V[3 * (size_t)x.list[v] + a];
-                lo[a] = fminf(lo[a], f);
-                hi[a] = fmaxf(hi[a], f);
-                put_f32(&bin, f);
-            }
-        size_t idx_off = bin.len;
-        const rmesh_cells *cl = g->cl;
-        for (size_t f = cl->off[g->c]; f < cl->off[g->c + 1]; f++)
-            for (size_t j = 0, nj = rmesh_ntri(&x.rm, cl->cf[f]); j < nj; j++) {
-                uint32_t t[3];
-                rmesh_triangle(&x.rm, cl->cf[f], j, t);
-                for (int q = 0; q < 3; q++) put_le32(&bin, x.local[t[q]]);
-            }
-        part_done(&x, nl);
-        if (k) api_buf_putc(&js, ',');
-        api_buf_puts(&js, "{\"name\":\"");
-        api_buf_puts(&js, g->result ? "result" : "cell");
-        if (!g->result) api_buf_u64(&js, g->c);
-        api_buf_puts(&js, "\",\"primitives\":[{\"attributes\":{\"POSITION\":");
-        api_buf_u64(&js, 2 * k);
-        api_buf_puts(&js, "},\"indices\":");
-        api_buf_u64(&js, 2 * k + 1);
-        api_buf_puts(&js, ",\"mode\":4}]}");
-        /* accessors and views, in step */
-        double dlo[3] = {lo[0], lo[1], lo[2]}, dhi[3] = {hi[0], hi[1], hi[2]};
-        api_buf_puts(&acc, k ? ",{\"bufferView\":" : "{\"bufferView\":");
-        api_buf_u64(&acc, 2 * k);
-        api_buf_puts(&acc, ",\"componentType\":5126,\"count\":");
-        api_buf_u64(&acc, nl);
-        api_buf_puts(&acc, ",\"type\":\"VEC3\",\"min\":");
-        api_buf_point(&acc, dlo, 3);
-        api_buf_puts(&acc, ",\"max\":");
-        api_buf_point(&acc, dhi, 3);
-        api_buf_puts(&acc, "},{\"bufferView\":");
-        api_buf_u64(&acc, 2 * k + 1);
-        api_buf_puts(&acc, ",\"componentType\":5125,\"count\":");
-        api_buf_u64(&acc, 3 * g->nt);
-        api_buf_puts(&acc, ",\"type\":\"SCALAR\"}");
-        api_buf_puts(&views,
-                     k ? ",{\"buffer\":0,\"byteOffset\":" : "{\"buffer\":0,\"byteOffset\":");
-        api_buf_u64(&views, pos_off);
-        api_buf_puts(&views, ",\"byteLength\":");
-        api_buf_u64(&views, idx_off - pos_off);
-        api_buf_puts(&views, ",\"target\":34962},{\"buffer\":0,\"byteOffset\":");
-        api_buf_u64(&views, idx_off);
-        api_buf_puts(&views, ",\"byteLength\":");
-        api_buf_u64(&views, bin.len - idx_off);
-        api_buf_puts(&views, ",\"target\":34963}");
-        k++;
-    }
-    api_buf_puts(&js, "]");
-    if (k) {
-        api_buf_puts(&js, ",\"accessors\":[");
-        api_buf_put(&js, acc.p ? acc.p : "", acc.len);
-        api_buf_puts(&js, "],\"bufferViews\":[");
-        api_buf_put(&js, views.p ? views.p : "", views.len);
-        api_buf_puts(&js, "],\"buffers\":[{\"byteLength\":");
-        api_buf_u64(&js, bin.len);
-        api_buf_puts(&js, "}]");
-    }
-    api_buf_putc(&js, '}');
-    int acc_failed = acc.failed || views.failed;
-    api_buf_free(&acc);
-    api_buf_free(&views);
-    if (js.failed || bin.failed || acc_failed) goto nomem;
-    while (js.len % 4) api_buf_putc(&js, ' ');
-    if (bin.len > UINT32_MAX - 64 - js.len) {
-        rc = api_fail(err, API_EINVALID, "glTF: more than 4 GiB");
-        goto out;
-    }
-    size_t total = 12 + 8 + js.len + (bin.len ? 8 + bin.len : 0);
-    put_le32(&b, 0x46546C67u); /* "glTF" */
-    put_le32(&b, 2);
-    put_le32(&b, (uint32_t)total);
-    put_le32(&b, (uint32_t)js.len);
-    put_le32(&b, 0x4E4F534Au); /* "JSON" */
-    api_buf_put(&b, js.p, js.len);
-    if (bin.len) {
-        put_le32(&b, (uint32_t)bin.len);
-        put_le32(&b, 0x004E4942u); /* "BIN\0" */
-        api_buf_put(&b, bin.p, bin.len);
-    }
+    nn = glb_nodes(&x, o, &cells, &res, nodes);
+    glb_scene(&js, nodes, nn);
+    if (glb_meshes(&x, nodes, nn, &js, &bin) != API_OK || js.failed || bin.failed) goto nomem;
+    rc = glb_pack(&b, &js, &bin, err);
     goto out;
 nomem:
     rc = api_fail(err, API_ENOMEM, "out of memory writing the glTF");

@@ -19,6 +19,10 @@
  *       rings follow the faces' in the ring table) and its "membership" (CSR, one row per face).
  *   3D: "CF" required; "holes" optional; every row of FV is a face; a Boolean's "result".faces
  *       (the signed faces of the result's boundary).  "EV" and "membership" are not read.
+ * The reading runs in stages (read_members, read_vertices, read_edges, count_faces, count_holes,
+ * count_cells, count_result_2d, then fill_tables): each checks one part, in the order the
+ * messages have always come in, and the counting ones add up what the tables will hold, so that
+ * fill_tables() allocates each table once and copies the checked rows without checking again.
  * The jansson tree costs about ten times the result's own size while it is read (api/larjson.c
  * says why results are not written that way); it is freed before api_result_read() returns.
  *
@@ -174,44 +178,10 @@ static int result_load(const char *text, size_t len, int dim, const char *why, j
     return API_OK;
 }
 
-/* A 2D Boolean's "result" after the faces' rings (r, w: the next ring and position): its
- * polygons' rings, the faces it selects ("cells"), its area, and the root's "membership". */
-static int read_result_2d(const json_t *root, const json_t *res, api_result *m, size_t *r,
-                          size_t *w, api_error *err)
+/* A 2D Boolean's "membership" (optional), compressed sparse rows: one row per face, the
+ * inputs each face lies in, into m->mem_off and m->mem. */
+static int read_membership(const json_t *root, api_result *m, api_error *err)
 {
-    const json_t *rFV = json_object_get(res, "FV"), *rholes = json_object_get(res, "holes");
-    m->has_result = 1;
-    m->poly_ring = malloc((m->npoly + 1) * sizeof *m->poly_ring);
-    m->selected = calloc(m->nf + 1, 1);
-    if (!m->poly_ring || !m->selected) return API_ENOMEM;
-    for (size_t q = 0; q < m->npoly; q++) {
-        const json_t *row = json_array_get(rFV, q), *hs;
-        char k[24];
-        m->poly_ring[q] = *r;
-        m->ring_off[(*r)++] = *w;
-        result_cycle(row, m->nv, 3, m->idx + *w, NULL, "result.FV[%zu]", q, SIZE_MAX);
-        *w += json_array_size(row);
-        snprintf(k, sizeof k, "%zu", q);
-        hs = json_object_get(rholes, k);
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            m->ring_off[(*r)++] = *w;
-            result_cycle(row, m->nv, 3, m->idx + *w, NULL, "result.holes.%zu[%zu]", q, h);
-            *w += json_array_size(row);
-        }
-    }
-    m->poly_ring[m->npoly] = *r;
-    const json_t *cells = json_object_get(res, "cells"), *area = json_object_get(res, "area");
-    m->res_area = json_is_number(area) ? json_number_value(area) : 0;
-    for (size_t i = 0; i < json_array_size(cells); i++) {
-        const json_t *x = json_array_get(cells, i);
-        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
-            (uint64_t)json_integer_value(x) >= m->nf)
-            return api_fail(err, API_EINVALID, "result.cells[%zu]: expected a face index < %zu", i,
-                            m->nf);
-        m->selected[json_integer_value(x)] = 1;
-    }
-    /* the membership, compressed sparse rows: one row per face */
     const json_t *mem = json_object_get(root, "membership");
     if (!mem) return API_OK;
     const json_t *shape = json_object_get(mem, "shape");
@@ -253,6 +223,56 @@ static int read_result_2d(const json_t *root, const json_t *res, api_result *m, 
     return API_OK;
 }
 
+/* The cycle row (checked) as the next ring of m: ring *nr from position *w of idx; both
+ * advanced. */
+static void put_ring(api_result *m, const json_t *row, size_t *nr, size_t *w)
+{
+    size_t n = json_array_size(row);
+    m->ring_off[(*nr)++] = *w;
+    for (size_t i = 0; i < n; i++)
+        m->idx[*w + i] = (uint32_t)json_integer_value(json_array_get(row, i));
+    *w += n;
+}
+
+/* The array of holes (an object of face keys to arrays of cycles) of face f, or NULL. */
+static const json_t *face_holes(const json_t *holes, size_t f)
+{
+    char k[24];
+    snprintf(k, sizeof k, "%zu", f);
+    return json_object_get(holes, k);
+}
+
+/* A 2D Boolean's "result" (checked) after the faces' rings (nr, w: the next ring and
+ * position): its polygons' rings, the faces it selects ("cells"), its area; then the root's
+ * "membership" (read_membership()). */
+static int read_result_2d(const json_t *root, const json_t *res, api_result *m, size_t *nr,
+                          size_t *w, api_error *err)
+{
+    const json_t *rFV = json_object_get(res, "FV"), *rholes = json_object_get(res, "holes");
+    m->has_result = 1;
+    m->poly_ring = malloc((m->npoly + 1) * sizeof *m->poly_ring);
+    m->selected = calloc(m->nf + 1, 1);
+    if (!m->poly_ring || !m->selected) return API_ENOMEM;
+    for (size_t q = 0; q < m->npoly; q++) {
+        const json_t *hs = face_holes(rholes, q);
+        m->poly_ring[q] = *nr;
+        put_ring(m, json_array_get(rFV, q), nr, w);
+        for (size_t h = 0; h < json_array_size(hs); h++) put_ring(m, json_array_get(hs, h), nr, w);
+    }
+    m->poly_ring[m->npoly] = *nr;
+    const json_t *cells = json_object_get(res, "cells"), *area = json_object_get(res, "area");
+    m->res_area = json_is_number(area) ? json_number_value(area) : 0;
+    for (size_t i = 0; i < json_array_size(cells); i++) {
+        const json_t *x = json_array_get(cells, i);
+        if (!json_is_integer(x) || json_integer_value(x) < 0 ||
+            (uint64_t)json_integer_value(x) >= m->nf)
+            return api_fail(err, API_EINVALID, "result.cells[%zu]: expected a face index < %zu", i,
+                            m->nf);
+        m->selected[json_integer_value(x)] = 1;
+    }
+    return read_membership(root, m, err);
+}
+
 /* A 3D result's cells (CF, checked) and a Boolean's "result".faces. */
 static int read_cells_3d(const json_t *CF, const json_t *res, api_result *m, api_error *err)
 {
@@ -281,253 +301,286 @@ static int read_cells_3d(const json_t *CF, const json_t *res, api_result *m, api
     return API_OK;
 }
 
+/* ---- the reader, in stages ------------------------------------------------------------------
+ * api_result_read() runs them in order; each checks one part of the result (in the order the
+ * messages have always come in, so the first thing wrong is the one named), and the counting
+ * stages add up what the tables will hold, so fill_tables() allocates each table once and
+ * copies without checking again.  A stage returns API_OK, API_EINVALID with the message set, or
+ * API_ENOMEM bare (api_result_read() says "out of memory reading the result"). */
+
+typedef struct rread {
+    json_t *root; /* the parsed result (api_result_read() keeps or frees it) */
+    const json_t *V, *FV, *EV, *holes, *CF, *res;
+    int dim;
+    size_t minlen; /* of a face's outer cycle: a bounded 2D face has 3 or more, a 3D face 1 */
+    size_t nidx;   /* counted: the entries of every ring (faces', holes', result polygons') */
+    size_t nres;   /* counted: the result polygons' rings (2D) */
+    size_t ncf;    /* counted: the entries of CF (3D) */
+    api_result *m;
+    api_error *err;
+} rread;
+
+/* The members read; V, FV and (3D) CF are required. */
+static int read_members(rread *r)
+{
+    r->V = json_object_get(r->root, "V");
+    r->FV = json_object_get(r->root, "FV");
+    if (r->dim == 2) r->EV = json_object_get(r->root, "EV");
+    if (r->dim == 3) r->CF = json_object_get(r->root, "CF");
+    r->holes = json_object_get(r->root, "holes");
+    r->res = json_object_get(r->root, "result");
+    if (r->V && r->FV && (r->dim != 3 || r->CF)) return API_OK;
+    return api_fail(r->err, API_EINVALID,
+                    "%s: required (the result was made with \"fields\" leaving it out: ask for "
+                    "%s)",
+                    !r->V    ? "V"
+                    : !r->FV ? "FV"
+                             : "CF",
+                    r->dim == 2 ? "\"V\", \"FV\" and \"holes\""
+                                : "\"V\", \"FV\", \"holes\" and \"CF\"");
+}
+
+/* V: at most 2^32 vertices of dim finite numbers each, into m->V. */
+static int read_vertices(rread *r)
+{
+    api_result *m = r->m;
+    size_t dim = (size_t)r->dim;
+    if (!json_is_array(r->V))
+        return api_fail(r->err, API_EINVALID, "V: expected an array of %s",
+                        dim == 2 ? "[x, y]" : "[x, y, z]");
+    m->nv = json_array_size(r->V);
+    if (m->nv > UINT32_MAX) return api_fail(r->err, API_EINVALID, "V: more than 2^32 vertices");
+    m->V = malloc(dim * m->nv * sizeof *m->V + 1);
+    if (!m->V) return API_ENOMEM;
+    for (size_t i = 0; i < m->nv; i++) {
+        const json_t *p = json_array_get(r->V, i);
+        int ok = json_array_size(p) == dim;
+        for (size_t a = 0; ok && a < dim; a++) {
+            const json_t *x = json_array_get(p, a);
+            ok = json_is_number(x) && isfinite(json_number_value(x));
+            if (ok) m->V[dim * i + a] = json_number_value(x);
+        }
+        if (!ok)
+            return api_fail(r->err, API_EINVALID, "V[%zu]: expected %d finite numbers", i, r->dim);
+    }
+    return API_OK;
+}
+
+/* EV (2D, optional; null is absent): pairs of vertex indices, into m->ev. */
+static int read_edges(rread *r)
+{
+    api_result *m = r->m;
+    if (!r->EV || json_is_null(r->EV)) return API_OK;
+    if (!json_is_array(r->EV))
+        return api_fail(r->err, API_EINVALID, "EV: expected an array of [v0, v1]");
+    m->ne = json_array_size(r->EV);
+    m->ev = malloc(2 * m->ne * sizeof *m->ev + 1);
+    if (!m->ev) return API_ENOMEM;
+    for (size_t e = 0; e < m->ne; e++) {
+        const json_t *row = json_array_get(r->EV, e);
+        if (json_array_size(row) != 2)
+            return api_fail(r->err, API_EINVALID, "EV[%zu]: expected 2 vertex indices", e);
+        int rc = result_cycle(row, m->nv, 2, m->ev + 2 * e, r->err, "EV[%zu]", e, SIZE_MAX);
+        if (rc != API_OK) return rc;
+    }
+    return API_OK;
+}
+
+/* FV: every row a cycle of vertex indices; the faces (2D: the bounded rows, bounded_rows())
+ * of minlen or more, counted into m->nf, m->nrings and r->nidx. */
+static int count_faces(rread *r)
+{
+    api_result *m = r->m;
+    size_t rows;
+    int rc;
+    if (!json_is_array(r->FV))
+        return api_fail(r->err, API_EINVALID, "FV: expected an array of cycles");
+    rows = json_array_size(r->FV);
+    for (size_t f = 0; f < rows; f++) {
+        rc = result_cycle(json_array_get(r->FV, f), m->nv, 1, NULL, r->err, "FV[%zu]", f, SIZE_MAX);
+        if (rc != API_OK) return rc;
+    }
+    m->nf = r->dim == 2 ? bounded_rows(r->root, r->FV, m->V) : rows;
+    m->nrings = m->nf;
+    for (size_t f = 0; f < m->nf; f++) {
+        const json_t *row = json_array_get(r->FV, f);
+        if (r->minlen > 1) {
+            rc = result_cycle(row, m->nv, r->minlen, NULL, r->err, "FV[%zu]", f, SIZE_MAX);
+            if (rc != API_OK) return rc;
+        }
+        r->nidx += json_array_size(row);
+    }
+    return API_OK;
+}
+
+/* The cycles of the array val (holes of face, or of result polygon, f: what names them) of
+ * minlen or more vertex indices, counted into *rings and r->nidx. */
+static int count_rings(rread *r, const json_t *val, size_t minlen, const char *what, size_t f,
+                       size_t *rings)
+{
+    for (size_t h = 0; h < json_array_size(val); h++) {
+        const json_t *row = json_array_get(val, h);
+        int rc = result_cycle(row, r->m->nv, minlen, NULL, r->err, what, f, h);
+        if (rc != API_OK) return rc;
+        r->nidx += json_array_size(row);
+        (*rings)++;
+    }
+    return API_OK;
+}
+
+/* "holes": an object (or null, 3D) of face keys (api_face_key(), < nf) to arrays of cycles,
+ * counted into m->nrings and r->nidx; required in 2D. */
+static int count_holes(rread *r)
+{
+    api_result *m = r->m;
+    const char *key;
+    const json_t *val;
+    if (r->holes && !json_is_null(r->holes)) {
+        if (!json_is_object(r->holes))
+            return api_fail(r->err, API_EINVALID,
+                            "holes: expected an object {\"f\": [[v, ...], ...]}");
+        json_object_foreach((json_t *)r->holes, key, val)
+        {
+            size_t f;
+            if (!api_face_key(key, m->nf, &f))
+                return api_fail(r->err, API_EINVALID, "holes.%.40s: not %s (there are %zu)", key,
+                                r->dim == 2 ? "a bounded face" : "a face", m->nf);
+            if (!json_is_array(val))
+                return api_fail(r->err, API_EINVALID, "holes.%zu: expected an array of cycles", f);
+            int rc = count_rings(r, val, 1, "holes.%zu[%zu]", f, &m->nrings);
+            if (rc != API_OK) return rc;
+        }
+    }
+    /* every key is well formed; without "holes" the faces would be drawn without their holes */
+    if (r->dim == 2 && !r->holes)
+        return api_fail(r->err, API_EINVALID,
+                        "holes: required (the result was made with \"fields\" leaving it out: "
+                        "ask for \"V\", \"FV\" and \"holes\"; the faces cannot be drawn without "
+                        "their holes)");
+    return API_OK;
+}
+
+/* CF (3D): rows of signed faces ±(f+1), f < nf, counted into m->nc and r->ncf. */
+static int count_cells(rread *r)
+{
+    api_result *m = r->m;
+    if (!json_is_array(r->CF))
+        return api_fail(r->err, API_EINVALID, "CF: expected an array of rows of signed faces");
+    m->nc = json_array_size(r->CF);
+    for (size_t c = 0; c < m->nc; c++) {
+        const json_t *row = json_array_get(r->CF, c);
+        int32_t s;
+        if (!json_is_array(row))
+            return api_fail(r->err, API_EINVALID, "CF[%zu]: expected an array of signed faces", c);
+        for (size_t i = 0; i < json_array_size(row); i++)
+            if (!signed_face(json_array_get(row, i), m->nf, &s))
+                return api_fail(r->err, API_EINVALID,
+                                "CF[%zu][%zu]: expected a signed face +(f+1) or -(f+1), "
+                                "0 <= f < %zu",
+                                c, i, m->nf);
+        r->ncf += json_array_size(row);
+    }
+    return API_OK;
+}
+
+/* A 2D Boolean's "result": its polygons' shells ("FV", 3 or more vertices each) and holes
+ * (keys < npoly), counted into m->npoly, r->nres and r->nidx. */
+static int count_result_2d(rread *r)
+{
+    api_result *m = r->m;
+    const json_t *rFV = json_object_get(r->res, "FV"), *rholes = json_object_get(r->res, "holes");
+    const char *key;
+    const json_t *val;
+    if (!json_is_object(r->res) || !json_is_array(rFV) || !json_is_object(rholes))
+        return api_fail(r->err, API_EINVALID,
+                        "result: expected an object with \"FV\" (the result polygons' shells) "
+                        "and \"holes\"");
+    m->npoly = json_array_size(rFV);
+    for (size_t q = 0; q < m->npoly; q++) {
+        const json_t *row = json_array_get(rFV, q);
+        int rc = result_cycle(row, m->nv, 3, NULL, r->err, "result.FV[%zu]", q, SIZE_MAX);
+        if (rc != API_OK) return rc;
+        r->nidx += json_array_size(row);
+        r->nres++;
+    }
+    json_object_foreach((json_t *)rholes, key, val)
+    {
+        size_t q;
+        if (!api_face_key(key, m->npoly, &q) || !json_is_array(val))
+            return api_fail(r->err, API_EINVALID,
+                            "result.holes.%.40s: expected an array of rings of a result polygon "
+                            "(there are %zu)",
+                            key, m->npoly);
+        int rc = count_rings(r, val, 3, "result.holes.%zu[%zu]", q, &r->nres);
+        if (rc != API_OK) return rc;
+    }
+    return API_OK;
+}
+
+/* Everything checked and counted: the tables allocated and filled, the faces' rings (the outer
+ * cycle, then the holes), a 2D Boolean's result polygons' rings after them, a 3D result's
+ * cells. */
+static int fill_tables(rread *r)
+{
+    api_result *m = r->m;
+    size_t nr = 0, w = 0;
+    m->nface_rings = m->nrings;
+    m->nrings += r->nres;
+    m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
+    m->ring_off = malloc((m->nrings + 1) * sizeof *m->ring_off);
+    m->idx = malloc(r->nidx * sizeof *m->idx + 1);
+    if (!m->face_ring || !m->ring_off || !m->idx) return API_ENOMEM;
+    if (r->dim == 3) {
+        m->cell_off = malloc((m->nc + 1) * sizeof *m->cell_off);
+        m->cf = malloc(r->ncf * sizeof *m->cf + 1);
+        if (!m->cell_off || !m->cf) return API_ENOMEM;
+    }
+    for (size_t f = 0; f < m->nf; f++) {
+        const json_t *hs = NULL;
+        m->face_ring[f] = nr;
+        put_ring(m, json_array_get(r->FV, f), &nr, &w);
+        if (json_is_object(r->holes)) hs = face_holes(r->holes, f);
+        for (size_t h = 0; h < json_array_size(hs); h++)
+            put_ring(m, json_array_get(hs, h), &nr, &w);
+    }
+    m->face_ring[m->nf] = nr;
+    if (r->dim == 2 && r->res) {
+        int rc = read_result_2d(r->root, r->res, m, &nr, &w, r->err);
+        if (rc != API_OK) return rc;
+    }
+    m->ring_off[nr] = w;
+    if (nr != m->nrings || w != r->nidx) /* cannot happen: keys were checked canonical, < nf */
+        return api_fail(r->err, API_EINTERNAL, "render: holes counted twice differently");
+    if (r->dim == 3) return read_cells_3d(r->CF, r->res, m, r->err);
+    return API_OK;
+}
+
 int api_result_read(const char *text, size_t len, int dim, const char *why, api_result *m,
                     api_error *err)
 {
-    json_t *root = NULL;
-    const json_t *V, *FV, *EV = NULL, *holes, *CF = NULL, *res, *val;
-    const char *key;
-    size_t rows, nidx = 0, nres = 0, ncf = 0, r, w;
-    size_t minlen = dim == 2 ? 3 : 1; /* of a face's outer cycle: a bounded face has 3 or more */
+    rread r = {.dim = dim, .minlen = dim == 2 ? 3 : 1, .m = m, .err = err};
     int rc;
     *m = (api_result){0};
     m->dim = dim;
-    rc = result_load(text, len, dim, why, &root, err);
+    rc = result_load(text, len, dim, why, &r.root, err);
     if (rc != API_OK) return rc;
-    V = json_object_get(root, "V");
-    FV = json_object_get(root, "FV");
-    if (dim == 2) EV = json_object_get(root, "EV");
-    if (dim == 3) CF = json_object_get(root, "CF");
-    holes = json_object_get(root, "holes");
-    if (!V || !FV || (dim == 3 && !CF)) {
-        rc = api_fail(err, API_EINVALID,
-                      "%s: required (the result was made with \"fields\" leaving it out: ask for "
-                      "%s)",
-                      !V    ? "V"
-                      : !FV ? "FV"
-                            : "CF",
-                      dim == 2 ? "\"V\", \"FV\" and \"holes\""
-                               : "\"V\", \"FV\", \"holes\" and \"CF\"");
-        goto fail;
+    rc = read_members(&r);
+    if (rc == API_OK) rc = read_vertices(&r);
+    if (rc == API_OK) rc = read_edges(&r);
+    if (rc == API_OK) rc = count_faces(&r);
+    if (rc == API_OK) rc = count_holes(&r);
+    if (rc == API_OK && dim == 3) rc = count_cells(&r);
+    if (rc == API_OK && dim == 2 && r.res) rc = count_result_2d(&r);
+    if (rc == API_OK) rc = fill_tables(&r);
+    if (rc == API_OK) {
+        if (dim == 2 && json_object_get(r.root, "layers"))
+            m->root = r.root; /* the GeoJSON writer reads "layers" and "result".pieces there */
+        else
+            json_decref(r.root);
+        return API_OK;
     }
-    if (!json_is_array(V)) {
-        rc = api_fail(err, API_EINVALID, "V: expected an array of %s",
-                      dim == 2 ? "[x, y]" : "[x, y, z]");
-        goto fail;
-    }
-    m->nv = json_array_size(V);
-    if (m->nv > UINT32_MAX) {
-        rc = api_fail(err, API_EINVALID, "V: more than 2^32 vertices");
-        goto fail;
-    }
-    m->V = malloc((size_t)dim * m->nv * sizeof *m->V + 1);
-    if (!m->V) goto nomem;
-    for (size_t i = 0; i < m->nv; i++) {
-        const json_t *p = json_array_get(V, i);
-        int ok = json_array_size(p) == (size_t)dim;
-        for (int a = 0; ok && a < dim; a++) {
-            const json_t *x = json_array_get(p, (size_t)a);
-            ok = json_is_number(x) && isfinite(json_number_value(x));
-            if (ok) m->V[(size_t)dim * i + (size_t)a] = json_number_value(x);
-        }
-        if (!ok) {
-            rc = api_fail(err, API_EINVALID, "V[%zu]: expected %d finite numbers", i, dim);
-            goto fail;
-        }
-    }
-
-    if (EV && !json_is_null(EV)) {
-        if (!json_is_array(EV)) {
-            rc = api_fail(err, API_EINVALID, "EV: expected an array of [v0, v1]");
-            goto fail;
-        }
-        m->ne = json_array_size(EV);
-        m->ev = malloc(2 * m->ne * sizeof *m->ev + 1);
-        if (!m->ev) goto nomem;
-        for (size_t e = 0; e < m->ne; e++) {
-            const json_t *row = json_array_get(EV, e);
-            if (json_array_size(row) != 2) {
-                rc = api_fail(err, API_EINVALID, "EV[%zu]: expected 2 vertex indices", e);
-                goto fail;
-            }
-            rc = result_cycle(row, m->nv, 2, m->ev + 2 * e, err, "EV[%zu]", e, SIZE_MAX);
-            if (rc != API_OK) goto fail;
-        }
-    }
-
-    if (!json_is_array(FV)) {
-        rc = api_fail(err, API_EINVALID, "FV: expected an array of cycles");
-        goto fail;
-    }
-    rows = json_array_size(FV);
-    for (size_t f = 0; f < rows; f++) {
-        rc = result_cycle(json_array_get(FV, f), m->nv, 1, NULL, err, "FV[%zu]", f, SIZE_MAX);
-        if (rc != API_OK) goto fail;
-    }
-    m->nf = dim == 2 ? bounded_rows(root, FV, m->V) : rows;
-    m->nrings = m->nf;
-    for (size_t f = 0; f < m->nf; f++) {
-        const json_t *row = json_array_get(FV, f);
-        if (minlen > 1) {
-            rc = result_cycle(row, m->nv, minlen, NULL, err, "FV[%zu]", f, SIZE_MAX);
-            if (rc != API_OK) goto fail;
-        }
-        nidx += json_array_size(row);
-    }
-    if (holes && !json_is_null(holes)) {
-        if (!json_is_object(holes)) {
-            rc = api_fail(err, API_EINVALID, "holes: expected an object {\"f\": [[v, ...], ...]}");
-            goto fail;
-        }
-        json_object_foreach((json_t *)holes, key, val)
-        {
-            size_t f;
-            if (!api_face_key(key, m->nf, &f)) {
-                rc = api_fail(err, API_EINVALID, "holes.%.40s: not %s (there are %zu)", key,
-                              dim == 2 ? "a bounded face" : "a face", m->nf);
-                goto fail;
-            }
-            if (!json_is_array(val)) {
-                rc = api_fail(err, API_EINVALID, "holes.%zu: expected an array of cycles", f);
-                goto fail;
-            }
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                const json_t *row = json_array_get(val, h);
-                rc = result_cycle(row, m->nv, 1, NULL, err, "holes.%zu[%zu]", f, h);
-                if (rc != API_OK) goto fail;
-                nidx += json_array_size(row);
-                m->nrings++;
-            }
-        }
-    }
-
-    /* every key is well formed; without "holes" the faces would be drawn without their holes */
-    if (dim == 2 && !holes) {
-        rc = api_fail(err, API_EINVALID,
-                      "holes: required (the result was made with \"fields\" leaving it out: ask "
-                      "for \"V\", \"FV\" and \"holes\"; the faces cannot be drawn without their "
-                      "holes)");
-        goto fail;
-    }
-
-    if (dim == 3) {
-        if (!json_is_array(CF)) {
-            rc = api_fail(err, API_EINVALID, "CF: expected an array of rows of signed faces");
-            goto fail;
-        }
-        m->nc = json_array_size(CF);
-        for (size_t c = 0; c < m->nc; c++) {
-            const json_t *row = json_array_get(CF, c);
-            int32_t s;
-            if (!json_is_array(row)) {
-                rc = api_fail(err, API_EINVALID, "CF[%zu]: expected an array of signed faces", c);
-                goto fail;
-            }
-            for (size_t i = 0; i < json_array_size(row); i++) {
-                if (!signed_face(json_array_get(row, i), m->nf, &s)) {
-                    rc = api_fail(err, API_EINVALID,
-                                  "CF[%zu][%zu]: expected a signed face +(f+1) or -(f+1), "
-                                  "0 <= f < %zu",
-                                  c, i, m->nf);
-                    goto fail;
-                }
-            }
-            ncf += json_array_size(row);
-        }
-    }
-
-    /* a 2D Boolean's result: its polygons' rings after the faces' */
-    res = json_object_get(root, "result");
-    if (dim == 2 && res) {
-        const json_t *rFV = json_object_get(res, "FV"), *rholes = json_object_get(res, "holes");
-        if (!json_is_object(res) || !json_is_array(rFV) || !json_is_object(rholes)) {
-            rc = api_fail(err, API_EINVALID,
-                          "result: expected an object with \"FV\" (the result polygons' shells) "
-                          "and \"holes\"");
-            goto fail;
-        }
-        m->npoly = json_array_size(rFV);
-        for (size_t q = 0; q < m->npoly; q++) {
-            const json_t *row = json_array_get(rFV, q);
-            rc = result_cycle(row, m->nv, 3, NULL, err, "result.FV[%zu]", q, SIZE_MAX);
-            if (rc != API_OK) goto fail;
-            nidx += json_array_size(row);
-            nres++;
-        }
-        json_object_foreach((json_t *)rholes, key, val)
-        {
-            size_t q;
-            if (!api_face_key(key, m->npoly, &q) || !json_is_array(val)) {
-                rc = api_fail(err, API_EINVALID,
-                              "result.holes.%.40s: expected an array of rings of a result polygon "
-                              "(there are %zu)",
-                              key, m->npoly);
-                goto fail;
-            }
-            for (size_t h = 0; h < json_array_size(val); h++) {
-                const json_t *row = json_array_get(val, h);
-                rc = result_cycle(row, m->nv, 3, NULL, err, "result.holes.%zu[%zu]", q, h);
-                if (rc != API_OK) goto fail;
-                nidx += json_array_size(row);
-                nres++;
-            }
-        }
-    }
-
-    /* everything is checked and counted: the tables, filled */
-    m->nface_rings = m->nrings;
-    m->nrings += nres;
-    m->face_ring = malloc((m->nf + 1) * sizeof *m->face_ring);
-    m->ring_off = malloc((m->nrings + 1) * sizeof *m->ring_off);
-    m->idx = malloc(nidx * sizeof *m->idx + 1);
-    if (!m->face_ring || !m->ring_off || !m->idx) goto nomem;
-    if (dim == 3) {
-        m->cell_off = malloc((m->nc + 1) * sizeof *m->cell_off);
-        m->cf = malloc(ncf * sizeof *m->cf + 1);
-        if (!m->cell_off || !m->cf) goto nomem;
-    }
-    r = w = 0;
-    for (size_t f = 0; f < m->nf; f++) {
-        const json_t *row = json_array_get(FV, f), *hs = NULL;
-        char k[24];
-        m->face_ring[f] = r;
-        m->ring_off[r++] = w;
-        result_cycle(row, m->nv, minlen, m->idx + w, NULL, "FV[%zu]", f, SIZE_MAX);
-        w += json_array_size(row);
-        snprintf(k, sizeof k, "%zu", f);
-        if (json_is_object(holes)) hs = json_object_get(holes, k);
-        for (size_t h = 0; h < json_array_size(hs); h++) {
-            row = json_array_get(hs, h);
-            m->ring_off[r++] = w;
-            result_cycle(row, m->nv, 1, m->idx + w, NULL, "holes.%zu[%zu]", f, h);
-            w += json_array_size(row);
-        }
-    }
-    m->face_ring[m->nf] = r;
-    if (dim == 2 && res) {
-        rc = read_result_2d(root, res, m, &r, &w, err);
-        if (rc == API_ENOMEM) goto nomem;
-        if (rc != API_OK) goto fail;
-    }
-    m->ring_off[r] = w;
-    if (r != m->nrings || w != nidx) { /* cannot happen: keys were checked canonical and < nf */
-        rc = api_fail(err, API_EINTERNAL, "render: holes counted twice differently");
-        goto fail;
-    }
-    if (dim == 3) {
-        rc = read_cells_3d(CF, res, m, err);
-        if (rc == API_ENOMEM) goto nomem;
-        if (rc != API_OK) goto fail;
-    }
-    if (dim == 2 && json_object_get(root, "layers"))
-        m->root = root;
-    else
-        json_decref(root);
-    return API_OK;
-nomem:
-    rc = api_fail(err, API_ENOMEM, "out of memory reading the result");
-fail:
-    json_decref(root);
+    if (rc == API_ENOMEM) rc = api_fail(err, API_ENOMEM, "out of memory reading the result");
+    json_decref(r.root);
     api_result_free(m);
     return rc;
 }

@@ -31,6 +31,13 @@
  * to PRECISION decimal digits (vcode): that would put many endpoints on a coarse common grid,
  * a different (and easier) input; snapping is the request's "precision" option instead.
  *
+ * Layout: main() parses the line (parse_option: number_option, value_option, render_option),
+ * refuses a flag given to a command it is not for (misplaced_flag) and runs the command
+ * (dispatch); every command that runs a request ends in run_request() (run, then write the
+ * output), and reads --options with options_object(); solids reads its files (solids_read) and
+ * writes its request (solids_request), polygons reads its layers (polygons_layers) and writes
+ * GeoJSON with their reference system itself (polygons_own).
+ *
  * Ownership: everything is freed before exit; the API's output buffer is the caller's to free.
  */
 #include "api/api.h"
@@ -551,10 +558,43 @@ static api_run_opts run_opts(int threads, const out_format *of)
     return ro;
 }
 
+/* Runs the request body[0..len) as `cellar run` runs it (JSON streamed to stdout, any other
+ * format rendered from the whole result) and writes the output: the exit status, or -1 when the
+ * request failed (*err says why; nothing printed). */
+static int run_request(const char *body, size_t len, int threads, const out_format *of,
+                       api_error *err)
+{
+    char *out = NULL;
+    size_t outlen = 0;
+    api_run_opts ro = run_opts(threads, of);
+    int r = api_run_json_ex(body, len, &ro, &out, &outlen, err) == API_OK ? 0 : -1;
+    progress_end();
+    if (r == 0) r = ro.stream ? write_streamed() : write_result(out, outlen, of);
+    free(out);
+    return r;
+}
+
+/* The request's "options" of --options (an object; none given: an empty one), or NULL after
+ * the message is printed (the caller exits EXIT_USAGE); where: say where the text is not
+ * JSON. */
+static json_t *options_object(const char *options_text, int where)
+{
+    json_error_t je;
+    json_t *opts =
+        options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
+    if (json_is_object(opts)) return opts;
+    if (opts || !options_text || !where)
+        fprintf(stderr, "cellar: --options: expected a JSON object\n");
+    else
+        fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column, je.text);
+    json_decref(opts);
+    return NULL;
+}
+
 static int run(char **pos, int npos, int threads, const out_format *of)
 {
-    size_t len, outlen;
-    char *body, *out;
+    size_t len;
+    char *body;
     api_error err;
     int rc;
     if (npos != 2) return usage_error("%s", "run takes one REQUEST.json (or - for stdin)");
@@ -562,16 +602,12 @@ static int run(char **pos, int npos, int threads, const out_format *of)
     if (!body) return 1;
     /* JSON goes out as it is made (a large result never sits whole in memory); pictures and
      * maps need the whole result */
-    api_run_opts ro = run_opts(threads, of);
-    rc = api_run_json_ex(body, len, &ro, &out, &outlen, &err);
-    progress_end();
+    rc = run_request(body, len, threads, of, &err);
     free(body);
-    if (rc != API_OK) {
+    if (rc < 0) {
         fprintf(stderr, "cellar: %s\n", err.msg);
         return 1;
     }
-    rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
-    free(out);
     return rc;
 }
 
@@ -601,26 +637,27 @@ static int parse_positive(const char *flag, const char *val, double *out)
     return 0;
 }
 
+/* The request req as one line of compact JSON into *body (malloc'd; req NULL: out of memory
+ * already): 0, or 1 with the message printed. */
+static int dump_request(const json_t *req, char **body)
+{
+    *body = req ? json_dumps(req, JSON_COMPACT) : NULL;
+    if (*body) return 0;
+    fprintf(stderr, "cellar: out of memory\n");
+    return 1;
+}
+
 static int svg_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
                        int threads, const out_format *of)
 {
-    size_t len, outlen;
-    char *text = NULL, *body = NULL, *out = NULL;
+    size_t len;
+    char *text = NULL, *body = NULL;
     json_t *opts = NULL, *req = NULL, *str = NULL;
-    json_error_t je;
     api_error err;
     int rc = 1;
     if (npos != 2) return usage_error("%s", "svg takes one DRAWING.svg (or - for stdin)");
-    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
-    if (!opts || !json_is_object(opts)) {
-        if (opts || !options_text)
-            fprintf(stderr, "cellar: --options: expected a JSON object\n");
-        else
-            fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column,
-                    je.text);
-        json_decref(opts);
-        return EXIT_USAGE;
-    }
+    opts = options_object(options_text, 1);
+    if (!opts) return EXIT_USAGE;
     if ((fl->normalize && json_object_set_new(opts, "normalize", json_true())) ||
         (fl->y_up && json_object_set_new(opts, "y_up", json_true())) ||
         (fl->rect_diagonal && json_object_set_new(opts, "rect2lines", json_string("diagonal"))) ||
@@ -643,25 +680,17 @@ static int svg_command(char **pos, int npos, const char *options_text, const svg
     }
     req = json_pack("{s:s, s:o, s:O}", "kind", "svg", "svg", str, "options", opts);
     str = NULL; /* the "o" format took it, also on failure */
-    body = req ? json_dumps(req, JSON_COMPACT) : NULL;
-    if (!body) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
+    if (dump_request(req, &body)) goto out;
     if (of->kind == OUT_REQUEST) {
         rc = write_request(body, strlen(body));
         goto out;
     }
-    api_run_opts ro = run_opts(threads, of);
-    int ok = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err) == API_OK;
-    progress_end();
-    if (!ok) {
+    rc = run_request(body, strlen(body), threads, of, &err);
+    if (rc < 0) {
         fprintf(stderr, "cellar: %s\n", err.msg);
-        goto out;
+        rc = 1;
     }
-    rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
 out:
-    free(out);
     free(body);
     free(text);
     json_decref(str);
@@ -730,103 +759,61 @@ static mesh_format solid_format(const char *path)
     return mesh_format_of_name(path);
 }
 
-/* cellar solids FILE...: the request {"kind":"solids",...} of the solids the files hold, run as
- * `cellar run` runs it. */
-static int solids_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
-                          int threads, const out_format *of)
+/* The solids the files pos[1 .. nfiles] hold, into *sv (*n of them; (*from)[i]: the file of
+ * solid i, an index into pos from 0): a solid per OFF, STL or PLY file, per object of an OBJ
+ * file ("o"; with groups "g" too), per mesh object a 3MF file's build places.  0, or 1 with the
+ * message printed (*sv then holds the solids read so far). */
+static int solids_read(char **pos, size_t nfiles, int groups, solid **sv, size_t **from, size_t *n)
 {
-    size_t n = npos > 1 ? (size_t)npos - 1 : 0, nfiles = n, blen = 0, outlen, cap = 0;
-    solid *sv = NULL;
-    size_t *from = NULL; /* by solid: the file it comes from */
-    char *body = NULL, *out = NULL, rerr[256];
-    json_t *opts = NULL, *op = NULL;
-    json_error_t je;
-    api_error err;
-    FILE *m = NULL;
-    int rc = 1;
-    if (n == 0)
-        return usage_error("%s", "solids takes one or more files (.obj, .off, .stl, .ply, .3mf, "
-                                 "- for OBJ on stdin)");
-    for (size_t i = 0; i < n; i++)
-        if (!solid_format(pos[i + 1]))
-            return usage_error("solids: \"%s\": expected a .obj, .off, .stl, .ply or .3mf file "
-                               "(or - for OBJ on standard input)",
-                               pos[i + 1]);
-    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
-    if (!opts || !json_is_object(opts)) {
-        if (opts || !options_text)
-            fprintf(stderr, "cellar: --options: expected a JSON object\n");
-        else
-            fprintf(stderr, "cellar: --options: line %d, column %d: %s\n", je.line, je.column,
-                    je.text);
-        json_decref(opts);
-        return EXIT_USAGE;
-    }
-    if (fl->precision > 0 && json_object_set_new(opts, "precision", json_real(fl->precision))) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
-    /* a solid per OFF, STL or PLY file, per object of an OBJ file ("o"; with --groups "g"
-     * too), per mesh object a 3MF file's build places */
-    n = 0;
+    size_t cap = 0;
+    char rerr[256];
+    *n = 0;
     for (size_t i = 0; i < nfiles; i++) {
         const char *path = pos[i + 1];
         size_t len, np = 0;
         char *text = read_all(path, &len);
         solid *parts = NULL;
         int r;
-        if (!text) goto out;
-        r = mesh_read(solid_format(path), text, len, fl->groups, &parts, &np, rerr, sizeof rerr);
+        if (!text) return 1;
+        r = mesh_read(solid_format(path), text, len, groups, &parts, &np, rerr, sizeof rerr);
         free(text);
         if (r != 0) {
             fprintf(stderr, "cellar: %s: %s\n", strcmp(path, "-") ? path : "standard input", rerr);
-            goto out;
+            return 1;
         }
-        if (n + np > cap) {
-            size_t c = 2 * (n + np) + 4;
-            solid *x = realloc(sv, c * sizeof *x);
-            size_t *y = x ? realloc(from, c * sizeof *y) : NULL;
-            if (x) sv = x;
-            if (y) from = y;
+        if (*n + np > cap) {
+            size_t c = 2 * (*n + np) + 4;
+            solid *x = realloc(*sv, c * sizeof *x);
+            size_t *y = x ? realloc(*from, c * sizeof *y) : NULL;
+            if (x) *sv = x;
+            if (y) *from = y;
             if (!x || !y) {
                 for (size_t k = 0; k < np; k++) solid_free(&parts[k]);
                 free(parts);
                 fprintf(stderr, "cellar: out of memory\n");
-                goto out;
+                return 1;
             }
             cap = c;
         }
-        for (size_t k = 0; k < np; k++) sv[n] = parts[k], from[n++] = i;
+        for (size_t k = 0; k < np; k++) (*sv)[*n] = parts[k], (*from)[(*n)++] = i;
         free(parts);
     }
-    if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
-        op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
-        if (!op) {
-            fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a "
-                            "JSON expression such as '[\"-\", 0, [\"+\", 1, 2]]'\n");
-            rc = EXIT_USAGE;
-            goto out;
-        }
-    }
-    if (!fl->faces && of->kind != OUT_REQUEST) {
-        /* the solids as read, straight to the run: the bytes of `cellar run` on the request
-         * that --format request prints, without writing and parsing it */
-        api_run_opts ro = run_opts(threads, of);
-        int r = api_solids_run_direct(sv, n, 0, op, json_object_size(opts) ? opts : NULL, &ro, &out,
-                                      &outlen, &err);
-        progress_end();
-        sv = NULL; /* taken over, array and all */
-        if (r != API_OK) goto failed;
-        rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
-        goto out;
-    }
-    m = open_memstream(&body, &blen);
+    return 0;
+}
+
+/* The request {"kind":"solids", "solids":[...] (with faces: "faces":{...}, one soup), "op",
+ * "options"} of the n solids sv, written into *body (*blen bytes, malloc'd); 0, or 1 with the
+ * message printed. */
+static int solids_request(const solid *sv, size_t n, int faces, const json_t *op,
+                          const json_t *opts, char **body, size_t *blen)
+{
+    FILE *m = open_memstream(body, blen);
     if (!m) {
         fprintf(stderr, "cellar: out of memory\n");
-        goto out;
+        return 1;
     }
     fputs("{\"kind\":\"solids\",", m);
-    if (fl->faces) {
+    if (faces) {
         fputs("\"faces\":", m);
         put_solid_json(m, sv, n);
     } else {
@@ -846,34 +833,86 @@ static int solids_command(char **pos, int npos, const char *options_text, const 
         put_json(m, opts);
     }
     fputc('}', m);
-    if (fclose(m) != 0 || !body) {
-        m = NULL;
+    if (fclose(m) != 0 || !*body) {
+        fprintf(stderr, "cellar: out of memory\n");
+        return 1;
+    }
+    return 0;
+}
+
+/* The message of a failed solids request, naming the file of "solids[i]..." too. */
+static void solids_failed(const api_error *err, char **pos, const size_t *from, size_t n)
+{
+    size_t i;
+    int k = -1;
+    if (sscanf(err->msg, "solids[%zu]%n", &i, &k) == 1 && k > 0 && i < n)
+        fprintf(stderr, "cellar: %s (solids[%zu] is %s)\n", err->msg, i,
+                strcmp(pos[from[i] + 1], "-") ? pos[from[i] + 1] : "standard input");
+    else
+        fprintf(stderr, "cellar: %s\n", err->msg);
+}
+
+/* cellar solids FILE...: the request {"kind":"solids",...} of the solids the files hold, run as
+ * `cellar run` runs it. */
+static int solids_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
+                          int threads, const out_format *of)
+{
+    size_t nfiles = npos > 1 ? (size_t)npos - 1 : 0, n = 0, blen = 0, outlen;
+    solid *sv = NULL;
+    size_t *from = NULL; /* by solid: the file it comes from */
+    char *body = NULL, *out = NULL;
+    json_t *opts = NULL, *op = NULL;
+    api_error err;
+    int rc = 1;
+    if (nfiles == 0)
+        return usage_error("%s", "solids takes one or more files (.obj, .off, .stl, .ply, .3mf, "
+                                 "- for OBJ on stdin)");
+    for (size_t i = 0; i < nfiles; i++)
+        if (!solid_format(pos[i + 1]))
+            return usage_error("solids: \"%s\": expected a .obj, .off, .stl, .ply or .3mf file "
+                               "(or - for OBJ on standard input)",
+                               pos[i + 1]);
+    opts = options_object(options_text, 1);
+    if (!opts) return EXIT_USAGE;
+    if (fl->precision > 0 && json_object_set_new(opts, "precision", json_real(fl->precision))) {
         fprintf(stderr, "cellar: out of memory\n");
         goto out;
     }
-    m = NULL;
+    if (solids_read(pos, nfiles, fl->groups, &sv, &from, &n)) goto out;
+    if (fl->op) { /* a name ("union") or an expression tree (["-", 0, ["+", 1, 2]]) */
+        op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
+        if (!op) {
+            fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a "
+                            "JSON expression such as '[\"-\", 0, [\"+\", 1, 2]]'\n");
+            rc = EXIT_USAGE;
+            goto out;
+        }
+    }
+    if (!fl->faces && of->kind != OUT_REQUEST) {
+        /* the solids as read, straight to the run: the bytes of `cellar run` on the request
+         * that --format request prints, without writing and parsing it */
+        api_run_opts ro = run_opts(threads, of);
+        int r = api_solids_run_direct(sv, n, 0, op, json_object_size(opts) ? opts : NULL, &ro, &out,
+                                      &outlen, &err);
+        progress_end();
+        sv = NULL; /* taken over, array and all */
+        if (r == API_OK)
+            rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
+        else
+            solids_failed(&err, pos, from, n);
+        goto out;
+    }
+    if (solids_request(sv, n, fl->faces, op, opts, &body, &blen)) goto out;
     if (of->kind == OUT_REQUEST) {
         rc = write_request(body, blen);
         goto out;
     }
-    api_run_opts sro = run_opts(threads, of);
-    int ok = api_run_json_ex(body, blen, &sro, &out, &outlen, &err) == API_OK;
-    progress_end();
-    if (!ok) {
-    failed:;
-        size_t i;
-        int k = -1;
-        /* name the file of "solids[i]..." too */
-        if (sscanf(err.msg, "solids[%zu]%n", &i, &k) == 1 && k > 0 && i < n)
-            fprintf(stderr, "cellar: %s (solids[%zu] is %s)\n", err.msg, i,
-                    strcmp(pos[from[i] + 1], "-") ? pos[from[i] + 1] : "standard input");
-        else
-            fprintf(stderr, "cellar: %s\n", err.msg);
-        goto out;
+    rc = run_request(body, blen, threads, of, &err);
+    if (rc < 0) {
+        solids_failed(&err, pos, from, n);
+        rc = 1;
     }
-    rc = sro.stream ? write_streamed() : write_result(out, outlen, of);
 out:
-    if (m) fclose(m);
     free(body);
     free(out);
     for (size_t i = 0; sv && i < n; i++) solid_free(&sv[i]);
@@ -984,40 +1023,12 @@ static int is_geojson_path(const char *path)
            (dot && (!strcasecmp(dot, ".geojson") || !strcasecmp(dot, ".json")));
 }
 
-static int polygons_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
-                            int threads, const out_format *of, const char *output)
+/* The layers of the files pos[1 .. npos) into the object layers (a FeatureCollection each,
+ * named by layer_name(), a second "a" as "a_2"), their common reference system into *crs (a
+ * reference, NULL: GeoJSON's own); 0, or 1 with the message printed. */
+static int polygons_layers(char **pos, int npos, json_t *layers, json_t **crs)
 {
-    json_t *req = NULL, *layers = NULL, *opts = NULL, *op = NULL, *crs = NULL;
-    char *body = NULL, *out = NULL, *tmp = NULL;
-    size_t outlen = 0;
     json_error_t je;
-    api_error err;
-    int rc = 1;
-    if (npos < 2)
-        return usage_error("%s", "polygons takes one or more GIS files (GeoJSON, Shapefile, "
-                                 "GeoPackage, ... : a layer each)");
-    if (!fl->op)
-        return usage_error("%s", "polygons: --op is required: union, intersection, difference, "
-                                 "xor (over the layers) or an expression over their names such "
-                                 "as '[\"&\", \"parcels\", \"zones\"]'");
-    if (of->kind == OUT_GPKG && !output)
-        return usage_error("%s", "--format gpkg needs --output FILE.gpkg");
-    opts = options_text ? json_loads(options_text, JSON_REJECT_DUPLICATES, &je) : json_object();
-    if (!json_is_object(opts)) {
-        fprintf(stderr, "cellar: --options: expected a JSON object\n");
-        json_decref(opts);
-        return EXIT_USAGE;
-    }
-    if (fl->precision > 0) json_object_set_new(opts, "precision", json_real(fl->precision));
-    op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
-    layers = json_object();
-    req = json_object();
-    if (!op || !layers || !req) {
-        fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a JSON "
-                        "expression over the layers' names\n");
-        rc = EXIT_USAGE;
-        goto out;
-    }
     for (int i = 1; i < npos; i++) {
         const char *path = pos[i];
         char name[128], uniq[140];
@@ -1031,13 +1042,13 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
             snprintf(what, sizeof what, "reading %.250s", path);
             text = run_program(argv, what, &text, &len) == 0 ? text : NULL;
         }
-        if (!text) goto out;
+        if (!text) return 1;
         json_t *fc = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
         free(text);
         if (!fc) {
             fprintf(stderr, "cellar: %s: line %d, column %d: %s\n", path, je.line, je.column,
                     je.text);
-            goto out;
+            return 1;
         }
         /* the reference system: the same for every layer, carried to the result (none is
          * GeoJSON's own, CRS84, as ogr2ogr names it) */
@@ -1048,14 +1059,14 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
                    !strcmp(cn, "urn:ogc:def:crs:EPSG::4326") || !strcmp(cn, "EPSG:4326")))
             c = NULL;
         if (i == 1) {
-            crs = c ? json_incref(c) : NULL;
-        } else if (!json_equal(crs ? crs : json_null(), c ? c : json_null())) {
+            *crs = c ? json_incref(c) : NULL;
+        } else if (!json_equal(*crs ? *crs : json_null(), c ? c : json_null())) {
             fprintf(stderr,
                     "cellar: %s: its coordinate reference system differs from %s's; reproject "
                     "one (ogr2ogr -t_srs) so that the coordinates agree\n",
                     path, pos[1]);
             json_decref(fc);
-            goto out;
+            return 1;
         }
         json_object_del(fc, "crs");
         json_object_del(fc, "name");
@@ -1065,57 +1076,38 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
             snprintf(uniq, sizeof uniq, "%s_%d", name, k);
         json_object_set_new(layers, uniq, fc);
     }
-    json_object_set_new(req, "kind", json_string("polygons"));
-    json_object_set(req, "layers", layers);
-    json_object_set(req, "op", op);
-    if (json_object_size(opts)) json_object_set(req, "options", opts);
-    body = json_dumps(req, JSON_COMPACT);
-    if (!body) {
-        fprintf(stderr, "cellar: out of memory\n");
-        goto out;
-    }
-    if (of->kind == OUT_REQUEST) {
-        rc = write_request(body, strlen(body));
-        goto out;
-    }
-    /* GeoJSON (and the GeoPackage made of it) carries the layers' reference system: written
-     * here, every other format as the other commands write it */
+    return 0;
+}
+
+/* The GeoJSON of the result out[0..outlen) with the layers' reference system crs (may be
+ * NULL), ogr2ogr reading its "crs" member: on stdout, or with --format gpkg through a temporary
+ * file (*tmp, the caller's to unlink and free) into the GeoPackage output.  The exit status. */
+static int polygons_own(const char *out, size_t outlen, const out_format *of, const json_t *crs,
+                        const char *output, char **tmp)
+{
     const render_format *geo = render_format_named("geojson");
-    int kgeo = (int)(geo - render_formats);
-    int own = of->kind == OUT_GPKG || (of->kind == kgeo && crs);
-    api_run_opts ro = run_opts(threads, of->kind == OUT_GPKG ? &(out_format){.kind = kgeo} : of);
-    int r = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err);
-    progress_end();
-    if (r != API_OK) {
-        fprintf(stderr, "cellar: %s\n", err.msg);
-        goto out;
-    }
-    if (!own) {
-        rc = ro.stream ? write_streamed() : write_result(out, outlen, of);
-        goto out;
-    }
-    /* GeoJSON with the layers' reference system (ogr2ogr reads its "crs" member) */
-    char *map = NULL;
+    char *map = NULL, *crs_text = NULL;
     size_t maplen = 0;
+    api_error err;
+    FILE *f = stdout;
     if (geo->render(out, outlen, &of->ro, &map, &maplen, &err) != API_OK) {
         fprintf(stderr, "cellar: --format %s: %s\n", of->kind == OUT_GPKG ? "gpkg" : "geojson",
                 err.msg);
-        goto out;
+        return 1;
     }
-    char *crs_text = crs ? json_dumps(crs, JSON_COMPACT) : NULL;
-    FILE *f = stdout;
+    crs_text = crs ? json_dumps(crs, JSON_COMPACT) : NULL;
     if (of->kind == OUT_GPKG) {
         const char *dir = getenv("TMPDIR");
-        tmp = malloc(strlen(dir ? dir : "/tmp") + 32);
-        if (tmp) sprintf(tmp, "%s/cellar-XXXXXX.geojson", dir ? dir : "/tmp");
-        int fd = tmp ? mkstemps(tmp, 8) : -1;
+        *tmp = malloc(strlen(dir ? dir : "/tmp") + 32);
+        if (*tmp) sprintf(*tmp, "%s/cellar-XXXXXX.geojson", dir ? dir : "/tmp");
+        int fd = *tmp ? mkstemps(*tmp, 8) : -1;
         f = fd >= 0 ? fdopen(fd, "w") : NULL;
         if (!f) {
             fprintf(stderr, "cellar: a temporary file: %s\n", strerror(errno));
             if (fd >= 0) close(fd);
             free(map);
             free(crs_text);
-            goto out;
+            return 1;
         }
     }
     if (crs_text && maplen > 1) { /* {"type":"FeatureCollection","crs":...,"features":... */
@@ -1127,21 +1119,74 @@ static int polygons_command(char **pos, int npos, const char *options_text, cons
     }
     free(map);
     free(crs_text);
-    if (of->kind != OUT_GPKG) {
-        rc = write_streamed();
-        goto out;
-    }
+    if (of->kind != OUT_GPKG) return write_streamed();
     if (fclose(f) != 0) {
-        fprintf(stderr, "cellar: %s: %s\n", tmp, strerror(errno));
-        goto out;
+        fprintf(stderr, "cellar: %s: %s\n", *tmp, strerror(errno));
+        return 1;
     }
     char nln[140];
     layer_name(output, nln, sizeof nln);
     char *argv[] = {"ogr2ogr", "-q",   "-overwrite", "-f",   "GPKG",         (char *)output,
-                    tmp,       "-nln", nln,          "-nlt", "MULTIPOLYGON", NULL};
+                    *tmp,      "-nln", nln,          "-nlt", "MULTIPOLYGON", NULL};
     char what[300];
     snprintf(what, sizeof what, "writing %.250s", output);
-    rc = run_program(argv, what, NULL, NULL) == 0 ? 0 : 1;
+    return run_program(argv, what, NULL, NULL) == 0 ? 0 : 1;
+}
+
+static int polygons_command(char **pos, int npos, const char *options_text, const svg_flags *fl,
+                            int threads, const out_format *of, const char *output)
+{
+    json_t *req = NULL, *layers = NULL, *opts = NULL, *op = NULL, *crs = NULL;
+    char *body = NULL, *out = NULL, *tmp = NULL;
+    size_t outlen = 0;
+    api_error err;
+    int rc = 1;
+    if (npos < 2)
+        return usage_error("%s", "polygons takes one or more GIS files (GeoJSON, Shapefile, "
+                                 "GeoPackage, ... : a layer each)");
+    if (!fl->op)
+        return usage_error("%s", "polygons: --op is required: union, intersection, difference, "
+                                 "xor (over the layers) or an expression over their names such "
+                                 "as '[\"&\", \"parcels\", \"zones\"]'");
+    if (of->kind == OUT_GPKG && !output)
+        return usage_error("%s", "--format gpkg needs --output FILE.gpkg");
+    opts = options_object(options_text, 0);
+    if (!opts) return EXIT_USAGE;
+    if (fl->precision > 0) json_object_set_new(opts, "precision", json_real(fl->precision));
+    op = fl->op[0] == '[' ? json_loads(fl->op, JSON_DECODE_ANY, NULL) : json_string(fl->op);
+    layers = json_object();
+    req = json_object();
+    if (!op || !layers || !req) {
+        fprintf(stderr, "cellar: --op: expected union, intersection, difference, xor or a JSON "
+                        "expression over the layers' names\n");
+        rc = EXIT_USAGE;
+        goto out;
+    }
+    if (polygons_layers(pos, npos, layers, &crs)) goto out;
+    json_object_set_new(req, "kind", json_string("polygons"));
+    json_object_set(req, "layers", layers);
+    json_object_set(req, "op", op);
+    if (json_object_size(opts)) json_object_set(req, "options", opts);
+    if (dump_request(req, &body)) goto out;
+    if (of->kind == OUT_REQUEST) {
+        rc = write_request(body, strlen(body));
+        goto out;
+    }
+    /* GeoJSON (and the GeoPackage made of it) carries the layers' reference system: written
+     * here, every other format as the other commands write it */
+    int kgeo = (int)(render_format_named("geojson") - render_formats);
+    if (of->kind != OUT_GPKG && !(of->kind == kgeo && crs)) {
+        rc = run_request(body, strlen(body), threads, of, &err);
+    } else {
+        api_run_opts ro = run_opts(threads, &(out_format){.kind = kgeo});
+        rc = api_run_json_ex(body, strlen(body), &ro, &out, &outlen, &err) == API_OK ? 0 : -1;
+        progress_end();
+        if (rc == 0) rc = polygons_own(out, outlen, of, crs, output, &tmp);
+    }
+    if (rc < 0) {
+        fprintf(stderr, "cellar: %s\n", err.msg);
+        rc = 1;
+    }
 out:
     if (tmp) unlink(tmp);
     free(tmp);
@@ -1155,16 +1200,198 @@ out:
     return rc;
 }
 
+/* The command line as parsed: the positional words (the command first) and the options. */
+typedef struct cli_args {
+    char **pos;
+    int npos;
+    const char *options_text; /* --options */
+    svg_flags fl;
+    out_format of;
+    const char *output; /* --output */
+    int threads;
+    int progress_flag; /* 'q' --quiet, 'p' --progress, 0 neither */
+} cli_args;
+
+/* --precision X, --flatten-tolerance X (or =X) at argv[*i]: the svg flags' numbers. */
+static int number_option(cli_args *a, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i], *eq = strchr(arg, '=');
+    int tol = arg[2] == 'f';
+    char flag[24];
+    snprintf(flag, sizeof flag, "%.*s", eq ? (int)(eq - arg) : (int)strlen(arg), arg);
+    if (!eq && *i + 1 == argc) return usage_error("%s needs a value", arg);
+    if (parse_positive(flag, eq ? eq + 1 : argv[++*i], tol ? &a->fl.tolerance : &a->fl.precision))
+        return EXIT_USAGE;
+    if (tol && !a->fl.first) a->fl.first = "--flatten-tolerance";
+    return -1;
+}
+
+/* --format, --explode, --width, --cells with its value val: the output's kind and options. */
+static int render_option(cli_args *a, const char *arg, const char *val)
+{
+    out_format *of = &a->of;
+    if (arg[2] == 'f') {
+        const render_format *f = render_format_named(val);
+        of->kind = f                         ? (int)(f - render_formats)
+                   : !strcmp(val, "request") ? OUT_REQUEST
+                   : !strcmp(val, "gpkg")    ? OUT_GPKG
+                                             : -1;
+        if (of->kind == -1)
+            return usage_error("--format: expected json, svg, geojson, obj, npz, stl, off, 3mf, "
+                               "glb or request, not \"%s\"",
+                               val);
+        return -1;
+    }
+    api_error re;
+    if (render_opts_parse_query(arg + 2, val, &of->ro, &re) != API_OK)
+        return usage_error("--%s", re.msg);
+    if (arg[2] == 'e')
+        of->explode = arg;
+    else if (arg[2] == 'c')
+        of->cells = arg;
+    else if (!of->first)
+        of->first = arg;
+    return -1;
+}
+
+/* An option that takes a value (--format, --explode, --width, --cells, --output, -o,
+ * --threads, --options; the last two also as --name=value) at argv[*i]; 0 when arg is none of
+ * them. */
+static int value_option(cli_args *a, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i], *val;
+    int known = !strcmp(arg, "--format") || !strcmp(arg, "--explode") || !strcmp(arg, "--width") ||
+                !strcmp(arg, "--cells") || !strcmp(arg, "--output") || !strcmp(arg, "-o") ||
+                !strcmp(arg, "--threads") || !strcmp(arg, "--options");
+    if (known && *i + 1 == argc) return usage_error("%s needs a value", arg);
+    if (known) {
+        val = argv[++*i];
+    } else if (!strncmp(arg, "--threads=", 10) || !strncmp(arg, "--options=", 10)) {
+        val = arg + 10;
+    } else {
+        return 0;
+    }
+    if (!strcmp(arg, "--output") || !strcmp(arg, "-o")) {
+        a->output = val;
+    } else if (!strncmp(arg, "--threads", 9)) {
+        uint64_t t;
+        if (parse_u64(val, &t) || t > 4096)
+            return usage_error("--threads: expected an integer in 0..4096, not \"%s\"", val);
+        a->threads = (int)t;
+    } else if (!strncmp(arg, "--options", 9)) {
+        a->options_text = val;
+    } else {
+        return render_option(a, arg, val);
+    }
+    return -1;
+}
+
+/* The option argv[*i] (a word starting "--", or -h, -o) into *a: -1 to go on, or the exit
+ * status (0 after --help or --version, EXIT_USAGE with the message printed). */
+static int parse_option(cli_args *a, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i];
+    if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
+        fputs(usage_text, stdout);
+        return 0;
+    }
+    if (!strcmp(arg, "--version")) {
+        printf("cellar %s (jansson %s)\n", API_VERSION, JANSSON_VERSION);
+        return 0;
+    }
+    if (!strcmp(arg, "--normalize") || !strcmp(arg, "--y-up") || !strcmp(arg, "--rect-diagonal") ||
+        !strcmp(arg, "--keep-dangling")) {
+        *(arg[2] == 'n'   ? &a->fl.normalize
+          : arg[2] == 'y' ? &a->fl.y_up
+          : arg[2] == 'r' ? &a->fl.rect_diagonal
+                          : &a->fl.keep_dangling) = 1;
+        if (!a->fl.first) a->fl.first = arg;
+        return -1;
+    }
+    if (!strcmp(arg, "--precision") || !strcmp(arg, "--flatten-tolerance") ||
+        !strncmp(arg, "--precision=", 12) || !strncmp(arg, "--flatten-tolerance=", 20))
+        return number_option(a, argc, argv, i);
+    if (!strcmp(arg, "--faces") || !strcmp(arg, "--groups")) {
+        *(arg[2] == 'f' ? &a->fl.faces : &a->fl.groups) = 1;
+        return -1;
+    }
+    if (!strcmp(arg, "--quiet") || !strcmp(arg, "--progress")) {
+        a->progress_flag = arg[2];
+        return -1;
+    }
+    if (!strcmp(arg, "--op") || !strncmp(arg, "--op=", 5)) {
+        if (!arg[4] && *i + 1 == argc) return usage_error("%s", "--op needs a value");
+        a->fl.op = arg[4] ? arg + 5 : argv[++*i];
+        return -1;
+    }
+    if (!strcmp(arg, "--numbers")) {
+        a->of.ro.numbers = 1;
+        if (!a->of.first) a->of.first = arg;
+        return -1;
+    }
+    int rc = value_option(a, argc, argv, i);
+    return rc == 0 ? usage_error("unknown option %s", arg) : rc;
+}
+
+/* A flag given to a command (or format) it is not for: the usage error's exit status, or -1
+ * when every flag fits the command cmd. */
+static int misplaced_flag(const cli_args *a, const char *cmd)
+{
+    const out_format *of = &a->of;
+    int svg = !strcmp(cmd, "svg"), solids = !strcmp(cmd, "solids");
+    int polygons = !strcmp(cmd, "polygons");
+    if (a->fl.first && !svg) return usage_error("%s is for the svg command", a->fl.first);
+    if (a->fl.precision > 0 && !svg && !solids && !polygons)
+        return usage_error("%s is for the svg, solids and polygons commands", "--precision");
+    if (of->kind == OUT_GPKG && !polygons)
+        return usage_error("%s", "--format gpkg is for the polygons command");
+    if (a->output && !polygons)
+        return usage_error("%s", "--output is for the polygons command (others write to standard "
+                                 "output)");
+    if (a->fl.faces && !solids) return usage_error("%s is for the solids command", "--faces");
+    if (a->fl.groups && !solids) return usage_error("%s is for the solids command", "--groups");
+    if (of->first && of->kind != 1) return usage_error("%s is for --format svg", of->first);
+    if (of->cells && of->kind != 2) return usage_error("%s is for --format geojson", of->cells);
+    if (of->explode && of->kind != 1 && of->kind != 3 &&
+        !(of->kind >= 0 && !strcmp(render_formats[of->kind].name, "glb")))
+        return usage_error("%s is for --format svg, obj or glb", of->explode);
+    if (of->kind == OUT_REQUEST && !svg && !solids && !polygons)
+        return usage_error("%s", "--format request is for the svg, solids and polygons commands");
+    return -1;
+}
+
+/* Runs the command a->pos[0]; its exit status. */
+static int dispatch(const cli_args *a)
+{
+    char **pos = a->pos;
+    int npos = a->npos;
+    if (npos == 0) return usage_error("%s", "no command (run, gen, svg, solids, polygons)");
+    if (!strcmp(pos[0], "svg"))
+        return svg_command(pos, npos, a->options_text, &a->fl, a->threads, &a->of);
+    if (!strcmp(pos[0], "solids"))
+        return solids_command(pos, npos, a->options_text, &a->fl, a->threads, &a->of);
+    if (!strcmp(pos[0], "polygons"))
+        return polygons_command(pos, npos, a->options_text, &a->fl, a->threads, &a->of, a->output);
+    if (!strcmp(pos[0], "run"))
+        return a->options_text ? usage_error("%s", "--options is for gen; put options in the "
+                                                   "request")
+                               : run(pos, npos, a->threads, &a->of);
+    if (!strcmp(pos[0], "gen")) {
+        if (npos < 2) return usage_error("%s", "gen needs lines or grid");
+        if (!strcmp(pos[1], "lines")) return gen_lines(pos, npos, a->options_text);
+        if (!strcmp(pos[1], "grid")) return gen_grid(pos, npos, a->options_text);
+        return usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
+    }
+    return usage_error("unknown command \"%s\" (run, gen, svg, solids, polygons)", pos[0]);
+}
+
 int main(int argc, char **argv)
 {
     static char outbuf[1 << 16];
-    char **pos = calloc((size_t)argc + 1, sizeof *pos);
-    const char *options_text = NULL;
-    svg_flags fl = {0};
-    out_format of = {.kind = 0, .ro = RENDER_OPTS_INIT};
-    const char *output = NULL;
-    int npos = 0, threads = 0, rc, progress_flag = 0;
-    if (!pos) return 1;
+    cli_args a = {.pos = calloc((size_t)argc + 1, sizeof *a.pos),
+                  .of = {.kind = 0, .ro = RENDER_OPTS_INIT}};
+    int rc = -1;
+    if (!a.pos) return 1;
     /* One run a process: the arrays a stage frees stay in the heap for the next stage to reuse
      * (glibc would give blocks of 128 KiB and more back to the kernel, and the next stage would
      * fault and zero its pages again: 5-10 % of a 3D run).  Freed memory is reused, so the peak
@@ -1172,194 +1399,22 @@ int main(int argc, char **argv)
     (void)mallopt(M_MMAP_THRESHOLD, 32 << 20);
     (void)mallopt(M_TRIM_THRESHOLD, 1 << 30);
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *val = NULL;
-        if (strncmp(a, "--", 2) != 0 && strcmp(a, "-h") != 0 && strcmp(a, "-o") != 0) {
-            pos[npos++] = argv[i];
-            continue;
-        }
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-            fputs(usage_text, stdout);
-            rc = 0;
-            goto out;
-        }
-        if (strcmp(a, "--version") == 0) {
-            printf("cellar %s (jansson %s)\n", API_VERSION, JANSSON_VERSION);
-            rc = 0;
-            goto out;
-        }
-        if (strcmp(a, "--normalize") == 0 || strcmp(a, "--y-up") == 0 ||
-            strcmp(a, "--rect-diagonal") == 0 || strcmp(a, "--keep-dangling") == 0) {
-            *(a[2] == 'n'   ? &fl.normalize
-              : a[2] == 'y' ? &fl.y_up
-              : a[2] == 'r' ? &fl.rect_diagonal
-                            : &fl.keep_dangling) = 1;
-            if (!fl.first) fl.first = a;
-            continue;
-        }
-        if (strcmp(a, "--precision") == 0 || strcmp(a, "--flatten-tolerance") == 0 ||
-            strncmp(a, "--precision=", 12) == 0 || strncmp(a, "--flatten-tolerance=", 20) == 0) {
-            int tol = a[2] == 'f';
-            const char *eq = strchr(a, '=');
-            char flag[24];
-            snprintf(flag, sizeof flag, "%.*s", eq ? (int)(eq - a) : (int)strlen(a), a);
-            if (!eq && i + 1 == argc) {
-                rc = usage_error("%s needs a value", a);
-                goto out;
-            }
-            if (parse_positive(flag, eq ? eq + 1 : argv[++i],
-                               tol ? &fl.tolerance : &fl.precision)) {
-                rc = EXIT_USAGE;
-                goto out;
-            }
-            if (tol && !fl.first) fl.first = "--flatten-tolerance";
-            continue;
-        }
-        if (strcmp(a, "--faces") == 0) {
-            fl.faces = 1;
-            continue;
-        }
-        if (strcmp(a, "--groups") == 0) {
-            fl.groups = 1;
-            continue;
-        }
-        if (strcmp(a, "--quiet") == 0 || strcmp(a, "--progress") == 0) {
-            progress_flag = a[2];
-            continue;
-        }
-        if (strcmp(a, "--op") == 0 || strncmp(a, "--op=", 5) == 0) {
-            if (!a[4] && i + 1 == argc) {
-                rc = usage_error("%s", "--op needs a value");
-                goto out;
-            }
-            fl.op = a[4] ? a + 5 : argv[++i];
-            continue;
-        }
-        if (strcmp(a, "--numbers") == 0) {
-            of.ro.numbers = 1;
-            if (!of.first) of.first = a;
-            continue;
-        }
-        if (strcmp(a, "--format") == 0 || strcmp(a, "--explode") == 0 ||
-            strcmp(a, "--width") == 0 || strcmp(a, "--cells") == 0) {
-            if (i + 1 == argc) {
-                rc = usage_error("%s needs a value", a);
-                goto out;
-            }
-            val = argv[++i];
-            if (a[2] == 'f') {
-                const render_format *f = render_format_named(val);
-                of.kind = f                         ? (int)(f - render_formats)
-                          : !strcmp(val, "request") ? OUT_REQUEST
-                          : !strcmp(val, "gpkg")    ? OUT_GPKG
-                                                    : -1;
-                if (of.kind == -1) {
-                    rc = usage_error(
-                        "--format: expected json, svg, geojson, obj, npz, stl, off, 3mf, glb or "
-                        "request, not \"%s\"",
-                        val);
-                    goto out;
-                }
-                continue;
-            }
-            api_error re;
-            if (render_opts_parse_query(a + 2, val, &of.ro, &re) != API_OK) {
-                rc = usage_error("--%s", re.msg);
-                goto out;
-            }
-            if (a[2] == 'e')
-                of.explode = a;
-            else if (a[2] == 'c')
-                of.cells = a;
-            else if (!of.first)
-                of.first = a;
-            continue;
-        }
-        if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
-            if (i + 1 == argc) {
-                rc = usage_error("%s needs a value", a);
-                goto out;
-            }
-            output = argv[++i];
-            continue;
-        }
-        if (strcmp(a, "--threads") == 0 || strcmp(a, "--options") == 0) {
-            if (i + 1 == argc) {
-                rc = usage_error("%s needs a value", a);
-                goto out;
-            }
-            val = argv[++i];
-        } else if (strncmp(a, "--threads=", 10) == 0 || strncmp(a, "--options=", 10) == 0) {
-            val = a + 10;
-        } else {
-            rc = usage_error("unknown option %s", a);
-            goto out;
-        }
-        if (strncmp(a, "--threads", 9) == 0) {
-            uint64_t t;
-            if (parse_u64(val, &t) || t > 4096) {
-                rc = usage_error("--threads: expected an integer in 0..4096, not \"%s\"", val);
-                goto out;
-            }
-            threads = (int)t;
-        } else {
-            options_text = val;
-        }
-    }
-    bar.mode = progress_flag == 'q'    ? PROGRESS_OFF
-               : isatty(STDERR_FILENO) ? PROGRESS_BAR
-               : progress_flag == 'p'  ? PROGRESS_LINES
-                                       : PROGRESS_OFF;
-    const char *cmd = npos ? pos[0] : "";
-    if (fl.first && strcmp(cmd, "svg") != 0) {
-        rc = usage_error("%s is for the svg command", fl.first);
-    } else if (fl.precision > 0 && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0 &&
-               strcmp(cmd, "polygons") != 0) {
-        rc = usage_error("%s is for the svg, solids and polygons commands", "--precision");
-    } else if (of.kind == OUT_GPKG && strcmp(cmd, "polygons") != 0) {
-        rc = usage_error("%s", "--format gpkg is for the polygons command");
-    } else if (output && strcmp(cmd, "polygons") != 0) {
-        rc = usage_error("%s", "--output is for the polygons command (others write to standard "
-                               "output)");
-    } else if (fl.faces && strcmp(cmd, "solids") != 0) {
-        rc = usage_error("%s is for the solids command", "--faces");
-    } else if (fl.groups && strcmp(cmd, "solids") != 0) {
-        rc = usage_error("%s is for the solids command", "--groups");
-    } else if (of.first && of.kind != 1) {
-        rc = usage_error("%s is for --format svg", of.first);
-    } else if (of.cells && of.kind != 2) {
-        rc = usage_error("%s is for --format geojson", of.cells);
-    } else if (of.explode && of.kind != 1 && of.kind != 3 &&
-               !(of.kind >= 0 && !strcmp(render_formats[of.kind].name, "glb"))) {
-        rc = usage_error("%s is for --format svg, obj or glb", of.explode);
-    } else if (of.kind == OUT_REQUEST && strcmp(cmd, "svg") != 0 && strcmp(cmd, "solids") != 0 &&
-               strcmp(cmd, "polygons") != 0) {
-        rc = usage_error("%s", "--format request is for the svg, solids and polygons commands");
-    } else if (npos == 0) {
-        rc = usage_error("%s", "no command (run, gen, svg, solids, polygons)");
-    } else if (strcmp(pos[0], "svg") == 0) {
-        rc = svg_command(pos, npos, options_text, &fl, threads, &of);
-    } else if (strcmp(pos[0], "solids") == 0) {
-        rc = solids_command(pos, npos, options_text, &fl, threads, &of);
-    } else if (strcmp(pos[0], "polygons") == 0) {
-        rc = polygons_command(pos, npos, options_text, &fl, threads, &of, output);
-    } else if (strcmp(pos[0], "run") == 0) {
-        rc = options_text ? usage_error("%s", "--options is for gen; put options in the request")
-                          : run(pos, npos, threads, &of);
-    } else if (strcmp(pos[0], "gen") == 0) {
-        if (npos < 2)
-            rc = usage_error("%s", "gen needs lines or grid");
-        else if (strcmp(pos[1], "lines") == 0)
-            rc = gen_lines(pos, npos, options_text);
-        else if (strcmp(pos[1], "grid") == 0)
-            rc = gen_grid(pos, npos, options_text);
+    for (int i = 1; i < argc && rc < 0; i++) {
+        if (strncmp(argv[i], "--", 2) != 0 && strcmp(argv[i], "-h") != 0 &&
+            strcmp(argv[i], "-o") != 0)
+            a.pos[a.npos++] = argv[i];
         else
-            rc = usage_error("gen: unknown generator \"%s\" (lines, grid)", pos[1]);
-    } else {
-        rc = usage_error("unknown command \"%s\" (run, gen, svg, solids, polygons)", pos[0]);
+            rc = parse_option(&a, argc, argv, &i);
     }
-out:
-    free(pos);
+    if (rc < 0) {
+        bar.mode = a.progress_flag == 'q'   ? PROGRESS_OFF
+                   : isatty(STDERR_FILENO)  ? PROGRESS_BAR
+                   : a.progress_flag == 'p' ? PROGRESS_LINES
+                                            : PROGRESS_OFF;
+        rc = misplaced_flag(&a, a.npos ? a.pos[0] : "");
+        if (rc < 0) rc = dispatch(&a);
+    }
+    free(a.pos);
     if (fflush(stdout) != 0) rc = rc ? rc : 1;
     return rc;
 }

@@ -33,7 +33,6 @@
 #include "core/arr2.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +43,7 @@
 #include "core/par.h"
 #include "core/sort.h"
 #include "core/stop.h"
+#include "core/util.h"
 
 #define MAXW      64 /* most workers */
 #define LEAF_MAX  24 /* bucket size aimed at */
@@ -110,33 +110,10 @@ static double now_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
 }
 
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
-static int vbuf_grow(vbuf *v, size_t need, size_t elem);
-
+/* Room for need elements of elem bytes in v (core/mem.h's growable array). */
 static inline int vbuf_reserve(vbuf *v, size_t need, size_t elem)
 {
-    return need <= v->cap ? 0 : vbuf_grow(v, need, elem);
-}
-
-static int vbuf_grow(vbuf *v, size_t need, size_t elem)
-{
-    size_t nc = v->cap ? v->cap * 2 : 256;
-    while (nc < need) nc *= 2;
-    void *q = realloc(v->p, nc * elem);
-    if (!q) return -1;
-    v->p = q;
-    v->cap = nc;
-    return 0;
+    return mem_grow(&v->p, &v->cap, need, elem);
 }
 
 static int cancelled(const ctx *c)
@@ -240,8 +217,8 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     for (size_t i = 0; i < n; i++) {
         for (int k = 0; k < 4; k++)
             if (!isfinite(s[4 * i + k]))
-                return seterr(err, el, ARR_EINVAL, "lines[%zu][%d]: expected 2 finite numbers", i,
-                              k / 2);
+                return util_seterr(err, el, ARR_EINVAL, "lines[%zu][%d]: expected 2 finite numbers",
+                                   i, k / 2);
         for (int k = 0; k < 4; k += 2) {
             double x = s[4 * i + k], y = s[4 * i + k + 1];
             minx = x < minx ? x : minx;
@@ -252,10 +229,11 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
     double w = n ? maxx - minx : 0, h = n ? maxy - miny : 0, ext = w > h ? w : h;
     if (n && !isfinite(ext))
-        return seterr(err, el, ARR_ELIMIT, "lines: the coordinates span more than a double holds");
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "lines: the coordinates span more than a double holds");
     double p = c->o->precision;
     if (p != 0 && !(isfinite(p) && p > 0))
-        return seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
+        return util_seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
     /* The finest grid the doubles where the drawing lies can write: twice their spacing at its
      * largest coordinate (mag < 2^em, where doubles are 2^(em-53) apart).  Grid points k * p
      * with p at least that are then distinct doubles, in the order of k, after rounding. */
@@ -273,18 +251,18 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
             if (p < finest) p = finest;
         }
     } else if (n && ext > 0 && p < finest) {
-        return seterr(err, el, ARR_ELIMIT,
-                      "options.precision: %g is finer than the doubles near %g (the drawing's "
-                      "largest coordinate) can write distinct points; use precision >= %g",
-                      p, mag, finest);
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "options.precision: %g is finer than the doubles near %g (the drawing's "
+                           "largest coordinate) can write distinct points; use precision >= %g",
+                           p, mag, finest);
     } else if (ext / p > ldexp(1.0, ARR2_GRID_BITS)) {
-        return seterr(err, el, ARR_ELIMIT,
-                      "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
-                      "grid steps across; use precision >= %g)",
-                      p, ext, ARR2_GRID_BITS, ext / ldexp(1.0, ARR2_GRID_BITS));
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
+                           "grid steps across; use precision >= %g)",
+                           p, ext, ARR2_GRID_BITS, ext / ldexp(1.0, ARR2_GRID_BITS));
     }
     if (!isfinite(ext / p) || p < 1e-300)
-        return seterr(err, el, ARR_ELIMIT, "options.precision: %g is out of range", p);
+        return util_seterr(err, el, ARR_ELIMIT, "options.precision: %g is out of range", p);
     c->step = p;
     st->precision = p;
     double centre[2] = {n ? minx / 2 + maxx / 2 : 0, n ? miny / 2 + maxy / 2 : 0};
@@ -295,7 +273,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
 
     c->seg = malloc((n ? n : 1) * sizeof *c->seg);
-    if (!c->seg) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    if (!c->seg) return util_seterr(err, el, ARR_ENOMEM, "out of memory");
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
         ipt a = {snap_coord(c, 0, s[4 * i]), snap_coord(c, 1, s[4 * i + 1])};
@@ -310,7 +288,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
     c->m = m;
     st->zero_length = n - m;
-    return spatial_order(c) ? seterr(err, el, ARR_ENOMEM, "out of memory") : ARR_OK;
+    return spatial_order(c) ? util_seterr(err, el, ARR_ENOMEM, "out of memory") : ARR_OK;
 }
 
 /* The bound every predicate relies on (core/num.h); the snap stage guarantees it, this
@@ -322,7 +300,8 @@ static int check_range(const ctx *c, char *err, size_t el)
         const seg2 *s = &c->seg[i];
         if (llabs(s->a.x) > lim || llabs(s->a.y) > lim || llabs(s->b.x) > lim ||
             llabs(s->b.y) > lim)
-            return seterr(err, el, ARR_EINTERNAL, "internal: a snapped coordinate is out of range");
+            return util_seterr(err, el, ARR_EINTERNAL,
+                               "internal: a snapped coordinate is out of range");
     }
     return ARR_OK;
 }
@@ -572,41 +551,16 @@ static void locate_chunk(void *vj, size_t chunk, int w)
     }
 }
 
-/* Sorts the n edges ev (v0 << 32 | v1) with their tags et by (edge, tag): LSD radix, the tags'
- * bytes first, then the edges', each pass stable, passes whose byte is the same everywhere
- * skipped.  Then makes the edges unique in place (*nu of them) and gives each the tags that lie
- * on it an odd number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
+/* Sorts the n edges ev (v0 << 32 | v1) with their tags et by (edge, tag) (sort_u64_u32), then
+ * makes the edges unique in place (*nu of them) and gives each the tags that lie on it an odd
+ * number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
 static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint32_t **toff,
                          uint32_t **tags, int32_t **tw)
 {
-    uint64_t *kb = malloc((n ? n : 1) * sizeof *kb);
-    uint32_t *tb = malloc((n ? n : 1) * sizeof *tb);
     uint32_t *off = NULL, *tg = NULL;
-    if (!kb || !tb) goto fail;
-    uint64_t *ks = ev, *kd = kb;
-    uint32_t *ts = et, *td = tb;
-    for (int part = 0; part < 2; part++) {
-        uint64_t all_or = 0, all_and = ~(uint64_t)0;
-        for (size_t i = 0; i < n; i++) {
-            uint64_t x = part ? ks[i] : ts[i];
-            all_or |= x, all_and &= x;
-        }
-        for (int pass = 0; pass < (part ? 8 : 4); pass++) {
-            int sh = 8 * pass;
-            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
-            size_t cnt[257] = {0};
-            for (size_t i = 0; i < n; i++) cnt[((part ? ks[i] : ts[i]) >> sh & 255) + 1]++;
-            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
-            for (size_t i = 0; i < n; i++) {
-                size_t d = cnt[(part ? ks[i] : ts[i]) >> sh & 255]++;
-                kd[d] = ks[i], td[d] = ts[i];
-            }
-            uint64_t *kt = ks;
-            ks = kd, kd = kt;
-            uint32_t *tt = ts;
-            ts = td, td = tt;
-        }
-    }
+    if (sort_u64_u32(ev, et, n)) return -1;
+    const uint64_t *ks = ev;
+    const uint32_t *ts = et;
     off = malloc((n + 1) * sizeof *off);
     tg = malloc((n ? n : 1) * sizeof *tg);
     if (!off || !tg) goto fail;
@@ -634,15 +588,11 @@ static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint3
         i = j;
     }
     off[u] = (uint32_t)nt;
-    free(kb);
-    free(tb);
     *nu = u;
     *toff = off;
     *tags = tg;
     return 0;
 fail:
-    free(kb);
-    free(tb);
     free(off);
     free(tg);
     if (tw) free(*tw), *tw = NULL;
@@ -865,7 +815,7 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     c->npix = u;
     st->hot_pixels = u;
     if (u >= NONE) {
-        rc = seterr(err, el, ARR_ELIMIT, "lines: more than 2^32 vertices");
+        rc = util_seterr(err, el, ARR_ELIMIT, "lines: more than 2^32 vertices");
         goto fail;
     }
     double t2 = now_ms();
@@ -938,7 +888,7 @@ fail:
     free(inc);
     free(ev);
     free(et);
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     return rc;
 }
 
@@ -1108,23 +1058,13 @@ static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
     return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
 }
 
-static uint32_t uf_find(uint32_t *par, uint32_t x)
-{
-    while (par[x] != x) {
-        par[x] = par[par[x]];
-        x = par[x];
-    }
-    return x;
-}
-
 /* The connected components: comp[v] for every vertex, numbered in the order of their smallest
  * vertex, by union-find over the edges (par: nv entries of scratch); returns their number. */
 static size_t components(const graph *g, uint32_t *comp, uint32_t *par)
 {
     for (size_t v = 0; v < g->nv; v++) par[v] = (uint32_t)v;
     for (size_t e = 0; e < g->ne; e++) {
-        uint32_t a = uf_find(par, g->EV[2 * e]), b = uf_find(par, g->EV[2 * e + 1]);
-        if (a != b) par[a > b ? a : b] = a < b ? a : b; /* the smaller vertex is the root */
+        uf_union(par, g->EV[2 * e], g->EV[2 * e + 1]); /* the smaller vertex is the root */
     }
     size_t n = 0;
     for (size_t v = 0; v < g->nv; v++) { /* a root is the smallest vertex of its component */
@@ -1616,10 +1556,10 @@ static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *
     size_t badv = atomic_load(&ej.bad);
     if (badv) {
         size_t v = badv - 1;
-        rc = seterr(err, el, ARR_EINTERNAL,
-                    "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
-                    "point",
-                    v, out->V[2 * v], out->V[2 * v + 1]);
+        rc = util_seterr(err, el, ARR_EINTERNAL,
+                         "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
+                         "point",
+                         v, out->V[2 * v], out->V[2 * v + 1]);
         goto out;
     }
     for (size_t v = 0; v < g->nv; v++) instack[v] = NONE;
@@ -1661,8 +1601,8 @@ static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *
             npos += ppos[p];
         }
         if (npos != (face_idx[cy] != NONE)) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: walk %zu splits into %zu outer cycles",
-                        cy, npos);
+            rc = util_seterr(err, el, ARR_EINTERNAL,
+                             "internal: walk %zu splits into %zu outer cycles", cy, npos);
             goto out;
         }
     }
@@ -1750,7 +1690,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
             goto fail;
         }
         if (sr) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
             goto fail;
         }
         walks_free(&w);
@@ -1803,7 +1743,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         }
         uint32_t k = comp[he_tail(g, w.hes[w.hoff[cy]])];
         if (comp_outer[k] != NONE) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a component with two outer walks");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a component with two outer walks");
             goto fail;
         }
         comp_outer[k] = (uint32_t)cy;
@@ -1811,7 +1751,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     }
     if (nouter != ncomp ||
         (long long)g->nv - (long long)g->ne + (long long)w.ncyc != 2 * (long long)ncomp) {
-        rc = seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
+        rc = util_seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
         goto fail;
     }
     double t2 = now_ms();
@@ -1822,7 +1762,8 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     if (ncomp > 1) {
         rc = place_components(c, g, &w, comp, ncomp, comp_outer, face_of);
         if (rc) {
-            if (rc == ARR_EINTERNAL) seterr(err, el, rc, "internal: inconsistent hole placement");
+            if (rc == ARR_EINTERNAL)
+                util_seterr(err, el, rc, "internal: inconsistent hole placement");
             goto fail;
         }
         rc = ARR_ENOMEM;
@@ -1839,7 +1780,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     st->components = ncomp;
     rc = ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(drop);
     free(pos);
     free(comp);
@@ -1933,7 +1874,7 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
 
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
-    if (!c) return seterr(err, errlen, ARR_ENOMEM, "out of memory");
+    if (!c) return util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
     c->o = opts ? opts : &defaults;
     c->in = seg;
     c->n_in = n;
@@ -1945,8 +1886,8 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     g.stop = &c->serial;
     out->stats.input_segments = n;
     if (n > ARR2_MAX_SEGMENTS) {
-        rc = seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u", n,
-                    ARR2_MAX_SEGMENTS);
+        rc = util_seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u",
+                         n, ARR2_MAX_SEGMENTS);
         goto fail;
     }
     progress(c, "snap", 0);
@@ -1973,12 +1914,12 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     g.P = c->pix;
     c->pix = NULL;
     if (c->o->input_coords && vertex_sources(c, seg, n, &g)) {
-        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
         goto fail;
     }
     g.EV = malloc((2 * nev + 1) * sizeof *g.EV);
     if (!g.EV) {
-        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
         goto fail;
     }
     for (size_t e = 0; e < nev; e++) {
@@ -1999,7 +1940,7 @@ fail : {
     lar2_free(out);
     out->stats = keep;
 }
-    if (rc == ARR_ECANCELED) seterr(err, errlen, rc, "cancelled");
+    if (rc == ARR_ECANCELED) util_seterr(err, errlen, rc, "cancelled");
     free(ev);
     graph_free(&g);
     ctx_free(c);

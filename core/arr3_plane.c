@@ -36,7 +36,10 @@
 #include <string.h>
 
 #include "core/mem.h"
+#include "core/member.h"
 #include "core/par.h"
+#include "core/planar.h"
+#include "core/util.h"
 
 #define NEWBASE 0x80000000u /* output ids from here are the plane's new points */
 #define UNB     UINT32_MAX  /* the unbounded face */
@@ -111,6 +114,8 @@ typedef struct pwork {
     size_t capfof, capaoff, capadj, capqueue, capcovo, capcovn, capcov, ncov;
     uint32_t *x1, *x2;
     size_t capx1, capx2;
+    double *span; /* placement: the edges' and queries' conservative spans */
+    size_t capspan;
     uint8_t *reached; /* by piece of the plane: goes through the arrangement */
     size_t capreached;
     int fail;
@@ -273,11 +278,7 @@ static void seg_box(pwork *w, pseg *s)
 {
     for (int d = 0; d < 2; d++) {
         int ax = d ? w->v : w->u;
-        double a = w->lp[s->p0].x[ax], b = w->lp[s->p1].x[ax];
-        double lo = a < b ? a : b, hi = a < b ? b : a;
-        double m = (fabs(lo) + fabs(hi)) * 0x1p-45 + 0x1p-30;
-        s->lo[d] = lo - m;
-        s->hi[d] = hi + m;
+        span_fast(w->lp[s->p0].x[ax], w->lp[s->p1].x[ax], &s->lo[d], &s->hi[d]);
     }
 }
 
@@ -367,21 +368,6 @@ static int cmp_edge(const void *pa, const void *pb)
     return (a->prov > b->prov) - (a->prov < b->prov);
 }
 
-/* XOR of two sorted piece lists into out (sorted); returns its length. */
-static size_t cov_xor(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
-{
-    size_t i = 0, j = 0, n = 0;
-    while (i < na || j < nb) {
-        if (j == nb || (i < na && a[i] < b[j]))
-            out[n++] = a[i++];
-        else if (i == na || b[j] < a[i])
-            out[n++] = b[j++];
-        else
-            i++, j++;
-    }
-    return n;
-}
-
 static int cmp_side(const void *pa, const void *pb, void *vw)
 {
     const pwork *w = vw;
@@ -457,7 +443,8 @@ static int merge_collinear(pwork *w)
                 size_t have = w->nsprov - p0;
                 if (GROW(w, sprov, w->nsprov + sg->nprov + 1) || GROW(w, x2, have + sg->nprov + 1))
                     return -1;
-                size_t nx = cov_xor(w->sprov + p0, have, w->sprov + sg->prov, sg->nprov, w->x2);
+                size_t nx =
+                    member_symdiff(w->sprov + p0, have, w->sprov + sg->prov, sg->nprov, w->x2);
                 memcpy(w->sprov + p0, w->x2, nx * sizeof *w->x2);
                 w->nsprov = p0 + nx;
             }
@@ -530,7 +517,8 @@ static int make_edges(pwork *w)
             if (GROW(w, prov, w->nprov + e.nprov + x->nprov + 1) ||
                 GROW(w, x2, e.nprov + x->nprov + 1))
                 return -1;
-            size_t nx = cov_xor(w->prov + e.prov, e.nprov, w->sprov + x->prov, x->nprov, w->x2);
+            size_t nx =
+                member_symdiff(w->prov + e.prov, e.nprov, w->sprov + x->prov, x->nprov, w->x2);
             memcpy(w->prov + e.prov, w->x2, nx * sizeof *w->x2);
             e.nprov = (uint32_t)nx;
         }
@@ -683,10 +671,31 @@ static uint32_t h_plus_u(const pwork *w, uint32_t e)
     return h_sig(w, h) * su > 0 ? h : h + 1;
 }
 
+/* The model's "below" (planar_traits): does edge e straddle the vertical line through
+ * component q's lowest point x (left end strictly left of it, right end not), with x strictly
+ * above it?  The conservative v spans first (span_fast), then the exact tests. */
+static int model_below(void *vw, uint32_t e, uint32_t q)
+{
+    const pwork *w = vw;
+    const pedge *E = &w->ed[e];
+    uint32_t x = w->low[q], l, r;
+    if (w->span[2 * w->ned + e] > w->span[2 * w->ned + w->ned + q]) return 0; /* above x */
+    ends_by_u(w, E, &l, &r);
+    if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) return 0;
+    return above_edge(w, E, x) > 0;
+}
+
+static int model_higher(void *vw, uint32_t a, uint32_t b)
+{
+    const pwork *w = vw;
+    return higher(w, &w->ed[a], &w->ed[b]);
+}
+
+/* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below its
+ * lowest vertex (NONE: nothing below, the unbounded face), by the kernel's planar_place over
+ * the edges' conservative u spans (span_fast). */
 static int place_components(pwork *w, size_t ncomp)
 {
-    /* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below
-     * its lowest vertex (NONE: nothing below, the unbounded face) */
     for (size_t c = 0; c < ncomp; c++) {
         uint32_t lw = w->low[c];
         uint32_t n = w->voff[lw + 1] - w->voff[lw];
@@ -694,36 +703,27 @@ static int place_components(pwork *w, size_t ncomp)
         w->host[c] = NONE;
     }
     if (ncomp < 2) return 0;
-    for (size_t c = 0; c < ncomp; c++) {
-        uint32_t x = w->low[c], best = NONE;
-        double xu = w->lp[x].x[w->u], xv = w->lp[x].x[w->v];
-        for (size_t e = 0; e < w->ned; e++) {
-            const pedge *E = &w->ed[e];
-            if (w->comp[E->a] == c) continue;
-            const xpt *A = &w->lp[E->a], *B = &w->lp[E->b];
-            double ulo = A->x[w->u] < B->x[w->u] ? A->x[w->u] : B->x[w->u];
-            double uhi = A->x[w->u] < B->x[w->u] ? B->x[w->u] : A->x[w->u];
-            double vlo = A->x[w->v] < B->x[w->v] ? A->x[w->v] : B->x[w->v];
-            double m = (fabs(ulo) + fabs(uhi) + fabs(xu)) * 0x1p-45 + 0x1p-30;
-            if (xu < ulo - m || xu > uhi + m || vlo > xv + (fabs(vlo) + fabs(xv)) * 0x1p-45 + m)
-                continue;
-            uint32_t l, r;
-            ends_by_u(w, E, &l, &r);
-            if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) continue;
-            if (above_edge(w, E, x) <= 0) continue; /* x is not above it */
-            if (best == NONE || higher(w, E, &w->ed[best])) best = (uint32_t)e;
-        }
-        if (best != NONE) w->host[c] = w->hcyc[h_plus_u(w, best)];
+    /* span: u lo, u hi by edge; v lo by edge; v hi by query; u lo, u hi by query */
+    size_t ne = w->ned;
+    if (GROW(w, span, 3 * ne + 3 * ncomp + 1) || GROW(w, tmp, ne + 1)) return -1;
+    double *elo = w->span, *ehi = elo + ne, *evlo = ehi + ne, *qvhi = evlo + ne;
+    double *qlo = qvhi + ncomp, *qhi = qlo + ncomp, d;
+    for (size_t e = 0; e < ne; e++) {
+        const xpt *A = &w->lp[w->ed[e].a], *B = &w->lp[w->ed[e].b];
+        span_fast(A->x[w->u], B->x[w->u], &elo[e], &ehi[e]);
+        span_fast(A->x[w->v], B->x[w->v], &evlo[e], &d);
+        w->tmp[e] = w->comp[w->ed[e].a];
     }
+    for (size_t c = 0; c < ncomp; c++) {
+        const xpt *X = &w->lp[w->low[c]];
+        span_fast(X->x[w->u], X->x[w->u], &qlo[c], &qhi[c]);
+        span_fast(X->x[w->v], X->x[w->v], &d, &qvhi[c]);
+    }
+    planar_traits T = {w, NULL, model_below, model_higher};
+    if (planar_place(&T, ne, elo, ehi, w->tmp, ncomp, qlo, qhi, w->host)) return -1;
+    for (size_t c = 0; c < ncomp; c++)
+        if (w->host[c] != NONE) w->host[c] = w->hcyc[h_plus_u(w, w->host[c])];
     return 0;
-}
-
-/* ---- coverage ------------------------------------------------------------------------- */
-
-static int cmpu32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
 }
 
 /* ---- output ------------------------------------------------------------------------------ */
@@ -798,16 +798,6 @@ static int out_cycle(pwork *w, outb *o, uint32_t h, uint32_t x, uint32_t *newid)
 
 /* ---- one plane ------------------------------------------------------------------------- */
 
-/* A conservative box of point p in grid units (the approximation's error and one unit more). */
-static void pt_box(const xpt *p, int64_t *lo, int64_t *hi)
-{
-    for (int a = 0; a < 3; a++) {
-        double x = p->x[a], m = fabs(x) * 0x1p-45 + 1;
-        lo[a] = (int64_t)floor(x - m);
-        hi[a] = (int64_t)ceil(x + m);
-    }
-}
-
 static int box_meets(const int64_t *lo, const int64_t *hi, const int32_t *b)
 {
     for (int a = 0; a < 3; a++)
@@ -842,8 +832,8 @@ static int reached_pieces(pwork *w, pfaces *F)
         if (A->pc[A->pp[o + i]].nc != 1) w->reached[i] = 1;
     for (uint32_t t = A->cs_off[P]; t < A->cs_off[P + 1]; t++) {
         int64_t lo[3], hi[3], l1[3], h1[3];
-        pt_box(&A->pt[A->cs[t].p0], lo, hi);
-        pt_box(&A->pt[A->cs[t].p1], l1, h1);
+        xpt_grid_box_fast(&A->pt[A->cs[t].p0], lo, hi);
+        xpt_grid_box_fast(&A->pt[A->cs[t].p1], l1, h1);
         for (int a = 0; a < 3; a++) {
             if (l1[a] < lo[a]) lo[a] = l1[a];
             if (h1[a] > hi[a]) hi[a] = h1[a];
@@ -853,7 +843,7 @@ static int reached_pieces(pwork *w, pfaces *F)
     }
     for (uint32_t t = A->cp_off[P]; t < A->cp_off[P + 1]; t++) {
         int64_t lo[3], hi[3];
-        pt_box(&A->pt[A->cp[t].p], lo, hi);
+        xpt_grid_box_fast(&A->pt[A->cp[t].p], lo, hi);
         for (uint32_t i = 0; i < m; i++)
             if (!w->reached[i] && box_meets(lo, hi, A->pc[A->pp[o + i]].box)) w->reached[i] = 1;
     }
@@ -946,14 +936,14 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     for (size_t i = 0; i < w->nsg; i++)
         if (w->sg[i].p0 == w->sg[i].p1) w->used[w->sg[i].p0] = 1;
     for (size_t p = 0; p < np; p++) w->comp[p] = (uint32_t)p;
-    for (size_t e = 0; e < w->ned; e++) a3_uf_union(w->comp, w->ed[e].a, w->ed[e].b);
+    for (size_t e = 0; e < w->ned; e++) uf_union(w->comp, w->ed[e].a, w->ed[e].b);
     /* components numbered in point order, each with its lowest point */
     size_t ncomp = 0;
     if (GROW(w, iso, np + 1)) return -1;
     for (size_t p = 0; p < np; p++) w->iso[p] = NONE;
     for (size_t p = 0; p < np; p++) {
         if (!w->used[p]) continue;
-        uint32_t r = a3_uf_find(w->comp, (uint32_t)p);
+        uint32_t r = uf_find(w->comp, (uint32_t)p);
         if (w->iso[r] == NONE) {
             if (GROW(w, low, ncomp + 1) || GROW(w, ext, ncomp + 1) || GROW(w, host, ncomp + 1))
                 return -1;
@@ -964,7 +954,7 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         if (lower(w, (uint32_t)p, w->low[c])) w->low[c] = (uint32_t)p;
     }
     if (GROW(w, tmp, np + 1)) return -1;
-    for (size_t p = 0; p < np; p++) w->tmp[p] = a3_uf_find(w->comp, (uint32_t)p);
+    for (size_t p = 0; p < np; p++) w->tmp[p] = uf_find(w->comp, (uint32_t)p);
     for (size_t p = 0; p < np; p++) w->comp[p] = w->used[p] ? w->iso[w->tmp[p]] : NONE;
     if (place_components(w, ncomp)) return -1;
     /* faces: every cycle that is not a component's outside is a bounded face.  fof[cy]: the
@@ -1020,9 +1010,9 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
                 return -1;
             /* the edge's pieces, sorted */
             memcpy(w->x2, w->prov + E->prov, E->nprov * sizeof *w->x2);
-            if (E->nprov > 1) qsort(w->x2, E->nprov, sizeof *w->x2, cmpu32);
+            if (E->nprov > 1) qsort(w->x2, E->nprov, sizeof *w->x2, u32_cmp);
             uint32_t *out = w->cov + w->ncov;
-            size_t n = cov_xor(w->cov + w->covo[f], w->covn[f], w->x2, E->nprov, out);
+            size_t n = member_symdiff(w->cov + w->covo[f], w->covn[f], w->x2, E->nprov, out);
             if (w->covo[g] == NONE) {
                 w->covo[g] = (uint32_t)w->ncov;
                 w->covn[g] = (uint32_t)n;
@@ -1096,7 +1086,7 @@ static void pwork_free(pwork *w)
     free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->cyc_h);
     free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);
     free(w->fof), free(w->aoff), free(w->adj), free(w->queue), free(w->covo), free(w->covn);
-    free(w->cov), free(w->x1), free(w->x2), free(w->reached);
+    free(w->cov), free(w->x1), free(w->x2), free(w->reached), free(w->span);
 }
 
 int a3_planes(a3 *A, char *err, size_t errlen)

@@ -35,9 +35,9 @@
 #include "core/member.h"
 #include "core/sort.h"
 #include "core/stop.h"
+#include "core/util.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,19 +45,6 @@
 #define NONE UINT32_MAX
 
 typedef __int128 i128;
-
-static int seterr(char *err, size_t el, int code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static int seterr(char *err, size_t el, int code, const char *fmt, ...)
-{
-    if (err && el) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, el, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 static void rings_free(bool2_rings *g)
 {
@@ -129,7 +116,7 @@ static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop
     size_t nf = c->nf;
     for (size_t f = 0; f <= nf; f++) {
         size_t ncy = f < nf ? 1 + c->hole_off[f + 1] - c->hole_off[f] : c->next;
-        if (stop_poll(stop, 64 * ncy)) return seterr(err, el, ARR_ECANCELED, "cancelled");
+        if (stop_poll(stop, 64 * ncy)) return util_seterr(err, el, ARR_ECANCELED, "cancelled");
         for (size_t j = 0; j < ncy; j++) {
             uint32_t cy = f == nf  ? c->ext_cyc[j]
                           : j == 0 ? c->face_cycle[f]
@@ -140,17 +127,19 @@ static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop
                 uint32_t u = c->cyc[o + i], v = c->cyc[o + (i + 1) % n];
                 uint32_t e = find_edge(c, first, u, v);
                 if (e == NONE)
-                    return seterr(err, el, ARR_EINTERNAL, "internal: a cycle steps off the edges");
+                    return util_seterr(err, el, ARR_EINTERNAL,
+                                       "internal: a cycle steps off the edges");
                 uint32_t *s = &side[2 * (size_t)e + (u < v ? 0 : 1)];
                 if (*s != NONE && *s != (uint32_t)f)
-                    return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in two faces");
+                    return util_seterr(err, el, ARR_EINTERNAL,
+                                       "internal: an edge side in two faces");
                 *s = (uint32_t)f;
             }
         }
     }
     for (size_t i = 0; i < 2 * c->ne; i++)
         if (side[i] == NONE)
-            return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in no face");
+            return util_seterr(err, el, ARR_EINTERNAL, "internal: an edge side in no face");
     return ARR_OK;
 }
 
@@ -159,7 +148,7 @@ static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop
 static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
 {
     uint32_t *first = malloc((c->nv + 2) * sizeof *first);
-    if (!first) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    if (!first) return util_seterr(err, el, ARR_ENOMEM, "out of memory");
     for (size_t a = 0, e = 0; a <= c->nv; a++) {
         while (e < c->ne && c->EV[2 * e] < a) e++;
         first[a] = (uint32_t)e;
@@ -212,18 +201,19 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
                                  tick, (void *)po, cancel);
     if (w < 0) goto done;
     if (w == 2) {
-        rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+        rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
         goto done;
     }
     if (w > 0) {
         if (bad == UINT32_MAX) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
         } else {
             const double *a = c->V + 2 * c->EV[2 * bad], *b = c->V + 2 * c->EV[2 * bad + 1];
-            rc = seterr(err, el, ARR_EINVAL,
-                        "polygons: the labels are inconsistent after snapping: the faces beside "
-                        "the edge (%.17g, %.17g)-(%.17g, %.17g) get two memberships",
-                        a[0], a[1], b[0], b[1]);
+            rc = util_seterr(
+                err, el, ARR_EINVAL,
+                "polygons: the labels are inconsistent after snapping: the faces beside "
+                "the edge (%.17g, %.17g)-(%.17g, %.17g) get two memberships",
+                a[0], a[1], b[0], b[1]);
         }
         goto done;
     }
@@ -232,7 +222,7 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
     out->memw = rows.wind;
     rc = ARR_OK;
 done:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(aoff);
     free(nb);
     free(ed);
@@ -241,15 +231,6 @@ done:
 }
 
 /* ---- select, groups ----------------------------------------------------------------------- */
-
-static uint32_t uf_find(uint32_t *p, uint32_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
 
 /* sel[f] (1: selected) for the nf + 1 faces (EXT never selected); out->cells.  The expression is
  * evaluated on each face's sparse row (bool_tree). */
@@ -290,8 +271,7 @@ static void stage_groups(const lar2 *c, const uint32_t *side, const uint32_t *la
     for (size_t e = 0; e < c->ne; e++) {
         uint32_t a = side[2 * e], b = side[2 * e + 1];
         if (a != b && lab[a] && lab[a] == lab[b]) {
-            uint32_t ra = uf_find(grp, a), rb = uf_find(grp, b);
-            if (ra != rb) grp[ra < rb ? rb : ra] = ra < rb ? ra : rb; /* the smaller face leads */
+            uf_union(grp, a, b); /* the smaller face leads */
         }
     }
     for (size_t f = 0; f <= c->nf; f++) grp[f] = uf_find(grp, (uint32_t)f);
@@ -373,23 +353,6 @@ typedef struct ray {
     int64_t dx, dy;  /* from v toward h's other end, grid units */
 } ray;
 
-static int ray_half(const ray *r)
-{
-    return r->dy < 0 || (r->dy == 0 && r->dx < 0);
-}
-
-/* By vertex, group, then angle counter-clockwise from +x (exact). */
-static int ray_cmp(const void *pa, const void *pb)
-{
-    const ray *a = pa, *b = pb;
-    if (a->v != b->v) return a->v < b->v ? -1 : 1;
-    if (a->grp != b->grp) return a->grp < b->grp ? -1 : 1;
-    int ha = ray_half(a), hb = ray_half(b);
-    if (ha != hb) return ha - hb;
-    i128 x = (i128)a->dx * b->dy - (i128)a->dy * b->dx;
-    return x > 0 ? -1 : x < 0 ? 1 : 0;
-}
-
 static uint32_t he_tail(const lar2 *c, uint32_t h)
 {
     return c->EV[2 * (size_t)(h >> 1) + (h & 1)];
@@ -452,13 +415,14 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
     for (size_t i = 0, j; i < nr; i = j) {
         for (j = i + 1; j < nr && order[j].k == order[i].k; j++) continue;
         if (stop_poll(stop, (j - i) * (j - i))) {
-            rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+            rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
             goto fail;
         }
         for (size_t k = i + 1; k < j; k++) {
             ray x = rays[k];
             size_t m = k;
-            for (; m > i && ray_cmp(&rays[m - 1], &x) > 0; m--) rays[m] = rays[m - 1];
+            for (; m > i && dir_cmp(rays[m - 1].dx, rays[m - 1].dy, x.dx, x.dy) > 0; m--)
+                rays[m] = rays[m - 1];
             rays[m] = x;
         }
     }
@@ -472,8 +436,8 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
             if (!rays[k].in) continue;
             const ray *o = &rays[k + 1 < j ? k + 1 : i];
             if (o->in) {
-                rc = seterr(err, el, ARR_EINTERNAL,
-                            "internal: the result's boundary does not alternate at a vertex");
+                rc = util_seterr(err, el, ARR_EINTERNAL,
+                                 "internal: the result's boundary does not alternate at a vertex");
                 goto fail;
             }
             next[rays[k].h] = o->h;
@@ -485,13 +449,14 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
         for (uint32_t h = (uint32_t)(2 * e); h <= 2 * e + 1; h++) {
             if (next[h] == NONE || done[h]) continue;
             if (stop_poll(stop, 1)) {
-                rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+                rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
                 goto fail;
             }
             uint32_t x = h;
             do {
                 if (done[x] || next[x] == NONE || k >= nb) {
-                    rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring is not closed");
+                    rc = util_seterr(err, el, ARR_EINTERNAL,
+                                     "internal: a boundary ring is not closed");
                     goto fail;
                 }
                 done[x] = 1;
@@ -507,7 +472,7 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
     g->nrcyc = nring;
     rc = ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(rays);
     free(sorted);
     free(order);
@@ -547,7 +512,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
         i128 a = ring_area2(c, out, k);
         ccw[k] = a > 0;
         if (a == 0) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
             goto done;
         }
     }
@@ -556,7 +521,8 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     for (size_t k = 0; k < nr; k++)
         if (ccw[k]) {
             if (gi[ring_grp[k]] != NONE) {
-                rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon with two shells");
+                rc = util_seterr(err, el, ARR_EINTERNAL,
+                                 "internal: a result polygon with two shells");
                 goto done;
             }
             gi[ring_grp[k]] = 0;
@@ -566,7 +532,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     for (size_t k = 0; k < nr; k++) {
         uint32_t q = gi[ring_grp[k]];
         if (q == NONE) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon without a shell");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a result polygon without a shell");
             goto done;
         }
         if (ccw[k])
@@ -596,7 +562,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     *area_out = area > 0 ? (double)(area / 2) : 0;
     rc = ARR_OK;
 done:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(gi);
     free(ccw);
     return rc;
@@ -615,8 +581,8 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
     if (in->npoly > BOOL2_MAX_INPUTS)
-        return seterr(err, errlen, ARR_ELIMIT, "polygons: %zu, more than the limit of %u",
-                      in->npoly, BOOL2_MAX_INPUTS);
+        return util_seterr(err, errlen, ARR_ELIMIT, "polygons: %zu, more than the limit of %u",
+                           in->npoly, BOOL2_MAX_INPUTS);
     if (stage_segments(in, &seg, &tag, &n)) goto fail;
     arr2_opts ao = opts ? *opts : defaults;
     ao.tags = tag;
@@ -639,7 +605,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
 #define BOOL2_CANCEL_POINT                                                                         \
     do {                                                                                           \
         if (ao.cancel && atomic_load(ao.cancel)) {                                                 \
-            rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");                                  \
+            rc = util_seterr(err, errlen, ARR_ECANCELED, "cancelled");                             \
             goto fail;                                                                             \
         }                                                                                          \
     } while (0)
@@ -691,7 +657,7 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     free(ring_grp);
     return ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, errlen, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, errlen, rc, "out of memory");
     free(seg);
     free(tag);
     free(side);

@@ -38,8 +38,7 @@ size_t member_row_inside(const member_rows *r, size_t k, int fill, uint32_t *buf
     return m;
 }
 
-/* out = a xor b (sorted, each once); returns its length. */
-static size_t symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
+size_t member_symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
 {
     size_t i = 0, j = 0, k = 0;
     while (i < na && j < nb) {
@@ -127,7 +126,7 @@ static int walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
             }
             size_t k = dw ? wsum(buf + start[u], bw + start[u], len[u], tags + toff[x],
                                  dw + toff[x], nt, dir[i], ti, tw)
-                          : symdiff(buf + start[u], len[u], tags + toff[x], nt, ti);
+                          : member_symdiff(buf + start[u], len[u], tags + toff[x], nt, ti);
             if (seen[v]) {
                 if (k != len[v] || memcmp(ti, buf + start[v], k * sizeof *ti) ||
                     (dw && memcmp(tw, bw + start[v], k * sizeof *tw))) {

@@ -54,6 +54,10 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
 
 void member_rows_free(member_rows *r);
 
+/* out = a xor b of two ascending lists (each element once): ascending, each once; returns its
+ * length (at most na + nb; out may not overlap a or b). */
+size_t member_symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out);
+
 /* The fill rules (2D and 3D alike): where a cell lies in an input, by the input's winding
  * number w about it. */
 enum { MEMBER_FILL_POSITIVE = 0 /* w > 0 */, MEMBER_FILL_NONZERO /* w != 0 */, MEMBER_FILL_ODD };

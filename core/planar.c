@@ -38,38 +38,23 @@ int planar_sort_around(const planar_traits *T, const uint32_t *off, uint32_t *ou
     return 0;
 }
 
-int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t **hoff,
+int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t *hoff,
                   size_t *ncyc)
 {
-    size_t cap = 64, n = 0, k = 0;
-    uint32_t *off = malloc(cap * sizeof *off);
-    if (!off) return -1;
+    size_t n = 0, k = 0;
     for (size_t h = 0; h < nh; h++) cyc_of[h] = PLANAR_NONE;
-    off[0] = 0;
+    hoff[0] = 0;
     for (size_t h0 = 0; h0 < nh; h0++) {
         if (cyc_of[h0] != PLANAR_NONE) continue;
-        if (n + 2 > cap) {
-            uint32_t *a = realloc(off, 2 * cap * sizeof *a);
-            if (!a) {
-                free(off);
-                return -1;
-            }
-            off = a;
-            cap *= 2;
-        }
         uint32_t cy = (uint32_t)n++, h = (uint32_t)h0;
         do {
-            if (cyc_of[h] != PLANAR_NONE || k >= nh) {
-                free(off);
-                return -2;
-            }
+            if (cyc_of[h] != PLANAR_NONE || k >= nh) return -2;
             cyc_of[h] = cy;
             hes[k++] = h;
             h = next[h];
         } while (h != h0);
-        off[cy + 1] = (uint32_t)k;
+        hoff[cy + 1] = (uint32_t)k;
     }
-    *hoff = off;
     *ncyc = n;
     return 0;
 }

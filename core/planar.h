@@ -58,9 +58,9 @@ int planar_sort_around(const planar_traits *T, const uint32_t *off, uint32_t *ou
 
 /* The cycles of the successor map next over nh half-edges, numbered in the order of their
  * smallest half-edge: cyc_of[h] (nh), hes (nh: each cycle's half-edges in walk order, from its
- * smallest), *hoff (malloc'd, ncyc + 1 offsets into hes), *ncyc.  Returns 0, -1 out of memory,
- * -2 when next is not a permutation (a bug of the caller). */
-int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t **hoff,
+ * smallest), hoff (room for nh + 1: *ncyc + 1 offsets into hes).  Returns 0, or -2 when next
+ * is not a permutation (a bug of the caller). */
+int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t *hoff,
                   size_t *ncyc);
 
 /* The slab index of planar_place: ns vertical slabs of equal width over [x0, x0 + ns w); each

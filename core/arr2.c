@@ -41,6 +41,7 @@
 #include "core/box.h"
 #include "core/num.h"
 #include "core/par.h"
+#include "core/planar.h"
 #include "core/sort.h"
 #include "core/stop.h"
 #include "core/util.h"
@@ -1007,36 +1008,30 @@ typedef struct sort_job {
     atomic_int same; /* two edges leave a vertex in the same direction */
 } sort_job;
 
+/* The model's "around" (planar_traits): two half-edges leaving one vertex by the exact angle of
+ * their grid directions (dir_cmp, from +x counter-clockwise). */
+static int model_around(void *vg, uint32_t a, uint32_t b)
+{
+    const graph *g = vg;
+    int64_t ax, ay, bx, by;
+    he_dir(g, a, &ax, &ay);
+    he_dir(g, b, &bx, &by);
+    return dir_cmp(ax, ay, bx, by);
+}
+
 static void sort_chunk(void *vj, size_t chunk, int wk)
 {
     sort_job *j = vj;
     const graph *g = j->g;
     size_t v0 = chunk * VERT_CHUNK, v1 = v0 + VERT_CHUNK < g->nv ? v0 + VERT_CHUNK : g->nv;
+    size_t work = 0;
     for (size_t v = v0; v < v1; v++) {
-        uint32_t *o = g->out + g->off[v];
         size_t d = g->off[v + 1] - g->off[v];
-        if (worker_stop(j->c, wk, d * d + 1)) return;
-        for (size_t i = 1; i < d; i++) {
-            uint32_t h = o[i];
-            int64_t hx, hy;
-            he_dir(g, h, &hx, &hy);
-            size_t k = i;
-            while (k > 0) {
-                int64_t px, py;
-                he_dir(g, o[k - 1], &px, &py);
-                int cmp = dir_cmp(px, py, hx, hy);
-                if (cmp == 0) {
-                    atomic_store(&j->same, 1);
-                    return;
-                }
-                if (cmp < 0) break;
-                o[k] = o[k - 1];
-                k--;
-            }
-            o[k] = h;
-        }
-        for (size_t i = 0; i < d; i++) j->pos[o[i]] = (uint32_t)i;
+        work += d * d + 1;
     }
+    if (worker_stop(j->c, wk, work)) return;
+    planar_traits T = {(void *)g, model_around, NULL, NULL};
+    if (planar_sort_around(&T, g->off, g->out, j->pos, v0, v1)) atomic_store(&j->same, 1);
 }
 
 /* Sorts each vertex's outgoing half-edges counter-clockwise, in parallel; pos[h] = index of h
@@ -1053,9 +1048,7 @@ static int sort_around_vertices(ctx *c, const graph *g, uint32_t *pos)
 
 static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
 {
-    uint32_t v = he_head(g, h), t = h ^ 1;
-    uint32_t d = g->off[v + 1] - g->off[v], i = pos[t];
-    return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
+    return planar_next(g->off, g->out, pos, he_head(g, h), h);
 }
 
 /* The connected components: comp[v] for every vertex, numbered in the order of their smallest
@@ -1131,11 +1124,11 @@ static void area_chunk(void *vj, size_t chunk, int wk)
  * they make (in half-edge order), and each cycle's twice signed area (in parallel). */
 static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
 {
-    size_t nh = 2 * g->ne, cap = 64;
+    size_t nh = 2 * g->ne;
     uint32_t *next = malloc((nh + 1) * sizeof *next);
     w->cyc_of = malloc((nh + 1) * sizeof *w->cyc_of);
     w->hes = malloc((nh + 1) * sizeof *w->hes);
-    w->hoff = malloc(cap * sizeof *w->hoff);
+    w->hoff = malloc((nh + 1) * sizeof *w->hoff);
     if (!next || !w->cyc_of || !w->hes || !w->hoff) {
         free(next);
         return ARR_ENOMEM;
@@ -1146,37 +1139,10 @@ static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
         free(next);
         return ARR_ECANCELED;
     }
-    for (size_t h = 0; h < nh; h++) w->cyc_of[h] = NONE;
-    size_t k = 0;
-    w->hoff[0] = 0;
-    for (size_t h0 = 0; h0 < nh; h0++) {
-        if (w->cyc_of[h0] != NONE) continue;
-        if (w->ncyc + 2 > cap) {
-            cap *= 2;
-            uint32_t *a = realloc(w->hoff, cap * sizeof *a);
-            if (!a) {
-                free(next);
-                return ARR_ENOMEM;
-            }
-            w->hoff = a;
-        }
-        uint32_t cy = (uint32_t)w->ncyc++, h = (uint32_t)h0;
-        do {
-            if (w->cyc_of[h] != NONE || k >= nh) {
-                free(next);
-                return ARR_EINTERNAL;
-            }
-            w->cyc_of[h] = cy;
-            w->hes[k++] = h;
-            h = next[h];
-        } while (h != h0);
-        if (g_stop(g, k - w->hoff[cy] + 1)) {
-            free(next);
-            return ARR_ECANCELED;
-        }
-        w->hoff[cy + 1] = (uint32_t)k;
-    }
+    int rc = planar_cycles(nh, next, w->cyc_of, w->hes, w->hoff, &w->ncyc);
     free(next);
+    if (rc) return ARR_EINTERNAL;
+    if (g_stop(g, nh)) return ARR_ECANCELED;
     w->area2 = malloc((w->ncyc + 1) * sizeof *w->area2);
     if (!w->area2) return ARR_ENOMEM;
     par_for(c->threads, (w->ncyc + HE_CHUNK - 1) / HE_CHUNK, area_chunk, &j);

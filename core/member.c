@@ -91,9 +91,12 @@ static int walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
 {
     /* rows in the order cells are reached, in one growing buffer (bw: their winding numbers,
      * with dw); a neighbour's row is made in ti (tw) */
-    size_t *start = malloc((n + 1) * sizeof *start);
-    uint32_t *len = malloc((n + 1) * sizeof *len), *queue = malloc((n + 1) * sizeof *queue);
-    uint8_t *seen = calloc(n + 1, 1);
+    /* start, len, queue and seen in one block: the 3D planes walk many small arrangements */
+    size_t *start = malloc((n + 1) * (sizeof *start + 2 * sizeof(uint32_t) + 1));
+    uint32_t *len = start ? (uint32_t *)(start + n + 1) : NULL;
+    uint32_t *queue = start ? len + n + 1 : NULL;
+    uint8_t *seen = start ? (uint8_t *)(queue + n + 1) : NULL;
+    if (seen) memset(seen, 0, n + 1);
     size_t cap = 1024, used = 0, tcap = 64;
     uint32_t *buf = malloc(cap * sizeof *buf), *ti = malloc(tcap * sizeof *ti);
     int32_t *bw = dw ? malloc(cap * sizeof *bw) : NULL, *tw = dw ? malloc(tcap * sizeof *tw) : NULL;
@@ -172,7 +175,7 @@ static int walk(size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *n
     rc = 0;
 done:
     if (rc) member_rows_free(rows);
-    free(start), free(len), free(queue), free(seen), free(buf), free(bw), free(ti), free(tw);
+    free(start), free(buf), free(bw), free(ti), free(tw);
     return rc;
 }
 

@@ -19,6 +19,9 @@
  *               repeated visits (block-cut tree); bridges (blocks of one edge: dangling trees)
  *               removed unless keep_dangling, with the vertices left without edges, and the
  *               walks made again
+ *               (the half-edge topology is core/planar.c's kernel, arr2 one model of it: its
+ *               traits order grid directions by dir_cmp; sorts and successors by chunks on
+ *               the threads, the cycles by planar_cycles)
  *   faces       positive walks are bounded faces, the others the outer walks of components
  *               (union-find over the edges)
  *   holes       each component's outer walk is placed by a downward ray from its lowest

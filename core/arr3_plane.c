@@ -22,6 +22,12 @@
  * that vertex to the nearest edge of another component below (exact comparisons of edges that
  * straddle the ray).  Which pieces cover a face follows from walking from the unbounded face
  * across edges, each crossing toggling the pieces whose boundary that edge is: no sample point.
+ * The topology is core/planar.c's half-edge kernel, this file being one model of it (traits:
+ * model_around, model_below, model_higher): sort around points, successors, cycles, and the
+ * placement over its slab index (each component asks the edges of its slab, whose conservative
+ * u spans come from span_fast of core/pred.c); the coverage walk is member_walk
+ * (core/member.h).  plane_run is stages: segments, split, cycles, components, faces, coverage,
+ * output.
  * The faces covered by at least one piece are P's faces of the complex, their cycles turned to
  * run counter-clockwise about P's normal.
  *

@@ -25,9 +25,9 @@
  * The topology is core/planar.c's half-edge kernel, this file being one model of it (traits:
  * model_around, model_below, model_higher): sort around points, successors, cycles, and the
  * placement over its slab index (each component asks the edges of its slab, whose conservative
- * u spans come from span_fast of core/pred.c); the coverage walk is member_walk
- * (core/member.h).  plane_run is stages: segments, split, cycles, components, faces, coverage,
- * output.
+ * u spans come from span_fast of core/pred.c); the coverage walk is member_walk_ws
+ * (core/member.h, its scratch kept in pwork from plane to plane).  plane_run is stages:
+ * segments, split, cycles, components, faces, coverage, output.
  * The faces covered by at least one piece are P's faces of the complex, their cycles turned to
  * run counter-clockwise about P's normal.
  *
@@ -125,6 +125,7 @@ typedef struct pwork {
     size_t capspan;
     uint8_t *reached; /* by piece of the plane: goes through the arrangement */
     size_t capreached;
+    member_ws mws; /* the coverage walk's scratch, and its rows */
     int fail;
     A3_PAD;
 } pwork;
@@ -962,7 +963,8 @@ static int plane_faces(pwork *w, size_t ncomp)
 /* Stage "coverage" of plane_run: which pieces cover each face, by member_walk (core/member.h)
  * from the unbounded face across the edges, each listing its pieces (ascending, each once:
  * they were made by symmetric differences).  The cells are the faces: cell[cy] for each
- * bounded face cycle, the unbounded face last (cell[ncyc]).  *rows is the caller's to free. */
+ * bounded face cycle, the unbounded face last (cell[ncyc]).  *rows is borrowed from w->mws
+ * (valid until the next plane). */
 static int plane_coverage(pwork *w, member_rows *rows)
 {
     size_t ncy = w->ncyc, ncell = 0;
@@ -992,7 +994,8 @@ static int plane_coverage(pwork *w, member_rows *rows)
     }
 #undef CELL
     uint32_t bad;
-    int rc = member_walk(ncell, (uint32_t)(ncell - 1), aoff, nb, el, toff, w->prov, rows, &bad);
+    int rc = member_walk_ws(&w->mws, ncell, (uint32_t)(ncell - 1), aoff, nb, el, toff, w->prov,
+                            rows, &bad);
     return rc < 0 ? -1 : rc > 0 ? -2 : 0;
 }
 
@@ -1069,9 +1072,7 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     if (rc) return rc;
     member_rows rows;
     if ((rc = plane_coverage(w, &rows))) return rc;
-    rc = plane_output(w, F, ncomp, &rows);
-    member_rows_free(&rows);
-    return rc;
+    return plane_output(w, F, ncomp, &rows);
 }
 
 /* ---- all planes --------------------------------------------------------------------------- */
@@ -1107,6 +1108,7 @@ static void pwork_free(pwork *w)
     free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);
     free(w->fof), free(w->aoff), free(w->adj), free(w->covo), free(w->covn);
     free(w->x1), free(w->x2), free(w->reached), free(w->span);
+    member_ws_free(&w->mws);
 }
 
 int a3_planes(a3 *A, char *err, size_t errlen)

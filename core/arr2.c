@@ -27,7 +27,9 @@
  *   holes       each component's outer walk is placed by a downward ray from its lowest
  *               vertex: the first edge of another component below it tells the face that
  *               contains it (a hole of that face) or the component it sits beside (same
- *               face as that one).  Chains only go down, so they end.
+ *               face as that one).  Chains only go down, so they end.  The first edge comes
+ *               from the kernel's planar_place (its slab index over grid x; this model's
+ *               scan: exact fractions, hit_below)
  *
  * Memory: flat arrays and per-worker buffers; nothing is allocated per element.
  * Thread use: par_for() in intersect, split, the sorts around vertices, the walks' successors
@@ -1033,7 +1035,7 @@ static void sort_chunk(void *vj, size_t chunk, int wk)
         work += d * d + 1;
     }
     if (worker_stop(j->c, wk, work)) return;
-    planar_traits T = {(void *)g, model_around, NULL, NULL};
+    planar_traits T = {(void *)g, model_around, NULL, NULL, NULL, NULL};
     if (planar_sort_around(&T, g->off, g->out, j->pos, v0, v1)) atomic_store(&j->same, 1);
 }
 
@@ -1176,119 +1178,82 @@ static int hit_below(const graph *g, uint32_t e, ipt p, i128 *num, i128 *den, ui
     return 1;
 }
 
-#define PLACE_CHUNK 64 /* components per work item */
-
-typedef struct place_job {
+/* The placement model (planar_traits) of arr2: keys are grid x, exact; a query is a
+ * component's lowest vertex. */
+typedef struct place_model {
     ctx *c;
     const graph *g;
-    const uint32_t *comp, *low, *soff, *sedge; /* see place_components */
-    int64_t minx;
-    int shift;     /* slabs are 2^shift wide */
-    uint32_t *hit; /* per component: the half-edge whose face is just below it, or NONE */
-    size_t n;      /* components */
-} place_job;
+    const uint32_t *comp, *low; /* see place_components */
+} place_model;
 
-/* Components [chunk * PLACE_CHUNK, ...): the first edge of another component straight below
- * each one's lowest vertex, as the half-edge with the face above on its left. */
-static void place_chunk(void *vj, size_t chunk, int wk)
+/* The model's "espan": an edge's x range (its ends are in lexicographic order). */
+static void model_espan(void *vm, size_t e0, size_t e1, int64_t *lo, int64_t *hi)
 {
-    place_job *j = vj;
-    const graph *g = j->g;
-    size_t k0 = chunk * PLACE_CHUNK, k1 = k0 + PLACE_CHUNK;
-    for (size_t k = k0; k < k1 && k < j->n; k++) {
-        ipt p = g->P[j->low[k]];
-        uint64_t s = (uint64_t)(p.x - j->minx) >> j->shift;
-        if (worker_stop(j->c, wk, j->soff[s + 1] - j->soff[s] + 1)) return;
-        i128 bn = 0, bd = 0;
-        uint32_t be = NONE, bat = NONE;
-        for (uint32_t i = j->soff[s]; i < j->soff[s + 1]; i++) {
-            uint32_t e = j->sedge[i], at;
-            if (j->comp[g->EV[2 * e]] == k) continue;
-            i128 n, d;
-            if (!hit_below(g, e, p, &n, &d, &at)) continue;
-            if (be == NONE || n * bd > bn * d) {
-                bn = n;
-                bd = d;
-                be = e;
-                bat = at;
-            }
-        }
-        uint32_t h = NONE;
-        if (be != NONE && bat != NONE) { /* a vertex: the wedge there that holds "up" */
-            const uint32_t *o = g->out + g->off[bat];
-            size_t d = g->off[bat + 1] - g->off[bat], jj = d - 1;
-            for (size_t i = 0; i < d; i++) {
-                int64_t dx, dy;
-                he_dir(g, o[i], &dx, &dy);
-                if (dir_cmp(dx, dy, 0, 1) < 0) jj = i;
-            }
-            h = o[jj];
-        } else if (be != NONE) {
-            h = 2 * be; /* leaves the left end: the face above is on its left */
-        }
-        j->hit[k] = h;
-    }
-}
-
-#define SLAB_CHUNK 65536 /* edges per work item of the slabs */
-
-typedef struct slab_job {
-    ctx *c;
-    const graph *g;
-    int64_t minx;
-    int shift;
-    size_t ns, nchunk;
-    uint32_t *es;    /* 2 per edge: its first and last slab */
-    uint64_t *ctot;  /* per chunk: its edges' slab entries */
-    uint32_t *cnt;   /* per chunk, ns + 1 apart: its entries per slab, then where they go */
-    uint32_t *sedge; /* the edges of each slab */
-} slab_job;
-
-static void slab_range(void *vj, size_t k, int wk)
-{
-    slab_job *j = vj;
-    const graph *g = j->g;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < g->ne ? e0 + SLAB_CHUNK : g->ne;
-    if (worker_stop(j->c, wk, e1 - e0)) return;
-    uint64_t t = 0;
-    for (size_t e = e0; e < e1; e++) {
-        j->es[2 * e] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e]].x - j->minx) >> j->shift);
-        j->es[2 * e + 1] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e + 1]].x - j->minx) >> j->shift);
-        t += j->es[2 * e + 1] - j->es[2 * e] + 1;
-    }
-    j->ctot[k] = t;
-}
-
-static void slab_count(void *vj, size_t k, int wk)
-{
-    slab_job *j = vj;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
-    uint32_t *cnt = j->cnt + k * (j->ns + 1);
-    (void)wk;
+    const place_model *m = vm;
+    const graph *g = m->g;
     for (size_t e = e0; e < e1; e++)
-        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) cnt[s]++;
+        lo[e - e0] = g->P[g->EV[2 * e]].x, hi[e - e0] = g->P[g->EV[2 * e + 1]].x;
 }
 
-static void slab_fill(void *vj, size_t k, int wk)
+static void model_qspan(void *vm, uint32_t q, int64_t *lo, int64_t *hi)
 {
-    slab_job *j = vj;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
-    uint32_t *at = j->cnt + k * (j->ns + 1);
-    (void)wk;
-    for (size_t e = e0; e < e1; e++)
-        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) j->sedge[at[s]++] = (uint32_t)e;
+    const place_model *m = vm;
+    *lo = *hi = m->g->P[m->low[q]].x;
+}
+
+/* The model's "scan": of best and the candidates, the edge of another component whose hit
+ * below component q's lowest vertex is highest (exact fractions; the first of equal ones). */
+static uint32_t model_scan(void *vm, uint32_t q, const uint32_t *cand, size_t n, uint32_t best)
+{
+    const place_model *m = vm;
+    const graph *g = m->g;
+    ipt p = g->P[m->low[q]];
+    i128 bn = 0, bd = 0;
+    uint32_t be = NONE, at;
+    for (size_t i = best == NONE; i <= n; i++) { /* best first, then the candidates */
+        uint32_t e = i ? cand[i - 1] : best;
+        if (m->comp[g->EV[2 * e]] == q) continue;
+        i128 num, den;
+        if (!hit_below(g, e, p, &num, &den, &at)) continue;
+        if (be == NONE || num * bd > bn * den) bn = num, bd = den, be = e;
+    }
+    return be;
+}
+
+static int model_stop(void *vm, int wk, size_t work)
+{
+    return worker_stop(((place_model *)vm)->c, wk, work);
+}
+
+/* The half-edge whose face lies just above p, from e, the first edge below p: at the vertex
+ * the ray hits, the wedge there that holds "up"; inside e, its half-edge leaving its left end
+ * (the face above on its left). */
+static uint32_t face_above(const graph *g, uint32_t e, ipt p)
+{
+    uint32_t u = g->EV[2 * e], v = g->EV[2 * e + 1]; /* as hit_below: a vertical edge's top */
+    uint32_t at = g->P[u].x == g->P[v].x ? v : p.x == g->P[u].x ? u : p.x == g->P[v].x ? v : NONE;
+    if (at == NONE) return 2 * e;
+    const uint32_t *o = g->out + g->off[at];
+    size_t d = g->off[at + 1] - g->off[at], jj = d - 1;
+    for (size_t i = 0; i < d; i++) {
+        int64_t dx, dy;
+        he_dir(g, o[i], &dx, &dy);
+        if (dir_cmp(dx, dy, 0, 1) < 0) jj = i;
+    }
+    return o[jj];
 }
 
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
- * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
+ * for every outer-walk cycle c, the face cycle it is a hole of, or NONE.  The first edge below
+ * each component's lowest vertex comes from the kernel's planar_place (its slab index and
+ * queries on the threads). */
 static int place_components(ctx *c, const graph *g, const walks *w, const uint32_t *comp,
                             size_t ncomp, const uint32_t *comp_outer, uint32_t *face_of)
 {
     int rc = ARR_ENOMEM;
     uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
     uint32_t *found = malloc(ncomp * sizeof *found);
-    uint32_t *soff = NULL, *sedge = NULL, *es = NULL;
-    slab_job sj = {0};
+    planar_ws ws = {0};
     if (!low || !par || !found) goto out;
     for (size_t k = 0; k < ncomp; k++) {
         low[k] = NONE;
@@ -1303,65 +1268,21 @@ static int place_components(ctx *c, const graph *g, const walks *w, const uint32
         minx = p.x < minx ? p.x : minx;
         maxx = p.x > maxx ? p.x : maxx;
     }
-    /* vertical slabs of edges, 2^shift wide: each edge listed in every slab its x-range
-     * meets, in edge order (a bucket sort by chunks of edges, in parallel: each chunk counts
-     * its edges per slab, then writes them at its own offsets) */
-    size_t ns = 1;
-    while (ns * ns < g->ne) ns *= 2;
-    uint64_t total;
-    int shift = 0;
-    sj.c = c;
-    sj.g = g;
-    sj.minx = minx;
-    sj.nchunk = (g->ne + SLAB_CHUNK - 1) / SLAB_CHUNK;
-    es = malloc((2 * g->ne + 1) * sizeof *es);
-    sj.ctot = calloc(sj.nchunk + 1, sizeof *sj.ctot);
-    if (!es || !sj.ctot) goto out;
-    sj.es = es;
-    for (;;) {
-        shift = 0;
-        while (((uint64_t)(maxx - minx) >> shift) >= ns) shift++;
-        sj.shift = shift;
-        par_for(c->threads, sj.nchunk, slab_range, &sj);
-        if ((rc = atomic_load(&c->fail))) goto out;
-        rc = ARR_ENOMEM;
-        total = 0;
-        for (size_t k = 0; k < sj.nchunk; k++) total += sj.ctot[k];
-        if (total <= 8 * (uint64_t)g->ne + ns || ns == 1) break;
-        ns /= 2;
-    }
-    sj.ns = ns;
-    soff = calloc(ns + 2, sizeof *soff);
-    sedge = malloc((total + 1) * sizeof *sedge);
-    sj.cnt = calloc(sj.nchunk * (ns + 1) + 1, sizeof *sj.cnt);
-    if (!soff || !sedge || !sj.cnt) goto out;
-    sj.sedge = sedge;
-    par_for(c->threads, sj.nchunk, slab_count, &sj);
-    /* the chunks' offsets, slab by slab: chunk k's edges of slab s go after those of the
-     * chunks before it */
-    uint32_t at = 0;
-    for (size_t s = 0; s < ns; s++) {
-        soff[s] = at;
-        for (size_t k = 0; k < sj.nchunk; k++) {
-            uint32_t n = sj.cnt[k * (ns + 1) + s];
-            sj.cnt[k * (ns + 1) + s] = at;
-            at += n;
-        }
-    }
-    soff[ns] = soff[ns + 1] = at;
-    par_for(c->threads, sj.nchunk, slab_fill, &sj);
-    free(sj.cnt);
-    sj.cnt = NULL;
-
-    /* each component's half-edge below its lowest vertex, in parallel; then, in order, the
-     * face it is a hole of, or the component whose outer walk holds it */
-    place_job pj = {c, g, comp, low, soff, sedge, minx, shift, found, ncomp};
-    par_for(c->threads, (ncomp + PLACE_CHUNK - 1) / PLACE_CHUNK, place_chunk, &pj);
-    if ((rc = atomic_load(&c->fail))) goto out;
+    /* each component's first edge below its lowest vertex, then the half-edge with the face
+     * above on its left; then, in order, the face it is a hole of, or the component whose
+     * outer walk holds it */
+    place_model m = {c, g, comp, low};
+    planar_traits T = {&m, NULL, model_espan, model_qspan, model_scan, model_stop};
+    int pr = planar_place(&T, c->threads, &ws, g->ne, minx, maxx, ncomp, found);
+    if ((rc = atomic_load(&c->fail)))
+        goto out; /* stopped (pr 1): the job failed or was cancelled */
+    rc = ARR_ENOMEM;
+    if (pr) goto out;
     for (size_t k = 0; k < ncomp; k++) {
-        uint32_t h = found[k];
+        uint32_t e = found[k];
         found[k] = NONE;
-        if (h == NONE) continue; /* nothing below: in the unbounded face */
+        if (e == NONE) continue; /* nothing below: in the unbounded face */
+        uint32_t h = face_above(g, e, g->P[low[k]]);
         uint32_t cyc = w->cyc_of[h];
         if (w->area2[cyc] > 0)
             found[k] = cyc;
@@ -1383,11 +1304,7 @@ out:
     free(low);
     free(par);
     free(found);
-    free(soff);
-    free(sedge);
-    free(es);
-    free(sj.ctot);
-    free(sj.cnt);
+    planar_ws_free(&ws);
     return rc;
 }
 

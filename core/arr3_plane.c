@@ -23,13 +23,13 @@
  * straddle the ray).  Which pieces cover a face follows from walking from the unbounded face
  * across edges, each crossing toggling the pieces whose boundary that edge is: no sample point.
  * The topology is core/planar.c's half-edge kernel, this file being one model of it (traits:
- * model_around, model_below, model_higher): sort around points, successors, cycles, and the
- * placement over its slab index (each component asks the edges of its slab, whose conservative
- * u spans come from span_fast of core/pred.c); the coverage walk is member_walk_ws
- * (core/member.h, its scratch kept in pwork from plane to plane).  plane_run is stages:
- * segments, split, cycles, components, faces, coverage, output.
- * The faces covered by at least one piece are P's faces of the complex, their cycles turned to
- * run counter-clockwise about P's normal.
+ * model_around, model_espan, model_qspan, model_scan): sort around points, successors, cycles,
+ * and the placement over its slab index (each component scans the edges of its slab, whose keys
+ * come from the conservative u spans of span_fast of core/pred.c, scaled to int64); the coverage
+ * walk is member_walk_ws (core/member.h, its scratch kept in pwork from plane to plane).  plane_run
+ * is stages: segments, split, cycles, components, faces, coverage, output. The faces covered by at
+ * least one piece are P's faces of the complex, their cycles turned to run counter-clockwise about
+ * P's normal.
  *
  * Threads: planes run on par_for(); each worker has its own scratch (pwork) and writes only its
  * plane's pfaces.  Nothing here depends on the number of threads.
@@ -49,6 +49,9 @@
 
 #define NEWBASE 0x80000000u /* output ids from here are the plane's new points */
 #define UNB     UINT32_MAX  /* the unbounded face */
+/* The placement keys run over [0, KEY_SPAN] (a scale, not a tolerance): room for any slab count
+ * the kernel's index takes, and far from int64's end. */
+#define KEY_SPAN 0x1p40
 
 typedef struct pseg {
     uint32_t p0, p1; /* local points; p0 == p1: a contact point, not a segment */
@@ -122,7 +125,9 @@ typedef struct pwork {
     uint32_t *x1, *x2;
     size_t capx1, capx2;
     double *span; /* placement: the edges' and queries' conservative spans */
-    size_t capspan;
+    size_t capspan, nq;
+    double kx0, ks;   /* placement keys: (x - kx0) * ks */
+    planar_ws pws;    /* placement scratch */
     uint8_t *reached; /* by piece of the plane: goes through the arrangement */
     size_t capreached;
     member_ws mws; /* the coverage walk's scratch, and its rows */
@@ -599,7 +604,7 @@ static int make_cycles(pwork *w)
     for (size_t h = 0; h < nh; h++) w->voff[h_from(w, (uint32_t)h) + 2]++;
     for (size_t p = 0; p < np; p++) w->voff[p + 2] += w->voff[p + 1];
     for (size_t h = 0; h < nh; h++) w->vh[w->voff[h_from(w, (uint32_t)h) + 1]++] = (uint32_t)h;
-    planar_traits T = {w, model_around, NULL, NULL};
+    planar_traits T = {w, model_around, NULL, NULL, NULL, NULL};
     if (planar_sort_around(&T, w->voff, w->vh, w->pos, 0, np)) return -2;
     for (size_t h = 0; h < nh; h++)
         w->next[h] = planar_next(w->voff, w->vh, w->pos, h_from(w, (uint32_t)h ^ 1), (uint32_t)h);
@@ -664,29 +669,64 @@ static uint32_t h_plus_u(const pwork *w, uint32_t e)
     return h_sig(w, h) * su > 0 ? h : h + 1;
 }
 
-/* The model's "below" (planar_traits): does edge e straddle the vertical line through
- * component q's lowest point x (left end strictly left of it, right end not), with x strictly
- * above it?  The conservative v spans first (span_fast), then the exact tests. */
-static int model_below(void *vw, uint32_t e, uint32_t q)
+/* Does edge e straddle the vertical line through component q's lowest point x (left end
+ * strictly left of it, right end not), with x strictly above it?  The conservative v spans
+ * first (span_fast), then the exact tests. */
+static int model_below(const pwork *w, uint32_t e, uint32_t q)
 {
-    const pwork *w = vw;
     const pedge *E = &w->ed[e];
     uint32_t x = w->low[q], l, r;
-    if (w->span[2 * w->ned + e] > w->span[2 * w->ned + w->ned + q]) return 0; /* above x */
+    if (w->span[2 * w->ned + e] > w->span[3 * w->ned + q]) return 0; /* above x */
     ends_by_u(w, E, &l, &r);
     if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) return 0;
     return above_edge(w, E, x) > 0;
 }
 
-static int model_higher(void *vw, uint32_t a, uint32_t b)
+/* The placement key of a conservative u bound: monotone (a subtraction, a product by ks >= 0
+ * and a truncation of a non-negative value, each non-decreasing), so the keys of conservative
+ * spans are conservative. */
+static inline int64_t u_key(const pwork *w, double x)
+{
+    return (int64_t)((x - w->kx0) * w->ks);
+}
+
+/* The model's "espan" (planar_traits): the keys of the edges' u spans. */
+static void model_espan(void *vw, size_t e0, size_t e1, int64_t *lo, int64_t *hi)
 {
     const pwork *w = vw;
-    return higher(w, &w->ed[a], &w->ed[b]);
+    const double *elo = w->span, *ehi = elo + w->ned;
+    for (size_t e = e0; e < e1; e++) lo[e - e0] = u_key(w, elo[e]), hi[e - e0] = u_key(w, ehi[e]);
+}
+
+/* The model's "qspan": the keys of component q's lowest point's u span. */
+static void model_qspan(void *vw, uint32_t q, int64_t *lo, int64_t *hi)
+{
+    const pwork *w = vw;
+    const double *qlo = w->span + 3 * w->ned + w->nq, *qhi = qlo + w->nq;
+    *lo = u_key(w, qlo[q]), *hi = u_key(w, qhi[q]);
+}
+
+/* The model's "scan": of best and the candidates, the highest edge of another component below
+ * q's lowest point (model_below) by higher(); edges whose u span misses the point's are not
+ * asked. */
+static uint32_t model_scan(void *vw, uint32_t q, const uint32_t *cand, size_t n, uint32_t best)
+{
+    const pwork *w = vw;
+    const double *elo = w->span, *ehi = elo + w->ned;
+    const double *qlo = w->span + 3 * w->ned + w->nq, *qhi = qlo + w->nq;
+    uint32_t b = best;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t e = cand[i];
+        if (w->tmp[e] == q || ehi[e] < qlo[q] || elo[e] > qhi[q]) continue;
+        if (e == b || !model_below(w, e, q)) continue;
+        if (b == NONE || higher(w, &w->ed[e], &w->ed[b])) b = e;
+    }
+    return b;
 }
 
 /* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below its
  * lowest vertex (NONE: nothing below, the unbounded face), by the kernel's planar_place over
- * the edges' conservative u spans (span_fast). */
+ * the keys of the edges' conservative u spans (span_fast). */
 static int place_components(pwork *w, size_t ncomp)
 {
     for (size_t c = 0; c < ncomp; c++) {
@@ -700,20 +740,26 @@ static int place_components(pwork *w, size_t ncomp)
     size_t ne = w->ned;
     if (GROW(w, span, 3 * ne + 3 * ncomp + 1) || GROW(w, tmp, ne + 1)) return -1;
     double *elo = w->span, *ehi = elo + ne, *evlo = ehi + ne, *qvhi = evlo + ne;
-    double *qlo = qvhi + ncomp, *qhi = qlo + ncomp, d;
+    double *qlo = qvhi + ncomp, *qhi = qlo + ncomp, d, x0 = INFINITY, x1 = -INFINITY;
     for (size_t e = 0; e < ne; e++) {
         const xpt *A = &w->lp[w->ed[e].a], *B = &w->lp[w->ed[e].b];
         span_fast(A->x[w->u], B->x[w->u], &elo[e], &ehi[e]);
         span_fast(A->x[w->v], B->x[w->v], &evlo[e], &d);
         w->tmp[e] = w->comp[w->ed[e].a];
+        x0 = elo[e] < x0 ? elo[e] : x0, x1 = ehi[e] > x1 ? ehi[e] : x1;
     }
     for (size_t c = 0; c < ncomp; c++) {
         const xpt *X = &w->lp[w->low[c]];
         span_fast(X->x[w->u], X->x[w->u], &qlo[c], &qhi[c]);
         span_fast(X->x[w->v], X->x[w->v], &d, &qvhi[c]);
+        x0 = qlo[c] < x0 ? qlo[c] : x0, x1 = qhi[c] > x1 ? qhi[c] : x1;
     }
-    planar_traits T = {w, NULL, model_below, model_higher};
-    if (planar_place(&T, ne, elo, ehi, w->tmp, ncomp, qlo, qhi, w->host)) return -1;
+    w->nq = ncomp;
+    w->kx0 = x0;
+    w->ks = x1 > x0 ? KEY_SPAN / (x1 - x0) : 0;
+    if (!isfinite(w->ks)) w->ks = 0;
+    planar_traits T = {w, NULL, model_espan, model_qspan, model_scan, NULL};
+    if (planar_place(&T, 1, &w->pws, ne, 0, u_key(w, x1), ncomp, w->host)) return -1;
     for (size_t c = 0; c < ncomp; c++)
         if (w->host[c] != NONE) w->host[c] = w->hcyc[h_plus_u(w, w->host[c])];
     return 0;
@@ -1109,6 +1155,7 @@ static void pwork_free(pwork *w)
     free(w->fof), free(w->aoff), free(w->adj), free(w->covo), free(w->covn);
     free(w->x1), free(w->x2), free(w->reached), free(w->span);
     member_ws_free(&w->mws);
+    planar_ws_free(&w->pws);
 }
 
 int a3_planes(a3 *A, char *err, size_t errlen)

@@ -3,17 +3,23 @@
  * Stages, each a function below: sort around vertices (insertion, the degrees are small),
  * cycles of the successor map (in the order of their smallest half-edge), placement of
  * components by a downward ray over a slab index.  Why slabs and not a tree: the edges of an
- * arrangement are short and spread across the plane, so about sqrt(n) slabs of equal width hold
- * a few edges each; where long edges make the lists too long (more than 8 entries per edge) the
- * slabs are halved until they are not, so the index stays linear in size.
+ * arrangement are short and spread across the plane, so about sqrt(n) slabs of equal width (a
+ * power of two of the models' int64 keys) hold a few edges each; where long edges make the
+ * lists too long (more than 8 entries per edge) the slabs are halved until they are not, so the
+ * index stays linear in size.  The index is built by chunks of edges and asked by chunks of
+ * queries, on par_for when the caller gives threads; the model's scan is its own tight loop
+ * over a slab's edges (arr2's exact fractions, arr3_plane's filtered spans then exact tests).
  *
  * Threads: reentrant; nothing here is shared.  Ownership: see planar.h.
  */
 #include "core/planar.h"
 
-#include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "core/mem.h"
+#include "core/par.h"
 
 int planar_sort_around(const planar_traits *T, const uint32_t *off, uint32_t *out, uint32_t *pos,
                        size_t v0, size_t v1)
@@ -59,73 +65,176 @@ int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *h
     return 0;
 }
 
-/* ---- the slab index ------------------------------------------------------------------------ */
+/* ---- placement: the slab index -------------------------------------------------------- */
 
-static size_t slab_of(const planar_slabs *S, double x)
+#define ECHUNK 65536 /* edges per work item of the index */
+#define QCHUNK 64    /* queries per work item */
+#define EBATCH 256   /* edges per call of T->espan */
+
+typedef struct place_job {
+    const planar_traits *T;
+    planar_ws *ws;
+    size_t ne, nq, ns, nchunk;
+    int64_t kmin;
+    int shift; /* the slabs are 2^shift keys wide */
+    uint32_t *best;
+    atomic_int stopped;
+} place_job;
+
+/* Work items [0, n) of fn: on the calling thread when there is one thread or one item (no
+ * thread started, the same worker number 0 as par_for would give), else par_for. */
+static void run(int threads, size_t n, par_fn fn, void *job)
 {
-    double q = (x - S->x0) / S->w; /* monotone in x: so is the slab */
-    if (!(q > 0)) return 0;
-    if (q >= (double)S->ns) return S->ns - 1;
-    return (size_t)q;
+    if (threads <= 1 || n <= 1)
+        for (size_t i = 0; i < n; i++) fn(job, i, 0);
+    else
+        par_for(threads, n, fn, job);
 }
 
-/* The slabs of n items with closed spans [lo[i], hi[i]]: about sqrt(n) of them, fewer when the
- * lists would hold more than 8 entries per item.  Returns 0, or -1 out of memory. */
-static int slabs_build(planar_slabs *S, size_t n, const double *lo, const double *hi)
+static int job_stop(place_job *j, int wk, size_t work)
 {
-    double x0 = INFINITY, x1 = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        x0 = lo[i] < x0 ? lo[i] : x0;
-        x1 = hi[i] > x1 ? hi[i] : x1;
+    if (atomic_load_explicit(&j->stopped, memory_order_relaxed)) return 1;
+    if (j->T->stop && j->T->stop(j->T->ctx, wk, work)) {
+        atomic_store(&j->stopped, 1);
+        return 1;
     }
-    size_t ns = 1, total;
-    while (ns * ns < n) ns *= 2;
-    S->x0 = x0;
+    return 0;
+}
+
+/* The slab of key k (keys outside the edges' [kmin, kmax] go to the end slabs). */
+static inline uint32_t slab_of(const place_job *j, int64_t k)
+{
+    if (k <= j->kmin) return 0;
+    uint64_t s = ((uint64_t)k - (uint64_t)j->kmin) >> j->shift;
+    return s >= j->ns ? (uint32_t)(j->ns - 1) : (uint32_t)s;
+}
+
+/* Chunk k of the edges: each one's first and last slab (es), and their entries (ctot[k]). */
+static void range_chunk(void *vj, size_t k, int wk)
+{
+    place_job *j = vj;
+    size_t e0 = k * ECHUNK, e1 = e0 + ECHUNK < j->ne ? e0 + ECHUNK : j->ne;
+    if (job_stop(j, wk, e1 - e0)) return;
+    uint32_t *es = j->ws->es;
+    uint64_t t = 0;
+    int64_t lo[EBATCH], hi[EBATCH];
+    for (size_t b0 = e0; b0 < e1; b0 += EBATCH) {
+        size_t b1 = b0 + EBATCH < e1 ? b0 + EBATCH : e1;
+        j->T->espan(j->T->ctx, b0, b1, lo, hi);
+        for (size_t e = b0; e < b1; e++) {
+            uint32_t s0 = slab_of(j, lo[e - b0]), s1 = slab_of(j, hi[e - b0]);
+            es[2 * e] = s0, es[2 * e + 1] = s1;
+            t += s1 - s0 + 1;
+        }
+    }
+    j->ws->ctot[k] = t;
+}
+
+/* Chunk k of the edges: its entries per slab (cnt, ns + 1 per chunk). */
+static void count_chunk(void *vj, size_t k, int wk)
+{
+    place_job *j = vj;
+    size_t e0 = k * ECHUNK, e1 = e0 + ECHUNK < j->ne ? e0 + ECHUNK : j->ne;
+    const uint32_t *es = j->ws->es;
+    uint32_t *cnt = j->ws->cnt + k * (j->ns + 1);
+    (void)wk;
+    for (size_t e = e0; e < e1; e++)
+        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) cnt[s]++;
+}
+
+/* Chunk k of the edges, written at the chunk's own places of each slab (cnt). */
+static void fill_chunk(void *vj, size_t k, int wk)
+{
+    place_job *j = vj;
+    size_t e0 = k * ECHUNK, e1 = e0 + ECHUNK < j->ne ? e0 + ECHUNK : j->ne;
+    const uint32_t *es = j->ws->es;
+    uint32_t *at = j->ws->cnt + k * (j->ns + 1), *item = j->ws->item;
+    (void)wk;
+    for (size_t e = e0; e < e1; e++)
+        for (uint32_t s = es[2 * e]; s <= es[2 * e + 1]; s++) item[at[s]++] = (uint32_t)e;
+}
+
+/* Queries [chunk * QCHUNK, ...): each one's slabs scanned by the model. */
+static void query_chunk(void *vj, size_t chunk, int wk)
+{
+    place_job *j = vj;
+    const planar_traits *T = j->T;
+    const uint32_t *off = j->ws->off, *item = j->ws->item;
+    size_t q0 = chunk * QCHUNK, q1 = q0 + QCHUNK < j->nq ? q0 + QCHUNK : j->nq;
+    for (size_t q = q0; q < q1; q++) {
+        int64_t lo, hi;
+        T->qspan(T->ctx, (uint32_t)q, &lo, &hi);
+        uint32_t b = PLANAR_NONE;
+        for (uint32_t s = slab_of(j, lo), s1 = slab_of(j, hi); s <= s1; s++) {
+            if (job_stop(j, wk, off[s + 1] - off[s] + 1)) return;
+            b = T->scan(T->ctx, (uint32_t)q, item + off[s], off[s + 1] - off[s], b);
+        }
+        j->best[q] = b;
+    }
+}
+
+/* The slabs: ns = the least power of two with ns^2 >= ne, halved while the lists would hold
+ * more than 8 entries per edge; each edge listed in every slab its span meets, in edge order
+ * (a bucket sort by chunks of edges: each chunk counts its edges per slab, then writes them at
+ * its own offsets).  Returns 0, -1 out of memory, 1 stopped. */
+static int index_build(place_job *j, int threads, int64_t kmax)
+{
+    planar_ws *ws = j->ws;
+    size_t ne = j->ne, ns = 1, nchunk = (ne + ECHUNK - 1) / ECHUNK;
+    uint64_t range = kmax > j->kmin ? (uint64_t)kmax - (uint64_t)j->kmin : 0, total;
+    while (ns * ns < ne) ns *= 2;
+    j->nchunk = nchunk;
+    if (mem_grow(&ws->es, &ws->capes, 2 * ne + 1, sizeof *ws->es) ||
+        mem_grow(&ws->ctot, &ws->capctot, nchunk + 1, sizeof *ws->ctot))
+        return -1;
     for (;;) {
-        S->ns = ns;
-        S->w = (x1 - x0) / (double)ns;
-        if (!(S->w > 0) || !isfinite(S->w)) S->ns = ns = 1, S->w = 1;
+        j->shift = 0;
+        while (j->shift < 63 && (range >> j->shift) >= ns) j->shift++;
+        j->ns = ns;
+        run(threads, nchunk, range_chunk, j);
+        if (atomic_load(&j->stopped)) return 1;
         total = 0;
-        for (size_t i = 0; i < n; i++) total += slab_of(S, hi[i]) - slab_of(S, lo[i]) + 1;
-        if (total <= 8 * n + ns || ns == 1) break;
+        for (size_t k = 0; k < nchunk; k++) total += ws->ctot[k];
+        if (total <= 8 * (uint64_t)ne + ns || ns == 1) break;
         ns /= 2;
     }
-    S->off = calloc(ns + 1, sizeof *S->off);
-    S->item = malloc((total + 1) * sizeof *S->item);
-    if (!S->off || !S->item || total > UINT32_MAX) return -1;
-    for (size_t i = 0; i < n; i++)
-        for (size_t s = slab_of(S, lo[i]), e = slab_of(S, hi[i]); s <= e; s++) S->off[s + 1]++;
-    for (size_t s = 0; s < ns; s++) S->off[s + 1] += S->off[s];
-    for (size_t i = 0; i < n; i++) /* in item order within each slab */
-        for (size_t s = slab_of(S, lo[i]), e = slab_of(S, hi[i]); s <= e; s++)
-            S->item[S->off[s]++] = (uint32_t)i;
-    for (size_t s = ns; s > 0; s--) S->off[s] = S->off[s - 1];
-    S->off[0] = 0;
+    if (total > UINT32_MAX || mem_grow(&ws->off, &ws->capoff, ns + 2, sizeof *ws->off) ||
+        mem_grow(&ws->item, &ws->capitem, total + 1, sizeof *ws->item) ||
+        mem_grow(&ws->cnt, &ws->capcnt, nchunk * (ns + 1) + 1, sizeof *ws->cnt))
+        return -1;
+    memset(ws->cnt, 0, (nchunk * (ns + 1) + 1) * sizeof *ws->cnt);
+    run(threads, nchunk, count_chunk, j);
+    uint32_t at = 0; /* chunk k's entries of slab s go after those of the chunks before it */
+    for (size_t s = 0; s < ns; s++) {
+        ws->off[s] = at;
+        for (size_t k = 0; k < nchunk; k++) {
+            uint32_t n = ws->cnt[k * (ns + 1) + s];
+            ws->cnt[k * (ns + 1) + s] = at;
+            at += n;
+        }
+    }
+    ws->off[ns] = ws->off[ns + 1] = at;
+    run(threads, nchunk, fill_chunk, j);
     return 0;
 }
 
-int planar_place(const planar_traits *T, size_t ne, const double *elo, const double *ehi,
-                 const uint32_t *ecomp, size_t nq, const double *qlo, const double *qhi,
-                 uint32_t *best)
+int planar_place(const planar_traits *T, int threads, planar_ws *ws, size_t ne, int64_t kmin,
+                 int64_t kmax, size_t nq, uint32_t *best)
 {
-    planar_slabs S = {0};
-    if (slabs_build(&S, ne, elo, ehi)) {
-        free(S.off);
-        free(S.item);
-        return -1;
+    place_job j = {.T = T, .ws = ws, .ne = ne, .nq = nq, .kmin = kmin, .best = best};
+    atomic_init(&j.stopped, 0);
+    if (ne == 0) {
+        for (size_t q = 0; q < nq; q++) best[q] = PLANAR_NONE;
+        return 0;
     }
-    for (size_t k = 0; k < nq; k++) {
-        uint32_t b = PLANAR_NONE;
-        for (size_t s = slab_of(&S, qlo[k]), s1 = slab_of(&S, qhi[k]); s <= s1; s++)
-            for (uint32_t i = S.off[s]; i < S.off[s + 1]; i++) {
-                uint32_t e = S.item[i];
-                if (ecomp[e] == k || ehi[e] < qlo[k] || elo[e] > qhi[k]) continue;
-                if (e == b || !T->below(T->ctx, e, (uint32_t)k)) continue;
-                if (b == PLANAR_NONE || T->higher(T->ctx, e, b)) b = e;
-            }
-        best[k] = b;
-    }
-    free(S.off);
-    free(S.item);
-    return 0;
+    int rc = index_build(&j, threads, kmax);
+    if (rc) return rc;
+    run(threads, (nq + QCHUNK - 1) / QCHUNK, query_chunk, &j);
+    return atomic_load(&j.stopped) ? 1 : 0;
+}
+
+void planar_ws_free(planar_ws *ws)
+{
+    free(ws->es), free(ws->off), free(ws->item), free(ws->cnt), free(ws->ctot);
+    memset(ws, 0, sizeof *ws);
 }

@@ -1,6 +1,8 @@
 /* test_planar.c — the planar half-edge kernel (core/planar.h) over a small grid model: sort
  * around vertices, successors, cycles and their order, placement of components by the slab
- * index, and the refusal of two half-edges leaving a vertex in one direction. */
+ * index (a small case, and many bars against a brute force on one and four threads, over
+ * several chunks of the index and with its slabs halved), and the refusal of two half-edges
+ * leaving a vertex in one direction. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +16,7 @@ typedef struct model {
     const ipt *P;
     const uint32_t *EV;
     const ipt *Q;
+    const uint32_t *ecomp, *qcomp; /* each edge's and query's component */
 } model;
 
 static uint32_t tail(const model *m, uint32_t h)
@@ -30,19 +33,44 @@ static int around(void *vm, uint32_t a, uint32_t b)
 }
 
 /* e (not vertical) straddles x = q.x (left end strictly left) and q lies strictly above it */
-static int below(void *vm, uint32_t e, uint32_t q)
+static int below(const model *m, uint32_t e, uint32_t q)
 {
-    const model *m = vm;
     ipt a = m->P[m->EV[2 * e]], b = m->P[m->EV[2 * e + 1]], p = m->Q[q];
     if (a.x == b.x || !(a.x < p.x && p.x <= b.x)) return 0;
     return orient2(a, b, p) > 0;
 }
 
-/* the test's candidates are horizontal: higher is the larger y */
-static int higher(void *vm, uint32_t a, uint32_t b)
+/* The placement's keys: twice the grid x, each query's span one key wider on both sides (as a
+ * model with conservative spans has them), so that a query may meet two slabs and its best is
+ * carried from the first slab's scan to the second's. */
+static void espan(void *vm, size_t e0, size_t e1, int64_t *lo, int64_t *hi)
 {
     const model *m = vm;
-    return m->P[m->EV[2 * a]].y > m->P[m->EV[2 * b]].y;
+    for (size_t i = 0; i < e1 - e0; i++) {
+        const uint32_t *ev = m->EV + 2 * (e0 + i);
+        lo[i] = 2 * m->P[ev[0]].x;
+        hi[i] = 2 * m->P[ev[1]].x;
+    }
+}
+
+static void qspan(void *vm, uint32_t q, int64_t *lo, int64_t *hi)
+{
+    int64_t k = 2 * ((const model *)vm)->Q[q].x;
+    *lo = k - 1, *hi = k + 1;
+}
+
+/* the candidates are horizontal: of those below and of another component, the highest (the
+ * first of equal ones) */
+static uint32_t scan(void *vm, uint32_t q, const uint32_t *cand, size_t n, uint32_t best)
+{
+    const model *m = vm;
+    uint32_t b = best;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t e = cand[i];
+        if (m->ecomp[e] == m->qcomp[q] || !below(m, e, q)) continue;
+        if (b == PLANAR_NONE || m->P[m->EV[2 * e]].y > m->P[m->EV[2 * b]].y) b = e;
+    }
+    return b;
 }
 
 /* Outgoing lists of nv vertices from ne edges: off (nv + 1), out (2 ne). */
@@ -64,8 +92,9 @@ TEST(planar_square_hole_and_bar)
     static const uint32_t EV[] = {0, 2, 0, 1, 1, 3, 2, 3, 4, 6, 4, 5, 5, 7, 6, 7, 8, 9};
     enum { NV = 10, NE = 9, NH = 18 };
     static const ipt Q[] = {{0, 0}, {3, 4}, {2, 2}}; /* each component's lowest (left) point */
-    model m = {P, EV, Q};
-    planar_traits T = {&m, around, below, higher};
+    static const uint32_t ecomp[NE] = {0, 0, 0, 0, 1, 1, 1, 1, 2}, qcomp[3] = {0, 1, 2};
+    model m = {P, EV, Q, ecomp, qcomp};
+    planar_traits T = {&m, around, espan, qspan, scan, NULL};
     uint32_t off[NV + 1], out[NH], pos[NH], next[NH], cyc_of[NH], hes[NH], hoff[NH + 1];
     adjacency(EV, NE, NV, off, out);
     REQUIRE(planar_sort_around(&T, off, out, pos, 0, NV) == 0, "sort around refused");
@@ -95,15 +124,11 @@ TEST(planar_square_hole_and_bar)
     }
     CHECK(pos_area == 2 && neg_area == 2, "areas: %d positive, %d negative", pos_area, neg_area);
     CHECK(hoff[ncyc] == NH, "the cycles hold %u half-edges", hoff[ncyc]);
-    /* placement: spans are the exact x ranges (a grid model needs no room) */
-    double elo[NE], ehi[NE], qlo[3], qhi[3];
-    uint32_t ecomp[NE], best[3];
-    for (uint32_t e = 0; e < NE; e++) {
-        elo[e] = (double)P[EV[2 * e]].x, ehi[e] = (double)P[EV[2 * e + 1]].x;
-        ecomp[e] = e < 4 ? 0 : e < 8 ? 1 : 2;
-    }
-    for (int q = 0; q < 3; q++) qlo[q] = qhi[q] = (double)Q[q].x;
-    REQUIRE(planar_place(&T, NE, elo, ehi, ecomp, 3, qlo, qhi, best) == 0, "place: no memory");
+    /* placement */
+    uint32_t best[3];
+    planar_ws ws = {0};
+    REQUIRE(planar_place(&T, 1, &ws, NE, 0, 20, 3, best) == 0, "place: no memory");
+    planar_ws_free(&ws);
     CHECK(best[0] == PLANAR_NONE, "the outer square has %u below it", best[0]);
     CHECK(best[1] == 8, "the inner square sits on edge %u, expected the bar (8)", best[1]);
     CHECK(best[2] == 0, "the bar sits on edge %u, expected the outer bottom (0)", best[2]);
@@ -114,8 +139,8 @@ TEST(planar_same_direction_refused)
     /* two edges from (0,0): to (2,2) and (1,1) — one direction */
     static const ipt P[] = {{0, 0}, {1, 1}, {2, 2}};
     static const uint32_t EV[] = {0, 2, 0, 1};
-    model m = {P, EV, NULL};
-    planar_traits T = {&m, around, NULL, NULL};
+    model m = {P, EV, NULL, NULL, NULL};
+    planar_traits T = {&m, around, NULL, NULL, NULL, NULL};
     uint32_t off[4], out[4], pos[4];
     adjacency(EV, 2, 3, off, out);
     CHECK(planar_sort_around(&T, off, out, pos, 0, 3) == -1, "same direction not refused");
@@ -126,4 +151,49 @@ TEST(planar_cycles_not_a_permutation)
     uint32_t next[4] = {1, 1, 3, 2}, cyc_of[4], hes[4], hoff[5];
     size_t n;
     CHECK(planar_cycles(4, next, cyc_of, hes, hoff, &n) == -2, "a broken successor map accepted");
+}
+
+/* Many horizontal bars (more than one chunk of the index: 65 536 edges), some spanning the
+ * whole width (so the slabs are halved); each query's answer, on one thread and on four, is
+ * the brute force's: the highest bar of another component strictly below, straddling it. */
+TEST(planar_place_many_bars_against_brute_force)
+{
+    enum { NB = 70000, NLONG = 1500, NQ = 300, W = 1 << 20 };
+    ipt *P = malloc(2 * NB * sizeof *P), Q[NQ];
+    uint32_t *EV = malloc(2 * NB * sizeof *EV), *ecomp = malloc(NB * sizeof *ecomp);
+    uint32_t qcomp[NQ], b1[NQ], b4[NQ], want[NQ];
+    REQUIRE(P && EV && ecomp, "no memory");
+    uint64_t r = 12345;
+    for (uint32_t e = 0; e < NB; e++) {
+        r = r * 6364136223846793005u + 1442695040888963407u;
+        int64_t x0 = (int64_t)(r >> 33) % W, len = e < NLONG ? W : 1 + (int64_t)(r >> 20) % 64;
+        if (e < NLONG) x0 = 0;
+        P[2 * e] = (ipt){x0, (int64_t)e}, P[2 * e + 1] = (ipt){x0 + len, (int64_t)e};
+        EV[2 * e] = 2 * e, EV[2 * e + 1] = 2 * e + 1;
+        ecomp[e] = e % 7;
+    }
+    for (uint32_t q = 0; q < NQ; q++) {
+        r = r * 6364136223846793005u + 1442695040888963407u;
+        Q[q] = (ipt){(int64_t)(r >> 33) % W, (int64_t)(r >> 20) % NB};
+        qcomp[q] = q % 7;
+    }
+    model m = {P, EV, Q, ecomp, qcomp};
+    planar_traits T = {&m, NULL, espan, qspan, scan, NULL};
+    planar_ws ws = {0};
+    REQUIRE(planar_place(&T, 1, &ws, NB, 0, 2 * W + 128, NQ, b1) == 0, "place (1 thread) failed");
+    REQUIRE(planar_place(&T, 4, &ws, NB, 0, 2 * W + 128, NQ, b4) == 0, "place (4 threads) failed");
+    planar_ws_free(&ws);
+    size_t found = 0;
+    for (uint32_t q = 0; q < NQ; q++) {
+        want[q] = PLANAR_NONE;
+        for (uint32_t e = 0; e < NB; e++)
+            if (ecomp[e] != qcomp[q] && below(&m, e, q) &&
+                (want[q] == PLANAR_NONE || P[2 * e].y > P[2 * want[q]].y))
+                want[q] = e;
+        found += want[q] != PLANAR_NONE;
+        CHECK(b1[q] == want[q], "query %u: %u on one thread, expected %u", q, b1[q], want[q]);
+        CHECK(b4[q] == want[q], "query %u: %u on four threads, expected %u", q, b4[q], want[q]);
+    }
+    CHECK(found > NQ / 2, "only %zu of %d queries have a bar below: a weak test", found, NQ);
+    free(P), free(EV), free(ecomp);
 }

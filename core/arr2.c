@@ -1546,6 +1546,24 @@ out:
     return rc;
 }
 
+/* With opts.half_edges: the kernel's half-edges handed to out (graph's sorted lists, *pos; both
+ * then owned by out) and the face on each one's left: its walk's face (a bounded face's own,
+ * the face an outer walk is a hole of, or nf).  Returns 0, or -1 out of memory. */
+static int keep_half_edges(graph *g, const walks *w, const uint32_t *face_of,
+                           const uint32_t *face_idx, size_t nf, uint32_t **pos, lar2 *out)
+{
+    size_t nh = 2 * g->ne;
+    out->he_face = malloc((nh + 1) * sizeof *out->he_face);
+    if (!out->he_face) return -1;
+    for (size_t h = 0; h < nh; h++) {
+        uint32_t fw = face_of[w->cyc_of[h]];
+        out->he_face[h] = fw == NONE ? (uint32_t)nf : face_idx[fw];
+    }
+    out->he_off = g->off, out->he_out = g->out, out->he_pos = *pos;
+    g->off = g->out = *pos = NULL;
+    return 0;
+}
+
 static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 {
     arr2_stats *st = &out->stats;
@@ -1659,6 +1677,8 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 
     /* output */
     if ((rc = emit_complex(c, g, &w, face_idx, face_of, nf, out, err, el))) goto fail;
+    rc = ARR_ENOMEM;
+    if (c->o->half_edges && keep_half_edges(g, &w, face_of, face_idx, nf, &pos, out)) goto fail;
     progress(c, "faces", 1);
     st->nv = g->nv;
     st->ne = g->ne;
@@ -1834,8 +1854,15 @@ fail : {
     return rc;
 }
 
+void lar2_free_half_edges(lar2 *c)
+{
+    free(c->he_face), free(c->he_off), free(c->he_out), free(c->he_pos);
+    c->he_face = c->he_off = c->he_out = c->he_pos = NULL;
+}
+
 void lar2_free(lar2 *c)
 {
+    lar2_free_half_edges(c);
     free(c->V);
     free(c->VG);
     free(c->etag_off);

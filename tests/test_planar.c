@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/arr2.h"
 #include "core/num.h"
 #include "core/planar.h"
 #include "tests/check.h"
@@ -196,4 +197,71 @@ TEST(planar_place_many_bars_against_brute_force)
     }
     CHECK(found > NQ / 2, "only %zu of %d queries have a bar below: a weak test", found, NQ);
     free(P), free(EV), free(ecomp);
+}
+
+/* The half-edge u -> v of c (NONE: no such edge). */
+static uint32_t half_edge(const lar2 *c, uint32_t u, uint32_t v)
+{
+    for (uint32_t e = 0; e < c->ne; e++) {
+        if (c->EV[2 * e] == u && c->EV[2 * e + 1] == v) return 2 * e;
+        if (c->EV[2 * e] == v && c->EV[2 * e + 1] == u) return 2 * e + 1;
+    }
+    return PLANAR_NONE;
+}
+
+/* arr2 keeps the kernel's half-edges when asked (the 2D Booleans walk them): each half-edge's
+ * place in its tail's counter-clockwise list, the lists in angle order, and the face on each
+ * one's left agreeing with the complex's cycles (every cycle has its face on its left: a
+ * bounded face's outer cycle and holes, the unbounded face's cycles as nf). */
+TEST(arr2_keeps_the_kernels_half_edges)
+{
+    /* a square with a square hole, a square beside it sharing a corner, a free bar inside */
+    static const double seg[] = {0,  0,  10, 0,  10, 0,  10, 10, 10, 10, 0,  10, 0,
+                                 10, 0,  0,  3,  3,  6,  3,  6,  3,  6,  6,  6,  6,
+                                 3,  6,  3,  6,  3,  3,  10, 10, 14, 10, 14, 10, 14,
+                                 14, 14, 14, 10, 14, 10, 14, 10, 10, 1,  8,  2,  9};
+    arr2_opts o = {.threads = 2, .keep_dangling = 1, .half_edges = 1};
+    lar2 c;
+    char err[256];
+    REQUIRE(arr2_build(seg, sizeof seg / sizeof *seg / 4, &o, &c, err, sizeof err) == ARR_OK, "%s",
+            err);
+    REQUIRE(c.he_face && c.he_off && c.he_out && c.he_pos, "the half-edges are not kept");
+    for (uint32_t h = 0; h < 2 * c.ne; h++) {
+        uint32_t t = c.EV[h];
+        CHECK(c.he_out[c.he_off[t] + c.he_pos[h]] == h, "he_pos of %u", h);
+    }
+    for (uint32_t v = 0; v < c.nv; v++)
+        for (uint32_t i = c.he_off[v]; i + 1 < c.he_off[v + 1]; i++) {
+            uint32_t a = c.he_out[i], b = c.he_out[i + 1];
+            const int64_t *G = c.VG;
+            CHECK(dir_cmp(G[2 * c.EV[a ^ 1]] - G[2 * v], G[2 * c.EV[a ^ 1] + 1] - G[2 * v + 1],
+                          G[2 * c.EV[b ^ 1]] - G[2 * v], G[2 * c.EV[b ^ 1] + 1] - G[2 * v + 1]) < 0,
+                  "vertex %u: not counter-clockwise at %u", v, i);
+        }
+    size_t seen = 0;
+    for (size_t f = 0; f <= c.nf; f++) {
+        size_t ncy = f < c.nf ? 1 + c.hole_off[f + 1] - c.hole_off[f] : c.next;
+        for (size_t j = 0; j < ncy; j++) {
+            uint32_t cy = f == c.nf ? c.ext_cyc[j]
+                          : j == 0  ? c.face_cycle[f]
+                                    : c.hole_cyc[c.hole_off[f] + j - 1];
+            uint32_t b = c.cyc_off[cy], n = c.cyc_off[cy + 1] - b;
+            for (uint32_t i = 0; i < n; i++) {
+                uint32_t h = half_edge(&c, c.cyc[b + i], c.cyc[b + (i + 1) % n]);
+                CHECK(h != PLANAR_NONE && c.he_face[h] == f, "face %zu, cycle %u: half-edge %u", f,
+                      cy, h);
+                seen++;
+            }
+        }
+    }
+    CHECK(seen == 2 * c.ne, "the cycles walk %zu half-edges of %zu", seen, 2 * c.ne);
+    CHECK(c.nf == 3, "%zu bounded faces, expected 3", c.nf);
+    lar2_free_half_edges(&c);
+    CHECK(!c.he_face && !c.he_out, "freed half-edges left");
+    lar2_free(&c);
+    o.half_edges = 0;
+    REQUIRE(arr2_build(seg, sizeof seg / sizeof *seg / 4, &o, &c, err, sizeof err) == ARR_OK, "%s",
+            err);
+    CHECK(!c.he_face && !c.he_off && !c.he_out && !c.he_pos, "half-edges kept unasked");
+    lar2_free(&c);
 }

@@ -1133,8 +1133,7 @@ static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
     uint32_t *next = malloc((nh + 1) * sizeof *next);
     w->cyc_of = malloc((nh + 1) * sizeof *w->cyc_of);
     w->hes = malloc((nh + 1) * sizeof *w->hes);
-    w->hoff = malloc((nh + 1) * sizeof *w->hoff);
-    if (!next || !w->cyc_of || !w->hes || !w->hoff) {
+    if (!next || !w->cyc_of || !w->hes) {
         free(next);
         return ARR_ENOMEM;
     }
@@ -1144,9 +1143,10 @@ static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
         free(next);
         return ARR_ECANCELED;
     }
-    int rc = planar_cycles(nh, next, w->cyc_of, w->hes, w->hoff, &w->ncyc);
+    size_t caphoff = 0;
+    int rc = planar_cycles(nh, next, w->cyc_of, w->hes, &w->hoff, &caphoff, &w->ncyc);
     free(next);
-    if (rc) return ARR_EINTERNAL;
+    if (rc) return rc == -1 ? ARR_ENOMEM : ARR_EINTERNAL;
     if (g_stop(g, nh)) return ARR_ECANCELED;
     w->area2 = malloc((w->ncyc + 1) * sizeof *w->area2);
     if (!w->area2) return ARR_ENOMEM;

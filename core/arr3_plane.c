@@ -587,8 +587,7 @@ static int make_cycles(pwork *w)
     const plane3 *pl = w->A->pl;
     size_t nh = 2 * w->ned, np = w->nlp;
     if (GROW(w, voff, np + 2) || GROW(w, vh, nh + 1) || GROW(w, pos, nh + 1) ||
-        GROW(w, next, nh + 1) || GROW(w, hcyc, nh + 1) || GROW(w, hes, nh + 1) ||
-        GROW(w, hoff, nh + 1))
+        GROW(w, next, nh + 1) || GROW(w, hcyc, nh + 1) || GROW(w, hes, nh + 1))
         return -1;
     for (size_t i = 0; i < w->ned; i++) {
         pedge *e = &w->ed[i];
@@ -608,7 +607,7 @@ static int make_cycles(pwork *w)
     if (planar_sort_around(&T, w->voff, w->vh, w->pos, 0, np)) return -2;
     for (size_t h = 0; h < nh; h++)
         w->next[h] = planar_next(w->voff, w->vh, w->pos, h_from(w, (uint32_t)h ^ 1), (uint32_t)h);
-    return planar_cycles(nh, w->next, w->hcyc, w->hes, w->hoff, &w->ncyc);
+    return planar_cycles(nh, w->next, w->hcyc, w->hes, &w->hoff, &w->caphoff, &w->ncyc);
 }
 
 /* ---- components, placement --------------------------------------------------------------- */

@@ -46,22 +46,24 @@ int planar_sort_around(const planar_traits *T, const uint32_t *off, uint32_t *ou
     return 0;
 }
 
-int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t *hoff,
-                  size_t *ncyc)
+int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t **hoff,
+                  size_t *caphoff, size_t *ncyc)
 {
     size_t n = 0, k = 0;
     for (size_t h = 0; h < nh; h++) cyc_of[h] = PLANAR_NONE;
-    hoff[0] = 0;
+    if (mem_grow(hoff, caphoff, 1, sizeof **hoff)) return -1;
+    (*hoff)[0] = 0;
     for (size_t h0 = 0; h0 < nh; h0++) {
         if (cyc_of[h0] != PLANAR_NONE) continue;
         uint32_t cy = (uint32_t)n++, h = (uint32_t)h0;
+        if (mem_grow(hoff, caphoff, n + 1, sizeof **hoff)) return -1;
         do {
             if (cyc_of[h] != PLANAR_NONE || k >= nh) return -2;
             cyc_of[h] = cy;
             hes[k++] = h;
             h = next[h];
         } while (h != h0);
-        hoff[cy + 1] = (uint32_t)k;
+        (*hoff)[cy + 1] = (uint32_t)k;
     }
     *ncyc = n;
     return 0;

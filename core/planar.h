@@ -71,10 +71,11 @@ int planar_sort_around(const planar_traits *T, const uint32_t *off, uint32_t *ou
 
 /* The cycles of the successor map next over nh half-edges, numbered in the order of their
  * smallest half-edge: cyc_of[h] (nh), hes (nh: each cycle's half-edges in walk order, from its
- * smallest), hoff (room for nh + 1: *ncyc + 1 offsets into hes).  Returns 0, or -2 when next
- * is not a permutation (a bug of the caller). */
-int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t *hoff,
-                  size_t *ncyc);
+ * smallest), *hoff (*ncyc + 1 offsets into hes: a growable array of *caphoff, core/mem.h's
+ * mem_grow, so that it holds what the cycles need, not nh + 1).  Returns 0, -1 out of memory,
+ * or -2 when next is not a permutation (a bug of the caller). */
+int planar_cycles(size_t nh, const uint32_t *next, uint32_t *cyc_of, uint32_t *hes, uint32_t **hoff,
+                  size_t *caphoff, size_t *ncyc);
 
 /* planar_place's scratch, kept between calls (zero-initialise; planar_ws_free). */
 typedef struct planar_ws {

@@ -96,7 +96,8 @@ TEST(planar_square_hole_and_bar)
     static const uint32_t ecomp[NE] = {0, 0, 0, 0, 1, 1, 1, 1, 2}, qcomp[3] = {0, 1, 2};
     model m = {P, EV, Q, ecomp, qcomp};
     planar_traits T = {&m, around, espan, qspan, scan, NULL};
-    uint32_t off[NV + 1], out[NH], pos[NH], next[NH], cyc_of[NH], hes[NH], hoff[NH + 1];
+    uint32_t off[NV + 1], out[NH], pos[NH], next[NH], cyc_of[NH], hes[NH], *hoff = NULL;
+    size_t caphoff = 0;
     adjacency(EV, NE, NV, off, out);
     REQUIRE(planar_sort_around(&T, off, out, pos, 0, NV) == 0, "sort around refused");
     for (uint32_t v = 0; v < NV; v++)
@@ -109,7 +110,7 @@ TEST(planar_square_hole_and_bar)
         CHECK(tail(&m, next[h]) == tail(&m, h ^ 1), "next of %u does not leave its head", h);
     }
     size_t ncyc = 0;
-    REQUIRE(planar_cycles(NH, next, cyc_of, hes, hoff, &ncyc) == 0, "cycles refused");
+    REQUIRE(planar_cycles(NH, next, cyc_of, hes, &hoff, &caphoff, &ncyc) == 0, "cycles refused");
     CHECK(ncyc == 5, "%zu cycles, expected 5 (two per square, one around the bar)", ncyc);
     int pos_area = 0, neg_area = 0;
     for (size_t c = 0; c < ncyc; c++) {
@@ -125,6 +126,7 @@ TEST(planar_square_hole_and_bar)
     }
     CHECK(pos_area == 2 && neg_area == 2, "areas: %d positive, %d negative", pos_area, neg_area);
     CHECK(hoff[ncyc] == NH, "the cycles hold %u half-edges", hoff[ncyc]);
+    free(hoff);
     /* placement */
     uint32_t best[3];
     planar_ws ws = {0};
@@ -149,9 +151,11 @@ TEST(planar_same_direction_refused)
 
 TEST(planar_cycles_not_a_permutation)
 {
-    uint32_t next[4] = {1, 1, 3, 2}, cyc_of[4], hes[4], hoff[5];
-    size_t n;
-    CHECK(planar_cycles(4, next, cyc_of, hes, hoff, &n) == -2, "a broken successor map accepted");
+    uint32_t next[4] = {1, 1, 3, 2}, cyc_of[4], hes[4], *hoff = NULL;
+    size_t n, caphoff = 0;
+    CHECK(planar_cycles(4, next, cyc_of, hes, &hoff, &caphoff, &n) == -2,
+          "a broken successor map accepted");
+    free(hoff);
 }
 
 /* Many horizontal bars (more than one chunk of the index: 65 536 edges), some spanning the

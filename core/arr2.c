@@ -19,12 +19,17 @@
  *               repeated visits (block-cut tree); bridges (blocks of one edge: dangling trees)
  *               removed unless keep_dangling, with the vertices left without edges, and the
  *               walks made again
+ *               (the half-edge topology is core/planar.c's kernel, arr2 one model of it: its
+ *               traits order grid directions by dir_cmp; sorts and successors by chunks on
+ *               the threads, the cycles by planar_cycles)
  *   faces       positive walks are bounded faces, the others the outer walks of components
  *               (union-find over the edges)
  *   holes       each component's outer walk is placed by a downward ray from its lowest
  *               vertex: the first edge of another component below it tells the face that
  *               contains it (a hole of that face) or the component it sits beside (same
- *               face as that one).  Chains only go down, so they end.
+ *               face as that one).  Chains only go down, so they end.  The first edge comes
+ *               from the kernel's planar_place (its slab index over grid x; this model's
+ *               scan: exact fractions, hit_below)
  *
  * Memory: flat arrays and per-worker buffers; nothing is allocated per element.
  * Thread use: par_for() in intersect, split, the sorts around vertices, the walks' successors
@@ -33,7 +38,6 @@
 #include "core/arr2.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,8 +46,10 @@
 #include "core/box.h"
 #include "core/num.h"
 #include "core/par.h"
+#include "core/planar.h"
 #include "core/sort.h"
 #include "core/stop.h"
+#include "core/util.h"
 
 #define MAXW      64 /* most workers */
 #define LEAF_MAX  24 /* bucket size aimed at */
@@ -110,33 +116,10 @@ static double now_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
 }
 
-static int seterr(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
-static int vbuf_grow(vbuf *v, size_t need, size_t elem);
-
+/* Room for need elements of elem bytes in v (core/mem.h's growable array). */
 static inline int vbuf_reserve(vbuf *v, size_t need, size_t elem)
 {
-    return need <= v->cap ? 0 : vbuf_grow(v, need, elem);
-}
-
-static int vbuf_grow(vbuf *v, size_t need, size_t elem)
-{
-    size_t nc = v->cap ? v->cap * 2 : 256;
-    while (nc < need) nc *= 2;
-    void *q = realloc(v->p, nc * elem);
-    if (!q) return -1;
-    v->p = q;
-    v->cap = nc;
-    return 0;
+    return mem_grow(&v->p, &v->cap, need, elem);
 }
 
 static int cancelled(const ctx *c)
@@ -240,8 +223,8 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     for (size_t i = 0; i < n; i++) {
         for (int k = 0; k < 4; k++)
             if (!isfinite(s[4 * i + k]))
-                return seterr(err, el, ARR_EINVAL, "lines[%zu][%d]: expected 2 finite numbers", i,
-                              k / 2);
+                return util_seterr(err, el, ARR_EINVAL, "lines[%zu][%d]: expected 2 finite numbers",
+                                   i, k / 2);
         for (int k = 0; k < 4; k += 2) {
             double x = s[4 * i + k], y = s[4 * i + k + 1];
             minx = x < minx ? x : minx;
@@ -252,10 +235,11 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
     double w = n ? maxx - minx : 0, h = n ? maxy - miny : 0, ext = w > h ? w : h;
     if (n && !isfinite(ext))
-        return seterr(err, el, ARR_ELIMIT, "lines: the coordinates span more than a double holds");
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "lines: the coordinates span more than a double holds");
     double p = c->o->precision;
     if (p != 0 && !(isfinite(p) && p > 0))
-        return seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
+        return util_seterr(err, el, ARR_EINVAL, "options.precision: expected a number > 0");
     /* The finest grid the doubles where the drawing lies can write: twice their spacing at its
      * largest coordinate (mag < 2^em, where doubles are 2^(em-53) apart).  Grid points k * p
      * with p at least that are then distinct doubles, in the order of k, after rounding. */
@@ -273,18 +257,18 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
             if (p < finest) p = finest;
         }
     } else if (n && ext > 0 && p < finest) {
-        return seterr(err, el, ARR_ELIMIT,
-                      "options.precision: %g is finer than the doubles near %g (the drawing's "
-                      "largest coordinate) can write distinct points; use precision >= %g",
-                      p, mag, finest);
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "options.precision: %g is finer than the doubles near %g (the drawing's "
+                           "largest coordinate) can write distinct points; use precision >= %g",
+                           p, mag, finest);
     } else if (ext / p > ldexp(1.0, ARR2_GRID_BITS)) {
-        return seterr(err, el, ARR_ELIMIT,
-                      "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
-                      "grid steps across; use precision >= %g)",
-                      p, ext, ARR2_GRID_BITS, ext / ldexp(1.0, ARR2_GRID_BITS));
+        return util_seterr(err, el, ARR_ELIMIT,
+                           "options.precision: %g is too fine for a drawing %g wide (at most 2^%d "
+                           "grid steps across; use precision >= %g)",
+                           p, ext, ARR2_GRID_BITS, ext / ldexp(1.0, ARR2_GRID_BITS));
     }
     if (!isfinite(ext / p) || p < 1e-300)
-        return seterr(err, el, ARR_ELIMIT, "options.precision: %g is out of range", p);
+        return util_seterr(err, el, ARR_ELIMIT, "options.precision: %g is out of range", p);
     c->step = p;
     st->precision = p;
     double centre[2] = {n ? minx / 2 + maxx / 2 : 0, n ? miny / 2 + maxy / 2 : 0};
@@ -295,7 +279,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
 
     c->seg = malloc((n ? n : 1) * sizeof *c->seg);
-    if (!c->seg) return seterr(err, el, ARR_ENOMEM, "out of memory");
+    if (!c->seg) return util_seterr(err, el, ARR_ENOMEM, "out of memory");
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
         ipt a = {snap_coord(c, 0, s[4 * i]), snap_coord(c, 1, s[4 * i + 1])};
@@ -310,7 +294,7 @@ static int stage_snap(ctx *c, const double *s, size_t n, arr2_stats *st, char *e
     }
     c->m = m;
     st->zero_length = n - m;
-    return spatial_order(c) ? seterr(err, el, ARR_ENOMEM, "out of memory") : ARR_OK;
+    return spatial_order(c) ? util_seterr(err, el, ARR_ENOMEM, "out of memory") : ARR_OK;
 }
 
 /* The bound every predicate relies on (core/num.h); the snap stage guarantees it, this
@@ -322,7 +306,8 @@ static int check_range(const ctx *c, char *err, size_t el)
         const seg2 *s = &c->seg[i];
         if (llabs(s->a.x) > lim || llabs(s->a.y) > lim || llabs(s->b.x) > lim ||
             llabs(s->b.y) > lim)
-            return seterr(err, el, ARR_EINTERNAL, "internal: a snapped coordinate is out of range");
+            return util_seterr(err, el, ARR_EINTERNAL,
+                               "internal: a snapped coordinate is out of range");
     }
     return ARR_OK;
 }
@@ -572,41 +557,16 @@ static void locate_chunk(void *vj, size_t chunk, int w)
     }
 }
 
-/* Sorts the n edges ev (v0 << 32 | v1) with their tags et by (edge, tag): LSD radix, the tags'
- * bytes first, then the edges', each pass stable, passes whose byte is the same everywhere
- * skipped.  Then makes the edges unique in place (*nu of them) and gives each the tags that lie
- * on it an odd number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
+/* Sorts the n edges ev (v0 << 32 | v1) with their tags et by (edge, tag) (sort_u64_u32), then
+ * makes the edges unique in place (*nu of them) and gives each the tags that lie on it an odd
+ * number of times (*toff: nu+1 offsets into *tags).  Returns -1 out of memory. */
 static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint32_t **toff,
                          uint32_t **tags, int32_t **tw)
 {
-    uint64_t *kb = malloc((n ? n : 1) * sizeof *kb);
-    uint32_t *tb = malloc((n ? n : 1) * sizeof *tb);
     uint32_t *off = NULL, *tg = NULL;
-    if (!kb || !tb) goto fail;
-    uint64_t *ks = ev, *kd = kb;
-    uint32_t *ts = et, *td = tb;
-    for (int part = 0; part < 2; part++) {
-        uint64_t all_or = 0, all_and = ~(uint64_t)0;
-        for (size_t i = 0; i < n; i++) {
-            uint64_t x = part ? ks[i] : ts[i];
-            all_or |= x, all_and &= x;
-        }
-        for (int pass = 0; pass < (part ? 8 : 4); pass++) {
-            int sh = 8 * pass;
-            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
-            size_t cnt[257] = {0};
-            for (size_t i = 0; i < n; i++) cnt[((part ? ks[i] : ts[i]) >> sh & 255) + 1]++;
-            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
-            for (size_t i = 0; i < n; i++) {
-                size_t d = cnt[(part ? ks[i] : ts[i]) >> sh & 255]++;
-                kd[d] = ks[i], td[d] = ts[i];
-            }
-            uint64_t *kt = ks;
-            ks = kd, kd = kt;
-            uint32_t *tt = ts;
-            ts = td, td = tt;
-        }
-    }
+    if (sort_u64_u32(ev, et, n)) return -1;
+    const uint64_t *ks = ev;
+    const uint32_t *ts = et;
     off = malloc((n + 1) * sizeof *off);
     tg = malloc((n ? n : 1) * sizeof *tg);
     if (!off || !tg) goto fail;
@@ -634,15 +594,11 @@ static int unique_tagged(uint64_t *ev, uint32_t *et, size_t n, size_t *nu, uint3
         i = j;
     }
     off[u] = (uint32_t)nt;
-    free(kb);
-    free(tb);
     *nu = u;
     *toff = off;
     *tags = tg;
     return 0;
 fail:
-    free(kb);
-    free(tb);
     free(off);
     free(tg);
     if (tw) free(*tw), *tw = NULL;
@@ -865,7 +821,7 @@ static int stage_split(ctx *c, arr2_stats *st, uint64_t **edges_out, size_t *ne_
     c->npix = u;
     st->hot_pixels = u;
     if (u >= NONE) {
-        rc = seterr(err, el, ARR_ELIMIT, "lines: more than 2^32 vertices");
+        rc = util_seterr(err, el, ARR_ELIMIT, "lines: more than 2^32 vertices");
         goto fail;
     }
     double t2 = now_ms();
@@ -938,7 +894,7 @@ fail:
     free(inc);
     free(ev);
     free(et);
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     return rc;
 }
 
@@ -1057,36 +1013,30 @@ typedef struct sort_job {
     atomic_int same; /* two edges leave a vertex in the same direction */
 } sort_job;
 
+/* The model's "around" (planar_traits): two half-edges leaving one vertex by the exact angle of
+ * their grid directions (dir_cmp, from +x counter-clockwise). */
+static int model_around(void *vg, uint32_t a, uint32_t b)
+{
+    const graph *g = vg;
+    int64_t ax, ay, bx, by;
+    he_dir(g, a, &ax, &ay);
+    he_dir(g, b, &bx, &by);
+    return dir_cmp(ax, ay, bx, by);
+}
+
 static void sort_chunk(void *vj, size_t chunk, int wk)
 {
     sort_job *j = vj;
     const graph *g = j->g;
     size_t v0 = chunk * VERT_CHUNK, v1 = v0 + VERT_CHUNK < g->nv ? v0 + VERT_CHUNK : g->nv;
+    size_t work = 0;
     for (size_t v = v0; v < v1; v++) {
-        uint32_t *o = g->out + g->off[v];
         size_t d = g->off[v + 1] - g->off[v];
-        if (worker_stop(j->c, wk, d * d + 1)) return;
-        for (size_t i = 1; i < d; i++) {
-            uint32_t h = o[i];
-            int64_t hx, hy;
-            he_dir(g, h, &hx, &hy);
-            size_t k = i;
-            while (k > 0) {
-                int64_t px, py;
-                he_dir(g, o[k - 1], &px, &py);
-                int cmp = dir_cmp(px, py, hx, hy);
-                if (cmp == 0) {
-                    atomic_store(&j->same, 1);
-                    return;
-                }
-                if (cmp < 0) break;
-                o[k] = o[k - 1];
-                k--;
-            }
-            o[k] = h;
-        }
-        for (size_t i = 0; i < d; i++) j->pos[o[i]] = (uint32_t)i;
+        work += d * d + 1;
     }
+    if (worker_stop(j->c, wk, work)) return;
+    planar_traits T = {(void *)g, model_around, NULL, NULL, NULL, NULL};
+    if (planar_sort_around(&T, g->off, g->out, j->pos, v0, v1)) atomic_store(&j->same, 1);
 }
 
 /* Sorts each vertex's outgoing half-edges counter-clockwise, in parallel; pos[h] = index of h
@@ -1103,18 +1053,7 @@ static int sort_around_vertices(ctx *c, const graph *g, uint32_t *pos)
 
 static inline uint32_t he_next(const graph *g, const uint32_t *pos, uint32_t h)
 {
-    uint32_t v = he_head(g, h), t = h ^ 1;
-    uint32_t d = g->off[v + 1] - g->off[v], i = pos[t];
-    return g->out[g->off[v] + (i == 0 ? d - 1 : i - 1)];
-}
-
-static uint32_t uf_find(uint32_t *par, uint32_t x)
-{
-    while (par[x] != x) {
-        par[x] = par[par[x]];
-        x = par[x];
-    }
-    return x;
+    return planar_next(g->off, g->out, pos, he_head(g, h), h);
 }
 
 /* The connected components: comp[v] for every vertex, numbered in the order of their smallest
@@ -1123,8 +1062,7 @@ static size_t components(const graph *g, uint32_t *comp, uint32_t *par)
 {
     for (size_t v = 0; v < g->nv; v++) par[v] = (uint32_t)v;
     for (size_t e = 0; e < g->ne; e++) {
-        uint32_t a = uf_find(par, g->EV[2 * e]), b = uf_find(par, g->EV[2 * e + 1]);
-        if (a != b) par[a > b ? a : b] = a < b ? a : b; /* the smaller vertex is the root */
+        uf_union(par, g->EV[2 * e], g->EV[2 * e + 1]); /* the smaller vertex is the root */
     }
     size_t n = 0;
     for (size_t v = 0; v < g->nv; v++) { /* a root is the smallest vertex of its component */
@@ -1191,12 +1129,11 @@ static void area_chunk(void *vj, size_t chunk, int wk)
  * they make (in half-edge order), and each cycle's twice signed area (in parallel). */
 static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
 {
-    size_t nh = 2 * g->ne, cap = 64;
+    size_t nh = 2 * g->ne;
     uint32_t *next = malloc((nh + 1) * sizeof *next);
     w->cyc_of = malloc((nh + 1) * sizeof *w->cyc_of);
     w->hes = malloc((nh + 1) * sizeof *w->hes);
-    w->hoff = malloc(cap * sizeof *w->hoff);
-    if (!next || !w->cyc_of || !w->hes || !w->hoff) {
+    if (!next || !w->cyc_of || !w->hes) {
         free(next);
         return ARR_ENOMEM;
     }
@@ -1206,37 +1143,11 @@ static int walk_faces(ctx *c, const graph *g, const uint32_t *pos, walks *w)
         free(next);
         return ARR_ECANCELED;
     }
-    for (size_t h = 0; h < nh; h++) w->cyc_of[h] = NONE;
-    size_t k = 0;
-    w->hoff[0] = 0;
-    for (size_t h0 = 0; h0 < nh; h0++) {
-        if (w->cyc_of[h0] != NONE) continue;
-        if (w->ncyc + 2 > cap) {
-            cap *= 2;
-            uint32_t *a = realloc(w->hoff, cap * sizeof *a);
-            if (!a) {
-                free(next);
-                return ARR_ENOMEM;
-            }
-            w->hoff = a;
-        }
-        uint32_t cy = (uint32_t)w->ncyc++, h = (uint32_t)h0;
-        do {
-            if (w->cyc_of[h] != NONE || k >= nh) {
-                free(next);
-                return ARR_EINTERNAL;
-            }
-            w->cyc_of[h] = cy;
-            w->hes[k++] = h;
-            h = next[h];
-        } while (h != h0);
-        if (g_stop(g, k - w->hoff[cy] + 1)) {
-            free(next);
-            return ARR_ECANCELED;
-        }
-        w->hoff[cy + 1] = (uint32_t)k;
-    }
+    size_t caphoff = 0;
+    int rc = planar_cycles(nh, next, w->cyc_of, w->hes, &w->hoff, &caphoff, &w->ncyc);
     free(next);
+    if (rc) return rc == -1 ? ARR_ENOMEM : ARR_EINTERNAL;
+    if (g_stop(g, nh)) return ARR_ECANCELED;
     w->area2 = malloc((w->ncyc + 1) * sizeof *w->area2);
     if (!w->area2) return ARR_ENOMEM;
     par_for(c->threads, (w->ncyc + HE_CHUNK - 1) / HE_CHUNK, area_chunk, &j);
@@ -1267,119 +1178,82 @@ static int hit_below(const graph *g, uint32_t e, ipt p, i128 *num, i128 *den, ui
     return 1;
 }
 
-#define PLACE_CHUNK 64 /* components per work item */
-
-typedef struct place_job {
+/* The placement model (planar_traits) of arr2: keys are grid x, exact; a query is a
+ * component's lowest vertex. */
+typedef struct place_model {
     ctx *c;
     const graph *g;
-    const uint32_t *comp, *low, *soff, *sedge; /* see place_components */
-    int64_t minx;
-    int shift;     /* slabs are 2^shift wide */
-    uint32_t *hit; /* per component: the half-edge whose face is just below it, or NONE */
-    size_t n;      /* components */
-} place_job;
+    const uint32_t *comp, *low; /* see place_components */
+} place_model;
 
-/* Components [chunk * PLACE_CHUNK, ...): the first edge of another component straight below
- * each one's lowest vertex, as the half-edge with the face above on its left. */
-static void place_chunk(void *vj, size_t chunk, int wk)
+/* The model's "espan": an edge's x range (its ends are in lexicographic order). */
+static void model_espan(void *vm, size_t e0, size_t e1, int64_t *lo, int64_t *hi)
 {
-    place_job *j = vj;
-    const graph *g = j->g;
-    size_t k0 = chunk * PLACE_CHUNK, k1 = k0 + PLACE_CHUNK;
-    for (size_t k = k0; k < k1 && k < j->n; k++) {
-        ipt p = g->P[j->low[k]];
-        uint64_t s = (uint64_t)(p.x - j->minx) >> j->shift;
-        if (worker_stop(j->c, wk, j->soff[s + 1] - j->soff[s] + 1)) return;
-        i128 bn = 0, bd = 0;
-        uint32_t be = NONE, bat = NONE;
-        for (uint32_t i = j->soff[s]; i < j->soff[s + 1]; i++) {
-            uint32_t e = j->sedge[i], at;
-            if (j->comp[g->EV[2 * e]] == k) continue;
-            i128 n, d;
-            if (!hit_below(g, e, p, &n, &d, &at)) continue;
-            if (be == NONE || n * bd > bn * d) {
-                bn = n;
-                bd = d;
-                be = e;
-                bat = at;
-            }
-        }
-        uint32_t h = NONE;
-        if (be != NONE && bat != NONE) { /* a vertex: the wedge there that holds "up" */
-            const uint32_t *o = g->out + g->off[bat];
-            size_t d = g->off[bat + 1] - g->off[bat], jj = d - 1;
-            for (size_t i = 0; i < d; i++) {
-                int64_t dx, dy;
-                he_dir(g, o[i], &dx, &dy);
-                if (dir_cmp(dx, dy, 0, 1) < 0) jj = i;
-            }
-            h = o[jj];
-        } else if (be != NONE) {
-            h = 2 * be; /* leaves the left end: the face above is on its left */
-        }
-        j->hit[k] = h;
-    }
-}
-
-#define SLAB_CHUNK 65536 /* edges per work item of the slabs */
-
-typedef struct slab_job {
-    ctx *c;
-    const graph *g;
-    int64_t minx;
-    int shift;
-    size_t ns, nchunk;
-    uint32_t *es;    /* 2 per edge: its first and last slab */
-    uint64_t *ctot;  /* per chunk: its edges' slab entries */
-    uint32_t *cnt;   /* per chunk, ns + 1 apart: its entries per slab, then where they go */
-    uint32_t *sedge; /* the edges of each slab */
-} slab_job;
-
-static void slab_range(void *vj, size_t k, int wk)
-{
-    slab_job *j = vj;
-    const graph *g = j->g;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < g->ne ? e0 + SLAB_CHUNK : g->ne;
-    if (worker_stop(j->c, wk, e1 - e0)) return;
-    uint64_t t = 0;
-    for (size_t e = e0; e < e1; e++) {
-        j->es[2 * e] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e]].x - j->minx) >> j->shift);
-        j->es[2 * e + 1] = (uint32_t)((uint64_t)(g->P[g->EV[2 * e + 1]].x - j->minx) >> j->shift);
-        t += j->es[2 * e + 1] - j->es[2 * e] + 1;
-    }
-    j->ctot[k] = t;
-}
-
-static void slab_count(void *vj, size_t k, int wk)
-{
-    slab_job *j = vj;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
-    uint32_t *cnt = j->cnt + k * (j->ns + 1);
-    (void)wk;
+    const place_model *m = vm;
+    const graph *g = m->g;
     for (size_t e = e0; e < e1; e++)
-        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) cnt[s]++;
+        lo[e - e0] = g->P[g->EV[2 * e]].x, hi[e - e0] = g->P[g->EV[2 * e + 1]].x;
 }
 
-static void slab_fill(void *vj, size_t k, int wk)
+static void model_qspan(void *vm, uint32_t q, int64_t *lo, int64_t *hi)
 {
-    slab_job *j = vj;
-    size_t e0 = k * SLAB_CHUNK, e1 = e0 + SLAB_CHUNK < j->g->ne ? e0 + SLAB_CHUNK : j->g->ne;
-    uint32_t *at = j->cnt + k * (j->ns + 1);
-    (void)wk;
-    for (size_t e = e0; e < e1; e++)
-        for (uint32_t s = j->es[2 * e]; s <= j->es[2 * e + 1]; s++) j->sedge[at[s]++] = (uint32_t)e;
+    const place_model *m = vm;
+    *lo = *hi = m->g->P[m->low[q]].x;
+}
+
+/* The model's "scan": of best and the candidates, the edge of another component whose hit
+ * below component q's lowest vertex is highest (exact fractions; the first of equal ones). */
+static uint32_t model_scan(void *vm, uint32_t q, const uint32_t *cand, size_t n, uint32_t best)
+{
+    const place_model *m = vm;
+    const graph *g = m->g;
+    ipt p = g->P[m->low[q]];
+    i128 bn = 0, bd = 0;
+    uint32_t be = NONE, at;
+    for (size_t i = best == NONE; i <= n; i++) { /* best first, then the candidates */
+        uint32_t e = i ? cand[i - 1] : best;
+        if (m->comp[g->EV[2 * e]] == q) continue;
+        i128 num, den;
+        if (!hit_below(g, e, p, &num, &den, &at)) continue;
+        if (be == NONE || num * bd > bn * den) bn = num, bd = den, be = e;
+    }
+    return be;
+}
+
+static int model_stop(void *vm, int wk, size_t work)
+{
+    return worker_stop(((place_model *)vm)->c, wk, work);
+}
+
+/* The half-edge whose face lies just above p, from e, the first edge below p: at the vertex
+ * the ray hits, the wedge there that holds "up"; inside e, its half-edge leaving its left end
+ * (the face above on its left). */
+static uint32_t face_above(const graph *g, uint32_t e, ipt p)
+{
+    uint32_t u = g->EV[2 * e], v = g->EV[2 * e + 1]; /* as hit_below: a vertical edge's top */
+    uint32_t at = g->P[u].x == g->P[v].x ? v : p.x == g->P[u].x ? u : p.x == g->P[v].x ? v : NONE;
+    if (at == NONE) return 2 * e;
+    const uint32_t *o = g->out + g->off[at];
+    size_t d = g->off[at + 1] - g->off[at], jj = d - 1;
+    for (size_t i = 0; i < d; i++) {
+        int64_t dx, dy;
+        he_dir(g, o[i], &dx, &dy);
+        if (dir_cmp(dx, dy, 0, 1) < 0) jj = i;
+    }
+    return o[jj];
 }
 
 /* Places every component's outer walk: hole of a bounded face or exterior.  face_of[c] gets,
- * for every outer-walk cycle c, the face cycle it is a hole of, or NONE. */
+ * for every outer-walk cycle c, the face cycle it is a hole of, or NONE.  The first edge below
+ * each component's lowest vertex comes from the kernel's planar_place (its slab index and
+ * queries on the threads). */
 static int place_components(ctx *c, const graph *g, const walks *w, const uint32_t *comp,
                             size_t ncomp, const uint32_t *comp_outer, uint32_t *face_of)
 {
     int rc = ARR_ENOMEM;
     uint32_t *low = malloc(ncomp * sizeof *low), *par = malloc(ncomp * sizeof *par);
     uint32_t *found = malloc(ncomp * sizeof *found);
-    uint32_t *soff = NULL, *sedge = NULL, *es = NULL;
-    slab_job sj = {0};
+    planar_ws ws = {0};
     if (!low || !par || !found) goto out;
     for (size_t k = 0; k < ncomp; k++) {
         low[k] = NONE;
@@ -1394,65 +1268,21 @@ static int place_components(ctx *c, const graph *g, const walks *w, const uint32
         minx = p.x < minx ? p.x : minx;
         maxx = p.x > maxx ? p.x : maxx;
     }
-    /* vertical slabs of edges, 2^shift wide: each edge listed in every slab its x-range
-     * meets, in edge order (a bucket sort by chunks of edges, in parallel: each chunk counts
-     * its edges per slab, then writes them at its own offsets) */
-    size_t ns = 1;
-    while (ns * ns < g->ne) ns *= 2;
-    uint64_t total;
-    int shift = 0;
-    sj.c = c;
-    sj.g = g;
-    sj.minx = minx;
-    sj.nchunk = (g->ne + SLAB_CHUNK - 1) / SLAB_CHUNK;
-    es = malloc((2 * g->ne + 1) * sizeof *es);
-    sj.ctot = calloc(sj.nchunk + 1, sizeof *sj.ctot);
-    if (!es || !sj.ctot) goto out;
-    sj.es = es;
-    for (;;) {
-        shift = 0;
-        while (((uint64_t)(maxx - minx) >> shift) >= ns) shift++;
-        sj.shift = shift;
-        par_for(c->threads, sj.nchunk, slab_range, &sj);
-        if ((rc = atomic_load(&c->fail))) goto out;
-        rc = ARR_ENOMEM;
-        total = 0;
-        for (size_t k = 0; k < sj.nchunk; k++) total += sj.ctot[k];
-        if (total <= 8 * (uint64_t)g->ne + ns || ns == 1) break;
-        ns /= 2;
-    }
-    sj.ns = ns;
-    soff = calloc(ns + 2, sizeof *soff);
-    sedge = malloc((total + 1) * sizeof *sedge);
-    sj.cnt = calloc(sj.nchunk * (ns + 1) + 1, sizeof *sj.cnt);
-    if (!soff || !sedge || !sj.cnt) goto out;
-    sj.sedge = sedge;
-    par_for(c->threads, sj.nchunk, slab_count, &sj);
-    /* the chunks' offsets, slab by slab: chunk k's edges of slab s go after those of the
-     * chunks before it */
-    uint32_t at = 0;
-    for (size_t s = 0; s < ns; s++) {
-        soff[s] = at;
-        for (size_t k = 0; k < sj.nchunk; k++) {
-            uint32_t n = sj.cnt[k * (ns + 1) + s];
-            sj.cnt[k * (ns + 1) + s] = at;
-            at += n;
-        }
-    }
-    soff[ns] = soff[ns + 1] = at;
-    par_for(c->threads, sj.nchunk, slab_fill, &sj);
-    free(sj.cnt);
-    sj.cnt = NULL;
-
-    /* each component's half-edge below its lowest vertex, in parallel; then, in order, the
-     * face it is a hole of, or the component whose outer walk holds it */
-    place_job pj = {c, g, comp, low, soff, sedge, minx, shift, found, ncomp};
-    par_for(c->threads, (ncomp + PLACE_CHUNK - 1) / PLACE_CHUNK, place_chunk, &pj);
-    if ((rc = atomic_load(&c->fail))) goto out;
+    /* each component's first edge below its lowest vertex, then the half-edge with the face
+     * above on its left; then, in order, the face it is a hole of, or the component whose
+     * outer walk holds it */
+    place_model m = {c, g, comp, low};
+    planar_traits T = {&m, NULL, model_espan, model_qspan, model_scan, model_stop};
+    int pr = planar_place(&T, c->threads, &ws, g->ne, minx, maxx, ncomp, found);
+    if ((rc = atomic_load(&c->fail)))
+        goto out; /* stopped (pr 1): the job failed or was cancelled */
+    rc = ARR_ENOMEM;
+    if (pr) goto out;
     for (size_t k = 0; k < ncomp; k++) {
-        uint32_t h = found[k];
+        uint32_t e = found[k];
         found[k] = NONE;
-        if (h == NONE) continue; /* nothing below: in the unbounded face */
+        if (e == NONE) continue; /* nothing below: in the unbounded face */
+        uint32_t h = face_above(g, e, g->P[low[k]]);
         uint32_t cyc = w->cyc_of[h];
         if (w->area2[cyc] > 0)
             found[k] = cyc;
@@ -1474,11 +1304,7 @@ out:
     free(low);
     free(par);
     free(found);
-    free(soff);
-    free(sedge);
-    free(es);
-    free(sj.ctot);
-    free(sj.cnt);
+    planar_ws_free(&ws);
     return rc;
 }
 
@@ -1616,10 +1442,10 @@ static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *
     size_t badv = atomic_load(&ej.bad);
     if (badv) {
         size_t v = badv - 1;
-        rc = seterr(err, el, ARR_EINTERNAL,
-                    "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
-                    "point",
-                    v, out->V[2 * v], out->V[2 * v + 1]);
+        rc = util_seterr(err, el, ARR_EINTERNAL,
+                         "internal: vertex %zu is written (%.17g, %.17g), which is not on its grid "
+                         "point",
+                         v, out->V[2 * v], out->V[2 * v + 1]);
         goto out;
     }
     for (size_t v = 0; v < g->nv; v++) instack[v] = NONE;
@@ -1661,8 +1487,8 @@ static int emit_complex(ctx *c, const graph *g, const walks *w, const uint32_t *
             npos += ppos[p];
         }
         if (npos != (face_idx[cy] != NONE)) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: walk %zu splits into %zu outer cycles",
-                        cy, npos);
+            rc = util_seterr(err, el, ARR_EINTERNAL,
+                             "internal: walk %zu splits into %zu outer cycles", cy, npos);
             goto out;
         }
     }
@@ -1720,6 +1546,24 @@ out:
     return rc;
 }
 
+/* With opts.half_edges: the kernel's half-edges handed to out (graph's sorted lists, *pos; both
+ * then owned by out) and the face on each one's left: its walk's face (a bounded face's own,
+ * the face an outer walk is a hole of, or nf).  Returns 0, or -1 out of memory. */
+static int keep_half_edges(graph *g, const walks *w, const uint32_t *face_of,
+                           const uint32_t *face_idx, size_t nf, uint32_t **pos, lar2 *out)
+{
+    size_t nh = 2 * g->ne;
+    out->he_face = malloc((nh + 1) * sizeof *out->he_face);
+    if (!out->he_face) return -1;
+    for (size_t h = 0; h < nh; h++) {
+        uint32_t fw = face_of[w->cyc_of[h]];
+        out->he_face[h] = fw == NONE ? (uint32_t)nf : face_idx[fw];
+    }
+    out->he_off = g->off, out->he_out = g->out, out->he_pos = *pos;
+    g->off = g->out = *pos = NULL;
+    return 0;
+}
+
 static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 {
     arr2_stats *st = &out->stats;
@@ -1750,7 +1594,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
             goto fail;
         }
         if (sr) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: two edges leave a vertex together");
             goto fail;
         }
         walks_free(&w);
@@ -1803,7 +1647,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
         }
         uint32_t k = comp[he_tail(g, w.hes[w.hoff[cy]])];
         if (comp_outer[k] != NONE) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a component with two outer walks");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a component with two outer walks");
             goto fail;
         }
         comp_outer[k] = (uint32_t)cy;
@@ -1811,7 +1655,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     }
     if (nouter != ncomp ||
         (long long)g->nv - (long long)g->ne + (long long)w.ncyc != 2 * (long long)ncomp) {
-        rc = seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
+        rc = util_seterr(err, el, ARR_EINTERNAL, "internal: the face walks are not planar");
         goto fail;
     }
     double t2 = now_ms();
@@ -1822,7 +1666,8 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     if (ncomp > 1) {
         rc = place_components(c, g, &w, comp, ncomp, comp_outer, face_of);
         if (rc) {
-            if (rc == ARR_EINTERNAL) seterr(err, el, rc, "internal: inconsistent hole placement");
+            if (rc == ARR_EINTERNAL)
+                util_seterr(err, el, rc, "internal: inconsistent hole placement");
             goto fail;
         }
         rc = ARR_ENOMEM;
@@ -1832,6 +1677,8 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
 
     /* output */
     if ((rc = emit_complex(c, g, &w, face_idx, face_of, nf, out, err, el))) goto fail;
+    rc = ARR_ENOMEM;
+    if (c->o->half_edges && keep_half_edges(g, &w, face_of, face_idx, nf, &pos, out)) goto fail;
     progress(c, "faces", 1);
     st->nv = g->nv;
     st->ne = g->ne;
@@ -1839,7 +1686,7 @@ static int build_complex(ctx *c, graph *g, lar2 *out, char *err, size_t el)
     st->components = ncomp;
     rc = ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(drop);
     free(pos);
     free(comp);
@@ -1933,7 +1780,7 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
 
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
-    if (!c) return seterr(err, errlen, ARR_ENOMEM, "out of memory");
+    if (!c) return util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
     c->o = opts ? opts : &defaults;
     c->in = seg;
     c->n_in = n;
@@ -1945,8 +1792,8 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     g.stop = &c->serial;
     out->stats.input_segments = n;
     if (n > ARR2_MAX_SEGMENTS) {
-        rc = seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u", n,
-                    ARR2_MAX_SEGMENTS);
+        rc = util_seterr(err, errlen, ARR_ELIMIT, "lines: %zu segments, more than the limit of %u",
+                         n, ARR2_MAX_SEGMENTS);
         goto fail;
     }
     progress(c, "snap", 0);
@@ -1973,12 +1820,12 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
     g.P = c->pix;
     c->pix = NULL;
     if (c->o->input_coords && vertex_sources(c, seg, n, &g)) {
-        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
         goto fail;
     }
     g.EV = malloc((2 * nev + 1) * sizeof *g.EV);
     if (!g.EV) {
-        rc = seterr(err, errlen, ARR_ENOMEM, "out of memory");
+        rc = util_seterr(err, errlen, ARR_ENOMEM, "out of memory");
         goto fail;
     }
     for (size_t e = 0; e < nev; e++) {
@@ -1999,7 +1846,7 @@ fail : {
     lar2_free(out);
     out->stats = keep;
 }
-    if (rc == ARR_ECANCELED) seterr(err, errlen, rc, "cancelled");
+    if (rc == ARR_ECANCELED) util_seterr(err, errlen, rc, "cancelled");
     free(ev);
     graph_free(&g);
     ctx_free(c);
@@ -2007,8 +1854,15 @@ fail : {
     return rc;
 }
 
+void lar2_free_half_edges(lar2 *c)
+{
+    free(c->he_face), free(c->he_off), free(c->he_out), free(c->he_pos);
+    c->he_face = c->he_off = c->he_out = c->he_pos = NULL;
+}
+
 void lar2_free(lar2 *c)
 {
+    lar2_free_half_edges(c);
     free(c->V);
     free(c->VG);
     free(c->etag_off);

@@ -57,6 +57,9 @@ typedef struct arr2_opts {
      * end 2i+1); only the other vertices (crossings) are grid values.  Zero: all are grid
      * values.  Topology is the grid's either way (lar2.VG). */
     int input_coords;
+    /* Non-zero: the lar2 keeps the planar kernel's half-edges (lar2.he_*), for a caller that
+     * walks the complex by them (the 2D Booleans); zero: they are freed with the build. */
+    int half_edges;
 } arr2_opts;
 
 typedef struct arr2_stats {
@@ -101,6 +104,12 @@ typedef struct lar2 {
     uint32_t *etag;     /* ascending, each an input tag lying on e an odd number of times
                            (with signed_tags: with a non-zero signed count) */
     int32_t *etagw;     /* with signed_tags: the signed count of each etag entry */
+    /* With opts.half_edges, the kernel's half-edges as the build made them (else NULL):
+     * half-edge h is edge h/2 leaving EV[h] (2e runs EV[2e] -> EV[2e+1], 2e+1 back). */
+    uint32_t *he_face; /* 2*ne: the face on h's left: a bounded face f < nf, or nf (unbounded) */
+    uint32_t *he_off;  /* nv+1: the half-edges leaving v are he_out[he_off[v] .. he_off[v+1]), */
+    uint32_t *he_out;  /*       counter-clockwise from the direction +x (exact, on VG) */
+    uint32_t *he_pos;  /* 2*ne: h's place in its tail's he_out list */
     arr2_stats stats;
 } lar2;
 
@@ -112,6 +121,9 @@ int arr2_build(const double *seg, size_t n, const arr2_opts *opts, lar2 *out, ch
 
 /* Frees what arr2_build() allocated; safe on a zeroed or already freed lar2. */
 void lar2_free(lar2 *c);
+
+/* Frees the half-edges only (lar2.he_*: NULL after), once the caller has walked them. */
+void lar2_free_half_edges(lar2 *c);
 
 /* Signed area of a cycle (shoelace), in input units. */
 double lar2_cycle_area(const lar2 *c, uint32_t cycle);

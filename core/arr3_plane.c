@@ -22,8 +22,14 @@
  * that vertex to the nearest edge of another component below (exact comparisons of edges that
  * straddle the ray).  Which pieces cover a face follows from walking from the unbounded face
  * across edges, each crossing toggling the pieces whose boundary that edge is: no sample point.
- * The faces covered by at least one piece are P's faces of the complex, their cycles turned to
- * run counter-clockwise about P's normal.
+ * The topology is core/planar.c's half-edge kernel, this file being one model of it (traits:
+ * model_around, model_espan, model_qspan, model_scan): sort around points, successors, cycles,
+ * and the placement over its slab index (each component scans the edges of its slab, whose keys
+ * come from the conservative u spans of span_fast of core/pred.c, scaled to int64); the coverage
+ * walk is member_walk_ws (core/member.h, its scratch kept in pwork from plane to plane).  plane_run
+ * is stages: segments, split, cycles, components, faces, coverage, output. The faces covered by at
+ * least one piece are P's faces of the complex, their cycles turned to run counter-clockwise about
+ * P's normal.
  *
  * Threads: planes run on par_for(); each worker has its own scratch (pwork) and writes only its
  * plane's pfaces.  Nothing here depends on the number of threads.
@@ -36,10 +42,16 @@
 #include <string.h>
 
 #include "core/mem.h"
+#include "core/member.h"
 #include "core/par.h"
+#include "core/planar.h"
+#include "core/util.h"
 
 #define NEWBASE 0x80000000u /* output ids from here are the plane's new points */
 #define UNB     UINT32_MAX  /* the unbounded face */
+/* The placement keys run over [0, KEY_SPAN] (a scale, not a tolerance): room for any slab count
+ * the kernel's index takes, and far from int64's end. */
+#define KEY_SPAN 0x1p40
 
 typedef struct pseg {
     uint32_t p0, p1; /* local points; p0 == p1: a contact point, not a segment */
@@ -100,19 +112,25 @@ typedef struct pwork {
     size_t capvoff, capvh;
     uint32_t *pos, *next, *hcyc;
     size_t cappos, capnext, caphcyc;
-    uint32_t *cyc_h; /* first half-edge of each cycle */
-    size_t ncyc, capcyc_h;
+    uint32_t *hes, *hoff; /* the cycles' half-edges (planar_cycles), hoff: ncyc + 1 offsets */
+    size_t ncyc, caphes, caphoff;
     uint32_t *comp, *low, *ext, *host, *iso;
     size_t capcomp, caplow, capext, caphost, capiso;
     uint8_t *used;
     size_t capused;
     /* faces, coverage */
-    uint32_t *fof, *aoff, *adj, *queue, *covo, *covn, *cov;
-    size_t capfof, capaoff, capadj, capqueue, capcovo, capcovn, capcov, ncov;
+    uint32_t *fof, *aoff, *adj; /* faces; their adjacency: neighbours, then the edges crossed */
+    uint32_t *covo, *covn;      /* coverage: each cycle's cell, each edge's first piece */
+    size_t capfof, capaoff, capadj, capcovo, capcovn;
     uint32_t *x1, *x2;
     size_t capx1, capx2;
+    double *span; /* placement: the edges' and queries' conservative spans */
+    size_t capspan, nq;
+    double kx0, ks;   /* placement keys: (x - kx0) * ks */
+    planar_ws pws;    /* placement scratch */
     uint8_t *reached; /* by piece of the plane: goes through the arrangement */
     size_t capreached;
+    member_ws mws; /* the coverage walk's scratch, and its rows */
     int fail;
     A3_PAD;
 } pwork;
@@ -273,11 +291,7 @@ static void seg_box(pwork *w, pseg *s)
 {
     for (int d = 0; d < 2; d++) {
         int ax = d ? w->v : w->u;
-        double a = w->lp[s->p0].x[ax], b = w->lp[s->p1].x[ax];
-        double lo = a < b ? a : b, hi = a < b ? b : a;
-        double m = (fabs(lo) + fabs(hi)) * 0x1p-45 + 0x1p-30;
-        s->lo[d] = lo - m;
-        s->hi[d] = hi + m;
+        span_fast(w->lp[s->p0].x[ax], w->lp[s->p1].x[ax], &s->lo[d], &s->hi[d]);
     }
 }
 
@@ -367,21 +381,6 @@ static int cmp_edge(const void *pa, const void *pb)
     return (a->prov > b->prov) - (a->prov < b->prov);
 }
 
-/* XOR of two sorted piece lists into out (sorted); returns its length. */
-static size_t cov_xor(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out)
-{
-    size_t i = 0, j = 0, n = 0;
-    while (i < na || j < nb) {
-        if (j == nb || (i < na && a[i] < b[j]))
-            out[n++] = a[i++];
-        else if (i == na || b[j] < a[i])
-            out[n++] = b[j++];
-        else
-            i++, j++;
-    }
-    return n;
-}
-
 static int cmp_side(const void *pa, const void *pb, void *vw)
 {
     const pwork *w = vw;
@@ -457,7 +456,8 @@ static int merge_collinear(pwork *w)
                 size_t have = w->nsprov - p0;
                 if (GROW(w, sprov, w->nsprov + sg->nprov + 1) || GROW(w, x2, have + sg->nprov + 1))
                     return -1;
-                size_t nx = cov_xor(w->sprov + p0, have, w->sprov + sg->prov, sg->nprov, w->x2);
+                size_t nx =
+                    member_symdiff(w->sprov + p0, have, w->sprov + sg->prov, sg->nprov, w->x2);
                 memcpy(w->sprov + p0, w->x2, nx * sizeof *w->x2);
                 w->nsprov = p0 + nx;
             }
@@ -530,7 +530,8 @@ static int make_edges(pwork *w)
             if (GROW(w, prov, w->nprov + e.nprov + x->nprov + 1) ||
                 GROW(w, x2, e.nprov + x->nprov + 1))
                 return -1;
-            size_t nx = cov_xor(w->prov + e.prov, e.nprov, w->sprov + x->prov, x->nprov, w->x2);
+            size_t nx =
+                member_symdiff(w->prov + e.prov, e.nprov, w->sprov + x->prov, x->nprov, w->x2);
             memcpy(w->prov + e.prov, w->x2, nx * sizeof *w->x2);
             e.nprov = (uint32_t)nx;
         }
@@ -565,10 +566,11 @@ static int h_half(const pwork *w, uint32_t h)
     return (dv > 0 || (dv == 0 && du > 0)) ? 0 : 1;
 }
 
-static int cmp_angle(const void *pa, const void *pb, void *vw)
+/* The model's "around" (planar_traits): half-edges a, b leaving one point, by angle
+ * counter-clockwise in the projection; equal directions by number (never 0). */
+static int model_around(void *vw, uint32_t a, uint32_t b)
 {
     const pwork *w = vw;
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
     int ha = h_half(w, a), hb = h_half(w, b);
     if (ha != hb) return ha - hb;
     const plane3 *pl = w->A->pl;
@@ -585,7 +587,7 @@ static int make_cycles(pwork *w)
     const plane3 *pl = w->A->pl;
     size_t nh = 2 * w->ned, np = w->nlp;
     if (GROW(w, voff, np + 2) || GROW(w, vh, nh + 1) || GROW(w, pos, nh + 1) ||
-        GROW(w, next, nh + 1) || GROW(w, hcyc, nh + 1))
+        GROW(w, next, nh + 1) || GROW(w, hcyc, nh + 1) || GROW(w, hes, nh + 1))
         return -1;
     for (size_t i = 0; i < w->ned; i++) {
         pedge *e = &w->ed[i];
@@ -601,28 +603,11 @@ static int make_cycles(pwork *w)
     for (size_t h = 0; h < nh; h++) w->voff[h_from(w, (uint32_t)h) + 2]++;
     for (size_t p = 0; p < np; p++) w->voff[p + 2] += w->voff[p + 1];
     for (size_t h = 0; h < nh; h++) w->vh[w->voff[h_from(w, (uint32_t)h) + 1]++] = (uint32_t)h;
-    for (size_t p = 0; p < np; p++) {
-        uint32_t o = w->voff[p], n = w->voff[p + 1] - o;
-        if (n > 1) qsort_r(w->vh + o, n, sizeof *w->vh, cmp_angle, w);
-        for (uint32_t i = 0; i < n; i++) w->pos[w->vh[o + i]] = i;
-    }
-    /* next(h): at h's end, the half-edge just clockwise of h's twin */
-    for (size_t h = 0; h < nh; h++) {
-        uint32_t t = (uint32_t)h ^ 1, b = h_from(w, t);
-        uint32_t o = w->voff[b], n = w->voff[b + 1] - o;
-        w->next[h] = w->vh[o + (w->pos[t] + n - 1) % n];
-    }
-    w->ncyc = 0;
-    for (size_t h = 0; h < nh; h++) w->hcyc[h] = NONE;
-    for (size_t h = 0; h < nh; h++) {
-        if (w->hcyc[h] != NONE) continue;
-        if (GROW(w, cyc_h, w->ncyc + 1)) return -1;
-        w->cyc_h[w->ncyc] = (uint32_t)h;
-        for (uint32_t x = (uint32_t)h; w->hcyc[x] == NONE; x = w->next[x])
-            w->hcyc[x] = (uint32_t)w->ncyc;
-        w->ncyc++;
-    }
-    return 0;
+    planar_traits T = {w, model_around, NULL, NULL, NULL, NULL};
+    if (planar_sort_around(&T, w->voff, w->vh, w->pos, 0, np)) return -2;
+    for (size_t h = 0; h < nh; h++)
+        w->next[h] = planar_next(w->voff, w->vh, w->pos, h_from(w, (uint32_t)h ^ 1), (uint32_t)h);
+    return planar_cycles(nh, w->next, w->hcyc, w->hes, &w->hoff, &w->caphoff, &w->ncyc);
 }
 
 /* ---- components, placement --------------------------------------------------------------- */
@@ -683,10 +668,66 @@ static uint32_t h_plus_u(const pwork *w, uint32_t e)
     return h_sig(w, h) * su > 0 ? h : h + 1;
 }
 
+/* Does edge e straddle the vertical line through component q's lowest point x (left end
+ * strictly left of it, right end not), with x strictly above it?  The conservative v spans
+ * first (span_fast), then the exact tests. */
+static int model_below(const pwork *w, uint32_t e, uint32_t q)
+{
+    const pedge *E = &w->ed[e];
+    uint32_t x = w->low[q], l, r;
+    if (w->span[2 * w->ned + e] > w->span[3 * w->ned + q]) return 0; /* above x */
+    ends_by_u(w, E, &l, &r);
+    if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) return 0;
+    return above_edge(w, E, x) > 0;
+}
+
+/* The placement key of a conservative u bound: monotone (a subtraction, a product by ks >= 0
+ * and a truncation of a non-negative value, each non-decreasing), so the keys of conservative
+ * spans are conservative. */
+static inline int64_t u_key(const pwork *w, double x)
+{
+    return (int64_t)((x - w->kx0) * w->ks);
+}
+
+/* The model's "espan" (planar_traits): the keys of the edges' u spans. */
+static void model_espan(void *vw, size_t e0, size_t e1, int64_t *lo, int64_t *hi)
+{
+    const pwork *w = vw;
+    const double *elo = w->span, *ehi = elo + w->ned;
+    for (size_t e = e0; e < e1; e++) lo[e - e0] = u_key(w, elo[e]), hi[e - e0] = u_key(w, ehi[e]);
+}
+
+/* The model's "qspan": the keys of component q's lowest point's u span. */
+static void model_qspan(void *vw, uint32_t q, int64_t *lo, int64_t *hi)
+{
+    const pwork *w = vw;
+    const double *qlo = w->span + 3 * w->ned + w->nq, *qhi = qlo + w->nq;
+    *lo = u_key(w, qlo[q]), *hi = u_key(w, qhi[q]);
+}
+
+/* The model's "scan": of best and the candidates, the highest edge of another component below
+ * q's lowest point (model_below) by higher(); edges whose u span misses the point's are not
+ * asked. */
+static uint32_t model_scan(void *vw, uint32_t q, const uint32_t *cand, size_t n, uint32_t best)
+{
+    const pwork *w = vw;
+    const double *elo = w->span, *ehi = elo + w->ned;
+    const double *qlo = w->span + 3 * w->ned + w->nq, *qhi = qlo + w->nq;
+    uint32_t b = best;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t e = cand[i];
+        if (w->tmp[e] == q || ehi[e] < qlo[q] || elo[e] > qhi[q]) continue;
+        if (e == b || !model_below(w, e, q)) continue;
+        if (b == NONE || higher(w, &w->ed[e], &w->ed[b])) b = e;
+    }
+    return b;
+}
+
+/* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below its
+ * lowest vertex (NONE: nothing below, the unbounded face), by the kernel's planar_place over
+ * the keys of the edges' conservative u spans (span_fast). */
 static int place_components(pwork *w, size_t ncomp)
 {
-    /* ext[c]: c's outside cycle (NONE for an isolated point); host[c]: the cycle just below
-     * its lowest vertex (NONE: nothing below, the unbounded face) */
     for (size_t c = 0; c < ncomp; c++) {
         uint32_t lw = w->low[c];
         uint32_t n = w->voff[lw + 1] - w->voff[lw];
@@ -694,36 +735,33 @@ static int place_components(pwork *w, size_t ncomp)
         w->host[c] = NONE;
     }
     if (ncomp < 2) return 0;
-    for (size_t c = 0; c < ncomp; c++) {
-        uint32_t x = w->low[c], best = NONE;
-        double xu = w->lp[x].x[w->u], xv = w->lp[x].x[w->v];
-        for (size_t e = 0; e < w->ned; e++) {
-            const pedge *E = &w->ed[e];
-            if (w->comp[E->a] == c) continue;
-            const xpt *A = &w->lp[E->a], *B = &w->lp[E->b];
-            double ulo = A->x[w->u] < B->x[w->u] ? A->x[w->u] : B->x[w->u];
-            double uhi = A->x[w->u] < B->x[w->u] ? B->x[w->u] : A->x[w->u];
-            double vlo = A->x[w->v] < B->x[w->v] ? A->x[w->v] : B->x[w->v];
-            double m = (fabs(ulo) + fabs(uhi) + fabs(xu)) * 0x1p-45 + 0x1p-30;
-            if (xu < ulo - m || xu > uhi + m || vlo > xv + (fabs(vlo) + fabs(xv)) * 0x1p-45 + m)
-                continue;
-            uint32_t l, r;
-            ends_by_u(w, E, &l, &r);
-            if (!(lcmp(w, l, x, w->u) < 0 && lcmp(w, r, x, w->u) >= 0)) continue;
-            if (above_edge(w, E, x) <= 0) continue; /* x is not above it */
-            if (best == NONE || higher(w, E, &w->ed[best])) best = (uint32_t)e;
-        }
-        if (best != NONE) w->host[c] = w->hcyc[h_plus_u(w, best)];
+    /* span: u lo, u hi by edge; v lo by edge; v hi by query; u lo, u hi by query */
+    size_t ne = w->ned;
+    if (GROW(w, span, 3 * ne + 3 * ncomp + 1) || GROW(w, tmp, ne + 1)) return -1;
+    double *elo = w->span, *ehi = elo + ne, *evlo = ehi + ne, *qvhi = evlo + ne;
+    double *qlo = qvhi + ncomp, *qhi = qlo + ncomp, d, x0 = INFINITY, x1 = -INFINITY;
+    for (size_t e = 0; e < ne; e++) {
+        const xpt *A = &w->lp[w->ed[e].a], *B = &w->lp[w->ed[e].b];
+        span_fast(A->x[w->u], B->x[w->u], &elo[e], &ehi[e]);
+        span_fast(A->x[w->v], B->x[w->v], &evlo[e], &d);
+        w->tmp[e] = w->comp[w->ed[e].a];
+        x0 = elo[e] < x0 ? elo[e] : x0, x1 = ehi[e] > x1 ? ehi[e] : x1;
     }
+    for (size_t c = 0; c < ncomp; c++) {
+        const xpt *X = &w->lp[w->low[c]];
+        span_fast(X->x[w->u], X->x[w->u], &qlo[c], &qhi[c]);
+        span_fast(X->x[w->v], X->x[w->v], &d, &qvhi[c]);
+        x0 = qlo[c] < x0 ? qlo[c] : x0, x1 = qhi[c] > x1 ? qhi[c] : x1;
+    }
+    w->nq = ncomp;
+    w->kx0 = x0;
+    w->ks = x1 > x0 ? KEY_SPAN / (x1 - x0) : 0;
+    if (!isfinite(w->ks)) w->ks = 0;
+    planar_traits T = {w, NULL, model_espan, model_qspan, model_scan, NULL};
+    if (planar_place(&T, 1, &w->pws, ne, 0, u_key(w, x1), ncomp, w->host)) return -1;
+    for (size_t c = 0; c < ncomp; c++)
+        if (w->host[c] != NONE) w->host[c] = w->hcyc[h_plus_u(w, w->host[c])];
     return 0;
-}
-
-/* ---- coverage ------------------------------------------------------------------------- */
-
-static int cmpu32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
 }
 
 /* ---- output ------------------------------------------------------------------------------ */
@@ -798,16 +836,6 @@ static int out_cycle(pwork *w, outb *o, uint32_t h, uint32_t x, uint32_t *newid)
 
 /* ---- one plane ------------------------------------------------------------------------- */
 
-/* A conservative box of point p in grid units (the approximation's error and one unit more). */
-static void pt_box(const xpt *p, int64_t *lo, int64_t *hi)
-{
-    for (int a = 0; a < 3; a++) {
-        double x = p->x[a], m = fabs(x) * 0x1p-45 + 1;
-        lo[a] = (int64_t)floor(x - m);
-        hi[a] = (int64_t)ceil(x + m);
-    }
-}
-
 static int box_meets(const int64_t *lo, const int64_t *hi, const int32_t *b)
 {
     for (int a = 0; a < 3; a++)
@@ -842,8 +870,8 @@ static int reached_pieces(pwork *w, pfaces *F)
         if (A->pc[A->pp[o + i]].nc != 1) w->reached[i] = 1;
     for (uint32_t t = A->cs_off[P]; t < A->cs_off[P + 1]; t++) {
         int64_t lo[3], hi[3], l1[3], h1[3];
-        pt_box(&A->pt[A->cs[t].p0], lo, hi);
-        pt_box(&A->pt[A->cs[t].p1], l1, h1);
+        xpt_grid_box_fast(&A->pt[A->cs[t].p0], lo, hi);
+        xpt_grid_box_fast(&A->pt[A->cs[t].p1], l1, h1);
         for (int a = 0; a < 3; a++) {
             if (l1[a] < lo[a]) lo[a] = l1[a];
             if (h1[a] > hi[a]) hi[a] = h1[a];
@@ -853,7 +881,7 @@ static int reached_pieces(pwork *w, pfaces *F)
     }
     for (uint32_t t = A->cp_off[P]; t < A->cp_off[P + 1]; t++) {
         int64_t lo[3], hi[3];
-        pt_box(&A->pt[A->cp[t].p], lo, hi);
+        xpt_grid_box_fast(&A->pt[A->cp[t].p], lo, hi);
         for (uint32_t i = 0; i < m; i++)
             if (!w->reached[i] && box_meets(lo, hi, A->pc[A->pp[o + i]].box)) w->reached[i] = 1;
     }
@@ -867,30 +895,12 @@ static int reached_pieces(pwork *w, pfaces *F)
     return 0;
 }
 
-static int plane_run(pwork *w, uint32_t P, pfaces *F)
+/* Stage "segments" of plane_run: the pieces' edges (of the reached pieces), the cuts and the
+ * contact points become segments, each with its axis along the line and its conservative box. */
+static int plane_segments(pwork *w, const plane3 *pl)
 {
     const a3 *A = w->A;
-    const plane3 *pl = &A->pl[P];
-    memset(F, 0, sizeof *F);
-    F->base = NEWBASE;
-    if (a3_plane_simple(A, P)) {
-        /* Nothing from another solid reaches this plane, and its pieces are simple polygons of
-         * one solid turning the same way: they are its faces as they are (in a surface that
-         * does not pass through itself, two such pieces meet at most along their edges; the
-         * same side facing out, they cannot overlap).  Pieces turning both ways (a surface
-         * touching itself face to face) go through the arrangement. */
-        F->trivial = 1; /* merge_planes writes the pieces as they are */
-        return 0;
-    }
-    w->P = P;
-    w->k = plane_axis(pl);
-    w->u = (w->k + 1) % 3;
-    w->v = (w->k + 2) % 3;
-    w->sgnk = pl->n[w->k] > 0 ? 1 : -1;
-    lp_reset(w);
-    w->nsg = w->nsp = w->nsprov = 0;
-    if (reached_pieces(w, F)) return -1;
-    /* segments: the pieces' edges, the cuts, the contact points */
+    uint32_t P = w->P;
     for (uint32_t i = A->pp_off[P]; i < A->pp_off[P + 1]; i++) {
         uint32_t pi = A->pp[i];
         const piece *pc = &A->pc[pi];
@@ -936,24 +946,28 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         }
         seg_box(w, s);
     }
-    if (merge_collinear(w) || sweep(w) || dedup_local(w) || make_edges(w)) return -1;
-    if (make_cycles(w)) return -1;
-    /* the points in use: ends of edges, and contact points (which may stand alone) */
-    size_t np = w->nlp;
-    if (GROW(w, used, np + 1) || GROW(w, comp, np + 1)) return -1;
+    return 0;
+}
+
+/* Stage "components" of plane_run: the points in use (ends of edges, and contact points, which
+ * may stand alone), comp[p] their component (NONE: unused), numbered in point order, each with
+ * its lowest point low[c]; *ncomp gets their number. */
+static int plane_components(pwork *w, size_t *ncomp_out)
+{
+    size_t np = w->nlp, ncomp = 0;
+    if (GROW(w, used, np + 1) || GROW(w, comp, np + 1) || GROW(w, iso, np + 1) ||
+        GROW(w, tmp, np + 1))
+        return -1;
     memset(w->used, 0, np);
     for (size_t e = 0; e < w->ned; e++) w->used[w->ed[e].a] = w->used[w->ed[e].b] = 1;
     for (size_t i = 0; i < w->nsg; i++)
         if (w->sg[i].p0 == w->sg[i].p1) w->used[w->sg[i].p0] = 1;
     for (size_t p = 0; p < np; p++) w->comp[p] = (uint32_t)p;
-    for (size_t e = 0; e < w->ned; e++) a3_uf_union(w->comp, w->ed[e].a, w->ed[e].b);
-    /* components numbered in point order, each with its lowest point */
-    size_t ncomp = 0;
-    if (GROW(w, iso, np + 1)) return -1;
+    for (size_t e = 0; e < w->ned; e++) uf_union(w->comp, w->ed[e].a, w->ed[e].b);
     for (size_t p = 0; p < np; p++) w->iso[p] = NONE;
     for (size_t p = 0; p < np; p++) {
         if (!w->used[p]) continue;
-        uint32_t r = a3_uf_find(w->comp, (uint32_t)p);
+        uint32_t r = uf_find(w->comp, (uint32_t)p);
         if (w->iso[r] == NONE) {
             if (GROW(w, low, ncomp + 1) || GROW(w, ext, ncomp + 1) || GROW(w, host, ncomp + 1))
                 return -1;
@@ -963,19 +977,23 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         uint32_t c = w->iso[r];
         if (lower(w, (uint32_t)p, w->low[c])) w->low[c] = (uint32_t)p;
     }
-    if (GROW(w, tmp, np + 1)) return -1;
-    for (size_t p = 0; p < np; p++) w->tmp[p] = a3_uf_find(w->comp, (uint32_t)p);
+    for (size_t p = 0; p < np; p++) w->tmp[p] = uf_find(w->comp, (uint32_t)p);
     for (size_t p = 0; p < np; p++) w->comp[p] = w->used[p] ? w->iso[w->tmp[p]] : NONE;
-    if (place_components(w, ncomp)) return -1;
-    /* faces: every cycle that is not a component's outside is a bounded face.  fof[cy]: the
-     * face a cycle belongs to (itself, or the face holding its component, UNB for none). */
+    *ncomp_out = ncomp;
+    return 0;
+}
+
+/* Stage "faces" of plane_run: every cycle that is not a component's outside is a bounded face.
+ * fof[cy]: the face a cycle belongs to (itself, or the face holding its component, UNB for
+ * none); host[c] resolved up through outside cycles to a bounded face (or UNB). */
+static int plane_faces(pwork *w, size_t ncomp)
+{
     size_t ncy = w->ncyc;
     if (GROW(w, fof, ncy + 1) || GROW(w, x1, ncy + 1)) return -1;
     for (size_t cy = 0; cy < ncy; cy++) w->fof[cy] = (uint32_t)cy, w->x1[cy] = NONE;
     for (size_t c = 0; c < ncomp; c++)
         if (w->ext[c] != NONE) w->x1[w->ext[c]] = (uint32_t)c; /* cycle -> its component */
     for (size_t c = 0; c < ncomp; c++) {
-        /* resolve the host of c: up through outside cycles to a bounded face (or UNB) */
         uint32_t h = w->host[c];
         size_t guard = 0;
         while (h != NONE && w->x1[h] != NONE && guard++ <= ncomp) h = w->host[w->x1[h]];
@@ -984,60 +1002,56 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
     }
     for (size_t c = 0; c < ncomp; c++)
         if (w->ext[c] != NONE) w->fof[w->ext[c]] = w->host[c];
-    /* adjacency of faces across edges, then the walk from the unbounded face */
-    size_t nfn = ncy + 1; /* node ncy: UNB */
-    if (GROW(w, aoff, nfn + 2) || GROW(w, adj, 4 * w->ned + 1) || GROW(w, queue, nfn + 1) ||
-        GROW(w, covo, nfn + 1) || GROW(w, covn, nfn + 1))
+    return 0;
+}
+
+/* Stage "coverage" of plane_run: which pieces cover each face, by member_walk (core/member.h)
+ * from the unbounded face across the edges, each listing its pieces (ascending, each once:
+ * they were made by symmetric differences).  The cells are the faces: cell[cy] for each
+ * bounded face cycle, the unbounded face last (cell[ncyc]).  *rows is borrowed from w->mws
+ * (valid until the next plane). */
+static int plane_coverage(pwork *w, member_rows *rows)
+{
+    size_t ncy = w->ncyc, ncell = 0;
+    if (GROW(w, covo, ncy + 2) || GROW(w, aoff, ncy + 3) || GROW(w, adj, 4 * w->ned + 1) ||
+        GROW(w, covn, w->ned + 2))
         return -1;
-    memset(w->aoff, 0, (nfn + 2) * sizeof *w->aoff);
-#define NODE(f) ((f) == UNB ? (uint32_t)ncy : (f))
+    uint32_t *cell = w->covo, *toff = w->covn;
+    for (size_t cy = 0; cy < ncy; cy++) cell[cy] = w->fof[cy] == cy ? (uint32_t)ncell++ : NONE;
+    cell[ncy] = (uint32_t)ncell++; /* UNB */
+#define CELL(f) cell[(f) == UNB ? ncy : (f)]
+    uint32_t *aoff = w->aoff, *nb = w->adj, *el = w->adj + 2 * w->ned;
+    memset(aoff, 0, (ncell + 2) * sizeof *aoff);
     for (size_t e = 0; e < w->ned; e++) {
-        uint32_t f1 = NODE(w->fof[w->hcyc[2 * e]]), f2 = NODE(w->fof[w->hcyc[2 * e + 1]]);
+        uint32_t f1 = CELL(w->fof[w->hcyc[2 * e]]), f2 = CELL(w->fof[w->hcyc[2 * e + 1]]);
+        toff[e] = w->ed[e].prov;
         if (f1 == f2) continue;
-        w->aoff[f1 + 2]++;
-        w->aoff[f2 + 2]++;
+        aoff[f1 + 2]++;
+        aoff[f2 + 2]++;
     }
-    for (size_t f = 0; f < nfn; f++) w->aoff[f + 2] += w->aoff[f + 1];
+    toff[w->ned] = (uint32_t)w->nprov;
+    for (size_t f = 0; f < ncell; f++) aoff[f + 2] += aoff[f + 1];
     for (size_t e = 0; e < w->ned; e++) {
-        uint32_t f1 = NODE(w->fof[w->hcyc[2 * e]]), f2 = NODE(w->fof[w->hcyc[2 * e + 1]]);
+        uint32_t f1 = CELL(w->fof[w->hcyc[2 * e]]), f2 = CELL(w->fof[w->hcyc[2 * e + 1]]);
         if (f1 == f2) continue;
-        w->adj[2 * w->aoff[f1 + 1]] = f2, w->adj[2 * w->aoff[f1 + 1]++ + 1] = (uint32_t)e;
-        w->adj[2 * w->aoff[f2 + 1]] = f1, w->adj[2 * w->aoff[f2 + 1]++ + 1] = (uint32_t)e;
+        nb[aoff[f1 + 1]] = f2, el[aoff[f1 + 1]++] = (uint32_t)e;
+        nb[aoff[f2 + 1]] = f1, el[aoff[f2 + 1]++] = (uint32_t)e;
     }
-    for (size_t f = 0; f < nfn; f++) w->covo[f] = NONE;
-    w->ncov = 0;
-    size_t qh = 0, qt = 0;
-    w->queue[qt++] = (uint32_t)ncy;
-    w->covo[ncy] = 0;
-    w->covn[ncy] = 0;
-    while (qh < qt) {
-        uint32_t f = w->queue[qh++];
-        for (uint32_t i = w->aoff[f]; i < w->aoff[f + 1]; i++) {
-            uint32_t g = w->adj[2 * i], e = w->adj[2 * i + 1];
-            const pedge *E = &w->ed[e];
-            if (GROW(w, cov, w->ncov + w->covn[f] + E->nprov + 1) ||
-                GROW(w, x2, E->nprov + w->covn[f] + 1))
-                return -1;
-            /* the edge's pieces, sorted */
-            memcpy(w->x2, w->prov + E->prov, E->nprov * sizeof *w->x2);
-            if (E->nprov > 1) qsort(w->x2, E->nprov, sizeof *w->x2, cmpu32);
-            uint32_t *out = w->cov + w->ncov;
-            size_t n = cov_xor(w->cov + w->covo[f], w->covn[f], w->x2, E->nprov, out);
-            if (w->covo[g] == NONE) {
-                w->covo[g] = (uint32_t)w->ncov;
-                w->covn[g] = (uint32_t)n;
-                w->ncov += n;
-                w->queue[qt++] = g;
-            } else if (w->covn[g] != n || memcmp(w->cov + w->covo[g], out, n * sizeof *out) != 0) {
-                return -2; /* two coverings of one face: a broken arrangement */
-            }
-        }
-    }
-    /* output: bounded faces covered by a piece, with the components they hold */
+#undef CELL
+    uint32_t bad;
+    int rc = member_walk_ws(&w->mws, ncell, (uint32_t)(ncell - 1), aoff, nb, el, toff, w->prov,
+                            rows, &bad);
+    return rc < 0 ? -1 : rc > 0 ? -2 : 0;
+}
+
+/* Stage "output" of plane_run: the bounded faces covered by a piece, each with the components
+ * it holds and its pieces (rows: by cell, cell[cy] in w->covo). */
+static int plane_output(pwork *w, pfaces *F, size_t ncomp, const member_rows *rows)
+{
+    size_t ncy = w->ncyc, np = w->nlp;
     outb o = {F, 0, 0, 0, 0, 0, 0, 0};
-    uint32_t *newid = w->x1; /* reuse: per local point */
     if (GROW(w, x1, np + 1)) return -1;
-    newid = w->x1;
+    uint32_t *newid = w->x1; /* per local point */
     for (size_t p = 0; p < np; p++) newid[p] = NONE;
     if (mem_grow(&F->f_cyc, &o.capfc, 1, sizeof *F->f_cyc) ||
         mem_grow(&F->f_cov, &o.capfv, 1, sizeof *F->f_cov) ||
@@ -1045,15 +1059,18 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         return -1;
     F->f_cyc[0] = 0, F->f_cov[0] = 0, F->cyc_off[0] = 0;
     for (size_t cy = 0; cy < ncy; cy++) {
-        if (w->fof[cy] != cy || w->covo[cy] == NONE || w->covn[cy] == 0) continue;
-        if (out_cycle(w, &o, w->cyc_h[cy], NONE, newid)) return -1;
+        if (w->fof[cy] != cy) continue;
+        uint32_t k = w->covo[cy], r0 = rows->off[k], r1 = rows->off[k + 1];
+        if (r0 == r1) continue;
+        if (out_cycle(w, &o, w->hes[w->hoff[cy]], NONE, newid)) return -1;
         for (size_t c = 0; c < ncomp; c++) {
             if (w->host[c] != cy) continue;
-            if (out_cycle(w, &o, w->ext[c] == NONE ? NONE : w->cyc_h[w->ext[c]], w->low[c], newid))
+            if (out_cycle(w, &o, w->ext[c] == NONE ? NONE : w->hes[w->hoff[w->ext[c]]], w->low[c],
+                          newid))
                 return -1;
         }
-        for (uint32_t i = 0; i < w->covn[cy]; i++)
-            if (A3_PUSH(F->cov, F->ncov, o.capcov, w->cov[w->covo[cy] + i])) return -1;
+        for (uint32_t i = r0; i < r1; i++)
+            if (A3_PUSH(F->cov, F->ncov, o.capcov, rows->idx[i])) return -1;
         if (mem_grow(&F->f_cyc, &o.capfc, F->nf + 2, sizeof *F->f_cyc) ||
             mem_grow(&F->f_cov, &o.capfv, F->nf + 2, sizeof *F->f_cov))
             return -1;
@@ -1061,8 +1078,46 @@ static int plane_run(pwork *w, uint32_t P, pfaces *F)
         F->f_cyc[F->nf] = F->ncyc;
         F->f_cov[F->nf] = F->ncov;
     }
-#undef NODE
     return 0;
+}
+
+/* The arrangement of plane P into F: -1 out of memory, -2 an inconsistent arrangement (a bug),
+ * else 0.  Stages: segments, split (merge_collinear, sweep, dedup_local, make_edges), cycles
+ * (the kernel: make_cycles), components and their placement (the kernel: planar_place), faces,
+ * coverage (member_walk), output. */
+static int plane_run(pwork *w, uint32_t P, pfaces *F)
+{
+    const a3 *A = w->A;
+    const plane3 *pl = &A->pl[P];
+    memset(F, 0, sizeof *F);
+    F->base = NEWBASE;
+    if (a3_plane_simple(A, P)) {
+        /* Nothing from another solid reaches this plane, and its pieces are simple polygons of
+         * one solid turning the same way: they are its faces as they are (in a surface that
+         * does not pass through itself, two such pieces meet at most along their edges; the
+         * same side facing out, they cannot overlap).  Pieces turning both ways (a surface
+         * touching itself face to face) go through the arrangement. */
+        F->trivial = 1; /* merge_planes writes the pieces as they are */
+        return 0;
+    }
+    w->P = P;
+    w->k = plane_axis(pl);
+    w->u = (w->k + 1) % 3;
+    w->v = (w->k + 2) % 3;
+    w->sgnk = pl->n[w->k] > 0 ? 1 : -1;
+    lp_reset(w);
+    w->nsg = w->nsp = w->nsprov = 0;
+    if (reached_pieces(w, F) || plane_segments(w, pl)) return -1;
+    if (merge_collinear(w) || sweep(w) || dedup_local(w) || make_edges(w)) return -1;
+    size_t ncomp;
+    int rc = make_cycles(w);
+    if (!rc) rc = plane_components(w, &ncomp);
+    if (!rc) rc = place_components(w, ncomp);
+    if (!rc) rc = plane_faces(w, ncomp);
+    if (rc) return rc;
+    member_rows rows;
+    if ((rc = plane_coverage(w, &rows))) return rc;
+    return plane_output(w, F, ncomp, &rows);
 }
 
 /* ---- all planes --------------------------------------------------------------------------- */
@@ -1093,10 +1148,13 @@ static void pwork_free(pwork *w)
     free(w->sg), free(w->sp), free(w->order), free(w->active), free(w->tmp);
     free(w->sprov), free(w->grp), free(w->rank);
     free(w->ed), free(w->prov);
-    free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->cyc_h);
+    free(w->voff), free(w->vh), free(w->pos), free(w->next), free(w->hcyc), free(w->hes),
+        free(w->hoff);
     free(w->comp), free(w->low), free(w->ext), free(w->host), free(w->iso), free(w->used);
-    free(w->fof), free(w->aoff), free(w->adj), free(w->queue), free(w->covo), free(w->covn);
-    free(w->cov), free(w->x1), free(w->x2), free(w->reached);
+    free(w->fof), free(w->aoff), free(w->adj), free(w->covo), free(w->covn);
+    free(w->x1), free(w->x2), free(w->reached), free(w->span);
+    member_ws_free(&w->mws);
+    planar_ws_free(&w->pws);
 }
 
 int a3_planes(a3 *A, char *err, size_t errlen)

@@ -5,8 +5,9 @@
  *   arrange     arr2_build() with the tags (each edge then lists the polygons lying on it an odd
  *               number of times: crossing it changes exactly their membership) and the input
  *               coordinates for the vertices that input points snapped to;
- *   sides       the face on each side of every edge, from the face cycles (every cycle has its
- *               face on its left; EXT stands for the unbounded face);
+ *   sides       the face on each side of every edge: read from the arrangement, which keeps the
+ *               planar kernel's half-edges for us (arr2_opts.half_edges: lar2.he_face, the face
+ *               left of each half-edge; EXT, nf, stands for the unbounded face);
  *   membership  a walk over the faces from EXT, whose row is empty: crossing edge e toggles
  *               the polygons e lists (core/member.h: sparse rows, the few polygons a face lies
  *               in, never faces x polygons).  Every face is reached; a face reached again must
@@ -17,7 +18,8 @@
  *               group is one result polygon (polygons of the result meet at most at vertices);
  *   boundary    the edges with a selected face on one side only, directed with it on the
  *               left; at each vertex, an edge coming in is followed by the next edge of its
- *               group counter-clockwise around the vertex: the turn through the wedge outside
+ *               group counter-clockwise around the vertex (the kernel's order there, lar2.he_out
+ *               and he_pos: nothing is sorted again): the turn through the wedge outside
  *               the group.  So a ring never passes a vertex twice: where the outside touches
  *               the polygon (a hole touching the shell or another hole) the rings split there,
  *               as OGC asks;
@@ -25,19 +27,19 @@
  *               unbounded part of the group's outside) and the others clockwise (holes: the
  *               bounded parts).  No point-in-polygon test is needed: the group says which
  *               holes are whose.
- * Every decision is exact on the arrangement's grid coordinates (lar2.VG): angles by the sign of
- * 128-bit cross products, orientation by the exact signed area.
+ * Every decision is exact on the arrangement's grid coordinates (lar2.VG): angles as the kernel
+ * sorted them (dir_cmp, the sign of 128-bit cross products), orientation by the exact signed
+ * area.  The half-edges are freed once the rings are made (the result keeps the complex only).
  *
  * Threads: reentrant (arr2_build() starts and joins its own threads); no globals.
  * Ownership: see bool2.h.
  */
 #include "core/bool2.h"
 #include "core/member.h"
-#include "core/sort.h"
 #include "core/stop.h"
+#include "core/util.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,19 +47,6 @@
 #define NONE UINT32_MAX
 
 typedef __int128 i128;
-
-static int seterr(char *err, size_t el, int code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static int seterr(char *err, size_t el, int code, const char *fmt, ...)
-{
-    if (err && el) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, el, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 static void rings_free(bool2_rings *g)
 {
@@ -109,66 +98,6 @@ static int stage_segments(const bool2_input *in, double **seg, uint32_t **tag, s
     return 0;
 }
 
-/* ---- sides -------------------------------------------------------------------------------- */
-
-/* The edge from vertex u to vertex v, or NONE.  EV is sorted, v0 < v1: the edges whose lower
- * end is a are EV's rows first[a] .. first[a + 1), a few. */
-static uint32_t find_edge(const lar2 *c, const uint32_t *first, uint32_t u, uint32_t v)
-{
-    uint32_t a = u < v ? u : v, b = u < v ? v : u;
-    for (uint32_t e = first[a]; e < first[a + 1]; e++)
-        if (c->EV[2 * (size_t)e + 1] == b) return e;
-    return NONE;
-}
-
-/* stage_sides' walk over every cycle, with first: each vertex's first edge in EV. */
-static int sides_walk(const lar2 *c, const uint32_t *first, uint32_t *side, stop_meter *stop,
-                      char *err, size_t el)
-{
-    for (size_t i = 0; i < 2 * c->ne; i++) side[i] = NONE;
-    size_t nf = c->nf;
-    for (size_t f = 0; f <= nf; f++) {
-        size_t ncy = f < nf ? 1 + c->hole_off[f + 1] - c->hole_off[f] : c->next;
-        if (stop_poll(stop, 64 * ncy)) return seterr(err, el, ARR_ECANCELED, "cancelled");
-        for (size_t j = 0; j < ncy; j++) {
-            uint32_t cy = f == nf  ? c->ext_cyc[j]
-                          : j == 0 ? c->face_cycle[f]
-                                   : c->hole_cyc[c->hole_off[f] + j - 1];
-            uint32_t o = c->cyc_off[cy], n = c->cyc_off[cy + 1] - o;
-            if (n < 2) continue;
-            for (uint32_t i = 0; i < n; i++) {
-                uint32_t u = c->cyc[o + i], v = c->cyc[o + (i + 1) % n];
-                uint32_t e = find_edge(c, first, u, v);
-                if (e == NONE)
-                    return seterr(err, el, ARR_EINTERNAL, "internal: a cycle steps off the edges");
-                uint32_t *s = &side[2 * (size_t)e + (u < v ? 0 : 1)];
-                if (*s != NONE && *s != (uint32_t)f)
-                    return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in two faces");
-                *s = (uint32_t)f;
-            }
-        }
-    }
-    for (size_t i = 0; i < 2 * c->ne; i++)
-        if (side[i] == NONE)
-            return seterr(err, el, ARR_EINTERNAL, "internal: an edge side in no face");
-    return ARR_OK;
-}
-
-/* side[2e] = the face left of e (walking EV[2e] -> EV[2e+1]), side[2e+1] the face right of it;
- * c->nf for the unbounded face.  Every cycle of the complex has its face on its left. */
-static int stage_sides(const lar2 *c, uint32_t *side, stop_meter *stop, char *err, size_t el)
-{
-    uint32_t *first = malloc((c->nv + 2) * sizeof *first);
-    if (!first) return seterr(err, el, ARR_ENOMEM, "out of memory");
-    for (size_t a = 0, e = 0; a <= c->nv; a++) {
-        while (e < c->ne && c->EV[2 * e] < a) e++;
-        first[a] = (uint32_t)e;
-    }
-    int rc = sides_walk(c, first, side, stop, err, el);
-    free(first);
-    return rc;
-}
-
 /* ---- membership --------------------------------------------------------------------------- */
 
 /* The rows of the nf + 1 faces (the last is EXT, empty) by member_walk() over the faces
@@ -212,18 +141,19 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
                                  tick, (void *)po, cancel);
     if (w < 0) goto done;
     if (w == 2) {
-        rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+        rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
         goto done;
     }
     if (w > 0) {
         if (bad == UINT32_MAX) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: faces out of reach of the walk");
         } else {
             const double *a = c->V + 2 * c->EV[2 * bad], *b = c->V + 2 * c->EV[2 * bad + 1];
-            rc = seterr(err, el, ARR_EINVAL,
-                        "polygons: the labels are inconsistent after snapping: the faces beside "
-                        "the edge (%.17g, %.17g)-(%.17g, %.17g) get two memberships",
-                        a[0], a[1], b[0], b[1]);
+            rc = util_seterr(
+                err, el, ARR_EINVAL,
+                "polygons: the labels are inconsistent after snapping: the faces beside "
+                "the edge (%.17g, %.17g)-(%.17g, %.17g) get two memberships",
+                a[0], a[1], b[0], b[1]);
         }
         goto done;
     }
@@ -232,7 +162,7 @@ static int stage_membership(bool2_result *out, const uint32_t *side, const arr2_
     out->memw = rows.wind;
     rc = ARR_OK;
 done:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(aoff);
     free(nb);
     free(ed);
@@ -241,15 +171,6 @@ done:
 }
 
 /* ---- select, groups ----------------------------------------------------------------------- */
-
-static uint32_t uf_find(uint32_t *p, uint32_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
 
 /* sel[f] (1: selected) for the nf + 1 faces (EXT never selected); out->cells.  The expression is
  * evaluated on each face's sparse row (bool_tree). */
@@ -290,8 +211,7 @@ static void stage_groups(const lar2 *c, const uint32_t *side, const uint32_t *la
     for (size_t e = 0; e < c->ne; e++) {
         uint32_t a = side[2 * e], b = side[2 * e + 1];
         if (a != b && lab[a] && lab[a] == lab[b]) {
-            uint32_t ra = uf_find(grp, a), rb = uf_find(grp, b);
-            if (ra != rb) grp[ra < rb ? rb : ra] = ra < rb ? ra : rb; /* the smaller face leads */
+            uf_union(grp, a, b); /* the smaller face leads */
         }
     }
     for (size_t f = 0; f <= c->nf; f++) grp[f] = uf_find(grp, (uint32_t)f);
@@ -366,43 +286,52 @@ done:
 
 /* ---- boundary rings ----------------------------------------------------------------------- */
 
-typedef struct ray {
-    uint32_t v, grp; /* at vertex v, of group grp */
-    uint32_t h;      /* boundary half-edge 2e (EV0 -> EV1) or 2e+1 (the other way) */
-    int in;          /* 1: h ends at v; 0: h starts at v */
-    int64_t dx, dy;  /* from v toward h's other end, grid units */
-} ray;
-
-static int ray_half(const ray *r)
-{
-    return r->dy < 0 || (r->dy == 0 && r->dx < 0);
-}
-
-/* By vertex, group, then angle counter-clockwise from +x (exact). */
-static int ray_cmp(const void *pa, const void *pb)
-{
-    const ray *a = pa, *b = pb;
-    if (a->v != b->v) return a->v < b->v ? -1 : 1;
-    if (a->grp != b->grp) return a->grp < b->grp ? -1 : 1;
-    int ha = ray_half(a), hb = ray_half(b);
-    if (ha != hb) return ha - hb;
-    i128 x = (i128)a->dx * b->dy - (i128)a->dy * b->dx;
-    return x > 0 ? -1 : x < 0 ? 1 : 0;
-}
-
 static uint32_t he_tail(const lar2 *c, uint32_t h)
 {
-    return c->EV[2 * (size_t)(h >> 1) + (h & 1)];
+    return c->EV[h];
 }
 
-static uint32_t he_head(const lar2 *c, uint32_t h)
+/* Is half-edge x on the boundary of group gr: a labelled face of gr on its left, another label
+ * on its right? */
+static inline int bound_of(const uint32_t *side, const uint32_t *lab, const uint32_t *grp,
+                           uint32_t x, uint32_t gr)
 {
-    return c->EV[2 * (size_t)(h >> 1) + 1 - (h & 1)];
+    uint32_t f = side[x];
+    return lab[f] && lab[f] != lab[side[x ^ 1]] && grp[f] == gr;
+}
+
+/* next[h] for every boundary half-edge h (NONE for the others): at h's head v, the first
+ * half-edge of h's group counter-clockwise after h's twin in the kernel's order around v
+ * (lar2.he_out), which must leave v on the boundary (the rays of one group alternate in and out
+ * around a vertex).  Returns ARR_OK, or an error with its message. */
+static int ring_next(const lar2 *c, const uint32_t *side, const uint32_t *lab, const uint32_t *grp,
+                     uint32_t *next, stop_meter *stop, char *err, size_t el)
+{
+    for (size_t h = 0; h < 2 * c->ne; h++) {
+        next[h] = NONE;
+        uint32_t f = side[h];
+        if (!lab[f] || lab[f] == lab[side[h ^ 1]]) continue;
+        uint32_t gr = grp[f], t = (uint32_t)h ^ 1, v = he_tail(c, t);
+        const uint32_t *o = c->he_out + c->he_off[v];
+        uint32_t d = c->he_off[v + 1] - c->he_off[v], j = c->he_pos[t];
+        if (stop_poll(stop, d)) return util_seterr(err, el, ARR_ECANCELED, "cancelled");
+        for (uint32_t k = 0; k < d && next[h] == NONE; k++) {
+            j = j + 1 == d ? 0 : j + 1;
+            if (bound_of(side, lab, grp, o[j], gr))
+                next[h] = o[j];
+            else if (bound_of(side, lab, grp, o[j] ^ 1, gr))
+                return util_seterr(
+                    err, el, ARR_EINTERNAL,
+                    "internal: the result's boundary does not alternate at a vertex");
+        }
+    }
+    return ARR_OK;
 }
 
 /* The rings of the labelled faces: g->rc_off, rv, re (every ring with its faces on its left),
  * and ring_grp (the group of each ring).  An edge between two labels is on a ring of each
- * (once each way), an edge between a label and none on one. */
+ * (once each way), an edge between a label and none on one.  At each vertex a boundary
+ * half-edge coming in is followed by the next one of its group counter-clockwise (ring_next). */
 static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, const uint32_t *lab,
                        const uint32_t *grp, uint32_t **ring_grp, stop_meter *stop, char *err,
                        size_t el)
@@ -412,7 +341,6 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
         uint32_t l = lab[side[2 * e]], r = lab[side[2 * e + 1]];
         if (l != r) nb += (l != 0) + (r != 0);
     }
-    ray *rays = malloc((2 * nb + 1) * sizeof *rays);
     uint32_t *next = malloc((2 * c->ne + 1) * sizeof *next);
     uint8_t *done = calloc(2 * c->ne + 1, 1);
     g->rc_off = malloc((nb + 1) * sizeof *g->rc_off);
@@ -420,78 +348,22 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
     g->re = malloc((nb + 1) * sizeof *g->re);
     *ring_grp = malloc((nb + 1) * sizeof **ring_grp);
     int rc = ARR_ENOMEM;
-    kv *order = NULL;
-    ray *sorted = NULL;
-    if (!rays || !next || !done || !g->rc_off || !g->rv || !g->re || !*ring_grp) goto fail;
-    size_t nr = 0;
-    for (size_t e = 0; e < c->ne; e++) {
-        uint32_t l = side[2 * e], r = side[2 * e + 1];
-        if (lab[l] == lab[r]) continue;
-        for (int s = 0; s < 2; s++) { /* the half-edge with face s ? r : l on its left */
-            uint32_t f = s ? r : l;
-            if (!lab[f]) continue;
-            uint32_t h = (uint32_t)(2 * e + s), gr = grp[f];
-            uint32_t t = he_tail(c, h), d = he_head(c, h);
-            int64_t dx = c->VG[2 * d] - c->VG[2 * t], dy = c->VG[2 * d + 1] - c->VG[2 * t + 1];
-            rays[nr++] = (ray){t, gr, h, 0, dx, dy};
-            rays[nr++] = (ray){d, gr, h, 1, -dx, -dy};
-        }
-    }
-    /* by (vertex, group) in a radix sort, then each run of rays by angle (runs are short: the
-     * group's boundary edges at one vertex) */
-    order = malloc((nr + 1) * sizeof *order);
-    sorted = malloc((nr + 1) * sizeof *sorted);
-    if (!order || !sorted) goto fail;
-    for (size_t i = 0; i < nr; i++)
-        order[i] = (kv){(uint64_t)rays[i].v << 32 | rays[i].grp, (uint32_t)i};
-    if (sort_kv(order, nr)) goto fail;
-    for (size_t i = 0; i < nr; i++) sorted[i] = rays[order[i].v];
-    free(rays);
-    rays = sorted;
-    sorted = NULL;
-    for (size_t i = 0, j; i < nr; i = j) {
-        for (j = i + 1; j < nr && order[j].k == order[i].k; j++) continue;
-        if (stop_poll(stop, (j - i) * (j - i))) {
-            rc = seterr(err, el, ARR_ECANCELED, "cancelled");
-            goto fail;
-        }
-        for (size_t k = i + 1; k < j; k++) {
-            ray x = rays[k];
-            size_t m = k;
-            for (; m > i && ray_cmp(&rays[m - 1], &x) > 0; m--) rays[m] = rays[m - 1];
-            rays[m] = x;
-        }
-    }
-    /* an edge coming in is followed by the next ray of its group counter-clockwise: an edge
-     * going out (the rays of one group alternate around a vertex) */
-    for (size_t i = 0; i < 2 * c->ne; i++) next[i] = NONE;
-    for (size_t i = 0, j; i < nr; i = j) {
-        for (j = i + 1; j < nr && rays[j].v == rays[i].v && rays[j].grp == rays[i].grp; j++)
-            continue;
-        for (size_t k = i; k < j; k++) {
-            if (!rays[k].in) continue;
-            const ray *o = &rays[k + 1 < j ? k + 1 : i];
-            if (o->in) {
-                rc = seterr(err, el, ARR_EINTERNAL,
-                            "internal: the result's boundary does not alternate at a vertex");
-                goto fail;
-            }
-            next[rays[k].h] = o->h;
-        }
-    }
+    if (!next || !done || !g->rc_off || !g->rv || !g->re || !*ring_grp) goto fail;
+    if ((rc = ring_next(c, side, lab, grp, next, stop, err, el)) != ARR_OK) goto fail;
     size_t nring = 0, k = 0;
     g->rc_off[0] = 0;
     for (size_t e = 0; e < c->ne; e++)
         for (uint32_t h = (uint32_t)(2 * e); h <= 2 * e + 1; h++) {
             if (next[h] == NONE || done[h]) continue;
             if (stop_poll(stop, 1)) {
-                rc = seterr(err, el, ARR_ECANCELED, "cancelled");
+                rc = util_seterr(err, el, ARR_ECANCELED, "cancelled");
                 goto fail;
             }
             uint32_t x = h;
             do {
                 if (done[x] || next[x] == NONE || k >= nb) {
-                    rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring is not closed");
+                    rc = util_seterr(err, el, ARR_EINTERNAL,
+                                     "internal: a boundary ring is not closed");
                     goto fail;
                 }
                 done[x] = 1;
@@ -500,17 +372,14 @@ static int stage_rings(const lar2 *c, bool2_rings *g, const uint32_t *side, cons
                 k++;
                 x = next[x];
             } while (x != h);
-            uint32_t s = side[2 * (size_t)(h >> 1) + (h & 1)]; /* the labelled face */
+            uint32_t s = side[h]; /* the labelled face */
             (*ring_grp)[nring] = grp[s];
             g->rc_off[++nring] = (uint32_t)k;
         }
     g->nrcyc = nring;
     rc = ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
-    free(rays);
-    free(sorted);
-    free(order);
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(next);
     free(done);
     return rc;
@@ -547,7 +416,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
         i128 a = ring_area2(c, out, k);
         ccw[k] = a > 0;
         if (a == 0) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a boundary ring of zero area");
             goto done;
         }
     }
@@ -556,7 +425,8 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     for (size_t k = 0; k < nr; k++)
         if (ccw[k]) {
             if (gi[ring_grp[k]] != NONE) {
-                rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon with two shells");
+                rc = util_seterr(err, el, ARR_EINTERNAL,
+                                 "internal: a result polygon with two shells");
                 goto done;
             }
             gi[ring_grp[k]] = 0;
@@ -566,7 +436,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     for (size_t k = 0; k < nr; k++) {
         uint32_t q = gi[ring_grp[k]];
         if (q == NONE) {
-            rc = seterr(err, el, ARR_EINTERNAL, "internal: a result polygon without a shell");
+            rc = util_seterr(err, el, ARR_EINTERNAL, "internal: a result polygon without a shell");
             goto done;
         }
         if (ccw[k])
@@ -596,7 +466,7 @@ static int stage_polygons(const lar2 *c, bool2_rings *out, const uint32_t *ring_
     *area_out = area > 0 ? (double)(area / 2) : 0;
     rc = ARR_OK;
 done:
-    if (rc == ARR_ENOMEM) seterr(err, el, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, el, rc, "out of memory");
     free(gi);
     free(ccw);
     return rc;
@@ -609,19 +479,20 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
 {
     static const arr2_opts defaults = {0};
     double *seg = NULL;
-    uint32_t *tag = NULL, *side = NULL, *grp = NULL, *ring_grp = NULL, *sel = NULL;
+    uint32_t *tag = NULL, *grp = NULL, *ring_grp = NULL, *sel = NULL;
     size_t n = 0;
     int rc = ARR_ENOMEM;
     memset(out, 0, sizeof *out);
     if (err && errlen) err[0] = 0;
     if (in->npoly > BOOL2_MAX_INPUTS)
-        return seterr(err, errlen, ARR_ELIMIT, "polygons: %zu, more than the limit of %u",
-                      in->npoly, BOOL2_MAX_INPUTS);
+        return util_seterr(err, errlen, ARR_ELIMIT, "polygons: %zu, more than the limit of %u",
+                           in->npoly, BOOL2_MAX_INPUTS);
     if (stage_segments(in, &seg, &tag, &n)) goto fail;
     arr2_opts ao = opts ? *opts : defaults;
     ao.tags = tag;
     ao.signed_tags = in->fill != BOOL2_FILL_ODD;
     ao.input_coords = 1;
+    ao.half_edges = 1; /* the sides of the edges and the order around the vertices, kept */
     if ((rc = arr2_build(seg, n, &ao, &out->c, err, errlen)) != ARR_OK) goto fail;
     free(seg);
     free(tag);
@@ -630,16 +501,16 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     size_t ni = in->npoly, nf = c->nf;
     out->ninputs = ni;
     rc = ARR_ENOMEM;
-    side = malloc((2 * c->ne + 1) * sizeof *side);
+    const uint32_t *side = c->he_face; /* side[h]: the face left of half-edge h */
     sel = malloc((nf + 1) * sizeof *sel);
     grp = malloc((nf + 1) * sizeof *grp);
-    if (!side || !sel || !grp) goto fail;
+    if (!sel || !grp) goto fail;
         /* the stages after the arrangement's, a cancel read between them and each stage's end
          * reported */
 #define BOOL2_CANCEL_POINT                                                                         \
     do {                                                                                           \
         if (ao.cancel && atomic_load(ao.cancel)) {                                                 \
-            rc = seterr(err, errlen, ARR_ECANCELED, "cancelled");                                  \
+            rc = util_seterr(err, errlen, ARR_ECANCELED, "cancelled");                             \
             goto fail;                                                                             \
         }                                                                                          \
     } while (0)
@@ -649,7 +520,6 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
         BOOL2_CANCEL_POINT;                                                                        \
     } while (0)
     stop_meter stop = {.flag = ao.cancel};
-    if ((rc = stage_sides(c, side, &stop, err, errlen)) != ARR_OK) goto fail;
     BOOL2_CANCEL_POINT;
     if ((rc = stage_membership(out, side, &ao, err, errlen)) != ARR_OK) goto fail;
     BOOL2_PROGRESS("membership", 1);
@@ -685,16 +555,15 @@ int bool2_build(const bool2_input *in, const bool_expr *op, const arr2_opts *opt
     BOOL2_PROGRESS("polygons", 1);
 #undef BOOL2_PROGRESS
 #undef BOOL2_CANCEL_POINT
-    free(side);
+    lar2_free_half_edges(c); /* walked: the result keeps the complex only */
     free(sel);
     free(grp);
     free(ring_grp);
     return ARR_OK;
 fail:
-    if (rc == ARR_ENOMEM) seterr(err, errlen, rc, "out of memory");
+    if (rc == ARR_ENOMEM) util_seterr(err, errlen, rc, "out of memory");
     free(seg);
     free(tag);
-    free(side);
     free(sel);
     free(grp);
     free(ring_grp);

@@ -52,7 +52,28 @@ int member_walk_wind(size_t n, uint32_t root, const uint32_t *aoff, const uint32
                      const uint32_t *tags, const int32_t *dw, member_rows *rows, uint32_t *bad_el,
                      void (*tick)(void *udata, double f), void *udata, const atomic_int *cancel);
 
+/* The scratch of member_walk_ws, kept between walks (the 3D planes walk many small
+ * arrangements, one after the other, on one thread): zero-initialise it, free it with
+ * member_ws_free.  Not shared between threads. */
+typedef struct member_ws {
+    void *blk; /* by cell: start, len, queue, seen */
+    uint32_t *buf, *ti, *off, *idx;
+    int32_t *bw, *tw, *wind;
+    size_t capblk, capbuf, capti, capoff, capidx, capbw, captw, capwind;
+} member_ws;
+
+/* member_walk over ws's scratch: the same rows, but borrowed from ws (valid until the next walk
+ * on ws or member_ws_free; not freed with member_rows_free).  Returns as member_walk. */
+int member_walk_ws(member_ws *ws, size_t n, uint32_t root, const uint32_t *aoff, const uint32_t *nb,
+                   const uint32_t *el, const uint32_t *toff, const uint32_t *tags,
+                   member_rows *rows, uint32_t *bad_el);
+void member_ws_free(member_ws *ws);
+
 void member_rows_free(member_rows *r);
+
+/* out = a xor b of two ascending lists (each element once): ascending, each once; returns its
+ * length (at most na + nb; out may not overlap a or b). */
+size_t member_symdiff(const uint32_t *a, size_t na, const uint32_t *b, size_t nb, uint32_t *out);
 
 /* The fill rules (2D and 3D alike): where a cell lies in an input, by the input's winding
  * number w about it. */

@@ -531,3 +531,33 @@ int tri_tri_apart(const int64_t *const p_[3], const int64_t *const q_[3])
     if (sp[b] < 0) t = p[1], p[1] = p[2], p[2] = t;
     return orient3_grid(p[0], p[1], q[0], q[1]) > 0 || orient3_grid(p[0], p[2], q[2], q[0]) > 0;
 }
+
+/* ---- planar predicates -----------------------------------------------------------------------
+ * The bound.  An approximation x of an exact coordinate X (pred.h: GRID exact, LPI and TPI
+ * within XPT_REL |x| = 2^-50 |x|) has |X - x| <= 2^-50 |x|.  The filters widen by
+ *     m = PLANAR_REL (|a| + |b|) + PLANAR_ABS,   PLANAR_REL = 2^-45, PLANAR_ABS = 2^-30,
+ * computed in doubles: the sum and the product round up to 2u relative (u = 2^-53), so the
+ * computed m is at least (1 - 2u) 2^-45 max(|a|, |b|) >= 2^-50 max(|a|, |b|) with a factor 31
+ * to spare, which also covers the rounding of lo - m and hi + m (at most u |lo - m|, below
+ * 2^-52 |lo| + u m).  PLANAR_ABS keeps a floor of room where the coordinates are near zero
+ * (there the relative bound already holds; the floor costs nothing and guards subnormals).
+ * In grid units (xpt_grid_box_fast) the floor is one unit, and floor/ceil only widen. */
+#define PLANAR_REL 0x1p-45
+#define PLANAR_ABS 0x1p-30
+
+void span_fast(double a, double b, double *lo, double *hi)
+{
+    double l = a < b ? a : b, h = a < b ? b : a;
+    double m = (fabs(l) + fabs(h)) * PLANAR_REL + PLANAR_ABS;
+    *lo = l - m;
+    *hi = h + m;
+}
+
+void xpt_grid_box_fast(const xpt *p, int64_t lo[3], int64_t hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        double x = p->x[a], m = fabs(x) * PLANAR_REL + 1;
+        lo[a] = (int64_t)floor(x - m);
+        hi[a] = (int64_t)ceil(x + m);
+    }
+}

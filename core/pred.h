@@ -162,4 +162,17 @@ static inline int orient3_grid(const int64_t *a, const int64_t *b, const int64_t
  * a vertex lies on the other's plane (touching and coplanar cases are left to the caller). */
 int tri_tri_apart(const int64_t *const p[3], const int64_t *const q[3]);
 
+/* ---- planar predicates ------------------------------------------------------------------
+ * Filters of the arrangement of one plane (core/arr3_plane.c) on the points' approximations,
+ * each conservative: a box or an answer that holds for the exact points, whatever the
+ * approximations' errors (the bound is derived once, in pred.c).  "_fast": they may say
+ * "maybe" where the exact answer is "no"; never "no" where it is "yes". */
+
+/* The closed interval [*lo, *hi] holding the exact coordinate (on one axis) of every point of a
+ * segment whose ends' approximations on that axis are a and b. */
+void span_fast(double a, double b, double *lo, double *hi);
+
+/* The integer box [lo, hi] (grid units, one unit of room) holding the exact point p. */
+void xpt_grid_box_fast(const xpt *p, int64_t lo[3], int64_t hi[3]);
+
 #endif

@@ -176,3 +176,45 @@ int sort_kv_xyz(kv *a, size_t n, const int64_t *xyz)
     }
     return 0;
 }
+
+int sort_u64_u32(uint64_t *key, uint32_t *val, size_t n)
+{
+    uint64_t *kb = malloc((n ? n : 1) * sizeof *kb);
+    uint32_t *vb = malloc((n ? n : 1) * sizeof *vb);
+    if (!kb || !vb) {
+        free(kb);
+        free(vb);
+        return -1;
+    }
+    uint64_t *ks = key, *kd = kb;
+    uint32_t *vs = val, *vd = vb;
+    for (int part = 0; part < 2; part++) { /* the values' bytes, then the keys' */
+        uint64_t all_or = 0, all_and = ~(uint64_t)0;
+        for (size_t i = 0; i < n; i++) {
+            uint64_t x = part ? ks[i] : vs[i];
+            all_or |= x, all_and &= x;
+        }
+        for (int pass = 0; pass < (part ? 8 : 4); pass++) {
+            int sh = 8 * pass;
+            if (((all_or ^ all_and) >> sh & 255) == 0) continue;
+            size_t cnt[257] = {0};
+            for (size_t i = 0; i < n; i++) cnt[((part ? ks[i] : vs[i]) >> sh & 255) + 1]++;
+            for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+            for (size_t i = 0; i < n; i++) {
+                size_t d = cnt[(part ? ks[i] : vs[i]) >> sh & 255]++;
+                kd[d] = ks[i], vd[d] = vs[i];
+            }
+            uint64_t *kt = ks;
+            ks = kd, kd = kt;
+            uint32_t *vt = vs;
+            vs = vd, vd = vt;
+        }
+    }
+    if (ks != key) {
+        memcpy(key, ks, n * sizeof *key);
+        memcpy(val, vs, n * sizeof *val);
+    }
+    free(kb);
+    free(vb);
+    return 0;
+}

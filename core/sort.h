@@ -30,4 +30,9 @@ int sort_ipt_stop(ipt *a, size_t n, const atomic_int *stop);
  * an LSD pass of sort_kv per coordinate, z first; stable.  The keys a[i].k are overwritten. */
 int sort_kv_xyz(kv *a, size_t n, const int64_t *xyz);
 
+/* Parallel arrays key[n] and val[n] sorted together by (key, then val): LSD radix on bytes, the
+ * values' 4 first, then the keys' 8, each pass stable and skipped when its byte is the same
+ * everywhere (arr2's edges with their tags).  0, or -1 out of memory (left as they were). */
+int sort_u64_u32(uint64_t *key, uint32_t *val, size_t n);
+
 #endif

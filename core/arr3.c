@@ -26,8 +26,8 @@
  *           cells, exact equality inside), keeping the simplest definition (a vertex before an
  *           LPI); each plane's new points are deduplicated again after the planes.
  *
- * Tools: util_seterr, uf_find/uf_union, u32_cmp of core/util.h and mem_grow of core/mem.h (the
- * a3_uf_* and a3_cmp_u32 of arr3_int.h are their old names, kept for the other arr3 files).
+ * Tools: util_seterr, uf_find/uf_union, u32_cmp of core/util.h and mem_grow of core/mem.h, as
+ * in every core file.
  *
  * Threads: the cuts (in chunks of pairs), the planes and parts of the cells (arr3_cells.c) run
  * on par_for(); everything else runs on the calling thread.  Results do not depend on the

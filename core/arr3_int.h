@@ -202,12 +202,6 @@ static inline const uint32_t *a3_piece_tri(const a3 *A, const piece *P)
 typedef int (*a3_eq_fn)(const void *ctx, uint32_t a, uint32_t b);
 int a3_firsts(int threads, size_t n, const uint64_t *hash, a3_eq_fn eq, const void *ctx,
               uint32_t *first);
-/* qsort's comparison of uint32_t, ascending: util.h's u32_cmp (this name stays for the files
- * that still call it). */
-static inline int a3_cmp_u32(const void *pa, const void *pb)
-{
-    return u32_cmp(pa, pb);
-}
 #define A3_PUSH(arr, n, cap, val)                                                                  \
     (mem_grow(&(arr), &(cap), (n) + 1, sizeof *(arr)) ? -1 : ((arr)[(n)++] = (val), 0))
 uint64_t a3_mix64(uint64_t x);
@@ -225,15 +219,6 @@ typedef struct a3_span {
     double lo, hi;
 } a3_span;
 void a3_span_tick(void *span, double f);
-/* util.h's union-find (the smaller root wins), under the names the other files still call. */
-static inline uint32_t a3_uf_find(uint32_t *p, uint32_t x)
-{
-    return uf_find(p, x);
-}
-static inline void a3_uf_union(uint32_t *p, uint32_t a, uint32_t b)
-{
-    uf_union(p, a, b);
-}
 
 /* Deduplication of points by position: a hash over cells of one grid unit, exact equality
  * inside.  Points are added with their id; pset_find returns the id of an equal point or NONE. */

@@ -71,6 +71,19 @@ typedef struct store_recount {
     long long tot_count, tot_bytes, count, bytes, bad_size, bad_off, orphans;
 } store_recount;
 
+/* The recount's statement up to bad_off, the same SQL in both backends: the totals row (t),
+ * the table's count and sum, the results whose chunks do not add up to their size, the chunks
+ * that do not start where the one before ends.  A backend adds its further columns and
+ * " FROM result_totals t WHERE t.id = 0". */
+#define STORE_SQL_RECOUNT                                                                          \
+    "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"                                     \
+    " (SELECT coalesce(sum(bytes), 0) FROM results),"                                              \
+    " (SELECT count(*) FROM results r WHERE r.bytes <> (SELECT coalesce(sum(length(c.body)), 0)"   \
+    "  FROM result_chunks c WHERE c.hash = r.hash)),"                                              \
+    " (SELECT count(*) FROM (SELECT off, sum(length(body)) OVER (PARTITION BY hash ORDER BY off"   \
+    "  ROWS UNBOUNDED PRECEDING) - length(body) AS start FROM result_chunks"                       \
+    "  WHERE hash IN (SELECT hash FROM results)) x WHERE off <> start)"
+
 typedef struct store_be_ops {
     const char *name; /* "sqlite", "postgresql": the first word of every message */
 

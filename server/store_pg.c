@@ -31,7 +31,8 @@
  *     made anew it reports STORE_EV_RESET, since events may have been lost meanwhile.
  *
  * Threads: any thread may call any op; each thread gets its own connection (made on its first
- * call, made anew after it is lost), found through a pthread key, as in store_sqlite.c.  A
+ * call, made anew after it is lost), kept by the per-thread registry of server/store_conn.h,
+ * as in store_sqlite.c.  A
  * connection that fails is given up; the next op on that thread connects again, at most twice a
  * second, so a database that is away costs each op one quick failure (STORE_ERR), the daemon
  * answers 503, and it recovers by itself when the database is back.
@@ -40,11 +41,11 @@
 
 #include "core/util.h"
 #include "server/store_be.h"
+#include "server/store_conn.h"
 
 #include <errno.h>
 #include <libpq-fe.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -103,21 +104,17 @@ typedef struct pg_store pg_store;
 typedef struct store_conn pg_conn;
 
 struct store_conn {
+    store_conn_link link; /* first member: in the store's registry (server/store_conn.h) */
     PGconn *db;
-    int one;              /* in a STORE_TX_ONE frame: autocommit, nothing to end */
-    double failed_at;     /* when a connect last failed (0: never) */
-    pg_store *owner;      /* the store whose list holds this conn */
-    pg_conn *prev, *next; /* in owner->conns; guarded by owner->mu */
+    int one;          /* in a STORE_TX_ONE frame: autocommit, nothing to end */
+    double failed_at; /* when a connect last failed (0: never) */
 };
 
 struct pg_store {
     store base; /* first member */
     char *conninfo;
-    pthread_key_t key;
-    pthread_mutex_t mu; /* guards conns */
-    pg_conn *conns;
-    int key_made;
-    PGconn *listen; /* wait_event's own connection (one thread calls wait_event) */
+    store_conns conns; /* every thread's pg_conn */
+    PGconn *listen;    /* wait_event's own connection (one thread calls wait_event) */
 };
 
 /* libpq's message, on one line */
@@ -148,18 +145,13 @@ static void pg_conn_close(pg_conn *c)
     free(c);
 }
 
-static void pg_conn_release(void *p)
+/* The registry's open: a thread's conn, not yet connected (pg_conn_get connects it). */
+static store_conn *pg_conn_new(void *ctx, char *err, size_t errlen)
 {
-    pg_conn *c = p;
-    pg_store *s = c->owner;
-    pthread_mutex_lock(&s->mu);
-    if (c->prev)
-        c->prev->next = c->next;
-    else if (s->conns == c)
-        s->conns = c->next;
-    if (c->next) c->next->prev = c->prev;
-    pthread_mutex_unlock(&s->mu);
-    pg_conn_close(c);
+    (void)ctx;
+    pg_conn *c = calloc(1, sizeof *c);
+    if (!c) util_seterr(err, errlen, STORE_ERR, "postgresql: out of memory");
+    return c;
 }
 
 static void pg_notice(void *arg, const char *msg)
@@ -191,25 +183,8 @@ static PGconn *pg_connect(pg_store *s, char *err, size_t errlen)
  * database cannot be reached. */
 static pg_conn *pg_conn_get(pg_store *s, char *err, size_t errlen)
 {
-    pg_conn *c = pthread_getspecific(s->key);
-    if (!c) {
-        c = calloc(1, sizeof *c);
-        if (!c) {
-            util_seterr(err, errlen, STORE_ERR, "postgresql: out of memory");
-            return NULL;
-        }
-        c->owner = s;
-        if (pthread_setspecific(s->key, c) != 0) {
-            free(c);
-            util_seterr(err, errlen, STORE_ERR, "postgresql: pthread_setspecific failed");
-            return NULL;
-        }
-        pthread_mutex_lock(&s->mu);
-        c->next = s->conns;
-        if (s->conns) s->conns->prev = c;
-        s->conns = c;
-        pthread_mutex_unlock(&s->mu);
-    }
+    pg_conn *c = store_conns_get(&s->conns, err, errlen);
+    if (!c) return NULL;
     if (c->db && PQstatus(c->db) != CONNECTION_OK) { /* lost: made anew below */
         PQfinish(c->db);
         c->db = NULL;
@@ -980,14 +955,8 @@ static int pg_be_recount(pg_conn *c, store_recount *v, char *err, size_t errlen)
 {
     PGresult *r = pg_rows(
         c,
-        "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
-        " (SELECT coalesce(sum(bytes), 0) FROM results),"
-        " (SELECT count(*) FROM results r WHERE r.bytes <> (SELECT coalesce(sum(length(c.body)), 0)"
-        "  FROM result_chunks c WHERE c.hash = r.hash)),"
-        " (SELECT count(*) FROM (SELECT off, sum(length(body)) OVER (PARTITION BY hash ORDER BY off"
-        "  ROWS UNBOUNDED PRECEDING) - length(body) AS start FROM result_chunks"
-        "  WHERE hash IN (SELECT hash FROM results)) x WHERE off <> start),"
-        " (SELECT count(*) FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results))"
+        STORE_SQL_RECOUNT
+        ", (SELECT count(*) FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results))"
         " FROM result_totals t WHERE t.id = 0",
         NULL, 0, "check", err, errlen);
     if (!r) return STORE_ERR;
@@ -1025,18 +994,8 @@ static void pg_be_close(store *base)
 {
     pg_store *s = (pg_store *)base;
     if (!s) return;
-    if (s->key_made) pthread_key_delete(s->key);
-    pthread_mutex_lock(&s->mu);
-    pg_conn *c = s->conns;
-    s->conns = NULL;
-    pthread_mutex_unlock(&s->mu);
-    while (c) {
-        pg_conn *next = c->next;
-        pg_conn_close(c);
-        c = next;
-    }
+    store_conns_free(&s->conns);
     if (s->listen) PQfinish(s->listen);
-    pthread_mutex_destroy(&s->mu);
     free(s->conninfo);
     free(s);
 }
@@ -1118,7 +1077,7 @@ store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_s
                      char *err, size_t errlen)
 {
     pg_store *s = calloc(1, sizeof *s);
-    int mu_made = 0;
+    const char *what;
     if (!s || !(s->conninfo = strdup(conninfo))) {
         util_seterr(err, errlen, STORE_ERR, "postgresql open: out of memory");
         goto fail;
@@ -1129,13 +1088,10 @@ store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_s
     s->base.budget = budget_bytes;
     s->base.touch_seconds = touch_seconds > 0 ? touch_seconds : 0;
     s->base.put_batch = 0; /* a put is one transaction (see the file comment) */
-    if (pthread_mutex_init(&s->mu, NULL) != 0) goto fail;
-    mu_made = 1;
-    if (pthread_key_create(&s->key, pg_conn_release) != 0) {
-        util_seterr(err, errlen, STORE_ERR, "postgresql open: pthread_key_create failed");
+    if ((what = store_conns_init(&s->conns, pg_conn_new, pg_conn_close, s, "postgresql"))) {
+        util_seterr(err, errlen, STORE_ERR, "postgresql open: %s failed", what);
         goto fail;
     }
-    s->key_made = 1;
     /* a database that is still starting (a compose stack's) is waited for, PG_OPEN_WAIT_S */
     pg_conn *c = NULL;
     for (double t0 = pg_now();;) {
@@ -1149,13 +1105,7 @@ store *store_pg_open(const char *conninfo, uint64_t budget_bytes, double touch_s
     return &s->base;
 fail:
     if (s) {
-        if (s->key_made) {
-            pg_conn *c = pthread_getspecific(s->key);
-            pthread_setspecific(s->key, NULL);
-            pthread_key_delete(s->key);
-            pg_conn_close(c);
-        }
-        if (mu_made) pthread_mutex_destroy(&s->mu);
+        store_conns_free(&s->conns);
         free(s->conninfo);
         free(s);
     }

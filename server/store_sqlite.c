@@ -56,14 +56,15 @@
  *     upgrade a read lock half-way (SQLITE_BUSY_SNAPSHOT).  Readers never block in WAL mode.
  *
  * Threads: any thread may call any op.  Each thread gets its own connection (opened on its
- * first call, SQLITE_OPEN_NOMUTEX, with its own cache of prepared statements), found through a
- * pthread key whose destructor closes it when the thread exits.  The store keeps the list of
- * all its connections under mu, so that close() can finalize and close every one of them;
- * close() must therefore not run while another thread still uses the store or is exiting
+ * first call, SQLITE_OPEN_NOMUTEX, with its own cache of prepared statements), kept by the
+ * per-thread registry of server/store_conn.h: a pthread key whose destructor closes it when
+ * the thread exits, and the list of all of them, so that close() can finalize and close every
+ * one; close() must therefore not run while another thread still uses the store or is exiting
  * after having used it (the daemon closes the store after joining its workers and stopping
- * the HTTP server).  The ops never hold mu while talking to SQLite.  A callback of
- * jobs_unfinished() runs with no statement active, so it may call any op of the same store.
- * One daemon uses a file at a time (opening deletes the chunks of puts under way elsewhere).
+ * the HTTP server).  mu guards last_stamp only; no lock is held while talking to SQLite.  A
+ * callback of jobs_unfinished() runs with no statement active, so it may call any op of the
+ * same store.  One daemon uses a file at a time (opening deletes the chunks of puts under way
+ * elsewhere).
  *
  * Ownership: strings passed in are borrowed; error, request and body handed out are malloc'd
  * copies, NUL-terminated one byte past their length, which the caller frees.
@@ -72,6 +73,7 @@
 
 #include "core/util.h"
 #include "server/store_be.h"
+#include "server/store_conn.h"
 
 #include <openssl/evp.h>
 #include <pthread.h>
@@ -283,17 +285,8 @@ static const char *const sq_sql_text[SQ_NSQL] = {
         "SELECT body, sha FROM result_chunks WHERE hash IN (SELECT hash FROM results)",
     [SQ_RESULT_TOUCH] = "UPDATE results SET last_used = ?2 WHERE hash = ?1",
     [SQ_INTEGRITY] = "PRAGMA integrity_check",
-    /* the totals row, the table's count and sum, the results whose chunks do not add up to
-     * their size, the chunks that do not start where the one before ends */
-    [SQ_TOTALS_RECOUNT] =
-        "SELECT t.count, t.bytes, (SELECT count(*) FROM results),"
-        " (SELECT coalesce(sum(bytes), 0) FROM results),"
-        " (SELECT count(*) FROM results r WHERE r.bytes <> (SELECT coalesce(sum(length(c.body)), 0)"
-        "  FROM result_chunks c WHERE c.hash = r.hash)),"
-        " (SELECT count(*) FROM (SELECT off, sum(length(body)) OVER (PARTITION BY hash ORDER BY off"
-        "  ROWS UNBOUNDED PRECEDING) - length(body) AS start FROM result_chunks"
-        "  WHERE hash IN (SELECT hash FROM results)) WHERE off <> start)"
-        " FROM result_totals t WHERE t.id = 0",
+    /* the columns up to bad_off (no count of chunks of no result: a put under way has some) */
+    [SQ_TOTALS_RECOUNT] = STORE_SQL_RECOUNT " FROM result_totals t WHERE t.id = 0",
 };
 
 typedef struct sq_store sq_store;
@@ -301,20 +294,18 @@ typedef struct sq_store sq_store;
 typedef struct store_conn sq_conn;
 
 struct store_conn {
+    store_conn_link link;        /* first member: in the store's registry (server/store_conn.h) */
     sqlite3 *db;                 /* used by one thread only (or by close) */
     sqlite3_stmt *stmt[SQ_NSQL]; /* prepared on first use, finalized when the conn closes */
-    sq_store *owner;             /* the store whose list holds this conn */
-    sq_conn *prev, *next;        /* in owner->conns; guarded by owner->mu */
 };
 
 struct sq_store {
     store base;         /* first member: a store * of this backend is a sq_store * */
     char *path;         /* the database file */
-    pthread_key_t key;  /* the calling thread's sq_conn */
-    pthread_mutex_t mu; /* guards conns and last_stamp */
-    sq_conn *conns;     /* every open connection of this store */
+    store_conns conns;  /* every thread's sq_conn */
+    pthread_mutex_t mu; /* guards last_stamp */
     double last_stamp;  /* the latest last_used handed out (or found at open) */
-    int key_made;       /* key is valid (for the cleanup path of open) */
+    int mu_made;        /* mu is valid (for the cleanup path of open) */
     int lock_fd;        /* path + "-lock", flock'd: one daemon per file (-1: none) */
 };
 
@@ -382,21 +373,6 @@ static void sq_conn_close(sq_conn *c)
     free(c);
 }
 
-/* The pthread key's destructor: a thread that used the store is exiting. */
-static void sq_conn_release(void *p)
-{
-    sq_conn *c = p;
-    sq_store *s = c->owner;
-    pthread_mutex_lock(&s->mu);
-    if (c->prev)
-        c->prev->next = c->next;
-    else
-        s->conns = c->next;
-    if (c->next) c->next->prev = c->prev;
-    pthread_mutex_unlock(&s->mu);
-    sq_conn_close(c);
-}
-
 /* Opens a connection to s->path (creating the file if create), with this backend's per-connection
  * settings; not yet registered anywhere.  *out is the conn, or NULL on failure. */
 static int sq_conn_open(sq_store *s, int create, sq_conn **out, char *err, size_t errlen)
@@ -408,7 +384,6 @@ static int sq_conn_open(sq_store *s, int create, sq_conn **out, char *err, size_
         util_seterr(err, errlen, STORE_ERR, "sqlite open: out of memory");
         return STORE_ERR;
     }
-    c->owner = s;
     if (sqlite3_open_v2(s->path, &c->db, flags, NULL) != SQLITE_OK) {
         util_seterr(err, errlen, STORE_ERR, "sqlite open %s: %s", s->path,
                     c->db ? sqlite3_errmsg(c->db) : "out of memory");
@@ -431,23 +406,11 @@ fail:
     return STORE_ERR;
 }
 
-/* The calling thread's connection, opened and registered on its first call. */
-static sq_conn *sq_conn_get(sq_store *s, char *err, size_t errlen)
+/* The registry's open: a connection of the calling thread to an existing file. */
+static store_conn *sq_conn_new(void *s, char *err, size_t errlen)
 {
-    sq_conn *c = pthread_getspecific(s->key);
-    if (c) return c;
-    if (sq_conn_open(s, 0, &c, err, errlen)) return NULL;
-    if (pthread_setspecific(s->key, c) != 0) {
-        util_seterr(err, errlen, STORE_ERR, "sqlite open: pthread_setspecific failed");
-        sq_conn_close(c);
-        return NULL;
-    }
-    pthread_mutex_lock(&s->mu);
-    c->next = s->conns;
-    if (s->conns) s->conns->prev = c;
-    s->conns = c;
-    pthread_mutex_unlock(&s->mu);
-    return c;
+    sq_conn *c;
+    return sq_conn_open(s, 0, &c, err, errlen) ? NULL : c;
 }
 
 /* A last_used stamp: now, but strictly after every stamp this store handed out before. */
@@ -561,7 +524,7 @@ static int sq_lookup(sq_conn *c, enum sq_sql id, const char *key, long long *out
 
 static store_conn *sq_be_conn(store *s, char *err, size_t errlen)
 {
-    return sq_conn_get((sq_store *)s, err, errlen);
+    return store_conns_get(&((sq_store *)s)->conns, err, errlen);
 }
 
 /* Every frame is a transaction: a write one takes the write lock up front (BEGIN IMMEDIATE),
@@ -1085,20 +1048,9 @@ static int sq_be_probe(sq_conn *c, char *err, size_t errlen)
 static void sq_be_close(store *base)
 {
     sq_store *s = (sq_store *)base;
-    sq_conn *c;
     if (!s) return;
-    /* first, so that no thread exiting from now on runs the destructor on a conn freed here */
-    if (s->key_made) pthread_key_delete(s->key);
-    pthread_mutex_lock(&s->mu);
-    c = s->conns;
-    s->conns = NULL;
-    pthread_mutex_unlock(&s->mu);
-    while (c) {
-        sq_conn *next = c->next;
-        sq_conn_close(c);
-        c = next;
-    }
-    pthread_mutex_destroy(&s->mu);
+    store_conns_free(&s->conns);
+    if (s->mu_made) pthread_mutex_destroy(&s->mu);
     if (s->lock_fd >= 0) close(s->lock_fd);
     free(s->path);
     free(s);
@@ -1372,7 +1324,8 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
 {
     sq_store *s = NULL;
     sq_conn *c = NULL;
-    int mu_made = 0, v;
+    int v;
+    const char *what;
     struct stat sb;
     if (!path || !*path) {
         util_seterr(err, errlen, STORE_ERR, "sqlite open: no path");
@@ -1398,12 +1351,11 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
         util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_mutex_init failed", path);
         goto fail;
     }
-    mu_made = 1;
-    if (pthread_key_create(&s->key, sq_conn_release) != 0) {
-        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_key_create failed", path);
+    s->mu_made = 1;
+    if ((what = store_conns_init(&s->conns, sq_conn_new, sq_conn_close, s, "sqlite open"))) {
+        util_seterr(err, errlen, STORE_ERR, "sqlite open %s: %s failed", path, what);
         goto fail;
     }
-    s->key_made = 1;
     if (sq_lock(s, err, errlen)) goto fail;
     int existed = stat(path, &sb) == 0;
     if (sq_conn_open(s, 1, &c, err, errlen)) goto fail;
@@ -1417,17 +1369,16 @@ store *store_sqlite_open(const char *path, uint64_t budget_bytes, double touch_s
         sq_exec(c, "DELETE FROM result_chunks WHERE hash NOT IN (SELECT hash FROM results)",
                 "open: deleting the chunks of unfinished puts", err, errlen))
         goto fail;
-    if (pthread_setspecific(s->key, c) != 0) {
+    if (store_conns_add(&s->conns, c) != 0) { /* this thread's connection from now on */
         util_seterr(err, errlen, STORE_ERR, "sqlite open %s: pthread_setspecific failed", path);
         goto fail;
     }
-    s->conns = c; /* this thread's connection from now on */
     return &s->base;
 fail:
     sq_conn_close(c);
     if (s) {
-        if (s->key_made) pthread_key_delete(s->key);
-        if (mu_made) pthread_mutex_destroy(&s->mu);
+        store_conns_free(&s->conns);
+        if (s->mu_made) pthread_mutex_destroy(&s->mu);
         if (s->lock_fd >= 0) close(s->lock_fd);
         free(s->path);
         free(s);

@@ -800,10 +800,13 @@ static void put_face_rows(api_buf *b, const rows *r, int fe)
         const int32_t *e;
         if (api_buf_tick(b, f, r->nrows)) break; /* failed, or canceled */
         if (f) api_buf_putc(b, ',');
-        if (fe)
-            i32_list_inline(b, e, fe_row(r, f, &e));
-        else
-            api_buf_u32_list(b, v, fv_row(r, f, &v));
+        if (fe) {
+            size_t n = fe_row(r, f, &e); /* before e is read: arguments have no order */
+            i32_list_inline(b, e, n);
+        } else {
+            size_t n = fv_row(r, f, &v);
+            api_buf_u32_list(b, v, n);
+        }
     }
     api_buf_putc(b, ']');
 }

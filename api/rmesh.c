@@ -17,7 +17,11 @@
  * face for n vertices and r reflex ones, no spatial index (results are capped in size before
  * they are rendered by the daemon; faces of an arrangement are small).
  *
- * Geometry here is floating point: for pictures and meshes, not for the complex.
+ * Geometry here is floating point: for pictures and meshes, not for the complex.  It is not a
+ * copy of the exact clipper of the 3D input (core/arr3.c's a3_triangulate): that one decides on
+ * the integer grid, bridges to the nearest visible vertex, splits pinched loops and fails when
+ * no ear is left; this one reads a written result's doubles and must always end.  The two give
+ * different triangles, and every written mesh's bytes depend on these.
  *
  * Threads: reentrant, no globals.  Ownership: rmesh.h.
  */

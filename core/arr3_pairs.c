@@ -1132,11 +1132,7 @@ static int solid_charts(const chartjob *j, size_t sol)
                             continue;
                         }
                     }
-                    if (nb == capb) {
-                        uint32_t *nbx = mem_realloc(bx, 2 * capb * sizeof *nbx);
-                        if (!nbx) goto done;
-                        bx = nbx, capb *= 2;
-                    }
+                    if (mem_grow(&bx, &capb, nb + 1, sizeof *bx)) goto done;
                     bx[nb++] = x;
                 }
             }

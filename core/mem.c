@@ -14,19 +14,34 @@ void *mem_huge(void *p, size_t n)
     return p;
 }
 
+/* *pp resized to n elements of elem bytes by re (*cap = n), or -1 with *pp as it was. */
+static int resize(void **p, size_t *cap, size_t n, size_t elem, void *(*re)(void *, size_t))
+{
+    if (elem && n > SIZE_MAX / elem) return -1;
+    void *q = re(*p, n * elem);
+    if (!q) return -1;
+    *p = q;
+    *cap = n;
+    return 0;
+}
+
+static void *hinted_realloc(void *p, size_t n)
+{
+    return mem_realloc(p, n);
+}
+
 int mem_grow_slow(void *pp, size_t *cap, size_t need, size_t elem)
 {
-    void **p = pp;
     if (need <= *cap) return 0;
     size_t nc = *cap ? *cap : 16;
     while (nc < need) {
         if (nc > SIZE_MAX / 2) return -1;
         nc *= 2;
     }
-    if (elem && nc > SIZE_MAX / elem) return -1;
-    void *q = mem_realloc(*p, nc * elem);
-    if (!q) return -1;
-    *p = q;
-    *cap = nc;
-    return 0;
+    return resize(pp, cap, nc, elem, hinted_realloc);
+}
+
+int mem_fit(void *pp, size_t *cap, size_t need, size_t elem)
+{
+    return need <= *cap ? 0 : resize(pp, cap, need, elem, realloc);
 }

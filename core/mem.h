@@ -45,4 +45,10 @@ static inline int mem_grow(void *pp, size_t *cap, size_t need, size_t elem)
     return need <= *cap ? 0 : mem_grow_slow(pp, cap, need, elem);
 }
 
+/* The same array made to hold exactly need elements when it holds fewer (plain realloc, no
+ * hint, no doubling): for scratch kept between calls whose sizes come in few steps, where a
+ * large one-shot use must hold no more than it needs (doubling would add to the peak).  0, or
+ * -1 out of memory or past what a size_t counts (*pp and *cap then as they were). */
+int mem_fit(void *pp, size_t *cap, size_t need, size_t elem);
+
 #endif

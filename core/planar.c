@@ -9,7 +9,7 @@
  * index stays linear in size.  The index is built by chunks of edges and asked by chunks of
  * queries, on par_for when the caller gives threads; the model's scan is its own tight loop
  * over a slab's edges (arr2's exact fractions, arr3_plane's filtered spans then exact tests).
- * Its scratch (planar_ws) grows to exact sizes (util_fit): arr3_plane keeps it from plane to
+ * Its scratch (planar_ws) grows to exact sizes (mem_fit): arr3_plane keeps it from plane to
  * plane, arr2 uses it once for up to millions of edges, where doubling would raise the peak.
  *
  * Threads: reentrant; nothing here is shared.  Ownership: see planar.h.
@@ -188,8 +188,8 @@ static int index_build(place_job *j, int threads, int64_t kmax)
     uint64_t range = kmax > j->kmin ? (uint64_t)kmax - (uint64_t)j->kmin : 0, total;
     while (ns * ns < ne) ns *= 2;
     j->nchunk = nchunk;
-    if (util_fit(&ws->es, &ws->capes, 2 * ne + 1, sizeof *ws->es) ||
-        util_fit(&ws->ctot, &ws->capctot, nchunk + 1, sizeof *ws->ctot))
+    if (mem_fit(&ws->es, &ws->capes, 2 * ne + 1, sizeof *ws->es) ||
+        mem_fit(&ws->ctot, &ws->capctot, nchunk + 1, sizeof *ws->ctot))
         return -1;
     for (;;) {
         j->shift = 0;
@@ -202,9 +202,9 @@ static int index_build(place_job *j, int threads, int64_t kmax)
         if (total <= 8 * (uint64_t)ne + ns || ns == 1) break;
         ns /= 2;
     }
-    if (total > UINT32_MAX || util_fit(&ws->off, &ws->capoff, ns + 2, sizeof *ws->off) ||
-        util_fit(&ws->item, &ws->capitem, total + 1, sizeof *ws->item) ||
-        util_fit(&ws->cnt, &ws->capcnt, nchunk * (ns + 1) + 1, sizeof *ws->cnt))
+    if (total > UINT32_MAX || mem_fit(&ws->off, &ws->capoff, ns + 2, sizeof *ws->off) ||
+        mem_fit(&ws->item, &ws->capitem, total + 1, sizeof *ws->item) ||
+        mem_fit(&ws->cnt, &ws->capcnt, nchunk * (ns + 1) + 1, sizeof *ws->cnt))
         return -1;
     memset(ws->cnt, 0, (nchunk * (ns + 1) + 1) * sizeof *ws->cnt);
     run(threads, nchunk, count_chunk, j);

@@ -1,6 +1,7 @@
 /* util.h — the small tools every core file shares, each written once.
  *
- *   growable array    mem_grow() of core/mem.h (room doubled, the common case inline)
+ *   growable array    mem_grow() of core/mem.h (room doubled, the common case inline);
+ *                     mem_fit() there for scratch sized exactly
  *   error message     util_seterr(): prints into the caller's buffer, returns the code
  *   union-find        uf_find() (path halving), uf_union() (the smaller root wins, so a root
  *                     is the smallest element of its set: numberings by root are stable)
@@ -44,13 +45,5 @@ static inline void uf_union(uint32_t *p, uint32_t a, uint32_t b)
 
 /* qsort/bsearch order of uint32_t values. */
 int u32_cmp(const void *a, const void *b);
-
-/* ---- planar (issue 30, item 1): scratch of exact size ----
- * *pp (the address of a pointer to *cap elements of elem bytes, or to NULL with *cap 0) made to
- * hold exactly need elements when it holds fewer: the growable array for scratch kept between
- * calls whose sizes come in few steps (no doubling, so no room over: a large one-shot use
- * holds no more than it needs, where mem_grow's doubling would add to the peak).  0, or -1 out
- * of memory or past what a size_t counts (*pp and *cap then as they were). */
-int util_fit(void *pp, size_t *cap, size_t need, size_t elem);
 
 #endif

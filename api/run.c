@@ -419,12 +419,13 @@ void api_request_free(api_request *q)
 }
 
 /* Whether every object under v has its keys in sorted (strcmp) order, as the canonical form
- * writes them. */
-static int keys_sorted(const json_t *v)
+ * writes them: all of them when all, else only those under a "properties" member (a feature's
+ * properties are written back in their order, the rest of the request is read by key). */
+static int keys_sorted(const json_t *v, int all)
 {
     if (json_is_array(v)) {
         for (size_t i = 0; i < json_array_size(v); i++)
-            if (!keys_sorted(json_array_get(v, i))) return 0;
+            if (!keys_sorted(json_array_get(v, i), all)) return 0;
         return 1;
     }
     if (!json_is_object(v)) return 1;
@@ -432,26 +433,9 @@ static int keys_sorted(const json_t *v)
     json_t *m;
     json_object_foreach((json_t *)v, key, m)
     {
-        if ((prev && strcmp(prev, key) > 0) || !keys_sorted(m)) return 0;
+        if (all && prev && strcmp(prev, key) > 0) return 0;
+        if (!keys_sorted(m, all || !strcmp(key, "properties"))) return 0;
         prev = key;
-    }
-    return 1;
-}
-
-/* Whether the "properties" of every feature under v keep their order in the canonical form. */
-static int properties_sorted(const json_t *v)
-{
-    if (json_is_array(v)) {
-        for (size_t i = 0; i < json_array_size(v); i++)
-            if (!properties_sorted(json_array_get(v, i))) return 0;
-        return 1;
-    }
-    if (!json_is_object(v)) return 1;
-    const char *key;
-    json_t *m;
-    json_object_foreach((json_t *)v, key, m)
-    {
-        if (!(strcmp(key, "properties") ? properties_sorted(m) : keys_sorted(m))) return 0;
     }
     return 1;
 }
@@ -469,7 +453,7 @@ static int canon_same_request(const json_t *root)
             if (prev && strcmp(prev, key) > 0) return 0;
             prev = key;
         }
-    return properties_sorted(root);
+    return keys_sorted(root, 0);
 }
 
 int api_run_json(const char *body, size_t len, int threads, char **out, size_t *outlen,

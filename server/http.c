@@ -184,6 +184,8 @@ static int bad_framing(conn *c, enum MHD_Result *r)
         MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_TRANSFER_ENCODING);
     if (!te) return 0;
     c->close = 1;
+    int defer = c->defer;
+    c->defer = 0; /* past bad framing the body cannot be found: answered at once */
     if (MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH)) {
         *r = http_problem(c, 400, "Content-Length and Transfer-Encoding together", NULL, NULL);
         return 1;
@@ -196,21 +198,25 @@ static int bad_framing(conn *c, enum MHD_Result *r)
         return 1;
     }
     c->close = 0;
+    c->defer = defer;
     return 0;
 }
 
-/* The headers of a POST /v1/jobs: what can be refused before its body is read (draining,
- * too large, a type not read, a representation not made: answered with Connection: close,
- * the body never read), and its bytes reserved against the in-flight budget. */
+/* The headers of a POST /v1/jobs: what they refuse, and its bytes reserved against the
+ * in-flight budget.  Draining, too large and over the budget are answered at once with
+ * Connection: close, the body never read; a type not read or a representation not made
+ * once the body is read and dropped (c->defer, see body_follows). */
 static enum MHD_Result post_headers(conn *c)
 {
     http_server *h = c->h;
     struct MHD_Connection *mc = c->mc;
-    if (atomic_load(&h->draining))
+    if (atomic_load(&h->draining)) {
+        c->defer = 0;
         return http_problem(c, 503, "the service is shutting down", "5", NULL);
+    }
     const char *cl =
         MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-    c->close = 1; /* an early answer: the body that follows is not read */
+    c->close = 1; /* an early answer: the body that follows is not read (but see c->defer) */
     unsigned long long clv = cl ? strtoull(cl, NULL, 10) : 0;
     if (cl && clv > h->cfg->max_body) {
         char msg[128];
@@ -234,6 +240,7 @@ static enum MHD_Result post_headers(conn *c)
      * is known, else as they come), against one budget for every connection */
     if (cl && (http_body_reserve(c, clv + 1) || !(c->body = malloc(clv + 1)))) {
         char msg[200];
+        c->defer = 0; /* the budget is spent: no time is spent reading a body refused */
         http_inflight_msg(h, msg, sizeof msg);
         return http_problem(c, 503, msg, "1", NULL);
     }
@@ -242,18 +249,50 @@ static enum MHD_Result post_headers(conn *c)
     return MHD_YES;
 }
 
-/* The first call for a request: its headers are in.  Makes its conn (*con_cls) and answers at
- * once what needs no body (a bad prefix, escape or framing; a POST refused early). */
+/* Whether a refusal made from the headers waits for the body (conn.later): one follows, it
+ * is not larger than --max-body, and the client is not waiting for a 100 Continue (which
+ * it then never gets: the answer comes at once and the body is never sent). */
+static int body_follows(const conn *c)
+{
+    struct MHD_Connection *mc = c->mc;
+    const char *cl =
+        MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    const char *te =
+        MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_TRANSFER_ENCODING);
+    const char *ex = MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
+    if (ex && strcasestr(ex, "100-continue")) return 0;
+    if (te) return 1; /* chunked: its bytes are counted as they are dropped */
+    if (!cl) return 0;
+    unsigned long long n = strtoull(cl, NULL, 10);
+    return n > 0 && n <= c->h->cfg->max_body;
+}
+
+/* The first call for a request: its headers are in.  Makes its conn (*con_cls) and answers
+ * what needs no body (a bad prefix, escape or framing; a POST refused early): at once, or
+ * when a body follows, once it is read (body_follows; framing, a body too large and a
+ * service shutting down are answered at once, the connection closed). */
+static enum MHD_Result head_checks(conn *c, const char *url, const char *method);
+
 static enum MHD_Result on_headers(http_server *h, struct MHD_Connection *mc, const char *url,
                                   const char *method, void **con_cls)
 {
     conn *c = calloc(1, sizeof *c);
     if (!c) return MHD_NO;
     *con_cls = c;
-    /* the headers are in: the body (if any) has --body-timeout from now */
-    http_set_deadline(h, mc, h->cfg->body_timeout, "body");
     c->h = h;
     c->mc = mc;
+    c->defer = body_follows(c);
+    enum MHD_Result r = head_checks(c, url, method);
+    c->defer = 0;
+    return r;
+}
+
+static enum MHD_Result head_checks(conn *c, const char *url, const char *method)
+{
+    http_server *h = c->h;
+    struct MHD_Connection *mc = c->mc;
+    /* the headers are in: the body (if any) has --body-timeout from now */
+    http_set_deadline(h, mc, h->cfg->body_timeout, "body");
     c->t0 = engine_now();
     snprintf(c->method, sizeof c->method, "%s", method);
     snprintf(c->path, sizeof c->path, "%s", url);
@@ -304,8 +343,10 @@ static enum MHD_Result on_request(conn *c)
         c->pp = NULL;
     }
     http_set_deadline(c->h, c->mc, 0, NULL); /* the request is in: no deadline */
-    if (c->status) return MHD_YES;           /* answered before the body (413, 415, 503) */
-    if (c->intake == 2) {                    /* resumed: the intake has decided */
+    if (c->status) return MHD_YES;           /* answered before the body (413, 503) */
+    if (c->later.status)                     /* refused from the headers: the body is dropped */
+        return http_problem(c, c->later.status, c->later.detail, c->later.retry, c->later.allow);
+    if (c->intake == 2) { /* resumed: the intake has decided */
         c->intake = 0;
         http_unpark(c);
         return http_answer_plan(c);
@@ -328,7 +369,13 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
     if (*upload_size) { /* a piece of the body */
         size_t n = *upload_size;
         *upload_size = 0;
-        if (c->status) return MHD_YES;              /* answered already */
+        if (c->status) return MHD_YES; /* answered already */
+        if (c->later.status) {         /* refused from the headers: dropped, up to the limit */
+            c->later.dropped += n;
+            if (c->later.dropped > c->h->cfg->max_body)
+                return http_refuse_mid_body(c, c->later.status, c->later.detail);
+            return MHD_YES;
+        }
         if (c->route != ROUTE_JOBS) return MHD_YES; /* bodies of other routes are ignored */
         return http_body_piece(c, upload, n);
     }

@@ -154,6 +154,17 @@ typedef struct conn {
     http_part *parts;
     size_t nparts;
     char mp_err[160]; /* the multipart body is bad: why ("" when it is not) */
+    /* A refusal the headers decided while a body follows: answered once the body is read
+     * and dropped (closing on unread bytes makes the client's kernel reset the connection,
+     * which can destroy the answer before the client reads it).  defer: http_problem keeps
+     * its problem here instead of answering. */
+    int defer;
+    struct {
+        unsigned status;
+        const char *retry, *allow; /* string constants */
+        char detail[512];
+        uint64_t dropped; /* the body's bytes read and dropped */
+    } later;
 } conn;
 
 /* Per TCP connection (MHD's socket context): what the URL unescaper saw in the request line

@@ -188,6 +188,15 @@ json_t *http_problem_json(unsigned status, const char *detail, const char *insta
 enum MHD_Result http_problem(conn *c, unsigned status, const char *detail, const char *retry,
                              const char *allow)
 {
+    if (c->defer) { /* decided from the headers: answered after the body (conn.later) */
+        c->later.status = status;
+        c->later.retry = retry;
+        c->later.allow = allow;
+        snprintf(c->later.detail, sizeof c->later.detail, "%s", detail);
+        c->close = 0; /* the body is read: the stream stays in step */
+        http_body_release(c);
+        return MHD_YES;
+    }
     char instance[CONFIG_PREFIX_MAX + sizeof c->path];
     http_link_to(c, instance, sizeof instance, "%s", route_path(c));
     json_t *o = http_problem_json(status, detail, instance);

@@ -203,9 +203,10 @@ static int bad_framing(conn *c, enum MHD_Result *r)
 }
 
 /* The headers of a POST /v1/jobs: what they refuse, and its bytes reserved against the
- * in-flight budget.  Draining, too large and over the budget are answered at once with
- * Connection: close, the body never read; a type not read or a representation not made
- * once the body is read and dropped (c->defer, see body_follows). */
+ * in-flight budget.  Draining and over the budget are answered at once with Connection:
+ * close, the body never read; too large, a type not read or a representation not made
+ * once the body is read and dropped when it is small (c->defer, see body_follows), else
+ * at once. */
 static enum MHD_Result post_headers(conn *c)
 {
     http_server *h = c->h;
@@ -249,8 +250,15 @@ static enum MHD_Result post_headers(conn *c)
     return MHD_YES;
 }
 
+/* The most bytes of a body refused from its headers that are read and dropped: --max-body,
+ * and at least 1 MiB (so that a body a little over a small --max-body gets its 413 too). */
+static uint64_t drain_limit(const http_server *h)
+{
+    return h->cfg->max_body > (1u << 20) ? h->cfg->max_body : 1u << 20;
+}
+
 /* Whether a refusal made from the headers waits for the body (conn.later): one follows, it
- * is not larger than --max-body, and the client is not waiting for a 100 Continue (which
+ * is not larger than drain_limit, and the client is not waiting for a 100 Continue (which
  * it then never gets: the answer comes at once and the body is never sent). */
 static int body_follows(const conn *c)
 {
@@ -264,7 +272,7 @@ static int body_follows(const conn *c)
     if (te) return 1; /* chunked: its bytes are counted as they are dropped */
     if (!cl) return 0;
     unsigned long long n = strtoull(cl, NULL, 10);
-    return n > 0 && n <= c->h->cfg->max_body;
+    return n > 0 && n <= drain_limit(c->h);
 }
 
 /* The first call for a request: its headers are in.  Makes its conn (*con_cls) and answers
@@ -372,7 +380,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         if (c->status) return MHD_YES; /* answered already */
         if (c->later.status) {         /* refused from the headers: dropped, up to the limit */
             c->later.dropped += n;
-            if (c->later.dropped > c->h->cfg->max_body)
+            if (c->later.dropped > drain_limit(c->h))
                 return http_refuse_mid_body(c, c->later.status, c->later.detail);
             return MHD_YES;
         }

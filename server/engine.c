@@ -901,8 +901,9 @@ int engine_cancel(engine *e, const char *id, job_info *out, char *err, size_t er
     rc = e->cfg.st->ops->sub_cancel(e->cfg.st, id, now, &changed, &what, err, errlen);
     if (rc != STORE_OK) return rc == STORE_NOTFOUND ? ENG_NOTFOUND : ENG_ERR;
     if (!changed) return ENG_ENDED;   /* canceled by another DELETE meanwhile */
-    if (what == STORE_JOB_CANCELED) { /* it was queued: ended now */
+    if (what == STORE_JOB_CANCELED) { /* it was queued: ended now, its checked form dropped */
         metrics_job_end(e->cfg.m, "canceled", 0);
+        api_request_free(stash_take(e, out->hash, NULL));
         wake_job(e, s.job);
     } else if (what == STORE_JOB_STOPPING) { /* running: here, stopped now; elsewhere, told */
         pthread_mutex_lock(&e->lock);
@@ -957,6 +958,14 @@ int engine_wait(engine *e, const char *job, double deadline, void (*wake)(void *
         }
     pthread_mutex_unlock(&e->lock); /* taken by a waker, which calls wake */
     return 0;
+}
+
+void engine_checked_kept(engine *e, size_t *n, uint64_t *bytes)
+{
+    pthread_mutex_lock(&e->lock);
+    *n = e->nstash;
+    *bytes = e->stash_bytes;
+    pthread_mutex_unlock(&e->lock);
 }
 
 void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *running_here,

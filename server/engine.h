@@ -123,6 +123,9 @@ void engine_stop(engine *e);
 void engine_gauges(engine *e, size_t *queued, size_t *running, size_t *running_here,
                    size_t *queue_max, int *draining);
 
+/* The checked requests kept for jobs not yet claimed here, and their requests' bytes. */
+void engine_checked_kept(engine *e, size_t *n, uint64_t *bytes);
+
 /* Unix time now, in seconds. */
 double engine_now(void);
 

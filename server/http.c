@@ -42,6 +42,7 @@ static enum MHD_Result route_metrics(conn *c)
     metrics_gauges g = {0};
     char err[256];
     engine_gauges(c->h->e, &g.queued, &g.running, &g.running_here, &g.queue_capacity, &g.draining);
+    engine_checked_kept(c->h->e, &g.checked_kept, &g.checked_bytes);
     if (c->h->st->ops->result_stats(c->h->st, &g.cache_results, &g.cache_bytes, err, sizeof err))
         log_kv(LOG_WARN, "store: result_stats failed", "error", err, NULL);
     g.cache_budget = c->h->cfg->cache_bytes;

@@ -156,6 +156,15 @@ char *metrics_render(metrics *m, const metrics_gauges *g, size_t *len)
                 "# HELP cellar_draining 1 while the daemon drains before exit.\n"
                 "# TYPE cellar_draining gauge\ncellar_draining %d\n",
                 g->draining);
+        fprintf(f,
+                "# HELP cellar_checked_requests_kept Requests kept in their checked form for "
+                "jobs queued here and not yet claimed (at most 64).\n"
+                "# TYPE cellar_checked_requests_kept gauge\ncellar_checked_requests_kept %zu\n"
+                "# HELP cellar_checked_request_bytes_kept Their requests' bytes (at most 256 "
+                "MiB).\n"
+                "# TYPE cellar_checked_request_bytes_kept gauge\n"
+                "cellar_checked_request_bytes_kept %llu\n",
+                g->checked_kept, (unsigned long long)g->checked_bytes);
     }
     if (fclose(f) != 0) {
         free(buf);

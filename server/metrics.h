@@ -48,6 +48,8 @@ typedef struct metrics_gauges {
     size_t cache_results;
     uint64_t cache_bytes, cache_budget;
     int draining;
+    size_t checked_kept; /* requests kept checked for jobs not yet claimed here */
+    uint64_t checked_bytes;
 } metrics_gauges;
 
 /* The whole exposition as a malloc'd NUL-terminated string (caller frees), or NULL. */

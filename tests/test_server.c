@@ -456,6 +456,49 @@ SERVER_TEST(cancel, "--workers 1 --job-threads 1")
     srv_term(d);
 }
 
+/* A request checked at the intake is kept in its checked form until its job is claimed: a
+ * queued job canceled for good drops it at once (it held up to its request's bytes until 64
+ * newer ones pushed it out), and a claimed one holds none. */
+SERVER_TEST(cancel_drops_the_checked_request, "--workers 1 --job-threads 1")
+{
+    size_t hlen, slen;
+    const char *huge = huge_body(&hlen), *slow1 = slow_body(1, &slen);
+    REQUIRE(huge && slow1, "no slow requests");
+    const char *kept = "cellar_checked_requests_kept", *bytes = "cellar_checked_request_bytes_kept";
+    jobv h, s, j;
+    REQUIRE(submit(d, huge, hlen, &h) == 0, "running job");
+    REQUIRE(wait_state(d, h.id, "running", 30 * slowdown(), &j), "huge job not running: %s",
+            j.state);
+    CHECK(metric(d, kept) == 0 && metric(d, bytes) == 0,
+          "a running job's checked request still kept: %g (%g bytes)", metric(d, kept),
+          metric(d, bytes));
+    REQUIRE(submit(d, slow1, slen, &s) == 0, "queued job");
+    CHECK(wait_state(d, s.id, "queued", 1, &j), "second job: %s, want queued", j.state);
+    double n = metric(d, kept), b = metric(d, bytes);
+    CHECK(n == 1 && b > 0, "a queued job: %g kept (%g bytes)", n, b);
+    hresp r;
+    char path[160];
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", s.id);
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE queued: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    CHECK(metric(d, kept) == 0 && metric(d, bytes) == 0,
+          "a canceled queued job's checked request still kept: %g (%g bytes)", metric(d, kept),
+          metric(d, bytes));
+    snprintf(path, sizeof path, "/v1/jobs/%.32s", h.id);
+    http_method(d, "DELETE", path, &r);
+    CHECK(r.status == 200, "DELETE running: %ld %s", r.status, r.body.p);
+    hresp_free(&r);
+    /* the same request again runs, from its new checked form */
+    size_t elen;
+    const char *exp = expect(slow1, slen, &elen);
+    http_post(d, slow1, slen, "wait=60", &r);
+    CHECK(r.status == 200 && exp && same_result(r.body.p, r.body.n, exp, elen) > 0,
+          "the canceled request again: %ld", r.status);
+    hresp_free(&r);
+    CHECK(metric(d, kept) == 0, "after it ran: %g kept", metric(d, kept));
+}
+
 /* A canceled job frees its worker at once, wherever the run is: the daemon's CPU use (both
  * core threads of the worker computing) ends within a bound of the DELETE derived from this
  * run's measured speed (slow.secs: the slow job's time; the huge job runs 4-6 times as long,

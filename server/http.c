@@ -278,8 +278,9 @@ static int body_follows(const conn *c)
 
 /* The first call for a request: its headers are in.  Makes its conn (*con_cls) and answers
  * what needs no body (a bad prefix, escape or framing; a POST refused early): at once, or
- * when a body follows, once it is read (body_follows; framing, a body too large and a
- * service shutting down are answered at once, the connection closed). */
+ * when a body follows, once it is read (body_follows; bad framing, a body over drain_limit,
+ * the in-flight budget spent and a service shutting down are answered at once, the
+ * connection closed). */
 static enum MHD_Result head_checks(conn *c, const char *url, const char *method);
 
 static enum MHD_Result on_headers(http_server *h, struct MHD_Connection *mc, const char *url,

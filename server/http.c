@@ -251,15 +251,8 @@ static enum MHD_Result post_headers(conn *c)
     return MHD_YES;
 }
 
-/* The most bytes of a body refused from its headers that are read and dropped: --max-body,
- * and at least 1 MiB (so that a body a little over a small --max-body gets its 413 too). */
-static uint64_t drain_limit(const http_server *h)
-{
-    return h->cfg->max_body > (1u << 20) ? h->cfg->max_body : 1u << 20;
-}
-
 /* Whether a refusal made from the headers waits for the body (conn.later): one follows, it
- * is not larger than drain_limit, and the client is not waiting for a 100 Continue (which
+ * is not larger than http_drain_limit, and the client is not waiting for a 100 Continue (which
  * it then never gets: the answer comes at once and the body is never sent). */
 static int body_follows(const conn *c)
 {
@@ -273,12 +266,12 @@ static int body_follows(const conn *c)
     if (te) return 1; /* chunked: its bytes are counted as they are dropped */
     if (!cl) return 0;
     unsigned long long n = strtoull(cl, NULL, 10);
-    return n > 0 && n <= drain_limit(c->h);
+    return n > 0 && n <= http_drain_limit(c->h);
 }
 
 /* The first call for a request: its headers are in.  Makes its conn (*con_cls) and answers
  * what needs no body (a bad prefix, escape or framing; a POST refused early): at once, or
- * when a body follows, once it is read (body_follows; bad framing, a body over drain_limit,
+ * when a body follows, once it is read (body_follows; bad framing, a body over http_drain_limit,
  * the in-flight budget spent and a service shutting down are answered at once, the
  * connection closed). */
 static enum MHD_Result head_checks(conn *c, const char *url, const char *method);
@@ -382,7 +375,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *mc, const char *
         if (c->status) return MHD_YES; /* answered already */
         if (c->later.status) {         /* refused from the headers: dropped, up to the limit */
             c->later.dropped += n;
-            if (c->later.dropped > drain_limit(c->h))
+            if (c->later.dropped > http_drain_limit(c->h))
                 return http_refuse_mid_body(c, c->later.status, c->later.detail);
             return MHD_YES;
         }

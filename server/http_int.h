@@ -234,6 +234,7 @@ int http_body_reserve(conn *c, uint64_t n);
 void http_body_release(conn *c);
 void http_inflight_msg(const http_server *h, char *msg, size_t n);
 void http_too_large_msg(const http_server *h, char *msg, size_t n);
+uint64_t http_drain_limit(const http_server *h);
 int http_body_type(conn *c);
 enum MHD_Result http_part_data(void *cls, enum MHD_ValueKind kind, const char *key,
                                const char *filename, const char *content_type,

@@ -91,6 +91,14 @@ void http_too_large_msg(const http_server *h, char *msg, size_t n)
     snprintf(msg, n, "the body is larger than %llu bytes", (unsigned long long)h->cfg->max_body);
 }
 
+/* The most bytes of a refused body that are read and dropped before its answer (so that the
+ * answer is not lost to a reset, see conn.later): --max-body, and at least 1 MiB (so that a
+ * body a little over a small --max-body gets its 413 too).  Past it the body is cut. */
+uint64_t http_drain_limit(const http_server *h)
+{
+    return h->cfg->max_body > (1u << 20) ? h->cfg->max_body : 1u << 20;
+}
+
 /* Frees c's body and gives its bytes back to the budget. */
 void http_body_release(conn *c)
 {
@@ -449,11 +457,17 @@ enum MHD_Result http_body_piece(conn *c, const char *upload, size_t n)
     http_server *h = c->h;
     uint64_t seen = c->pp ? c->raw : c->len; /* multipart: len counts the parts' data */
     if (seen + n > h->cfg->max_body) {
-        /* no Content-Length said so (chunked): the rest is never read */
+        /* no Content-Length said so (chunked): the rest is read and dropped up to
+         * http_drain_limit, then the 413 (conn.later); past it, never read */
         char msg[128];
         http_body_release(c);
         http_too_large_msg(h, msg, sizeof msg);
-        return http_refuse_mid_body(c, 413, msg);
+        if (seen + n > http_drain_limit(h)) return http_refuse_mid_body(c, 413, msg);
+        c->defer = 1;
+        http_problem(c, 413, msg, NULL, NULL);
+        c->defer = 0;
+        c->later.dropped = seen + n;
+        return MHD_YES;
     }
     if (seen + n + 1 > c->cap) { /* chunked: no length was reserved */
         size_t cap = c->cap ? c->cap : 4096;

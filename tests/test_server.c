@@ -2093,6 +2093,28 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
     st = read_answer(fd, out, sizeof out, 10 * slowdown());
     CHECK(st == 413 && strstr(out, "larger than 4096") && !strcasestr(out, "Connection: close"),
           "6000 bytes over --max-body 4096: %d (want 413, kept): %.300s", st, out);
+    close(fd);
+    /* the same by chunks: the limit is crossed in the body, which is still read to its end */
+    fd = raw_connect(d);
+    REQUIRE(fd >= 0, "connect");
+    snprintf(req, sizeof req,
+             "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
+             "Transfer-Encoding: chunked\r\n\r\n");
+    raw_send(fd, req, strlen(req));
+    for (int k = 0; k < 3; k++) {
+        raw_send(fd, "7d0\r\n", 5); /* 2000 bytes */
+        raw_send(fd, big, 2000);
+        raw_send(fd, "\r\n", 2);
+        sleep_s(0.05);
+    }
+    raw_send(fd, "0\r\n\r\n", 5);
+    st = read_answer(fd, out, sizeof out, 10 * slowdown());
+    CHECK(st == 413 && strstr(out, "larger than 4096") && !strcasestr(out, "Connection: close"),
+          "6000 bytes by chunks over --max-body 4096: %d (want 413, kept): %.300s", st, out);
+    const char hz[] = "GET /healthz HTTP/1.1\r\nHost: a\r\n\r\n";
+    raw_send(fd, hz, sizeof hz - 1);
+    st = read_answer(fd, out, sizeof out, 10 * slowdown());
+    CHECK(st == 200, "the request after a chunked 413: %d %.200s", st, out);
     free(big);
     close(fd);
     /* a chunked body refused from its headers is read and dropped up to 1 MiB (the most

@@ -260,31 +260,18 @@ typedef struct ray {
     uint32_t k; /* the record it belongs to */
 } ray;
 
-static int half(ipt d)
-{
-    return d.y < 0 || (d.y == 0 && d.x < 0);
-}
-
-/* Angle order of directions, counter-clockwise from +u; 0 for one direction. */
-static int ang_cmp(ipt a, ipt b)
-{
-    int ha = half(a), hb = half(b);
-    if (ha != hb) return ha - hb;
-    i128 x = (i128)a.x * b.y - (i128)a.y * b.x;
-    return x > 0 ? -1 : x < 0 ? 1 : 0;
-}
-
 static int ray_cmp(const void *pa, const void *pb)
 {
     const ray *a = pa, *b = pb;
-    int r = ang_cmp(a->d, b->d);
+    int r = dir_cmp(a->d.x, a->d.y, b->d.x, b->d.y); /* counter-clockwise from +u */
     return r ? r : (a->k > b->k) - (a->k < b->k);
 }
 
 /* Is direction x strictly inside the counter-clockwise turn from a to b? */
 static int in_turn(ipt a, ipt b, ipt x)
 {
-    int ab = ang_cmp(a, b), ax = ang_cmp(a, x), xb = ang_cmp(x, b);
+    int ab = dir_cmp(a.x, a.y, b.x, b.y), ax = dir_cmp(a.x, a.y, x.x, x.y),
+        xb = dir_cmp(x.x, x.y, b.x, b.y);
     if (ab < 0) return ax < 0 && xb < 0;
     return ax < 0 || xb < 0; /* the turn passes +u */
 }

@@ -174,33 +174,38 @@ static enum MHD_Result dispatch(conn *c)
     return http_problem(c, 405, "use GET", NULL, "GET, HEAD");
 }
 
+/* A refusal answered at once, whether a body follows or not (c->defer off): the body is
+ * never read. */
+static enum MHD_Result refuse_now(conn *c, unsigned status, const char *detail, const char *retry)
+{
+    c->defer = 0;
+    return http_problem(c, status, detail, retry, NULL);
+}
+
 /* The request's framing (RFC 9112 6.1): a body is framed by Content-Length or by chunks, never
  * both (a request with both is an attack on whoever reads it next), and chunked is the only
  * coding understood: past such a request the stream cannot be trusted, so it is closed.
- * 0, or 1 with the 400 queued in *r. */
+ * 0, or 1 with the 400 queued in *r (at once: past bad framing the body cannot be found). */
 static int bad_framing(conn *c, enum MHD_Result *r)
 {
     struct MHD_Connection *mc = c->mc;
     const char *te =
         MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_TRANSFER_ENCODING);
     if (!te) return 0;
-    c->close = 1;
-    int defer = c->defer;
-    c->defer = 0; /* past bad framing the body cannot be found: answered at once */
+    const char *why = NULL;
     if (MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH)) {
-        *r = http_problem(c, 400, "Content-Length and Transfer-Encoding together", NULL, NULL);
-        return 1;
+        why = "Content-Length and Transfer-Encoding together";
+    } else {
+        while (*te == ' ' || *te == '\t') te++;
+        size_t n = strlen(te);
+        while (n && (te[n - 1] == ' ' || te[n - 1] == '\t')) n--;
+        if (n != 7 || strncasecmp(te, "chunked", 7))
+            why = "Transfer-Encoding: only chunked is understood";
     }
-    while (*te == ' ' || *te == '\t') te++;
-    size_t n = strlen(te);
-    while (n && (te[n - 1] == ' ' || te[n - 1] == '\t')) n--;
-    if (n != 7 || strncasecmp(te, "chunked", 7)) {
-        *r = http_problem(c, 400, "Transfer-Encoding: only chunked is understood", NULL, NULL);
-        return 1;
-    }
-    c->close = 0;
-    c->defer = defer;
-    return 0;
+    if (!why) return 0;
+    c->close = 1;
+    *r = refuse_now(c, 400, why, NULL);
+    return 1;
 }
 
 /* The headers of a POST /v1/jobs: what they refuse, and its bytes reserved against the
@@ -212,10 +217,7 @@ static enum MHD_Result post_headers(conn *c)
 {
     http_server *h = c->h;
     struct MHD_Connection *mc = c->mc;
-    if (atomic_load(&h->draining)) {
-        c->defer = 0;
-        return http_problem(c, 503, "the service is shutting down", "5", NULL);
-    }
+    if (atomic_load(&h->draining)) return refuse_now(c, 503, "the service is shutting down", "5");
     const char *cl =
         MHD_lookup_connection_value(mc, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     c->close = 1; /* an early answer: the body that follows is not read (but see c->defer) */
@@ -241,10 +243,9 @@ static enum MHD_Result post_headers(conn *c)
     /* the body's bytes are reserved before any is read (all of them when the length
      * is known, else as they come), against one budget for every connection */
     if (cl && (http_body_reserve(c, clv + 1) || !(c->body = malloc(clv + 1)))) {
-        char msg[200];
-        c->defer = 0; /* the budget is spent: no time is spent reading a body refused */
+        char msg[200]; /* the budget is spent: no time is spent reading a body refused */
         http_inflight_msg(h, msg, sizeof msg);
-        return http_problem(c, 503, msg, "1", NULL);
+        return refuse_now(c, 503, msg, "1");
     }
     if (cl) c->cap = clv + 1;
     c->close = 0;

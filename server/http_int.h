@@ -204,6 +204,8 @@ json_t *http_problem_json(unsigned status, const char *detail, const char *insta
 enum MHD_Result http_problem(conn *c, unsigned status, const char *detail, const char *retry,
                              const char *allow);
 enum MHD_Result http_refuse_mid_body(conn *c, unsigned status, const char *detail);
+enum MHD_Result http_refuse_later(conn *c, unsigned status, const char *detail, const char *retry,
+                                  const char *allow);
 json_t *http_job_json(conn *c, const job_info *ji);
 
 /* ---- http_assets.c ---- */

@@ -463,11 +463,8 @@ enum MHD_Result http_body_piece(conn *c, const char *upload, size_t n)
         http_body_release(c);
         http_too_large_msg(h, msg, sizeof msg);
         if (seen + n > http_drain_limit(h)) return http_refuse_mid_body(c, 413, msg);
-        c->defer = 1;
-        http_problem(c, 413, msg, NULL, NULL);
-        c->defer = 0;
         c->later.dropped = seen + n;
-        return MHD_YES;
+        return http_refuse_later(c, 413, msg, NULL, NULL);
     }
     if (seen + n + 1 > c->cap) { /* chunked: no length was reserved */
         size_t cap = c->cap ? c->cap : 4096;

@@ -185,18 +185,25 @@ json_t *http_problem_json(unsigned status, const char *detail, const char *insta
     return o;
 }
 
+/* Keeps a refusal, answered once the body is read and dropped (conn.later): the body held
+ * so far is let go, and the connection, read to the body's end, stays in step. */
+enum MHD_Result http_refuse_later(conn *c, unsigned status, const char *detail, const char *retry,
+                                  const char *allow)
+{
+    c->later.status = status;
+    c->later.retry = retry;
+    c->later.allow = allow;
+    snprintf(c->later.detail, sizeof c->later.detail, "%s", detail);
+    c->close = 0;
+    http_body_release(c);
+    return MHD_YES;
+}
+
 enum MHD_Result http_problem(conn *c, unsigned status, const char *detail, const char *retry,
                              const char *allow)
 {
-    if (c->defer) { /* decided from the headers: answered after the body (conn.later) */
-        c->later.status = status;
-        c->later.retry = retry;
-        c->later.allow = allow;
-        snprintf(c->later.detail, sizeof c->later.detail, "%s", detail);
-        c->close = 0; /* the body is read: the stream stays in step */
-        http_body_release(c);
-        return MHD_YES;
-    }
+    /* decided from the headers while a body follows: answered after it */
+    if (c->defer) return http_refuse_later(c, status, detail, retry, allow);
     char instance[CONFIG_PREFIX_MAX + sizeof c->path];
     http_link_to(c, instance, sizeof instance, "%s", route_path(c));
     json_t *o = http_problem_json(status, detail, instance);

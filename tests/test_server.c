@@ -2005,6 +2005,33 @@ static int read_answer(int fd, char *out, size_t max, double timeout)
     return n > 12 && !strncmp(out, "HTTP/1.", 7) ? atoi(out + 9) : 0;
 }
 
+/* A POST /v1/jobs's head on a new raw connection: its headers (each ending in CRLF), then
+ * "Content-Length: len", or chunked framing when len is SIZE_MAX.  The socket, or -1. */
+static int post_head(const srv *d, const char *headers, size_t len)
+{
+    char req[1024];
+    int fd = raw_connect(d);
+    if (fd < 0) return -1;
+    if (len == SIZE_MAX)
+        snprintf(req, sizeof req,
+                 "POST /v1/jobs HTTP/1.1\r\nHost: a\r\n%sTransfer-Encoding: chunked\r\n\r\n",
+                 headers);
+    else
+        snprintf(req, sizeof req,
+                 "POST /v1/jobs HTTP/1.1\r\nHost: a\r\n%sContent-Length: %zu\r\n\r\n", headers,
+                 len);
+    raw_send(fd, req, strlen(req));
+    return fd;
+}
+
+/* GET /healthz on a kept connection: its status (0: none). */
+static int healthz_on(int fd, char *out, size_t max)
+{
+    const char hz[] = "GET /healthz HTTP/1.1\r\nHost: a\r\n\r\n";
+    raw_send(fd, hz, sizeof hz - 1);
+    return read_answer(fd, out, max, 10 * slowdown());
+}
+
 /* A refusal the headers decide (a bad X-Forwarded-Prefix, a type not read, a format not
  * made) while a body follows is answered once the body is in, the connection kept: closing
  * on bytes not read made the client's kernel reset the connection, which could destroy the
@@ -2027,18 +2054,8 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         for (int chunked = 0; chunked < 2; chunked++) {
-            int fd = raw_connect(d);
+            int fd = post_head(d, cases[i].headers, chunked ? SIZE_MAX : sizeof body);
             REQUIRE(fd >= 0, "connect");
-            if (chunked)
-                snprintf(
-                    req, sizeof req,
-                    "POST /v1/jobs HTTP/1.1\r\nHost: a\r\n%sTransfer-Encoding: chunked\r\n\r\n",
-                    cases[i].headers);
-            else
-                snprintf(req, sizeof req,
-                         "POST /v1/jobs HTTP/1.1\r\nHost: a\r\n%sContent-Length: %zu\r\n\r\n",
-                         cases[i].headers, sizeof body);
-            raw_send(fd, req, strlen(req));
             /* the answer waits for the body */
             int st = read_answer(fd, out, sizeof out, 0.3);
             CHECK(st == 0, "%s (%s): answered before the body: %.200s", cases[i].why,
@@ -2057,22 +2074,18 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
                   "%s (%s): %d, want %d on a kept connection: %.300s", cases[i].why,
                   chunked ? "chunked" : "Content-Length", st, cases[i].status, out);
             /* the connection is still in step: the next request is answered */
-            const char hz[] = "GET /healthz HTTP/1.1\r\nHost: a\r\n\r\n";
-            raw_send(fd, hz, sizeof hz - 1);
-            st = read_answer(fd, out, sizeof out, 10 * slowdown());
+            st = healthz_on(fd, out, sizeof out);
             CHECK(st == 200, "%s (%s): the request after: %d %.200s", cases[i].why,
                   chunked ? "chunked" : "Content-Length", st, out);
             close(fd);
         }
     }
     /* Expect: 100-continue: at once, and closed (the body is never sent) */
-    int fd = raw_connect(d);
+    int fd = post_head(d,
+                       "Content-Type: application/json\r\nX-Forwarded-Prefix: cellar\r\n"
+                       "Expect: 100-continue\r\n",
+                       sizeof body);
     REQUIRE(fd >= 0, "connect");
-    snprintf(req, sizeof req,
-             "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
-             "X-Forwarded-Prefix: cellar\r\nExpect: 100-continue\r\nContent-Length: %zu\r\n\r\n",
-             sizeof body);
-    raw_send(fd, req, strlen(req));
     int st = read_answer(fd, out, sizeof out, 5 * slowdown());
     CHECK(st == 400 && strcasestr(out, "Connection: close"),
           "with Expect: 100-continue: %d (want 400 at once, closed): %.300s", st, out);
@@ -2081,12 +2094,8 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
     char *big = malloc(6000);
     REQUIRE(big, "no memory");
     memset(big, ' ', 6000);
-    fd = raw_connect(d);
+    fd = post_head(d, "Content-Type: application/json\r\n", 6000);
     REQUIRE(fd >= 0, "connect");
-    snprintf(req, sizeof req,
-             "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
-             "Content-Length: 6000\r\n\r\n");
-    raw_send(fd, req, strlen(req));
     st = read_answer(fd, out, sizeof out, 0.3);
     CHECK(st == 0, "413: answered before the body: %.200s", out);
     raw_send(fd, big, 6000);
@@ -2095,12 +2104,8 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
           "6000 bytes over --max-body 4096: %d (want 413, kept): %.300s", st, out);
     close(fd);
     /* the same by chunks: the limit is crossed in the body, which is still read to its end */
-    fd = raw_connect(d);
+    fd = post_head(d, "Content-Type: application/json\r\n", SIZE_MAX);
     REQUIRE(fd >= 0, "connect");
-    snprintf(req, sizeof req,
-             "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: application/json\r\n"
-             "Transfer-Encoding: chunked\r\n\r\n");
-    raw_send(fd, req, strlen(req));
     for (int k = 0; k < 3; k++) {
         raw_send(fd, "7d0\r\n", 5); /* 2000 bytes */
         raw_send(fd, big, 2000);
@@ -2111,21 +2116,15 @@ SERVER_TEST(refusals_after_the_body, "--workers 1 --job-threads 1 --max-body 409
     st = read_answer(fd, out, sizeof out, 10 * slowdown());
     CHECK(st == 413 && strstr(out, "larger than 4096") && !strcasestr(out, "Connection: close"),
           "6000 bytes by chunks over --max-body 4096: %d (want 413, kept): %.300s", st, out);
-    const char hz[] = "GET /healthz HTTP/1.1\r\nHost: a\r\n\r\n";
-    raw_send(fd, hz, sizeof hz - 1);
-    st = read_answer(fd, out, sizeof out, 10 * slowdown());
+    st = healthz_on(fd, out, sizeof out);
     CHECK(st == 200, "the request after a chunked 413: %d %.200s", st, out);
     free(big);
     close(fd);
     /* a chunked body refused from its headers is read and dropped up to 1 MiB (the most
      * dropped when --max-body is smaller), then cut: the refusal, closed.  The byte past
      * the limit comes alone, after a pause, so that none is left unread at the close. */
-    fd = raw_connect(d);
+    fd = post_head(d, "Content-Type: text/plain\r\n", SIZE_MAX);
     REQUIRE(fd >= 0, "connect");
-    snprintf(req, sizeof req,
-             "POST /v1/jobs HTTP/1.1\r\nHost: a\r\nContent-Type: text/plain\r\n"
-             "Transfer-Encoding: chunked\r\n\r\n");
-    raw_send(fd, req, strlen(req));
     char *mib = malloc(1u << 20);
     REQUIRE(mib, "no memory");
     memset(mib, ' ', 1u << 20);
